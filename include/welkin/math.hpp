@@ -1,0 +1,33 @@
+// Small numeric helpers that keep the physics out of trouble near its domain edges.
+//
+// As in Bruneton's implementation, every cosine that comes out of arithmetic is clamped
+// to [-1, 1] and every square root takes max(0, x): rounding must never turn a grazing
+// ray into a NaN.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+namespace welkin {
+
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kTwoPi = 2.0 * kPi;
+inline constexpr double kFourPi = 4.0 * kPi;
+inline constexpr double kDegree = kPi / 180.0;
+
+template <class T>
+inline T clamp_cosine(T mu) {
+    return std::clamp(mu, T(-1), T(1));
+}
+
+template <class T>
+inline T safe_sqrt(T x) {
+    return std::sqrt(std::max(x, T(0)));
+}
+
+template <class T>
+inline T clamp01(T x) {
+    return std::clamp(x, T(0), T(1));
+}
+
+}  // namespace welkin

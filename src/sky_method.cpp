@@ -1,0 +1,78 @@
+#include "welkin/sky_method.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+
+#include "welkin/analytic_sky.hpp"
+#include "welkin/error.hpp"
+#include "welkin/lut_sky.hpp"
+#include "welkin/raymarch_sky.hpp"
+#include "welkin/reference_sky.hpp"
+
+namespace welkin {
+
+Observer Observer::validated() const {
+    // 1e9 m: far beyond any atmosphere; the sky from there is a dot.
+    require_in_range("altitude_m", altitude_m, 0.0, 1e9, "m");
+    const double len = glm::length(sun_direction);
+    if (!std::isfinite(len) || !(len > 1e-12))
+        throw InvalidArgument("sun_direction", fmt::format("must be a finite non-zero vector, "
+                                                           "got ({}, {}, {})",
+                                                           sun_direction.x, sun_direction.y,
+                                                           sun_direction.z));
+    Observer o = *this;
+    o.sun_direction = sun_direction / len;
+    return o;
+}
+
+void SkyOptions::validate() const {
+    require_in_range("transmittance_width", transmittance_width, 4, 4096);
+    require_in_range("transmittance_height", transmittance_height, 4, 4096);
+    require_in_range("multiscattering_size", multiscattering_size, 4, 1024);
+    require_in_range("skyview_width", skyview_width, 4, 8192);
+    require_in_range("skyview_height", skyview_height, 4, 8192);
+    require_in_range("raymarch_steps", raymarch_steps, 1, 100000);
+    require_in_range("raymarch_sun_steps", raymarch_sun_steps, 1, 100000);
+    require_in_range("reference_paths", reference_paths, 1, 1 << 26);
+}
+
+std::vector<glm::dvec3> validated_directions(std::span<const glm::dvec3> directions) {
+    std::vector<glm::dvec3> out(directions.size());
+    for (std::size_t i = 0; i < directions.size(); ++i) {
+        const glm::dvec3& d = directions[i];
+        const double len = glm::length(d);
+        if (!std::isfinite(len) || !(len > 1e-12))
+            throw InvalidArgument(fmt::format("view_directions[{}]", i),
+                                  fmt::format("must be a finite non-zero vector, got ({}, {}, {})",
+                                              d.x, d.y, d.z));
+        out[i] = d / len;
+    }
+    return out;
+}
+
+std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference"}; }
+
+std::unique_ptr<SkyMethod> make_sky_method(const std::string& name, const SkyOptions& options) {
+    options.validate();
+    if (name == "analytic") return std::make_unique<AnalyticSky>(options);
+    if (name == "lut") return std::make_unique<LutSky>(options);
+    if (name == "raymarch") return std::make_unique<RaymarchSky>(options);
+    if (name == "reference") return std::make_unique<ReferenceSky>(options);
+    throw InvalidArgument("method", fmt::format("unknown method '{}'; choose one of: {}", name,
+                                                fmt::join(sky_method_names(), ", ")));
+}
+
+SkyResult sky_radiance(const SkyMethod& method, const Atmosphere& atmosphere,
+                       const Observer& observer, std::span<const glm::dvec3> directions,
+                       Progress* progress) {
+    SkyResult r;
+    r.channels = atmosphere.channels();
+    r.radiance.resize(directions.size() * r.channels);
+    r.standard_error.resize(directions.size() * r.channels);
+    method.radiance(atmosphere, observer, directions, r.radiance, r.standard_error, progress);
+    return r;
+}
+
+}  // namespace welkin
