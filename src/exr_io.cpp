@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 #include <ImathBox.h>
+#include <half.h>
 #include <ImfChannelList.h>
 #include <ImfCompression.h>
 #include <ImfFrameBuffer.h>
@@ -85,22 +86,26 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
                                   dir.string()));
 
     // Half files: clamp what half cannot hold (finite values beyond +-65504 would become
-    // infinities), and let OpenEXR round the rest from the float buffer.
+    // infinities), then round to half (OpenEXR's writer wants the buffer in the file's
+    // pixel type).
     ExrWriteReport report;
-    const float* data = image.pixels.data();
-    std::vector<float> clamped;
-    if (options.pixel_type == ExrPixelType::Half) {
-        clamped = image.pixels;
-        for (float& v : clamped)
+    const bool half = options.pixel_type == ExrPixelType::Half;
+    std::vector<Imath::half> halves;
+    if (half) {
+        halves.resize(image.pixels.size());
+        for (std::size_t k = 0; k < image.pixels.size(); ++k) {
+            float v = image.pixels[k];
             if (std::isfinite(v) && std::abs(v) > kHalfMax) {
                 v = std::copysign(kHalfMax, v);
                 ++report.clamped_values;
             }
-        data = clamped.data();
+            halves[k] = Imath::half(v);
+        }
     }
-
-    const Imf::PixelType type =
-        options.pixel_type == ExrPixelType::Half ? Imf::HALF : Imf::FLOAT;
+    const char* data = half ? reinterpret_cast<const char*>(halves.data())
+                            : reinterpret_cast<const char*>(image.pixels.data());
+    const std::size_t value_size = half ? sizeof(Imath::half) : sizeof(float);
+    const Imf::PixelType type = half ? Imf::HALF : Imf::FLOAT;
     const std::size_t nc = image.channels();
     const fs::path tmp = temporary_path(target);
     try {
@@ -113,8 +118,8 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
             header.channels().insert(image.channel_names[c], Imf::Channel(type));
             // OpenEXR's y grows downwards from the data window's top: row 0 is the top.
             fb.insert(image.channel_names[c],
-                      Imf::Slice(Imf::FLOAT, (char*)(data + c), sizeof(float) * nc,
-                                 sizeof(float) * nc * std::size_t(image.width)));
+                      Imf::Slice(type, const_cast<char*>(data + value_size * c), value_size * nc,
+                                 value_size * nc * std::size_t(image.width)));
         }
         Imf::OutputFile file(tmp.c_str(), header);
         file.setFrameBuffer(fb);

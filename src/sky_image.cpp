@@ -1,9 +1,15 @@
 // Equirectangular sky images with the sun's disc; see sky_image.hpp.
 #include "welkin/sky_image.hpp"
 
+#include <sys/mman.h>
+
 #include <algorithm>
+#include <cstdint>
+#include <cstdlib>
 #include <cmath>
 #include <array>
+#include <atomic>
+#include <memory>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -31,6 +37,37 @@ namespace {
 // sizes does not need gigabytes.
 constexpr std::size_t kMaxValuesPerCall = std::size_t(32) << 20;
 
+// Large scratch buffers: 2 MiB aligned and marked for transparent huge pages, where the
+// kernel allows them (Linux, THP in "madvise" or "always" mode). First-touch page faults
+// of 4 KiB pages dominated the image assembly at 2048 x 1024 (48 MiB of directions);
+// huge pages cut their number 512-fold. Elsewhere this is a plain aligned allocation.
+constexpr std::size_t kHugePage = std::size_t(2) << 20;
+struct FreeDeleter {
+    void operator()(void* p) const { std::free(p); }
+};
+template <class T>
+std::unique_ptr<T[], FreeDeleter> huge_buffer(std::size_t n) {
+    const std::size_t bytes = std::max<std::size_t>(1, (n * sizeof(T) + kHugePage - 1) / kHugePage) * kHugePage;
+    void* p = std::aligned_alloc(kHugePage, bytes);
+    if (!p) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    ::madvise(p, bytes, MADV_HUGEPAGE);
+#endif
+    return std::unique_ptr<T[], FreeDeleter>(static_cast<T*>(p));
+}
+
+// The image's own vector: reserved first, so that the same advice applies before resize()
+// touches (zeroes) its pages.
+void advise_huge_pages(std::vector<float>& v, std::size_t n) {
+    v.reserve(n);
+#ifdef MADV_HUGEPAGE
+    const std::uintptr_t begin = reinterpret_cast<std::uintptr_t>(v.data());
+    const std::uintptr_t end = begin + n * sizeof(float);
+    const std::uintptr_t a = (begin + kHugePage - 1) / kHugePage * kHugePage;
+    if (end > a + kHugePage) ::madvise(reinterpret_cast<void*>(a), (end - a) / kHugePage * kHugePage, MADV_HUGEPAGE);
+#endif
+}
+
 // Maps a sub-task's [0, 1] onto [lo, hi] of the host's progress.
 class SubProgress final : public Progress {
 public:
@@ -51,21 +88,19 @@ struct DiscSplat {
     std::vector<double> radiance;     // (pixel.size(), channels), W m^-2 sr^-1 nm^-1
 };
 
-// The disc, supersampled. For every pixel whose footprint the disc's cap can touch, k_u x
-// k_v samples at the centres of a regular grid in (u, v) inside the pixel; a sample at
-// elevation e stands for the solid angle cos(e) du dv (2 pi)(pi) of its cell. With
-// rho the sample's angle from the disc centre, the pixel gathers
-//     S(p, c) = sum over samples of LD_c(rho) dOmega,
-// an estimate of the integral of the limb-darkening factor over the part of the disc in
-// p, once over the whole disc (A_c) and once over its part above the horizon (V_c). The
-// pixel's added radiance is then
-//     L(p, c) = direct_irradiance_c * S_vis(p, c) / V_c / Omega_p,
+// The disc, supersampled. For every pixel that the disc's cap can touch, a regular grid
+// of samples over the part of the pixel inside the cap's bounding box (u, v); a sample at
+// elevation e stands for the solid angle cos(e) dphi de of its cell. With rho the
+// sample's angle from the disc centre, the pixel gathers
+//     S(p, c) = sum over samples above the horizon of LD_c(rho) dOmega,
+// an estimate of the integral of the limb-darkening factor over the visible part of the
+// disc inside p. With V_c = sum_p S(p, c), the pixel's added radiance is
+//     L(p, c) = direct_irradiance_c * S(p, c) / V_c / Omega_p,
 // so that sum_p L(p, c) Omega_p = direct_irradiance_c exactly, whatever the sampling
-// error of each S; the sampling only decides how that energy is shared between pixels.
-// Sample spacing: at most alpha/8 in elevation and about alpha/8 in azimuth at the row's
-// widest latitude, so the disc is resolved at any image size (capped at 256 x 256 per
-// pixel for tiny images; if no sample lands on the visible disc, its energy goes to the
-// pixel holding the disc's centre).
+// error of each S: the sampling only decides how that energy is shared between pixels,
+// and pixels the disc covers partly get a partial (antialiased) value. Sample spacing:
+// at most alpha / 8, so the disc is resolved at any image size. If no sample lands on the
+// visible disc (a sliver at the horizon), its energy goes to the pixel of its centre.
 DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, int height,
                          const SunRadiometry& sun) {
     const std::size_t nc = atm.channels();
@@ -73,21 +108,26 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
     const glm::dvec3 s = obs.sun_direction;
     const double r = atm.bottom_radius_m + obs.altitude_m;
     const double e_s = std::asin(clamp_cosine(s.z));
-    const double du_angle = kTwoPi / width, dv_angle = kPi / height;
+    const double dv_angle = kPi / height;
 
-    // Rows the cap can touch (one more each side for safety).
-    const int j0 = std::max(0, int(std::floor((0.5 * kPi - (e_s + alpha)) / dv_angle)) - 1);
-    const int j1 =
-        std::min(height - 1, int(std::floor((0.5 * kPi - (e_s - alpha)) / dv_angle)) + 1);
-    // Columns: all of them if the cap holds a pole; else the cap's azimuth half-width
-    // asin(sin alpha / cos e_s) around the centre's column.
+    // The cap's bounding box: elevations [e_s - alpha, e_s + alpha]; in u, the centre's u
+    // plus or minus the cap's azimuth half-width asin(sin alpha / cos e_s) / (2 pi), or
+    // every u when the cap holds a pole.
+    const double e_lo = e_s - alpha, e_hi = e_s + alpha;
+    const int j0 = std::max(0, int(std::floor((0.5 * kPi - e_hi) / dv_angle)));
+    const int j1 = std::min(height - 1, int(std::floor((0.5 * kPi - e_lo) / dv_angle)));
+    bool all_u = true;
+    double u_lo = 0.0, u_hi = 1.0;
     int i0 = 0, ncols = width;
-    if (e_s + alpha < 0.5 * kPi && e_s - alpha > -0.5 * kPi) {
-        const double half = std::asin(std::min(1.0, std::sin(alpha) / std::cos(e_s)));
+    if (e_hi < 0.5 * kPi && e_lo > -0.5 * kPi) {
+        const double half = std::asin(std::min(1.0, std::sin(alpha) / std::cos(e_s))) / kTwoPi;
         const double u_c = direction_to_equirect(s).x;
-        const int a = int(std::floor((u_c - half / kTwoPi) * width)) - 1;
-        const int b = int(std::floor((u_c + half / kTwoPi) * width)) + 1;
+        const int a = int(std::floor((u_c - half) * width));
+        const int b = int(std::floor((u_c + half) * width));
         if (b - a + 1 < width) {
+            all_u = false;
+            u_lo = u_c - half;
+            u_hi = u_c + half;
             i0 = a;
             ncols = b - a + 1;
         }
@@ -97,39 +137,42 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
     std::vector<LimbDarkening> ld;
     for (double w : atm.wavelengths_nm) ld.emplace_back(alpha, w);
 
+    // Each pixel samples only its intersection with the box, on a grid of spacing at most
+    // alpha / 8 in elevation and in azimuth (at the latitude where the intersection is
+    // widest): the cost follows the disc's size, not the pixel's.
     const std::size_t npix = std::size_t(nrows) * std::size_t(ncols);
-    std::vector<double> s_all(npix * nc, 0.0), s_vis(npix * nc, 0.0);
+    std::vector<double> s_vis(npix * nc, 0.0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, npix), [&](const auto& range) {
-        std::vector<double> ld_c(nc);
         for (std::size_t q = range.begin(); q != range.end(); ++q) {
             const int j = j0 + int(q / std::size_t(ncols));
-            const int i = ((i0 + int(q % std::size_t(ncols))) % width + width) % width;
-            // Widest latitude of the row: cos of the elevation closest to the equator.
-            const double e_top = 0.5 * kPi - dv_angle * j, e_bot = e_top - dv_angle;
+            const int ii = i0 + int(q % std::size_t(ncols));  // may lie outside [0, width)
+            // Elevation and u extent of pixel (ii, j) intersected with the box.
+            const double e_top = std::min(0.5 * kPi - dv_angle * j, e_hi);
+            const double e_bot = std::max(0.5 * kPi - dv_angle * (j + 1), e_lo);
+            const double pu0 = double(ii) / width, pu1 = double(ii + 1) / width;
+            const double u0 = all_u ? pu0 : std::max(pu0, u_lo);
+            const double u1 = all_u ? pu1 : std::min(pu1, u_hi);
+            if (!(e_top > e_bot) || !(u1 > u0)) continue;
             const double cos_max = (e_top >= 0.0 && e_bot <= 0.0)
                                        ? 1.0
                                        : std::max(std::cos(e_top), std::cos(e_bot));
-            const int kv = std::clamp(int(std::ceil(8.0 * dv_angle / alpha)), 2, 256);
-            const int ku = std::clamp(int(std::ceil(8.0 * cos_max * du_angle / alpha)), 2, 256);
-            const double cell = du_angle / ku * dv_angle / kv;
-            double* all = &s_all[q * nc];
+            const double de = e_top - e_bot, dphi = kTwoPi * (u1 - u0);
+            const int kv = std::clamp(int(std::ceil(8.0 * de / alpha)), 2, 512);
+            const int ku = std::clamp(int(std::ceil(8.0 * cos_max * dphi / alpha)), 2, 512);
+            const double cell = dphi / ku * de / kv;
             double* vis = &s_vis[q * nc];
             for (int b = 0; b < kv; ++b) {
-                const double e = e_top - dv_angle * (b + 0.5) / kv;
+                const double e = e_top - de * (b + 0.5) / kv;
                 const double ce = std::cos(e), se = std::sin(e);
-                const bool visible = !ray_hits_ground(r, se, atm.bottom_radius_m);
+                if (ray_hits_ground(r, se, atm.bottom_radius_m)) continue;  // behind the ground
                 for (int a = 0; a < ku; ++a) {
-                    const double phi = kPi - du_angle * (i + (a + 0.5) / ku);
+                    const double phi = kPi - kTwoPi * (u0 + (u1 - u0) * (a + 0.5) / ku);
                     const glm::dvec3 d{ce * std::cos(phi), ce * std::sin(phi), se};
                     const double rho =
                         std::atan2(glm::length(glm::cross(d, s)), glm::dot(d, s));
                     if (rho > alpha) continue;
                     const double w = ce * cell;
-                    for (std::size_t c = 0; c < nc; ++c) {
-                        const double v = ld[c](rho) * w;
-                        all[c] += v;
-                        if (visible) vis[c] += v;
-                    }
+                    for (std::size_t c = 0; c < nc; ++c) vis[c] += ld[c](rho) * w;
                 }
             }
         }
@@ -221,7 +264,8 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         for (double w : atm.wavelengths_nm) image.channel_names.push_back(spectral_channel_name(w));
     }
     const std::size_t out_nc = image.channels();
-    image.pixels.assign(std::size_t(W) * std::size_t(H) * out_nc, 0.0f);
+    advise_huge_pages(image.pixels, std::size_t(W) * std::size_t(H) * out_nc);
+    image.pixels.resize(std::size_t(W) * std::size_t(H) * out_nc, 0.0f);
 
     // Per-column and per-row factors of the pixel-centre directions (equirect.cpp):
     // direction = (cos e cos phi, cos e sin phi, sin e).
@@ -238,13 +282,21 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         cos_e[j] = std::hypot(d.x, d.y);
     }
 
-    // Sky radiance, in bands of rows (one band for all but very large images).
+    // Sky radiance, in bands of rows (one band for all but very large images). Where the
+    // method's output has the image's layout (spectral output, or three wavelengths to
+    // RGB) it writes straight into the image and is converted in place; otherwise into a
+    // scratch band. Scratch buffers are left uninitialised and first touched by the
+    // parallel loops that fill them: at 2048 x 1024, zeroing them serially cost more than
+    // everything else here.
     const std::size_t row_values = std::size_t(W) * nc;
     const int band_rows = int(std::clamp<std::size_t>(kMaxValuesPerCall / row_values, 1,
                                                       std::size_t(H)));
     const int bands = (H + band_rows - 1) / band_rows;
-    std::vector<glm::dvec3> directions(std::size_t(band_rows) * std::size_t(W));
-    std::vector<float> radiance(std::size_t(band_rows) * row_values);
+    const bool in_place = !rgb || nc == 3;
+    const std::size_t band_pixels = std::size_t(band_rows) * std::size_t(W);
+    const auto directions = huge_buffer<glm::dvec3>(band_pixels);
+    const auto scratch = huge_buffer<float>(in_place ? 0 : band_pixels * nc);
+    const std::vector<double>& m = rgb ? sky_to_rgb->matrix() : std::vector<double>{};
     for (int band = 0; band < bands; ++band) {
         const int row0 = band * band_rows;
         const int rows = std::min(band_rows, H - row0);
@@ -258,33 +310,51 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
             }
         });
         SubProgress sub(progress, double(band) / bands, double(band + 1) / bands);
-        const std::span<float> out(radiance.data(), n * nc);
-        method.radiance(atm, obs, std::span<const glm::dvec3>(directions.data(), n), out, {},
+        float* dst = image.pixels.data() + std::size_t(row0) * std::size_t(W) * out_nc;
+        const std::span<float> out(in_place ? dst : scratch.get(), n * nc);
+        method.radiance(atm, obs, std::span<const glm::dvec3>(directions.get(), n), out, {},
                         progress ? &sub : nullptr);
 
-        const std::size_t bad = tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, out.size(), 1 << 16), std::size_t(-1),
-            [&](const auto& range, std::size_t first) {
-                for (std::size_t k = range.begin(); k != range.end() && first == std::size_t(-1);
-                     ++k)
-                    if (!std::isfinite(out[k])) first = k;
-                return first;
-            },
-            [](std::size_t a, std::size_t b) { return std::min(a, b); });
-        if (bad != std::size_t(-1)) {
-            const std::size_t k = bad / nc;
-            const glm::dvec3 d = directions[k];
+        // One pass: find the first non-finite value, and convert to RGB.
+        std::atomic<std::size_t> bad{std::size_t(-1)};
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& range) {
+            std::array<double, 9> m3{};  // local copy: no reloads through possible aliases
+            if (rgb && nc == 3) std::copy(m.begin(), m.end(), m3.begin());
+            std::size_t first = std::size_t(-1);
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                const float* s = &out[i * nc];
+                bool finite = true;
+                for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(s[c]);
+                if (!finite && first == std::size_t(-1)) first = i;
+                if (!rgb) continue;
+                if (nc == 3) {  // in place
+                    const float a = s[0], b = s[1], c = s[2];
+                    float* d = &dst[3 * i];
+                    d[0] = float(m3[0] * a + m3[1] * b + m3[2] * c);
+                    d[1] = float(m3[3] * a + m3[4] * b + m3[5] * c);
+                    d[2] = float(m3[6] * a + m3[7] * b + m3[8] * c);
+                } else {
+                    double r = 0.0, g = 0.0, b = 0.0;
+                    for (std::size_t c = 0; c < nc; ++c) {
+                        r += m[c] * s[c];
+                        g += m[nc + c] * s[c];
+                        b += m[2 * nc + c] * s[c];
+                    }
+                    float* d = &dst[3 * i];
+                    d[0] = float(r), d[1] = float(g), d[2] = float(b);
+                }
+            }
+            std::size_t cur = bad.load();
+            while (first < cur && !bad.compare_exchange_weak(cur, first)) {
+            }
+        });
+        if (bad.load() != std::size_t(-1)) {
+            const glm::dvec3 d = directions[bad.load()];
             throw std::runtime_error(fmt::format(
-                "sky method '{}' returned a non-finite radiance ({}) for direction "
+                "sky method '{}' returned a non-finite radiance for direction "
                 "({:.6f}, {:.6f}, {:.6f})",
-                method.name(), out[bad], d.x, d.y, d.z));
+                method.name(), d.x, d.y, d.z));
         }
-
-        float* dst = image.pixels.data() + std::size_t(row0) * std::size_t(W) * out_nc;
-        if (rgb)
-            sky_to_rgb->convert(out, std::span<float>(dst, n * 3));
-        else
-            std::copy(out.begin(), out.end(), dst);
     }
 
     if (options.sun_disc) {
