@@ -7,6 +7,7 @@
 // Instead the core runs on a worker thread and the calling thread waits for it, waking
 // on each progress report and at least every 50 ms to check for signals. The core never
 // touches Python; the Python callback always runs on the calling thread with the GIL.
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>

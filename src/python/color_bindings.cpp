@@ -13,7 +13,7 @@
 namespace welkin::python {
 namespace {
 
-// Rows of an (N, k) or (k,) array, and the shape of a result with k' columns instead.
+// The shape of `a`, (N, k) or (k,), with its last axis replaced by `last`.
 std::vector<py::ssize_t> with_last_axis(const py::array& a, py::ssize_t last) {
     std::vector<py::ssize_t> shape(a.shape(), a.shape() + a.ndim());
     shape.back() = last;

@@ -4,6 +4,7 @@
 //   sky_bindings.cpp         welkin.sky_radiance, methods (cancellable, GIL released)
 //   sun_bindings.cpp         welkin.sun
 //   color_bindings.cpp       spectrum_to_rgb, spectral_wavelengths_nm, equirect mapping
+//   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
 #include <cstring>
 #include <sstream>

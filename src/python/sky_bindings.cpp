@@ -85,7 +85,9 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
                         std::uint64_t seed, int transmittance_width, int transmittance_height,
                         int multiscattering_size, int skyview_width, int skyview_height,
                         bool return_standard_error, const py::object& progress) {
-    // Everything is checked before any work starts.
+    // The checks that need no core work come first. `atmosphere` is a copy, so that Python
+    // code running while the GIL is released (other threads, the progress callback) cannot
+    // change it under the core.
     if (output != "spectral" && output != "rgb")
         throw InvalidArgument("output", fmt::format("must be \"spectral\" or \"rgb\", got \"{}\"",
                                                     output));
