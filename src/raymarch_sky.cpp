@@ -37,7 +37,8 @@ void RaymarchSky::radiance(const Atmosphere& atm, const Observer& observer_in,
         const double R = medium.bottom_radius(), top = medium.top_radius();
         const double angular_radius = atm.sun_angular_radius_rad;
         const int sun_steps = options_.raymarch_sun_steps;
-        const auto sun_t = [&](double r_t, double mu_s_t) {
+        const auto sun_t = [&](const RaySamples::Step& st, double mu_s_t) {
+            const double r_t = st.r;
             const double fraction = sun_visible_fraction(R, r_t, mu_s_t, angular_radius);
             if (fraction <= 0.0) return Spectrum4(0.0f);
             const Spectrum4 tau = march_optical_depth(medium, r_t, mu_s_t, distance_to_top(r_t, mu_s_t, top), sun_steps);
@@ -46,12 +47,12 @@ void RaymarchSky::radiance(const Atmosphere& atm, const Observer& observer_in,
         const std::size_t first = medium.first_channel(), count = medium.channel_count();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, directions.size(), 64),
                           [&](const tbb::blocked_range<std::size_t>& range) {
+                              RaySamples ray;
                               for (std::size_t i = range.begin(); i != range.end(); ++i) {
                                   const ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
-                                  const InscatterResult s = integrate_inscattering(
-                                      medium, &b->multiscattering, r, g.mu, g.mu_s, g.nu,
-                                      options_.raymarch_steps, sun_t);
-                                  store_channels(s.radiance, count, &out[i * C + first]);
+                                  prepare_ray(medium, r, g.mu, options_.raymarch_steps, ray, nullptr, &b->multiscattering);
+                                  store_channels(inscatter(medium, &b->multiscattering, ray, g.mu_s, g.nu, sun_t),
+                                                 count, &out[i * C + first]);
                               }
                               tracker.advance(range.size());
                           });

@@ -111,6 +111,20 @@ double sun_visible_fraction(double bottom_radius, double r, double mu_s, double 
     return x * x * (3.0 - 2.0 * x);
 }
 
+TransmittanceLut::AtRadius TransmittanceLut::at_radius(double r_in) const {
+    AtRadius a;
+    a.r = std::min(r_in, top_);
+    const double sin_h = std::min(bottom_ / a.r, 1.0);
+    a.cos_horizon = -safe_sqrt(1.0 - sin_h * sin_h);
+    a.top_disc = (a.r - top_) * (a.r + top_);
+    const double rho = safe_sqrt((a.r - bottom_) * (a.r + bottom_));
+    a.d_min = top_ - a.r;
+    const double range = rho + H_ - a.d_min;
+    a.inv_d_range = range > 0.0 ? 1.0 / range : 0.0;
+    a.v = texcoord_from_unit(float(clamp01(rho / H_)), texture_.height());
+    return a;
+}
+
 Spectrum4 TransmittanceLut::to_sun(double r, double mu_s) const {
     const double fraction = sun_visible_fraction(bottom_, r, mu_s, sun_angular_radius_);
     if (fraction <= 0.0) return Spectrum4(0.0f);

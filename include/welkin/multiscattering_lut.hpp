@@ -32,6 +32,14 @@ public:
         return texture_.sample(u, v);
     }
 
+    // psi with the radius-only part (the v coordinate) computed once.
+    float v_at_radius(double r) const {
+        return texcoord_from_unit(float(clamp01((r - bottom_) / (top_ - bottom_))), texture_.height());
+    }
+    Spectrum4 psi(float v, double mu_s) const {
+        return texture_.sample(texcoord_from_unit(float(0.5 * (mu_s + 1.0)), texture_.width()), v);
+    }
+
     const Texture2D& texture() const { return texture_; }
 
 private:

@@ -31,6 +31,22 @@ public:
     // 2017, GetTransmittanceToSun).
     Spectrum4 to_sun(double r, double mu_s) const;
 
+    // The parts of a sun lookup that depend on the radius alone, computed once for many
+    // sun angles at the same radius (the marches evaluate a whole row of the sky-view LUT,
+    // or every sun angle of the multiple-scattering LUT, along one ray).
+    struct AtRadius {
+        double r, cos_horizon, top_disc, d_min, inv_d_range;
+        float v;
+    };
+    AtRadius at_radius(double r) const;
+    Spectrum4 to_sun(const AtRadius& at, double mu_s) const {
+        const double x = std::clamp((mu_s - at.cos_horizon + sun_angular_radius_) / (2.0 * sun_angular_radius_), 0.0, 1.0);
+        if (x <= 0.0) return Spectrum4(0.0f);
+        const double d = -at.r * mu_s + std::sqrt(std::max(at.r * at.r * mu_s * mu_s - at.top_disc, 0.0));
+        const float x_mu = float(std::clamp((d - at.d_min) * at.inv_d_range, 0.0, 1.0));
+        return texture_.sample(texcoord_from_unit(x_mu, texture_.width()), at.v) * float(x * x * (3.0 - 2.0 * x));
+    }
+
     const Texture2D& texture() const { return texture_; }
 
     // (u, v) of (r, mu) and back; exposed for tests.
