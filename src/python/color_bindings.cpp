@@ -41,13 +41,14 @@ py::array_t<double> direction_to_equirect(const py::object& view_directions) {
     const c_array<double> in = to_c_array<double>(view_directions, "view_directions", 3, 1, 2,
                                                   "an (N, 3) or (3,) array");
     std::vector<glm::dvec3> storage;
-    // The core's check (finite, non-zero), which also normalises.
-    const std::vector<glm::dvec3> unit = validated_directions(as_dvec3_span(in, storage));
-    const std::size_t n = unit.size();
+    // The core's check (finite, non-zero); the mapping itself needs no unit length.
+    const std::span<const glm::dvec3> dirs = as_dvec3_span(in, storage);
+    welkin::validate_directions(dirs);
+    const std::size_t n = dirs.size();
     py::array_t<double> out(with_last_axis(in, 2));
     double* uv = out.mutable_data();
     for (std::size_t i = 0; i < n; ++i) {
-        const glm::dvec2 p = welkin::direction_to_equirect(unit[i]);
+        const glm::dvec2 p = welkin::direction_to_equirect(dirs[i]);
         uv[2 * i] = p.x;
         uv[2 * i + 1] = p.y;
     }
