@@ -38,18 +38,15 @@ void SkyOptions::validate() const {
     require_in_range("reference_paths", reference_paths, 1, 1 << 26);
 }
 
-std::vector<glm::dvec3> validated_directions(std::span<const glm::dvec3> directions) {
-    std::vector<glm::dvec3> out(directions.size());
+void validate_directions(std::span<const glm::dvec3> directions) {
     for (std::size_t i = 0; i < directions.size(); ++i) {
         const glm::dvec3& d = directions[i];
-        const double len = glm::length(d);
-        if (!std::isfinite(len) || !(len > 1e-12))
+        const double len2 = glm::dot(d, d);
+        if (!std::isfinite(len2) || !(len2 > 1e-24))
             throw InvalidArgument(fmt::format("view_directions[{}]", i),
                                   fmt::format("must be a finite non-zero vector, got ({}, {}, {})",
                                               d.x, d.y, d.z));
-        out[i] = d / len;
     }
-    return out;
 }
 
 std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference"}; }
