@@ -23,14 +23,9 @@ LutSky::LutSky(const SkyOptions& options) : options_(options) { options_.validat
 void LutSky::radiance(const Atmosphere& atm, const Observer& observer_in,
                       std::span<const glm::dvec3> directions_in, std::span<float> out,
                       std::span<float> standard_error, Progress* progress) const {
-    atm.validate();
-    const Observer observer = observer_in.validated();
-    validate_directions(directions_in);
+    const Observer observer = validate_deterministic_call(atm, observer_in, directions_in, out, standard_error);
     const std::span<const glm::dvec3> directions = directions_in;
     const std::size_t C = atm.channels();
-    if (out.size() != directions.size() * C)
-        throw InvalidArgument("out", "must hold directions x channels values");
-    if (!standard_error.empty()) std::fill(standard_error.begin(), standard_error.end(), 0.0f);
     const double r = atm.bottom_radius_m + observer.altitude_m;
     if (r >= atm.top_radius_m) {
         RaymarchSky(options_).radiance(atm, observer, directions, out, {}, progress);

@@ -1,5 +1,6 @@
 #include "welkin/sky_method.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -47,6 +48,20 @@ void validate_directions(std::span<const glm::dvec3> directions) {
                                   fmt::format("must be a finite non-zero vector, got ({}, {}, {})",
                                               d.x, d.y, d.z));
     }
+}
+
+Observer validate_deterministic_call(const Atmosphere& atmosphere, const Observer& observer,
+                                     std::span<const glm::dvec3> directions, std::span<float> out,
+                                     std::span<float> standard_error) {
+    atmosphere.validate();
+    const Observer validated = observer.validated();
+    validate_directions(directions);
+    if (out.size() != directions.size() * atmosphere.channels())
+        throw InvalidArgument("out", "must hold directions x channels values");
+    if (!standard_error.empty() && standard_error.size() != out.size())
+        throw InvalidArgument("standard_error", "must be empty or hold directions x channels values");
+    std::fill(standard_error.begin(), standard_error.end(), 0.0f);
+    return validated;
 }
 
 std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference"}; }
