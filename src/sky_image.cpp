@@ -32,10 +32,11 @@ namespace welkin {
 namespace {
 
 // Radiance values held at once: the method is called with every pixel of the image when
-// (pixels x channels) fits in this many floats (128 MiB; any 3-channel image up to 4096
-// wide), else with bands of whole rows, so that the 48-channel spectral mode at large
-// sizes does not need gigabytes.
-constexpr std::size_t kMaxValuesPerCall = std::size_t(32) << 20;
+// (pixels x channels) fits in this many floats (512 MiB: any 3-channel image up to 8192
+// wide, a 48-channel spectral one up to 2048 wide), else with bands of whole rows, so that
+// the spectral mode at large sizes does not need gigabytes. Bands cost: the lut method
+// builds its tables once per call (~1.2 s at 48 wavelengths on two cores).
+constexpr std::size_t kMaxValuesPerCall = std::size_t(128) << 20;
 
 // Large scratch buffers: 2 MiB aligned and marked for transparent huge pages, where the
 // kernel allows them (Linux, THP in "madvise" or "always" mode). First-touch page faults
