@@ -4,11 +4,11 @@
 #include <sys/mman.h>
 
 #include <algorithm>
-#include <cstdint>
-#include <cstdlib>
-#include <cmath>
 #include <array>
 #include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <span>
@@ -17,9 +17,7 @@
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
-#include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include "welkin/color.hpp"
 #include "welkin/equirect.hpp"
@@ -48,7 +46,8 @@ struct FreeDeleter {
 };
 template <class T>
 std::unique_ptr<T[], FreeDeleter> huge_buffer(std::size_t n) {
-    const std::size_t bytes = std::max<std::size_t>(1, (n * sizeof(T) + kHugePage - 1) / kHugePage) * kHugePage;
+    const std::size_t pages = std::max<std::size_t>(1, (n * sizeof(T) + kHugePage - 1) / kHugePage);
+    const std::size_t bytes = pages * kHugePage;
     void* p = std::aligned_alloc(kHugePage, bytes);
     if (!p) throw std::bad_alloc();
 #ifdef MADV_HUGEPAGE
@@ -65,7 +64,8 @@ void advise_huge_pages(std::vector<float>& v, std::size_t n) {
     const std::uintptr_t begin = reinterpret_cast<std::uintptr_t>(v.data());
     const std::uintptr_t end = begin + n * sizeof(float);
     const std::uintptr_t a = (begin + kHugePage - 1) / kHugePage * kHugePage;
-    if (end > a + kHugePage) ::madvise(reinterpret_cast<void*>(a), (end - a) / kHugePage * kHugePage, MADV_HUGEPAGE);
+    if (end > a + kHugePage)
+        ::madvise(reinterpret_cast<void*>(a), (end - a) / kHugePage * kHugePage, MADV_HUGEPAGE);
 #endif
 }
 

@@ -95,7 +95,8 @@ int run_sky(const SkyArgs& args) {
                                          : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
     write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
                         {"welkinSettings", settings.dump()}};
-    if (args.spectral_channels) write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
+    if (args.spectral_channels)
+        write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);
     if (report.clamped_values > 0)
         fmt::print(stderr,

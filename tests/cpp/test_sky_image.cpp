@@ -100,7 +100,8 @@ TEST(SkyImage, LayoutAndOneCallWithEveryPixel) {
     EXPECT_EQ(sky.calls, 1);
     EXPECT_EQ(sky.last_count, 64u * 32u);
     // Directions in pixel order, top row first, left to right.
-    EXPECT_NEAR(glm::length(sky.first_direction - equirect_pixel_direction(0, 0, 64, 32)), 0, 1e-15);
+    EXPECT_NEAR(glm::length(sky.first_direction - equirect_pixel_direction(0, 0, 64, 32)), 0,
+                1e-15);
     EXPECT_NEAR(glm::length(sky.last_direction - equirect_pixel_direction(63, 31, 64, 32)), 0,
                 1e-15);
     ASSERT_EQ(im.channel_names, (std::vector<std::string>{"S0.680nm", "S0.550nm", "S0.440nm"}));
@@ -138,9 +139,9 @@ TEST(SkyImage, SunDiscCarriesTheDirectIrradianceAtEveryResolution) {
         double elevation_deg, azimuth_deg, altitude_m;
     };
     const double a_deg = atm.sun_angular_radius_rad / kDegree;
-    for (const Case k : {Case{90, 0, 0}, Case{30, 10, 0}, Case{3, -100, 0}, Case{0.5 * a_deg, 45, 0},
-                         Case{0, 180, 0}, Case{-0.9 * a_deg, 12.3, 0}, Case{-4.0, 77, 20e3},
-                         Case{89.8, 33, 0}}) {
+    for (const Case k : {Case{90, 0, 0}, Case{30, 10, 0}, Case{3, -100, 0},
+                         Case{0.5 * a_deg, 45, 0}, Case{0, 180, 0}, Case{-0.9 * a_deg, 12.3, 0},
+                         Case{-4.0, 77, 20e3}, Case{89.8, 33, 0}}) {
         const Observer obs = sun_at(k.elevation_deg, k.azimuth_deg, k.altitude_m);
         const SunRadiometry sun = sun_radiometry(atm, obs);
         ASSERT_GT(sun.visible_fraction, 0.0);
@@ -313,8 +314,8 @@ TEST(SkyImage, LutHdriAt2048IsFiniteAndQuick) {
     for (int k = 0; k < 5; ++k) {
         const auto t0 = std::chrono::steady_clock::now();
         im = render_equirect_sky(*lut, atm, obs, 2048);
-        ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        const auto t1 = std::chrono::steady_clock::now();
+        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     }
     std::sort(ms.begin(), ms.end());
     std::printf("2048 x 1024 HDRI by lut (render_equirect_sky, no file): median %.1f ms, "

@@ -110,11 +110,13 @@ def test_atmosphere_writes_json_that_round_trips(tmp_path):
     r = welkin("atmosphere", "--preset", "bruneton2017", "-o", out)
     assert_one_line_error(r, str(out), "--overwrite")
     assert out.read_text() == before
-    assert welkin("atmosphere", "--preset", "bruneton2017", "-o", out, "--overwrite").returncode == 0
+    r = welkin("atmosphere", "--preset", "bruneton2017", "-o", out, "--overwrite")
+    assert r.returncode == 0
     # The file drives `welkin sun` exactly like the preset.
     a = json.loads(welkin("sun", "--atmosphere", out, "--sun-elevation", 25).stdout)
     b = json.loads(welkin("sun", "--preset", "bruneton2017", "--sun-elevation", 25).stdout)
-    assert a["direct_irradiance_W_m2_nm"] == pytest.approx(b["direct_irradiance_W_m2_nm"], rel=1e-12)
+    assert a["direct_irradiance_W_m2_nm"] == pytest.approx(b["direct_irradiance_W_m2_nm"],
+                                                           rel=1e-12)
     # Without -o: standard output.
     assert json.loads(welkin("atmosphere", "--preset", "mars").stdout)["bottom_radius_m"] > 1e6
 
