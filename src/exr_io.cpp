@@ -20,6 +20,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <ImfThreading.h>
 #include <Iex.h>
 
 #include "welkin/error.hpp"
@@ -190,6 +191,11 @@ ExrImage read_exr(const std::string& path) {
     } catch (const std::exception& e) {
         throw IoError(fmt::format("cannot read '{}': {}", path, e.what()));
     }
+}
+
+void set_exr_thread_count(int threads) {
+    require_in_range("threads", threads, 0, 1024);
+    Imf::setGlobalThreadCount(threads);
 }
 
 }  // namespace welkin

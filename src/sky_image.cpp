@@ -4,11 +4,11 @@
 #include <sys/mman.h>
 
 #include <algorithm>
-#include <cstdint>
-#include <cstdlib>
-#include <cmath>
 #include <array>
 #include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <span>
@@ -17,9 +17,7 @@
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
-#include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include "welkin/color.hpp"
 #include "welkin/equirect.hpp"
@@ -32,10 +30,11 @@ namespace welkin {
 namespace {
 
 // Radiance values held at once: the method is called with every pixel of the image when
-// (pixels x channels) fits in this many floats (128 MiB; any 3-channel image up to 4096
-// wide), else with bands of whole rows, so that the 48-channel spectral mode at large
-// sizes does not need gigabytes.
-constexpr std::size_t kMaxValuesPerCall = std::size_t(32) << 20;
+// (pixels x channels) fits in this many floats (512 MiB: any 3-channel image up to 8192
+// wide, a 48-channel spectral one up to 2048 wide), else with bands of whole rows, so that
+// the spectral mode at large sizes does not need gigabytes. Bands cost: the lut method
+// builds its tables once per call (~1.2 s at 48 wavelengths on two cores).
+constexpr std::size_t kMaxValuesPerCall = std::size_t(128) << 20;
 
 // Large scratch buffers: 2 MiB aligned and marked for transparent huge pages, where the
 // kernel allows them (Linux, THP in "madvise" or "always" mode). First-touch page faults
@@ -47,7 +46,8 @@ struct FreeDeleter {
 };
 template <class T>
 std::unique_ptr<T[], FreeDeleter> huge_buffer(std::size_t n) {
-    const std::size_t bytes = std::max<std::size_t>(1, (n * sizeof(T) + kHugePage - 1) / kHugePage) * kHugePage;
+    const std::size_t pages = std::max<std::size_t>(1, (n * sizeof(T) + kHugePage - 1) / kHugePage);
+    const std::size_t bytes = pages * kHugePage;
     void* p = std::aligned_alloc(kHugePage, bytes);
     if (!p) throw std::bad_alloc();
 #ifdef MADV_HUGEPAGE
@@ -64,7 +64,8 @@ void advise_huge_pages(std::vector<float>& v, std::size_t n) {
     const std::uintptr_t begin = reinterpret_cast<std::uintptr_t>(v.data());
     const std::uintptr_t end = begin + n * sizeof(float);
     const std::uintptr_t a = (begin + kHugePage - 1) / kHugePage * kHugePage;
-    if (end > a + kHugePage) ::madvise(reinterpret_cast<void*>(a), (end - a) / kHugePage * kHugePage, MADV_HUGEPAGE);
+    if (end > a + kHugePage)
+        ::madvise(reinterpret_cast<void*>(a), (end - a) / kHugePage * kHugePage, MADV_HUGEPAGE);
 #endif
 }
 

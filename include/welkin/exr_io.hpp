@@ -59,4 +59,9 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
 // Reads every channel as float. Throws IoError naming `path` on failure.
 ExrImage read_exr(const std::string& path);
 
+// Threads OpenEXR uses to compress and decompress (its default is none: one thread does
+// all the ZIP work). Process-wide (Imf::setGlobalThreadCount): for hosts that own the
+// process, such as the CLI; a library embedding Welkin leaves it to its host.
+void set_exr_thread_count(int threads);
+
 }  // namespace welkin

@@ -3,7 +3,8 @@
 // The image covers the whole sphere in Blender's Environment Texture mapping
 // (equirect.hpp): width x width/2 pixels, top row (zenith) first, pixel centres. Every
 // pixel's sky radiance comes from one call of the chosen SkyMethod with all the pixel
-// directions at once; then, unless switched off, the sun's disc is added.
+// directions at once (bands of rows only beyond 512 MiB of radiance: spectral images
+// wider than 2048); then, unless switched off, the sun's disc is added.
 //
 // Units. RGB output: linear Rec.709 in W m^-2 sr^-1 (color.hpp), the sky converted with
 // lambda power -3 and the disc with 0 (Bruneton 2017's sky and sun conversions).

@@ -189,7 +189,8 @@ TEST(Color, BatchConversionMatchesSingle) {
     std::vector<float> rgb(15);
     conv.convert(spectra, rgb);
     for (int i = 0; i < 5; ++i) {
-        const auto one = conv.convert(std::span<const float>(spectra).subspan(i * w.size(), w.size()));
+        const auto one =
+            conv.convert(std::span<const float>(spectra).subspan(i * w.size(), w.size()));
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(rgb[3 * i + c], one[c], 1e-5 * std::abs(one[c]));
     }
 }
