@@ -840,3 +840,25 @@ TEST(ReferenceSkyEdges, ReportsProgressAndCancels) {
     stop.cancel_after = 3;
     EXPECT_THROW(ReferenceSky(paths(256)).radiance(atm, sun_at(30), dirs, out, {}, &stop), Cancelled);
 }
+
+TEST(ReferenceSkyEdges, TwilightSingleScatteringMatchesBruteForce) {
+    // Sun below the horizon: the view ray enters and leaves the Earth's shadow; the
+    // method cuts its quadrature there. A 200000-step trapezoid agrees (the integrand
+    // fades to ~0 at the shadow's edge, where the sun grazes the whole atmosphere).
+    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const ColumnTable table(atm);
+    const ReferenceSky single(paths(1), 1);
+    for (double sz : {93.0, 97.0})
+        for (double altitude : {0.0, 10e3})
+            for (const glm::dvec3& v : {view_direction(0, 0), view_direction(80, 0),
+                                        view_direction(80, 180), view_direction(89, 30)}) {
+                const Observer obs = sun_at(sz, altitude);
+                const SkyRun r = run(single, atm, obs, {v});
+                const std::vector<double> t =
+                    trapezoid_single_scattering(atm, table, altitude, v, obs.sun_direction, 200000);
+                for (std::size_t c = 0; c < 3; ++c)
+                    EXPECT_NEAR(r.radiance[c], t[c], 1e-4 * t[c] + 1e-12)
+                        << "sun " << sz << " altitude " << altitude << " view " << v.x << " "
+                        << v.z << " " << kBands[c];
+            }
+}
