@@ -1,15 +1,53 @@
-// PLACEHOLDER until the lut method lands: it refuses to run rather than return anything.
+// The "lut" method: Hillaire 2020's pipeline. Per atmosphere, the transmittance and
+// multiple-scattering LUTs (atmosphere_luts.hpp); per observer and sun, the sky-view LUT
+// (skyview_lut.hpp); per direction, one bilinear lookup.
+//
+// Known failure and its fallback: the sky-view LUT describes the sky around a point inside
+// the atmosphere. For an observer above the top, this method hands the directions to the
+// ray-march (with the same options), which is right there, and slower.
 #include "welkin/lut_sky.hpp"
 
-#include <stdexcept>
+#include <tbb/parallel_for.h>
+
+#include "welkin/error.hpp"
+
+#include "welkin/atmosphere_luts.hpp"
+#include "welkin/raymarch_sky.hpp"
+#include "welkin/skyview_lut.hpp"
+#include "welkin/view_geometry.hpp"
 
 namespace welkin {
 
-LutSky::LutSky(const SkyOptions& options) : options_(options) {}
+LutSky::LutSky(const SkyOptions& options) : options_(options) { options_.validate(); }
 
-void LutSky::radiance(const Atmosphere&, const Observer&, std::span<const glm::dvec3>,
-                       std::span<float>, std::span<float>, Progress*) const {
-    throw std::logic_error("the lut method is not implemented yet");
+void LutSky::radiance(const Atmosphere& atm, const Observer& observer_in,
+                      std::span<const glm::dvec3> directions_in, std::span<float> out,
+                      std::span<float> standard_error, Progress* progress) const {
+    const Observer observer = validate_deterministic_call(atm, observer_in, directions_in, out, standard_error);
+    const std::span<const glm::dvec3> directions = directions_in;
+    const std::size_t C = atm.channels();
+    const double r = atm.bottom_radius_m + observer.altitude_m;
+    if (r >= atm.top_radius_m) {
+        RaymarchSky(options_).radiance(atm, observer, directions, out, {}, progress);
+        return;
+    }
+    const AtmosphereLuts luts(atm, options_);
+    ProgressTracker tracker(progress, directions.size() * luts.batches().size());
+    for (const auto& b : luts.batches()) {
+        const SkyViewLut sky(b->medium, b->transmittance, b->multiscattering, r,
+                             observer.sun_direction.z, options_.skyview_width,
+                             options_.skyview_height);
+        const std::size_t first = b->medium.first_channel(), count = b->medium.channel_count();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, directions.size(), 4096),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                                  const ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
+                                  store_channels(sky.radiance(g.mu, g.cos_phi), count, &out[i * C + first]);
+                              }
+                              tracker.advance(range.size());
+                          });
+    }
+    tracker.finish();
 }
 
 }  // namespace welkin

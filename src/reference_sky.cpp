@@ -607,7 +607,9 @@ void ReferenceSky::radiance(const Atmosphere& atmosphere, const Observer& observ
     atmosphere.validate();
     options_.validate();
     const Observer obs = observer.validated();
-    const std::vector<glm::dvec3> dirs = validated_directions(directions);
+    validate_directions(directions);
+    std::vector<glm::dvec3> dirs(directions.begin(), directions.end());
+    for (glm::dvec3& d : dirs) d /= std::sqrt(glm::dot(d, d));
     const std::size_t C = atmosphere.channels(), N = dirs.size();
     if (out.size() != N * C)
         throw InvalidArgument("out", fmt::format("must hold directions x channels = {} floats, "

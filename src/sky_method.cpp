@@ -1,5 +1,6 @@
 #include "welkin/sky_method.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -38,18 +39,29 @@ void SkyOptions::validate() const {
     require_in_range("reference_paths", reference_paths, 1, 1 << 26);
 }
 
-std::vector<glm::dvec3> validated_directions(std::span<const glm::dvec3> directions) {
-    std::vector<glm::dvec3> out(directions.size());
+void validate_directions(std::span<const glm::dvec3> directions) {
     for (std::size_t i = 0; i < directions.size(); ++i) {
         const glm::dvec3& d = directions[i];
-        const double len = glm::length(d);
-        if (!std::isfinite(len) || !(len > 1e-12))
+        const double len2 = glm::dot(d, d);
+        if (!std::isfinite(len2) || !(len2 > 1e-24))
             throw InvalidArgument(fmt::format("view_directions[{}]", i),
                                   fmt::format("must be a finite non-zero vector, got ({}, {}, {})",
                                               d.x, d.y, d.z));
-        out[i] = d / len;
     }
-    return out;
+}
+
+Observer validate_deterministic_call(const Atmosphere& atmosphere, const Observer& observer,
+                                     std::span<const glm::dvec3> directions, std::span<float> out,
+                                     std::span<float> standard_error) {
+    atmosphere.validate();
+    const Observer validated = observer.validated();
+    validate_directions(directions);
+    if (out.size() != directions.size() * atmosphere.channels())
+        throw InvalidArgument("out", "must hold directions x channels values");
+    if (!standard_error.empty() && standard_error.size() != out.size())
+        throw InvalidArgument("standard_error", "must be empty or hold directions x channels values");
+    std::fill(standard_error.begin(), standard_error.end(), 0.0f);
+    return validated;
 }
 
 std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference"}; }

@@ -20,4 +20,8 @@ glm::dvec3 equirect_to_direction(const glm::dvec2& uv);
 // first (j = 0 is the top row).
 glm::dvec3 equirect_pixel_direction(int i, int j, int width, int height);
 
+// Exact solid angle (sr) of a pixel in row j (0 = top): (2 pi / width) times the
+// difference of the sines of its bottom and top elevations. The rows sum to 4 pi.
+double equirect_pixel_solid_angle(int j, int width, int height);
+
 }  // namespace welkin

@@ -89,7 +89,14 @@ SkyResult sky_radiance(const SkyMethod& method, const Atmosphere& atmosphere,
                        const Observer& observer, std::span<const glm::dvec3> directions,
                        Progress* progress = nullptr);
 
-// Validates a batch of view directions and returns them normalised.
-std::vector<glm::dvec3> validated_directions(std::span<const glm::dvec3> directions);
+// The checks every deterministic method makes on entry: the atmosphere, the observer
+// (returned validated), the directions, and the size of `out`; zero-fills standard_error.
+Observer validate_deterministic_call(const Atmosphere& atmosphere, const Observer& observer,
+                                     std::span<const glm::dvec3> directions, std::span<float> out,
+                                     std::span<float> standard_error);
+
+// Throws InvalidArgument naming view_directions[i] for the first direction that is not a
+// finite non-zero vector. Methods normalise each direction as they use it.
+void validate_directions(std::span<const glm::dvec3> directions);
 
 }  // namespace welkin

@@ -1,0 +1,124 @@
+// The `welkin` Python module: the module object, its error mapping and the small helpers
+// the other bindings files share. Each part of the API registers itself from its own file:
+//   atmosphere_bindings.cpp  welkin.Atmosphere, DensityProfile, DensityLayer
+//   sky_bindings.cpp         welkin.sky_radiance, methods (cancellable, GIL released)
+//   sun_bindings.cpp         welkin.sun
+//   color_bindings.cpp       spectrum_to_rgb, spectral_wavelengths_nm, equirect mapping
+//   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
+#include <cstdint>
+#include <cstring>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "bindings.hpp"
+#include "welkin/error.hpp"
+
+#ifndef WELKIN_VERSION
+#define WELKIN_VERSION "unknown"
+#endif
+
+namespace welkin::python {
+
+std::vector<double> to_vector(const py::handle& values, const std::string& parameter) {
+    if (values.is_none()) return {};
+    const c_array<double> array =
+        to_c_array<double>(values, parameter, -1, 1, 1, "a sequence of numbers");
+    return std::vector<double>(array.data(), array.data() + array.size());
+}
+
+py::array_t<double> to_readonly_array(const std::vector<double>& values) {
+    py::array_t<double> array(static_cast<py::ssize_t>(values.size()));
+    std::copy(values.begin(), values.end(), array.mutable_data());
+    array.attr("flags").attr("writeable") = false;
+    return array;
+}
+
+std::string shape_string(const py::array& array) {
+    std::ostringstream s;
+    s << '(';
+    for (py::ssize_t i = 0; i < array.ndim(); ++i)
+        s << (i ? ", " : "") << array.shape(i);
+    s << (array.ndim() == 1 ? ",)" : ")");
+    return s.str();
+}
+
+static_assert(sizeof(glm::dvec3) == 3 * sizeof(double),
+              "a (..., 3) float64 buffer is read as glm::dvec3 in place");
+
+std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array,
+                                          std::vector<glm::dvec3>& storage) {
+    const auto n = static_cast<std::size_t>(array.size() / 3);
+    if (reinterpret_cast<std::uintptr_t>(array.data()) % alignof(glm::dvec3) == 0)
+        return {reinterpret_cast<const glm::dvec3*>(array.data()), n};
+    storage.resize(n);
+    std::memcpy(storage.data(), array.data(), n * sizeof(glm::dvec3));
+    return storage;
+}
+
+glm::dvec3 to_dvec3(const py::handle& values, const std::string& parameter) {
+    const c_array<double> v =
+        to_c_array<double>(values, parameter, 3, 1, 1, "a sequence of 3 numbers (x, y, z), Z up");
+    return {v.data()[0], v.data()[1], v.data()[2]};
+}
+
+void throw_bad_shape(const std::string& parameter, const std::string& expected,
+                     const std::string& got) {
+    throw InvalidArgument(parameter, fmt::format("must be {}, got {}", expected, got));
+}
+
+namespace {
+
+// The one place where core errors become Python exceptions. pybind11's own translation
+// handles the rest: std::bad_alloc -> MemoryError, other std::exception -> RuntimeError.
+void translate_errors(std::exception_ptr error) {
+    try {
+        if (error) std::rethrow_exception(error);
+    } catch (const InvalidArgument& e) {
+        PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const IoError& e) {
+        PyErr_SetString(PyExc_OSError, e.what());
+    } catch (const Cancelled&) {
+        PyErr_SetString(PyExc_KeyboardInterrupt, "welkin: computation cancelled");
+    }
+}
+
+}  // namespace
+}  // namespace welkin::python
+
+PYBIND11_MODULE(welkin, m) {
+    namespace py = pybind11;
+    using namespace welkin::python;
+
+    m.doc() = R"doc(Welkin: a physically based sky and atmosphere engine (C++ core).
+
+Conventions (the same in the core, the CLI and the Blender add-on):
+  * SI units: lengths in metres, coefficients in m^-1, angles in radians
+    (degrees only where a name ends in _deg).
+  * Frame: Blender's world frame, Z up. The observer stands on the Z axis at
+    altitude_m above a spherical ground; the planet centre is straight below.
+  * sun_direction: the unit vector towards the sun.
+  * Spectral radiance in W m^-2 sr^-1 nm^-1 at Atmosphere.wavelengths_nm
+    (default 680, 550, 440 nm); RGB is linear Rec.709 in W m^-2 sr^-1
+    (CIE 1931 weighted, without the 683 lm/W factor).
+
+Errors: bad input raises ValueError naming the parameter; file errors raise
+OSError; a cancelled computation (Ctrl-C, or a progress callback returning
+False) raises KeyboardInterrupt.
+
+Quick start:
+    import numpy as np, welkin
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    dirs = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.1]])
+    L = welkin.sky_radiance(atm, altitude_m=0.0, sun_direction=(0.0, 0.6, 0.8),
+                            view_directions=dirs, method="lut", output="rgb")
+)doc";
+    m.attr("__version__") = WELKIN_VERSION;
+
+    py::register_exception_translator(&translate_errors);
+
+    register_atmosphere(m);
+    register_sky(m);
+    register_sun(m);
+    register_color(m);
+}

@@ -1,0 +1,116 @@
+// Speed of the sky pipeline, side by side in one run (issue #2): each LUT's build time, a
+// full sun-change update, and a 2048 x 1024 equirectangular sky by lut, raymarch and
+// reference, with speed-up ratios. Timings are medians of repeated runs on this machine;
+// the reference is timed on a strided subset of the image's pixels and extrapolated
+// (printed as such), since a full-image Monte-Carlo render takes hours on two cores.
+//
+//   build/welkin_bench [--width 2048] [--repeats 7] [--reference-stride 4096] [--csv FILE]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <glm/geometric.hpp>
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "welkin/atmosphere_luts.hpp"
+#include "welkin/equirect.hpp"
+#include "welkin/skyview_lut.hpp"
+#include "welkin/sky_method.hpp"
+
+using namespace welkin;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double median_ms(int repeats, const std::function<void()>& f) {
+    std::vector<double> t;
+    for (int i = 0; i < repeats; ++i) {
+        const auto a = Clock::now();
+        f();
+        t.push_back(std::chrono::duration<double, std::milli>(Clock::now() - a).count());
+    }
+    std::sort(t.begin(), t.end());
+    return t[t.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"Welkin sky benchmark"};
+    int width = 2048, repeats = 7, stride = 4096;
+    std::string csv;
+    app.add_option("--width", width, "HDRI width in pixels (height = width / 2)");
+    app.add_option("--repeats", repeats, "runs per timing; the median is reported");
+    app.add_option("--reference-stride", stride, "time the reference on every Nth pixel");
+    app.add_option("--csv", csv, "also write the figures as CSV");
+    CLI11_PARSE(app, argc, argv);
+
+    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const SkyOptions options;
+    const Observer observer{0.0, glm::normalize(glm::dvec3(0.5, 0.3, 0.4))};
+    const double r = atm.bottom_radius_m + observer.altitude_m;
+    fmt::print("Welkin sky benchmark: {} threads, preset {}, {}x{} sky\n",
+               tbb::info::default_concurrency(), atm.name, width, width / 2);
+
+    std::vector<std::pair<std::string, double>> rows;
+    auto report = [&](const std::string& what, double ms) {
+        rows.emplace_back(what, ms);
+        fmt::print("  {:<52} {:>10.2f} ms\n", what, ms);
+    };
+
+    // LUT builds, one at a time.
+    const AtmosphereBatch medium(atm, 0, 3);
+    report(fmt::format("transmittance LUT {}x{}", options.transmittance_width, options.transmittance_height),
+           median_ms(repeats, [&] { TransmittanceLut t(medium, options.transmittance_width, options.transmittance_height); }));
+    const TransmittanceLut tlut(medium, options.transmittance_width, options.transmittance_height);
+    report(fmt::format("multiple-scattering LUT {}x{}", options.multiscattering_size, options.multiscattering_size),
+           median_ms(repeats, [&] { MultiScatteringLut m(medium, tlut, options.multiscattering_size); }));
+    const MultiScatteringLut mslut(medium, tlut, options.multiscattering_size);
+    report(fmt::format("sky-view LUT {}x{}", options.skyview_width, options.skyview_height),
+           median_ms(repeats, [&] { SkyViewLut s(medium, tlut, mslut, r, observer.sun_direction.z, options.skyview_width, options.skyview_height); }));
+    report("full LUT rebuild (atmosphere change: all three)", median_ms(repeats, [&] {
+               AtmosphereBatch m(atm, 0, 3);
+               TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
+               MultiScatteringLut ms(m, t, options.multiscattering_size);
+               SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+           }));
+
+    // Whole-image skies through the SkyMethod interface.
+    const int height = width / 2;
+    std::vector<glm::dvec3> dirs(std::size_t(width) * height);
+    for (int j = 0; j < height; ++j)
+        for (int i = 0; i < width; ++i) dirs[std::size_t(j) * width + i] = equirect_pixel_direction(i, j, width, height);
+    std::vector<float> out(dirs.size() * atm.channels());
+    const auto lut = make_sky_method("lut", options);
+    const double lut_ms = median_ms(repeats, [&] { lut->radiance(atm, observer, dirs, out); });
+    report(fmt::format("lut {}x{} sky (LUTs built per call, no file)", width, height), lut_ms);
+    const auto raymarch = make_sky_method("raymarch", options);
+    const double raymarch_ms = median_ms(std::min(repeats, 3), [&] { raymarch->radiance(atm, observer, dirs, out); });
+    report(fmt::format("raymarch {}x{} sky ({} + {} steps)", width, height, options.raymarch_steps, options.raymarch_sun_steps), raymarch_ms);
+    std::vector<glm::dvec3> subset;
+    for (std::size_t i = 0; i < dirs.size(); i += std::size_t(stride)) subset.push_back(dirs[i]);
+    std::vector<float> out_subset(subset.size() * atm.channels());
+    fmt::print("  speed-up lut vs raymarch:  {:>8.0f}x\n", raymarch_ms / lut_ms);
+    try {
+        const auto reference = make_sky_method("reference", options);
+        const double ref_subset_ms = median_ms(1, [&] { reference->radiance(atm, observer, subset, out_subset); });
+        const double reference_ms = ref_subset_ms * double(dirs.size()) / double(subset.size());
+        report(fmt::format("reference {}x{} sky ({} paths; extrapolated from {} px)", width, height,
+                           options.reference_paths, subset.size()), reference_ms);
+        fmt::print("  speed-up lut vs reference: {:>8.0f}x\n", reference_ms / lut_ms);
+    } catch (const std::exception& e) {
+        fmt::print("  reference: not timed ({})\n", e.what());
+    }
+    if (!csv.empty()) {
+        std::ofstream f(csv);
+        f << "what,ms\n";
+        for (auto& [what, ms] : rows) f << '"' << what << "\"," << ms << '\n';
+    }
+    return 0;
+}

@@ -1,0 +1,67 @@
+// OpenEXR images in and out: named float channels, top row first.
+//
+// The writer is atomic and careful with the user's files: it writes a temporary file in
+// the target's directory and moves it into place only once it is complete, so a failed or
+// cancelled write never leaves a partial image; it refuses to replace an existing file
+// unless asked to. Failures raise IoError naming the path.
+//
+// Channels are named as OpenEXR names them. A plain RGB image uses "R", "G", "B" (and
+// "A"); a multilayer file, as Blender writes and reads them, names each channel
+// "<layer>.<pass>.<channel>", e.g. "Welkin.Sky.R" (Blender splits at the dots: view layer
+// "Welkin", pass "Sky", channel "R"). OpenEXR stores channels sorted by name; the reader
+// returns them in the file's order, so look them up by name (channel_index).
+//
+// Half-float files hold magnitudes up to 65504: the writer clamps larger finite values to
+// that (the sun's disc can exceed it) and reports how many it clamped.
+//
+// Thread-safety: the functions share no state; OpenEXR compresses on its own thread pool.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace welkin {
+
+struct ExrImage {
+    int width = 0, height = 0;
+    std::vector<std::string> channel_names;
+    std::vector<float> pixels;  // (height, width, channels) interleaved, top row first
+
+    std::size_t channels() const { return channel_names.size(); }
+    // Index of a channel, or -1 when absent.
+    int channel_index(const std::string& name) const;
+    float at(int x, int y, std::size_t channel) const {
+        return pixels[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * channels() +
+                      channel];
+    }
+};
+
+enum class ExrPixelType { Half, Float };
+
+struct ExrWriteOptions {
+    ExrPixelType pixel_type = ExrPixelType::Float;
+    bool overwrite = false;
+    // Extra string attributes for the header (e.g. "software", "comments").
+    std::vector<std::pair<std::string, std::string>> attributes;
+};
+
+struct ExrWriteReport {
+    std::size_t clamped_values = 0;  // finite values beyond the half range, clamped
+};
+
+// Throws InvalidArgument for an inconsistent image (sizes, empty or duplicate channel
+// names) and IoError naming `path` when the file exists (and !overwrite) or cannot be
+// written.
+ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
+                         const ExrWriteOptions& options = {});
+
+// Reads every channel as float. Throws IoError naming `path` on failure.
+ExrImage read_exr(const std::string& path);
+
+// Threads OpenEXR uses to compress and decompress (its default is none: one thread does
+// all the ZIP work). Process-wide (Imf::setGlobalThreadCount): for hosts that own the
+// process, such as the CLI; a library embedding Welkin leaves it to its host.
+void set_exr_thread_count(int threads);
+
+}  // namespace welkin

@@ -1,0 +1,109 @@
+// The single-scattering march shared by the sky-view LUT and the ray-march method.
+//
+// Along a view ray from radius r with zenith cosine mu, the path radiance is
+// (Hillaire 2020 eqs. 1-4, 10)
+//
+//   L = integral_0^d T(0, t) J(t) dt,
+//   J = E_sun [ T_sun(t) (sigma_R P_R(nu) + sigma_M P_M(nu)) + (sigma_R + sigma_M) Psi_ms(t) ],
+//
+// with the sun's zenith cosine at distance t, mu_s(t) = (r mu_s + t nu) / r(t) (Bruneton
+// 2017, eq. for mu_s_d). Samples are spread as t = d s^2 for s uniform in [0, 1]: dense
+// near the observer, where an upward ray is densest and where a near-horizontal ray from
+// low altitude spends its first kilometres; each segment is integrated with Hillaire's
+// energy-conserving form: with S the source at the segment's midpoint (in s) and
+// T_seg = exp(-sigma_t dt), the segment adds T (S - S T_seg) / sigma_t (Hillaire 2015,
+// "Physically Based and Unified Volumetric Rendering in Frostbite"), which stays right
+// however thick a segment is.
+//
+// The march is split in two because everything but the sun depends on the ray alone:
+// RaySamples holds, per step, the radius, the scattering coefficients and the weight
+// T (1 - T_seg) / sigma_t; inscatter() then adds the sun- and phase-dependent source for
+// any (mu_s, nu). The sky-view LUT prepares one RaySamples per row (a view zenith angle)
+// and reuses it for every azimuth in the row.
+//
+// An observer above the atmosphere is first moved to where the ray enters it; rays that
+// miss the atmosphere see nothing.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "welkin/geometry.hpp"
+#include "welkin/multiscattering_lut.hpp"
+
+namespace welkin {
+
+struct RaySamples {
+    struct Step {
+        double t;   // distance from the observer (not from the atmosphere entry)
+        double r;   // radius of the sample
+        Spectrum4 weight;  // T(0, t_start) (1 - T_seg) / sigma_t, metres
+        Spectrum4 rayleigh_scattering, mie_scattering;
+        TransmittanceLut::AtRadius sun_at;  // filled when prepared with a transmittance LUT
+        float ms_v = 0.0f;
+    };
+    double r0 = 0.0;  // the observer's radius
+    std::vector<Step> steps;
+    Spectrum4 transmittance{1.0f};  // along the whole path
+};
+
+// Fills `out` for the ray (r, mu). `tlut` and `ms`, if given, also precompute the
+// radius-only parts of their lookups.
+inline void prepare_ray(const AtmosphereBatch& batch, double r, double mu, int steps, RaySamples& out,
+                        const TransmittanceLut* tlut = nullptr, const MultiScatteringLut* ms = nullptr) {
+    out.steps.clear();
+    out.r0 = r;
+    out.transmittance = Spectrum4(1.0f);
+    const double R = batch.bottom_radius(), top = batch.top_radius();
+    double offset = 0.0;
+    if (r > top) {
+        offset = distance_to_atmosphere_entry(r, mu, top);
+        if (offset < 0.0) return;
+        const double r_entry = std::min(radius_at(r, mu, offset), top);
+        mu = mu_at(r, mu, offset, r_entry);
+        r = r_entry;
+    }
+    const double d = distance_to_boundary(r, mu, R, top);
+    out.steps.resize(std::size_t(steps));
+    Spectrum4 T(1.0f);
+    const double inv_n = 1.0 / double(steps);
+    for (int i = 0; i < steps; ++i) {
+        const double s0 = double(i) * inv_n, s1 = double(i + 1) * inv_n, sm = (double(i) + 0.5) * inv_n;
+        const double dt = d * (s1 * s1 - s0 * s0);
+        const double t = d * sm * sm;
+        RaySamples::Step& st = out.steps[std::size_t(i)];
+        st.t = offset + t;
+        st.r = radius_at(r, mu, t);
+        const MediumSample m = batch.sample(st.r - R);
+        st.rayleigh_scattering = m.rayleigh_scattering;
+        st.mie_scattering = m.mie_scattering;
+        const Spectrum4 T_seg = glm::exp(-m.extinction * float(dt));
+        for (int c = 0; c < 4; ++c)
+            st.weight[c] = T[c] * (m.extinction[c] > 1e-12f ? (1.0f - T_seg[c]) / m.extinction[c] : float(dt));
+        if (tlut) st.sun_at = tlut->at_radius(st.r);
+        if (ms) st.ms_v = ms->v_at_radius(st.r);
+        T *= T_seg;
+    }
+    out.transmittance = T;
+}
+
+// Path radiance of a prepared ray for the sun at zenith cosine mu_s (at the observer) and
+// view-sun cosine nu. SunTransmittance: callable (const RaySamples::Step&, double mu_s_t)
+// -> Spectrum4, the sun's transmittance (with the planet's shadow) at a step.
+template <class SunTransmittance>
+Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, const RaySamples& ray,
+                    double mu_s, double nu, SunTransmittance&& sun_transmittance) {
+    const float rayleigh_p = batch.rayleigh_phase(float(nu));
+    const float mie_p = batch.mie_phase(float(nu));
+    Spectrum4 L(0.0f);
+    for (const RaySamples::Step& st : ray.steps) {
+        const double mu_s_t = clamp_cosine((ray.r0 * mu_s + st.t * nu) / st.r);
+        Spectrum4 source = sun_transmittance(st, mu_s_t) *
+                           (st.rayleigh_scattering * rayleigh_p + st.mie_scattering * mie_p);
+        if (ms) source += (st.rayleigh_scattering + st.mie_scattering) * ms->psi(st.ms_v, mu_s_t);
+        L += st.weight * source;
+    }
+    return L * batch.solar_irradiance();
+}
+
+}  // namespace welkin

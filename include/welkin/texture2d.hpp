@@ -1,0 +1,45 @@
+// A 2D table of Spectrum4 with bilinear lookup at texel centres, as a GPU texture with
+// clamp-to-edge addressing: texel (i, j) holds the value at u = (i + 0.5) / width,
+// v = (j + 0.5) / height.
+#pragma once
+
+#include <algorithm>
+#include <vector>
+
+#include "welkin/atmosphere_batch.hpp"
+
+namespace welkin {
+
+class Texture2D {
+public:
+    Texture2D() = default;
+    Texture2D(int width, int height) : width_(width), height_(height), texels_(std::size_t(width) * height) {}
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    Spectrum4& at(int i, int j) { return texels_[std::size_t(j) * width_ + i]; }
+    const Spectrum4& at(int i, int j) const { return texels_[std::size_t(j) * width_ + i]; }
+
+    Spectrum4 sample(float u, float v) const {
+        const float x = std::clamp(u * float(width_) - 0.5f, 0.0f, float(width_ - 1));
+        const float y = std::clamp(v * float(height_) - 0.5f, 0.0f, float(height_ - 1));
+        const int i = std::min(int(x), width_ - 2 < 0 ? 0 : width_ - 2);
+        const int j = std::min(int(y), height_ - 2 < 0 ? 0 : height_ - 2);
+        const float fx = x - float(i), fy = y - float(j);
+        const int i1 = std::min(i + 1, width_ - 1), j1 = std::min(j + 1, height_ - 1);
+        const Spectrum4 a = at(i, j) + fx * (at(i1, j) - at(i, j));
+        const Spectrum4 b = at(i, j1) + fx * (at(i1, j1) - at(i, j1));
+        return a + fy * (b - a);
+    }
+
+private:
+    int width_ = 0, height_ = 0;
+    std::vector<Spectrum4> texels_;
+};
+
+// Bruneton 2017 (functions.glsl, GetTextureCoordFromUnitRange): maps x in [0, 1] so that
+// 0 and 1 fall on the centres of the first and last texels, where values are exact.
+inline float texcoord_from_unit(float x, int size) { return 0.5f / float(size) + x * (1.0f - 1.0f / float(size)); }
+inline float unit_from_texcoord(float u, int size) { return (u - 0.5f / float(size)) / (1.0f - 1.0f / float(size)); }
+
+}  // namespace welkin

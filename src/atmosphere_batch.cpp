@@ -1,0 +1,59 @@
+#include "welkin/atmosphere_batch.hpp"
+
+#include <algorithm>
+
+#include "welkin/error.hpp"
+#include "welkin/phase.hpp"
+
+namespace welkin {
+namespace {
+
+Spectrum4 pack(const std::vector<double>& v, std::size_t first, std::size_t count) {
+    Spectrum4 s(0.0f);
+    for (int lane = 0; lane < 4; ++lane)
+        s[lane] = float(v[first + std::min<std::size_t>(std::size_t(lane), count - 1)]);
+    return s;
+}
+
+}  // namespace
+
+AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::size_t count)
+    : first_(first),
+      count_(count),
+      bottom_radius_(atm.bottom_radius_m),
+      top_radius_(atm.top_radius_m),
+      thickness_(atm.top_radius_m - atm.bottom_radius_m),
+      inv_table_step_(double(kTableSize - 1) / (atm.top_radius_m - atm.bottom_radius_m)),
+      solar_irradiance_(pack(atm.solar_irradiance, first, count)),
+      ground_albedo_(pack(atm.ground_albedo, first, count)),
+      sun_angular_radius_(float(atm.sun_angular_radius_rad)),
+      mie_model_(atm.mie_phase),
+      mie_g_(float(atm.mie_g)),
+      table_(kTableSize) {
+    if (count < 1 || count > 4 || first + count > atm.channels())
+        throw InvalidArgument("channels", "a batch holds 1 to 4 of the atmosphere's channels");
+    const Spectrum4 rayleigh = pack(atm.rayleigh_scattering, first, count);
+    const Spectrum4 mie_s = pack(atm.mie_scattering, first, count);
+    const Spectrum4 mie_t = pack(atm.mie_extinction, first, count);
+    const Spectrum4 absorption = pack(atm.absorption_extinction, first, count);
+    for (int i = 0; i < kTableSize; ++i) {
+        const double h = double(i) / inv_table_step_;
+        const float rho_r = float(atm.rayleigh_density.density(h));
+        const float rho_m = float(atm.mie_density.density(h));
+        const float rho_a = float(atm.absorption_density.density(h));
+        table_[i] = {rayleigh * rho_r, mie_s * rho_m,
+                     rayleigh * rho_r + mie_t * rho_m + absorption * rho_a};
+    }
+}
+
+std::vector<AtmosphereBatch> AtmosphereBatch::split(const Atmosphere& atm) {
+    std::vector<AtmosphereBatch> batches;
+    for (std::size_t first = 0; first < atm.channels(); first += 4)
+        batches.emplace_back(atm, first, std::min<std::size_t>(4, atm.channels() - first));
+    return batches;
+}
+
+float AtmosphereBatch::rayleigh_phase(float nu) const { return welkin::rayleigh_phase(nu); }
+float AtmosphereBatch::mie_phase(float nu) const { return welkin::mie_phase(mie_model_, nu, mie_g_); }
+
+}  // namespace welkin

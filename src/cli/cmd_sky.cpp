@@ -1,0 +1,176 @@
+// `welkin sky`: render an equirectangular sky HDRI to OpenEXR.
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "common.hpp"
+#include "terminal_progress.hpp"
+#include "welkin/error.hpp"
+#include "welkin/exr_io.hpp"
+#include "welkin/sky_image.hpp"
+
+namespace welkin::cli {
+namespace {
+
+struct SkyArgs {
+    AtmosphereArgs atmosphere;
+    ObserverArgs observer;
+    int width = 2048;
+    std::string method = "lut";
+    double exposure = 1.0;
+    bool half = false, full_float = false;
+    bool no_sun_disc = false;
+    bool multilayer = false;
+    bool spectral_channels = false;
+    bool overwrite = false;
+    std::string output = "welkin_sky.exr";
+    int threads = 0;
+    int reference_paths = SkyOptions{}.reference_paths;
+    std::uint64_t seed = SkyOptions{}.seed;
+};
+
+int run_sky(const SkyArgs& args) {
+    // Everything that can be refused is refused before the render starts.
+    check_output_path(args.output, args.overwrite);
+    const Atmosphere atm = load_atmosphere(args.atmosphere);
+    const Observer observer = make_observer(args.observer);
+    SkyOptions options;
+    options.reference_paths = args.reference_paths;
+    options.seed = args.seed;
+    const std::unique_ptr<SkyMethod> method = make_sky_method(args.method, options);
+    SkyImageOptions image_options;
+    image_options.sun_disc = !args.no_sun_disc;
+    image_options.exposure = args.exposure;
+    image_options.output = args.spectral_channels ? SkyImageOptions::Output::Spectral
+                                                  : SkyImageOptions::Output::Rgb;
+    image_options.validate();
+
+    std::optional<tbb::global_control> threads;
+    if (args.threads > 0)
+        threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(args.threads));
+    // ZIP compression of a 2048 x 1024 float image takes ~0.4 s on one thread.
+    set_exr_thread_count(args.threads > 0 ? args.threads
+                                          : int(std::max(1u, std::thread::hardware_concurrency())));
+
+    install_interrupt_handler();
+    const auto start = std::chrono::steady_clock::now();
+    SkyImage image;
+    {
+        TerminalProgress progress(fmt::format("sky {}x{} ({})", args.width, args.width / 2,
+                                              args.method));
+        image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
+        progress.finish();
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (interrupted()) throw Cancelled();
+
+    ExrImage exr;
+    exr.width = image.width;
+    exr.height = image.height;
+    for (const std::string& name : image.channel_names)
+        exr.channel_names.push_back(args.multilayer ? "Welkin.Sky." + name : name);
+    exr.pixels = std::move(image.pixels);
+    ExrWriteOptions write;
+    write.overwrite = args.overwrite;
+    write.pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
+    // Provenance: the settings that reproduce the file.
+    nlohmann::ordered_json settings = {
+        {"atmosphere", args.atmosphere.file.empty() ? atm.name : args.atmosphere.file},
+        {"wavelengths_nm", atm.wavelengths_nm},
+        {"sun_elevation_deg", args.observer.sun_elevation_deg},
+        {"sun_azimuth_deg", args.observer.sun_azimuth_deg},
+        {"altitude_m", args.observer.altitude_m},
+        {"method", args.method},
+        {"exposure", args.exposure},
+        {"sun_disc", !args.no_sun_disc},
+        {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
+                                         : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
+    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
+                        {"welkinSettings", settings.dump()}};
+    if (args.spectral_channels)
+        write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
+    const ExrWriteReport report = write_exr(args.output, exr, write);
+    if (report.clamped_values > 0)
+        fmt::print(stderr,
+                   "welkin: warning: {} values above 65504 (the sun's disc) were clamped in "
+                   "the half-float file; use --float to keep them, or --exposure to scale\n",
+                   report.clamped_values);
+    fmt::print("wrote {} ({} x {}, {} {}, method {}, {:.2f} s)\n",
+               std::filesystem::absolute(args.output).string(), exr.width, exr.height,
+               fmt::join(exr.channel_names, ","), args.half ? "half" : "float", args.method,
+               seconds);
+    return 0;
+}
+
+}  // namespace
+
+Command add_sky_command(CLI::App& app) {
+    auto args = std::make_shared<SkyArgs>();
+    CLI::App* sub = app.add_subcommand(
+        "sky", "Render an equirectangular sky HDRI (OpenEXR) for Blender's Environment Texture");
+    add_atmosphere_options(sub, args->atmosphere);
+    add_observer_options(sub, args->observer);
+    sub->add_option("--width", args->width,
+                    "Image width in pixels, even, in [4, 16384]; the height is width / 2")
+        ->type_name("W")
+        ->check(CLI::Range(4, 16384))
+        ->capture_default_str();
+    sub->add_option("--method", args->method,
+                    "Sky method: analytic, lut (Hillaire 2020), raymarch, or reference "
+                    "(Monte-Carlo, slow)")
+        ->type_name("NAME")
+        ->check(CLI::IsMember(sky_method_names()))
+        ->capture_default_str();
+    sub->add_option("--exposure", args->exposure,
+                    "Multiplies every output value (sky and sun) once, after colour "
+                    "conversion; in (0, 1e6]. 1 keeps physical units: linear Rec.709 in "
+                    "W m^-2 sr^-1, the scale of Blender's Nishita sky (683 gives cd m^-2)")
+        ->type_name("X")
+        ->capture_default_str();
+    auto* half = sub->add_flag("--half", args->half,
+                               "Write 16-bit half floats (smaller; values above 65504, such "
+                               "as the sun's disc, are clamped)");
+    auto* full = sub->add_flag("--float", args->full_float, "Write 32-bit floats (the default)");
+    half->excludes(full);
+    sub->add_flag("--no-sun-disc", args->no_sun_disc,
+                  "Leave the sun's disc out (when a sun lamp lights the scene, so that its "
+                  "energy is not counted twice)");
+    sub->add_flag("--multilayer", args->multilayer,
+                  "Name the channels Welkin.Sky.R/G/B (a Blender multilayer EXR) instead of "
+                  "R/G/B");
+    sub->add_flag("--spectral-channels", args->spectral_channels,
+                  "Write one channel per wavelength (W m^-2 sr^-1 nm^-1, named S0.<nm>nm as "
+                  "in the spectral OpenEXR layout) instead of RGB");
+    sub->add_flag("--overwrite", args->overwrite, "Replace the output file if it exists");
+    sub->add_option("-o,--output", args->output,
+                    "Output EXR file; never replaced unless --overwrite")
+        ->type_name("FILE.exr")
+        ->capture_default_str();
+    sub->add_option("--threads", args->threads, "Worker threads, in [1, 1024] (default: all cores)")
+        ->type_name("N")
+        ->check(CLI::Range(1, 1024));
+    sub->add_option("--reference-paths", args->reference_paths,
+                    "reference method: Monte-Carlo paths per pixel and wavelength")
+        ->type_name("N")
+        ->check(CLI::Range(1, 1 << 26))
+        ->capture_default_str();
+    sub->add_option("--seed", args->seed, "reference method: random seed")
+        ->type_name("N")
+        ->capture_default_str();
+    sub->footer(
+        "The image covers the whole sphere: top row the zenith, +X at the centre, +Y a "
+        "quarter from the left (Blender's mapping). Sky radiance excludes the sun's disc; "
+        "the disc is added with its exact direct irradiance (see `welkin sun`). Ctrl-C "
+        "cancels cleanly; nothing is written.");
+    return {sub, [args] { return run_sky(*args); }};
+}
+
+}  // namespace welkin::cli

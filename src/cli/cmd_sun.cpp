@@ -1,0 +1,68 @@
+// `welkin sun`: the sun at the observer, as JSON: transmittance, direct irradiance per
+// wavelength and in RGB (what a Blender sun lamp should carry so that sky and sun agree).
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "common.hpp"
+#include "welkin/color.hpp"
+#include "welkin/math.hpp"
+#include "welkin/sun.hpp"
+
+namespace welkin::cli {
+namespace {
+
+struct SunArgs {
+    AtmosphereArgs atmosphere;
+    ObserverArgs observer;
+};
+
+int run_sun(const SunArgs& args) {
+    const Atmosphere atm = load_atmosphere(args.atmosphere);
+    const Observer observer = make_observer(args.observer);
+    const SunRadiometry sun = sun_radiometry(atm, observer);
+    const double omega = kTwoPi * (1.0 - std::cos(atm.sun_angular_radius_rad));
+    nlohmann::ordered_json j = {
+        {"atmosphere", args.atmosphere.file.empty() ? atm.name : args.atmosphere.file},
+        {"altitude_m", observer.altitude_m},
+        {"sun_elevation_deg", args.observer.sun_elevation_deg},
+        {"sun_azimuth_deg", args.observer.sun_azimuth_deg},
+        {"sun_direction", {observer.sun_direction.x, observer.sun_direction.y,
+                           observer.sun_direction.z}},
+        {"sun_angular_radius_rad", atm.sun_angular_radius_rad},
+        {"sun_solid_angle_sr", omega},
+        {"visible_fraction", sun.visible_fraction},
+        {"wavelengths_nm", atm.wavelengths_nm},
+        {"solar_irradiance_W_m2_nm", atm.solar_irradiance},
+        {"transmittance", sun.transmittance},
+        {"direct_irradiance_W_m2_nm", sun.direct_irradiance}};
+    if (atm.channels() >= 3) {
+        // Sunlight converts with lambda power 0 (Bruneton's sun factors) when three
+        // wavelengths; spectrally otherwise. Units: W m^-2, CIE-weighted, no 683.
+        const SpectrumToRgb to_rgb(atm.wavelengths_nm, 0.0);
+        const std::vector<float> e(sun.direct_irradiance.begin(), sun.direct_irradiance.end());
+        const std::array<double, 3> rgb = to_rgb.convert(e);
+        j["direct_irradiance_rgb_W_m2"] = rgb;
+        j["disc_mean_radiance_rgb_W_m2_sr"] = {rgb[0] / omega, rgb[1] / omega, rgb[2] / omega};
+    }
+    fmt::print("{}\n", j.dump(2));
+    return 0;
+}
+
+}  // namespace
+
+Command add_sun_command(CLI::App& app) {
+    auto args = std::make_shared<SunArgs>();
+    CLI::App* sub = app.add_subcommand(
+        "sun", "Print the sun's transmittance and direct irradiance at the observer (JSON)");
+    add_atmosphere_options(sub, args->atmosphere);
+    add_observer_options(sub, args->observer);
+    sub->footer(
+        "direct_irradiance is the normal-incidence irradiance of the sun's disc at the "
+        "observer, E_sun * T * visible fraction (W m^-2 nm^-1 per wavelength; linear "
+        "Rec.709 W m^-2 for the RGB triple): the strength of a matching Blender sun lamp.");
+    return {sub, [args] { return run_sun(*args); }};
+}
+
+}  // namespace welkin::cli

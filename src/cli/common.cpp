@@ -1,0 +1,120 @@
+#include "common.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include <cmath>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "welkin/error.hpp"
+#include "welkin/math.hpp"
+
+namespace welkin::cli {
+
+void add_atmosphere_options(CLI::App* app, AtmosphereArgs& args) {
+    auto* preset = app->add_option("--preset", args.preset,
+                                   fmt::format("Built-in atmosphere: {} (see `welkin presets`)",
+                                               fmt::join(Atmosphere::preset_names(), ", ")))
+                       ->type_name("NAME")
+                       ->capture_default_str();
+    auto* file = app->add_option("--atmosphere", args.file,
+                                 "Atmosphere from a JSON file (the schema `welkin atmosphere` "
+                                 "writes); replaces --preset")
+                     ->type_name("FILE.json");
+    file->excludes(preset);
+    app->add_flag("--spectral", args.spectral,
+                  "Compute at 48 wavelengths (360-830 nm, 10 nm apart) and convert through "
+                  "the CIE 1931 functions, instead of 3 (680, 550, 440 nm) and Bruneton's "
+                  "approximate conversion; about 16x slower. With --preset only");
+}
+
+Atmosphere load_atmosphere(const AtmosphereArgs& args) {
+    if (!args.file.empty()) {
+        if (args.spectral)
+            throw InvalidArgument("--spectral",
+                                  "applies to --preset only: a JSON atmosphere sets its own "
+                                  "\"wavelengths_nm\" (with \"preset\" it resamples that "
+                                  "preset)");
+        try {
+            return Atmosphere::from_json_file(args.file);
+        } catch (const InvalidArgument& e) {
+            // The core may name the parameter twice ("p: p: message"): say it once.
+            std::string what = e.what();
+            const std::string twice = e.parameter() + ": " + e.parameter() + ": ";
+            if (what.rfind(twice, 0) == 0) what = what.substr(e.parameter().size() + 2);
+            throw InvalidArgument("--atmosphere", what);
+        }
+    }
+    try {
+        return args.spectral ? Atmosphere::preset(args.preset, spectral_wavelengths_nm())
+                             : Atmosphere::preset(args.preset);
+    } catch (const InvalidArgument& e) {
+        // "preset: unknown preset 'x'; choose one of: ..." -> named after the option.
+        const std::string what = e.what();
+        const std::string prefix = e.parameter() + ": ";
+        throw InvalidArgument("--preset", what.rfind(prefix, 0) == 0 ? what.substr(prefix.size())
+                                                                     : what);
+    }
+}
+
+void add_observer_options(CLI::App* app, ObserverArgs& args) {
+    app->add_option("--sun-elevation", args.sun_elevation_deg,
+                    "Sun elevation above the horizontal (XY) plane, degrees in [-90, 90]")
+        ->type_name("DEG")
+        ->check(CLI::Range(-90.0, 90.0))
+        ->capture_default_str();
+    app->add_option("--sun-azimuth", args.sun_azimuth_deg,
+                    "Sun azimuth, degrees counter-clockwise from +X (0: +X, the centre of "
+                    "the image; 90: +Y), in [-360, 360]")
+        ->type_name("DEG")
+        ->check(CLI::Range(-360.0, 360.0))
+        ->capture_default_str();
+    app->add_option("--altitude", args.altitude_m,
+                    "Observer altitude above the ground, metres in [0, 1e9] (above the top "
+                    "of the atmosphere is allowed)")
+        ->type_name("M")
+        ->check(CLI::Range(0.0, 1e9))
+        ->capture_default_str();
+}
+
+Observer make_observer(const ObserverArgs& args) {
+    // CLI::Range lets NaN through (every comparison with NaN is false).
+    require_in_range("--sun-elevation", args.sun_elevation_deg, -90.0, 90.0, "degrees");
+    require_in_range("--sun-azimuth", args.sun_azimuth_deg, -360.0, 360.0, "degrees");
+    require_in_range("--altitude", args.altitude_m, 0.0, 1e9, "m");
+    const double e = args.sun_elevation_deg * kDegree, a = args.sun_azimuth_deg * kDegree;
+    Observer o;
+    o.altitude_m = args.altitude_m;
+    o.sun_direction = {std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e)};
+    return o.validated();
+}
+
+void check_output_path(const std::string& path, bool overwrite) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path target = fs::absolute(fs::path(path), ec);
+    if (path.empty()) throw InvalidArgument("--output", "must not be empty");
+    if (fs::is_directory(target, ec))
+        throw IoError(fmt::format("cannot write '{}': it is a directory", path));
+    if (!overwrite && fs::exists(target, ec))
+        throw IoError(fmt::format("'{}' exists; pass --overwrite to replace it", path));
+    const fs::path dir = target.parent_path();
+    if (!fs::is_directory(dir, ec))
+        throw IoError(fmt::format("cannot write '{}': directory '{}' does not exist", path,
+                                  dir.string()));
+    // access() says yes to root everywhere: create (and remove) a probe file instead.
+    const fs::path probe = dir / fmt::format(".welkin-probe-{}", static_cast<long>(::getpid()));
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+    if (fd < 0)
+        throw IoError(fmt::format("cannot write '{}': directory '{}' is not writable ({})", path,
+                                  dir.string(), std::strerror(errno)));
+    ::close(fd);
+    fs::remove(probe, ec);
+}
+
+}  // namespace welkin::cli

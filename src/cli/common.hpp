@@ -1,0 +1,58 @@
+// Pieces the `welkin` subcommands share: choosing an atmosphere, placing the sun, checking
+// an output path before any work, and the command registry.
+//
+// The CLI owns no physics (../shared/DESIGN.md): every number comes from the core. Angles
+// are degrees here, at the user's edge, and radians from here on.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "welkin/atmosphere.hpp"
+#include "welkin/sky_method.hpp"
+
+namespace welkin::cli {
+
+inline constexpr const char* kVersion = "0.1.0";  // keep in step with CMakeLists.txt
+
+// A registered subcommand and what runs it once the command line is parsed.
+struct Command {
+    CLI::App* app = nullptr;
+    std::function<int()> run;
+};
+
+Command add_sky_command(CLI::App& app);
+Command add_sun_command(CLI::App& app);
+Command add_presets_command(CLI::App& app);
+Command add_atmosphere_command(CLI::App& app);
+Command add_exr_info_command(CLI::App& app);
+
+// --preset NAME | --atmosphere FILE.json, and --spectral.
+struct AtmosphereArgs {
+    std::string preset = "bruneton2017";
+    std::string file;
+    bool spectral = false;
+};
+void add_atmosphere_options(CLI::App* app, AtmosphereArgs& args);
+// Throws InvalidArgument naming --preset, --atmosphere or --spectral.
+Atmosphere load_atmosphere(const AtmosphereArgs& args);
+
+// --sun-elevation DEG, --sun-azimuth DEG, --altitude M.
+struct ObserverArgs {
+    double sun_elevation_deg = 30.0;
+    double sun_azimuth_deg = 0.0;
+    double altitude_m = 0.0;
+};
+void add_observer_options(CLI::App* app, ObserverArgs& args);
+// Unit vector towards the sun: azimuth counter-clockwise from +X, elevation above XY.
+Observer make_observer(const ObserverArgs& args);
+
+// Before any long work: refuse an existing file (unless overwrite) and a directory that
+// does not exist or cannot be written. Throws IoError naming the path.
+void check_output_path(const std::string& path, bool overwrite);
+
+}  // namespace welkin::cli

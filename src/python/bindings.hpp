@@ -1,0 +1,80 @@
+// Internal to the Python module: each bindings file registers one part of the `welkin`
+// module, and shares the few conversions they all need.
+//
+// The bindings own no physics. They turn Python objects into the core's types (with the
+// parameter's name in every error), release the GIL, call the core, and hand the core's
+// numbers back as numpy arrays. Errors travel as welkin::InvalidArgument / IoError /
+// Cancelled and become ValueError / OSError / KeyboardInterrupt in one place (module.cpp).
+#pragma once
+
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "welkin/progress.hpp"
+
+namespace welkin::python {
+
+namespace py = pybind11;
+
+void register_atmosphere(py::module_& m);
+void register_sky(py::module_& m);
+void register_sun(py::module_& m);
+void register_color(py::module_& m);
+
+// Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
+// is not one.
+std::vector<double> to_vector(const py::handle& values, const std::string& parameter);
+
+// A float64 array of shape (n,), a copy of `values`, read-only so that in-place edits
+// (atm.mie_scattering[0] = ..) fail loudly instead of changing a temporary.
+py::array_t<double> to_readonly_array(const std::vector<double>& values);
+
+// Any array-like -> C-contiguous array of T (no copy when it already is one); the shape
+// must be (..., last_dim) (any last axis when last_dim < 0) with `min_ndim` (>= 1) to
+// `max_ndim` axes, else InvalidArgument naming `parameter` and the shape it got.
+template <class T>
+using c_array = py::array_t<T, py::array::c_style | py::array::forcecast>;
+
+std::string shape_string(const py::array& array);
+
+[[noreturn]] void throw_bad_shape(const std::string& parameter, const std::string& expected,
+                                  const std::string& got);
+
+template <class T>
+c_array<T> to_c_array(const py::handle& values, const std::string& parameter, py::ssize_t last_dim,
+                      int min_ndim, int max_ndim, const std::string& expected) {
+    // ensure() converts like numpy.ascontiguousarray(values, dtype=T): it returns the same
+    // object when it already is one, and an empty handle when it cannot convert.
+    c_array<T> array = c_array<T>::ensure(values);
+    if (!array) throw_bad_shape(parameter, expected, "something that is not an array of numbers");
+    if (array.ndim() < min_ndim || array.ndim() > max_ndim ||
+        (last_dim >= 0 && array.shape(array.ndim() - 1) != last_dim))
+        throw_bad_shape(parameter, expected, "shape " + shape_string(array));
+    return array;
+}
+
+// The (..., 3) float64 array's buffer as directions, in place (no copy) when it is aligned
+// as numpy's own allocations are; else copied into `storage`.
+std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array,
+                                          std::vector<glm::dvec3>& storage);
+
+// A sequence of three numbers -> glm::dvec3 (InvalidArgument naming `parameter` otherwise).
+glm::dvec3 to_dvec3(const py::handle& values, const std::string& parameter);
+
+// Runs `work` (which calls the core, and must not touch Python) on a worker thread with
+// the GIL released, while this thread keeps Python responsive: it checks for Ctrl-C
+// (PyErr_CheckSignals only sees signals on Python's main thread, which is why the core
+// does not run here) and calls `callback(fraction)` with the core's progress, unless it
+// is None. Ctrl-C, or the callback returning False, cancels: the core stops at its next
+// progress check. Raises, in this order of precedence, the Python exception that stopped
+// it (KeyboardInterrupt for Ctrl-C, or whatever the callback raised), else the core's
+// exception (welkin::Cancelled when the callback returned False).
+void run_cancellable(const std::function<void(Progress*)>& work, const py::object& callback);
+
+}  // namespace welkin::python

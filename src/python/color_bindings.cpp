@@ -1,0 +1,139 @@
+// Conversions at the module's edges: spectra to RGB (color.hpp), the spectral-mode
+// wavelengths (atmosphere.hpp) and Blender's equirectangular mapping (equirect.hpp),
+// vectorised over numpy arrays.
+#include <fmt/format.h>
+
+#include "bindings.hpp"
+#include "welkin/atmosphere.hpp"
+#include "welkin/color.hpp"
+#include "welkin/equirect.hpp"
+#include "welkin/error.hpp"
+#include "welkin/sky_method.hpp"
+
+namespace welkin::python {
+namespace {
+
+// The shape of `a`, (N, k) or (k,), with its last axis replaced by `last`.
+std::vector<py::ssize_t> with_last_axis(const py::array& a, py::ssize_t last) {
+    std::vector<py::ssize_t> shape(a.shape(), a.shape() + a.ndim());
+    shape.back() = last;
+    return shape;
+}
+
+py::array_t<float> spectrum_to_rgb(const py::object& spectra, const py::object& wavelengths_nm,
+                                   double lambda_power) {
+    const std::vector<double> wavelengths = to_vector(wavelengths_nm, "wavelengths_nm");
+    const SpectrumToRgb to_rgb(wavelengths, lambda_power);
+    const auto channels = static_cast<py::ssize_t>(wavelengths.size());
+    const c_array<float> in = to_c_array<float>(
+        spectra, "spectra", channels, 1, 2,
+        fmt::format("an (N, C) or (C,) array with C = len(wavelengths_nm) = {}", channels));
+    py::array_t<float> out(with_last_axis(in, 3));
+    const std::size_t rows = static_cast<std::size_t>(in.size() / channels);
+    {
+        py::gil_scoped_release release;
+        to_rgb.convert({in.data(), rows * channels}, {out.mutable_data(), rows * 3});
+    }
+    return out;
+}
+
+py::array_t<double> direction_to_equirect(const py::object& view_directions) {
+    const c_array<double> in = to_c_array<double>(view_directions, "view_directions", 3, 1, 2,
+                                                  "an (N, 3) or (3,) array");
+    std::vector<glm::dvec3> storage;
+    // The core's check (finite, non-zero); the mapping itself needs no unit length.
+    const std::span<const glm::dvec3> dirs = as_dvec3_span(in, storage);
+    welkin::validate_directions(dirs);
+    const std::size_t n = dirs.size();
+    py::array_t<double> out(with_last_axis(in, 2));
+    double* uv = out.mutable_data();
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::dvec2 p = welkin::direction_to_equirect(dirs[i]);
+        uv[2 * i] = p.x;
+        uv[2 * i + 1] = p.y;
+    }
+    return out;
+}
+
+py::array_t<double> equirect_to_direction(const py::object& uv) {
+    const c_array<double> in = to_c_array<double>(uv, "uv", 2, 1, 2, "an (N, 2) or (2,) array");
+    const std::size_t n = static_cast<std::size_t>(in.size() / 2);
+    const double* p = in.data();
+    py::array_t<double> out(with_last_axis(in, 3));
+    double* d = out.mutable_data();
+    for (std::size_t i = 0; i < n; ++i) {
+        require_finite(fmt::format("uv[{}][0]", i), p[2 * i]);
+        require_finite(fmt::format("uv[{}][1]", i), p[2 * i + 1]);
+        const glm::dvec3 v = welkin::equirect_to_direction({p[2 * i], p[2 * i + 1]});
+        d[3 * i] = v.x;
+        d[3 * i + 1] = v.y;
+        d[3 * i + 2] = v.z;
+    }
+    return out;
+}
+
+py::array_t<double> equirect_pixel_directions(int width, int height) {
+    require_in_range("width", width, 1, 1 << 16, "pixels");
+    require_in_range("height", height, 1, 1 << 16, "pixels");
+    py::array_t<double> out({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
+    double* d = out.mutable_data();
+    {
+        py::gil_scoped_release release;
+        for (int j = 0; j < height; ++j)
+            for (int i = 0; i < width; ++i) {
+                const glm::dvec3 v = equirect_pixel_direction(i, j, width, height);
+                double* px = d + 3 * (std::size_t(j) * width + i);
+                px[0] = v.x;
+                px[1] = v.y;
+                px[2] = v.z;
+            }
+    }
+    return out;
+}
+
+}  // namespace
+
+void register_color(py::module_& m) {
+    m.def("spectrum_to_rgb", &spectrum_to_rgb, py::arg("spectra"), py::arg("wavelengths_nm"),
+          py::arg("lambda_power") = -3.0, R"doc(
+Spectral radiance (W m^-2 sr^-1 nm^-1) at wavelengths_nm -> linear Rec.709
+(W m^-2 sr^-1; CIE 1931 2-degree, D65 white, no 683 lm/W factor, no gamma).
+
+spectra: (N, C) or (C,) array-like with C = len(wavelengths_nm) >= 3; returns
+float32 (N, 3) or (3,). With more than three wavelengths the spectrum is
+integrated against the colour-matching functions; with exactly three, each
+sample is extended as the solar spectrum times (lambda / lambda_j)^lambda_power
+(Bruneton 2017's approximate conversion): -3 for sky light, 0 for sunlight.
+This is the conversion sky_radiance(output="rgb") uses.
+)doc");
+
+    m.def("spectral_wavelengths_nm", [](double step_nm) {
+              return to_readonly_array(spectral_wavelengths_nm(step_nm));
+          },
+          py::arg("step_nm") = 10.0, R"doc(
+Evenly spaced wavelengths for the spectral mode, 360..830 nm (48 samples at the
+default 10 nm step): pass them to Atmosphere.preset(name, wavelengths_nm=...).
+)doc");
+
+    m.def("direction_to_equirect", &direction_to_equirect, py::arg("view_directions"), R"doc(
+Blender's Environment Texture mapping, direction -> (u, v):
+    u = -atan2(y, x) / (2 pi) + 1/2,   v = atan2(z, hypot(x, y)) / pi + 1/2
+view_directions: (N, 3) or (3,), Z up, any non-zero length. u in [0, 1) left to
+right, v in [0, 1] bottom to top (v = 1 is the zenith). Returns float64 (N, 2)
+or (2,). Raises ValueError for a zero or non-finite direction.
+)doc");
+
+    m.def("equirect_to_direction", &equirect_to_direction, py::arg("uv"), R"doc(
+Inverse of direction_to_equirect: (N, 2) or (2,) texture coordinates (u, v) ->
+unit directions, float64 (N, 3) or (3,), Z up.
+)doc");
+
+    m.def("equirect_pixel_directions", &equirect_pixel_directions, py::arg("width"),
+          py::arg("height"), R"doc(
+Unit directions through the pixel centres of a width x height equirectangular
+image stored top row first (row 0 is the zenith side, as in EXR files):
+float64 array (height, width, 3). Reshape to (-1, 3) for sky_radiance.
+)doc");
+}
+
+}  // namespace welkin::python

@@ -1,0 +1,176 @@
+// welkin.sky_radiance and welkin.methods: the sky methods of include/welkin/sky_method.hpp.
+//
+// The hot path copies nothing it does not have to: a C-contiguous float64 (N, 3) array
+// reaches the core as the std::span<const glm::dvec3> it already is, and the core writes
+// straight into the numpy array that is returned. Other inputs (float32, strided, lists)
+// are converted once, as numpy.ascontiguousarray(dtype=float64) would.
+#include <optional>
+
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "welkin/color.hpp"
+#include "welkin/error.hpp"
+#include "welkin/sky_method.hpp"
+
+namespace welkin::python {
+namespace {
+
+const char* const kSkyRadianceDoc = R"doc(
+Sky (path) radiance seen by an observer, for many view directions.
+
+    L = welkin.sky_radiance(atm, altitude_m=0.0, sun_direction=(x, y, z),
+                            view_directions=dirs, method="lut", output="spectral")
+
+Frame: Blender's world frame, Z up, metres. The observer stands on the Z axis
+altitude_m metres above a spherical ground of radius atm.bottom_radius_m; the
+planet centre is straight below.
+
+Parameters
+----------
+atmosphere : welkin.Atmosphere
+altitude_m : float
+    Observer altitude above the ground, m (>= 0; may be above the atmosphere).
+sun_direction : 3 numbers
+    Vector towards the sun (normalised here; need not be unit length).
+view_directions : array-like, shape (N, 3)
+    Unit vectors from the observer towards the sky, Z up. float64 C-contiguous
+    arrays are used in place; anything else is converted once.
+method : str
+    "analytic" | "lut" | "raymarch" | "reference" (see welkin.methods()):
+    fast approximations up to Monte-Carlo path tracing of all orders.
+output : str
+    "spectral": W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm, shape (N, C).
+    "rgb": linear Rec.709 in W m^-2 sr^-1 (CIE 1931, without the 683 lm/W
+    factor; 3 wavelengths are extended as a power law, lambda^-3), shape (N, 3).
+
+Keyword-only options (defaults are the core's, welkin::SkyOptions)
+----------------------------------------------------------------
+steps, sun_steps : int
+    raymarch: steps along each view ray, and along each ray towards the sun.
+paths : int
+    reference: Monte-Carlo paths per direction (and wavelength).
+seed : int
+    reference: random seed; the same seed gives the same numbers everywhere.
+transmittance_width, transmittance_height, multiscattering_size,
+skyview_width, skyview_height : int
+    lut: texture sizes (Hillaire 2020's defaults).
+return_standard_error : bool
+    If True return (L, standard_error), both (N, C) float32: the Monte-Carlo
+    standard error of each value (zeros for deterministic methods). Spectral
+    output only.
+progress : callable(fraction) or None
+    Called on this thread with the fraction done (0..1); return False to
+    cancel (KeyboardInterrupt). An exception it raises stops the computation
+    and propagates.
+
+Returns
+-------
+numpy.ndarray, float32, shape (N, C) or (N, 3), C-contiguous, owning its data.
+"Sky radiance only": no sun disc, no ground surface at the end of the ray
+(ground-reflected light scattered back by the air is included where the method
+models multiple scattering). Rays that hit the ground carry the path radiance
+up to the ground.
+
+The GIL is released while the core computes; Ctrl-C cancels (KeyboardInterrupt).
+Raises ValueError naming the parameter for bad input (unknown method or output,
+view_directions not (N, 3), a NaN or zero-length direction, altitude_m < 0, an
+invalid atmosphere or option).
+)doc";
+
+py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::object& sun_direction,
+                        const py::object& view_directions, const std::string& method,
+                        const std::string& output, int steps, int sun_steps, int paths,
+                        std::uint64_t seed, int transmittance_width, int transmittance_height,
+                        int multiscattering_size, int skyview_width, int skyview_height,
+                        bool return_standard_error, const py::object& progress) {
+    // The checks that need no core work come first. `atmosphere` is a copy, so that Python
+    // code running while the GIL is released (other threads, the progress callback) cannot
+    // change it under the core.
+    if (output != "spectral" && output != "rgb")
+        throw InvalidArgument("output", fmt::format("must be \"spectral\" or \"rgb\", got \"{}\"",
+                                                    output));
+    const bool rgb = output == "rgb";
+    if (rgb && return_standard_error)
+        throw InvalidArgument("return_standard_error",
+                              "is only available with output=\"spectral\"");
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+
+    SkyOptions options;
+    options.raymarch_steps = steps;
+    options.raymarch_sun_steps = sun_steps;
+    options.reference_paths = paths;
+    options.seed = seed;
+    options.transmittance_width = transmittance_width;
+    options.transmittance_height = transmittance_height;
+    options.multiscattering_size = multiscattering_size;
+    options.skyview_width = skyview_width;
+    options.skyview_height = skyview_height;
+    const std::unique_ptr<SkyMethod> sky = make_sky_method(method, options);
+
+    const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
+
+    const c_array<double> dirs = to_c_array<double>(
+        view_directions, "view_directions", 3, 2, 2, "an (N, 3) array of unit vectors (Z up)");
+    std::vector<glm::dvec3> storage;
+    const std::span<const glm::dvec3> directions = as_dvec3_span(dirs, storage);
+    const std::size_t n = directions.size();
+
+    const std::size_t channels = atmosphere.channels();
+    const auto rows = static_cast<py::ssize_t>(n);
+    std::optional<SpectrumToRgb> to_rgb;
+    if (rgb) to_rgb.emplace(atmosphere.wavelengths_nm, -3.0);
+
+    // Spectral output goes straight into the returned array; RGB through one (N, C) buffer.
+    py::array_t<float> result({rows, static_cast<py::ssize_t>(rgb ? 3 : channels)});
+    std::vector<float> spectral_buffer(rgb ? n * channels : 0);
+    const std::span<float> spectral =
+        rgb ? std::span<float>(spectral_buffer)
+            : std::span<float>(result.mutable_data(), n * channels);
+    py::array_t<float> standard_error;
+    std::span<float> standard_error_out;
+    if (return_standard_error) {
+        standard_error = py::array_t<float>({rows, static_cast<py::ssize_t>(channels)});
+        standard_error_out = {standard_error.mutable_data(), n * channels};
+    }
+    const std::span<float> rgb_out =
+        rgb ? std::span<float>(result.mutable_data(), n * 3) : std::span<float>();
+
+    run_cancellable(
+        [&](Progress* p) {
+            sky->radiance(atmosphere, observer, directions, spectral, standard_error_out, p);
+            if (to_rgb) to_rgb->convert(spectral, rgb_out);
+        },
+        progress);
+
+    if (return_standard_error) return py::make_tuple(result, standard_error);
+    return std::move(result);
+}
+
+}  // namespace
+
+void register_sky(py::module_& m) {
+    const SkyOptions defaults;
+    m.def("sky_radiance", &sky_radiance, kSkyRadianceDoc, py::arg("atmosphere"),
+          py::arg("altitude_m"), py::arg("sun_direction"), py::arg("view_directions"),
+          py::arg("method") = "lut", py::arg("output") = "spectral", py::kw_only(),
+          py::arg("steps") = defaults.raymarch_steps,
+          py::arg("sun_steps") = defaults.raymarch_sun_steps,
+          py::arg("paths") = defaults.reference_paths, py::arg("seed") = defaults.seed,
+          py::arg("transmittance_width") = defaults.transmittance_width,
+          py::arg("transmittance_height") = defaults.transmittance_height,
+          py::arg("multiscattering_size") = defaults.multiscattering_size,
+          py::arg("skyview_width") = defaults.skyview_width,
+          py::arg("skyview_height") = defaults.skyview_height,
+          py::arg("return_standard_error") = false, py::arg("progress") = py::none());
+
+    m.def("methods", &sky_method_names, R"doc(
+Names of the sky methods, fastest first: "analytic" (no marching), "lut"
+(Hillaire 2020 look-up tables), "raymarch" (nested single-scattering march plus
+a multiple-scattering term), "reference" (Monte-Carlo path tracing, all orders).
+)doc");
+}
+
+}  // namespace welkin::python

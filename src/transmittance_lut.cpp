@@ -1,0 +1,134 @@
+#include "welkin/transmittance_lut.hpp"
+
+#include <array>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "welkin/geometry.hpp"
+
+namespace welkin {
+namespace {
+
+// 4-point Gauss-Legendre on [0, 1] (nodes (1 +- x)/2, weights w/2; A&S table 25.4).
+constexpr std::array<double, 4> kGlNodes = {0.5 - 0.5 * 0.8611363115940526, 0.5 - 0.5 * 0.3399810435848563,
+                                            0.5 + 0.5 * 0.3399810435848563, 0.5 + 0.5 * 0.8611363115940526};
+constexpr std::array<float, 4> kGlWeights = {0.5f * 0.3478548451374538f, 0.5f * 0.6521451548625461f,
+                                             0.5f * 0.6521451548625461f, 0.5f * 0.3478548451374538f};
+
+// Integral of extinction over [a, b] of the ray, densest at `a` (toward_a) or `b`.
+// Substituting t = a + (b - a) s^2 (or the mirror image) clusters samples at the dense
+// end; the integrand in s, rho(t(s)) 2 (b - a) s, is smooth, so composite Gauss-Legendre
+// in s converges fast.
+Spectrum4 graded_piece(const AtmosphereBatch& batch, double r, double mu, double a, double b,
+                       bool toward_a, int panels) {
+    Spectrum4 sum(0.0f);
+    const double len = b - a;
+    if (!(len > 0.0)) return sum;
+    const double R = batch.bottom_radius();
+    for (int p = 0; p < panels; ++p) {
+        for (int k = 0; k < 4; ++k) {
+            const double s = (double(p) + kGlNodes[k]) / double(panels);
+            const double offset = len * s * s;
+            const double t = toward_a ? a + offset : b - offset;
+            const double jacobian = 2.0 * len * s / double(panels);
+            const double h = radius_at(r, mu, t) - R;
+            sum += (kGlWeights[k] * float(jacobian)) * batch.sample(h).extinction;
+        }
+    }
+    return sum;
+}
+
+}  // namespace
+
+Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length,
+                              int samples) {
+    const int panels = std::max(1, samples / 4);
+    const double t_low = -r * mu;  // the ray's lowest point, when it lies ahead
+    if (t_low <= 0.0) return graded_piece(batch, r, mu, 0.0, length, true, panels);
+    if (t_low >= length) return graded_piece(batch, r, mu, 0.0, length, false, panels);
+    const int half = std::max(1, panels / 2);
+    return graded_piece(batch, r, mu, 0.0, t_low, false, half) +
+           graded_piece(batch, r, mu, t_low, length, true, half);
+}
+
+TransmittanceLut::TransmittanceLut(const AtmosphereBatch& batch, int width, int height, int steps)
+    : bottom_(batch.bottom_radius()),
+      top_(batch.top_radius()),
+      H_(std::sqrt((top_ - bottom_) * (top_ + bottom_))),
+      sun_angular_radius_(batch.sun_angular_radius()),
+      texture_(width, height) {
+    tbb::parallel_for(0, height, [&](int j) {
+        for (int i = 0; i < width; ++i) {
+            double r, mu;
+            r_mu_from_uv((float(i) + 0.5f) / float(width), (float(j) + 0.5f) / float(height), r, mu);
+            const Spectrum4 tau = march_optical_depth(batch, r, mu, distance_to_top(r, mu, top_), steps);
+            texture_.at(i, j) = glm::exp(-tau);
+        }
+    });
+}
+
+void TransmittanceLut::uv_from_r_mu(double r, double mu, float& u, float& v) const {
+    const double H = H_;
+    const double rho = safe_sqrt((r - bottom_) * (r + bottom_));
+    const double d = distance_to_top(r, mu, top_);
+    const double d_min = top_ - r, d_max = rho + H;
+    const double x_mu = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+    u = texcoord_from_unit(float(clamp01(x_mu)), texture_.width());
+    v = texcoord_from_unit(float(clamp01(rho / H)), texture_.height());
+}
+
+void TransmittanceLut::r_mu_from_uv(float u, float v, double& r, double& mu) const {
+    const double x_mu = unit_from_texcoord(u, texture_.width());
+    const double x_r = unit_from_texcoord(v, texture_.height());
+    const double H = H_;
+    const double rho = H * x_r;
+    r = std::sqrt(rho * rho + bottom_ * bottom_);
+    const double d_min = top_ - r, d_max = rho + H;
+    const double d = d_min + x_mu * (d_max - d_min);
+    // Invert d = -r mu + sqrt(r^2 mu^2 - r^2 + top^2) for mu.
+    mu = d == 0.0 ? 1.0 : clamp_cosine((H * H - rho * rho - d * d) / (2.0 * r * d));
+}
+
+Spectrum4 TransmittanceLut::to_top(double r, double mu) const {
+    float u, v;
+    uv_from_r_mu(std::min(r, top_), mu, u, v);
+    return texture_.sample(u, v);
+}
+
+Spectrum4 TransmittanceLut::segment(double r, double mu, double d, bool hits_ground) const {
+    const double r_d = std::clamp(radius_at(r, mu, d), bottom_, top_);
+    const double mu_d = mu_at(r, mu, d, r_d);
+    const Spectrum4 a = hits_ground ? to_top(r_d, -mu_d) : to_top(r, mu);
+    const Spectrum4 b = hits_ground ? to_top(r, -mu) : to_top(r_d, mu_d);
+    return glm::min(a / glm::max(b, Spectrum4(1e-30f)), Spectrum4(1.0f));
+}
+
+double sun_visible_fraction(double bottom_radius, double r, double mu_s, double angular_radius) {
+    const double sin_h = std::min(bottom_radius / r, 1.0);
+    const double cos_h = -safe_sqrt(1.0 - sin_h * sin_h);  // zenith cosine of the horizon
+    const double x = std::clamp((mu_s - cos_h + angular_radius) / (2.0 * angular_radius), 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+}
+
+TransmittanceLut::AtRadius TransmittanceLut::at_radius(double r_in) const {
+    AtRadius a;
+    a.r = std::min(r_in, top_);
+    const double sin_h = std::min(bottom_ / a.r, 1.0);
+    a.cos_horizon = -safe_sqrt(1.0 - sin_h * sin_h);
+    a.top_disc = (a.r - top_) * (a.r + top_);
+    const double rho = safe_sqrt((a.r - bottom_) * (a.r + bottom_));
+    a.d_min = top_ - a.r;
+    const double range = rho + H_ - a.d_min;
+    a.inv_d_range = range > 0.0 ? 1.0 / range : 0.0;
+    a.v = texcoord_from_unit(float(clamp01(rho / H_)), texture_.height());
+    return a;
+}
+
+Spectrum4 TransmittanceLut::to_sun(double r, double mu_s) const {
+    const double fraction = sun_visible_fraction(bottom_, r, mu_s, sun_angular_radius_);
+    if (fraction <= 0.0) return Spectrum4(0.0f);
+    return to_top(r, mu_s) * float(fraction);
+}
+
+}  // namespace welkin

@@ -1,0 +1,88 @@
+// The fast methods against the peer table (Bruneton 2017's double-precision spectral
+// reference, 4 scattering orders): views above the horizon, 680/550/440 nm.
+//
+// The peer's single scattering carries its own quadrature error (test_peer_quadrature.cpp:
+// up to +6.4 % towards the sun at 680 nm), so the comparison is made against the peer with
+// its single-scattering part replaced by the converged one, L - L1d + SS_converged; the raw
+// figures are printed too.
+//
+// Tolerances. Issue #2 asks lut within 5 %. Measured: the median is within it at every
+// wavelength, and that is asserted. The worst views are not: Hillaire 2020's
+// multiple-scattering term assumes the light scattered two or more times arrives
+// isotropically, while the peer's orders 2-4 are up to ~1.4x brighter towards the sun than
+// away from it; at 440 nm, where multiple scattering is 30-45 % of the sky, that costs up
+// to ~10 %. The worst case is held at 12 % as a regression bound, not as a claim; the
+// 5 % worst case is an open item of issue #2. The analytic method (single scattering only)
+// is held to the peer's single scattering within 25 %, its measured envelope.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "peer_single_scattering.hpp"
+#include "peer_table.hpp"
+#include "welkin/sky_method.hpp"
+
+using namespace welkin;
+using welkin::test::PeerRow;
+
+namespace {
+
+const char* kNames[] = {"680nm", "550nm", "440nm"};
+
+struct Errors {
+    std::vector<double> raw[3], corrected[3];
+};
+
+// `single_only`: compare with the converged single scattering instead of all orders.
+Errors relative_errors(const std::string& method, bool single_only = false) {
+    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const auto sky = make_sky_method(method);
+    Errors e;
+    for (double sun_zenith : {0.0, 30.0, 60.0}) {
+        std::vector<PeerRow> rows;
+        std::vector<glm::dvec3> dirs;
+        for (const PeerRow& row : welkin::test::read_peer_table())
+            if (row["sun_zenith_deg"] == sun_zenith && row["view_zenith_deg"] < 90.0) {
+                rows.push_back(row);
+                dirs.push_back(row.view_direction());
+            }
+        EXPECT_FALSE(rows.empty());
+        const SkyResult r = sky_radiance(*sky, atm, Observer{0.0, rows.front().sun_direction()}, dirs);
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+            const auto ss = welkin::test::single_scattering(atm, rows[i], 1000);
+            for (int c = 0; c < 3; ++c) {
+                const std::string n = kNames[c];
+                const double raw = single_only ? rows[i]["L1d_" + n] : rows[i]["L_" + n];
+                const double corrected = single_only ? ss[c] : raw - rows[i]["L1d_" + n] + ss[c];
+                e.raw[c].push_back(std::abs(r.radiance[i * 3 + c] / raw - 1.0));
+                e.corrected[c].push_back(std::abs(r.radiance[i * 3 + c] / corrected - 1.0));
+            }
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        const auto [m, w] = welkin::test::median_and_max(e.corrected[c]);
+        const auto [rm, rw] = welkin::test::median_and_max(e.raw[c]);
+        std::printf("%-9s %s vs %s: median %.2f %% worst %.2f %% (raw peer: median %.2f %% worst %.2f %%), %zu views\n",
+                    method.c_str(), kNames[c], single_only ? "single scattering" : "peer (SS converged)",
+                    100 * m, 100 * w, 100 * rm, 100 * rw, e.corrected[c].size());
+    }
+    return e;
+}
+
+void expect_within(const Errors& e, double median_bound, double worst_bound) {
+    for (int c = 0; c < 3; ++c) {
+        const auto [median, worst] = welkin::test::median_and_max(e.corrected[c]);
+        EXPECT_LT(median, median_bound) << kNames[c];
+        EXPECT_LT(worst, worst_bound) << kNames[c];
+    }
+}
+
+}  // namespace
+
+TEST(FastMethodsVsPeer, Lut) { expect_within(relative_errors("lut"), 0.05, 0.12); }
+
+TEST(FastMethodsVsPeer, Raymarch) { expect_within(relative_errors("raymarch"), 0.05, 0.12); }
+
+TEST(FastMethodsVsPeer, AnalyticAgainstSingleScattering) {
+    expect_within(relative_errors("analytic", true), 0.10, 0.25);
+}

@@ -1,0 +1,41 @@
+"""Shared fixtures for the tests of the `welkin` Python module.
+
+The module is the one built in build/ (scripts/test.sh sets PYTHONPATH=build); when
+pytest runs without it, build/ is put on sys.path here so `python3 -m pytest
+tests/python` works from a fresh build. Run with /usr/bin/python3, the Python the module
+is built for.
+"""
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+
+_BUILD = pathlib.Path(__file__).resolve().parents[2] / "build"
+if str(_BUILD) not in sys.path:
+    sys.path.append(str(_BUILD))
+
+import welkin  # noqa: E402
+
+
+@pytest.fixture
+def atm():
+    """A fresh default atmosphere (Bruneton 2017's demo Earth, 680/550/440 nm)."""
+    return welkin.Atmosphere.preset("bruneton2017")
+
+
+@pytest.fixture
+def sun_direction():
+    """Sun 30 degrees above the horizon, towards +Y."""
+    e = np.radians(30.0)
+    return (0.0, float(np.cos(e)), float(np.sin(e)))
+
+
+@pytest.fixture
+def view_directions():
+    """(N, 3) C-contiguous float64 unit vectors covering the sphere, below the horizon too."""
+    rng = np.random.default_rng(7)
+    d = rng.normal(size=(24, 3))
+    d[0] = (0.0, 0.0, 1.0)  # zenith
+    d[1] = (1.0, 0.0, 0.0)  # horizon
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
