@@ -41,14 +41,18 @@
 //   - Every flight, from the current point along w to the ground or the top (length D),
 //     adds the sun scattered at its end by next-event estimation in both places it can
 //     happen: (a) in the air, at a forced collision s drawn from the free-flight density
-//     conditioned on colliding before D, sigma_t(s) T(s) / (1 - T(D)), weighted with
-//     sigma_s p(w . s) E T_sun(s) (T_sun from the column table, zero in the Earth's
-//     shadow); (b) at the ground, if the ray meets it, with its exact weight
+//     conditioned on colliding before D and outside the Earth's shadow (where the
+//     integrand vanishes; the shadow is one interval [a, b] of the flight, the line
+//     against the shadow cylinder cut by the terminator plane), sigma_t(s) T(s) / M with
+//     M = 1 - T(a) + T(b) - T(D), weighted with sigma_s p(w . s) E T_sun(s) (T_sun from
+//     the column table); (b) at the ground, if the ray meets it, with its exact weight
 //     T(D) albedo / pi E T_sun cos. Every path thus scores on every flight (plain
-//     free-flight sampling leaves ~40 % of the paths escaping with nothing).
-//   - The path then continues with the same s as a collision with probability
-//     1 - T(D), else from the ground (cosine-weighted direction, weight albedo) or it
-//     ends in space: together this is regular tracking, density sigma_t(s) T(s) per
+//     free-flight sampling leaves ~40 % of the paths escaping with nothing), and in
+//     twilight the samples land where the sun is.
+//   - The path then continues with a collision with probability 1 - T(D) (at the same s
+//     when the flight has no shadow, whose distribution is then the right one; else at a
+//     new distance), else from the ground (cosine-weighted direction, weight albedo) or
+//     it ends in space: together this is regular tracking, density sigma_t(s) T(s) per
 //     collision and T(D) for reaching the end. Distances solve tau(s) = tau* by
 //     safeguarded Newton on the column table (d tau / ds is the local extinction).
 //   - Channels: one path carries all of them (three, or the 48 of the spectral mode, at
