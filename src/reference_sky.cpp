@@ -41,14 +41,18 @@
 //   - Every flight, from the current point along w to the ground or the top (length D),
 //     adds the sun scattered at its end by next-event estimation in both places it can
 //     happen: (a) in the air, at a forced collision s drawn from the free-flight density
-//     conditioned on colliding before D, sigma_t(s) T(s) / (1 - T(D)), weighted with
-//     sigma_s p(w . s) E T_sun(s) (T_sun from the column table, zero in the Earth's
-//     shadow); (b) at the ground, if the ray meets it, with its exact weight
+//     conditioned on colliding before D and outside the Earth's shadow (where the
+//     integrand vanishes; the shadow is one interval [a, b] of the flight, the line
+//     against the shadow cylinder cut by the terminator plane), sigma_t(s) T(s) / M with
+//     M = 1 - T(a) + T(b) - T(D), weighted with sigma_s p(w . s) E T_sun(s) (T_sun from
+//     the column table); (b) at the ground, if the ray meets it, with its exact weight
 //     T(D) albedo / pi E T_sun cos. Every path thus scores on every flight (plain
-//     free-flight sampling leaves ~40 % of the paths escaping with nothing).
-//   - The path then continues with the same s as a collision with probability
-//     1 - T(D), else from the ground (cosine-weighted direction, weight albedo) or it
-//     ends in space: together this is regular tracking, density sigma_t(s) T(s) per
+//     free-flight sampling leaves ~40 % of the paths escaping with nothing), and in
+//     twilight the samples land where the sun is.
+//   - The path then continues with a collision with probability 1 - T(D) (at the same s
+//     when the flight has no shadow, whose distribution is then the right one; else at a
+//     new distance), else from the ground (cosine-weighted direction, weight albedo) or
+//     it ends in space: together this is regular tracking, density sigma_t(s) T(s) per
 //     collision and T(D) for reaching the end. Distances solve tau(s) = tau* by
 //     safeguarded Newton on the column table (d tau / ds is the local extinction).
 //   - Channels: one path carries all of them (three, or the 48 of the spectral mode, at
@@ -154,6 +158,39 @@ struct Medium {
     double extinction(std::size_t c, const Densities& d) const {
         return rayleigh[c] * d.rayleigh + mie_extinction[c] * d.mie + absorption[c] * d.absorption;
     }
+    // The part [a, b] of [0, length] of the ray p + t w that lies in the Earth's shadow,
+    // {y : y . s < 0 and |y - (y . s) s| < R} (a cylinder behind the planet cut by the
+    // terminator plane: convex, so a line meets it in one interval). None: a = b = length.
+    void shadow_interval(const glm::dvec3& p, const glm::dvec3& w, double length, double& a,
+                         double& b) const {
+        a = b = length;
+        double lo = -1e300, hi = 1e300;
+        const glm::dvec3 pa = p - glm::dot(p, s) * s, wb = w - glm::dot(w, s) * s;
+        const double bb = glm::dot(wb, wb), ab = glm::dot(pa, wb), aa = glm::dot(pa, pa) - R * R;
+        if (bb > 1e-300) {
+            const double disc = ab * ab - bb * aa;
+            if (!(disc > 0.0)) return;
+            const double root = std::sqrt(disc);
+            lo = (-ab - root) / bb;
+            hi = (-ab + root) / bb;
+        } else if (!(aa < 0.0)) {
+            return;
+        }
+        const double ps = glm::dot(p, s), ws = glm::dot(w, s);
+        if (ws > 0.0)
+            hi = std::min(hi, -ps / ws);
+        else if (ws < 0.0)
+            lo = std::max(lo, -ps / ws);
+        else if (!(ps < 0.0))
+            return;
+        lo = std::max(lo, 0.0);
+        hi = std::min(hi, length);
+        if (hi > lo) {
+            a = lo;
+            b = hi;
+        }
+    }
+
     // Transmittance towards the sun from position p (radius r), 0 in the Earth's shadow.
     void sun_transmittance(const glm::dvec3& p, double r, double* out) const {
         const double mu_s = clamp_cosine(glm::dot(p, s) / r);
@@ -314,6 +351,7 @@ public:
           tau_(m.C),
           tr_(m.C),
           tr_end_(m.C),
+          lit_(m.C),
           sun_t_(m.C),
           contrib_(m.C) {}
 
@@ -447,21 +485,44 @@ private:
 
             // The sun scattered at event `event` on this flight, both branches at once:
             // (a) in the air, at a forced collision s drawn from the hero's free-flight
-            // density conditioned on colliding, p_j(s) = sigma_t,j T_j(s) / (1 - T_j(D));
-            // (b) at the ground, if the ray meets it, with its exact weight T_c(D).
+            // density restricted to the part of the flight outside the Earth's shadow
+            // [a, b] (where the integrand vanishes), p_j(s) = sigma_t,j T_j(s) / M_j with
+            // M_j = 1 - T_j(a) + T_j(b) - T_j(D): in daylight the shadow is empty and this
+            // is the free-flight density conditioned on colliding; in twilight it keeps the
+            // samples where the sun is; (b) at the ground, if the ray meets it, with its
+            // exact weight T_c(D).
+            double shadow_a, shadow_b;
+            m_.shadow_interval(pos, w, ray.length(), shadow_a, shadow_b);
+            const bool shadowed = shadow_a < ray.length();
+            double before_h = 0.0, after_h = 0.0;  // 1 - T_h(a), T_h(b)
+            if (shadowed) {
+                const ColumnDensity ca = ray.upto(shadow_a), cb = ray.upto(shadow_b);
+                for (std::size_t c = 0; c < m_.C; ++c)
+                    lit_[c] = -std::expm1(-m_.tau(c, ca)) +
+                              (std::exp(-m_.tau(c, cb)) - tr_end_[c]);
+                before_h = -std::expm1(-m_.tau(hero, ca));
+                after_h = std::exp(-m_.tau(hero, cb));
+            } else {
+                for (std::size_t c = 0; c < m_.C; ++c) lit_[c] = -std::expm1(-m_.tau(c, col_end));
+            }
             double s = 0.0;
             glm::dvec3 z{0.0};
-            if (collide_h > 0.0) {
-                s = solve_distance(ray, pos, w, hero, -std::log1p(-u_flight * collide_h));
+            if (lit_[hero] > 0.0) {
+                const double before = shadowed ? before_h : lit_[hero];
+                const double mass = u_flight * lit_[hero];
+                const double tau_target =
+                    mass < before ? -std::log1p(-mass)
+                                  // past the shadow: T(tau*) = T_h(b) - (mass - before)
+                                  : -std::log(std::max(after_h - (mass - before), 1e-300));
+                s = solve_distance(ray, pos, w, hero, tau_target);
                 z = pos + s * w;
                 r_z_ = std::clamp(glm::length(z), m_.R, m_.top);
                 d = m_.densities(r_z_);
                 double mean = 0.0;
                 for (std::size_t c = 0; c < m_.C; ++c) {
                     tr_[c] = std::exp(-tau_[c]);
-                    const double collide_c = -std::expm1(-m_.tau(c, col_end));
                     p_seg_[c] = m_.extinction(c, d) * tr_[c];  // regular-tracking density
-                    mean += collide_c > 0.0 ? q_[c] * p_seg_[c] / collide_c : 0.0;
+                    mean += lit_[c] > 0.0 ? q_[c] * p_seg_[c] / lit_[c] : 0.0;
                 }
                 mean /= double(m_.C);
                 if (mean > 0.0) sun_at_scattering(z, r_z_, w, d, 1.0 / mean);
@@ -479,10 +540,21 @@ private:
             }
             if (max_order_ > 0 && event >= max_order_) return;
 
-            // Continue: collide (at the same s) with probability 1 - T_h(D), which makes
-            // the continuation regular tracking: density sigma_t,j T_j(s) for channel j,
-            // or T_j(D) for reaching the end of the ray.
+            // Continue: collide with probability 1 - T_h(D), which makes the continuation
+            // regular tracking: density sigma_t,j T_j(s) for channel j, or T_j(D) for
+            // reaching the end of the ray. Without shadow the collision is the same s (its
+            // distribution is the conditional one); with shadow, a new distance.
             if (u_collide < collide_h) {
+                if (shadowed || !(lit_[hero] > 0.0)) {
+                    s = solve_distance(ray, pos, w, hero, -std::log1p(-u_collide));
+                    z = pos + s * w;
+                    r_z_ = std::clamp(glm::length(z), m_.R, m_.top);
+                    d = m_.densities(r_z_);
+                    for (std::size_t c = 0; c < m_.C; ++c) {
+                        tr_[c] = std::exp(-tau_[c]);
+                        p_seg_[c] = m_.extinction(c, d) * tr_[c];
+                    }
+                }
                 if (!(p_seg_[hero] > 0.0)) return;
                 mis_update(tr_, p_seg_);
                 pos = z;
@@ -521,7 +593,7 @@ private:
         }
     }
 
-    std::vector<double> beta_, beta1_, q_, p_seg_, tau_, tr_, tr_end_, sun_t_, contrib_;
+    std::vector<double> beta_, beta1_, q_, p_seg_, tau_, tr_, tr_end_, lit_, sun_t_, contrib_;
     double r_z_ = 0.0;
 };
 
