@@ -17,15 +17,11 @@
 #include <cmath>
 
 #include "welkin/geometry.hpp"
+#include "welkin/quadrature.hpp"
 
 namespace welkin {
 namespace {
 
-// 8-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun, table 25.4).
-constexpr std::array<double, 4> kNodes = {0.1834346424956498, 0.5255324099163290,
-                                          0.7966664774136267, 0.9602898564975363};
-constexpr std::array<double, 4> kWeights = {0.3626837833783620, 0.3137066458778873,
-                                            0.2223810344533745, 0.1012285362903763};
 constexpr int kPanels = 14;
 constexpr double kGrowth = 1.6;
 
@@ -33,8 +29,8 @@ template <class F>
 double gauss_legendre(F&& f, double a, double b) {
     const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
     double sum = 0.0;
-    for (std::size_t i = 0; i < kNodes.size(); ++i)
-        sum += kWeights[i] * (f(mid - half * kNodes[i]) + f(mid + half * kNodes[i]));
+    for (std::size_t i = 0; i < kGauss8Nodes.size(); ++i)
+        sum += kGauss8Weights[i] * (f(mid - half * kGauss8Nodes[i]) + f(mid + half * kGauss8Nodes[i]));
     return sum * half;
 }
 

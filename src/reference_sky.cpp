@@ -112,6 +112,7 @@
 
 #include "welkin/error.hpp"
 #include "welkin/geometry.hpp"
+#include "welkin/quadrature.hpp"
 #include "welkin/phase.hpp"
 #include "welkin/reference_column_table.hpp"
 #include "welkin/reference_rng.hpp"
@@ -120,11 +121,6 @@
 namespace welkin {
 namespace {
 
-// 8-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun, table 25.4).
-constexpr std::array<double, 4> kGlNodes = {0.1834346424956498, 0.5255324099163290,
-                                            0.7966664774136267, 0.9602898564975363};
-constexpr std::array<double, 4> kGlWeights = {0.3626837833783620, 0.3137066458778873,
-                                              0.2223810344533745, 0.1012285362903763};
 // Panels per smooth piece of the view ray, growing geometrically away from its low end.
 constexpr int kPanels = 12;
 constexpr double kPanelGrowth = 1.6;
@@ -294,8 +290,8 @@ ViewRay prepare_view_ray(const Medium& m, const glm::dvec3& x, const glm::dvec3&
             std::vector<double> pw(m.C, 0.0);
             const double mid = 0.5 * (pa + pb), half = 0.5 * (pb - pa);
             for (int n = 0; n < 8; ++n) {
-                const double t = mid + (n < 4 ? -1.0 : 1.0) * half * kGlNodes[std::size_t(n % 4)];
-                const double wq = half * kGlWeights[std::size_t(n % 4)];
+                const double t = mid + (n < 4 ? -1.0 : 1.0) * half * kGauss8Nodes[std::size_t(n % 4)];
+                const double wq = half * kGauss8Weights[std::size_t(n % 4)];
                 const glm::dvec3 y = p + t * v;
                 const double ry = glm::length(y);
                 const Medium::Densities d = m.densities(ry);
