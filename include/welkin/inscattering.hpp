@@ -4,7 +4,12 @@
 // (Hillaire 2020 eqs. 1-4, 10)
 //
 //   L = integral_0^d T(0, t) J(t) dt,
-//   J = E_sun [ T_sun(t) (sigma_R P_R(nu) + sigma_M P_M(nu)) + (sigma_R + sigma_M) Psi_ms(t) ],
+//   J = E_sun [ T_sun(t) (sigma_R P_R(nu) + sigma_M P_M(nu)) + J_ms(t) ],
+//
+// J_ms the multiple-scattering source of multiscattering_lut.hpp: Hillaire's
+// (sigma_R + sigma_M) Psi_ms plus the terms of the field's dipole and quadrupole about
+// the local zenith, weighted by the view's zenith cosine at t,
+// mu_v(t) = (r mu + t) / r(t), which prepare_ray computes once per step.
 //
 // with the sun's zenith cosine at distance t, mu_s(t) = (r mu_s + t nu) / r(t) (Bruneton
 // 2017, eq. for mu_s_d). Samples are spread as t = d s^2 for s uniform in [0, 1]: dense
@@ -41,6 +46,9 @@ struct RaySamples {
         Spectrum4 rayleigh_scattering, mie_scattering;
         TransmittanceLut::AtRadius sun_at;  // filled when prepared with a transmittance LUT
         float ms_v = 0.0f;
+        // Weights of the multiple-scattering dipole and quadrupole at this step
+        // (MultiScatteringLut::source_weights), filled when prepared with that LUT.
+        Spectrum4 ms_w1{0.0f}, ms_w2{0.0f};
     };
     double r0 = 0.0;  // the observer's radius
     std::vector<Step> steps;
@@ -81,7 +89,11 @@ inline void prepare_ray(const AtmosphereBatch& batch, double r, double mu, int s
         for (int c = 0; c < 4; ++c)
             st.weight[c] = T[c] * (m.extinction[c] > 1e-12f ? (1.0f - T_seg[c]) / m.extinction[c] : float(dt));
         if (tlut) st.sun_at = tlut->at_radius(st.r);
-        if (ms) st.ms_v = ms->v_at_radius(st.r);
+        if (ms) {
+            st.ms_v = ms->v_at_radius(st.r);
+            ms->source_weights(st.rayleigh_scattering, st.mie_scattering, clamp_cosine((r * mu + t) / st.r),
+                               st.ms_w1, st.ms_w2);
+        }
         T *= T_seg;
     }
     out.transmittance = T;
@@ -100,7 +112,7 @@ Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, 
         const double mu_s_t = clamp_cosine((ray.r0 * mu_s + st.t * nu) / st.r);
         Spectrum4 source = sun_transmittance(st, mu_s_t) *
                            (st.rayleigh_scattering * rayleigh_p + st.mie_scattering * mie_p);
-        if (ms) source += (st.rayleigh_scattering + st.mie_scattering) * ms->psi(st.ms_v, mu_s_t);
+        if (ms) source += ms->source(st.ms_v, mu_s_t, st.rayleigh_scattering + st.mie_scattering, st.ms_w1, st.ms_w2);
         L += st.weight * source;
     }
     return L * batch.solar_irradiance();
