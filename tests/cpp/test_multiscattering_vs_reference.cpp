@@ -1,0 +1,138 @@
+// The multiple-scattering term of the fast methods, and the lut method as a whole, against
+// the reference path tracer (all scattering orders, split into single scattering and the
+// rest with max_scattering_order = 1). Geometry: the peer table's 90 views above the horizon
+// (camera on the ground, sun zenith 0, 30, 60 deg), bruneton2017, 680/550/440 nm.
+//
+// Why against the reference and not the peer: the reference's second order is checked
+// against an independent plane-parallel quadrature (test_reference_sky.cpp,
+// SecondOrderMatchesPlaneParallelQuadrature), and the peer's orders 2-4 have an azimuthal
+// structure at sun zenith 30 and 60 deg that neither shows (e.g. sun 30, view 30, 440 nm:
+// the peer's orders 2-4 are 1.38x brighter towards the sun than away from it, the
+// reference's 1.02x), so the peer cannot tell a better multiple-scattering model from a
+// worse one there. Both comparisons are printed.
+//
+// What is asserted, with the bounds stated against what was measured when this was
+// written (16384 paths, seed 17; the reference's relative standard error on the
+// multiple-scattering part is under 1.3 %):
+//  * The methods' multiple-scattering term J_ms (multiscattering_lut.hpp), integrated
+//    along the view ray with 256 steps, against the reference's orders >= 2: median
+//    within 3 %, worst within 17 / 13 / 14 % at 680 / 550 / 440 nm (measured: median
+//    2.2 / 1.2 / 1.2 %, worst 16.0 / 12.0 / 13.0 %; the worst are the last degrees above
+//    the horizon with the sun low, where Hillaire's local approximation of orders >= 3
+//    fails; Hillaire's original isotropic term measured 7.4 / 6.1 / 6.1 % median and
+//    30 / 27 / 24 % worst on the same views).
+//  * The same term with only its isotropic part (a_0) must do worse in the worst case at
+//    every wavelength (measured 21.7 / 17.9 / 17.6 %): the dipole and quadrupole are what
+//    carry the zenith dependence.
+//  * The lut method (default sizes), all orders, against the reference, all orders:
+//    within 5 % for every view at every wavelength (issue #2's figure for lut; measured
+//    worst 3.9 / 3.0 / 4.9 %), median within 1.5 % (measured 0.8 / 0.6 / 0.7 %).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "peer_single_scattering.hpp"
+#include "peer_table.hpp"
+#include "welkin/atmosphere_luts.hpp"
+#include "welkin/inscattering.hpp"
+#include "welkin/reference_sky.hpp"
+#include "welkin/sky_method.hpp"
+#include "welkin/view_geometry.hpp"
+
+using namespace welkin;
+using welkin::test::PeerRow;
+
+namespace {
+
+const char* kNames[] = {"680nm", "550nm", "440nm"};
+
+// The multiple-scattering term along the view ray, per unit of nothing (W m^-2 sr^-1 nm^-1):
+// the march of inscattering.hpp with the sun's direct light switched off. `isotropic`
+// keeps only a_0 (the dipole and quadrupole weights set to zero).
+Spectrum4 multiple_scattering_term(const AtmosphereLuts::Batch& b, double r, const ViewGeometry& g,
+                                   bool isotropic) {
+    RaySamples ray;
+    prepare_ray(b.medium, r, g.mu, 256, ray, &b.transmittance, &b.multiscattering);
+    if (isotropic)
+        for (RaySamples::Step& st : ray.steps) st.ms_w1 = st.ms_w2 = Spectrum4(0.0f);
+    return inscatter(b.medium, &b.multiscattering, ray, g.mu_s, g.nu,
+                     [](const RaySamples::Step&, double) { return Spectrum4(0.0f); });
+}
+
+}  // namespace
+
+TEST(MultipleScatteringVsReference, TermAndLutAgainstTheReferenceByOrder) {
+    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    SkyOptions options;
+    options.reference_paths = 16384;
+    options.seed = 17;
+    const ReferenceSky all(options), single(options, 1);
+    const AtmosphereLuts luts(atm, SkyOptions{});
+    const AtmosphereLuts::Batch& b = *luts.batches()[0];
+    const auto lut = make_sky_method("lut");
+    std::vector<double> ms_err[3], iso_err[3], lut_err[3], lut_peer_err[3], ref_peer_err[3], rel_se[3];
+    double worst_peer_row_ref[3] = {0, 0, 0}, worst_peer[3] = {0, 0, 0};
+    for (double sun_zenith : {0.0, 30.0, 60.0}) {
+        std::vector<PeerRow> rows;
+        std::vector<glm::dvec3> dirs;
+        for (const PeerRow& row : welkin::test::read_peer_table())
+            if (row["sun_zenith_deg"] == sun_zenith && row["view_zenith_deg"] < 90.0) {
+                rows.push_back(row);
+                dirs.push_back(row.view_direction());
+            }
+        ASSERT_EQ(rows.size(), 30u);
+        const Observer obs{0.0, rows.front().sun_direction()};
+        const SkyResult ref = sky_radiance(all, atm, obs, dirs);
+        const SkyResult ref1 = sky_radiance(single, atm, obs, dirs);
+        const SkyResult fast = sky_radiance(*lut, atm, obs, dirs);
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+            const ViewGeometry g = view_geometry(dirs[i], obs.sun_direction);
+            const Spectrum4 ms = multiple_scattering_term(b, atm.bottom_radius_m, g, false);
+            const Spectrum4 iso = multiple_scattering_term(b, atm.bottom_radius_m, g, true);
+            const auto ss = welkin::test::single_scattering(atm, rows[i], 1000);
+            for (int c = 0; c < 3; ++c) {
+                const std::size_t k = i * 3 + std::size_t(c);
+                const double ms_ref = double(ref.radiance[k]) - double(ref1.radiance[k]);
+                ms_err[c].push_back(std::abs(ms[c] / ms_ref - 1.0));
+                iso_err[c].push_back(std::abs(iso[c] / ms_ref - 1.0));
+                rel_se[c].push_back(ref.standard_error[k] / ms_ref);
+                lut_err[c].push_back(std::abs(fast.radiance[k] / ref.radiance[k] - 1.0));
+                // The peer with its single-scattering quadrature error removed (as in
+                // test_fast_methods_vs_peer.cpp).
+                const std::string n = kNames[c];
+                const double peer = rows[i]["L_" + n] - rows[i]["L1d_" + n] + ss[std::size_t(c)];
+                lut_peer_err[c].push_back(std::abs(fast.radiance[k] / peer - 1.0));
+                ref_peer_err[c].push_back(std::abs(ref.radiance[k] / peer - 1.0));
+                if (lut_peer_err[c].back() > worst_peer[c]) {
+                    worst_peer[c] = lut_peer_err[c].back();
+                    worst_peer_row_ref[c] = ref.radiance[k] / peer - 1.0;
+                }
+            }
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        const auto [m, w] = welkin::test::median_and_max(ms_err[c]);
+        const auto [im, iw] = welkin::test::median_and_max(iso_err[c]);
+        const auto [lm, lw] = welkin::test::median_and_max(lut_err[c]);
+        const auto [pm, pw] = welkin::test::median_and_max(lut_peer_err[c]);
+        const auto [rm, rw] = welkin::test::median_and_max(ref_peer_err[c]);
+        const auto [sm, sw] = welkin::test::median_and_max(rel_se[c]);
+        std::printf("[ %s ] multiple scattering vs reference orders >= 2: median %.2f %% worst %.2f %% "
+                    "(isotropic part only: median %.2f %% worst %.2f %%; reference relative se median "
+                    "%.2f %% worst %.2f %%)\n",
+                    kNames[c], 100 * m, 100 * w, 100 * im, 100 * iw, 100 * sm, 100 * sw);
+        std::printf("[ %s ] lut vs reference (all orders): median %.2f %% worst %.2f %%; lut vs peer "
+                    "(SS converged): median %.2f %% worst %.2f %% (at that view the reference is %+.2f %% "
+                    "from the peer); reference vs peer: median %.2f %% worst %.2f %%\n",
+                    kNames[c], 100 * lm, 100 * lw, 100 * pm, 100 * pw, 100 * worst_peer_row_ref[c], 100 * rm,
+                    100 * rw);
+        EXPECT_LT(m, 0.03) << kNames[c];
+        EXPECT_LT(w, c == 0 ? 0.17 : c == 1 ? 0.13 : 0.14) << kNames[c];
+        EXPECT_LT(w, iw) << kNames[c];
+        EXPECT_LT(lm, 0.015) << kNames[c];
+        EXPECT_LT(lw, 0.05) << kNames[c];
+        EXPECT_LT(sw, 0.013) << kNames[c];
+    }
+}
