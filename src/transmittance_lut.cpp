@@ -114,14 +114,20 @@ double sun_visible_fraction(double bottom_radius, double r, double mu_s, double 
 TransmittanceLut::AtRadius TransmittanceLut::at_radius(double r_in) const {
     AtRadius a;
     a.r = std::min(r_in, top_);
-    const double sin_h = std::min(bottom_ / a.r, 1.0);
-    a.cos_horizon = -safe_sqrt(1.0 - sin_h * sin_h);
-    a.top_disc = (a.r - top_) * (a.r + top_);
+    a.r_f = float(a.r);
+    a.top_k = float(std::max((top_ - a.r) * (top_ + a.r), 0.0));
     const double rho = safe_sqrt((a.r - bottom_) * (a.r + bottom_));
-    a.d_min = top_ - a.r;
-    const double range = rho + H_ - a.d_min;
-    a.inv_d_range = range > 0.0 ? 1.0 / range : 0.0;
-    a.v = texcoord_from_unit(float(clamp01(rho / H_)), texture_.height());
+    const double d_min = top_ - a.r;
+    a.d_min = float(d_min);
+    const double range = rho + H_ - d_min;
+    a.x_scale = range > 0.0 ? float(double(texture_.width() - 1) / range) : 0.0f;
+    // sun_visible_fraction's smoothstep argument (mu_s - cos_h + alpha) / (2 alpha).
+    const double sin_h = std::min(bottom_ / a.r, 1.0);
+    const double cos_h = -safe_sqrt(1.0 - sin_h * sin_h);
+    const double alpha = sun_angular_radius_;
+    a.fraction_scale = float(1.0 / (2.0 * alpha));
+    a.fraction_offset = float((alpha - cos_h) / (2.0 * alpha));
+    a.row = texture_.row(texcoord_from_unit(float(clamp01(rho / H_)), texture_.height()));
     return a;
 }
 

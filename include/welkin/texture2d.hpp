@@ -32,6 +32,32 @@ public:
         return a + fy * (b - a);
     }
 
+    // The same bilinear lookup split for loops that read many texels at one v: Row holds
+    // the two texel rows and the weight between them, and Row::sample takes the texel-space
+    // coordinate x = u * width - 0.5 (so x = 0 and x = width - 1 are the first and last
+    // texel centres). sample(u, v) == row(v).sample(u * width - 0.5f) for textures of at
+    // least 2 x 2 texels (the LUT sizes are at least 4).
+    struct Row {
+        const Spectrum4* lo;
+        const Spectrum4* hi;
+        float fy;
+        int last;  // width - 1
+
+        Spectrum4 sample(float x_in) const {
+            const float x = std::clamp(x_in, 0.0f, float(last));
+            const int i = std::min(int(x), last - 1);
+            const float fx = x - float(i);
+            const Spectrum4 a = lo[i] + fx * (lo[i + 1] - lo[i]);
+            const Spectrum4 b = hi[i] + fx * (hi[i + 1] - hi[i]);
+            return a + fy * (b - a);
+        }
+    };
+    Row row(float v) const {
+        const float y = std::clamp(v * float(height_) - 0.5f, 0.0f, float(height_ - 1));
+        const int j = std::min(int(y), height_ - 2);
+        return {&at(0, j), &at(0, j + 1), y - float(j), width_ - 1};
+    }
+
 private:
     int width_ = 0, height_ = 0;
     std::vector<Spectrum4> texels_;
