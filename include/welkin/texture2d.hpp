@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "welkin/atmosphere_batch.hpp"
+#include "welkin/simd.hpp"
 
 namespace welkin {
 
@@ -43,14 +44,16 @@ public:
         float fy;
         int last;  // width - 1
 
-        Spectrum4 sample(float x_in) const {
+        Float4 sample4(float x_in) const {
             const float x = std::clamp(x_in, 0.0f, float(last));
             const int i = std::min(int(x), last - 1);
             const float fx = x - float(i);
-            const Spectrum4 a = lo[i] + fx * (lo[i + 1] - lo[i]);
-            const Spectrum4 b = hi[i] + fx * (hi[i + 1] - hi[i]);
+            const Float4 l0 = to_float4(lo[i]), l1 = to_float4(lo[i + 1]);
+            const Float4 h0 = to_float4(hi[i]), h1 = to_float4(hi[i + 1]);
+            const Float4 a = l0 + fx * (l1 - l0), b = h0 + fx * (h1 - h0);
             return a + fy * (b - a);
         }
+        Spectrum4 sample(float x) const { return to_vec4(sample4(x)); }
     };
     Row row(float v) const {
         const float y = std::clamp(v * float(height_) - 0.5f, 0.0f, float(height_ - 1));

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "welkin/texture2d.hpp"
 
@@ -88,7 +89,26 @@ double sun_visible_fraction(double bottom_radius, double r, double mu_s, double 
 
 // Optical depth (as a Spectrum4 of tau) along [0, length] of the ray (r, mu), by
 // Gauss-Legendre on panels graded towards the lowest altitude; `samples` evaluations.
-// The kernel of the transmittance LUT and of the ray-march method's sun rays.
+// The kernel of the transmittance LUT and of the ray-march method's sun rays. The nodes
+// and weights depend on `samples` alone: GradedQuadrature holds them for loops that march
+// many rays, march_optical_depth builds them for one.
+class GradedQuadrature {
+public:
+    explicit GradedQuadrature(int samples);
+    Spectrum4 optical_depth(const AtmosphereBatch& batch, double r, double mu, double length) const;
+
+private:
+    // One graded piece of `panels` 4-point panels: per node, s^2 and the weight
+    // w 2 s / panels of the substitution t = len s^2 (transmittance_lut.cpp).
+    struct Piece {
+        std::vector<double> s2, weight;
+    };
+    static Piece make_piece(int panels);
+    Spectrum4 integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b, bool toward_a,
+                        const Piece& piece) const;
+    Piece whole_, half_;  // a ray densest at one end; each side of an interior lowest point
+};
+
 Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length,
                               int samples);
 
