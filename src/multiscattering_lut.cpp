@@ -40,12 +40,22 @@ void gauss_legendre_unit(int n, std::vector<double>& x, std::vector<double>& w) 
 
 }  // namespace
 
-// Texel (i, j) holds the moments for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on the
+// Texel (i, j) holds the moments a_0 = Psi_ms, a_1, a_2 for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on the
 // texel-centre grid of texcoord_from_unit). One row shares its radius, so each of the
 // row's rays (a direction w about the local zenith) is marched once and reused for all 32
 // sun angles: only the sun's transmittance along it and the phase functions depend on
-// mu_s. The transfer f' of a ray does not depend on the sun at all. See the header for
-// the derivation.
+// mu_s. The transfer f' of a ray does not depend on the sun at all. See the header for the
+// derivation.
+//
+// For the ray w = (sin(theta) cos(phi), sin(theta) sin(phi), mu) and the sun at
+// (sin_s, 0, mu_s), nu = mu mu_s + sin(theta) cos(phi) sin_s, and the sun's zenith cosine
+// at distance t along w is (Bruneton 2017, mu_s_d)
+//   mu_s(t) = (r mu_s + t nu) / r(t) = mu_s (r + t mu) / r(t) + sin_s cos(phi) t sin(theta) / r(t),
+// two per-step constants times two per-(phi, sun angle) ones. So each step of a ray is one
+// pass over all (phi, mu_s) pairs that computes the lookups' texel coordinates
+// (arithmetic only: it vectorises) and one that fetches and accumulates, per constituent
+// (the phase functions, which depend on nu = mu mu_s + sin(theta) sin_s cos(phi), multiply
+// each ray's two sums once it is done).
 MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const TransmittanceLut& tlut,
                                        int size, int directions_sqrt, int steps)
     : bottom_(batch.bottom_radius()),
@@ -60,72 +70,116 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
     const double R = bottom_, top = top_;
     const Spectrum4 albedo = batch.ground_albedo();
     const Spectrum4 albedo_over_pi = albedo * float(1.0 / kPi);
-    // Cosines: Gauss-Legendre on each hemisphere; azimuths: midpoints of strata over
-    // [0, pi], the sky around the point being symmetric about the sun's vertical plane.
+    // Cosines: Gauss-Legendre on each hemisphere (the light is sharp at the horizon).
+    // Azimuths: strata over [0, pi]; the sky around the point is symmetric about the sun's
+    // vertical plane, so half the strata give the same sum as [0, 2 pi) at half the cost.
     const int n_half = directions_sqrt / 2, n_phi = std::max(1, directions_sqrt / 2);
     std::vector<double> gl_x, gl_w;
     gauss_legendre_unit(n_half, gl_x, gl_w);
-    std::vector<double> cos_phi(static_cast<std::size_t>(n_phi));
-    for (int b = 0; b < n_phi; ++b) cos_phi[std::size_t(b)] = std::cos(kPi * (double(b) + 0.5) / double(n_phi));
     const TransmittanceLut::AtRadius ground_at = tlut.at_radius(R);
-    tbb::parallel_for(0, size, [&](int j) {
-        const double r = R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
-        // <L' P_l> per sun angle, and <f' P_l>; <.> the mean over the sphere.
-        std::vector<Spectrum4> m0(std::size_t(size), Spectrum4(0.0f)), m1 = m0, m2 = m0;
-        Spectrum4 f0(0.0f), f1(0.0f), f2(0.0f);
+    // The (phi, mu_s) pairs, l = b size + i: mu_s and sin_s cos(phi).
+    const std::size_t n_pairs = std::size_t(n_phi) * std::size_t(size);
+    std::vector<float> pair_mu_s(n_pairs), pair_sin_cos(n_pairs);
+    for (int b = 0; b < n_phi; ++b) {
+        const double cos_phi = std::cos(kPi * (double(b) + 0.5) / double(n_phi));
+        for (int i = 0; i < size; ++i) {
+            const double mu_s = clamp_cosine(2.0 * unit_from_texcoord((float(i) + 0.5f) / float(size), size) - 1.0);
+            pair_mu_s[std::size_t(b) * size + i] = float(mu_s);
+            pair_sin_cos[std::size_t(b) * size + i] = float(safe_sqrt(1.0 - mu_s * mu_s) * cos_phi);
+        }
+    }
+    const float* const pm = pair_mu_s.data();
+    const float* const psc = pair_sin_cos.data();
+    tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& rows) {
         RaySamples ray;
-        for (int a = 0; a < 2 * n_half; ++a) {
-            const double mu = a < n_half ? gl_x[std::size_t(a)] : -gl_x[std::size_t(a - n_half)];
-            // Weight of this cosine in the mean over the sphere (each hemisphere's weights sum to 1).
-            const float w_mu = float(0.5 * gl_w[std::size_t(a % n_half)]);
-            const float p1 = float(mu), p2 = float(0.5 * (3.0 * mu * mu - 1.0));
-            const double sin_theta = safe_sqrt(1.0 - mu * mu);
-            prepare_ray(batch, r, mu, steps, ray, &tlut);
-            const bool hits_ground = ray_hits_ground(r, mu, R);
-            const double d = distance_to_boundary(r, mu, R, top);
-            Spectrum4 f(0.0f);
-            for (const RaySamples::Step& st : ray.steps) f += st.weight * (st.rayleigh_scattering + st.mie_scattering);
-            if (hits_ground) f += ray.transmittance * albedo;
-            f0 += f * w_mu;
-            f1 += f * (w_mu * p1);
-            f2 += f * (w_mu * p2);
-            const float w_dir = w_mu / float(n_phi);
-            for (int b = 0; b < n_phi; ++b) {
-                const double sin_cos = sin_theta * cos_phi[std::size_t(b)];
-                for (int i = 0; i < size; ++i) {
-                    const double mu_s = clamp_cosine(2.0 * unit_from_texcoord((float(i) + 0.5f) / float(size), size) - 1.0);
-                    const double nu = sin_cos * safe_sqrt(1.0 - mu_s * mu_s) + mu * mu_s;
-                    Spectrum4 sum_rayleigh(0.0f), sum_mie(0.0f);
-                    for (const RaySamples::Step& st : ray.steps) {
-                        const double mu_s_t = clamp_cosine((r * mu_s + st.t * nu) / st.r);
-                        const Spectrum4 lit = st.weight * tlut.to_sun(st.sun_at, mu_s_t);
-                        sum_rayleigh += lit * st.rayleigh_scattering;
-                        sum_mie += lit * st.mie_scattering;
+        std::vector<float> x_buf(n_pairs), fraction_buf(n_pairs);
+        // Per pair, this ray's sums of w sigma_R T_sun and w sigma_M T_sun, then the light
+        // L' it brings (phases applied, ground added).
+        std::vector<Spectrum4> sum_r_buf(n_pairs), sum_m_buf(n_pairs), ground_buf(n_pairs);
+        // Per pair, <L'>, <L' P_1>, <L' P_2> summed over the directions.
+        std::vector<Spectrum4> m0_buf(n_pairs), m1_buf(n_pairs), m2_buf(n_pairs);
+        float* const x = x_buf.data();
+        float* const fraction = fraction_buf.data();
+        Spectrum4* const sum_r = sum_r_buf.data();
+        Spectrum4* const sum_m = sum_m_buf.data();
+        Spectrum4* const ground = ground_buf.data();
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+            const double r = R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
+            for (auto* m : {&m0_buf, &m1_buf, &m2_buf}) std::fill(m->begin(), m->end(), Spectrum4(0.0f));
+            Spectrum4 f0(0.0f), f1(0.0f), f2(0.0f);  // <f'>, <f' P_1>, <f' P_2>
+            for (int a = 0; a < 2 * n_half; ++a) {
+                const double mu = a < n_half ? gl_x[std::size_t(a)] : -gl_x[std::size_t(a - n_half)];
+                // This cosine's weight in the mean over the sphere (each hemisphere's sum to 1),
+                // shared by the n_phi azimuths.
+                const float w_mu = float(0.5 * gl_w[std::size_t(a % n_half)]), w_dir = w_mu / float(n_phi);
+                const float p1 = float(mu), p2 = float(0.5 * (3.0 * mu * mu - 1.0));
+                const double sin_theta = safe_sqrt(1.0 - mu * mu);
+                prepare_ray(batch, r, mu, steps, ray, &tlut);
+                std::fill(sum_r_buf.begin(), sum_r_buf.end(), Spectrum4(0.0f));
+                std::fill(sum_m_buf.begin(), sum_m_buf.end(), Spectrum4(0.0f));
+                std::fill(ground_buf.begin(), ground_buf.end(), Spectrum4(0.0f));
+                Spectrum4 f(0.0f);
+                for (const RaySamples::Step& st : ray.steps) {
+                    const Spectrum4 w_r = st.weight * st.rayleigh_scattering, w_m = st.weight * st.mie_scattering;
+                    f += w_r + w_m;
+                    const float C = float((r + st.t * mu) / st.r), D = float(st.t * sin_theta / st.r);
+                    const TransmittanceLut::AtRadius& at = st.sun_at;
+                    for (std::size_t l = 0; l < n_pairs; ++l)
+                        TransmittanceLut::sun_lookup(at, clamp_value(C * pm[l] + D * psc[l], -1.0f, 1.0f), x[l], fraction[l]);
+                    for (std::size_t l = 0; l < n_pairs; ++l) {
+                        const Spectrum4 T = at.row.sample(x[l]) * fraction[l];
+                        sum_r[l] += w_r * T;
+                        sum_m[l] += w_m * T;
                     }
-                    // Light arriving from w travels along -w; the sun's along -s: the
-                    // scattering cosine is w . s = nu (phase.hpp).
-                    Spectrum4 L = sum_rayleigh * batch.rayleigh_phase(float(nu)) + sum_mie * batch.mie_phase(float(nu));
-                    if (hits_ground) {
-                        // Sun light reflected by the Lambertian ground at the ray's end.
-                        const double mu_s_g = clamp_cosine((r * mu_s + d * nu) / R);
-                        L += ray.transmittance * tlut.to_sun(ground_at, mu_s_g) *
-                             float(std::max(mu_s_g, 0.0)) * albedo_over_pi;
+                }
+                const bool hits_ground = ray_hits_ground(r, mu, R);
+                // The ground lit by the isotropic field of each order (irradiance pi m_n)
+                // adds albedo m_n T_g to the next order along this ray: f' = f + albedo T_g.
+                if (hits_ground) f += ray.transmittance * albedo;
+                f0 += f * w_mu;
+                f1 += f * (w_mu * p1);
+                f2 += f * (w_mu * p2);
+                if (hits_ground) {
+                    // Sun light reflected by the Lambertian ground at the ray's end, where
+                    // mu_s = (r mu_s + d nu) / R.
+                    const double d = distance_to_bottom(r, mu, R);
+                    const float C = float((r + d * mu) / R), D = float(d * sin_theta / R);
+                    const Spectrum4 k = ray.transmittance * albedo_over_pi;
+                    for (std::size_t l = 0; l < n_pairs; ++l) {
+                        const float mu_s_g = clamp_value(C * pm[l] + D * psc[l], -1.0f, 1.0f);
+                        TransmittanceLut::sun_lookup(ground_at, mu_s_g, x[l], fraction[l]);
+                        fraction[l] *= max_value(mu_s_g, 0.0f);
                     }
-                    L *= w_dir;
-                    m0[std::size_t(i)] += L;
-                    m1[std::size_t(i)] += L * p1;
-                    m2[std::size_t(i)] += L * p2;
+                    for (std::size_t l = 0; l < n_pairs; ++l) ground[l] = k * (ground_at.row.sample(x[l]) * fraction[l]);
+                }
+                // L' = the single-scattered light with the real phase functions at
+                // nu = w . s (light from w travels along -w, the sun's along -s), plus the
+                // ground; accumulated into the three moments.
+                for (std::size_t l = 0; l < n_pairs; ++l) {
+                    const float nu = clamp_value(float(mu) * pm[l] + float(sin_theta) * psc[l], -1.0f, 1.0f);
+                    const Spectrum4 L =
+                        (sum_r[l] * batch.rayleigh_phase(nu) + sum_m[l] * batch.mie_phase(nu) + ground[l]) * w_dir;
+                    m0_buf[l] += L;
+                    m1_buf[l] += L * p1;
+                    m2_buf[l] += L * p2;
                 }
             }
-        }
-        // Orders >= 2 of the arriving light: a geometric series in <f'> for the mean,
-        // and Psi_ms f'(w) for its shape.
-        const Spectrum4 series = 1.0f / glm::max(Spectrum4(1.0f) - f0, Spectrum4(1e-3f));
-        for (int i = 0; i < size; ++i) {
-            const Spectrum4 psi = m0[std::size_t(i)] * series;
-            texture_.at(i, j) = psi;
-            dipole_.at(i, j) = 3.0f * (m1[std::size_t(i)] + psi * f1);
-            quadrupole_.at(i, j) = 5.0f * (m2[std::size_t(i)] + psi * f2);
+            // Orders >= 2 of the arriving light: a geometric series in <f'> for the mean,
+            // Psi_ms f'(w) for its shape.
+            const Spectrum4 series = 1.0f / glm::max(Spectrum4(1.0f) - f0, Spectrum4(1e-3f));
+            for (int i = 0; i < size; ++i) {
+                Spectrum4 s0(0.0f), s1(0.0f), s2(0.0f);
+                for (int b = 0; b < n_phi; ++b) {
+                    const std::size_t l = std::size_t(b) * size + i;
+                    s0 += m0_buf[l];
+                    s1 += m1_buf[l];
+                    s2 += m2_buf[l];
+                }
+                const Spectrum4 psi = s0 * series;
+                texture_.at(i, j) = psi;
+                dipole_.at(i, j) = 3.0f * (s1 + psi * f1);
+                quadrupole_.at(i, j) = 5.0f * (s2 + psi * f2);
+            }
         }
     });
 }

@@ -64,6 +64,8 @@
 // on the view ray only, so the marches precompute them per step (inscattering.hpp).
 #pragma once
 
+#include <vector>
+
 #include "welkin/transmittance_lut.hpp"
 
 namespace welkin {
@@ -116,6 +118,33 @@ public:
         const Spectrum4 a = combined(i, j) + fx * (combined(i + 1, j) - combined(i, j));
         const Spectrum4 b = combined(i, j + 1) + fx * (combined(i + 1, j + 1) - combined(i, j + 1));
         return a + fy * (b - a);
+    }
+
+    // psi for many sun angles at one radius (Texture2D::Row): the row of v_at_radius(r),
+    // and the texel coordinate of mu_s, x = (mu_s + 1) / 2 (width - 1), which is
+    // u * width - 0.5 for the u of psi(v, mu_s).
+    Texture2D::Row row_at_radius(double r) const { return texture_.row(v_at_radius(r)); }
+    float texel_x(float mu_s) const { return 0.5f * (mu_s + 1.0f) * float(texture_.width() - 1); }
+
+    // source() for many sun angles at one radius and one set of weights: the three rows
+    // at v_at_radius(r), interpolated in r and combined with w0, w1, w2 into `buffer`
+    // (width texels), returned as a Row whose sample(texel_x(mu_s)) is source(v, mu_s, ...).
+    // A step of a sky-view row (inscatter_row) costs one combination and then one linear
+    // lookup per view, as the isotropic term did.
+    Texture2D::Row source_row(double r, const Spectrum4& w0, const Spectrum4& w1, const Spectrum4& w2,
+                              std::vector<Spectrum4>& buffer) const {
+        const Texture2D::Row a0 = texture_.row(v_at_radius(r));
+        const Texture2D::Row a1 = dipole_.row(v_at_radius(r)), a2 = quadrupole_.row(v_at_radius(r));
+        const int n = texture_.width();
+        buffer.resize(std::size_t(n));
+        const float fy = a0.fy;
+        for (int i = 0; i < n; ++i) {
+            const Spectrum4 c0 = a0.lo[i] + fy * (a0.hi[i] - a0.lo[i]);
+            const Spectrum4 c1 = a1.lo[i] + fy * (a1.hi[i] - a1.lo[i]);
+            const Spectrum4 c2 = a2.lo[i] + fy * (a2.hi[i] - a2.lo[i]);
+            buffer[std::size_t(i)] = w0 * c0 + w1 * c1 + w2 * c2;
+        }
+        return {buffer.data(), buffer.data(), 0.0f, n - 1};
     }
 
     const Texture2D& texture() const { return texture_; }       // a_0 = Psi_ms

@@ -48,17 +48,22 @@ namespace {
 
 const char* kNames[] = {"680nm", "550nm", "440nm"};
 
-// The multiple-scattering term along the view ray, per unit of nothing (W m^-2 sr^-1 nm^-1):
-// the march of inscattering.hpp with the sun's direct light switched off. `isotropic`
-// keeps only a_0 (the dipole and quadrupole weights set to zero).
+// The multiple-scattering term along the view ray (W m^-2 sr^-1 nm^-1): the march of
+// inscattering.hpp with the sun's direct light switched off. `isotropic` keeps only a_0,
+// (sigma_R + sigma_M) Psi_ms at each step, the form of Hillaire's term.
 Spectrum4 multiple_scattering_term(const AtmosphereLuts::Batch& b, double r, const ViewGeometry& g,
                                    bool isotropic) {
     RaySamples ray;
     prepare_ray(b.medium, r, g.mu, 256, ray, &b.transmittance, &b.multiscattering);
-    if (isotropic)
-        for (RaySamples::Step& st : ray.steps) st.ms_w1 = st.ms_w2 = Spectrum4(0.0f);
-    return inscatter(b.medium, &b.multiscattering, ray, g.mu_s, g.nu,
-                     [](const RaySamples::Step&, double) { return Spectrum4(0.0f); });
+    if (!isotropic)
+        return inscatter(b.medium, &b.multiscattering, ray, g.mu_s, g.nu,
+                         [](const RaySamples::Step&, double) { return Spectrum4(0.0f); });
+    Spectrum4 L(0.0f);
+    for (const RaySamples::Step& st : ray.steps) {
+        const double mu_s_t = clamp_cosine((ray.r0 * g.mu_s + st.t * g.nu) / st.r);
+        L += st.weight * (st.rayleigh_scattering + st.mie_scattering) * b.multiscattering.psi(st.ms_v, mu_s_t);
+    }
+    return L * b.medium.solar_irradiance();
 }
 
 }  // namespace
