@@ -31,6 +31,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "peer_single_scattering.hpp"
@@ -140,4 +141,43 @@ TEST(MultipleScatteringVsReference, TermAndLutAgainstTheReferenceByOrder) {
         EXPECT_LT(lw, 0.05) << kNames[c];
         EXPECT_LT(sw, 0.013) << kNames[c];
     }
+}
+
+// The multiple-scattering source (*) of multiscattering_lut.hpp is never negative, for every
+// preset, texel, and view cosine, although the unclamped truncated series does go negative
+// for some presets (checked too, so that this test would notice if the clamp were lost).
+TEST(MultipleScatteringLut, SourceIsNeverNegative) {
+    int unclamped_negative = 0;
+    for (const std::string& name : Atmosphere::preset_names()) {
+        const Atmosphere atm = Atmosphere::preset(name);
+        const AtmosphereLuts luts(atm, SkyOptions{});
+        for (const auto& b : luts.batches()) {
+            const MultiScatteringLut& ms = b->multiscattering;
+            const int n = ms.texture().width();
+            const double R = b->medium.bottom_radius(), top = b->medium.top_radius();
+            for (int j = 0; j < n; ++j) {
+                const double r = R + (top - R) * double(j) / double(n - 1);
+                const MediumSample m = b->medium.sample(r - R);
+                for (int i = 0; i < n; ++i) {
+                    const double mu_s = -1.0 + 2.0 * double(i) / double(n - 1);
+                    for (double mu_v = -1.0; mu_v <= 1.0; mu_v += 0.25) {
+                        Spectrum4 w1, w2;
+                        ms.source_weights(m.rayleigh_scattering, m.mie_scattering, mu_v, w1, w2);
+                        const Spectrum4 w0 = m.rayleigh_scattering + m.mie_scattering;
+                        const Spectrum4 J = ms.source(ms.v_at_radius(r), mu_s, w0, w1, w2);
+                        const Spectrum4 raw = w0 * ms.texture().at(i, j) + w1 * ms.dipole().at(i, j) +
+                                              w2 * ms.quadrupole().at(i, j);
+                        for (std::size_t c = 0; c < b->medium.channel_count(); ++c) {
+                            ASSERT_TRUE(std::isfinite(J[int(c)])) << name;
+                            ASSERT_GE(J[int(c)], 0.0f) << name << " r texel " << j << " mu_s texel " << i;
+                            if (raw[int(c)] < 0.0f) ++unclamped_negative;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    std::printf("[ positivity ] texel sources the truncated series makes negative (clamped): %d\n",
+                unclamped_negative);
+    EXPECT_GT(unclamped_negative, 0);
 }
