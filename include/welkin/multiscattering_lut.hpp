@@ -124,8 +124,9 @@ public:
 
     // The multiple-scattering source J_ms of (*) per unit sun illuminance (m^-1 sr^-1) at
     // the radius of texture row coordinate v, sun zenith cosine mu_s: w0 = sigma_R + sigma_M,
-    // w1, w2 from source_weights. The three textures share one bilinear coordinate; each
-    // texel's source is clamped at zero before the interpolation (see Positivity).
+    // w1, w2 from source_weights. The three textures share one bilinear coordinate; the
+    // source is clamped at zero at each sun-angle texel (see Positivity), after the
+    // interpolation in r, exactly as source_row does.
     Spectrum4 source(float v, double mu_s, const Spectrum4& w0, const Spectrum4& w1, const Spectrum4& w2) const {
         const int n = texture_.width(), m = texture_.height();
         const float u = texcoord_from_unit(float(0.5 * (mu_s + 1.0)), n);
@@ -133,13 +134,13 @@ public:
         const float y = std::clamp(v * float(m) - 0.5f, 0.0f, float(m - 1));
         const int i = std::min(int(x), n - 2), j = std::min(int(y), m - 2);
         const float fx = x - float(i), fy = y - float(j);
-        const auto combined = [&](int ii, int jj) {
-            return glm::max(w0 * texture_.at(ii, jj) + w1 * dipole_.at(ii, jj) + w2 * quadrupole_.at(ii, jj),
-                            Spectrum4(0.0f));
+        // As source_row: interpolate in r, combine, clamp, then interpolate in mu_s.
+        const auto combined = [&](int ii) {
+            const auto lerp_r = [&](const Texture2D& t) { return t.at(ii, j) + fy * (t.at(ii, j + 1) - t.at(ii, j)); };
+            return glm::max(w0 * lerp_r(texture_) + w1 * lerp_r(dipole_) + w2 * lerp_r(quadrupole_), Spectrum4(0.0f));
         };
-        const Spectrum4 a = combined(i, j) + fx * (combined(i + 1, j) - combined(i, j));
-        const Spectrum4 b = combined(i, j + 1) + fx * (combined(i + 1, j + 1) - combined(i, j + 1));
-        return a + fy * (b - a);
+        const Spectrum4 c0 = combined(i);
+        return c0 + fx * (combined(i + 1) - c0);
     }
 
     // psi for many sun angles at one radius (Texture2D::Row): the row of v_at_radius(r),
