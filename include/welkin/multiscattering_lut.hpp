@@ -17,7 +17,7 @@
 // order; tests/cpp/test_multiscattering_vs_reference.cpp, bruneton2017, camera on the
 // ground, the peer table's 90 views): Hillaire's multiple scattering is up to 24 % too
 // low near the horizon with the sun 60 deg from the zenith, and 5-8 % too high at the
-// zenith with the sun overhead (440 nm; 26-30 % and 17-27 % worst at 680 and 550 nm).
+// zenith with the sun overhead (440 nm; its worst case is 30 % at 680 nm, 27 % at 550 nm).
 // The multiply-scattered light is not isotropic: seen from the low air it is brightest
 // near the horizon (long paths), and Rayleigh's phase 3/4 (1 + nu^2) sends that light
 // into a horizontal view with weight 3/4 (1 + cos^2) ~ 1.125 on average over the horizon
@@ -39,7 +39,7 @@
 // same rays, with two corrections:
 //  * The first scattering uses the real phase functions p_k(w . s) (Hillaire uses p_u
 //    there too), so L'(x, w) is the single-scattered sky as seen from x; the sums along
-//    each ray are kept per constituent, so this costs one multiply per ray.
+//    each ray are kept per constituent and the phases applied once the ray is done.
 //  * Light of order n + 1 arriving from w is, in Hillaire's local approximation, the
 //    order-n mean radiance m_n re-emitted isotropically along the ray: m_n f(w), with
 //    f(w) = int_w T sigma_s dt, plus where the ray meets the ground, the ground lit by
@@ -72,7 +72,8 @@
 // some texels (down to -0.3 times the isotropic term), which no radiance can be. The
 // source is therefore clamped at zero texel by texel, before the bilinear lookup, which
 // keeps every lookup >= 0 and changes nothing where (*) is positive (every texel of
-// bruneton2017, whose smallest (*) is 0.15 times the isotropic term). Limiting the
+// bruneton2017, whose smallest (*) over view cosines -1, -0.5, ..., 1 is 0.15 times the
+// isotropic term). Limiting the
 // moments so that the truncated field itself stays >= 0 would also do, but it flattens
 // the horizon peak near the ground and was measured to cost accuracy (lut worst case
 // against the reference at 440 nm 4.9 -> 5.2 %).
