@@ -80,7 +80,7 @@
 //
 // Cost: three 32 x 32 textures instead of one, filled by the same loop (one more sum per
 // step and pair, and the phases once per ray and pair: the LUT build measured 5.2 -> 5.9 ms
-// of CPU on one thread); at lookup (*) takes three texels at one coordinate, and the
+// of CPU on one thread against the isotropic version, in a throw-away A/B program); at lookup (*) takes three texels at one coordinate, and the
 // weights sigma_k chi_kl P_l(mu_v) depend on the step alone, so a sky-view row combines the
 // three texel rows once per step and each view does one lookup, as before (7.3 -> 7.2 ms).
 #pragma once
