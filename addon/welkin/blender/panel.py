@@ -57,3 +57,5 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         layout.operator("welkin.export_hdri", icon='EXPORT')
         if s.status:
             _wrapped(layout, s.status, icon='INFO')
+        for warning in filter(None, s.warnings.split("\n")):
+            _wrapped(layout, warning, icon='ERROR')

@@ -91,3 +91,4 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
     previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
     last_key: bpy.props.StringProperty(options={'HIDDEN'})
     status: bpy.props.StringProperty(options={'HIDDEN'})
+    warnings: bpy.props.StringProperty(options={'HIDDEN'})  # of the last update, one a line

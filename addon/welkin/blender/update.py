@@ -73,6 +73,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
     outcome.updated = True
     outcome.seconds = result.seconds
     outcome.method = result.method
+    settings.warnings = "\n".join(outcome.warnings)
     settings.status = (f"sky {request.width}x{height} by {result.method} in "
                        f"{result.seconds:.2f} s from '{lamp.name}'"
                        + (f"; {len(outcome.warnings)} warning(s)" if outcome.warnings else ""))
