@@ -114,3 +114,46 @@ def check(condition, message):
 
 def done(name):
     print(f"{name}: OK")
+
+
+def panoramic_camera(scene, width, height, samples=2):
+    """Makes the scene camera an equirectangular panorama at the origin looking along +X
+    with +Z up, so that its image has Blender's Environment Texture mapping (the image
+    centre is +X, +Y to the left), and sets up a fast, exact-as-possible Cycles render:
+    a tiny pixel filter (samples at the pixel centres), no denoising, linear EXR."""
+    import math as m
+    cam = scene.camera
+    cam.location = (0.0, 0.0, cam.location.z)
+    cam.rotation_mode = 'XYZ'
+    cam.rotation_euler = (m.radians(90.0), 0.0, m.radians(-90.0))
+    cam.data.type = 'PANO'
+    if hasattr(cam.data, "panorama_type"):  # Blender 4.x
+        cam.data.panorama_type = 'EQUIRECTANGULAR'
+    else:                                   # Blender 3.x
+        cam.data.cycles.panorama_type = 'EQUIRECTANGULAR'
+    scene.render.engine = 'CYCLES'
+    scene.cycles.device = 'CPU'
+    scene.cycles.samples = samples
+    scene.cycles.use_adaptive_sampling = False
+    scene.cycles.use_denoising = False
+    scene.cycles.pixel_filter_type = 'BLACKMAN_HARRIS'
+    scene.cycles.filter_width = 0.01
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = False
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.image_settings.color_mode = 'RGB'
+    scene.view_settings.view_transform = 'Standard'
+
+
+def read_rgb_exr(welkin, path):
+    """(H, W, 3) float32, top row first, R G B in that order (read by the core)."""
+    import numpy as np
+    pixels, names = welkin.read_exr(str(path))
+    return np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1)
+
+
+def render_still(scene, path):
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
