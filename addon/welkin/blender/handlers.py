@@ -26,6 +26,12 @@ DEBOUNCE_S = 0.15
 _state = {"due": 0.0, "armed": False}
 
 
+def _headless():
+    """True in `blender -b` (no timers run there). A function, so a headless test can
+    stand in for the UI."""
+    return bpy.app.background
+
+
 def _log(settings, text):
     print(f"Welkin: {text}")
     if settings is not None:
@@ -83,7 +89,7 @@ def _stale(scene, depsgraph):
 
 def settings_changed(settings, context):
     """A panel parameter changed (property update callback)."""
-    if bpy.app.background or not settings.active or not settings.auto_update:
+    if _headless() or not settings.active or not settings.auto_update:
         return
     _arm()
 
@@ -91,7 +97,7 @@ def settings_changed(settings, context):
 @persistent
 def on_depsgraph_update(scene, depsgraph=None):
     # Headless sessions have no timers: scripts call update_sky, renders get frame changes.
-    if bpy.app.background or not _live(scene):
+    if _headless() or not _live(scene):
         return
     if _stale(scene, None):
         _arm()
