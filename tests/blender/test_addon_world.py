@@ -126,6 +126,8 @@ user_extra.location = (-600, 300)
 output = tree.nodes['World Output']
 tree.links.new(user_sky.outputs['Color'], user_bg.inputs['Color'])
 tree.links.new(user_bg.outputs['Background'], output.inputs['Surface'])
+world.cycles.sampling_method = 'AUTOMATIC'
+world.cycles.sample_map_resolution = 777
 before = signature(tree)
 images_before = set(bpy.data.images.keys())
 
@@ -141,9 +143,13 @@ T.check([x[:5] for x in during_nodes] == strip, "user nodes changed by update")
 active = [n for n in tree.nodes if n.bl_idname == 'ShaderNodeOutputWorld' and n.is_active_output]
 T.check(len(active) == 1 and active[0].get("welkin_role") == "output",
         f"the active output is not Welkin's: {[n.name for n in active]}")
+T.check((world.cycles.sampling_method, world.cycles.sample_map_resolution) == ('MANUAL', 256),
+        "the world's importance map is not Manual at the sky's width")
 
 bpy.ops.welkin.remove_sky()
 T.check(signature(tree) == before, "remove_sky did not restore the user's nodes exactly")
+T.check((world.cycles.sampling_method, world.cycles.sample_map_resolution) == ('AUTOMATIC', 777),
+        "remove_sky did not restore the world's importance-map setting")
 T.check(set(bpy.data.images.keys()) == images_before, "remove_sky left images behind")
 T.check(not any(n.get("welkin_role") for n in tree.nodes), "Welkin nodes left after remove")
 

@@ -40,8 +40,10 @@ def ensure(settings, role, width, height):
 
 def write(image, top_first):
     """Fills `image` from an (H, W, 3) top-row-first array."""
+    # Setting pixels marks the image dirty and drops its GPU textures; update_tag() tells
+    # the depsgraph (and so Cycles' viewport render). Image.update() is not called: it
+    # builds the 8-bit display buffer, which nothing here needs and costs ~0.1 s at 2048.
     image.pixels.foreach_set(pixels.to_blender(top_first))
-    image.update()
     image.update_tag()
 
 

@@ -89,6 +89,7 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
     disc_image: bpy.props.PointerProperty(type=bpy.types.Image, options={'HIDDEN'})
     previous_output: bpy.props.StringProperty(options={'HIDDEN'})
     previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
+    previous_sampling: bpy.props.StringProperty(options={'HIDDEN'})  # "METHOD:resolution"
     last_key: bpy.props.StringProperty(options={'HIDDEN'})
     status: bpy.props.StringProperty(options={'HIDDEN'})
     warnings: bpy.props.StringProperty(options={'HIDDEN'})  # of the last update, one a line

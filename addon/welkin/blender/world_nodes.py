@@ -13,7 +13,14 @@ The tree (energy appears once, DESIGN.md):
 The sun lamp lights the scene; the disc's Background has strength "Is Camera Ray", so
 camera rays see the disc while diffuse, glossy and shadow rays, and Cycles' importance map
 of the world, see the sky alone.
+
+Cycles' world importance map: on "Automatic" it takes the resolution of the largest
+environment texture, and building a 2048 x 1024 map took 4.3 s per render here (two
+cores), against 0.4 s at 1024 x 512. Without the disc the sky is smooth, so the add-on
+sets the map to Manual, at most 1024 wide (the sky's width when smaller), and remove()
+puts the world's own setting back.
 """
+MAP_RESOLUTION = 1024
 ROLE_KEY = "welkin_role"
 
 
@@ -44,9 +51,15 @@ def install(world, settings, sky_image, disc_image):
         settings.previous_use_nodes = world.use_nodes
     world.use_nodes = True
     tree = world.node_tree
+    cycles = getattr(world, "cycles", None)  # absent when Cycles is disabled
     if not _ours(tree):
         # The user's active outputs (one per render engine target at most).
         settings.previous_output = "\n".join(n.name for n in _active_outputs(tree))
+        if cycles is not None:
+            settings.previous_sampling = f"{cycles.sampling_method}:{cycles.sample_map_resolution}"
+    if cycles is not None:
+        cycles.sampling_method = 'MANUAL'
+        cycles.sample_map_resolution = min(MAP_RESOLUTION, sky_image.size[0])
     xs = [n.location.x for n in tree.nodes if not n.get(ROLE_KEY)] or [0.0]
     ys = [n.location.y for n in tree.nodes if not n.get(ROLE_KEY)] or [0.0]
     x0, y0 = min(xs), min(ys) - 400.0
@@ -93,4 +106,10 @@ def remove(world, settings):
             previous = tree.nodes.get(name)
             if previous is not None:
                 previous.is_active_output = True
+    cycles = getattr(world, "cycles", None)
+    if cycles is not None and settings.previous_sampling:
+        method, resolution = settings.previous_sampling.split(":")
+        cycles.sampling_method = method
+        cycles.sample_map_resolution = int(resolution)
+        settings.previous_sampling = ""
     world.use_nodes = settings.previous_use_nodes
