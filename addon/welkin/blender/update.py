@@ -65,6 +65,15 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
     world_nodes.install(world, settings, sky, disc)
     if settings.sync_lamp:
         data = lamp.data
+        if depsgraph is not None and depsgraph.mode == 'RENDER':
+            # A render's own depsgraph (frame_change_post during `-a` or F12): write the
+            # lamp's values into its evaluated copy, which Cycles reads, and leave the
+            # original alone. Editing the original would make Blender evaluate that
+            # depsgraph a second time, and the second pass re-copies the lamp object
+            # from the original without re-animating it: the frame would render the
+            # new strength from the old direction (seen: frame 10 lit from frame 1).
+            # The images need no such care: Cycles reads the original image's pixels.
+            data = lamp.evaluated_get(depsgraph).data
         data.color = result.lamp.color
         data.energy = result.lamp.strength_w_m2
         data.angle = result.lamp.angle_rad
