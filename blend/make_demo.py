@@ -1,7 +1,7 @@
 """Makes the demo scene and renders a short time-of-day sequence, headless:
 
     blender -b --factory-startup --python-use-system-env --python blend/make_demo.py \
-        [-- --frames 6 --out out/demo --size 480 --samples 16 --no-render]
+        [-- --frames 6 --out out/demo --size 480 --samples 16 --no-render --sheet PNG]
 
 A ground plane, a few objects, a camera looking along +X, and one sun lamp
 animated from just below the horizon (frame 1) to 60 degrees up (last frame) while it
@@ -12,6 +12,7 @@ and re-renders headless on any machine with the add-on installed:
 
     blender -b OUT/welkin_demo.blend --addons welkin -a
 
+--sheet writes the frames side by side (two rows) as one PNG, e.g. docs/addon_demo.png.
 Frames go to OUT/frame_####.png (Filmic, exposure -5 for the physical W m^-2 sr^-1
 radiance scale, as with Blender's Nishita sky).
 """
@@ -30,6 +31,7 @@ parser.add_argument("--out", default=os.path.join(ROOT, "out", "demo"))
 parser.add_argument("--size", type=int, default=480, help="image width, pixels")
 parser.add_argument("--samples", type=int, default=16)
 parser.add_argument("--no-render", action="store_true")
+parser.add_argument("--sheet", help="also write the frames as one contact-sheet PNG")
 args = parser.parse_args(argv)
 os.makedirs(args.out, exist_ok=True)
 
@@ -108,3 +110,24 @@ print(f"make_demo: saved {blend}")
 if not args.no_render:
     bpy.ops.render.render(animation=True)
     print(f"make_demo: rendered frames 1-{args.frames} to {args.out}")
+    if args.sheet:
+        import numpy as np
+        frames = []
+        for f in range(1, args.frames + 1):
+            image = bpy.data.images.load(os.path.join(args.out, f"frame_{f:04d}.png"))
+            w, h = image.size
+            px = np.empty(w * h * 4, dtype=np.float32)
+            image.pixels.foreach_get(px)
+            frames.append(px.reshape(h, w, 4))  # bottom row first, as Blender keeps them
+            bpy.data.images.remove(image)
+        cols = (len(frames) + 1) // 2
+        frames += [np.zeros_like(frames[0])] * (2 * cols - len(frames))
+        top = np.concatenate(frames[:cols], axis=1)
+        bottom = np.concatenate(frames[cols:], axis=1)
+        sheet = np.concatenate([bottom, top], axis=0)  # bottom-first: first row on top
+        out = bpy.data.images.new("sheet", sheet.shape[1], sheet.shape[0], alpha=True)
+        out.pixels.foreach_set(sheet.ravel())
+        out.filepath_raw = os.path.abspath(args.sheet)
+        out.file_format = 'PNG'
+        out.save()
+        print(f"make_demo: contact sheet {args.sheet}")
