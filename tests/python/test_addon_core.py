@@ -128,3 +128,15 @@ def test_blender_pixels_are_bottom_row_first_rgba():
     np.testing.assert_array_equal(flat[:3], img[1, 0])  # Blender's first pixel: bottom left
     np.testing.assert_array_equal(flat.reshape(2, 3, 4)[..., 3], 1.0)
     np.testing.assert_array_equal(pixels.from_blender(flat, 3, 2), img)
+
+
+def test_sparse_disc_pixels_are_written_and_cleared():
+    sparse = pixels.SparseImage(4, 2)
+    a = np.zeros((2, 4, 3), np.float32)
+    a[0, 1] = (1.0, 2.0, 3.0)
+    np.testing.assert_array_equal(sparse.to_blender(a), pixels.to_blender(a))
+    b = np.zeros((2, 4, 3), np.float32)
+    b[1, 3] = (4.0, 5.0, 6.0)
+    np.testing.assert_array_equal(sparse.to_blender(b), pixels.to_blender(b))
+    out = pixels.rgba_buffer(4, 2)
+    np.testing.assert_array_equal(pixels.to_blender(b, out), pixels.to_blender(b))

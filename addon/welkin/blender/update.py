@@ -58,7 +58,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
     sky = images.ensure(settings, "sky", request.width, height)
     disc = images.ensure(settings, "disc", request.width, height)
     images.write(sky, result.sky)
-    images.write(disc, result.disc)
+    images.write(disc, result.disc, sparse=True)
     if pack:
         images.pack(sky)
         images.pack(disc)
