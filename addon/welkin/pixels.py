@@ -37,7 +37,10 @@ class SparseImage:
     def to_blender(self, image):
         h = self.buffer.shape[0]
         self.buffer[self._rows, self._cols, :3] = 0.0
-        rows, cols = np.nonzero(image.any(axis=2))
+        w = image.shape[1]
+        flat = np.ascontiguousarray(image[..., :3]).reshape(-1)
+        pixel = np.unique(np.flatnonzero(flat) // 3)  # a linear scan, then a few indices
+        rows, cols = pixel // w, pixel % w
         self._rows, self._cols = h - 1 - rows, cols
         self.buffer[self._rows, self._cols, :3] = image[rows, cols, :3]
         return self.buffer.reshape(-1)
