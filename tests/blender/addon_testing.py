@@ -157,3 +157,41 @@ def read_rgb_exr(welkin, path):
 def render_still(scene, path):
     scene.render.filepath = str(path)
     bpy.ops.render.render(write_still=True)
+
+
+class FakeLayout:
+    """Records what a panel draws (labels, properties, operators), for headless tests."""
+
+    def __init__(self, log=None):
+        self.log = [] if log is None else log
+        self.use_property_split = False
+        self.active = True
+
+    def _child(self, *args, **kwargs):
+        return FakeLayout(self.log)
+
+    row = column = box = _child
+
+    def separator(self, *args, **kwargs):
+        pass
+
+    def label(self, text="", **kwargs):
+        self.log.append(("label", text))
+
+    def prop(self, data, name, **kwargs):
+        getattr(data, name)  # the property must exist
+        self.log.append(("prop", name))
+
+    def operator(self, idname, **kwargs):
+        self.log.append(("operator", idname))
+
+
+def draw_panel(scene):
+    """What Properties > World > Welkin Sky shows for `scene`: a list of (kind, text)."""
+    import types
+    panel_class = bpy.types.WORLD_PT_welkin_sky
+    layout = FakeLayout()
+    context = types.SimpleNamespace(world=scene.world, scene=scene)
+    T = types.SimpleNamespace(layout=layout)
+    panel_class.draw(T, context)
+    return layout.log

@@ -72,6 +72,11 @@ for zip_name, rename, fragment in (
             f"{zip_name}: message {native.message()!r} lacks {fragment!r}")
     T.check("build_addon.sh" in native.message(), "the message does not say how to fix it")
     scene, _sun = T.new_scene()
+    shown = T.draw_panel(scene)
+    shown_text = " ".join(text for kind, text in shown if kind == "label")
+    T.check(fragment in shown_text and "build_addon.sh" in shown_text,
+            f"{zip_name}: the panel does not show the message: {shown}")
+    T.check(not any(kind == "operator" for kind, _ in shown), "operators offered without module")
     nodes_before = len(scene.world.node_tree.nodes)
     expect_error(bpy.ops.welkin.update_sky, fragment)
     T.check(len(scene.world.node_tree.nodes) == nodes_before, "world changed without module")

@@ -26,6 +26,12 @@ ELEVATION, AZIMUTH = 25.0, 60.0
 scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution='256')
 bpy.ops.welkin.update_sky()
 settings = scene.world.welkin
+shown = T.draw_panel(scene)
+for name in ("preset", "altitude_m", "sun_object", "exposure", "resolution", "method"):
+    T.check(("prop", name) in shown, f"the panel does not show {name}: {shown}")
+for op in ("welkin.update_sky", "welkin.remove_sky", "welkin.export_hdri"):
+    T.check(("operator", op) in shown, f"the panel does not offer {op}")
+T.check(settings.method == 'auto', f"default method {settings.method}, expected auto")
 sky = T.world_pixels(settings.sky_image)
 H, W, _ = sky.shape
 T.check((W, H) == (256, 128), f"world image is {W}x{H}, expected 256x128")

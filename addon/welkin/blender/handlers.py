@@ -14,6 +14,7 @@
 All are @persistent (they stay across file loads) and need no UI. Failures are printed and
 kept in the panel's status line; a handler never raises.
 """
+import threading
 import time
 
 import bpy
@@ -110,8 +111,17 @@ def on_frame_change_pre(scene, depsgraph=None):
 
 @persistent
 def on_frame_change_post(scene, depsgraph=None):
-    if _live(scene):
-        _run(scene, depsgraph, pack=False)
+    if not _live(scene):
+        return
+    # UI renders (F12, Ctrl F12) call frame handlers on the render thread while the
+    # interface keeps drawing; changing images and lamps from there is only safe with
+    # Render > Lock Interface on. Headless renders (-a) run on the main thread.
+    if threading.current_thread() is not threading.main_thread() \
+            and not scene.render.use_lock_interface:
+        _log(scene.world.welkin, "sky not updated for this frame: the render runs beside "
+             "the interface; enable Render > Lock Interface so renders follow the sun lamp")
+        return
+    _run(scene, depsgraph, pack=False)
 
 
 @persistent

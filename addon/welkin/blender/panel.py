@@ -51,6 +51,13 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         col.prop(s, "resolution")
         col.prop(s, "method")
         col.prop(s, "auto_update")
+        lamp = s.sun_object
+        animated = lamp is not None and lamp.animation_data is not None
+        if s.auto_update and animated and not context.scene.render.use_lock_interface:
+            box = layout.box()
+            _wrapped(box, "Animated sun: UI renders follow it only with Lock Interface on",
+                     icon='INFO')
+            box.prop(context.scene.render, "use_lock_interface")
         row = layout.row(align=True)
         row.operator("welkin.update_sky", icon='WORLD')
         row.operator("welkin.remove_sky", icon='X')
