@@ -47,6 +47,13 @@ def lamp_values(native, atm, altitude_m, sun_direction, exposure):
     return LampValues(color, strength, 2.0 * float(atm.sun_angular_radius_rad))
 
 
+def lamp_for(native, request):
+    """The lamp's values alone for `request` (no images): cheap."""
+    sky_request.validate(request, native)
+    atm = sky_request.build_atmosphere(request, native)
+    return lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure)
+
+
 def sun_elevation_rad(sun_direction):
     x, y, z = (float(c) for c in sun_direction)
     return math.atan2(z, math.hypot(x, y))

@@ -36,6 +36,22 @@ def _world(scene):
     return scene.world
 
 
+def _sync_lamp(lamp, values, depsgraph):
+    data = lamp.data
+    if depsgraph is not None and depsgraph.mode == 'RENDER':
+        # A render's own depsgraph (frame_change_post during `-a` or F12): write the
+        # lamp's values into its evaluated copy, which Cycles reads, and leave the
+        # original alone. Editing the original would make Blender evaluate that
+        # depsgraph a second time, and the second pass re-copies the lamp object from
+        # the original without re-animating it: the frame would render the new strength
+        # from the old direction (seen: frame 10 lit from frame 1). The images need no
+        # such care: Cycles reads the original image's pixels.
+        data = lamp.evaluated_get(depsgraph).data
+    data.color = values.color
+    data.energy = values.strength_w_m2
+    data.angle = values.angle_rad
+
+
 def update_sky(scene, depsgraph=None, *, force=False, pack=True):
     """Brings the world's sky up to date with the scene. Returns an Outcome."""
     module = module_or_error()
@@ -46,8 +62,16 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
     settings = world.welkin
     request, lamp, outcome.warnings = scene_sun.request_for(scene, settings, depsgraph)
     key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp))
+    render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
     if (not force and settings.active and settings.last_key == key
             and settings.sky_image is not None):
+        if render_graph and settings.sync_lamp:
+            # The sky is current, but this render's evaluated lamp may be a fresh copy of
+            # the original (see _sync_lamp): give it its values again (no images).
+            try:
+                _sync_lamp(lamp, sky_compute.lamp_for(module, request), depsgraph)
+            except ValueError as error:
+                raise UserError(str(error)) from None
         return outcome
     try:
         result = sky_compute.compute(module, request, disc=settings.show_sun_disc)
@@ -64,19 +88,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
         images.pack(disc)
     world_nodes.install(world, settings, sky, disc)
     if settings.sync_lamp:
-        data = lamp.data
-        if depsgraph is not None and depsgraph.mode == 'RENDER':
-            # A render's own depsgraph (frame_change_post during `-a` or F12): write the
-            # lamp's values into its evaluated copy, which Cycles reads, and leave the
-            # original alone. Editing the original would make Blender evaluate that
-            # depsgraph a second time, and the second pass re-copies the lamp object
-            # from the original without re-animating it: the frame would render the
-            # new strength from the old direction (seen: frame 10 lit from frame 1).
-            # The images need no such care: Cycles reads the original image's pixels.
-            data = lamp.evaluated_get(depsgraph).data
-        data.color = result.lamp.color
-        data.energy = result.lamp.strength_w_m2
-        data.angle = result.lamp.angle_rad
+        _sync_lamp(lamp, result.lamp, depsgraph)
     settings.active = True
     settings.last_key = key
     outcome.updated = True
