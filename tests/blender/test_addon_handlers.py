@@ -27,6 +27,14 @@ settings = scene.world.welkin
 key0 = settings.last_key
 T.check(not H._state["armed"], "armed before any change")
 
+# Moving an unrelated object does not arm anything.
+cube = bpy.data.objects.new("Cube", bpy.data.meshes.new("Cube"))
+scene.collection.objects.link(cube)
+bpy.context.view_layer.update()
+cube.location.x = 3.0
+bpy.context.view_layer.update()
+T.check(not H._state["armed"], "moving an unrelated object armed the sky update")
+
 # Drag the lamp: three depsgraph updates in a row arm one timer.
 for elevation in (31.0, 33.0, 35.0):
     T.aim_sun(sun, elevation, 10.0)

@@ -167,4 +167,25 @@ bpy.ops.welkin.remove_sky()
 T.check(not world.use_nodes, "remove_sky did not restore use_nodes = False")
 print("user nodes survive update and remove")
 
+# A new resolution rescales the add-on's images (packed ones included).
+world.welkin.resolution = '512'
+bpy.ops.welkin.update_sky()
+T.check(tuple(world.welkin.sky_image.size) == (512, 256), "the sky image was not resized")
+T.check(tuple(world.welkin.disc_image.size) == (512, 256), "the disc image was not resized")
+ref = welkin.sky_radiance(atm, 0.0, tuple(scene.objects["Sun"].matrix_world.col[2][:3]),
+                          welkin.equirect_pixel_directions(512, 256)[0, :1], method=method,
+                          output="rgb")[0]
+T.check(np.allclose(T.world_pixels(world.welkin.sky_image)[0, 0], ref, rtol=0.02),
+        "the resized sky is not the sky")
+bpy.ops.welkin.remove_sky()
+
+# A scene without a world gets one of its own, which remove_sky takes out again.
+scene.world = None
+bpy.ops.welkin.update_sky()
+T.check(scene.world is not None and scene.world.welkin.active, "no world made for the sky")
+made = scene.world.name
+bpy.ops.welkin.remove_sky()
+T.check(scene.world is None and made not in bpy.data.worlds, "the add-on's world stayed")
+print("resolution change and a scene without a world")
+
 T.done("test_addon_world")

@@ -100,8 +100,16 @@ def on_depsgraph_update(scene, depsgraph=None):
     # Headless sessions have no timers: scripts call update_sky, renders get frame changes.
     if _headless() or not _live(scene):
         return
+    if depsgraph is not None and not any(_concerns_sky(u.id) for u in depsgraph.updates):
+        return  # a cheap filter: most edits touch neither a sun lamp nor the camera
     if _stale(scene, None):
         _arm()
+
+
+def _concerns_sky(id_):
+    if isinstance(id_, bpy.types.Object):
+        return id_.type == 'CAMERA' or (id_.type == 'LIGHT' and id_.data.type == 'SUN')
+    return isinstance(id_, (bpy.types.Scene, bpy.types.World, bpy.types.Light))
 
 
 @persistent
