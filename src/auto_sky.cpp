@@ -62,11 +62,17 @@ std::string setting_label(const auto_table::Setting& s) {
 
 AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
                              std::size_t directions, double tolerance, const SkyOptions& options) {
+    return choose_sky_method(atmosphere, observer, directions, tolerance, options,
+                             auto_table::table());
+}
+
+AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
+                             std::size_t directions, double tolerance, const SkyOptions& options,
+                             const auto_table::Table& t) {
     require_in_range("tolerance", tolerance, kMinTolerance, kMaxTolerance,
                      "(relative luminance error)");
     atmosphere.validate();
     const Observer obs = observer.validated();
-    const auto_table::Table& t = auto_table::table();
 
     // The scene's place on the chart's grid. Sun elevation: asin of the sun direction's
     // vertical component (the observer's zenith is +Z).

@@ -26,6 +26,7 @@
 #include <cstddef>
 #include <string>
 
+#include "welkin/auto_sky_table.hpp"
 #include "welkin/sky_method.hpp"
 
 namespace welkin {
@@ -35,7 +36,7 @@ struct AutoChoice {
     SkyOptions options;          // the caller's options with this setting's sizes / steps
     std::string setting;         // e.g. "lut 256x64/32/192x108", for messages
     double predicted_error = 0;  // the table's p95 relative luminance error (worst corner)
-    double predicted_seconds = 0;  // on the chart's machine, for this many directions
+    double predicted_seconds = 0;  // CPU s on the chart's machine, for this many directions
     bool meets_tolerance = false;
 };
 
@@ -44,6 +45,11 @@ struct AutoChoice {
 AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
                              std::size_t directions, double tolerance,
                              const SkyOptions& options = {});
+
+// The same choice from another table (tests use small synthetic ones).
+AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
+                             std::size_t directions, double tolerance, const SkyOptions& options,
+                             const auto_table::Table& table);
 
 inline constexpr double kMinTolerance = 1e-3;
 inline constexpr double kMaxTolerance = 10.0;

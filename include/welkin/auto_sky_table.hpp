@@ -17,7 +17,8 @@ namespace welkin::auto_table {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// One charted method and setting, with its measured cost on the machine the chart ran on:
+// One charted method and setting, with its measured cost on the machine the chart ran on,
+// in CPU seconds (all threads summed; see bench/chart.py):
 // a call on N directions takes about fixed_seconds + seconds_per_direction * N.
 struct Setting {
     const char* method;   // "analytic" | "lut" | "raymarch"
