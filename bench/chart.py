@@ -213,7 +213,11 @@ def main():
     ap.add_argument("--table", default=None,
                     help="write the auto table here (full run default: src/auto_sky_table.cpp)")
     ap.add_argument("--no-table", action="store_true", help="do not write the auto table")
+    ap.add_argument("--replot", action="store_true",
+                    help="only redraw chart.png and stability.png from the CSV files in --out")
     args = ap.parse_args()
+    if args.replot:
+        return replot(pathlib.Path(args.out or (ROOT / "bench/results")), args.tolerance)
 
     n_dirs = args.directions or (96 if args.quick else 160)
     paths = args.paths or (1024 if args.quick else 2048)
@@ -256,7 +260,7 @@ def main():
                 noise = ref_se_y / np.maximum(np.maximum(y_ref, floor), 1e-300)
                 noise = np.where(ref_se_y > 0, noise, 0.0)
                 noise_rows.append(dict(preset=preset, altitude_m=alt, sun_elevation_deg=sun_el,
-                                       paths=scene_paths,
+                                       paths=scene_paths, directions=n_dirs,
                                        noise_mean=float(np.mean(noise)),
                                        noise_p95=float(np.percentile(noise, 95)),
                                        noise_max=float(np.max(noise)),
@@ -340,8 +344,8 @@ def main():
     write_csv(out / "scenes.csv", scene_rows)
     write_csv(out / "reference_noise.csv", noise_rows)
     draw_chart(out / "chart.png", chart_rows, n_dirs, paths, len(noise_rows))
-    draw_stability(out / "stability.png", scene_rows, [s[0] for s in settings], suns, alts,
-                   args.tolerance)
+    draw_stability(out / "stability.png", scene_rows, noise_rows, [s[0] for s in settings],
+                   suns, alts, args.tolerance)
     if table:
         write_table(pathlib.Path(table), settings, timing, scene_rows, noise_rows, suns, alts,
                     paths, ref_per_path, n_dirs)
@@ -404,30 +408,69 @@ def draw_chart(path, rows, n_dirs, paths, n_scenes):
         ax.set_xlabel("CPU time for a 2048x1024 HDRI, s (all threads summed)")
         ax.set_ylabel(name)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="lower left")
+    dirs_text = f"{n_dirs} directions each" if n_dirs else "directions"
     fig.suptitle(f"Welkin sky methods against the spectral reference: {n_scenes} scenes, "
-                 f"{n_dirs} directions each over the whole sphere (circles 3 wavelengths, "
+                 f"{dirs_text} over the whole sphere (circles 3 wavelengths, "
                  f"squares spectral)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def draw_stability(path, scene_rows, labels, suns, alts, tolerance):
+def read_csv(path):
+    rows = []
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            out = {}
+            for k, v in r.items():
+                try:
+                    out[k] = int(v)
+                except ValueError:
+                    try:
+                        out[k] = float(v)
+                    except ValueError:
+                        out[k] = v
+            rows.append(out)
+    return rows
+
+
+def replot(out, tolerance):
+    chart_rows = read_csv(out / "chart.csv")
+    scene_rows = read_csv(out / "scenes.csv")
+    noise_rows = read_csv(out / "reference_noise.csv")
+    labels = list(dict.fromkeys(r["setting"] for r in scene_rows))
+    suns = sorted({float(r["sun_elevation_deg"]) for r in noise_rows})
+    alts = sorted({float(r["altitude_m"]) for r in noise_rows})
+    for r in scene_rows + noise_rows:
+        r["sun_elevation_deg"], r["altitude_m"] = float(r["sun_elevation_deg"]), float(r["altitude_m"])
+    n_dirs = noise_rows[0].get("directions")
+    paths = int(min(r["paths"] for r in noise_rows))
+    draw_chart(out / "chart.png", chart_rows, n_dirs, paths, len(noise_rows))
+    draw_stability(out / "stability.png", scene_rows, noise_rows, labels, suns, alts, tolerance)
+    print(f"redrew {out}/chart.png, stability.png")
+
+
+def draw_stability(path, scene_rows, noise_rows, labels, suns, alts, tolerance):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
 
     cols = 4
-    rows_n = math.ceil(len(labels) / cols)
+    panels = labels + ["reference's own noise"]
+    rows_n = math.ceil(len(panels) / cols)
     fig, axes = plt.subplots(rows_n, cols, figsize=(4.0 * cols, 3.0 * rows_n), squeeze=False)
     norm = LogNorm(vmin=1e-3, vmax=1.0)
     im = None
-    for k, label in enumerate(labels):
+    for k, label in enumerate(panels):
         ax = axes[k // cols][k % cols]
         grid = np.zeros((len(alts), len(suns)))
         bad = np.zeros_like(grid, dtype=bool)
+        if label == panels[-1]:
+            for r in noise_rows:
+                i, j = alts.index(r["altitude_m"]), suns.index(r["sun_elevation_deg"])
+                grid[i, j] = max(grid[i, j], r["noise_p95"])
         for r in scene_rows:
             if r["setting"] != label:
                 continue
@@ -442,9 +485,15 @@ def draw_stability(path, scene_rows, labels, suns, alts, tolerance):
                 if bad[i, j]:
                     ax.text(j, i, "X", ha="center", va="center", color="red", fontsize=11,
                             weight="bold")
-                elif grid[i, j] > tolerance:
-                    ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False,
+                    continue
+                if grid[i, j] > tolerance:
+                    ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 0.96, 0.96, fill=False,
                                                edgecolor="red", lw=1.2))
+                v = grid[i, j]
+                text = ">999%" if v >= 10 else (f"{v:.0%}" if v >= 0.01 else f"{v:.1%}")
+                ax.text(j, i, text, ha="center",
+                        va="center", fontsize=5,
+                        color="black" if v > 0.03 else "white")
         ax.set_xticks(range(len(suns)))
         ax.set_xticklabels([f"{s:g}" for s in suns], fontsize=6)
         ax.set_yticks(range(len(alts)))
@@ -454,7 +503,7 @@ def draw_stability(path, scene_rows, labels, suns, alts, tolerance):
             ax.set_ylabel("altitude")
         if k // cols == rows_n - 1:
             ax.set_xlabel("sun elevation, deg")
-    for k in range(len(labels), rows_n * cols):
+    for k in range(len(panels), rows_n * cols):
         axes[k // cols][k % cols].axis("off")
     fig.colorbar(im, ax=axes, shrink=0.8,
                  label="relative luminance error, p95 over the sphere (worst preset)")

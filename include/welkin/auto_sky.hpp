@@ -15,8 +15,9 @@
 // raymarch (no LUT builds) while an HDRI goes to lut.
 //
 // When no charted setting meets the tolerance (deep twilight, haze, tolerances below what
-// the fast methods reach) auto falls back to the setting with the smallest measured error
-// there and says so (AutoChoice::meets_tolerance = false). It never picks the reference:
+// the fast methods reach) auto falls back to the cheapest setting whose measured error
+// there is within the reference's own noise of the smallest, and says so
+// (AutoChoice::meets_tolerance = false). It never picks the reference:
 // at the chart's settings a 2048 x 1024 reference sky takes hours, and a host should ask
 // for it by name.
 //
