@@ -35,8 +35,9 @@ Outputs (in --out, default bench/results/):
   scenes.csv           one row per method+setting+scene: p95/mean/max error, non-finite count
   reference_noise.csv  the reference's relative standard error per scene
   chart.png            log time per HDRI against log error, the Pareto front marked
-  stability.png        per method+setting, p95 error over (sun elevation, altitude),
-                       cells above --tolerance marked, non-finite values crossed
+  stability_<preset>.png  per method+setting, p95 error over (sun elevation, altitude),
+                       cells above --tolerance marked, non-finite values crossed, and the
+                       reference's own noise
 and (full run only, or with --table) the table `auto` chooses from:
   src/auto_sky_table.cpp  (generated; rerun this script to refresh it, then rebuild)
 """
@@ -357,7 +358,7 @@ def main():
         write_table(pathlib.Path(table), settings, timing, scene_rows, noise_rows, suns, alts,
                     paths, ref_per_path, n_dirs)
         print(f"wrote {table}")
-    print(f"wrote {out}/chart.csv, scenes.csv, reference_noise.csv, chart.png, stability.png "
+    print(f"wrote {out}/chart.csv, scenes.csv, reference_noise.csv, chart.png, stability_*.png "
           f"in {time.perf_counter() - start:.0f} s")
 
 
@@ -492,10 +493,19 @@ def replot(out, tolerance):
     paths = int(min(r["paths"] for r in noise_rows))
     draw_chart(out / "chart.png", chart_rows, n_dirs, paths, len(noise_rows))
     draw_stability(out / "stability.png", scene_rows, noise_rows, labels, suns, alts, tolerance)
-    print(f"redrew {out}/chart.png, stability.png")
+    print(f"redrew {out}/chart.png, stability_*.png")
 
 
 def draw_stability(path, scene_rows, noise_rows, labels, suns, alts, tolerance):
+    """One map per preset: stability_<preset>.png next to `path`."""
+    for preset in PRESETS:
+        draw_stability_preset(path.with_name(f"{path.stem}_{preset}{path.suffix}"),
+                              [r for r in scene_rows if r["preset"] == preset],
+                              [r for r in noise_rows if r["preset"] == preset], labels, suns,
+                              alts, tolerance, preset)
+
+
+def draw_stability_preset(path, scene_rows, noise_rows, labels, suns, alts, tolerance, preset):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -519,7 +529,6 @@ def draw_stability(path, scene_rows, noise_rows, labels, suns, alts, tolerance):
             if r["setting"] != label:
                 continue
             i, j = alts.index(r["altitude_m"]), suns.index(r["sun_elevation_deg"])
-            # The worst over the presets.
             grid[i, j] = max(grid[i, j], r["rel_lum_p95"])
             bad[i, j] |= r["nonfinite_or_negative"] > 0
         shown = np.where(np.isfinite(grid), np.clip(grid, 1e-3, 1.0), 1.0)
@@ -550,9 +559,9 @@ def draw_stability(path, scene_rows, noise_rows, labels, suns, alts, tolerance):
     for k in range(len(panels), rows_n * cols):
         axes[k // cols][k % cols].axis("off")
     fig.colorbar(im, ax=axes, shrink=0.8,
-                 label="relative luminance error, p95 over the sphere (worst preset)")
-    fig.suptitle(f"Stability map: red frame = p95 error above {tolerance:.0%}, "
-                 f"red X = a non-finite or negative value", fontsize=9)
+                 label="relative luminance error, p95 over the sphere")
+    fig.suptitle(f"Stability map, preset {preset}: red frame = p95 error above "
+                 f"{tolerance:.0%}, red X = a non-finite or negative value", fontsize=9)
     fig.savefig(path, dpi=100)
     plt.close(fig)
 
