@@ -48,20 +48,15 @@ int run_sky(const SkyArgs& args) {
     options.seed = args.seed;
     options.tolerance = args.tolerance;
     std::string method_name = args.method;
+    std::optional<AutoChoice> choice;
     if (args.method == "auto") {
-        // Resolved here, once for the whole image, so that it can be reported.
-        const AutoChoice c = choose_sky_method(
-            atm, observer, std::size_t(args.width) * std::size_t(args.width / 2), args.tolerance,
-            options);
-        fmt::print("auto: {} (chart: p95 relative luminance error {:.3g} {} tolerance {:g})\n",
-                   c.setting, c.predicted_error, c.meets_tolerance ? "<=" : "ABOVE",
-                   args.tolerance);
-        if (!c.meets_tolerance)
-            fmt::print(stderr, "welkin: warning: no fast method meets --tolerance {:g} for this "
-                               "scene; using the most accurate one ({}); --method reference "
-                               "is exact but slow\n", args.tolerance, c.setting);
-        options = c.options;
-        method_name = c.method;
+        // Resolved here, once for the whole image, so that it can be reported (after the
+        // render, so that a refusal is the only thing a bad command prints).
+        choice = choose_sky_method(atm, observer,
+                                   std::size_t(args.width) * std::size_t(args.width / 2),
+                                   args.tolerance, options);
+        options = choice->options;
+        method_name = choice->method;
     }
     const std::unique_ptr<SkyMethod> method = make_sky_method(method_name, options);
     SkyImageOptions image_options;
@@ -119,6 +114,16 @@ int run_sky(const SkyArgs& args) {
     if (args.spectral_channels)
         write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);
+    if (choice) {
+        fmt::print("auto: {} (chart: p95 relative luminance error {:.3g} {} tolerance {:g})\n",
+                   choice->setting, choice->predicted_error,
+                   choice->meets_tolerance ? "<=" : "ABOVE", args.tolerance);
+        if (!choice->meets_tolerance)
+            fmt::print(stderr,
+                       "welkin: warning: no fast method meets --tolerance {:g} for this scene; "
+                       "used the closest ({}); --method reference is exact but slow\n",
+                       args.tolerance, choice->setting);
+    }
     if (report.clamped_values > 0)
         fmt::print(stderr,
                    "welkin: warning: {} values above 65504 (the sun's disc) were clamped in "

@@ -59,7 +59,7 @@ seed : int
     reference: random seed; the same seed gives the same numbers everywhere.
 tolerance : float
     auto: the relative luminance error to meet, as the 95th percentile over the
-    sphere against the reference, in [0.001, 10] (0.05 = 5 %).
+    sphere against the reference, in [0.001, 10] (0.1 = 10 %).
 transmittance_width, transmittance_height, multiscattering_size,
 skyview_width, skyview_height : int
     lut: texture sizes (Hillaire 2020's defaults).
