@@ -12,6 +12,7 @@
 
 #include "common.hpp"
 #include "terminal_progress.hpp"
+#include "welkin/auto_sky.hpp"
 #include "welkin/error.hpp"
 #include "welkin/exr_io.hpp"
 #include "welkin/sky_image.hpp"
@@ -23,7 +24,8 @@ struct SkyArgs {
     AtmosphereArgs atmosphere;
     ObserverArgs observer;
     int width = 2048;
-    std::string method = "lut";
+    std::string method = "auto";
+    double tolerance = SkyOptions{}.tolerance;
     double exposure = 1.0;
     bool half = false, full_float = false;
     bool no_sun_disc = false;
@@ -44,7 +46,19 @@ int run_sky(const SkyArgs& args) {
     SkyOptions options;
     options.reference_paths = args.reference_paths;
     options.seed = args.seed;
-    const std::unique_ptr<SkyMethod> method = make_sky_method(args.method, options);
+    options.tolerance = args.tolerance;
+    std::string method_name = args.method;
+    std::optional<AutoChoice> choice;
+    if (args.method == "auto") {
+        // Resolved here, once for the whole image, so that it can be reported (after the
+        // render, so that a refusal is the only thing a bad command prints).
+        choice = choose_sky_method(atm, observer,
+                                   std::size_t(args.width) * std::size_t(args.width / 2),
+                                   args.tolerance, options);
+        options = choice->options;
+        method_name = choice->method;
+    }
+    const std::unique_ptr<SkyMethod> method = make_sky_method(method_name, options);
     SkyImageOptions image_options;
     image_options.sun_disc = !args.no_sun_disc;
     image_options.exposure = args.exposure;
@@ -64,7 +78,7 @@ int run_sky(const SkyArgs& args) {
     SkyImage image;
     {
         TerminalProgress progress(fmt::format("sky {}x{} ({})", args.width, args.width / 2,
-                                              args.method));
+                                              method_name));
         image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
         progress.finish();
     }
@@ -88,7 +102,9 @@ int run_sky(const SkyArgs& args) {
         {"sun_elevation_deg", args.observer.sun_elevation_deg},
         {"sun_azimuth_deg", args.observer.sun_azimuth_deg},
         {"altitude_m", args.observer.altitude_m},
-        {"method", args.method},
+        {"method", method_name},
+        {"requested_method", args.method},
+        {"tolerance", args.tolerance},
         {"exposure", args.exposure},
         {"sun_disc", !args.no_sun_disc},
         {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
@@ -98,6 +114,16 @@ int run_sky(const SkyArgs& args) {
     if (args.spectral_channels)
         write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);
+    if (choice) {
+        fmt::print("auto: {} (chart: p95 relative luminance error {:.3g} {} tolerance {:g})\n",
+                   choice->setting, choice->predicted_error,
+                   choice->meets_tolerance ? "<=" : "ABOVE", args.tolerance);
+        if (!choice->meets_tolerance)
+            fmt::print(stderr,
+                       "welkin: warning: no fast method meets --tolerance {:g} for this scene; "
+                       "used the closest ({}); --method reference is exact but slow\n",
+                       args.tolerance, choice->setting);
+    }
     if (report.clamped_values > 0)
         fmt::print(stderr,
                    "welkin: warning: {} values above 65504 (the sun's disc) were clamped in "
@@ -105,7 +131,7 @@ int run_sky(const SkyArgs& args) {
                    report.clamped_values);
     fmt::print("wrote {} ({} x {}, {} {}, method {}, {:.2f} s)\n",
                std::filesystem::absolute(args.output).string(), exr.width, exr.height,
-               fmt::join(exr.channel_names, ","), args.half ? "half" : "float", args.method,
+               fmt::join(exr.channel_names, ","), args.half ? "half" : "float", method_name,
                seconds);
     return 0;
 }
@@ -124,10 +150,16 @@ Command add_sky_command(CLI::App& app) {
         ->check(CLI::Range(4, 16384))
         ->capture_default_str();
     sub->add_option("--method", args->method,
-                    "Sky method: analytic, lut (Hillaire 2020), raymarch, or reference "
-                    "(Monte-Carlo, slow)")
+                    "Sky method: auto (the cheapest that the speed-accuracy chart shows "
+                    "meeting --tolerance), analytic, lut (Hillaire 2020), raymarch, or "
+                    "reference (Monte-Carlo, slow)")
         ->type_name("NAME")
         ->check(CLI::IsMember(sky_method_names()))
+        ->capture_default_str();
+    sub->add_option("--tolerance", args->tolerance,
+                    "auto method: relative luminance error to meet (95th percentile over the "
+                    "sphere, against the reference), in [0.001, 10]")
+        ->type_name("X")
         ->capture_default_str();
     sub->add_option("--exposure", args->exposure,
                     "Multiplies every output value (sky and sun) once, after colour "
