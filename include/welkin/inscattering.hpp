@@ -117,11 +117,14 @@ Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, 
 //   L = E_sun [ P_R(nu) sum w sigma_R T_sun + P_M(nu) sum w sigma_M T_sun
 //             + sum w (sigma_R + sigma_M) Psi_ms ],
 // so each step is one pass over the views that computes every mu_s(t) and texel
-// coordinate (arithmetic only: it vectorises) and one that fetches and accumulates.
+// coordinate (arithmetic only: it vectorises) and one that fetches and accumulates. The
+// multiple-scattering LUT is read along one row per step, so that row is first blended
+// between its two texel rows (32 texels) and then read linearly.
 // `scratch` is reused between calls (no allocation once it is large enough).
 struct InscatterRowScratch {
-    std::vector<float> x_sun, fraction, x_ms;
-    std::vector<Spectrum4> sum_rayleigh, sum_mie, sum_ms;
+    std::vector<int> i_sun, i_ms;
+    std::vector<float> fx_sun, fraction, fx_ms;
+    std::vector<Float4> ms_line, sum_rayleigh, sum_mie, sum_ms;
 };
 void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
                    const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,
