@@ -11,6 +11,27 @@
 
 namespace welkin {
 
+namespace {
+
+// The arithmetic pass over the (phi, mu_s) pairs at one point: mu_s there = C mu_s + D
+// sin_s cos(phi), clamped, and the transmittance lookup's texel and weights; `ground`
+// also weighs by the cosine of the sun on the ground, max(mu_s, 0). The arrays do not
+// overlap (__restrict), which lets the compiler vectorise the loop.
+void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, const float* __restrict mu_s,
+                     const float* __restrict sin_cos, std::size_t n, bool ground, int* __restrict texel,
+                     float* __restrict fx, float* __restrict fraction) {
+    const TransmittanceLut::AtRadius at = at_in;
+    for (std::size_t l = 0; l < n; ++l) {
+        const float mu = clamp_value(C * mu_s[l] + D * sin_cos[l], -1.0f, 1.0f);
+        float x, f;
+        TransmittanceLut::sun_lookup(at, mu, x, f);
+        Texture2D::Row::split(x, at.row.last, texel[l], fx[l]);
+        fraction[l] = ground ? f * max_value(mu, 0.0f) : f;
+    }
+}
+
+}  // namespace
+
 // Texel (i, j) holds Psi_ms for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on the
 // texel-centre grid of texcoord_from_unit). One row shares its radius, so each of the
 // row's rays (a direction w about the local zenith) is marched once and reused for all 32
@@ -50,14 +71,16 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
     const float* const psc = pair_sin_cos.data();
     tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& rows) {
         RaySamples ray;
-        std::vector<float> x_buf(n_pairs), fraction_buf(n_pairs);
-        std::vector<Spectrum4> L2_buf(n_pairs);
-        float* const x = x_buf.data();
+        std::vector<int> texel_buf(n_pairs);
+        std::vector<float> fx_buf(n_pairs), fraction_buf(n_pairs);
+        std::vector<Float4> L2_buf(n_pairs);
+        int* const texel = texel_buf.data();
+        float* const fx = fx_buf.data();
         float* const fraction = fraction_buf.data();
-        Spectrum4* const L2 = L2_buf.data();  // per pair, summed over the directions
+        Float4* const L2 = L2_buf.data();  // per pair, summed over the directions
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const double r = R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
-            std::fill(L2_buf.begin(), L2_buf.end(), Spectrum4(0.0f));
+            std::fill(L2_buf.begin(), L2_buf.end(), Float4{0.0f, 0.0f, 0.0f, 0.0f});
             Spectrum4 f_ms(0.0f);
             for (int a = 0; a < directions_sqrt; ++a) {
                 // Stratified uniform directions: cos(theta) uniform in [-1, 1], phi in [0, pi].
@@ -66,13 +89,12 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                 prepare_ray(batch, r, mu, steps, ray, &tlut);
                 Spectrum4 f(0.0f);
                 for (const RaySamples::Step& st : ray.steps) {
-                    const Spectrum4 w = st.weight * (st.rayleigh_scattering + st.mie_scattering) * p_u;
+                    const Float4 w = to_float4(st.weight * (st.rayleigh_scattering + st.mie_scattering) * p_u);
                     f += st.weight * (st.rayleigh_scattering + st.mie_scattering);
                     const float C = float((r + st.t * mu) / st.r), D = float(st.t * sin_theta / st.r);
                     const TransmittanceLut::AtRadius& at = st.sun_at;
-                    for (std::size_t l = 0; l < n_pairs; ++l)
-                        TransmittanceLut::sun_lookup(at, clamp_value(C * pm[l] + D * psc[l], -1.0f, 1.0f), x[l], fraction[l]);
-                    for (std::size_t l = 0; l < n_pairs; ++l) L2[l] += w * (at.row.sample(x[l]) * fraction[l]);
+                    sun_coordinates(at, C, D, pm, psc, n_pairs, false, texel, fx, fraction);
+                    for (std::size_t l = 0; l < n_pairs; ++l) L2[l] += (w * fraction[l]) * at.row.sample4(texel[l], fx[l]);
                 }
                 f_ms += f * float(n_phi);
                 if (ray_hits_ground(r, mu, R)) {
@@ -80,22 +102,19 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                     // mu_s = (r mu_s + d nu) / R.
                     const double d = distance_to_bottom(r, mu, R);
                     const float C = float((r + d * mu) / R), D = float(d * sin_theta / R);
-                    const Spectrum4 k = ray.transmittance * albedo_over_pi;
-                    for (std::size_t l = 0; l < n_pairs; ++l) {
-                        const float mu_s_g = clamp_value(C * pm[l] + D * psc[l], -1.0f, 1.0f);
-                        TransmittanceLut::sun_lookup(ground_at, mu_s_g, x[l], fraction[l]);
-                        fraction[l] *= max_value(mu_s_g, 0.0f);
-                    }
-                    for (std::size_t l = 0; l < n_pairs; ++l) L2[l] += k * (ground_at.row.sample(x[l]) * fraction[l]);
+                    const Float4 k = to_float4(ray.transmittance * albedo_over_pi);
+                    sun_coordinates(ground_at, C, D, pm, psc, n_pairs, true, texel, fx, fraction);
+                    for (std::size_t l = 0; l < n_pairs; ++l)
+                        L2[l] += (k * fraction[l]) * ground_at.row.sample4(texel[l], fx[l]);
                 }
             }
             f_ms *= inv_dirs;
             // Each order >= 2 carries f_ms of the one before: a geometric series.
             const Spectrum4 series = inv_dirs / glm::max(Spectrum4(1.0f) - f_ms, Spectrum4(1e-3f));
             for (int i = 0; i < size; ++i) {
-                Spectrum4 sum(0.0f);
+                Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f};
                 for (int b = 0; b < n_phi; ++b) sum += L2[std::size_t(b) * size + i];
-                texture_.at(i, j) = sum * series;
+                texture_.at(i, j) = to_vec4(sum) * series;
             }
         }
     });
