@@ -47,10 +47,8 @@ void LutSky::radiance(const Atmosphere& atm, const Observer& observer_in,
         const std::size_t first = b->medium.first_channel(), count = b->medium.channel_count();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, directions.size(), 4096),
                           [&](const tbb::blocked_range<std::size_t>& range) {
-                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                                  const ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
-                                  store_channels(sky.radiance(g.mu, g.cos_phi), count, &out[i * C + first]);
-                              }
+                              sky.radiance(directions.subspan(range.begin(), range.size()), observer.sun_direction,
+                                           count, &out[range.begin() * C + first], C);
                               tracker.advance(range.size());
                           });
     }
