@@ -31,7 +31,6 @@ void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
     scratch.fx_sun.resize(n);
     scratch.fraction.resize(n);
     scratch.fx_ms.resize(n);
-    scratch.ms_line.resize(std::size_t(ms.texture().width()));
     scratch.sum_rayleigh.assign(n, zero);
     scratch.sum_mie.assign(n, zero);
     scratch.sum_ms.assign(n, zero);
@@ -40,7 +39,6 @@ void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
     float* const fx_sun = scratch.fx_sun.data();
     float* const fraction = scratch.fraction.data();
     float* const fx_ms = scratch.fx_ms.data();
-    Float4* const ms_line = scratch.ms_line.data();
     Float4* const sum_r = scratch.sum_rayleigh.data();
     Float4* const sum_m = scratch.sum_mie.data();
     Float4* const sum_ms = scratch.sum_ms.data();
@@ -51,19 +49,19 @@ void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
         const float A = float(ray.r0 * mu_s / st.r), B = float(st.t / st.r);
         const TransmittanceLut::AtRadius& at = st.sun_at;  // from prepare_ray
         coordinates(at, A, B, ms_scale, ms_last, nu_p, n, i_sun, fx_sun, fraction, i_ms, fx_ms);
-        const Texture2D::Row ms_row = ms.row_at_radius(st.r);
-        for (int k = 0; k <= ms_last; ++k) {
-            const Float4 lo = to_float4(ms_row.lo[k]), hi = to_float4(ms_row.hi[k]);
-            ms_line[k] = lo + ms_row.fy * (hi - lo);
-        }
-        const Float4 w_r = to_float4(st.weight * st.rayleigh_scattering), w_m = to_float4(st.weight * st.mie_scattering);
-        const Float4 w_s = to_float4(st.weight * (st.rayleigh_scattering + st.mie_scattering));
+        const Spectrum4 w_r4 = st.weight * st.rayleigh_scattering, w_m4 = st.weight * st.mie_scattering;
+        Spectrum4 w1, w2;
+        ms.source_weights(st.rayleigh_scattering, st.mie_scattering, view_zenith_cosine(ray, st), w1, w2);
+        // One texel row (lo == hi) of the combined source at this step's radius.
+        const Spectrum4* const line =
+            ms.source_row(st.r, w_r4 + w_m4, st.weight * w1, st.weight * w2, scratch.ms_source).lo;
+        const Float4 w_r = to_float4(w_r4), w_m = to_float4(w_m4);
         for (std::size_t i = 0; i < n; ++i) {
             const Float4 T = at.row.sample4(i_sun[i], fx_sun[i]) * fraction[i];
             sum_r[i] += w_r * T;
             sum_m[i] += w_m * T;
-            const Float4 psi0 = ms_line[i_ms[i]], psi1 = ms_line[i_ms[i] + 1];
-            sum_ms[i] += w_s * (psi0 + fx_ms[i] * (psi1 - psi0));
+            const Float4 j0 = to_float4(line[i_ms[i]]), j1 = to_float4(line[i_ms[i] + 1]);
+            sum_ms[i] += j0 + fx_ms[i] * (j1 - j0);
         }
     }
     const Float4 E = to_float4(batch.solar_irradiance());
