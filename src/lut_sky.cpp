@@ -16,7 +16,6 @@
 #include "welkin/lut_cache.hpp"
 #include "welkin/raymarch_sky.hpp"
 #include "welkin/skyview_lut.hpp"
-#include "welkin/view_geometry.hpp"
 
 namespace welkin {
 
