@@ -252,6 +252,7 @@ double AerialPerspectiveVolume::slice_depth(int k) const {
 AerialPerspectiveVolume::Sample AerialPerspectiveVolume::sample(double sx, double sy, double depth) const {
     Sample out{{0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f}};
     if (!(depth > 0.0)) return out;
+    depth = std::min(depth, max_depth_);  // beyond the volume (or +inf): its last slice
     // Screen: bilinear between the four nearest columns.
     const double fx = clamp01(sx) * double(nx_ - 1), fy = clamp01(sy) * double(ny_ - 1);
     const int i = std::min(int(fx), nx_ - 2), j = std::min(int(fy), ny_ - 2);

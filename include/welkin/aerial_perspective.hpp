@@ -94,7 +94,8 @@ public:
     struct Sample {
         std::array<float, 3> inscatter, transmittance;
     };
-    // Screen coordinates (sx, sy) in [0, 1], top-left origin; depth as the Z pass.
+    // Screen coordinates (sx, sy) in [0, 1], top-left origin (clamped); depth as the Z
+    // pass, clamped to [0, max_depth_m()] (the caller decides what sky pixels get).
     Sample sample(double sx, double sy, double depth) const;
 
     int columns() const { return nx_; }
