@@ -20,6 +20,7 @@
 // keys are errors (a typo would otherwise be ignored). matrix_world is written by rows,
 // as Python's [list(row) for row in camera.matrix_world] gives them. Errors name the key
 // path ("camera.lens_mm").
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -131,13 +132,18 @@ Camera parse_camera(const json& j) {
                                   fmt::format("only \"EQUIRECTANGULAR\" is supported, got \"{}\" "
                                               "(fisheye and mirror-ball panoramas are not)", t));
     }
-    const auto angle = [&](const char* key, double& out) {
-        if (j.contains(key)) out = number(j[key], std::string("camera.") + key) * kDegree;
+    // Blender keeps these in float32 radians: -pi/2 comes out as -90.0000025 degrees.
+    // Values within 1e-3 degrees beyond the range are taken as its end.
+    const auto angle = [&](const char* key, double limit_deg, double& out) {
+        if (!j.contains(key)) return;
+        double deg = number(j[key], std::string("camera.") + key);
+        if (std::abs(deg) > limit_deg && std::abs(deg) < limit_deg + 1e-3) deg = std::copysign(limit_deg, deg);
+        out = deg * kDegree;
     };
-    angle("latitude_min_deg", c.latitude_min_rad);
-    angle("latitude_max_deg", c.latitude_max_rad);
-    angle("longitude_min_deg", c.longitude_min_rad);
-    angle("longitude_max_deg", c.longitude_max_rad);
+    angle("latitude_min_deg", 90.0, c.latitude_min_rad);
+    angle("latitude_max_deg", 90.0, c.latitude_max_rad);
+    angle("longitude_min_deg", 180.0, c.longitude_min_rad);
+    angle("longitude_max_deg", 180.0, c.longitude_max_rad);
     if (j.contains("shift_x")) c.shift_x = number(j["shift_x"], "camera.shift_x");
     if (j.contains("shift_y")) c.shift_y = number(j["shift_y"], "camera.shift_y");
     if (j.contains("clip_start_m")) c.clip_start_m = number(j["clip_start_m"], "camera.clip_start_m");

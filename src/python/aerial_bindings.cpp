@@ -8,6 +8,7 @@
 
 #include "bindings.hpp"
 #include "welkin/aerial_perspective.hpp"
+#include "welkin/camera.hpp"
 #include "welkin/error.hpp"
 #include "welkin/exr_io.hpp"
 #include "welkin/scene.hpp"
@@ -150,6 +151,21 @@ frame exactly (the atmosphere is written in full).
         .def_property_readonly("height", [](const SceneDescription& s) { return s.resolution.height(); })
         .def_property_readonly("has_camera", [](const SceneDescription& s) { return bool(s.camera); })
         .def_property_readonly("version", [](const SceneDescription& s) { return s.version; })
+        .def(
+            "camera_ray",
+            [](const SceneDescription& s, double sx, double sy) {
+                const CameraRays rays(s.require_camera(), s.resolution.width(), s.resolution.height());
+                const CameraRays::Ray r = rays.at_screen(sx, sy);
+                return py::make_tuple(py::make_tuple(r.origin.x, r.origin.y, r.origin.z),
+                                      py::make_tuple(r.direction.x, r.direction.y, r.direction.z),
+                                      r.distance_per_depth);
+            },
+            py::arg("sx"), py::arg("sy"), R"doc(
+The camera's ray at screen coordinates (sx, sy) in [0, 1], left to right and top to
+bottom (pixel (i, j)'s centre is ((i + 0.5) / width, (j + 0.5) / height)):
+(origin, unit direction, distance_per_depth), world frame, metres; a surface at Z-pass
+depth z lies z * distance_per_depth along the ray. ValueError without a camera.
+)doc")
         .def("__repr__", [](const SceneDescription& s) {
             return fmt::format("<welkin.SceneDescription {} x {}, atmosphere '{}', camera {}>",
                                s.resolution.width(), s.resolution.height(), s.atmosphere.name,
