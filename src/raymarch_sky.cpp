@@ -31,12 +31,12 @@ void RaymarchSky::radiance(const Atmosphere& atm, const Observer& observer_in,
         const AtmosphereBatch& medium = b->medium;
         const double R = medium.bottom_radius(), top = medium.top_radius();
         const double angular_radius = atm.sun_angular_radius_rad;
-        const int sun_steps = options_.raymarch_sun_steps;
+        const GradedQuadrature sun_quadrature(options_.raymarch_sun_steps);
         const auto sun_t = [&](const RaySamples::Step& st, double mu_s_t) {
             const double r_t = st.r;
             const double fraction = sun_visible_fraction(R, r_t, mu_s_t, angular_radius);
             if (fraction <= 0.0) return Spectrum4(0.0f);
-            const Spectrum4 tau = march_optical_depth(medium, r_t, mu_s_t, distance_to_top(r_t, mu_s_t, top), sun_steps);
+            const Spectrum4 tau = sun_quadrature.optical_depth(medium, r_t, mu_s_t, distance_to_top(r_t, mu_s_t, top));
             return glm::exp(-tau) * float(fraction);
         };
         const std::size_t first = medium.first_channel(), count = medium.channel_count();

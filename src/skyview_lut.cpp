@@ -17,26 +17,30 @@ SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlu
     beta_ = std::acos(clamp_cosine(rho / r));
     theta_h_ = kPi - beta_;
     const double sin_s = safe_sqrt(1.0 - mu_s * mu_s);
-    const auto sun_t = [&](const RaySamples::Step& st, double mu_s_t) { return tlut.to_sun(st.sun_at, mu_s_t); };
-    tbb::parallel_for(0, height, [&](int j) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
         // Everything along the ray but the sun is shared by the whole row.
         RaySamples ray;
-        const double v = (double(j) + 0.5) / double(height);
-        double theta;
-        if (v < 0.5) {
-            const double c = 1.0 - 2.0 * v;
-            theta = theta_h_ * (1.0 - c * c);
-        } else {
-            const double c = 2.0 * v - 1.0;
-            theta = theta_h_ + beta_ * c * c;
-        }
-        const double mu = std::cos(theta), sin_v = std::sin(theta);
-        prepare_ray(batch, r, mu, steps, ray, &tlut, &mslut);
-        for (int i = 0; i < width; ++i) {
-            const double u = (double(i) + 0.5) / double(width);
-            const double cos_phi = 1.0 - 2.0 * u * u;
-            const double nu = clamp_cosine(mu * mu_s + sin_v * sin_s * cos_phi);
-            texture_.at(i, j) = inscatter(batch, &mslut, ray, mu_s, nu, sun_t);
+        InscatterRowScratch scratch;
+        std::vector<float> nu(static_cast<std::size_t>(width));
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+            const double v = (double(j) + 0.5) / double(height);
+            double theta;
+            if (v < 0.5) {
+                const double c = 1.0 - 2.0 * v;
+                theta = theta_h_ * (1.0 - c * c);
+            } else {
+                const double c = 2.0 * v - 1.0;
+                theta = theta_h_ + beta_ * c * c;
+            }
+            const double mu = std::cos(theta), sin_v = std::sin(theta);
+            prepare_ray(batch, r, mu, steps, ray, &tlut);
+            for (int i = 0; i < width; ++i) {
+                const double u = (double(i) + 0.5) / double(width);
+                const double cos_phi = 1.0 - 2.0 * u * u;
+                nu[std::size_t(i)] = float(clamp_cosine(mu * mu_s + sin_v * sin_s * cos_phi));
+            }
+            inscatter_row(batch, mslut, ray, mu_s, nu, std::span<Spectrum4>(&texture_.at(0, j), std::size_t(width)),
+                          scratch);
         }
     });
 }

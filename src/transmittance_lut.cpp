@@ -13,43 +13,66 @@ namespace {
 // 4-point Gauss-Legendre on [0, 1] (nodes (1 +- x)/2, weights w/2; A&S table 25.4).
 constexpr std::array<double, 4> kGlNodes = {0.5 - 0.5 * 0.8611363115940526, 0.5 - 0.5 * 0.3399810435848563,
                                             0.5 + 0.5 * 0.3399810435848563, 0.5 + 0.5 * 0.8611363115940526};
-constexpr std::array<float, 4> kGlWeights = {0.5f * 0.3478548451374538f, 0.5f * 0.6521451548625461f,
-                                             0.5f * 0.6521451548625461f, 0.5f * 0.3478548451374538f};
+constexpr std::array<double, 4> kGlWeights = {0.5 * 0.3478548451374538, 0.5 * 0.6521451548625461,
+                                              0.5 * 0.6521451548625461, 0.5 * 0.3478548451374538};
+
+}  // namespace
 
 // Integral of extinction over [a, b] of the ray, densest at `a` (toward_a) or `b`.
 // Substituting t = a + (b - a) s^2 (or the mirror image) clusters samples at the dense
 // end; the integrand in s, rho(t(s)) 2 (b - a) s, is smooth, so composite Gauss-Legendre
-// in s converges fast.
-Spectrum4 graded_piece(const AtmosphereBatch& batch, double r, double mu, double a, double b,
-                       bool toward_a, int panels) {
-    Spectrum4 sum(0.0f);
-    const double len = b - a;
-    if (!(len > 0.0)) return sum;
-    const double R = batch.bottom_radius();
-    for (int p = 0; p < panels; ++p) {
+// in s converges fast. A piece keeps its nodes' s^2 and weights w 2 s / panels; each
+// block of samples is one pass computing the altitudes (double, r(t)^2 = t^2 + 2 r mu t +
+// r^2 as in radius_at; it vectorises) and one fetching the extinction.
+GradedQuadrature::Piece GradedQuadrature::make_piece(int panels) {
+    Piece piece;
+    for (int p = 0; p < panels; ++p)
         for (int k = 0; k < 4; ++k) {
             const double s = (double(p) + kGlNodes[k]) / double(panels);
-            const double offset = len * s * s;
-            const double t = toward_a ? a + offset : b - offset;
-            const double jacobian = 2.0 * len * s / double(panels);
-            const double h = radius_at(r, mu, t) - R;
-            sum += (kGlWeights[k] * float(jacobian)) * batch.sample(h).extinction;
+            piece.s2.push_back(s * s);
+            piece.weight.push_back(kGlWeights[k] * 2.0 * s / double(panels));
         }
-    }
-    return sum;
+    return piece;
 }
 
-}  // namespace
+GradedQuadrature::GradedQuadrature(int samples)
+    : whole_(make_piece(std::max(1, samples / 4))), half_(make_piece(std::max(1, samples / 8))) {}
+
+Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b,
+                                      bool toward_a, const Piece& piece) const {
+    const double len = b - a;
+    if (!(len > 0.0)) return Spectrum4(0.0f);
+    Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f};
+    const double R = batch.bottom_radius(), inv_step = batch.inv_table_step();
+    const double x_max = double(AtmosphereBatch::kTableSize - 1);
+    const double origin = toward_a ? a : b, direction = toward_a ? len : -len;
+    constexpr std::size_t kBlock = 32;
+    double x[kBlock];
+    const std::size_t n = piece.s2.size();
+    for (std::size_t first = 0; first < n; first += kBlock) {
+        const std::size_t m = std::min(kBlock, n - first);
+        const double* const s2 = piece.s2.data() + first;
+        for (std::size_t l = 0; l < m; ++l) {
+            const double t = origin + direction * s2[l];
+            const double h = std::sqrt(max_value(t * t + 2.0 * r * mu * t + r * r, 0.0)) - R;
+            x[l] = clamp_value(h * inv_step, 0.0, x_max);
+        }
+        const double* const w = piece.weight.data() + first;
+        for (std::size_t l = 0; l < m; ++l) sum += float(len * w[l]) * batch.extinction_at(x[l]);
+    }
+    return to_vec4(sum);
+}
+
+Spectrum4 GradedQuadrature::optical_depth(const AtmosphereBatch& batch, double r, double mu, double length) const {
+    const double t_low = -r * mu;  // the ray's lowest point, when it lies ahead
+    if (t_low <= 0.0) return integrate(batch, r, mu, 0.0, length, true, whole_);
+    if (t_low >= length) return integrate(batch, r, mu, 0.0, length, false, whole_);
+    return integrate(batch, r, mu, 0.0, t_low, false, half_) + integrate(batch, r, mu, t_low, length, true, half_);
+}
 
 Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length,
                               int samples) {
-    const int panels = std::max(1, samples / 4);
-    const double t_low = -r * mu;  // the ray's lowest point, when it lies ahead
-    if (t_low <= 0.0) return graded_piece(batch, r, mu, 0.0, length, true, panels);
-    if (t_low >= length) return graded_piece(batch, r, mu, 0.0, length, false, panels);
-    const int half = std::max(1, panels / 2);
-    return graded_piece(batch, r, mu, 0.0, t_low, false, half) +
-           graded_piece(batch, r, mu, t_low, length, true, half);
+    return GradedQuadrature(samples).optical_depth(batch, r, mu, length);
 }
 
 TransmittanceLut::TransmittanceLut(const AtmosphereBatch& batch, int width, int height, int steps)
@@ -58,11 +81,12 @@ TransmittanceLut::TransmittanceLut(const AtmosphereBatch& batch, int width, int 
       H_(std::sqrt((top_ - bottom_) * (top_ + bottom_))),
       sun_angular_radius_(batch.sun_angular_radius()),
       texture_(width, height) {
+    const GradedQuadrature quadrature(steps);
     tbb::parallel_for(0, height, [&](int j) {
         for (int i = 0; i < width; ++i) {
             double r, mu;
             r_mu_from_uv((float(i) + 0.5f) / float(width), (float(j) + 0.5f) / float(height), r, mu);
-            const Spectrum4 tau = march_optical_depth(batch, r, mu, distance_to_top(r, mu, top_), steps);
+            const Spectrum4 tau = quadrature.optical_depth(batch, r, mu, distance_to_top(r, mu, top_));
             texture_.at(i, j) = glm::exp(-tau);
         }
     });
@@ -114,14 +138,20 @@ double sun_visible_fraction(double bottom_radius, double r, double mu_s, double 
 TransmittanceLut::AtRadius TransmittanceLut::at_radius(double r_in) const {
     AtRadius a;
     a.r = std::min(r_in, top_);
-    const double sin_h = std::min(bottom_ / a.r, 1.0);
-    a.cos_horizon = -safe_sqrt(1.0 - sin_h * sin_h);
-    a.top_disc = (a.r - top_) * (a.r + top_);
+    a.r_f = float(a.r);
+    a.top_k = float(std::max((top_ - a.r) * (top_ + a.r), 0.0));
     const double rho = safe_sqrt((a.r - bottom_) * (a.r + bottom_));
-    a.d_min = top_ - a.r;
-    const double range = rho + H_ - a.d_min;
-    a.inv_d_range = range > 0.0 ? 1.0 / range : 0.0;
-    a.v = texcoord_from_unit(float(clamp01(rho / H_)), texture_.height());
+    const double d_min = top_ - a.r;
+    a.d_min = float(d_min);
+    const double range = rho + H_ - d_min;
+    a.x_scale = range > 0.0 ? float(double(texture_.width() - 1) / range) : 0.0f;
+    // sun_visible_fraction's smoothstep argument (mu_s - cos_h + alpha) / (2 alpha).
+    const double sin_h = std::min(bottom_ / a.r, 1.0);
+    const double cos_h = -safe_sqrt(1.0 - sin_h * sin_h);
+    const double alpha = sun_angular_radius_;
+    a.fraction_scale = float(1.0 / (2.0 * alpha));
+    a.fraction_offset = float((alpha - cos_h) / (2.0 * alpha));
+    a.row = texture_.row(texcoord_from_unit(float(clamp01(rho / H_)), texture_.height()));
     return a;
 }
 

@@ -11,6 +11,7 @@
 // dh^2 / (8 H^2): with 8192 entries over Earth's 60 km and H = 1.2 km it is 1.5e-6.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include <glm/common.hpp>
@@ -18,6 +19,7 @@
 #include <glm/vec4.hpp>
 
 #include "welkin/atmosphere.hpp"
+#include "welkin/simd.hpp"
 
 namespace welkin {
 
@@ -60,6 +62,17 @@ public:
         return {a.rayleigh_scattering + f * (b.rayleigh_scattering - a.rayleigh_scattering),
                 a.mie_scattering + f * (b.mie_scattering - a.mie_scattering),
                 a.extinction + f * (b.extinction - a.extinction)};
+    }
+
+    // The extinction alone at table coordinate x = altitude * inv_table_step(), already
+    // clamped to [0, kTableSize - 1] (for loops that compute many coordinates first);
+    // equal to sample(altitude).extinction inside the atmosphere.
+    double inv_table_step() const { return inv_table_step_; }
+    Float4 extinction_at(double x) const {
+        const int i = std::min(int(x), kTableSize - 2);
+        const float f = float(x - double(i));
+        const Float4 a = to_float4(table_[i].extinction), b = to_float4(table_[i + 1].extinction);
+        return a + f * (b - a);
     }
 
     // Phase functions at scattering cosine nu (phase.hpp).

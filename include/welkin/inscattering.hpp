@@ -19,13 +19,15 @@
 // RaySamples holds, per step, the radius, the scattering coefficients and the weight
 // T (1 - T_seg) / sigma_t; inscatter() then adds the sun- and phase-dependent source for
 // any (mu_s, nu). The sky-view LUT prepares one RaySamples per row (a view zenith angle)
-// and reuses it for every azimuth in the row.
+// and reuses it for every azimuth in the row, through inscatter_row(), the same sum
+// arranged for many nu at once.
 //
 // An observer above the atmosphere is first moved to where the ray enters it; rays that
 // miss the atmosphere see nothing.
 #pragma once
 
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "welkin/geometry.hpp"
@@ -105,5 +107,24 @@ Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, 
     }
     return L * batch.solar_irradiance();
 }
+
+// inscatter() with the transmittance and multiple-scattering LUTs for many views along one
+// ray, prepared with the transmittance LUT `tlut`, that share the sun's zenith cosine mu_s and differ in
+// nu: out[i] = inscatter(batch, &ms, ray, mu_s, nu[i], tlut.to_sun). A row of the
+// sky-view LUT. Only the sun's zenith cosine at a step depends on nu, and linearly,
+//   mu_s(t) = (r0 mu_s + t nu) / r(t) = A + B nu,  A = r0 mu_s / r(t),  B = t / r(t),
+// and the phase functions factor out of the sum over steps:
+//   L = E_sun [ P_R(nu) sum w sigma_R T_sun + P_M(nu) sum w sigma_M T_sun
+//             + sum w (sigma_R + sigma_M) Psi_ms ],
+// so each step is one pass over the views that computes every mu_s(t) and texel
+// coordinate (arithmetic only: it vectorises) and one that fetches and accumulates.
+// `scratch` is reused between calls (no allocation once it is large enough).
+struct InscatterRowScratch {
+    std::vector<float> x_sun, fraction, x_ms;
+    std::vector<Spectrum4> sum_rayleigh, sum_mie, sum_ms;
+};
+void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
+                   const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,
+                   InscatterRowScratch& scratch);
 
 }  // namespace welkin

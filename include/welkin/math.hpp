@@ -30,4 +30,19 @@ inline T clamp01(T x) {
     return std::clamp(x, T(0), T(1));
 }
 
+// min, max and clamp by value, written as selects: std::min and std::clamp return
+// references, which keeps GCC from turning a loop of them into SIMD code.
+template <class T>
+inline T min_value(T a, T b) {
+    return b < a ? b : a;
+}
+template <class T>
+inline T max_value(T a, T b) {
+    return a < b ? b : a;
+}
+template <class T>
+inline T clamp_value(T x, T lo, T hi) {
+    return min_value(max_value(x, lo), hi);
+}
+
 }  // namespace welkin

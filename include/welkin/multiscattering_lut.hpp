@@ -40,6 +40,12 @@ public:
         return texture_.sample(texcoord_from_unit(float(0.5 * (mu_s + 1.0)), texture_.width()), v);
     }
 
+    // psi for many sun angles at one radius (Texture2D::Row): the row of v_at_radius(r),
+    // and the texel coordinate of mu_s, x = (mu_s + 1) / 2 (width - 1), which is
+    // u * width - 0.5 for the u of psi(v, mu_s).
+    Texture2D::Row row_at_radius(double r) const { return texture_.row(v_at_radius(r)); }
+    float texel_x(float mu_s) const { return 0.5f * (mu_s + 1.0f) * float(texture_.width() - 1); }
+
     const Texture2D& texture() const { return texture_; }
 
 private:

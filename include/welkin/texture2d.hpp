@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "welkin/atmosphere_batch.hpp"
+#include "welkin/simd.hpp"
 
 namespace welkin {
 
@@ -30,6 +31,34 @@ public:
         const Spectrum4 a = at(i, j) + fx * (at(i1, j) - at(i, j));
         const Spectrum4 b = at(i, j1) + fx * (at(i1, j1) - at(i, j1));
         return a + fy * (b - a);
+    }
+
+    // The same bilinear lookup split for loops that read many texels at one v: Row holds
+    // the two texel rows and the weight between them, and Row::sample takes the texel-space
+    // coordinate x = u * width - 0.5 (so x = 0 and x = width - 1 are the first and last
+    // texel centres). sample(u, v) == row(v).sample(u * width - 0.5f) for textures of at
+    // least 2 x 2 texels (the LUT sizes are at least 4).
+    struct Row {
+        const Spectrum4* lo;
+        const Spectrum4* hi;
+        float fy;
+        int last;  // width - 1
+
+        Float4 sample4(float x_in) const {
+            const float x = std::clamp(x_in, 0.0f, float(last));
+            const int i = std::min(int(x), last - 1);
+            const float fx = x - float(i);
+            const Float4 l0 = to_float4(lo[i]), l1 = to_float4(lo[i + 1]);
+            const Float4 h0 = to_float4(hi[i]), h1 = to_float4(hi[i + 1]);
+            const Float4 a = l0 + fx * (l1 - l0), b = h0 + fx * (h1 - h0);
+            return a + fy * (b - a);
+        }
+        Spectrum4 sample(float x) const { return to_vec4(sample4(x)); }
+    };
+    Row row(float v) const {
+        const float y = std::clamp(v * float(height_) - 0.5f, 0.0f, float(height_ - 1));
+        const int j = std::min(int(y), height_ - 2);
+        return {&at(0, j), &at(0, j + 1), y - float(j), width_ - 1};
     }
 
 private:

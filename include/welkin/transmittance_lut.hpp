@@ -12,6 +12,10 @@
 // T(q, -mu_q) / T(p, -mu_p) for rays going down to the ground.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 #include "welkin/texture2d.hpp"
 
 namespace welkin {
@@ -31,20 +35,39 @@ public:
     // 2017, GetTransmittanceToSun).
     Spectrum4 to_sun(double r, double mu_s) const;
 
-    // The parts of a sun lookup that depend on the radius alone, computed once for many
-    // sun angles at the same radius (the marches evaluate a whole row of the sky-view LUT,
-    // or every sun angle of the multiple-scattering LUT, along one ray).
+    // The parts of a sun lookup that depend on the radius alone, computed once in double
+    // for many sun angles at the same radius (the marches evaluate a whole row of the
+    // sky-view LUT, or every sun angle of the multiple-scattering LUT, at each sample).
+    // What varies with the sun angle is then done in float without losing digits. The
+    // distance to the top, d = -r mu_s + sqrt(r^2 mu_s^2 + K) with K = top^2 - r^2 =
+    // (top - r)(top + r) >= 0, cancels for mu_s > 0 and is written there as
+    // d = K / (r mu_s + sqrt(r^2 mu_s^2 + K)); for mu_s < 0 both terms are positive. K and
+    // d_min = top - r, where digits matter, are rounded from double; r itself in float is
+    // off by at most 0.25 m (4e-8 relative), which only scales r mu_s. The texel
+    // coordinate is x = (d - d_min) / (d_max - d_min) (width - 1) (Texture2D::Row), and the
+    // visible fraction's smoothstep argument (sun_visible_fraction) is linear in mu_s.
     struct AtRadius {
-        double r, cos_horizon, top_disc, d_min, inv_d_range;
-        float v;
+        double r;  // clamped to the top
+        float r_f, top_k, d_min, x_scale, fraction_scale, fraction_offset;
+        Texture2D::Row row;
     };
     AtRadius at_radius(double r) const;
-    Spectrum4 to_sun(const AtRadius& at, double mu_s) const {
-        const double x = std::clamp((mu_s - at.cos_horizon + sun_angular_radius_) / (2.0 * sun_angular_radius_), 0.0, 1.0);
-        if (x <= 0.0) return Spectrum4(0.0f);
-        const double d = -at.r * mu_s + std::sqrt(std::max(at.r * at.r * mu_s * mu_s - at.top_disc, 0.0));
-        const float x_mu = float(std::clamp((d - at.d_min) * at.inv_d_range, 0.0, 1.0));
-        return texture_.sample(texcoord_from_unit(x_mu, texture_.width()), at.v) * float(x * x * (3.0 - 2.0 * x));
+
+    // The two halves of a sun lookup at one radius: the texel coordinate and the visible
+    // fraction (arithmetic only, so loops over many sun angles vectorise), then the fetch.
+    // (Both forms of d are computed and one selected, so that the loop has no branch.)
+    static void sun_lookup(const AtRadius& at, float mu_s, float& x, float& fraction) {
+        const float s = clamp_value(mu_s * at.fraction_scale + at.fraction_offset, 0.0f, 1.0f);
+        fraction = s * s * (3.0f - 2.0f * s);
+        const float rm = at.r_f * mu_s;
+        const float q = std::sqrt(rm * rm + at.top_k);
+        const float d_up = at.top_k / max_value(rm + q, 1e-30f), d_down = q - rm;
+        x = ((rm >= 0.0f ? d_up : d_down) - at.d_min) * at.x_scale;
+    }
+    static Spectrum4 to_sun(const AtRadius& at, float mu_s) {
+        float x, fraction;
+        sun_lookup(at, mu_s, x, fraction);
+        return at.row.sample(x) * fraction;
     }
 
     const Texture2D& texture() const { return texture_; }
@@ -66,7 +89,26 @@ double sun_visible_fraction(double bottom_radius, double r, double mu_s, double 
 
 // Optical depth (as a Spectrum4 of tau) along [0, length] of the ray (r, mu), by
 // Gauss-Legendre on panels graded towards the lowest altitude; `samples` evaluations.
-// The kernel of the transmittance LUT and of the ray-march method's sun rays.
+// The kernel of the transmittance LUT and of the ray-march method's sun rays. The nodes
+// and weights depend on `samples` alone: GradedQuadrature holds them for loops that march
+// many rays, march_optical_depth builds them for one.
+class GradedQuadrature {
+public:
+    explicit GradedQuadrature(int samples);
+    Spectrum4 optical_depth(const AtmosphereBatch& batch, double r, double mu, double length) const;
+
+private:
+    // One graded piece of `panels` 4-point panels: per node, s^2 and the weight
+    // w 2 s / panels of the substitution t = len s^2 (transmittance_lut.cpp).
+    struct Piece {
+        std::vector<double> s2, weight;
+    };
+    static Piece make_piece(int panels);
+    Spectrum4 integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b, bool toward_a,
+                        const Piece& piece) const;
+    Piece whole_, half_;  // a ray densest at one end; each side of an interior lowest point
+};
+
 Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length,
                               int samples);
 
