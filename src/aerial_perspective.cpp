@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -135,6 +136,92 @@ void check_call(const SceneDescription& scene, std::span<const float> depth, int
                                           scene.resolution.y, scene.resolution.percentage));
     check_aerial_memory(width, height);
     validate_depth(depth, width, height);
+}
+
+// Marches one pixel's ray to its depth: the "raymarch" method, and the froxel method's
+// fallback for the few pixels beyond its fitted depth range.
+class PixelMarcher {
+public:
+    PixelMarcher(const SceneDescription& scene, const AtmosphereLuts& luts, int width, int height)
+        : scene_(scene),
+          luts_(luts),
+          rays_(scene.require_camera(), width, height),
+          sun_(scene.origin_observer().sun_direction),
+          colour_(scene.atmosphere, scene.exposure),
+          steps_(scene.aerial.raymarch_steps),
+          top_(scene.atmosphere.top_radius_m) {}
+
+    struct Scratch {
+        explicit Scratch(std::size_t C) : L(C), T(C), tmp(C) {}
+        std::vector<float> L, T, tmp;
+    };
+    std::size_t channels() const { return colour_.channels(); }
+
+    // Pixel (x, y) at Z-pass depth z >= 0 (not sky): RGB in-scattering and transmittance.
+    void operator()(int x, int y, float z, Scratch& s, float* L3, float* T3) const {
+        for (int c = 0; c < 3; ++c) {
+            L3[c] = 0.0f;
+            T3[c] = 1.0f;
+        }
+        if (!(z > 0.0f)) return;
+        const CameraRays::Ray cam = rays_.at_pixel(x, y);
+        const AirRay ray = air_ray(scene_, cam, sun_);
+        double t0, t1;
+        if (!clip_to_atmosphere(ray, top_, double(z) * cam.distance_per_depth, t0, t1)) return;
+        const float nu = float(clamp_cosine(glm::dot(ray.d, sun_)));
+        for (const auto& b : luts_.batches()) {
+            Spectrum4 Ls(0.0f), Ts(1.0f);
+            march_segment(*b, ray, b->medium.rayleigh_phase(nu), b->medium.mie_phase(nu), t0, t1, steps_, Ls, Ts);
+            store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(), &s.L[b->medium.first_channel()]);
+            store_channels(Ts, b->medium.channel_count(), &s.T[b->medium.first_channel()]);
+        }
+        colour_.convert(s.L, s.T, s.tmp, L3, T3);
+    }
+
+private:
+    const SceneDescription& scene_;
+    const AtmosphereLuts& luts_;
+    CameraRays rays_;
+    glm::dvec3 sun_;
+    PassColour colour_;
+    int steps_;
+    double top_;
+};
+
+// The fraction of the finite depths the froxel volume's range covers; deeper pixels (a far
+// ridge's last pixels, the Moon) are marched one by one instead of stretching every slice.
+constexpr double kFittedFraction = 0.999;
+
+// The depth below which kFittedFraction of the non-sky pixels lie (0 when all are sky).
+double fitted_depth(std::span<const float> depth, double sky_depth_m) {
+    std::vector<float> finite;
+    finite.reserve(depth.size());
+    for (const float z : depth)
+        if (!is_sky_depth(z, sky_depth_m) && z > 0.0f) finite.push_back(z);
+    if (finite.empty()) return 0.0;
+    const std::size_t k = std::size_t(kFittedFraction * double(finite.size() - 1));
+    std::nth_element(finite.begin(), finite.begin() + std::ptrdiff_t(k), finite.end());
+    return double(finite[k]);
+}
+
+// The largest view-axis depth at which any froxel column's ray leaves the top of the
+// atmosphere (0 when none is inside it): beyond it nothing changes along any column, so
+// the fitted depth range never needs to reach further, however far the farthest surface
+// is (a moon, the ground seen from orbit).
+double atmosphere_exit_depth(const SceneDescription& scene, int width, int height) {
+    const CameraRays rays(scene.require_camera(), width, height);
+    const int nx = scene.aerial.froxel_width, ny = scene.aerial.froxel_height;
+    const double top = scene.atmosphere.top_radius_m;
+    double z = 0.0;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const CameraRays::Ray cam = rays.at_screen(double(i) / double(nx - 1), double(j) / double(ny - 1));
+            const AirRay ray = air_ray(scene, cam, glm::dvec3(0.0, 0.0, 1.0));
+            double t0, t1;
+            if (clip_to_atmosphere(ray, top, std::numeric_limits<double>::infinity(), t0, t1))
+                z = std::max(z, t1 / cam.distance_per_depth);
+        }
+    return z;
 }
 
 AerialPasses allocate(int width, int height) {
@@ -290,8 +377,12 @@ AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<
     check_call(scene, depth, width, height);
     AerialPasses passes = allocate(width, height);
     const double sky = scene.aerial.sky_depth_m;
-    double z_max = scene.aerial.max_depth_m > 0.0 ? scene.aerial.max_depth_m
-                                                  : largest_finite_depth(depth, sky);
+    double z_max = scene.aerial.max_depth_m;
+    if (!(z_max > 0.0)) {
+        z_max = fitted_depth(depth, sky);
+        const double exit = atmosphere_exit_depth(scene, width, height);
+        if (exit > 0.0) z_max = std::min(z_max, exit);
+    }
     if (!(z_max > 0.0)) {  // nothing but sky (or depth 0): T = 1, L = 0 everywhere
         if (progress) progress->report(1.0);
         return passes;
@@ -299,14 +390,20 @@ AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<
     const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
     // Build ~ a few percent of the work; the application is one lookup per pixel.
     const AerialPerspectiveVolume volume(scene, luts, width, height, z_max, nullptr);
+    const PixelMarcher march(scene, luts, width, height);
     ProgressTracker tracker(progress, std::size_t(height));
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+        PixelMarcher::Scratch scratch(march.channels());
         for (int y = rows.begin(); y != rows.end(); ++y) {
             const double sy = (double(y) + 0.5) / double(height);
             for (int x = 0; x < width; ++x) {
                 const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
                 const float z = depth[p];
                 if (is_sky_depth(z, sky)) continue;
+                if (double(z) > z_max && scene.aerial.max_depth_m <= 0.0) {  // beyond the fitted range
+                    march(x, y, z, scratch, &passes.inscatter[p * 3], &passes.transmittance[p * 3]);
+                    continue;
+                }
                 const AerialPerspectiveVolume::Sample s =
                     volume.sample((double(x) + 0.5) / double(width), sy, double(z));
                 for (int c = 0; c < 3; ++c) {
@@ -328,34 +425,15 @@ AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
     AerialPasses passes = allocate(width, height);
     const double sky = scene.aerial.sky_depth_m;
     const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
-    const CameraRays rays(scene.require_camera(), width, height);
-    const glm::dvec3 sun = scene.origin_observer().sun_direction;
-    const PassColour colour(scene.atmosphere, scene.exposure);
-    const std::size_t C = colour.channels();
-    const int steps = scene.aerial.raymarch_steps;
-    const double top = scene.atmosphere.top_radius_m;
+    const PixelMarcher march(scene, luts, width, height);
     ProgressTracker tracker(progress, std::size_t(height));
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-        std::vector<float> L(C), T(C), scratch(C);
+        PixelMarcher::Scratch scratch(march.channels());
         for (int y = rows.begin(); y != rows.end(); ++y) {
             for (int x = 0; x < width; ++x) {
                 const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
-                const float z = depth[p];
-                if (is_sky_depth(z, sky) || !(z > 0.0f)) continue;
-                const CameraRays::Ray cam = rays.at_pixel(x, y);
-                const AirRay ray = air_ray(scene, cam, sun);
-                double t0, t1;
-                if (!clip_to_atmosphere(ray, top, double(z) * cam.distance_per_depth, t0, t1)) continue;
-                const float nu = float(clamp_cosine(glm::dot(ray.d, sun)));
-                for (const auto& b : luts.batches()) {
-                    Spectrum4 Ls(0.0f), Ts(1.0f);
-                    march_segment(*b, ray, b->medium.rayleigh_phase(nu), b->medium.mie_phase(nu), t0, t1,
-                                  steps, Ls, Ts);
-                    store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(),
-                                   &L[b->medium.first_channel()]);
-                    store_channels(Ts, b->medium.channel_count(), &T[b->medium.first_channel()]);
-                }
-                colour.convert(L, T, scratch, &passes.inscatter[p * 3], &passes.transmittance[p * 3]);
+                if (is_sky_depth(depth[p], sky)) continue;
+                march(x, y, depth[p], scratch, &passes.inscatter[p * 3], &passes.transmittance[p * 3]);
             }
             tracker.advance();
         }

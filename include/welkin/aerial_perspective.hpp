@@ -25,9 +25,12 @@
 //    grid over the camera's screen (columns at screen coordinates i / (width - 1), so the
 //    image edges are columns) and its depth. Depth slices are spaced quadratically,
 //    z_k = z_max (k / N)^2, k = 1..N (dense near the camera, where haze builds fastest
-//    relative to its value), and z_max is fitted to the depth buffer's largest finite depth
-//    unless given; the volume is built by marching each column's ray through the slices
-//    (steps_per_slice sub-steps each). A pixel reads it bilinearly across the screen and
+//    relative to its value), and z_max is fitted to the depth buffer unless given: the
+//    depth below which 99.9 % of the non-sky pixels lie, and no further than the farthest
+//    depth at which a column's ray leaves the atmosphere (beyond it nothing changes). The
+//    rarer deeper pixels (a far ridge's last pixels, the Moon) are marched one by one as
+//    by "raymarch", so that they do not stretch every slice. The volume is built by
+//    marching each column's ray through the slices (steps_per_slice sub-steps each). A pixel reads it bilinearly across the screen and
 //    linearly in depth between its two slices (with L = 0, T = 1 at depth 0); the
 //    transmittance is interpolated as optical depth, -ln T, so that exponential fall-off
 //    across deep slices does not band.

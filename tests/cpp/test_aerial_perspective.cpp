@@ -282,3 +282,35 @@ TEST(AerialPerspective, FroxelsAgreeWithPerPixelMarchInStrongHaze) {
             }
         }
 }
+
+// A surface far beyond the atmosphere (the Moon, 3.8e5 km, a few pixels above the ridge)
+// must not stretch the volume's depth range: the other pixels keep the tolerances above,
+// and the far pixels, marched one by one, get exactly the per-pixel march's values.
+TEST(AerialPerspective, FarSurfacesDoNotStretchTheVolume) {
+    const int W = 192, H = 108;
+    const double h0 = 200.0;
+    SceneDescription s = scene_for("hazy", camera_along_x(h0, 2.0 * kDegree), W, H, 6.0, 10.0);
+    std::vector<float> depth = terrain_depth(s, W, H, h0);
+    std::vector<std::size_t> moon;
+    for (int y = 10; y < 13; ++y)
+        for (int x = 100; x < 104; ++x) moon.push_back(std::size_t(y) * W + x);  // 12 pixels
+    for (std::size_t p : moon) {
+        ASSERT_FALSE(std::isfinite(depth[p]));  // sky there
+        depth[p] = 3.8e8f;
+    }
+    s.aerial.method = AerialOptions::Method::Froxel;
+    const AerialPasses f = aerial_perspective(s, depth, W, H);
+    s.aerial.method = AerialOptions::Method::Raymarch;
+    const AerialPasses r = aerial_perspective(s, depth, W, H);
+    const Comparison e = compare(f, r, depth);
+    EXPECT_LT(e.median_rel_L, 0.01);
+    EXPECT_LT(e.p99_rel_L, 0.05);
+    EXPECT_LT(e.max_abs_T, 0.02);
+    for (std::size_t p : moon)
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_EQ(f.transmittance[p * 3 + c], r.transmittance[p * 3 + c]);
+            EXPECT_EQ(f.inscatter[p * 3 + c], r.inscatter[p * 3 + c]);
+            EXPECT_LT(f.transmittance[p * 3 + c], 1.0f);
+            EXPECT_GT(f.inscatter[p * 3 + c], 0.0f);
+        }
+}
