@@ -159,11 +159,11 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
 CameraRays::Ray CameraRays::at_screen(double sx, double sy) const {
     Ray ray;
     if (type_ == CameraType::Panoramic) {
-        // Cycles: u = sx, v = 1 - sy (its images are bottom row first); latitude
-        // lat_min + (lat_max - lat_min) v, longitude lon_min + (lon_max - lon_min) u growing
-        // to the left of the image, i.e. phi = -longitude towards local -X... written out:
-        // forward (local -Z) at (0, 0), local +Y at latitude 90 degrees, local -X at
-        // phi = +90 degrees (the left quarter of a full panorama).
+        // Cycles (equirectangular_range_to_direction): u = sx, v = 1 - sy (its images are
+        // bottom row first), latitude = lat_min + (lat_max - lat_min) v and
+        // phi = -(lon_min + (lon_max - lon_min) u), the direction
+        // (cos lat cos phi, cos lat sin phi, sin lat) in a frame whose x is forward (local
+        // -Z), y is left (local -X) and z is up (local +Y).
         const double lat = lat_min_ + (lat_max_ - lat_min_) * (1.0 - sy);
         const double phi = -(lon_min_ + (lon_max_ - lon_min_) * sx);
         const double c = std::cos(lat);

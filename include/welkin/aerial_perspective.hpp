@@ -70,10 +70,12 @@ struct AerialPasses {
 };
 
 // Bytes the passes of a width x height render take while computed (depth in, two RGB
-// passes out, float). Throws InvalidArgument naming "resolution" when that is more than
-// half of this machine's physical memory.
-std::size_t aerial_pass_bytes(int width, int height);
-void check_aerial_memory(int width, int height);
+// passes out, float: 28 per pixel), plus what the caller holds besides
+// (`extra_bytes_per_pixel`: the CLI's EXR buffer, the module's numpy copies). Throws
+// InvalidArgument naming "resolution" when that is more than half of this machine's
+// physical memory.
+std::size_t aerial_pass_bytes(int width, int height, std::size_t extra_bytes_per_pixel = 0);
+void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixel = 0);
 
 // Throws InvalidArgument naming "depth" (and the pixel) for a NaN, negative or -infinite
 // value, or when depth.size() != width * height.

@@ -87,7 +87,8 @@ int run_aerial(const AerialArgs& args) {
     }
     const int width = scene.resolution.width(), height = scene.resolution.height();
     try {
-        check_aerial_memory(width, height);
+        // Besides the core's buffers: the EXR image (6 floats a pixel), and its half copy.
+        check_aerial_memory(width, height, 6 * sizeof(float) + (args.half ? 6 * 2 : 0));
     } catch (const InvalidArgument& e) {
         rethrow_as("--scene", e, args.scene);
     }

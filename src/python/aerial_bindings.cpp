@@ -64,7 +64,7 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
         throw py::type_error("progress: must be a callable taking the fraction done, or None");
     scene.require_camera();
     const int width = scene.resolution.width(), height = scene.resolution.height();
-    check_aerial_memory(width, height);
+    check_aerial_memory(width, height, 6 * sizeof(float));  // plus the two returned arrays
     const c_array<float> depth = to_c_array<float>(depth_in, "depth", -1, 2, 2,
                                                    "a (height, width) array of depths in metres");
     if (depth.shape(0) != height || depth.shape(1) != width)
