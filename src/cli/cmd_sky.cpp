@@ -122,14 +122,14 @@ int run_sky(const SkyArgs& args) {
         {"sun_disc", !args.no_sun_disc},
         {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
                                          : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
-    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
-                        {"welkinSettings", settings.dump()}};
     if (args.scene.empty()) {
         settings["sun_elevation_deg"] = args.observer.sun_elevation_deg;
         settings["sun_azimuth_deg"] = args.observer.sun_azimuth_deg;
     } else {
         settings["scene"] = args.scene;
     }
+    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
+                        {"welkinSettings", settings.dump()}};
     if (args.spectral_channels)
         write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);
