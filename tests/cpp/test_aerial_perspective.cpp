@@ -314,3 +314,42 @@ TEST(AerialPerspective, FarSurfacesDoNotStretchTheVolume) {
             EXPECT_GT(f.inscatter[p * 3 + c], 0.0f);
         }
 }
+
+// Orthographic and equirectangular cameras through the froxel volume, against the per-pixel
+// march, over a ground plane seen from 200 m (out to 60 km), with the tolerances of the
+// perspective test. A full panorama spreads the columns over the whole sphere (32 columns
+// are 11 degrees apart, and the error reaches 15 % at the horizon, measured): panoramas
+// need more columns, 256 x 128 here (measured: median 0.36 %, worst 1.3 %).
+TEST(AerialPerspective, OrthographicAndPanoramicCamerasAgreeWithTheMarch) {
+    const double h0 = 200.0;
+    for (const CameraType type : {CameraType::Orthographic, CameraType::Panoramic}) {
+        Camera cam = camera_along_x(h0, 2.0 * kDegree);
+        cam.type = type;
+        cam.ortho_scale = 500.0;
+        const int W = type == CameraType::Panoramic ? 384 : 160, H = type == CameraType::Panoramic ? 192 : 90;
+        SceneDescription s = scene_for("hazy", cam, W, H, 10.0, 30.0);
+        if (type == CameraType::Panoramic) {
+            s.aerial.froxel_width = 256;
+            s.aerial.froxel_height = 128;
+        }
+        const CameraRays rays(cam, W, H);
+        std::vector<float> depth(std::size_t(W) * H, std::numeric_limits<float>::infinity());
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const CameraRays::Ray r = rays.at_pixel(x, y);
+                if (r.direction.z < 0.0)
+                    depth[std::size_t(y) * W + x] =
+                        float(std::min(r.origin.z / -r.direction.z, 60e3) / r.distance_per_depth);
+            }
+        s.aerial.method = AerialOptions::Method::Froxel;
+        const AerialPasses f = aerial_perspective(s, depth, W, H);
+        s.aerial.method = AerialOptions::Method::Raymarch;
+        const AerialPasses r = aerial_perspective(s, depth, W, H);
+        const Comparison e = compare(f, r, depth);
+        std::printf("%s: L median %.3f %%, p99 %.3f %%, T max abs %.4f\n", camera_type_name(type),
+                    100 * e.median_rel_L, 100 * e.p99_rel_L, e.max_abs_T);
+        EXPECT_LT(e.median_rel_L, 0.01) << camera_type_name(type);
+        EXPECT_LT(e.p99_rel_L, 0.05) << camera_type_name(type);
+        EXPECT_LT(e.max_abs_T, 0.02) << camera_type_name(type);
+    }
+}
