@@ -40,8 +40,10 @@
 //
 // Depth is Blender's Z pass (camera.hpp): along the view axis for perspective and
 // orthographic cameras, along the ray for panoramic ones; all three camera types are
-// supported by both ways (a full panorama needs more froxel
-// columns than 32 x 32: they are spread over the whole sphere; 256 x 128 is tested). Sky pixels: a depth of +infinity, or at or beyond
+// supported by both ways (a full panorama needs more froxel columns than 32 x 32, which
+// it spreads over the whole sphere; 256 x 128 is tested).
+//
+// Sky pixels: a depth of +infinity, or at or beyond
 // aerial.sky_depth_m (Cycles writes 1e10 m for the background), gets T = 1 and
 // L_in = 0: the render's background already shows the sky (the world texture holds the
 // atmosphere's whole path radiance), so Image x T + Inscatter leaves it as rendered.
