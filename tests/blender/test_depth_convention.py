@@ -18,6 +18,8 @@ Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
 import json
 import math
 import os
+import pathlib
+import subprocess
 import tempfile
 
 import bpy
@@ -26,6 +28,8 @@ from mathutils import Euler
 import numpy as np
 import welkin
 
+CLI = os.environ.get("WELKIN_CLI",
+                     str(pathlib.Path(__file__).resolve().parents[2] / "build" / "welkin"))
 WALL_Y = 30.0  # the wall's plane, y = WALL_Y, for |x| < 40, 0 < z < 25
 
 
@@ -125,6 +129,33 @@ def check(scene, cam, label, tmp):
         assert (z[sky] >= 1e9).all(), f"{label}: background depth {z[sky].min()}"
     print(f"ok: {label}: {use.sum()} pixels ({(use & on_wall).sum()} on the wall), "
           f"worst {100 * rel.max():.3f} %")
+    return path, z, use
+
+
+def aerial_from_cycles_render(scene, cam, path, z, use, tmp):
+    """`welkin aerial` on Cycles' own multilayer EXR: it finds ViewLayer.Depth.Z, and the
+    passes get hazier with depth (the nearest compared pixels against the farthest)."""
+    r = scene.render
+    frame = os.path.join(tmp, "frame.json")
+    with open(frame, "w") as f:
+        json.dump({"version": 1, "atmosphere": "hazy", "camera": camera_json(cam),
+                   "sun": {"elevation_deg": 20, "azimuth_deg": 40},
+                   "resolution": {"x": r.resolution_x, "y": r.resolution_y,
+                                  "percentage": r.resolution_percentage}}, f)
+    out = os.path.join(tmp, "passes.exr")
+    run = subprocess.run([CLI, "aerial", "--scene", frame, "--depth", path, "-o", out],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    p = welkin.read_exr(out)
+    T = p["Welkin.AerialTransmittance.G"]
+    L = p["Welkin.AerialInscatter.G"]
+    zz = np.where(use, z, np.nan)
+    near, far = np.nanargmin(zz), np.nanargmax(zz)
+    assert T.flat[far] < T.flat[near] and L.flat[far] > L.flat[near], (z.flat[near], z.flat[far])
+    sky = z >= 1e9
+    assert (T[sky] == 1).all() and (L[sky] == 0).all()
+    print(f"ok: welkin aerial on the Cycles render: T {T.flat[near]:.4f} at {z.flat[near]:.1f} m, "
+          f"{T.flat[far]:.4f} at {z.flat[far]:.1f} m")
 
 
 def main():
@@ -136,7 +167,8 @@ def main():
     cam.data.lens = 30.0
     cam.data.shift_x, cam.data.shift_y = 0.1, -0.05
     with tempfile.TemporaryDirectory() as tmp:
-        check(scene, cam, "perspective", tmp)
+        path, z, use = check(scene, cam, "perspective", tmp)
+        aerial_from_cycles_render(scene, cam, path, z, use, tmp)
         cam.data.sensor_fit = "VERTICAL"
         scene.render.resolution_x, scene.render.resolution_y = 64, 96
         check(scene, cam, "perspective_portrait_vertical", tmp)
