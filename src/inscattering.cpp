@@ -27,14 +27,16 @@ void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
             TransmittanceLut::sun_lookup(at, mu_s_t, x_sun[i], fraction[i]);
             x_ms[i] = ms.texel_x(mu_s_t);
         }
-        const Texture2D::Row ms_row = ms.row_at_radius(st.r);
         const Spectrum4 w_r = st.weight * st.rayleigh_scattering, w_m = st.weight * st.mie_scattering;
-        const Spectrum4 w_s = st.weight * (st.rayleigh_scattering + st.mie_scattering);
+        Spectrum4 w1, w2;
+        ms.source_weights(st.rayleigh_scattering, st.mie_scattering, view_zenith_cosine(ray, st), w1, w2);
+        const Texture2D::Row ms_row =
+            ms.source_row(st.r, w_r + w_m, st.weight * w1, st.weight * w2, scratch.ms_source);
         for (std::size_t i = 0; i < n; ++i) {
             const Spectrum4 T = at.row.sample(x_sun[i]) * fraction[i];
             sum_r[i] += w_r * T;
             sum_m[i] += w_m * T;
-            sum_ms[i] += w_s * ms_row.sample(x_ms[i]);
+            sum_ms[i] += ms_row.sample(x_ms[i]);
         }
     }
     const Spectrum4 E = batch.solar_irradiance();

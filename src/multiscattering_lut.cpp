@@ -2,20 +2,50 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 
+#include "welkin/error.hpp"
 #include "welkin/geometry.hpp"
 #include "welkin/inscattering.hpp"
 #include "welkin/phase.hpp"
 
 namespace welkin {
+namespace {
 
-// Texel (i, j) holds Psi_ms for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on the
+// n-point Gauss-Legendre on (0, 1): nodes by Newton's method on P_n from Tricomi's
+// initial guesses, weights 2 / ((1 - x^2) P_n'(x)^2) halved for the unit interval.
+void gauss_legendre_unit(int n, std::vector<double>& x, std::vector<double>& w) {
+    x.resize(std::size_t(n));
+    w.resize(std::size_t(n));
+    for (int i = 0; i < n; ++i) {
+        double t = std::cos(kPi * (double(i) + 0.75) / (double(n) + 0.5)), dp = 1.0;
+        for (int it = 0; it < 100; ++it) {
+            double p0 = 1.0, p1 = t;
+            for (int k = 2; k <= n; ++k) {
+                const double p2 = ((2.0 * k - 1.0) * t * p1 - (k - 1.0) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (t * p1 - p0) / (t * t - 1.0);
+            const double dt = p1 / dp;
+            t -= dt;
+            if (std::abs(dt) < 1e-15) break;
+        }
+        x[std::size_t(i)] = 0.5 * (1.0 + t);
+        w[std::size_t(i)] = 1.0 / ((1.0 - t * t) * dp * dp);
+    }
+}
+
+}  // namespace
+
+// Texel (i, j) holds the moments a_0 = Psi_ms, a_1, a_2 for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on the
 // texel-centre grid of texcoord_from_unit). One row shares its radius, so each of the
 // row's rays (a direction w about the local zenith) is marched once and reused for all 32
-// sun angles: only the sun's transmittance along it depends on mu_s. The transfer f of a
-// ray does not depend on the sun at all.
+// sun angles: only the sun's transmittance along it and the phase functions depend on
+// mu_s. The transfer f' of a ray does not depend on the sun at all. See the header for the
+// derivation.
 //
 // For the ray w = (sin(theta) cos(phi), sin(theta) sin(phi), mu) and the sun at
 // (sin_s, 0, mu_s), nu = mu mu_s + sin(theta) cos(phi) sin_s, and the sun's zenith cosine
@@ -23,17 +53,29 @@ namespace welkin {
 //   mu_s(t) = (r mu_s + t nu) / r(t) = mu_s (r + t mu) / r(t) + sin_s cos(phi) t sin(theta) / r(t),
 // two per-step constants times two per-(phi, sun angle) ones. So each step of a ray is one
 // pass over all (phi, mu_s) pairs that computes the lookups' texel coordinates
-// (arithmetic only: it vectorises) and one that fetches and accumulates.
+// (arithmetic only: it vectorises) and one that fetches and accumulates, per constituent
+// (the phase functions, which depend on nu = mu mu_s + sin(theta) sin_s cos(phi), multiply
+// each ray's two sums once it is done).
 MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const TransmittanceLut& tlut,
                                        int size, int directions_sqrt, int steps)
-    : bottom_(batch.bottom_radius()), top_(batch.top_radius()), texture_(size, size) {
+    : bottom_(batch.bottom_radius()),
+      top_(batch.top_radius()),
+      mie_chi1_(mie_phase_moment(batch.mie_phase_model(), 1, batch.mie_g())),
+      mie_chi2_(mie_phase_moment(batch.mie_phase_model(), 2, batch.mie_g())),
+      texture_(size, size),
+      dipole_(size, size),
+      quadrupole_(size, size) {
+    if (directions_sqrt < 2 || directions_sqrt % 2 != 0)
+        throw InvalidArgument("directions_sqrt", "must be an even number >= 2");
     const double R = bottom_, top = top_;
-    const float p_u = float(kIsotropicPhase);
-    const Spectrum4 albedo_over_pi = batch.ground_albedo() * float(1.0 / kPi);
-    // The sky around the point is symmetric about the sun's vertical plane, so azimuths in
-    // [0, pi] with half the strata give the same sum as [0, 2 pi) at half the cost.
-    const int n_phi = std::max(1, directions_sqrt / 2);
-    const float inv_dirs = 1.0f / float(directions_sqrt * n_phi);
+    const Spectrum4 albedo = batch.ground_albedo();
+    const Spectrum4 albedo_over_pi = albedo * float(1.0 / kPi);
+    // Cosines: Gauss-Legendre on each hemisphere (the light is sharp at the horizon).
+    // Azimuths: strata over [0, pi]; the sky around the point is symmetric about the sun's
+    // vertical plane, so half the strata give the same sum as [0, 2 pi) at half the cost.
+    const int n_half = directions_sqrt / 2, n_phi = std::max(1, directions_sqrt / 2);
+    std::vector<double> gl_x, gl_w;
+    gauss_legendre_unit(n_half, gl_x, gl_w);
     const TransmittanceLut::AtRadius ground_at = tlut.at_radius(R);
     // The (phi, mu_s) pairs, l = b size + i: mu_s and sin_s cos(phi).
     const std::size_t n_pairs = std::size_t(n_phi) * std::size_t(size);
@@ -51,31 +93,53 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
     tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& rows) {
         RaySamples ray;
         std::vector<float> x_buf(n_pairs), fraction_buf(n_pairs);
-        std::vector<Spectrum4> L2_buf(n_pairs);
+        // Per pair, this ray's sums of w sigma_R T_sun and w sigma_M T_sun, then the light
+        // L' it brings (phases applied, ground added).
+        std::vector<Spectrum4> sum_r_buf(n_pairs), sum_m_buf(n_pairs), ground_buf(n_pairs);
+        // Per pair, <L'>, <L' P_1>, <L' P_2> summed over the directions.
+        std::vector<Spectrum4> m0_buf(n_pairs), m1_buf(n_pairs), m2_buf(n_pairs);
         float* const x = x_buf.data();
         float* const fraction = fraction_buf.data();
-        Spectrum4* const L2 = L2_buf.data();  // per pair, summed over the directions
+        Spectrum4* const sum_r = sum_r_buf.data();
+        Spectrum4* const sum_m = sum_m_buf.data();
+        Spectrum4* const ground = ground_buf.data();
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const double r = R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
-            std::fill(L2_buf.begin(), L2_buf.end(), Spectrum4(0.0f));
-            Spectrum4 f_ms(0.0f);
-            for (int a = 0; a < directions_sqrt; ++a) {
-                // Stratified uniform directions: cos(theta) uniform in [-1, 1], phi in [0, pi].
-                const double mu = 1.0 - 2.0 * (double(a) + 0.5) / double(directions_sqrt);
+            for (auto* m : {&m0_buf, &m1_buf, &m2_buf}) std::fill(m->begin(), m->end(), Spectrum4(0.0f));
+            Spectrum4 f0(0.0f), f1(0.0f), f2(0.0f);  // <f'>, <f' P_1>, <f' P_2>
+            for (int a = 0; a < 2 * n_half; ++a) {
+                const double mu = a < n_half ? gl_x[std::size_t(a)] : -gl_x[std::size_t(a - n_half)];
+                // This cosine's weight in the mean over the sphere (each hemisphere's sum to 1),
+                // shared by the n_phi azimuths.
+                const float w_mu = float(0.5 * gl_w[std::size_t(a % n_half)]), w_dir = w_mu / float(n_phi);
+                const float p1 = float(mu), p2 = float(0.5 * (3.0 * mu * mu - 1.0));
                 const double sin_theta = safe_sqrt(1.0 - mu * mu);
                 prepare_ray(batch, r, mu, steps, ray, &tlut);
+                std::fill(sum_r_buf.begin(), sum_r_buf.end(), Spectrum4(0.0f));
+                std::fill(sum_m_buf.begin(), sum_m_buf.end(), Spectrum4(0.0f));
+                std::fill(ground_buf.begin(), ground_buf.end(), Spectrum4(0.0f));
                 Spectrum4 f(0.0f);
                 for (const RaySamples::Step& st : ray.steps) {
-                    const Spectrum4 w = st.weight * (st.rayleigh_scattering + st.mie_scattering) * p_u;
-                    f += st.weight * (st.rayleigh_scattering + st.mie_scattering);
+                    const Spectrum4 w_r = st.weight * st.rayleigh_scattering, w_m = st.weight * st.mie_scattering;
+                    f += w_r + w_m;
                     const float C = float((r + st.t * mu) / st.r), D = float(st.t * sin_theta / st.r);
                     const TransmittanceLut::AtRadius& at = st.sun_at;
                     for (std::size_t l = 0; l < n_pairs; ++l)
                         TransmittanceLut::sun_lookup(at, clamp_value(C * pm[l] + D * psc[l], -1.0f, 1.0f), x[l], fraction[l]);
-                    for (std::size_t l = 0; l < n_pairs; ++l) L2[l] += w * (at.row.sample(x[l]) * fraction[l]);
+                    for (std::size_t l = 0; l < n_pairs; ++l) {
+                        const Spectrum4 T = at.row.sample(x[l]) * fraction[l];
+                        sum_r[l] += w_r * T;
+                        sum_m[l] += w_m * T;
+                    }
                 }
-                f_ms += f * float(n_phi);
-                if (ray_hits_ground(r, mu, R)) {
+                const bool hits_ground = ray_hits_ground(r, mu, R);
+                // The ground lit by the isotropic field of each order (irradiance pi m_n)
+                // adds albedo m_n T_g to the next order along this ray: f' = f + albedo T_g.
+                if (hits_ground) f += ray.transmittance * albedo;
+                f0 += f * w_mu;
+                f1 += f * (w_mu * p1);
+                f2 += f * (w_mu * p2);
+                if (hits_ground) {
                     // Sun light reflected by the Lambertian ground at the ray's end, where
                     // mu_s = (r mu_s + d nu) / R.
                     const double d = distance_to_bottom(r, mu, R);
@@ -86,16 +150,35 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                         TransmittanceLut::sun_lookup(ground_at, mu_s_g, x[l], fraction[l]);
                         fraction[l] *= max_value(mu_s_g, 0.0f);
                     }
-                    for (std::size_t l = 0; l < n_pairs; ++l) L2[l] += k * (ground_at.row.sample(x[l]) * fraction[l]);
+                    for (std::size_t l = 0; l < n_pairs; ++l) ground[l] = k * (ground_at.row.sample(x[l]) * fraction[l]);
+                }
+                // L' = the single-scattered light with the real phase functions at
+                // nu = w . s (light from w travels along -w, the sun's along -s), plus the
+                // ground; accumulated into the three moments.
+                for (std::size_t l = 0; l < n_pairs; ++l) {
+                    const float nu = clamp_value(float(mu) * pm[l] + float(sin_theta) * psc[l], -1.0f, 1.0f);
+                    const Spectrum4 L =
+                        (sum_r[l] * batch.rayleigh_phase(nu) + sum_m[l] * batch.mie_phase(nu) + ground[l]) * w_dir;
+                    m0_buf[l] += L;
+                    m1_buf[l] += L * p1;
+                    m2_buf[l] += L * p2;
                 }
             }
-            f_ms *= inv_dirs;
-            // Each order >= 2 carries f_ms of the one before: a geometric series.
-            const Spectrum4 series = inv_dirs / glm::max(Spectrum4(1.0f) - f_ms, Spectrum4(1e-3f));
+            // Orders >= 2 of the arriving light: a geometric series in <f'> for the mean,
+            // Psi_ms f'(w) for its shape.
+            const Spectrum4 series = 1.0f / glm::max(Spectrum4(1.0f) - f0, Spectrum4(1e-3f));
             for (int i = 0; i < size; ++i) {
-                Spectrum4 sum(0.0f);
-                for (int b = 0; b < n_phi; ++b) sum += L2[std::size_t(b) * size + i];
-                texture_.at(i, j) = sum * series;
+                Spectrum4 s0(0.0f), s1(0.0f), s2(0.0f);
+                for (int b = 0; b < n_phi; ++b) {
+                    const std::size_t l = std::size_t(b) * size + i;
+                    s0 += m0_buf[l];
+                    s1 += m1_buf[l];
+                    s2 += m2_buf[l];
+                }
+                const Spectrum4 psi = s0 * series;
+                texture_.at(i, j) = psi;
+                dipole_.at(i, j) = 3.0f * (s1 + psi * f1);
+                quadrupole_.at(i, j) = 5.0f * (s2 + psi * f2);
             }
         }
     });

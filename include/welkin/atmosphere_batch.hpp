@@ -78,6 +78,8 @@ public:
     // Phase functions at scattering cosine nu (phase.hpp).
     float rayleigh_phase(float nu) const;
     float mie_phase(float nu) const;
+    MiePhaseModel mie_phase_model() const { return mie_model_; }
+    float mie_g() const { return mie_g_; }
 
 private:
     std::size_t first_, count_;

@@ -4,10 +4,13 @@
 // (Hillaire 2020 eqs. 1-4, 10)
 //
 //   L = integral_0^d T(0, t) J(t) dt,
-//   J = E_sun [ T_sun(t) (sigma_R P_R(nu) + sigma_M P_M(nu)) + (sigma_R + sigma_M) Psi_ms(t) ],
+//   J = E_sun [ T_sun(t) (sigma_R P_R(nu) + sigma_M P_M(nu)) + J_ms(t) ],
 //
 // with the sun's zenith cosine at distance t, mu_s(t) = (r mu_s + t nu) / r(t) (Bruneton
-// 2017, eq. for mu_s_d). Samples are spread as t = d s^2 for s uniform in [0, 1]: dense
+// 2017, eq. for mu_s_d), and J_ms the multiple-scattering source of multiscattering_lut.hpp:
+// Hillaire's (sigma_R + sigma_M) Psi_ms plus the terms of the multiply-scattered light's
+// dipole and quadrupole about the local zenith, weighted by the view's zenith cosine
+// there, mu_v(t) = (r mu + t) / r(t) (view_zenith_cosine below). Samples are spread as t = d s^2 for s uniform in [0, 1]: dense
 // near the observer, where an upward ray is densest and where a near-horizontal ray from
 // low altitude spends its first kilometres; each segment is integrated with Hillaire's
 // energy-conserving form: with S the source at the segment's midpoint (in s) and
@@ -44,7 +47,8 @@ struct RaySamples {
         TransmittanceLut::AtRadius sun_at;  // filled when prepared with a transmittance LUT
         float ms_v = 0.0f;
     };
-    double r0 = 0.0;  // the observer's radius
+    double r0 = 0.0;   // the observer's radius
+    double mu0 = 1.0;  // the view's zenith cosine at the observer
     std::vector<Step> steps;
     Spectrum4 transmittance{1.0f};  // along the whole path
 };
@@ -55,6 +59,7 @@ inline void prepare_ray(const AtmosphereBatch& batch, double r, double mu, int s
                         const TransmittanceLut* tlut = nullptr, const MultiScatteringLut* ms = nullptr) {
     out.steps.clear();
     out.r0 = r;
+    out.mu0 = mu;
     out.transmittance = Spectrum4(1.0f);
     const double R = batch.bottom_radius(), top = batch.top_radius();
     double offset = 0.0;
@@ -89,6 +94,12 @@ inline void prepare_ray(const AtmosphereBatch& batch, double r, double mu, int s
     out.transmittance = T;
 }
 
+// The view's zenith cosine at a step: the local zenith turns along the ray, so a view that
+// leaves the observer horizontally climbs through the air at mu_v = t / r(t).
+inline double view_zenith_cosine(const RaySamples& ray, const RaySamples::Step& st) {
+    return clamp_cosine((ray.r0 * ray.mu0 + st.t) / st.r);
+}
+
 // Path radiance of a prepared ray for the sun at zenith cosine mu_s (at the observer) and
 // view-sun cosine nu. SunTransmittance: callable (const RaySamples::Step&, double mu_s_t)
 // -> Spectrum4, the sun's transmittance (with the planet's shadow) at a step.
@@ -102,7 +113,11 @@ Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, 
         const double mu_s_t = clamp_cosine((ray.r0 * mu_s + st.t * nu) / st.r);
         Spectrum4 source = sun_transmittance(st, mu_s_t) *
                            (st.rayleigh_scattering * rayleigh_p + st.mie_scattering * mie_p);
-        if (ms) source += (st.rayleigh_scattering + st.mie_scattering) * ms->psi(st.ms_v, mu_s_t);
+        if (ms) {
+            Spectrum4 w1, w2;
+            ms->source_weights(st.rayleigh_scattering, st.mie_scattering, view_zenith_cosine(ray, st), w1, w2);
+            source += ms->source(st.ms_v, mu_s_t, st.rayleigh_scattering + st.mie_scattering, w1, w2);
+        }
         L += st.weight * source;
     }
     return L * batch.solar_irradiance();
@@ -114,14 +129,16 @@ Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, 
 // sky-view LUT. Only the sun's zenith cosine at a step depends on nu, and linearly,
 //   mu_s(t) = (r0 mu_s + t nu) / r(t) = A + B nu,  A = r0 mu_s / r(t),  B = t / r(t),
 // and the phase functions factor out of the sum over steps:
-//   L = E_sun [ P_R(nu) sum w sigma_R T_sun + P_M(nu) sum w sigma_M T_sun
-//             + sum w (sigma_R + sigma_M) Psi_ms ],
+//   L = E_sun [ P_R(nu) sum w sigma_R T_sun + P_M(nu) sum w sigma_M T_sun + sum w J_ms ],
 // so each step is one pass over the views that computes every mu_s(t) and texel
-// coordinate (arithmetic only: it vectorises) and one that fetches and accumulates.
+// coordinate (arithmetic only: it vectorises) and one that fetches and accumulates. The
+// weights of J_ms's three moments depend on the step alone (the view's zenith cosine
+// there is the same for every nu), so they are combined into one row of texels per step
+// (MultiScatteringLut::source_row) and each view does one lookup in it.
 // `scratch` is reused between calls (no allocation once it is large enough).
 struct InscatterRowScratch {
     std::vector<float> x_sun, fraction, x_ms;
-    std::vector<Spectrum4> sum_rayleigh, sum_mie, sum_ms;
+    std::vector<Spectrum4> sum_rayleigh, sum_mie, sum_ms, ms_source;
 };
 void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
                    const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,

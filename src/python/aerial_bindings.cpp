@@ -1,6 +1,6 @@
-// welkin.SceneDescription, welkin.aerial_perspective, and EXR files in and out
-// (include/welkin/scene.hpp, aerial_perspective.hpp, exr_io.hpp): what the Blender add-on
-// needs to turn a rendered frame's depth into its aerial-perspective passes. Thin: the
+// welkin.SceneDescription and welkin.aerial_perspective (include/welkin/scene.hpp,
+// aerial_perspective.hpp): what the Blender add-on needs to turn a rendered frame's depth
+// into its aerial-perspective passes (EXR files in and out: exr_bindings.cpp). Thin: the
 // scene travels as its JSON text, the depth as a numpy array, the passes come back as
 // numpy arrays the core wrote into.
 #include <fmt/format.h>
@@ -10,7 +10,6 @@
 #include "welkin/aerial_perspective.hpp"
 #include "welkin/camera.hpp"
 #include "welkin/error.hpp"
-#include "welkin/exr_io.hpp"
 #include "welkin/scene.hpp"
 
 namespace welkin::python {
@@ -83,54 +82,6 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
     return py::make_tuple(L, T);
 }
 
-py::dict read_exr_py(const std::string& path, const py::object& channels) {
-    ExrImage image;
-    if (channels.is_none())
-        image = read_exr(path);
-    else
-        image = read_exr_channels(path, channels.cast<std::vector<std::string>>());
-    py::dict out;
-    const std::size_t nc = image.channels(), n = std::size_t(image.width) * std::size_t(image.height);
-    for (std::size_t c = 0; c < nc; ++c) {
-        py::array_t<float> a({py::ssize_t(image.height), py::ssize_t(image.width)});
-        float* dst = a.mutable_data();
-        for (std::size_t p = 0; p < n; ++p) dst[p] = image.pixels[p * nc + c];
-        out[py::str(image.channel_names[c])] = a;
-    }
-    return out;
-}
-
-void write_exr_py(const std::string& path, const py::dict& channels, bool half, bool overwrite) {
-    ExrImage image;
-    std::vector<c_array<float>> arrays;
-    for (const auto& [key, value] : channels) {
-        const std::string name = py::str(key);
-        arrays.push_back(to_c_array<float>(value, "channels['" + name + "']", -1, 2, 2,
-                                           "a (height, width) array"));
-        const c_array<float>& a = arrays.back();
-        if (image.channel_names.empty()) {
-            image.height = int(a.shape(0));
-            image.width = int(a.shape(1));
-        } else if (a.shape(0) != image.height || a.shape(1) != image.width) {
-            throw InvalidArgument("channels['" + name + "']",
-                                  fmt::format("has shape {}, the first channel ({}, {})",
-                                              shape_string(a), image.height, image.width));
-        }
-        image.channel_names.push_back(name);
-    }
-    if (image.channel_names.empty()) throw InvalidArgument("channels", "needs at least one channel");
-    const std::size_t nc = image.channels(), n = std::size_t(image.width) * std::size_t(image.height);
-    image.pixels.resize(n * nc);
-    for (std::size_t c = 0; c < nc; ++c) {
-        const float* src = arrays[c].data();
-        for (std::size_t p = 0; p < n; ++p) image.pixels[p * nc + c] = src[p];
-    }
-    ExrWriteOptions options;
-    options.overwrite = overwrite;
-    options.pixel_type = half ? ExrPixelType::Half : ExrPixelType::Float;
-    write_exr(path, image, options);
-}
-
 }  // namespace
 
 void register_aerial(py::module_& m) {
@@ -175,18 +126,6 @@ depth z lies z * distance_per_depth along the ray. ValueError without a camera.
     m.def("aerial_perspective", &aerial_perspective_py, kAerialDoc, py::arg("scene"),
           py::arg("depth"), py::arg("method") = py::none(), py::kw_only(),
           py::arg("progress") = py::none());
-
-    m.def("read_exr", &read_exr_py, py::arg("path"), py::arg("channels") = py::none(), R"doc(
-Reads an OpenEXR file: {channel name: float32 (height, width) array}, rows top
-first. channels: None for all, or a list of names (only those are decoded).
-OSError when the file cannot be read, ValueError naming a missing channel.
-)doc");
-    m.def("write_exr", &write_exr_py, py::arg("path"), py::arg("channels"), py::kw_only(),
-          py::arg("half") = false, py::arg("overwrite") = false, R"doc(
-Writes {channel name: (height, width) array} to an OpenEXR file, rows top first,
-atomically; multilayer names as Blender's ("Welkin.AerialInscatter.R"). Refuses to
-replace a file unless overwrite=True (OSError).
-)doc");
 }
 
 }  // namespace welkin::python

@@ -95,7 +95,8 @@ def check(scene, cam, label, tmp):
     r.image_settings.file_format = "OPEN_EXR_MULTILAYER"
     r.filepath = path
     bpy.ops.render.render(write_still=True)
-    z = welkin.read_exr(path, ["ViewLayer.Depth.Z"])["ViewLayer.Depth.Z"]
+    pixels, names = welkin.read_exr(path)
+    z = pixels[..., names.index("ViewLayer.Depth.Z")]
     desc = welkin.SceneDescription.from_json_string(json.dumps(
         {"version": 1, "camera": camera_json(cam),
          "resolution": {"x": r.resolution_x, "y": r.resolution_y,
@@ -146,9 +147,9 @@ def aerial_from_cycles_render(scene, cam, path, z, use, tmp):
     run = subprocess.run([CLI, "aerial", "--scene", frame, "--depth", path, "-o", out],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
-    p = welkin.read_exr(out)
-    T = p["Welkin.AerialTransmittance.G"]
-    L = p["Welkin.AerialInscatter.G"]
+    pixels, names = welkin.read_exr(out)
+    T = pixels[..., names.index("Welkin.AerialTransmittance.G")]
+    L = pixels[..., names.index("Welkin.AerialInscatter.G")]
     zz = np.where(use, z, np.nan)
     near, far = np.nanargmin(zz), np.nanargmax(zz)
     assert T.flat[far] < T.flat[near] and L.flat[far] > L.flat[near], (z.flat[near], z.flat[far])

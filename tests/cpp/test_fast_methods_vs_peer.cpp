@@ -6,16 +6,22 @@
 // its single-scattering part replaced by the converged one, L - L1d + SS_converged; the raw
 // figures are printed too.
 //
-// Tolerances. Issue #2 asks lut within 5 %. Measured: the median is within it at every
-// wavelength, and that is asserted. The worst views are not: Hillaire 2020's
-// multiple-scattering term assumes the light scattered two or more times arrives
-// isotropically, while the peer's orders 2-4 are up to ~1.4x brighter towards the sun than
-// away from it; at 440 nm, where multiple scattering is 30-45 % of the sky, that costs up
-// to ~10 %. The worst case is held at 12 % as a regression bound, not as a claim; the
-// 5 % worst case is an open item of issue #2. The analytic method (single scattering only)
-// is held to the peer's single scattering within 25 %, its measured envelope.
+// Tolerances. Issue #2 asks lut within 5 %. Measured (multiple-scattering LUT with the
+// dipole and quadrupole of the multiply-scattered light, multiscattering_lut.hpp): lut
+// median 1.5 / 1.4 / 2.0 %, worst 5.2 / 6.6 / 9.7 % at 680 / 550 / 440 nm; raymarch
+// median 1.1 / 1.2 / 1.7 %, worst 5.1 / 6.3 / 9.5 %. Asserted: median within 2.5 %, worst
+// within 6 / 7 / 10 %. The worst views are not the methods' error: at each of them the
+// reference path tracer (all orders) is itself 3.6 / 5.4 / 9.0 % above the peer, because the
+// peer's orders 2-4 have an azimuthal structure (up to 1.38x brighter towards the sun than
+// away from it at 440 nm) that the reference does not have and whose second order an
+// independent quadrature confirms (test_multiscattering_vs_reference.cpp prints these; there
+// lut is within 5 % of the reference for every view, which is asserted). Before the
+// extension (Hillaire's isotropic term) lut measured median 1.6 / 2.3 / 3.3 %, worst
+// 6.1 / 7.1 / 10.3 % here. The analytic method (single scattering only) is held to the
+// peer's single scattering within 25 %, its measured envelope.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdio>
 
 #include "peer_single_scattering.hpp"
@@ -69,20 +75,20 @@ Errors relative_errors(const std::string& method, bool single_only = false) {
     return e;
 }
 
-void expect_within(const Errors& e, double median_bound, double worst_bound) {
+void expect_within(const Errors& e, double median_bound, const std::array<double, 3>& worst_bound) {
     for (int c = 0; c < 3; ++c) {
         const auto [median, worst] = welkin::test::median_and_max(e.corrected[c]);
         EXPECT_LT(median, median_bound) << kNames[c];
-        EXPECT_LT(worst, worst_bound) << kNames[c];
+        EXPECT_LT(worst, worst_bound[std::size_t(c)]) << kNames[c];
     }
 }
 
 }  // namespace
 
-TEST(FastMethodsVsPeer, Lut) { expect_within(relative_errors("lut"), 0.05, 0.12); }
+TEST(FastMethodsVsPeer, Lut) { expect_within(relative_errors("lut"), 0.025, {0.06, 0.07, 0.10}); }
 
-TEST(FastMethodsVsPeer, Raymarch) { expect_within(relative_errors("raymarch"), 0.05, 0.12); }
+TEST(FastMethodsVsPeer, Raymarch) { expect_within(relative_errors("raymarch"), 0.025, {0.06, 0.07, 0.10}); }
 
 TEST(FastMethodsVsPeer, AnalyticAgainstSingleScattering) {
-    expect_within(relative_errors("analytic", true), 0.10, 0.25);
+    expect_within(relative_errors("analytic", true), 0.10, {0.25, 0.25, 0.25});
 }

@@ -84,6 +84,27 @@ TEST(Phase, MeanCosinesMatchClosedForms) {
     EXPECT_NEAR(sphere_integral([](double nu) { return nu * rayleigh_phase(nu); }), 0.0, 1e-12);
 }
 
+// The Legendre moments chi_l = 2 pi int p P_l dnu used by the multiple-scattering LUT:
+// the closed forms of phase.hpp against direct quadrature, for l = 0, 1, 2.
+TEST(Phase, LegendreMomentsMatchQuadrature) {
+    const auto legendre = [](int l, double nu) { return l == 0 ? 1.0 : l == 1 ? nu : 0.5 * (3.0 * nu * nu - 1.0); };
+    for (int l = 0; l <= 2; ++l) {
+        EXPECT_NEAR(rayleigh_phase_moment(l),
+                    sphere_integral([&](double nu) { return rayleigh_phase(nu) * legendre(l, nu); }), 1e-12)
+            << l;
+        for (double g : {-0.5, 0.0, 0.3, 0.8, 0.95}) {
+            EXPECT_NEAR(mie_phase_moment(MiePhaseModel::HenyeyGreenstein, l, g),
+                        sphere_integral([&](double nu) { return henyey_greenstein_phase(nu, g) * legendre(l, nu); }),
+                        1e-9)
+                << "HG l " << l << " g " << g;
+            EXPECT_NEAR(mie_phase_moment(MiePhaseModel::CornetteShanks, l, g),
+                        sphere_integral([&](double nu) { return cornette_shanks_phase(nu, g) * legendre(l, nu); }),
+                        1e-9)
+                << "CS l " << l << " g " << g;
+        }
+    }
+}
+
 TEST(PhaseSampling, SamplersInvertTheirCdfs) {
     // sample_rayleigh_cosine is F^-1 with F(nu) = (nu^3 + 3 nu + 4) / 8; the HG sampler is
     // F^-1(1 - u), which is as uniform.

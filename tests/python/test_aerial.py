@@ -1,5 +1,5 @@
 """Aerial perspective end to end: `welkin aerial`, `welkin sky --scene`, and the module's
-welkin.aerial_perspective / SceneDescription / read_exr / write_exr.
+welkin.aerial_perspective and SceneDescription.
 
 Depth files are written with welkin.write_exr (Debian has no OpenEXR binding for Python),
 named as Blender names its passes ("Z", "Depth.Z", "<view layer>.Depth.Z"). Checks: the
@@ -29,6 +29,19 @@ CLI = os.environ.get("WELKIN_CLI", str(ROOT / "build" / "welkin"))
 PASS_CHANNELS = [f"Welkin.Aerial{p}.{c}" for p in ("Inscatter", "Transmittance") for c in "RGB"]
 
 W, H = 96, 54
+
+
+def write_channels(path, channels):
+    """{channel name: (height, width) array} -> an EXR file (welkin.write_exr)."""
+    names = list(channels)
+    welkin.write_exr(str(path), np.stack([np.asarray(channels[n], np.float32) for n in names],
+                                         axis=-1), names)
+
+
+def read_channels(path):
+    """An EXR file -> {channel name: (height, width) array} (welkin.read_exr)."""
+    pixels, names = welkin.read_exr(str(path))
+    return {n: pixels[..., i] for i, n in enumerate(names)}
 
 
 def run(*args, cwd=None, timeout=120):
@@ -86,7 +99,7 @@ def frame(tmp_path):
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps(scene_dict()))
     z = depth_image()
-    welkin.write_exr(str(tmp_path / "render.exr"),
+    write_channels(tmp_path / "render.exr",
                      {"ViewLayer.Combined.R": np.zeros_like(z), "ViewLayer.Depth.Z": z})
     return tmp_path, scene, z
 
@@ -99,7 +112,7 @@ def test_aerial_writes_both_passes_far_hazier_than_near(frame):
     r = run("aerial", "--scene", scene, "--depth", "render.exr", "-o", "passes.exr", cwd=d)
     assert r.returncode == 0, r.stderr
     assert "passes.exr" in r.stdout
-    passes = welkin.read_exr(str(d / "passes.exr"))
+    passes = read_channels(d / "passes.exr")
     assert sorted(passes) == sorted(PASS_CHANNELS)
     L = np.stack([passes[f"Welkin.AerialInscatter.{c}"] for c in "RGB"], axis=-1)
     T = np.stack([passes[f"Welkin.AerialTransmittance.{c}"] for c in "RGB"], axis=-1)
@@ -125,7 +138,7 @@ def test_aerial_writes_both_passes_far_hazier_than_near(frame):
 def test_depth_channel_is_found_as_blender_names_it(tmp_path, name):
     (tmp_path / "s.json").write_text(json.dumps(scene_dict()))
     z = depth_image()
-    welkin.write_exr(str(tmp_path / "d.exr"), {name: z, "R": np.zeros_like(z)})
+    write_channels(tmp_path / "d.exr", {name: z, "R": np.zeros_like(z)})
     r = run("aerial", "--scene", "s.json", "--depth", "d.exr", "-o", "p.exr", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "p.exr" in files(tmp_path)
@@ -134,7 +147,7 @@ def test_depth_channel_is_found_as_blender_names_it(tmp_path, name):
 def test_depth_channel_option_picks_one_of_several_layers(tmp_path):
     (tmp_path / "s.json").write_text(json.dumps(scene_dict()))
     z = depth_image()
-    welkin.write_exr(str(tmp_path / "d.exr"), {"A.Depth.Z": z, "B.Depth.Z": z * 2})
+    write_channels(tmp_path / "d.exr", {"A.Depth.Z": z, "B.Depth.Z": z * 2})
     r = run("aerial", "--scene", "s.json", "--depth", "d.exr", "-o", "p.exr", cwd=tmp_path)
     assert_one_line_error(r, "--depth-channel", "A.Depth.Z", "B.Depth.Z")
     assert files(tmp_path) == ["d.exr", "s.json"]
@@ -142,7 +155,7 @@ def test_depth_channel_option_picks_one_of_several_layers(tmp_path):
             "-o", "p.exr", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     Lm, _ = welkin.aerial_perspective((tmp_path / "s.json").read_text(), z * 2)
-    np.testing.assert_array_equal(welkin.read_exr(str(tmp_path / "p.exr"))["Welkin.AerialInscatter.G"],
+    np.testing.assert_array_equal(read_channels(tmp_path / "p.exr")["Welkin.AerialInscatter.G"],
                                   Lm[..., 1])
 
 
@@ -192,8 +205,8 @@ def test_sky_from_a_scene_matches_the_same_options(tmp_path):
     r = run("sky", "--preset", "hazy", "--sun-elevation", 10, "--sun-azimuth", 30, "--altitude",
             500, "--width", 32, "-o", "b.exr", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    a = welkin.read_exr(str(tmp_path / "a.exr"))
-    b = welkin.read_exr(str(tmp_path / "b.exr"))
+    a = read_channels(tmp_path / "a.exr")
+    b = read_channels(tmp_path / "b.exr")
     for c in "RGB":
         np.testing.assert_allclose(a[c], b[c], rtol=1e-6)
     r = run("sky", "--scene", "s.json", "--preset", "clear", "-o", "c.exr", cwd=tmp_path)
@@ -208,7 +221,7 @@ def bad_case(tmp_path, case):
     z = depth_image()
     good = scene_dict()
     (tmp_path / "good.json").write_text(json.dumps(good))
-    welkin.write_exr(str(tmp_path / "good.exr"), {"ViewLayer.Depth.Z": z})
+    write_channels(tmp_path / "good.exr", {"ViewLayer.Depth.Z": z})
     base = ["--scene", "good.json", "--depth", "good.exr"]
     if case == "no_camera":
         (tmp_path / "s.json").write_text(json.dumps(scene_dict(camera=False)))
@@ -228,7 +241,7 @@ def bad_case(tmp_path, case):
     if case == "missing_depth_file":
         return ["--scene", "good.json", "--depth", "nope.exr"], ["--depth", "nope.exr"]
     if case == "missing_depth_channel":
-        welkin.write_exr(str(tmp_path / "d.exr"), {"ViewLayer.Combined.R": z})
+        write_channels(tmp_path / "d.exr", {"ViewLayer.Combined.R": z})
         return ["--scene", "good.json", "--depth", "d.exr"], ["--depth-channel", "Z pass",
                                                               "ViewLayer.Combined.R"]
     if case == "unknown_depth_channel":
@@ -237,10 +250,10 @@ def bad_case(tmp_path, case):
         bad = z.copy()
         bad[40, 7] = {"depth_nan": np.nan, "depth_negative": -3.0,
                       "depth_minus_inf": -np.inf}[case]
-        welkin.write_exr(str(tmp_path / "d.exr"), {"Z": bad})
+        write_channels(tmp_path / "d.exr", {"Z": bad})
         return ["--scene", "good.json", "--depth", "d.exr"], ["--depth", "x 7, y 40"]
     if case == "wrong_size":
-        welkin.write_exr(str(tmp_path / "d.exr"), {"Z": z[:, :-1]})
+        write_channels(tmp_path / "d.exr", {"Z": z[:, :-1]})
         return ["--scene", "good.json", "--depth", "d.exr"], ["--depth", f"{W - 1} x {H}",
                                                               f"{W} x {H}"]
     if case == "huge_render":
@@ -290,7 +303,7 @@ def test_existing_output_is_kept_unless_overwrite(frame):
     r = run("aerial", "--scene", scene, "--depth", "render.exr", "-o", "passes.exr",
             "--overwrite", cwd=d)
     assert r.returncode == 0, r.stderr
-    assert sorted(welkin.read_exr(str(d / "passes.exr"))) == sorted(PASS_CHANNELS)
+    assert sorted(read_channels(d / "passes.exr")) == sorted(PASS_CHANNELS)
     assert files(d) == ["passes.exr", "render.exr", "scene.json"]
 
 
@@ -318,7 +331,7 @@ def test_ctrl_c_cancels_cleanly(tmp_path):
     # The per-pixel march of a 1920 x 1080 frame runs for many seconds on two cores.
     s = scene_dict(width=1920, height=1080, aerial={"method": "raymarch", "raymarch_steps": 256})
     (tmp_path / "s.json").write_text(json.dumps(s))
-    welkin.write_exr(str(tmp_path / "d.exr"), {"Z": depth_image(1080, 1920)})
+    write_channels(tmp_path / "d.exr", {"Z": depth_image(1080, 1920)})
     before = files(tmp_path)
     p = subprocess.Popen([CLI, "aerial", "--scene", "s.json", "--depth", "d.exr", "-o", "c.exr"],
                          cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
