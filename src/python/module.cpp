@@ -6,6 +6,7 @@
 //   color_bindings.cpp       spectrum_to_rgb, spectral_wavelengths_nm, equirect mapping
 //   image_bindings.cpp       sky_image, sun_disc_image (equirect sky images)
 //   exr_bindings.cpp         write_exr, read_exr
+//   aerial_bindings.cpp      welkin.SceneDescription, aerial_perspective
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
 #include <cstring>
@@ -133,4 +134,5 @@ Quick start:
     register_color(m);
     register_image(m);
     register_exr(m);
+    register_aerial(m);
 }
