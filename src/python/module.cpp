@@ -7,6 +7,7 @@
 //   image_bindings.cpp       sky_image, sun_disc_image (equirect sky images)
 //   exr_bindings.cpp         write_exr, read_exr
 //   aerial_bindings.cpp      welkin.SceneDescription, aerial_perspective
+//   plate_bindings.cpp       camera_plate
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
 #include <cstring>
@@ -135,4 +136,5 @@ Quick start:
     register_image(m);
     register_exr(m);
     register_aerial(m);
+    register_plate(m);
 }

@@ -10,10 +10,11 @@
   operators.py   welkin.update_sky, welkin.remove_sky, welkin.export_hdri
   panel.py       Properties > World > Welkin Sky
   handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
+  render_engine.py  the render engine "WELKIN": the camera's plate with Welkin's passes
 """
 import bpy
 
-from . import handlers, operators, panel, properties
+from . import handlers, operators, panel, properties, render_engine
 
 classes = (
     properties.WelkinWorldSettings,
@@ -21,6 +22,7 @@ classes = (
     operators.WELKIN_OT_remove_sky,
     operators.WELKIN_OT_export_hdri,
     panel.WORLD_PT_welkin_sky,
+    render_engine.WelkinRenderEngine,
 )
 
 
@@ -29,12 +31,14 @@ def register():
         bpy.utils.register_class(cls)
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
     handlers.register()
+    render_engine.register()
     from .. import native
     if native.message():
         print(f"Welkin: {native.message()}")
 
 
 def unregister():
+    render_engine.unregister()
     handlers.unregister()
     del bpy.types.World.welkin
     for cls in reversed(classes):

@@ -1,0 +1,136 @@
+"""The Welkin render engine ("WELKIN"): the active camera's plate of sky, sun disc and
+aerial perspective over the ground at the scene's ground altitude, no meshes.
+
+render() writes the scene description (plate.scene_json) from the world's Welkin
+settings, the sun lamp and the camera, has the core render it (welkin.camera_plate, the
+same plate as `welkin plate --scene`), and hands Blender the passes in bands of rows.
+Combined, Welkin.Sky, Welkin.AerialInscatter, Welkin.AerialTransmittance; Welkin.Clouds
+(transparent black) and Welkin.CloudDepth (+inf) stay empty until clouds land. Errors (no
+camera, no world, a camera below the ground, the compiled module missing) are reported
+with self.report({'ERROR'}) and no result is written; a cancelled render (Esc,
+test_break) stops the core and writes nothing. No viewport preview (view_update /
+view_draw are not implemented): the viewport shows Blender's Workbench-like fallback.
+"""
+import bpy
+
+from .. import plate, sky_request
+from . import scene_sun, update
+from .scene_sun import UserError
+
+BAND_ROWS = 64
+
+
+def _camera_data(cam):
+    data = {k: getattr(cam, k) for k in (
+        "type", "lens", "sensor_width", "sensor_height", "sensor_fit", "ortho_scale",
+        "shift_x", "shift_y", "clip_start", "clip_end")}
+    if cam.type == "PANO":
+        # Blender 3.4 keeps the panorama settings on Cycles' camera properties.
+        source = cam if hasattr(cam, "panorama_type") else getattr(cam, "cycles", None)
+        if source is None:
+            raise UserError("panoramic camera: its panorama settings need the Cycles add-on "
+                            "(enabled by default)")
+        for k in ("panorama_type", "latitude_min", "latitude_max", "longitude_min",
+                  "longitude_max"):
+            data[k] = getattr(source, k)
+        if data["panorama_type"] != "EQUIRECTANGULAR":
+            raise UserError(f"camera '{cam.name}': panorama type {data['panorama_type']} is not "
+                            f"supported; Welkin renders EQUIRECTANGULAR panoramas")
+    return data
+
+
+def scene_description_json(scene, depsgraph, native):
+    """The frame's scene JSON (README "Scene JSON"); UserError for what the user can fix."""
+    if scene.camera is None:
+        raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
+                        "active (Ctrl+Numpad 0)")
+    if scene.world is None:
+        raise UserError("the scene has no world: add one (World properties); its Welkin Sky "
+                        "settings drive the plate")
+    settings = scene.world.welkin
+    request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
+    sky_request.validate(request, native)
+    atm = sky_request.build_atmosphere(request, native)
+    camera = scene.camera.evaluated_get(depsgraph)
+    if camera.type != "CAMERA":
+        raise UserError(f"the active camera '{camera.name}' is not a camera object")
+    cam = plate.camera_dict(camera.matrix_world, _camera_data(camera.data),
+                            scene.unit_settings.scale_length)
+    r = scene.render
+    return plate.scene_json(atm.to_json_string(), settings.altitude_m, request.sun_direction,
+                            request.exposure, sky_request.resolve_method(request.method, native),
+                            cam, (r.resolution_x, r.resolution_y, r.resolution_percentage))
+
+
+class WelkinRenderEngine(bpy.types.RenderEngine):
+    bl_idname = "WELKIN"
+    bl_label = "Welkin"
+    bl_use_postprocess = True
+    bl_use_preview = False
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
+        for name, channels, chan_id, _source in plate.PASSES:
+            kind = 'VALUE' if channels == 1 else ('VECTOR' if channels == 3 else 'COLOR')
+            self.register_pass(scene, renderlayer, name, channels, chan_id, kind)
+
+    def render(self, depsgraph):
+        import numpy as np
+        scene = depsgraph.scene
+        try:
+            native = update.module_or_error()
+            text = scene_description_json(scene, depsgraph, native)
+            description = native.SceneDescription.from_json_string(text)
+        except (UserError, ValueError) as error:
+            self.report({'ERROR'}, f"Welkin: {error}")
+            return
+        self.update_stats("Welkin", "sky, sun and aerial perspective")
+
+        def progress(fraction):
+            self.update_progress(0.9 * fraction)
+            return not self.test_break()
+
+        try:
+            result = native.camera_plate(description, progress=progress)
+        except ValueError as error:
+            self.report({'ERROR'}, f"Welkin: {error}")
+            return
+        except KeyboardInterrupt:
+            return  # cancelled (the core raises KeyboardInterrupt): nothing is written
+        height, width = result["depth"].shape
+        for name, channels, _chan_id, _source in plate.PASSES:
+            self.add_pass(name, channels, _chan_id)
+        for rows, y, h in plate.bands(height, BAND_ROWS):
+            if self.test_break():
+                return
+            band = self.begin_result(0, y, width, h)
+            layer = band.layers[0]
+            layer.passes["Combined"].rect = plate.pass_rect(np, result, "combined", 4, rows)
+            for name, channels, _chan_id, source in plate.PASSES:
+                layer.passes[name].rect = plate.pass_rect(np, result, source, channels, rows)
+            self.end_result(band)
+            self.update_progress(0.9 + 0.1 * rows[1] / height)
+
+
+def _panels():
+    """Properties panels that show with Welkin as the engine (render, output, world,
+    camera data): those that list Cycles' or Eevee's engines in COMPAT_ENGINES."""
+    out = []
+    for name in dir(bpy.types):
+        panel = getattr(bpy.types, name)
+        engines = getattr(panel, "COMPAT_ENGINES", None)
+        if engines is not None and ("CYCLES" in engines or "BLENDER_EEVEE" in engines) and (
+                name.startswith(("RENDER_PT_dimensions", "RENDER_PT_format", "RENDER_PT_output",
+                                 "DATA_PT_camera", "DATA_PT_lens", "WORLD_PT"))):
+            out.append(panel)
+    return out
+
+
+def register():
+    for panel in _panels():
+        panel.COMPAT_ENGINES.add("WELKIN")
+
+
+def unregister():
+    for panel in _panels():
+        panel.COMPAT_ENGINES.discard("WELKIN")

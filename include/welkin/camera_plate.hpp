@@ -1,0 +1,51 @@
+// A camera plate: what the scene camera sees of the sky, the sun and the air over the
+// ground, with no meshes (the Welkin render engine's frame, `welkin plate`).
+//
+// For every pixel of the scene's render (scene.resolution, camera.hpp's rays):
+//   * A ray that misses the ground sphere (the planet, radius atmosphere.bottom_radius_m,
+//     centred below the scene origin: scene.hpp) sees the sky: the sky method's path
+//     radiance for its direction (sky_method.hpp, one call for all sky pixels, the observer
+//     at the camera's altitude), plus the sun's disc.
+//   * A ray that hits it sees a black ground through the air: its depth (Blender's Z
+//     convention, camera.hpp) goes to aerial_perspective() and the pixel is
+//     T x 0 + L_in = L_in (the compositor's Image x T + Inscatter with Image = 0).
+// Passes (linear Rec.709, W m^-2 sr^-1, times the scene's exposure; top row first):
+//   combined       = sky (sky pixels) + inscatter (ground pixels)
+//   sky            = sky radiance with the disc on sky pixels, 0 on ground pixels
+//   inscatter      = Welkin.AerialInscatter (0 on sky pixels)
+//   transmittance  = Welkin.AerialTransmittance (1 on sky pixels)
+//   depth          = the Z pass: depth to the ground, +infinity on sky pixels
+//
+// Frame approximation: the sky method's observer stands at the camera's altitude with the
+// world's Z as its zenith; the true zenith at a camera d metres from the scene origin's
+// vertical tilts by d / R (1e-3 rad at 6.4 km). Orthographic rays start at different
+// points but all see the sky from the camera's altitude.
+//
+// The sun's disc: E_sun T / Omega_sun x limb darkening (sun.hpp) at every sample whose
+// ray is within the disc and above the horizon. Pixels whose centre ray lies within the
+// disc's radius plus two pixel footprints are supersampled on an S x S grid, S chosen so
+// that the sample spacing is at most 1/8 of the disc's radius (2 <= S <= 64), so a disc
+// smaller than a pixel is antialiased and its energy is kept to the sampling error.
+//
+// Errors (InvalidArgument): no camera ("camera"), a camera at or below the ground
+// ("camera.matrix_world"), and whatever the scene's validation or the sky method refuse.
+// Cancelled when `progress` cancels.
+#pragma once
+
+#include <vector>
+
+#include "welkin/progress.hpp"
+#include "welkin/scene.hpp"
+
+namespace welkin {
+
+struct CameraPlate {
+    int width = 0, height = 0;
+    std::vector<float> combined, sky, inscatter, transmittance;  // (height, width, 3)
+    std::vector<float> depth;                                     // (height, width)
+    std::string method;  // the sky method that ran (auto resolved by the method itself)
+};
+
+CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progress = nullptr);
+
+}  // namespace welkin

@@ -1,0 +1,123 @@
+// `welkin plate`: the scene camera's plate (camera_plate.hpp) from a scene JSON, as a
+// multilayer OpenEXR: RGB (Combined) plus the layers Welkin.Sky, Welkin.AerialInscatter,
+// Welkin.AerialTransmittance (R, G, B each) and Z (depth to the ground, +inf on sky).
+// The same plate the Blender render engine "WELKIN" renders.
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "common.hpp"
+#include "terminal_progress.hpp"
+#include "welkin/camera_plate.hpp"
+#include "welkin/error.hpp"
+#include "welkin/exr_io.hpp"
+#include "welkin/scene.hpp"
+
+namespace welkin::cli {
+namespace {
+
+struct PlateArgs {
+    std::string scene;
+    std::string output = "welkin_plate.exr";
+    bool half = false;
+    bool overwrite = false;
+    int threads = 0;
+};
+
+int run_plate(const PlateArgs& args) {
+    check_output_path(args.output, args.overwrite);
+    SceneDescription scene;
+    try {
+        scene = SceneDescription::from_json_file(args.scene);
+        scene.require_camera();
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), args.scene));
+    } catch (const IoError& e) {
+        throw InvalidArgument("--scene", e.what());
+    }
+    std::optional<tbb::global_control> threads;
+    if (args.threads > 0)
+        threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(args.threads));
+
+    install_interrupt_handler();
+    const auto start = std::chrono::steady_clock::now();
+    CameraPlate plate;
+    {
+        TerminalProgress progress(fmt::format("plate {}x{}", scene.resolution.width(),
+                                              scene.resolution.height()));
+        try {
+            plate = render_camera_plate(scene, &progress);
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), args.scene));
+        }
+        progress.finish();
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (interrupted()) throw Cancelled();
+
+    ExrImage exr;
+    exr.width = plate.width;
+    exr.height = plate.height;
+    const std::vector<std::pair<std::string, const std::vector<float>*>> layers = {
+        {"", &plate.combined},
+        {"Welkin.Sky.", &plate.sky},
+        {"Welkin.AerialInscatter.", &plate.inscatter},
+        {"Welkin.AerialTransmittance.", &plate.transmittance}};
+    for (const auto& [prefix, data] : layers)
+        for (const char* c : {"R", "G", "B"}) exr.channel_names.push_back(prefix + c);
+    exr.channel_names.push_back("Z");
+    const std::size_t n = std::size_t(plate.width) * std::size_t(plate.height);
+    const std::size_t nch = exr.channel_names.size();
+    exr.pixels.resize(n * nch);
+    for (std::size_t p = 0; p < n; ++p) {
+        for (std::size_t l = 0; l < layers.size(); ++l)
+            for (int c = 0; c < 3; ++c) exr.pixels[p * nch + l * 3 + c] = (*layers[l].second)[p * 3 + c];
+        exr.pixels[p * nch + nch - 1] = plate.depth[p];
+    }
+    ExrWriteOptions write;
+    write.overwrite = args.overwrite;
+    write.pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
+    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
+                        {"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
+                        {"welkinMethod", plate.method},
+                        {"welkinUnits", "linear Rec.709, W m^-2 sr^-1 (times exposure); "
+                                        "AerialTransmittance dimensionless; Z metres"}};
+    write_exr(args.output, exr, write);
+    fmt::print("wrote {} ({} x {}, sky method {}, {:.2f} s)\n",
+               std::filesystem::absolute(args.output).string(), plate.width, plate.height,
+               plate.method, seconds);
+    return 0;
+}
+
+}  // namespace
+
+Command add_plate_command(CLI::App& app) {
+    auto args = std::make_shared<PlateArgs>();
+    CLI::App* sub = app.add_subcommand(
+        "plate", "The scene camera's plate: sky, sun disc and aerial perspective over the "
+                 "ground (no meshes), as the Blender render engine \"Welkin\" renders it");
+    sub->add_option("--scene", args->scene,
+                    "Scene description JSON with a camera (README \"Scene JSON\")")
+        ->type_name("FILE.json")
+        ->required();
+    sub->add_flag("--half", args->half, "Write 16-bit half floats (default: 32-bit float)");
+    sub->add_flag("--overwrite", args->overwrite, "Replace the output file if it exists");
+    sub->add_option("-o,--output", args->output,
+                    "Output multilayer EXR; never replaced unless --overwrite")
+        ->type_name("FILE.exr")
+        ->capture_default_str();
+    sub->add_option("--threads", args->threads, "Worker threads, in [1, 1024] (default: all cores)")
+        ->type_name("N")
+        ->check(CLI::Range(1, 1024));
+    sub->footer("Channels: R, G, B (Combined), Welkin.Sky.{R,G,B}, Welkin.AerialInscatter.{R,G,B}, "
+                "Welkin.AerialTransmittance.{R,G,B}, Z. Linear Rec.709, W m^-2 sr^-1, times the "
+                "scene's exposure; top row first. Ctrl-C cancels; nothing is written.");
+    return {sub, [args] { return run_plate(*args); }};
+}
+
+}  // namespace welkin::cli

@@ -1,0 +1,61 @@
+// welkin.camera_plate: the scene camera's plate (camera_plate.hpp) as numpy arrays.
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "welkin/camera_plate.hpp"
+#include "welkin/error.hpp"
+
+namespace welkin::python {
+namespace {
+
+constexpr const char* kPlateDoc = R"doc(
+The scene camera's plate: sky with the sun's disc, and a black ground seen through the air
+(aerial perspective), no meshes; what the Blender render engine "WELKIN" and
+`welkin plate` render (camera_plate.hpp).
+
+scene    : welkin.SceneDescription or its JSON text, with a camera
+progress : callable(fraction) -> bool or None; returning False cancels
+           (welkin.Cancelled / KeyboardInterrupt, nothing returned)
+
+Returns a dict of float32 arrays, top row first: "combined", "sky", "inscatter",
+"transmittance" (height, width, 3) and "depth" (height, width; +inf on sky), plus
+"method" (the sky method that ran). Linear Rec.709, W m^-2 sr^-1, times the exposure.
+Raises ValueError naming the field: no camera ("camera"), a camera at or below the
+ground ("camera.matrix_world").
+)doc";
+
+py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress) {
+    SceneDescription scene;
+    if (py::isinstance<SceneDescription>(scene_in))
+        scene = scene_in.cast<SceneDescription>();
+    else if (py::isinstance<py::str>(scene_in))
+        scene = SceneDescription::from_json_string(scene_in.cast<std::string>());
+    else
+        throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    scene.require_camera();
+    CameraPlate plate;
+    run_cancellable([&](Progress* p) { plate = render_camera_plate(scene, p); }, progress);
+    const int w = plate.width, h = plate.height;
+    py::dict out;
+    out["combined"] = to_image_array(std::move(plate.combined), w, h, 3);
+    out["sky"] = to_image_array(std::move(plate.sky), w, h, 3);
+    out["inscatter"] = to_image_array(std::move(plate.inscatter), w, h, 3);
+    out["transmittance"] = to_image_array(std::move(plate.transmittance), w, h, 3);
+    py::array_t<float> depth({py::ssize_t(h), py::ssize_t(w)});
+    std::copy(plate.depth.begin(), plate.depth.end(), depth.mutable_data());
+    out["depth"] = depth;
+    out["method"] = plate.method;
+    return out;
+}
+
+}  // namespace
+
+void register_plate(py::module_& m) {
+    m.def("camera_plate", &camera_plate_py, kPlateDoc, py::arg("scene"), py::kw_only(),
+          py::arg("progress") = py::none());
+}
+
+}  // namespace welkin::python
