@@ -51,18 +51,20 @@ def is_welkin_render(names):
     return all(any(n.startswith(f"ViewLayer.{p}.") for n in names) for p in plate.PASS_NAMES)
 
 
-def render_headless(blend, out_stem, *, addon_enabled=True):
+def render_headless(blend, out_stem, *, addon_enabled=True, engine_flag=True, expect_rc=0):
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
     env.pop("PYTHONPATH", None)
     cmd = ["blender", "-b", str(blend)]
     if addon_enabled:
         cmd += ["--addons", "welkin"]
-    cmd += ["-E", "WELKIN", "-o", str(out_stem) + "_####", "-F", "OPEN_EXR_MULTILAYER",
-            "-f", "1"]
+    if engine_flag:
+        cmd += ["-E", "WELKIN"]
+    cmd += ["-o", str(out_stem) + "_####", "-F", "OPEN_EXR_MULTILAYER", "-f", "1"]
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     print(run.stdout[-1500:], run.stderr[-1500:])
-    check(run.returncode == 0, f"blender exited {run.returncode}")
-    return pathlib.Path(str(out_stem) + "_0001.exr"), run.stdout + run.stderr
+    if expect_rc is not None:
+        check(run.returncode == expect_rc, f"blender exited {run.returncode}")
+    return pathlib.Path(str(out_stem) + "_0001.exr"), run
 
 
 def cli_plate(scene_json_text, path):
@@ -104,7 +106,7 @@ cam.rotation_euler = (math.radians(88.0), 0.0, math.radians(-90.0))
 bpy.context.view_layer.update()
 blend = t.TMP / "engine_persp.blend"
 bpy.ops.wm.save_as_mainfile(filepath=str(blend))
-exr, _log = render_headless(blend, t.TMP / "persp")
+exr, _run = render_headless(blend, t.TMP / "persp")
 layers, names = read_layers(exr)
 check(is_welkin_render(names), f"not a Welkin render; channels: {names}")
 for name in PASSES:
@@ -127,12 +129,23 @@ check(np.allclose(layers["Combined"][..., :3],
 peak = float(layers["Welkin.Sky"][..., 1].max())
 check(peak > 100 * float(np.median(layers["Welkin.Sky"][..., 1])), "no sun disc in view")
 
-# Without the add-on, `-E WELKIN` falls back silently and exits 0: tell by the passes.
-exr_off, log_off = render_headless(blend, t.TMP / "fallback", addon_enabled=False)
-if exr_off.exists():
-    _l, names_off = read_layers(exr_off)
-    check(not is_welkin_render(names_off), "fallback render has Welkin's passes?")
-print("fallback without the add-on detected (no Welkin passes, exit 0)")
+# Without the add-on, a .blend saved with Welkin as its engine renders with Blender's
+# fallback engine and exits 0 (Blender 3.4 prints only "Engine 'WELKIN' not available"):
+# the output lacks Welkin's passes, which is how a farm script must tell.
+exr_off, run_off = render_headless(blend, t.TMP / "fallback", addon_enabled=False,
+                                   engine_flag=False, expect_rc=0)
+check(exr_off.exists(), "the fallback render wrote nothing")
+_l, names_off = read_layers(exr_off)
+check(not is_welkin_render(names_off), f"fallback render has Welkin's passes? {names_off}")
+print(f"fallback without the add-on: exit 0, channels {names_off}: detected (no Welkin passes)")
+# With `-E WELKIN` and no add-on, Blender 3.4 refuses ("engine not found") and renders
+# nothing.
+exr_off2, run_off2 = render_headless(blend, t.TMP / "fallback_e", addon_enabled=False,
+                                     expect_rc=None)
+check(not (exr_off2.exists() and is_welkin_render(read_layers(exr_off2)[1])),
+      "-E WELKIN without the add-on wrote a Welkin frame?")
+print(f"-E WELKIN without the add-on: exit {run_off2.returncode}, frame written: "
+      f"{exr_off2.exists()}")
 
 # Orthographic, in this Blender: the same plate as the CLI.
 cam.data.type = 'ORTHO'
