@@ -55,10 +55,10 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     const double R = atm.bottom_radius_m;
 
     const double cam_r = glm::length(rays.position() - centre);
-    if (!(cam_r > R))
+    if (!(cam_r >= R))
         throw InvalidArgument("camera.matrix_world",
                               fmt::format("puts the camera {:.6g} m below the ground (it must stand "
-                                          "above altitude 0 m)",
+                                          "at or above altitude 0 m)",
                                           R - cam_r));
     const Observer observer = Observer{cam_r - R, scene.sun_direction}.validated();
 

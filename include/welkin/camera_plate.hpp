@@ -27,7 +27,7 @@
 // that the sample spacing is at most 1/8 of the disc's radius (2 <= S <= 64), so a disc
 // smaller than a pixel is antialiased and its energy is kept to the sampling error.
 //
-// Errors (InvalidArgument): no camera ("camera"), a camera at or below the ground
+// Errors (InvalidArgument): no camera ("camera"), a camera below the ground
 // ("camera.matrix_world"), and whatever the scene's validation or the sky method refuse.
 // Cancelled when `progress` cancels.
 #pragma once
