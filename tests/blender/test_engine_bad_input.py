@@ -1,5 +1,5 @@
 """The render engine "WELKIN" refuses what it cannot render with a clear report and
-writes no frame: no camera, a camera below the ground. Rendered headless
+writes no frame: no camera, a camera below the ground, a render region. Rendered headless
 (`blender -b scene.blend -E WELKIN -f 1`, the add-on enabled with --addons)."""
 import os
 import pathlib
@@ -38,6 +38,11 @@ scene, _sun = t.new_scene(camera_z=-20.0)
 scene.render.engine = 'WELKIN'
 scene.render.resolution_x, scene.render.resolution_y = 32, 16
 expect_refusal("below_ground", ("camera.matrix_world", "below the ground"))
+
+scene.camera.location.z = 2.0
+scene.render.use_border = True
+expect_refusal("border", ("render region",))
+scene.render.use_border = False
 
 scene.camera = None
 # Blender itself refuses before the engine runs ("Cannot render, no camera"); the

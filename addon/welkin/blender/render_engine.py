@@ -57,6 +57,9 @@ def scene_description_json(scene, depsgraph, native):
     cam = plate.camera_dict(camera.matrix_world, _camera_data(camera.data),
                             scene.unit_settings.scale_length)
     r = scene.render
+    if r.use_border:
+        raise UserError("render region (Output > Format > Render Region) is not supported by "
+                        "the Welkin engine: turn it off to render the full frame")
     return plate.scene_json(atm.to_json_string(), settings.altitude_m, request.sun_direction,
                             request.exposure, sky_request.resolve_method(request.method, native),
                             cam, (r.resolution_x, r.resolution_y, r.resolution_percentage))
