@@ -26,6 +26,7 @@ void register_atmosphere(py::module_& m);
 void register_sky(py::module_& m);
 void register_sun(py::module_& m);
 void register_color(py::module_& m);
+void register_clouds(py::module_& m);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
 // is not one.

@@ -4,6 +4,7 @@
 //   sky_bindings.cpp         welkin.sky_radiance, methods (cancellable, GIL released)
 //   sun_bindings.cpp         welkin.sun
 //   color_bindings.cpp       spectrum_to_rgb, spectral_wavelengths_nm, equirect mapping
+//   cloud_bindings.cpp       welkin.CloudLayer, VdbClouds, cloud_radiance, sky_image
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
 #include <cstring>
@@ -121,4 +122,5 @@ Quick start:
     register_sky(m);
     register_sun(m);
     register_color(m);
+    register_clouds(m);
 }
