@@ -20,6 +20,13 @@ PYTHONPATH="$(pwd)/build${PYTHONPATH:+:$PYTHONPATH}" \
 
 if compgen -G "tests/blender/test_*.py" >/dev/null; then
   echo "=== Blender tests (headless)"
+  # The add-on zip the tests install, built once (scripts/build_addon.sh).
+  if bash scripts/build_addon.sh build/addon_dist; then
+    WELKIN_ADDON_ZIP=$(ls build/addon_dist/welkin-*.zip)
+    export WELKIN_ADDON_ZIP
+  else
+    failed+=(build_addon)
+  fi
   for t in tests/blender/test_*.py; do
     echo "--- $t"
     PYTHONPATH="$(pwd)/build${PYTHONPATH:+:$PYTHONPATH}" \

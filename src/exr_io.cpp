@@ -193,6 +193,55 @@ ExrImage read_exr(const std::string& path) {
     }
 }
 
+ExrHeaderInfo read_exr_header(const std::string& path) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        ExrHeaderInfo info;
+        info.width = dw.max.x - dw.min.x + 1;
+        info.height = dw.max.y - dw.min.y + 1;
+        for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
+            info.channel_names.push_back(it.name());
+        return info;
+    } catch (const std::exception& e) {
+        throw IoError(fmt::format("cannot read '{}': {}", path, e.what()));
+    }
+}
+
+ExrImage read_exr_channels(const std::string& path, const std::vector<std::string>& names) {
+    ExrImage image;
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& header = file.header();
+        for (const std::string& name : names) {
+            const Imf::Channel* channel = header.channels().findChannel(name);
+            if (!channel)
+                throw InvalidArgument("channel", fmt::format("'{}' has no channel '{}'", path, name));
+            if (channel->xSampling != 1 || channel->ySampling != 1)
+                throw IoError(fmt::format("cannot read '{}': channel '{}' is subsampled", path, name));
+        }
+        const Imath::Box2i dw = header.dataWindow();
+        image.width = dw.max.x - dw.min.x + 1;
+        image.height = dw.max.y - dw.min.y + 1;
+        image.channel_names = names;
+        const std::size_t nc = names.size();
+        image.pixels.assign(std::size_t(image.width) * std::size_t(image.height) * nc, 0.0f);
+        Imf::FrameBuffer fb;
+        for (std::size_t c = 0; c < nc; ++c)
+            fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, dw, sizeof(float) * nc,
+                                                 sizeof(float) * nc * std::size_t(image.width)));
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+    } catch (const InvalidArgument&) {
+        throw;
+    } catch (const IoError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw IoError(fmt::format("cannot read '{}': {}", path, e.what()));
+    }
+    return image;
+}
+
 void set_exr_thread_count(int threads) {
     require_in_range("threads", threads, 0, 1024);
     Imf::setGlobalThreadCount(threads);

@@ -1,6 +1,7 @@
 // The "lut" method: Hillaire 2020's pipeline. Per atmosphere, the transmittance and
-// multiple-scattering LUTs (atmosphere_luts.hpp); per observer and sun, the sky-view LUT
-// (skyview_lut.hpp); per direction, one bilinear lookup.
+// multiple-scattering LUTs (atmosphere_luts.hpp), kept between calls by a cache
+// (lut_cache.hpp); per observer and sun, the sky-view LUT (skyview_lut.hpp); per
+// direction, one bilinear lookup.
 //
 // Known failure and its fallback: the sky-view LUT describes the sky around a point inside
 // the atmosphere. For an observer above the top, this method hands the directions to the
@@ -12,13 +13,17 @@
 #include "welkin/error.hpp"
 
 #include "welkin/atmosphere_luts.hpp"
+#include "welkin/lut_cache.hpp"
 #include "welkin/raymarch_sky.hpp"
 #include "welkin/skyview_lut.hpp"
-#include "welkin/view_geometry.hpp"
 
 namespace welkin {
 
-LutSky::LutSky(const SkyOptions& options) : options_(options) { options_.validate(); }
+LutSky::LutSky(const SkyOptions& options, AtmosphereLutCache* cache) : options_(options), cache_(cache) {
+    options_.validate();
+}
+
+AtmosphereLutCache* LutSky::default_cache() { return &AtmosphereLutCache::shared(); }
 
 void LutSky::radiance(const Atmosphere& atm, const Observer& observer_in,
                       std::span<const glm::dvec3> directions_in, std::span<float> out,
@@ -31,19 +36,18 @@ void LutSky::radiance(const Atmosphere& atm, const Observer& observer_in,
         RaymarchSky(options_).radiance(atm, observer, directions, out, {}, progress);
         return;
     }
-    const AtmosphereLuts luts(atm, options_);
-    ProgressTracker tracker(progress, directions.size() * luts.batches().size());
-    for (const auto& b : luts.batches()) {
+    const std::shared_ptr<const AtmosphereLuts> luts =
+        cache_ ? cache_->get(atm, options_) : std::make_shared<const AtmosphereLuts>(atm, options_);
+    ProgressTracker tracker(progress, directions.size() * luts->batches().size());
+    for (const auto& b : luts->batches()) {
         const SkyViewLut sky(b->medium, b->transmittance, b->multiscattering, r,
                              observer.sun_direction.z, options_.skyview_width,
                              options_.skyview_height);
         const std::size_t first = b->medium.first_channel(), count = b->medium.channel_count();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, directions.size(), 4096),
                           [&](const tbb::blocked_range<std::size_t>& range) {
-                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                                  const ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
-                                  store_channels(sky.radiance(g.mu, g.cos_phi), count, &out[i * C + first]);
-                              }
+                              sky.radiance(directions.subspan(range.begin(), range.size()), observer.sun_direction,
+                                           count, &out[range.begin() * C + first], C);
                               tracker.advance(range.size());
                           });
     }

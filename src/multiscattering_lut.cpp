@@ -14,6 +14,23 @@
 namespace welkin {
 namespace {
 
+// The arithmetic pass over the (phi, mu_s) pairs at one point: mu_s there = C mu_s + D
+// sin_s cos(phi), clamped, and the transmittance lookup's texel and weights; `ground`
+// also weighs by the cosine of the sun on the ground, max(mu_s, 0). The arrays do not
+// overlap (__restrict), which lets the compiler vectorise the loop.
+void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, const float* __restrict mu_s,
+                     const float* __restrict sin_cos, std::size_t n, bool ground, int* __restrict texel,
+                     float* __restrict fx, float* __restrict fraction) {
+    const TransmittanceLut::AtRadius at = at_in;
+    for (std::size_t l = 0; l < n; ++l) {
+        const float mu = clamp_value(C * mu_s[l] + D * sin_cos[l], -1.0f, 1.0f);
+        float x, f;
+        TransmittanceLut::sun_lookup(at, mu, x, f);
+        Texture2D::Row::split(x, at.row.last, texel[l], fx[l]);
+        fraction[l] = ground ? f * max_value(mu, 0.0f) : f;
+    }
+}
+
 // n-point Gauss-Legendre on (0, 1): nodes by Newton's method on P_n from Tricomi's
 // initial guesses, weights 2 / ((1 - x^2) P_n'(x)^2) halved for the unit interval.
 void gauss_legendre_unit(int n, std::vector<double>& x, std::vector<double>& w) {
@@ -92,17 +109,20 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
     const float* const psc = pair_sin_cos.data();
     tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& rows) {
         RaySamples ray;
-        std::vector<float> x_buf(n_pairs), fraction_buf(n_pairs);
+        std::vector<int> texel_buf(n_pairs);
+        std::vector<float> fx_buf(n_pairs), fraction_buf(n_pairs);
         // Per pair, this ray's sums of w sigma_R T_sun and w sigma_M T_sun, then the light
         // L' it brings (phases applied, ground added).
-        std::vector<Spectrum4> sum_r_buf(n_pairs), sum_m_buf(n_pairs), ground_buf(n_pairs);
+        std::vector<Float4> sum_r_buf(n_pairs), sum_m_buf(n_pairs), ground_buf(n_pairs);
         // Per pair, <L'>, <L' P_1>, <L' P_2> summed over the directions.
         std::vector<Spectrum4> m0_buf(n_pairs), m1_buf(n_pairs), m2_buf(n_pairs);
-        float* const x = x_buf.data();
+        int* const texel = texel_buf.data();
+        float* const fx = fx_buf.data();
         float* const fraction = fraction_buf.data();
-        Spectrum4* const sum_r = sum_r_buf.data();
-        Spectrum4* const sum_m = sum_m_buf.data();
-        Spectrum4* const ground = ground_buf.data();
+        Float4* const sum_r = sum_r_buf.data();
+        Float4* const sum_m = sum_m_buf.data();
+        Float4* const ground = ground_buf.data();
+        const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const double r = R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
             for (auto* m : {&m0_buf, &m1_buf, &m2_buf}) std::fill(m->begin(), m->end(), Spectrum4(0.0f));
@@ -115,21 +135,21 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                 const float p1 = float(mu), p2 = float(0.5 * (3.0 * mu * mu - 1.0));
                 const double sin_theta = safe_sqrt(1.0 - mu * mu);
                 prepare_ray(batch, r, mu, steps, ray, &tlut);
-                std::fill(sum_r_buf.begin(), sum_r_buf.end(), Spectrum4(0.0f));
-                std::fill(sum_m_buf.begin(), sum_m_buf.end(), Spectrum4(0.0f));
-                std::fill(ground_buf.begin(), ground_buf.end(), Spectrum4(0.0f));
+                std::fill(sum_r_buf.begin(), sum_r_buf.end(), zero);
+                std::fill(sum_m_buf.begin(), sum_m_buf.end(), zero);
+                std::fill(ground_buf.begin(), ground_buf.end(), zero);
                 Spectrum4 f(0.0f);
                 for (const RaySamples::Step& st : ray.steps) {
                     const Spectrum4 w_r = st.weight * st.rayleigh_scattering, w_m = st.weight * st.mie_scattering;
                     f += w_r + w_m;
                     const float C = float((r + st.t * mu) / st.r), D = float(st.t * sin_theta / st.r);
                     const TransmittanceLut::AtRadius& at = st.sun_at;
-                    for (std::size_t l = 0; l < n_pairs; ++l)
-                        TransmittanceLut::sun_lookup(at, clamp_value(C * pm[l] + D * psc[l], -1.0f, 1.0f), x[l], fraction[l]);
+                    sun_coordinates(at, C, D, pm, psc, n_pairs, false, texel, fx, fraction);
+                    const Float4 w_r4 = to_float4(w_r), w_m4 = to_float4(w_m);
                     for (std::size_t l = 0; l < n_pairs; ++l) {
-                        const Spectrum4 T = at.row.sample(x[l]) * fraction[l];
-                        sum_r[l] += w_r * T;
-                        sum_m[l] += w_m * T;
+                        const Float4 T = at.row.sample4(texel[l], fx[l]) * fraction[l];
+                        sum_r[l] += w_r4 * T;
+                        sum_m[l] += w_m4 * T;
                     }
                 }
                 const bool hits_ground = ray_hits_ground(r, mu, R);
@@ -144,13 +164,10 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                     // mu_s = (r mu_s + d nu) / R.
                     const double d = distance_to_bottom(r, mu, R);
                     const float C = float((r + d * mu) / R), D = float(d * sin_theta / R);
-                    const Spectrum4 k = ray.transmittance * albedo_over_pi;
-                    for (std::size_t l = 0; l < n_pairs; ++l) {
-                        const float mu_s_g = clamp_value(C * pm[l] + D * psc[l], -1.0f, 1.0f);
-                        TransmittanceLut::sun_lookup(ground_at, mu_s_g, x[l], fraction[l]);
-                        fraction[l] *= max_value(mu_s_g, 0.0f);
-                    }
-                    for (std::size_t l = 0; l < n_pairs; ++l) ground[l] = k * (ground_at.row.sample(x[l]) * fraction[l]);
+                    const Float4 k = to_float4(ray.transmittance * albedo_over_pi);
+                    sun_coordinates(ground_at, C, D, pm, psc, n_pairs, true, texel, fx, fraction);
+                    for (std::size_t l = 0; l < n_pairs; ++l)
+                        ground[l] = (k * fraction[l]) * ground_at.row.sample4(texel[l], fx[l]);
                 }
                 // L' = the single-scattered light with the real phase functions at
                 // nu = w . s (light from w travels along -w, the sun's along -s), plus the
@@ -158,7 +175,7 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                 for (std::size_t l = 0; l < n_pairs; ++l) {
                     const float nu = clamp_value(float(mu) * pm[l] + float(sin_theta) * psc[l], -1.0f, 1.0f);
                     const Spectrum4 L =
-                        (sum_r[l] * batch.rayleigh_phase(nu) + sum_m[l] * batch.mie_phase(nu) + ground[l]) * w_dir;
+                        to_vec4((sum_r[l] * batch.rayleigh_phase(nu) + sum_m[l] * batch.mie_phase(nu) + ground[l]) * w_dir);
                     m0_buf[l] += L;
                     m1_buf[l] += L * p1;
                     m2_buf[l] += L * p2;

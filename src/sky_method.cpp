@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include "welkin/analytic_sky.hpp"
+#include "welkin/auto_sky.hpp"
 #include "welkin/error.hpp"
 #include "welkin/lut_sky.hpp"
 #include "welkin/raymarch_sky.hpp"
@@ -37,6 +38,8 @@ void SkyOptions::validate() const {
     require_in_range("raymarch_steps", raymarch_steps, 1, 100000);
     require_in_range("raymarch_sun_steps", raymarch_sun_steps, 1, 100000);
     require_in_range("reference_paths", reference_paths, 1, 1 << 26);
+    require_in_range("tolerance", tolerance, kMinTolerance, kMaxTolerance,
+                     "(relative luminance error)");
 }
 
 void validate_directions(std::span<const glm::dvec3> directions) {
@@ -64,7 +67,8 @@ Observer validate_deterministic_call(const Atmosphere& atmosphere, const Observe
     return validated;
 }
 
-std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference"}; }
+std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference", "auto"};
+}
 
 std::unique_ptr<SkyMethod> make_sky_method(const std::string& name, const SkyOptions& options) {
     options.validate();
@@ -72,6 +76,7 @@ std::unique_ptr<SkyMethod> make_sky_method(const std::string& name, const SkyOpt
     if (name == "lut") return std::make_unique<LutSky>(options);
     if (name == "raymarch") return std::make_unique<RaymarchSky>(options);
     if (name == "reference") return std::make_unique<ReferenceSky>(options);
+    if (name == "auto") return std::make_unique<AutoSky>(options);
     throw InvalidArgument("method", fmt::format("unknown method '{}'; choose one of: {}", name,
                                                 fmt::join(sky_method_names(), ", ")));
 }

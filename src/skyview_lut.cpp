@@ -45,10 +45,8 @@ SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlu
     });
 }
 
-Spectrum4 SkyViewLut::radiance(double mu, double cos_phi) const {
+float SkyViewLut::v_of_theta(double theta) const {
     const int h = texture_.height();
-    const double theta = std::acos(clamp_cosine(mu));
-    const float u = float(safe_sqrt(0.5 * (1.0 - clamp_cosine(cos_phi))));
     float v;
     if (theta < theta_h_) {
         v = float(0.5 * (1.0 - safe_sqrt(1.0 - theta / theta_h_)));
@@ -57,9 +55,53 @@ Spectrum4 SkyViewLut::radiance(double mu, double cos_phi) const {
         v = float(0.5 * (1.0 + safe_sqrt((theta - theta_h_) / beta_)));
         v = std::max(v, (float(h / 2) + 0.5f) / float(h));  // stay below it
     }
+    return v;
+}
+
+Spectrum4 SkyViewLut::radiance(double mu, double cos_phi) const {
+    const double theta = std::acos(clamp_cosine(mu));
+    const float u = float(safe_sqrt(0.5 * (1.0 - clamp_cosine(cos_phi))));
     // The stored texel centres sit at u = (i + 0.5) / width exactly, so sample without the
     // texcoord_from_unit remapping.
-    return texture_.sample(u, v);
+    return texture_.sample(u, v_of_theta(theta));
+}
+
+namespace {
+
+// The arithmetic pass of a block of lookups: mu and u = sqrt((1 - cos_phi) / 2) of each
+// view, as view_geometry() and radiance(mu, cos_phi) compute them.
+void view_angles(const glm::dvec3* __restrict d, std::size_t n, double sx, double sy, double hs2,
+                 double* __restrict mu, float* __restrict u) {
+    for (std::size_t k = 0; k < n; ++k) {
+        const double inv = 1.0 / std::sqrt(d[k].x * d[k].x + d[k].y * d[k].y + d[k].z * d[k].z);
+        const double x = d[k].x * inv, y = d[k].y * inv;
+        mu[k] = clamp_value(d[k].z * inv, -1.0, 1.0);
+        const double hv2 = x * x + y * y;
+        const double c = clamp_value((x * sx + y * sy) / std::sqrt(max_value(hv2 * hs2, 1e-300)), -1.0, 1.0);
+        const double cos_phi = (hv2 > 1e-24 && hs2 > 1e-24) ? c : 1.0;
+        u[k] = float(std::sqrt(max_value(0.5 * (1.0 - cos_phi), 0.0)));
+    }
+}
+
+}  // namespace
+
+void SkyViewLut::radiance(std::span<const glm::dvec3> directions, const glm::dvec3& sun, std::size_t count,
+                          float* out, std::size_t stride) const {
+    const double hs2 = sun.x * sun.x + sun.y * sun.y;
+    constexpr std::size_t kBlock = 64;
+    double mu[kBlock];
+    float u[kBlock];
+    const float width = float(texture_.width());
+    for (std::size_t first = 0; first < directions.size(); first += kBlock) {
+        const std::size_t n = std::min(kBlock, directions.size() - first);
+        view_angles(directions.data() + first, n, sun.x, sun.y, hs2, mu, u);
+        for (std::size_t k = 0; k < n; ++k) {
+            const float v = v_of_theta(std::acos(mu[k]));
+            const Float4 L = texture_.row(v).sample4(u[k] * width - 0.5f);
+            float* const o = out + (first + k) * stride;
+            for (std::size_t c = 0; c < count; ++c) o[c] = L[c];
+        }
+    }
 }
 
 }  // namespace welkin

@@ -22,8 +22,8 @@ constexpr std::array<double, 4> kGlWeights = {0.5 * 0.3478548451374538, 0.5 * 0.
 // Substituting t = a + (b - a) s^2 (or the mirror image) clusters samples at the dense
 // end; the integrand in s, rho(t(s)) 2 (b - a) s, is smooth, so composite Gauss-Legendre
 // in s converges fast. A piece keeps its nodes' s^2 and weights w 2 s / panels; each
-// block of samples is one pass computing the altitudes (double, r(t)^2 = t^2 + 2 r mu t +
-// r^2 as in radius_at; it vectorises) and one fetching the extinction.
+// block of samples is one pass computing the altitudes (in double; it vectorises) and
+// one fetching the extinction.
 GradedQuadrature::Piece GradedQuadrature::make_piece(int panels) {
     Piece piece;
     for (int p = 0; p < panels; ++p)
@@ -38,27 +38,42 @@ GradedQuadrature::Piece GradedQuadrature::make_piece(int panels) {
 GradedQuadrature::GradedQuadrature(int samples)
     : whole_(make_piece(std::max(1, samples / 4))), half_(make_piece(std::max(1, samples / 8))) {}
 
+namespace {
+
+// The arithmetic pass over a block of nodes: the table coordinate of each node's altitude
+// and its weight. r(t)^2 = (t + r mu)^2 + r^2 (1 - mu^2), a sum of two squares (never
+// negative, so no guard per node), with r^2 (1 - mu^2) = (r sin)^2 formed once per ray.
+void table_coordinates(double r_mu, double r_sin2, double R, double inv_step, double origin, double direction,
+                       double len, const double* __restrict s2, const double* __restrict w, std::size_t m,
+                       double* __restrict x, float* __restrict weight) {
+    for (std::size_t l = 0; l < m; ++l) {
+        const double t_low = origin + direction * s2[l] + r_mu;  // t + r mu
+        x[l] = (std::sqrt(t_low * t_low + r_sin2) - R) * inv_step;
+        weight[l] = float(len * w[l]);
+    }
+}
+
+}  // namespace
+
 Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b,
                                       bool toward_a, const Piece& piece) const {
     const double len = b - a;
     if (!(len > 0.0)) return Spectrum4(0.0f);
     Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f};
-    const double R = batch.bottom_radius(), inv_step = batch.inv_table_step();
-    const double x_max = double(AtmosphereBatch::kTableSize - 1);
     const double origin = toward_a ? a : b, direction = toward_a ? len : -len;
+    const double r_mu = r * mu, r_sin2 = r * r * std::max((1.0 - mu) * (1.0 + mu), 0.0);
+    const double x_max = double(AtmosphereBatch::kTableSize - 1);
     constexpr std::size_t kBlock = 32;
     double x[kBlock];
+    float weight[kBlock];
     const std::size_t n = piece.s2.size();
     for (std::size_t first = 0; first < n; first += kBlock) {
         const std::size_t m = std::min(kBlock, n - first);
-        const double* const s2 = piece.s2.data() + first;
-        for (std::size_t l = 0; l < m; ++l) {
-            const double t = origin + direction * s2[l];
-            const double h = std::sqrt(max_value(t * t + 2.0 * r * mu * t + r * r, 0.0)) - R;
-            x[l] = clamp_value(h * inv_step, 0.0, x_max);
-        }
-        const double* const w = piece.weight.data() + first;
-        for (std::size_t l = 0; l < m; ++l) sum += float(len * w[l]) * batch.extinction_at(x[l]);
+        table_coordinates(r_mu, r_sin2, batch.bottom_radius(), batch.inv_table_step(), origin, direction, len,
+                          piece.s2.data() + first, piece.weight.data() + first, m, x, weight);
+        // (The clamp to the table is scalar here: one minsd and one maxsd.)
+        for (std::size_t l = 0; l < m; ++l)
+            sum += weight[l] * batch.extinction_at(std::min(std::max(x[l], 0.0), x_max));
     }
     return to_vec4(sum);
 }

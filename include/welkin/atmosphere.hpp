@@ -73,6 +73,10 @@ struct Atmosphere {
     std::string to_json_string() const;
     // Refuses to overwrite an existing file unless `overwrite`.
     void to_json_file(const std::string& path, bool overwrite = false) const;
+
+    // Every field equal (member by member, so a field added later takes part as well);
+    // caches of what an atmosphere determines (lut_cache.hpp) use it as their key.
+    bool operator==(const Atmosphere&) const = default;
 };
 
 // The default channels: 680, 550 and 440 nm (Bruneton 2017, Hillaire 2020).

@@ -25,6 +25,8 @@ struct DensityLayer {
     double constant = 0.0;
 
     double density(double altitude_m) const;
+
+    bool operator==(const DensityLayer&) const = default;
 };
 
 class DensityProfile {
@@ -51,6 +53,8 @@ public:
     const std::vector<DensityLayer>& layers() const { return layers_; }
     // Throws InvalidArgument naming `parameter` on non-finite terms or bad widths.
     void validate(const std::string& parameter) const;
+
+    bool operator==(const DensityProfile&) const = default;
 
 private:
     std::vector<DensityLayer> layers_;

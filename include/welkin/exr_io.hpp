@@ -59,6 +59,18 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
 // Reads every channel as float. Throws IoError naming `path` on failure.
 ExrImage read_exr(const std::string& path);
 
+// The size and channel names of an EXR file, from its header only (nothing is decoded).
+struct ExrHeaderInfo {
+    int width = 0, height = 0;
+    std::vector<std::string> channel_names;
+};
+ExrHeaderInfo read_exr_header(const std::string& path);
+
+// Reads only the named channels (in that order), as float; a multilayer render with many
+// passes need not be decoded whole. Throws IoError naming `path` on failure, and
+// InvalidArgument naming "channel" when one of them is absent.
+ExrImage read_exr_channels(const std::string& path, const std::vector<std::string>& names);
+
 // Threads OpenEXR uses to compress and decompress (its default is none: one thread does
 // all the ZIP work). Process-wide (Imf::setGlobalThreadCount): for hosts that own the
 // process, such as the CLI; a library embedding Welkin leaves it to its host.

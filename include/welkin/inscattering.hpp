@@ -134,11 +134,13 @@ Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, 
 // coordinate (arithmetic only: it vectorises) and one that fetches and accumulates. The
 // weights of J_ms's three moments depend on the step alone (the view's zenith cosine
 // there is the same for every nu), so they are combined into one row of texels per step
-// (MultiScatteringLut::source_row) and each view does one lookup in it.
+// (MultiScatteringLut::source_row) and each view does one linear lookup in it.
 // `scratch` is reused between calls (no allocation once it is large enough).
 struct InscatterRowScratch {
-    std::vector<float> x_sun, fraction, x_ms;
-    std::vector<Spectrum4> sum_rayleigh, sum_mie, sum_ms, ms_source;
+    std::vector<int> i_sun, i_ms;
+    std::vector<float> fx_sun, fraction, fx_ms;
+    std::vector<Float4> sum_rayleigh, sum_mie, sum_ms;
+    std::vector<Spectrum4> ms_source;
 };
 void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
                    const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,

@@ -12,6 +12,8 @@
 //   lut       Hillaire 2020: transmittance, multiple-scattering and sky-view LUTs
 //   raymarch  nested single-scattering march plus Hillaire's multiple-scattering term
 //   reference Monte-Carlo path tracing, all orders, ground reflection, seeded
+// and "auto", which picks the cheapest of the first three that the chart shows meets a
+// tolerance for the scene (auto_sky.hpp).
 //
 // Frame: Blender's world frame, Z up. The observer stands on the Z axis at
 // bottom_radius + altitude from the planet centre. Output: radiance in
@@ -52,6 +54,12 @@ struct SkyOptions {
     // reference: Monte-Carlo paths per direction (per wavelength) and the seed.
     int reference_paths = 4096;
     std::uint64_t seed = 1;
+    // auto: the relative luminance error to meet (95th percentile over the sphere, against
+    // the reference; see auto_sky.hpp), in [0.001, 10].
+    // The default 0.1: the default lut meets it on the bruneton2017 preset at every charted
+    // altitude with the sun 3 degrees or more up (bench/results/scenes.csv); under haze and
+    // in twilight no fast method does, and auto falls back (auto_sky.hpp).
+    double tolerance = 0.1;
 
     void validate() const;
 };
@@ -79,7 +87,7 @@ public:
                           Progress* progress = nullptr) const = 0;
 };
 
-// "analytic" | "lut" | "raymarch" | "reference"; throws InvalidArgument otherwise.
+// "analytic" | "lut" | "raymarch" | "reference" | "auto"; throws InvalidArgument otherwise.
 std::unique_ptr<SkyMethod> make_sky_method(const std::string& name,
                                            const SkyOptions& options = {});
 std::vector<std::string> sky_method_names();

@@ -17,6 +17,8 @@
 // top of the atmosphere, which is only right for views straight down).
 #pragma once
 
+#include <span>
+
 #include <glm/vec3.hpp>
 
 #include "welkin/multiscattering_lut.hpp"
@@ -33,9 +35,20 @@ public:
     // to the sun.
     Spectrum4 radiance(double mu, double cos_phi) const;
 
+    // radiance() for many views at once: `directions` (finite non-zero vectors, normalised
+    // here; Z up) around the sun `sun` (a unit vector), with mu and cos_phi as
+    // view_geometry() gives them. Writes lanes [0, count) of each view's radiance to
+    // out[i * stride + c]. The same values as one call per view, computed in blocks: a
+    // pass over the block for the angles (arithmetic only, it vectorises), then the acos,
+    // the latitude mapping and the bilinear fetches.
+    void radiance(std::span<const glm::dvec3> directions, const glm::dvec3& sun, std::size_t count, float* out,
+                  std::size_t stride) const;
+
     const Texture2D& texture() const { return texture_; }
 
 private:
+    float v_of_theta(double theta) const;  // Hillaire's latitude mapping, above
+
     double r_, theta_h_, beta_;
     Texture2D texture_;
 };

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "welkin/atmosphere_batch.hpp"
+#include "welkin/math.hpp"
 #include "welkin/simd.hpp"
 
 namespace welkin {
@@ -44,14 +45,24 @@ public:
         float fy;
         int last;  // width - 1
 
-        Float4 sample4(float x_in) const {
-            const float x = std::clamp(x_in, 0.0f, float(last));
-            const int i = std::min(int(x), last - 1);
-            const float fx = x - float(i);
+        // x (clamped to the texels) as the left texel i and the weight fx of the right one;
+        // arithmetic only, so a loop of them vectorises.
+        static void split(float x_in, int last, int& i, float& fx) {
+            const float x = clamp_value(x_in, 0.0f, float(last));
+            i = int(min_value(x, float(last - 1)));
+            fx = x - float(i);
+        }
+        Float4 sample4(int i, float fx) const {
             const Float4 l0 = to_float4(lo[i]), l1 = to_float4(lo[i + 1]);
             const Float4 h0 = to_float4(hi[i]), h1 = to_float4(hi[i + 1]);
             const Float4 a = l0 + fx * (l1 - l0), b = h0 + fx * (h1 - h0);
             return a + fy * (b - a);
+        }
+        Float4 sample4(float x) const {
+            int i;
+            float fx;
+            split(x, last, i, fx);
+            return sample4(i, fx);
         }
         Spectrum4 sample(float x) const { return to_vec4(sample4(x)); }
     };

@@ -12,8 +12,10 @@
 
 #include "common.hpp"
 #include "terminal_progress.hpp"
+#include "welkin/auto_sky.hpp"
 #include "welkin/error.hpp"
 #include "welkin/exr_io.hpp"
+#include "welkin/scene.hpp"
 #include "welkin/sky_image.hpp"
 
 namespace welkin::cli {
@@ -23,7 +25,8 @@ struct SkyArgs {
     AtmosphereArgs atmosphere;
     ObserverArgs observer;
     int width = 2048;
-    std::string method = "lut";
+    std::string method = "auto";
+    double tolerance = SkyOptions{}.tolerance;
     double exposure = 1.0;
     bool half = false, full_float = false;
     bool no_sun_disc = false;
@@ -34,20 +37,60 @@ struct SkyArgs {
     int threads = 0;
     int reference_paths = SkyOptions{}.reference_paths;
     std::uint64_t seed = SkyOptions{}.seed;
+    std::string scene;  // a scene JSON replaces the atmosphere, sun, method and exposure options
 };
+
+// The sky's settings from --scene: atmosphere, observer at the scene origin, sky method and
+// its options, exposure. Errors name --scene and the key.
+struct SkySettings {
+    Atmosphere atmosphere;
+    Observer observer;
+    SkyOptions options;
+    std::string method;
+    double exposure;
+};
+
+SkySettings settings_from(const SkyArgs& args) {
+    if (args.scene.empty()) {
+        SkyOptions options;
+        options.reference_paths = args.reference_paths;
+        options.seed = args.seed;
+        return {load_atmosphere(args.atmosphere), make_observer(args.observer), options, args.method,
+                args.exposure};
+    }
+    try {
+        const SceneDescription scene = SceneDescription::from_json_file(args.scene);
+        return {scene.atmosphere, scene.origin_observer(), scene.sky_options, scene.method, scene.exposure};
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), args.scene));
+    } catch (const IoError& e) {
+        throw InvalidArgument("--scene", e.what());
+    }
+}
 
 int run_sky(const SkyArgs& args) {
     // Everything that can be refused is refused before the render starts.
     check_output_path(args.output, args.overwrite);
-    const Atmosphere atm = load_atmosphere(args.atmosphere);
-    const Observer observer = make_observer(args.observer);
-    SkyOptions options;
-    options.reference_paths = args.reference_paths;
-    options.seed = args.seed;
-    const std::unique_ptr<SkyMethod> method = make_sky_method(args.method, options);
+    const SkySettings sky = settings_from(args);
+    const Atmosphere& atm = sky.atmosphere;
+    const Observer& observer = sky.observer;
+    SkyOptions options = sky.options;
+    options.tolerance = args.tolerance;
+    std::string method_name = sky.method;
+    std::optional<AutoChoice> choice;
+    if (method_name == "auto") {
+        // Resolved here, once for the whole image, so that it can be reported (after the
+        // render, so that a refusal is the only thing a bad command prints).
+        choice = choose_sky_method(atm, observer,
+                                   std::size_t(args.width) * std::size_t(args.width / 2),
+                                   args.tolerance, options);
+        options = choice->options;
+        method_name = choice->method;
+    }
+    const std::unique_ptr<SkyMethod> method = make_sky_method(method_name, options);
     SkyImageOptions image_options;
     image_options.sun_disc = !args.no_sun_disc;
-    image_options.exposure = args.exposure;
+    image_options.exposure = sky.exposure;
     image_options.output = args.spectral_channels ? SkyImageOptions::Output::Spectral
                                                   : SkyImageOptions::Output::Rgb;
     image_options.validate();
@@ -64,7 +107,7 @@ int run_sky(const SkyArgs& args) {
     SkyImage image;
     {
         TerminalProgress progress(fmt::format("sky {}x{} ({})", args.width, args.width / 2,
-                                              args.method));
+                                              method_name));
         image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
         progress.finish();
     }
@@ -83,21 +126,40 @@ int run_sky(const SkyArgs& args) {
     write.pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
     // Provenance: the settings that reproduce the file.
     nlohmann::ordered_json settings = {
-        {"atmosphere", args.atmosphere.file.empty() ? atm.name : args.atmosphere.file},
+        {"atmosphere", !args.scene.empty()           ? atm.name
+                       : args.atmosphere.file.empty() ? atm.name
+                                                      : args.atmosphere.file},
         {"wavelengths_nm", atm.wavelengths_nm},
-        {"sun_elevation_deg", args.observer.sun_elevation_deg},
-        {"sun_azimuth_deg", args.observer.sun_azimuth_deg},
-        {"altitude_m", args.observer.altitude_m},
-        {"method", args.method},
-        {"exposure", args.exposure},
+        {"sun_direction", {observer.sun_direction.x, observer.sun_direction.y, observer.sun_direction.z}},
+        {"altitude_m", observer.altitude_m},
+        {"method", method_name},
+        {"requested_method", sky.method},
+        {"tolerance", args.tolerance},
+        {"exposure", sky.exposure},
         {"sun_disc", !args.no_sun_disc},
         {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
                                          : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
+    if (args.scene.empty()) {
+        settings["sun_elevation_deg"] = args.observer.sun_elevation_deg;
+        settings["sun_azimuth_deg"] = args.observer.sun_azimuth_deg;
+    } else {
+        settings["scene"] = args.scene;
+    }
     write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
                         {"welkinSettings", settings.dump()}};
     if (args.spectral_channels)
         write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);
+    if (choice) {
+        fmt::print("auto: {} (chart: p95 relative luminance error {:.3g} {} tolerance {:g})\n",
+                   choice->setting, choice->predicted_error,
+                   choice->meets_tolerance ? "<=" : "ABOVE", args.tolerance);
+        if (!choice->meets_tolerance)
+            fmt::print(stderr,
+                       "welkin: warning: no fast method meets --tolerance {:g} for this scene; "
+                       "used the closest ({}); --method reference is exact but slow\n",
+                       args.tolerance, choice->setting);
+    }
     if (report.clamped_values > 0)
         fmt::print(stderr,
                    "welkin: warning: {} values above 65504 (the sun's disc) were clamped in "
@@ -105,7 +167,7 @@ int run_sky(const SkyArgs& args) {
                    report.clamped_values);
     fmt::print("wrote {} ({} x {}, {} {}, method {}, {:.2f} s)\n",
                std::filesystem::absolute(args.output).string(), exr.width, exr.height,
-               fmt::join(exr.channel_names, ","), args.half ? "half" : "float", args.method,
+               fmt::join(exr.channel_names, ","), args.half ? "half" : "float", method_name,
                seconds);
     return 0;
 }
@@ -124,10 +186,16 @@ Command add_sky_command(CLI::App& app) {
         ->check(CLI::Range(4, 16384))
         ->capture_default_str();
     sub->add_option("--method", args->method,
-                    "Sky method: analytic, lut (Hillaire 2020), raymarch, or reference "
-                    "(Monte-Carlo, slow)")
+                    "Sky method: auto (the cheapest that the speed-accuracy chart shows "
+                    "meeting --tolerance), analytic, lut (Hillaire 2020), raymarch, or "
+                    "reference (Monte-Carlo, slow)")
         ->type_name("NAME")
         ->check(CLI::IsMember(sky_method_names()))
+        ->capture_default_str();
+    sub->add_option("--tolerance", args->tolerance,
+                    "auto method: relative luminance error to meet (95th percentile over the "
+                    "sphere, against the reference), in [0.001, 10]")
+        ->type_name("X")
         ->capture_default_str();
     sub->add_option("--exposure", args->exposure,
                     "Multiplies every output value (sky and sun) once, after colour "
@@ -165,6 +233,14 @@ Command add_sky_command(CLI::App& app) {
     sub->add_option("--seed", args->seed, "reference method: random seed")
         ->type_name("N")
         ->capture_default_str();
+    auto* scene = sub->add_option("--scene", args->scene,
+                                  "Take the atmosphere, the sun, the observer altitude (the scene "
+                                  "origin's), the method and the exposure from a scene JSON (the "
+                                  "schema `welkin aerial` reads); replaces those options")
+                      ->type_name("FILE.json");
+    for (const char* name : {"--preset", "--atmosphere", "--spectral", "--sun-elevation", "--sun-azimuth",
+                             "--altitude", "--method", "--exposure", "--reference-paths", "--seed"})
+        scene->excludes(sub->get_option(name));
     sub->footer(
         "The image covers the whole sphere: top row the zenith, +X at the centre, +Y a "
         "quarter from the left (Blender's mapping). Sky radiance excludes the sun's disc; "

@@ -30,6 +30,7 @@ Command add_sun_command(CLI::App& app);
 Command add_presets_command(CLI::App& app);
 Command add_atmosphere_command(CLI::App& app);
 Command add_exr_info_command(CLI::App& app);
+Command add_aerial_command(CLI::App& app);
 
 // --preset NAME | --atmosphere FILE.json, and --spectral.
 struct AtmosphereArgs {

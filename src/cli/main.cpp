@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
     app.get_formatter()->column_width(34);
     const std::vector<Command> commands = {add_sky_command(app), add_sun_command(app),
                                            add_presets_command(app), add_atmosphere_command(app),
-                                           add_exr_info_command(app)};
+                                           add_exr_info_command(app), add_aerial_command(app)};
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -26,6 +26,9 @@ void register_atmosphere(py::module_& m);
 void register_sky(py::module_& m);
 void register_sun(py::module_& m);
 void register_color(py::module_& m);
+void register_image(py::module_& m);
+void register_exr(py::module_& m);
+void register_aerial(py::module_& m);
 void register_clouds(py::module_& m);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
@@ -64,6 +67,10 @@ c_array<T> to_c_array(const py::handle& values, const std::string& parameter, py
 // as numpy's own allocations are; else copied into `storage`.
 std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array,
                                           std::vector<glm::dvec3>& storage);
+
+// A (height, width, channels) float32 array that owns `pixels` (moved, not copied).
+py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height,
+                                  std::size_t channels);
 
 // A sequence of three numbers -> glm::dvec3 (InvalidArgument naming `parameter` otherwise).
 glm::dvec3 to_dvec3(const py::handle& values, const std::string& parameter);

@@ -95,37 +95,6 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
                           to_array(result.depth_m, {n}));
 }
 
-const char* const kSkyImageDoc = R"doc(
-An equirectangular sky image (Blender's Environment Texture mapping, top row =
-zenith), optionally with clouds composited over the sky.
-
-    img = welkin.sky_image(atm, altitude_m, sun_direction, width, method="lut",
-                           output="rgb", sun_disc=True, exposure=1.0, clouds=None)
-
-Returns float32 (width/2, width, 3) linear Rec.709 W m^-2 sr^-1 ("rgb"), or
-(width/2, width, C) W m^-2 sr^-1 nm^-1 ("spectral"). clouds: None, a
-welkin.CloudLayer or a welkin.VdbClouds (lit by the same atmosphere; the sun disc is
-dimmed behind them). ValueError for bad input; Ctrl-C cancels.
-)doc";
-
-py::array_t<float> sky_image(Atmosphere atmosphere, double altitude_m, const py::object& sun_direction, int width,
-                             const std::string& method, const std::string& output, bool sun_disc, double exposure,
-                             std::shared_ptr<const CloudDensity> clouds, const py::object& progress) {
-    if (output != "spectral" && output != "rgb")
-        throw InvalidArgument("output", fmt::format("must be \"spectral\" or \"rgb\", got \"{}\"", output));
-    SkyImageOptions options;
-    options.sun_disc = sun_disc;
-    options.exposure = exposure;
-    options.output = output == "rgb" ? SkyImageOptions::Output::Rgb : SkyImageOptions::Output::Spectral;
-    options.clouds = clouds;
-    const std::unique_ptr<SkyMethod> sky = make_sky_method(method);
-    const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
-    SkyImage image;
-    run_cancellable([&](Progress* p) { image = render_equirect_sky(*sky, atmosphere, observer, width, options, p); },
-                    progress);
-    return to_array(image.pixels, {image.height, image.width, py::ssize_t(image.channels())});
-}
-
 }  // namespace
 
 void register_clouds(py::module_& m) {
@@ -228,10 +197,6 @@ values; every message names the file and the grid.
           py::arg("max_steps") = lo.max_steps, py::arg("light_steps") = lo.light_steps,
           py::arg("octaves") = lo.octaves, py::arg("albedo") = lo.scattering.albedo,
           py::arg("paths") = CloudReferenceOptions{}.paths, py::arg("seed") = lo.seed,
-          py::arg("progress") = py::none());
-    m.def("sky_image", &sky_image, kSkyImageDoc, py::arg("atmosphere"), py::arg("altitude_m"),
-          py::arg("sun_direction"), py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb",
-          py::kw_only(), py::arg("sun_disc") = true, py::arg("exposure") = 1.0, py::arg("clouds") = py::none(),
           py::arg("progress") = py::none());
 }
 

@@ -4,7 +4,10 @@
 //   sky_bindings.cpp         welkin.sky_radiance, methods (cancellable, GIL released)
 //   sun_bindings.cpp         welkin.sun
 //   color_bindings.cpp       spectrum_to_rgb, spectral_wavelengths_nm, equirect mapping
-//   cloud_bindings.cpp       welkin.CloudLayer, VdbClouds, cloud_radiance, sky_image
+//   image_bindings.cpp       sky_image, sun_disc_image (equirect sky images)
+//   exr_bindings.cpp         write_exr, read_exr
+//   aerial_bindings.cpp      welkin.SceneDescription, aerial_perspective
+//   cloud_bindings.cpp       welkin.CloudLayer, VdbClouds, cloud_radiance
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
 #include <cstring>
@@ -42,6 +45,14 @@ std::string shape_string(const py::array& array) {
         s << (i ? ", " : "") << array.shape(i);
     s << (array.ndim() == 1 ? ",)" : ")");
     return s.str();
+}
+
+py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height,
+                                  std::size_t channels) {
+    auto* owner = new std::vector<float>(std::move(pixels));
+    py::capsule free_when_done(owner, [](void* p) { delete static_cast<std::vector<float>*>(p); });
+    return py::array_t<float>({py::ssize_t(height), py::ssize_t(width), py::ssize_t(channels)},
+                              owner->data(), free_when_done);
 }
 
 static_assert(sizeof(glm::dvec3) == 3 * sizeof(double),
@@ -122,5 +133,8 @@ Quick start:
     register_sky(m);
     register_sun(m);
     register_color(m);
-    register_clouds(m);
+    register_clouds(m);  // before register_image: sky_image takes clouds=
+    register_image(m);
+    register_exr(m);
+    register_aerial(m);
 }

@@ -10,6 +10,8 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "welkin/auto_sky.hpp"
+#include "welkin/auto_sky_table.hpp"
 #include "welkin/color.hpp"
 #include "welkin/error.hpp"
 #include "welkin/sky_method.hpp"
@@ -21,7 +23,7 @@ const char* const kSkyRadianceDoc = R"doc(
 Sky (path) radiance seen by an observer, for many view directions.
 
     L = welkin.sky_radiance(atm, altitude_m=0.0, sun_direction=(x, y, z),
-                            view_directions=dirs, method="lut", output="spectral")
+                            view_directions=dirs, method="auto", output="spectral")
 
 Frame: Blender's world frame, Z up, metres. The observer stands on the Z axis
 altitude_m metres above a spherical ground of radius atm.bottom_radius_m; the
@@ -38,8 +40,10 @@ view_directions : array-like, shape (N, 3)
     Unit vectors from the observer towards the sky, Z up. float64 C-contiguous
     arrays are used in place; anything else is converted once.
 method : str
-    "analytic" | "lut" | "raymarch" | "reference" (see welkin.methods()):
-    fast approximations up to Monte-Carlo path tracing of all orders.
+    "analytic" | "lut" | "raymarch" | "reference" | "auto" (see welkin.methods()):
+    fast approximations up to Monte-Carlo path tracing of all orders; "auto" picks,
+    per scene, the cheapest of the first three that the speed-accuracy chart shows
+    meeting `tolerance` (see welkin.auto_choice).
 output : str
     "spectral": W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm, shape (N, C).
     "rgb": linear Rec.709 in W m^-2 sr^-1 (CIE 1931, without the 683 lm/W
@@ -53,6 +57,9 @@ paths : int
     reference: Monte-Carlo paths per direction (and wavelength).
 seed : int
     reference: random seed; the same seed gives the same numbers everywhere.
+tolerance : float
+    auto: the relative luminance error to meet, as the 95th percentile over the
+    sphere against the reference, in [0.001, 10] (0.1 = 10 %).
 transmittance_width, transmittance_height, multiscattering_size,
 skyview_width, skyview_height : int
     lut: texture sizes (Hillaire 2020's defaults).
@@ -84,7 +91,8 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
                         const std::string& output, int steps, int sun_steps, int paths,
                         std::uint64_t seed, int transmittance_width, int transmittance_height,
                         int multiscattering_size, int skyview_width, int skyview_height,
-                        bool return_standard_error, const py::object& progress) {
+                        double tolerance, bool return_standard_error,
+                        const py::object& progress) {
     // The checks that need no core work come first. `atmosphere` is a copy, so that Python
     // code running while the GIL is released (other threads, the progress callback) cannot
     // change it under the core.
@@ -108,6 +116,7 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
     options.multiscattering_size = multiscattering_size;
     options.skyview_width = skyview_width;
     options.skyview_height = skyview_height;
+    options.tolerance = tolerance;
     const std::unique_ptr<SkyMethod> sky = make_sky_method(method, options);
 
     const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
@@ -164,12 +173,88 @@ void register_sky(py::module_& m) {
           py::arg("multiscattering_size") = defaults.multiscattering_size,
           py::arg("skyview_width") = defaults.skyview_width,
           py::arg("skyview_height") = defaults.skyview_height,
+          py::arg("tolerance") = defaults.tolerance,
           py::arg("return_standard_error") = false, py::arg("progress") = py::none());
+
+    m.def(
+        "auto_choice",
+        [](const Atmosphere& atmosphere, double altitude_m, const py::object& sun_direction,
+           std::size_t n_directions, double tolerance) {
+            const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
+            const AutoChoice c =
+                choose_sky_method(atmosphere, observer, n_directions, tolerance);
+            py::dict d;
+            d["method"] = c.method;
+            d["setting"] = c.setting;
+            d["predicted_error"] = c.predicted_error;
+            d["predicted_seconds"] = c.predicted_seconds;
+            d["meets_tolerance"] = c.meets_tolerance;
+            py::dict options;
+            options["transmittance_width"] = c.options.transmittance_width;
+            options["transmittance_height"] = c.options.transmittance_height;
+            options["multiscattering_size"] = c.options.multiscattering_size;
+            options["skyview_width"] = c.options.skyview_width;
+            options["skyview_height"] = c.options.skyview_height;
+            options["steps"] = c.options.raymarch_steps;
+            options["sun_steps"] = c.options.raymarch_sun_steps;
+            d["options"] = options;
+            return d;
+        },
+        py::arg("atmosphere"), py::arg("altitude_m"), py::arg("sun_direction"),
+        py::arg("n_directions"), py::arg("tolerance") = defaults.tolerance, R"doc(
+What method="auto" runs for this scene: a dict with "method", "options" (keyword
+arguments of sky_radiance for that method), "setting" (a label),
+"predicted_error" (the chart's p95 relative luminance error, worst grid corner
+around the scene), "predicted_seconds" (CPU seconds on the machine the chart ran on, for
+n_directions directions) and "meets_tolerance" (False when no charted setting
+meets it there and auto falls back to the most accurate one).
+)doc");
+
+    m.def(
+        "chart_table",
+        [] {
+            const auto_table::Table& t = auto_table::table();
+            py::list settings;
+            for (const auto_table::Setting& s : t.settings) {
+                py::dict d;
+                d["method"] = s.method;
+                d["spectral"] = s.spectral;
+                py::dict options;
+                options["transmittance_width"] = s.transmittance_width;
+                options["transmittance_height"] = s.transmittance_height;
+                options["multiscattering_size"] = s.multiscattering_size;
+                options["skyview_width"] = s.skyview_width;
+                options["skyview_height"] = s.skyview_height;
+                options["steps"] = s.raymarch_steps;
+                options["sun_steps"] = s.raymarch_sun_steps;
+                d["options"] = options;
+                d["fixed_seconds"] = s.fixed_seconds;
+                d["seconds_per_direction"] = s.seconds_per_direction;
+                settings.append(d);
+            }
+            py::dict d;
+            d["altitudes_m"] = std::vector<double>(t.altitudes_m.begin(), t.altitudes_m.end());
+            d["sun_elevations_deg"] =
+                std::vector<double>(t.sun_elevations_deg.begin(), t.sun_elevations_deg.end());
+            d["presets"] = std::vector<std::string>(t.presets.begin(), t.presets.end());
+            d["settings"] = settings;
+            d["reference_paths"] = t.reference_paths;
+            d["reference_seconds_per_path"] = t.reference_seconds_per_path;
+            return d;
+        },
+        R"doc(
+The speed-accuracy table method="auto" chooses from (generated by bench/chart.py):
+the charted grid ("altitudes_m", "sun_elevations_deg", "presets"), and per
+"settings" entry its method, options and measured CPU cost ("fixed_seconds" +
+"seconds_per_direction" x N on the machine the chart ran on), plus the reference's
+cost ("reference_seconds_per_path" x paths x N).
+)doc");
 
     m.def("methods", &sky_method_names, R"doc(
 Names of the sky methods, fastest first: "analytic" (no marching), "lut"
 (Hillaire 2020 look-up tables), "raymarch" (nested single-scattering march plus
-a multiple-scattering term), "reference" (Monte-Carlo path tracing, all orders).
+a multiple-scattering term), "reference" (Monte-Carlo path tracing, all orders),
+then "auto" (the cheapest of the first three that meets a tolerance).
 )doc");
 }
 

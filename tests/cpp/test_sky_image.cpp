@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <atomic>
 #include <memory>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -265,22 +264,6 @@ TEST(SkyImage, RejectsBadInput) {
     EXPECT_THROW(render_equirect_sky(sky, two, sun_at(30), 16), InvalidArgument);
 }
 
-TEST(SkyImage, OverheadOfImageAssemblyAt2048) {
-    // Measures what render_equirect_sky adds around the method (directions, conversion,
-    // disc) with a method that only fills zeros; printed for the report. The bound is
-    // generous (a debug-ish machine); the target is a few tens of milliseconds.
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
-    const FakeSky sky(FakeSky::Constant);
-    render_equirect_sky(sky, atm, sun_at(30), 256);  // warm up TBB
-    const auto t0 = std::chrono::steady_clock::now();
-    const SkyImage im = render_equirect_sky(sky, atm, sun_at(30), 2048);
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("2048 x 1024 image assembly around the method: %.1f ms\n", ms);
-    EXPECT_EQ(im.pixels.size(), 2048u * 1024u * 3u);
-    EXPECT_LT(ms, 500.0);
-}
-
 TEST(SkyImage, SubPixelDiscLandsInItsPixel) {
     // 64 wide: pixels of 0.098 rad, 20 sun radii. A sun at a pixel centre puts all its
     // energy into that pixel.
@@ -302,26 +285,14 @@ TEST(SkyImage, SubPixelDiscLandsInItsPixel) {
     EXPECT_EQ(lit, 3u);
 }
 
-TEST(SkyImage, LutHdriAt2048IsFiniteAndQuick) {
-    // The real path: the lut method, every pixel in one call, RGB with the disc. Timed as
-    // the median of 5 renders (printed for the report; the target is < 100 ms on two
-    // idle cores, asserted only loosely here because the test machines are shared).
+TEST(SkyImage, LutHdriAt2048IsFiniteAndKeepsTheDiscEnergy) {
+    // The real path: the lut method, every pixel in one call, RGB with the disc. (Its speed
+    // is measured in bench/bench_sky.cpp, not here.)
     const Atmosphere atm = Atmosphere::preset("bruneton2017");
     const std::unique_ptr<SkyMethod> lut = make_sky_method("lut");
     const Observer obs = sun_at(20, 45);
-    std::vector<double> ms;
-    SkyImage im;
-    for (int k = 0; k < 5; ++k) {
-        const auto t0 = std::chrono::steady_clock::now();
-        im = render_equirect_sky(*lut, atm, obs, 2048);
-        const auto t1 = std::chrono::steady_clock::now();
-        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-    }
-    std::sort(ms.begin(), ms.end());
-    std::printf("2048 x 1024 HDRI by lut (render_equirect_sky, no file): median %.1f ms, "
-                "min %.1f ms\n", ms[2], ms[0]);
+    const SkyImage im = render_equirect_sky(*lut, atm, obs, 2048);
     EXPECT_TRUE(all_finite(im));
-    EXPECT_LT(ms[2], 2000.0);
     // Energy: the image integral minus the sky's equals the direct irradiance (RGB, p = 0).
     SkyImageOptions no_disc;
     no_disc.sun_disc = false;

@@ -333,7 +333,7 @@ def test_the_gil_is_released_while_computing(atm, sun_direction):
 def test_preset_names_and_methods():
     assert set(welkin.Atmosphere.preset_names()) == {"bruneton2017", "clear", "hazy",
                                                     "polluted", "mars"}
-    assert welkin.methods() == ["analytic", "lut", "raymarch", "reference"]
+    assert welkin.methods() == ["analytic", "lut", "raymarch", "reference", "auto"]
     for name in welkin.Atmosphere.preset_names():
         a = welkin.Atmosphere.preset(name)
         a.validate()

@@ -1,0 +1,41 @@
+"""The bpy layer of the add-on: one concern per file, classes registered from one tuple
+(in order) and unregistered in reverse.
+
+  properties.py  WelkinWorldSettings (World.welkin): the panel's parameters and the state
+                 the add-on keeps (its images, the output node it replaced)
+  scene_sun.py   which sun lamp drives the sky, its direction, the observer altitude
+  images.py      the world's float images: create, fill, pack
+  world_nodes.py the add-on's own nodes in the world tree (the user's stay untouched)
+  update.py      one sky update: request -> compute -> images, nodes, lamp
+  operators.py   welkin.update_sky, welkin.remove_sky, welkin.export_hdri
+  panel.py       Properties > World > Welkin Sky
+  handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
+"""
+import bpy
+
+from . import handlers, operators, panel, properties
+
+classes = (
+    properties.WelkinWorldSettings,
+    operators.WELKIN_OT_update_sky,
+    operators.WELKIN_OT_remove_sky,
+    operators.WELKIN_OT_export_hdri,
+    panel.WORLD_PT_welkin_sky,
+)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
+    handlers.register()
+    from .. import native
+    if native.message():
+        print(f"Welkin: {native.message()}")
+
+
+def unregister():
+    handlers.unregister()
+    del bpy.types.World.welkin
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,168 @@
+"""The sky follows the lamp.
+
+  * In the UI, depsgraph_update_post notices that the sky's request changed (the sun lamp
+    turned, a setting changed) and arms a timer; the update runs once the changes have
+    stopped for DEBOUNCE_S, so dragging a lamp recomputes a few times, not per event.
+  * In animation (playback, and `blender -b file.blend -a` renders, where no timer or UI
+    runs), frame_change_post updates the sky synchronously from the depsgraph it is given
+    (the render's own one during renders): the lamp's evaluated transform at that frame.
+    Blender evaluates that depsgraph again when a frame_change_post handler changed data,
+    so the lamp's new strength and the new image reach the frame being rendered.
+    frame_change_pre only drops a pending UI timer (the frame's own update follows).
+  * save_pre packs images that changed since they were last packed, so the saved file
+    carries the sky it shows.
+All are @persistent (they stay across file loads) and need no UI. Failures are printed and
+kept in the panel's status line; a handler never raises.
+"""
+import threading
+import time
+
+import bpy
+from bpy.app.handlers import persistent
+
+from . import scene_sun, update
+from .scene_sun import UserError
+
+DEBOUNCE_S = 0.15
+_state = {"due": 0.0, "armed": False}
+
+
+def _headless():
+    """True in `blender -b` (no timers run there). A function, so a headless test can
+    stand in for the UI."""
+    return bpy.app.background
+
+
+def _log(settings, text):
+    print(f"Welkin: {text}")
+    if settings is not None:
+        settings.status = text
+
+
+def _live(scene):
+    world = scene.world
+    return world is not None and world.welkin.active and world.welkin.auto_update
+
+
+def _run(scene, depsgraph, *, pack):
+    try:
+        outcome = update.update_sky(scene, depsgraph, pack=pack)
+        for warning in outcome.warnings if outcome.updated else ():
+            print(f"Welkin: warning: {warning}")
+    except UserError as error:
+        _log(scene.world.welkin, f"sky not updated: {error}")
+    except Exception as error:  # a handler must never break Blender's loop
+        _log(scene.world.welkin, f"sky not updated: unexpected {type(error).__name__}: {error}")
+
+
+def _tick():
+    wait = _state["due"] - time.monotonic()
+    if wait > 0.0:
+        return wait
+    _state["armed"] = False
+    scene = bpy.context.scene
+    if scene is not None and _live(scene):
+        _run(scene, None, pack=False)
+    return None
+
+
+def _arm():
+    _state["due"] = time.monotonic() + DEBOUNCE_S
+    if not _state["armed"]:
+        _state["armed"] = True
+        bpy.app.timers.register(_tick, first_interval=DEBOUNCE_S)
+
+
+def _disarm():
+    if _state["armed"] and bpy.app.timers.is_registered(_tick):
+        bpy.app.timers.unregister(_tick)
+    _state["armed"] = False
+
+
+def _stale(scene, depsgraph):
+    settings = scene.world.welkin
+    try:
+        request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
+    except UserError:
+        return False
+    return request.key() + repr((settings.show_sun_disc, settings.sync_lamp)) != settings.last_key
+
+
+def settings_changed(settings, context):
+    """A panel parameter changed (property update callback)."""
+    if _headless() or not settings.active or not settings.auto_update:
+        return
+    _arm()
+
+
+@persistent
+def on_depsgraph_update(scene, depsgraph=None):
+    # Headless sessions have no timers: scripts call update_sky, renders get frame changes.
+    if _headless() or not _live(scene):
+        return
+    if depsgraph is not None and not any(_concerns_sky(u.id) for u in depsgraph.updates):
+        return  # a cheap filter: most edits touch neither a sun lamp nor the camera
+    if _stale(scene, None):
+        _arm()
+
+
+def _concerns_sky(id_):
+    if isinstance(id_, bpy.types.Object):
+        return id_.type == 'CAMERA' or (id_.type == 'LIGHT' and id_.data.type == 'SUN')
+    return isinstance(id_, (bpy.types.Scene, bpy.types.World, bpy.types.Light))
+
+
+@persistent
+def on_frame_change_pre(scene, depsgraph=None):
+    _disarm()
+
+
+@persistent
+def on_frame_change_post(scene, depsgraph=None):
+    if not _live(scene):
+        return
+    # UI renders (F12, Ctrl F12) call frame handlers on the render thread while the
+    # interface keeps drawing; changing images and lamps from there is only safe with
+    # Render > Lock Interface on. Headless renders (-a) run on the main thread.
+    if threading.current_thread() is not threading.main_thread() \
+            and not scene.render.use_lock_interface:
+        _log(scene.world.welkin, "sky not updated for this frame: the render runs beside "
+             "the interface; enable Render > Lock Interface so renders follow the sun lamp")
+        return
+    _run(scene, depsgraph, pack=False)
+
+
+@persistent
+def on_save_pre(*_args):
+    for world in bpy.data.worlds:
+        settings = world.welkin
+        for image in (settings.sky_image, settings.disc_image):
+            if image is not None and (image.is_dirty or image.packed_file is None):
+                update.images.pack(image)
+
+
+@persistent
+def on_load_post(*_args):
+    _disarm()
+
+
+_HANDLERS = (
+    (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
+    (bpy.app.handlers.frame_change_pre, on_frame_change_pre),
+    (bpy.app.handlers.frame_change_post, on_frame_change_post),
+    (bpy.app.handlers.save_pre, on_save_pre),
+    (bpy.app.handlers.load_post, on_load_post),
+)
+
+
+def register():
+    for handlers, function in _HANDLERS:
+        if function not in handlers:
+            handlers.append(function)
+
+
+def unregister():
+    _disarm()
+    for handlers, function in reversed(_HANDLERS):
+        if function in handlers:
+            handlers.remove(function)

@@ -1,0 +1,77 @@
+"""The world's float images: created by the add-on, filled from the core's top-row-first
+arrays (flipped once, in pixels.py), packed into the .blend so they survive saving and
+farm rendering. Packing a float image stores it as OpenEXR (full float), so the radiance
+reloads unchanged."""
+import bpy
+
+from .. import pixels
+
+ROLE_KEY = "welkin_role"  # custom property marking the add-on's own images
+NAMES = {"sky": "Welkin Sky", "disc": "Welkin Sun Disc"}
+
+
+def _linear(image):
+    # 3.4 calls it "Linear"; 4.x "Linear Rec.709".
+    names = {item.identifier for item in
+             image.colorspace_settings.bl_rna.properties['name'].enum_items}
+    # Set only when it differs: assigning it frees the image's buffers (a packed image is
+    # then decoded again, ~0.2 s at 2048 x 1024).
+    for name in ("Linear Rec.709", "Linear"):
+        if name in names:
+            if image.colorspace_settings.name != name:
+                image.colorspace_settings.name = name
+            return
+
+
+def ensure(settings, role, width, height):
+    """The add-on's image for `role` ("sky" or "disc") at width x height."""
+    attr = "sky_image" if role == "sky" else "disc_image"
+    image = getattr(settings, attr)
+    if image is not None and image.get(ROLE_KEY) != role:
+        image = None  # never write into an image the add-on did not make
+    if image is not None and tuple(image.size) != (width, height):
+        if image.packed_file is not None:
+            image.unpack(method='REMOVE')
+        image.scale(width, height)
+    if image is None:
+        image = bpy.data.images.new(NAMES[role], width, height, alpha=False, float_buffer=True)
+        image[ROLE_KEY] = role
+        setattr(settings, attr, image)
+    _linear(image)
+    return image
+
+
+# RGBA buffers kept between live updates, per (image name, role, size).
+_buffers = {}
+
+
+def write(image, top_first, *, sparse=False):
+    """Fills `image` from an (H, W, 3) top-row-first array (`sparse`: mostly zero, as the
+    sun's disc is)."""
+    h, w, _ = top_first.shape
+    key = (image.name, sparse, w, h)
+    if key not in _buffers:
+        if len(_buffers) > 4:
+            _buffers.clear()
+        _buffers[key] = pixels.SparseImage(w, h) if sparse else pixels.rgba_buffer(w, h)
+    cached = _buffers[key]
+    flat = cached.to_blender(top_first) if sparse else pixels.to_blender(top_first, cached)
+    # Setting pixels marks the image dirty and drops its GPU textures; update_tag() tells
+    # the depsgraph (and so Cycles' viewport render). Image.update() is not called: it
+    # builds the 8-bit display buffer, which nothing here needs and costs ~0.1 s at 2048.
+    image.pixels.foreach_set(flat)
+    image.update_tag()
+
+
+def pack(image):
+    """Packs the image's current pixels into the .blend (as OpenEXR, float)."""
+    image.file_format = 'OPEN_EXR'
+    image.pack()
+
+
+def remove(settings):
+    for attr in ("sky_image", "disc_image"):
+        image = getattr(settings, attr)
+        setattr(settings, attr, None)
+        if image is not None and image.get(ROLE_KEY) and image.users == 0:
+            bpy.data.images.remove(image)

@@ -1,0 +1,95 @@
+"""World.welkin: the sky's parameters (shown in the panel) and the add-on's state."""
+import bpy
+
+from .. import native, sky_request
+
+
+def _is_sun_lamp(_settings, obj):
+    return obj.type == 'LIGHT' and obj.data.type == 'SUN'
+
+
+_preset_items = []
+
+
+def _presets(_self, _context):
+    # Blender keeps only the strings of a dynamic enum that Python keeps alive: cache.
+    if not _preset_items:
+        module = native.module()
+        names = module.Atmosphere.preset_names() if module else sky_request.FALLBACK_PRESETS
+        _preset_items.extend((n, n, f"Welkin's {n} atmosphere") for n in names)
+    return _preset_items
+
+
+def _changed(settings, context):
+    from . import handlers
+    handlers.settings_changed(settings, context)
+
+
+_METHOD_ITEMS = (
+    ('auto', "Auto", "The module's automatic choice where it has one, else lut"),
+    ('analytic', "Analytic", "No marching: plane-parallel single scattering (fastest)"),
+    ('lut', "LUT", "Hillaire 2020 look-up tables (fast, multiple scattering)"),
+    ('raymarch', "Ray march", "Nested single-scattering march plus multiple scattering "
+     "(tens of seconds at 2048)"),
+)
+
+
+class WelkinWorldSettings(bpy.types.PropertyGroup):
+    preset: bpy.props.EnumProperty(name="Preset", items=_presets, update=_changed,
+                                   description="Atmosphere preset")
+    air_density: bpy.props.FloatProperty(
+        name="Air", default=1.0, min=0.0, max=100.0, soft_max=10.0, update=_changed,
+        description="Multiplier of the preset's Rayleigh (air) scattering")
+    aerosol_density: bpy.props.FloatProperty(
+        name="Aerosol", default=1.0, min=0.0, max=100.0, soft_max=10.0, update=_changed,
+        description="Multiplier of the preset's aerosol (Mie) scattering and extinction")
+    ozone_density: bpy.props.FloatProperty(
+        name="Ozone", default=1.0, min=0.0, max=100.0, soft_max=10.0, update=_changed,
+        description="Multiplier of the preset's ozone absorption")
+    use_preset_albedo: bpy.props.BoolProperty(
+        name="Preset Ground Albedo", default=True, update=_changed,
+        description="Use the preset's ground albedo")
+    ground_albedo: bpy.props.FloatProperty(
+        name="Ground Albedo", default=0.1, min=0.0, max=1.0, update=_changed,
+        description="Albedo of the planet's ground (lights the sky from below)")
+    altitude_m: bpy.props.FloatProperty(
+        name="Origin Altitude (m)", default=0.0, min=0.0, max=1e7, soft_max=1e5,
+        update=_changed,
+        description="Altitude of the scene origin above the ground, metres")
+    use_camera_height: bpy.props.BoolProperty(
+        name="Add Camera Height", default=True, update=_changed,
+        description="Observer at the scene camera's height above the origin")
+    sun_object: bpy.props.PointerProperty(
+        name="Sun Lamp", type=bpy.types.Object, poll=_is_sun_lamp, update=_changed,
+        description="The sun lamp that drives the sky (empty: the first sun lamp by name)")
+    sync_lamp: bpy.props.BoolProperty(
+        name="Sync Lamp", default=True, update=_changed,
+        description="Set the lamp's colour, strength (W/m^2) and angle from the sun "
+                    "transmitted through the atmosphere")
+    show_sun_disc: bpy.props.BoolProperty(
+        name="Sun Disc for Camera", default=True, update=_changed,
+        description="Show the sun's disc to camera rays (the lamp does the lighting)")
+    exposure: bpy.props.FloatProperty(
+        name="Exposure", default=1.0, min=1e-6, max=1e6, soft_max=10.0, update=_changed,
+        description="Multiplies sky, disc and lamp alike (1: physical W m^-2 sr^-1, the "
+                    "scale of Blender's Nishita sky)")
+    resolution: bpy.props.EnumProperty(
+        name="Resolution", default='1024', update=_changed,
+        items=[(str(w), f"{w} x {w // 2}", "") for w in sky_request.WIDTHS])
+    method: bpy.props.EnumProperty(name="Method", items=_METHOD_ITEMS, default='auto',
+                                   update=_changed)
+    auto_update: bpy.props.BoolProperty(
+        name="Follow Lamp", default=True,
+        description="Update the sky when the sun lamp moves or a setting changes, and on "
+                    "every frame of animation renders")
+
+    # State kept by the add-on (not shown as parameters).
+    active: bpy.props.BoolProperty(default=False, options={'HIDDEN'})
+    sky_image: bpy.props.PointerProperty(type=bpy.types.Image, options={'HIDDEN'})
+    disc_image: bpy.props.PointerProperty(type=bpy.types.Image, options={'HIDDEN'})
+    previous_output: bpy.props.StringProperty(options={'HIDDEN'})
+    previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
+    previous_sampling: bpy.props.StringProperty(options={'HIDDEN'})  # "METHOD:resolution"
+    last_key: bpy.props.StringProperty(options={'HIDDEN'})
+    status: bpy.props.StringProperty(options={'HIDDEN'})
+    warnings: bpy.props.StringProperty(options={'HIDDEN'})  # of the last update, one a line

@@ -1,0 +1,77 @@
+"""The scene side of a sky request: which sun lamp drives it, where it points, and how
+high the observer stands."""
+import math
+
+from .. import sky_request
+
+
+class UserError(Exception):
+    """A problem the user can fix; the message says how. Reported, never a traceback."""
+
+
+def sun_lamps(scene):
+    return sorted((o for o in scene.objects if o.type == 'LIGHT' and o.data.type == 'SUN'),
+                  key=lambda o: o.name)
+
+
+def choose_sun(scene, settings):
+    """(sun lamp object, warning or None); UserError when there is none."""
+    chosen = settings.sun_object if settings is not None else None
+    lamps = sun_lamps(scene)
+    if chosen is not None and chosen.name in scene.objects:
+        return chosen, None
+    if not lamps:
+        raise UserError("no sun lamp in the scene: add one (Add > Light > Sun) or choose "
+                        "one in World > Welkin Sky > Sun Lamp")
+    warning = None
+    if len(lamps) > 1:
+        warning = (f"{len(lamps)} sun lamps in the scene: the sky follows '{lamps[0].name}' "
+                   f"(the first by name); choose another in World > Welkin Sky > Sun Lamp")
+    return lamps[0], warning
+
+
+def sun_direction(obj, depsgraph=None):
+    """Unit vector towards the sun: the lamp's local +Z in world space (DESIGN.md)."""
+    if depsgraph is not None:
+        obj = obj.evaluated_get(depsgraph)
+    z = obj.matrix_world.col[2]
+    x, y, zz = float(z[0]), float(z[1]), float(z[2])
+    n = math.sqrt(x * x + y * y + zz * zz)
+    if not n > 0.0 or not math.isfinite(n):
+        raise UserError(f"sun lamp '{obj.name}' has a degenerate transform (zero scale): "
+                        f"its direction is undefined")
+    return (x / n, y / n, zz / n)
+
+
+def camera_height_m(scene, settings, depsgraph=None):
+    camera = scene.camera
+    if not settings.use_camera_height or camera is None:
+        return 0.0
+    if depsgraph is not None:
+        camera = camera.evaluated_get(depsgraph)
+    return float(camera.matrix_world.translation.z) * scene.unit_settings.scale_length
+
+
+def request_for(scene, settings, depsgraph=None):
+    """(SkyRequest, sun lamp object, warnings)."""
+    warnings = []
+    lamp, warning = choose_sun(scene, settings)
+    if warning:
+        warnings.append(warning)
+    altitude, warning = sky_request.observer_altitude(
+        settings.altitude_m, camera_height_m(scene, settings, depsgraph))
+    if warning:
+        warnings.append(warning)
+    request = sky_request.SkyRequest(
+        preset=settings.preset,
+        air_density=settings.air_density,
+        aerosol_density=settings.aerosol_density,
+        ozone_density=settings.ozone_density,
+        ground_albedo=-1.0 if settings.use_preset_albedo else settings.ground_albedo,
+        altitude_m=altitude,
+        sun_direction=sun_direction(lamp, depsgraph),
+        width=int(settings.resolution),
+        method=settings.method,
+        exposure=settings.exposure,
+    )
+    return request, lamp, warnings

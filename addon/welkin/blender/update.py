@@ -1,0 +1,118 @@
+"""One sky update, shared by the operator and the handlers: scene -> SkyRequest -> the
+module -> the world's images and nodes, and the sun lamp.
+
+Problems the user can fix raise scene_sun.UserError (nothing is changed then); warnings
+(several sun lamps, sun below the horizon, camera below the ground) come back to be
+reported. The world's user nodes are never touched (world_nodes.py)."""
+import bpy
+
+from .. import native, sky_compute
+from . import images, scene_sun, world_nodes
+from .scene_sun import UserError
+
+WORLD_NAME = "Welkin World"
+
+
+class Outcome:
+    def __init__(self):
+        self.warnings = []
+        self.updated = False
+        self.seconds = 0.0
+        self.method = ""
+
+
+def module_or_error():
+    module, message = native.load()
+    if module is None:
+        raise UserError(message)
+    return module
+
+
+def _world(scene):
+    if scene.world is None:
+        world = bpy.data.worlds.new(WORLD_NAME)
+        world["welkin_created"] = True
+        scene.world = world
+    return scene.world
+
+
+def _sync_lamp(lamp, values, depsgraph):
+    data = lamp.data
+    if depsgraph is not None and depsgraph.mode == 'RENDER':
+        # A render's own depsgraph (frame_change_post during `-a` or F12): write the
+        # lamp's values into its evaluated copy, which Cycles reads, and leave the
+        # original alone. Editing the original would make Blender evaluate that
+        # depsgraph a second time, and the second pass re-copies the lamp object from
+        # the original without re-animating it: the frame would render the new strength
+        # from the old direction (seen: frame 10 lit from frame 1). The images need no
+        # such care: Cycles reads the original image's pixels.
+        data = lamp.evaluated_get(depsgraph).data
+    data.color = values.color
+    data.energy = values.strength_w_m2
+    data.angle = values.angle_rad
+
+
+def update_sky(scene, depsgraph=None, *, force=False, pack=True):
+    """Brings the world's sky up to date with the scene. Returns an Outcome."""
+    module = module_or_error()
+    outcome = Outcome()
+    if scene.world is None:
+        scene_sun.choose_sun(scene, None)  # no sun lamp: refuse before adding a world
+    world = _world(scene)
+    settings = world.welkin
+    request, lamp, outcome.warnings = scene_sun.request_for(scene, settings, depsgraph)
+    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp))
+    render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
+    if (not force and settings.active and settings.last_key == key
+            and settings.sky_image is not None):
+        if render_graph and settings.sync_lamp:
+            # The sky is current, but this render's evaluated lamp may be a fresh copy of
+            # the original (see _sync_lamp): give it its values again (no images).
+            try:
+                _sync_lamp(lamp, sky_compute.lamp_for(module, request), depsgraph)
+            except ValueError as error:
+                raise UserError(str(error)) from None
+        return outcome
+    try:
+        result = sky_compute.compute(module, request, disc=settings.show_sun_disc)
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    outcome.warnings += result.warnings
+    height = request.width // 2
+    sky = images.ensure(settings, "sky", request.width, height)
+    disc = images.ensure(settings, "disc", request.width, height)
+    images.write(sky, result.sky)
+    images.write(disc, result.disc, sparse=True)
+    if pack:
+        images.pack(sky)
+        images.pack(disc)
+    world_nodes.install(world, settings, sky, disc)
+    if settings.sync_lamp:
+        _sync_lamp(lamp, result.lamp, depsgraph)
+    settings.active = True
+    settings.last_key = key
+    outcome.updated = True
+    outcome.seconds = result.seconds
+    outcome.method = result.method
+    settings.warnings = "\n".join(outcome.warnings)
+    settings.status = (f"sky {request.width}x{height} by {result.method} in "
+                       f"{result.seconds:.2f} s from '{lamp.name}'"
+                       + (f"; {len(outcome.warnings)} warning(s)" if outcome.warnings else ""))
+    return outcome
+
+
+def remove_sky(scene):
+    """Takes the add-on's nodes and images out; the user's world comes back as it was."""
+    world = scene.world
+    if world is None or not world.welkin.active:
+        raise UserError("no Welkin sky in this scene's world to remove")
+    settings = world.welkin
+    world_nodes.remove(world, settings)
+    images.remove(settings)
+    settings.active = False
+    settings.last_key = ""
+    settings.status = ""
+    if world.get("welkin_created"):
+        scene.world = None
+        if world.users == 0:
+            bpy.data.worlds.remove(world)

@@ -1,0 +1,51 @@
+"""Pixel layouts: the core and EXR files store images top row first (row 0 at the
+zenith); Blender's Image.pixels are bottom row first, RGBA. The flip happens here, once.
+
+Live updates at 2048 x 1024 move 8 M floats per image, so the RGBA buffers can be kept and
+reused (`out`): a fresh 32 MiB array costs its page faults every time. The sun-disc image
+is zero but for a few pixels: `sparse_to_blender` writes only those into a buffer that is
+otherwise kept zero (alpha 1).
+"""
+import numpy as np
+
+
+def rgba_buffer(width, height):
+    """A bottom-row-first RGBA buffer, zero with alpha 1, shape (H, W, 4)."""
+    out = np.zeros((height, width, 4), dtype=np.float32)
+    out[..., 3] = 1.0
+    return out
+
+
+def to_blender(image, out=None):
+    """(H, W, 3) top-row-first -> flat float32 RGBA, bottom row first (alpha 1). Writes
+    into `out` ((H, W, 4) float32, alpha already 1) when given."""
+    h, w, _ = image.shape
+    if out is None:
+        out = rgba_buffer(w, h)
+    out[..., :3] = image[::-1, :, :3]
+    return out.reshape(-1)
+
+
+class SparseImage:
+    """A mostly zero (H, W, 3) top-row-first image into a reused RGBA buffer: only the
+    non-zero pixels are written, and cleared again before the next image."""
+
+    def __init__(self, width, height):
+        self.buffer = rgba_buffer(width, height)
+        self._rows = self._cols = np.empty(0, dtype=np.intp)
+
+    def to_blender(self, image):
+        h = self.buffer.shape[0]
+        self.buffer[self._rows, self._cols, :3] = 0.0
+        w = image.shape[1]
+        flat = np.ascontiguousarray(image[..., :3]).reshape(-1)
+        pixel = np.unique(np.flatnonzero(flat) // 3)  # a linear scan, then a few indices
+        rows, cols = pixel // w, pixel % w
+        self._rows, self._cols = h - 1 - rows, cols
+        self.buffer[self._rows, self._cols, :3] = image[rows, cols, :3]
+        return self.buffer.reshape(-1)
+
+
+def from_blender(flat, width, height):
+    """Blender's flat RGBA pixels -> (H, W, 3) float32, top row first."""
+    return np.asarray(flat, dtype=np.float32).reshape(height, width, 4)[::-1, :, :3].copy()

@@ -1,0 +1,105 @@
+"""A sky request: everything that decides the world image, as plain data.
+
+The Blender layer fills a SkyRequest from the world's Welkin settings and the scene (the
+sun lamp's direction, the camera height); sky_compute turns it into images and lamp
+values. Two requests that compare equal give the same sky, so `key()` tells the handlers
+whether the world image is already up to date.
+
+Atmosphere parameters are the preset's, with three density multipliers in the spirit of
+Blender's Nishita sky (air, dust, ozone): they scale the preset's Rayleigh scattering, its
+aerosol (Mie) scattering and extinction, and its ozone absorption. Scaling a coefficient
+is not new physics: the core still computes every number.
+"""
+import dataclasses
+import math
+
+FALLBACK_PRESETS = ("bruneton2017", "clear", "hazy", "polluted", "mars")
+# Methods the add-on offers. "reference" (Monte-Carlo, hours at 2048 wide) is left to the
+# CLI and the module: a live sky must not freeze Blender.
+LIVE_METHODS = ("auto", "analytic", "lut", "raymarch")
+WIDTHS = (256, 512, 1024, 2048, 4096)
+
+
+@dataclasses.dataclass(frozen=True)
+class SkyRequest:
+    preset: str = "bruneton2017"
+    air_density: float = 1.0        # x Rayleigh scattering
+    aerosol_density: float = 1.0    # x Mie scattering and extinction
+    ozone_density: float = 1.0      # x ozone absorption
+    ground_albedo: float = -1.0     # < 0: the preset's
+    altitude_m: float = 0.0         # observer above the ground, m (>= 0)
+    sun_direction: tuple = (0.0, 0.0, 1.0)  # towards the sun, Z up
+    width: int = 1024               # equirect width; height = width / 2
+    method: str = "auto"
+    exposure: float = 1.0
+
+    def key(self):
+        """A string that changes whenever the sky would (sun rounded to 1e-7)."""
+        d = dataclasses.asdict(self)
+        d["sun_direction"] = tuple(round(float(c), 7) for c in self.sun_direction)
+        return repr(sorted(d.items()))
+
+
+def validate(request, native):
+    """Raises ValueError naming the parameter and its accepted range."""
+    names = native.Atmosphere.preset_names()
+    if request.preset not in names:
+        raise ValueError(f"preset: must be one of {', '.join(names)}, got {request.preset!r}")
+    for name in ("air_density", "aerosol_density", "ozone_density"):
+        value = getattr(request, name)
+        if not (math.isfinite(value) and 0.0 <= value <= 100.0):
+            raise ValueError(f"{name}: must be in [0, 100], got {value}")
+    if not (request.ground_albedo < 0.0 or request.ground_albedo <= 1.0):
+        raise ValueError(f"ground_albedo: must be in [0, 1] (or < 0 for the preset's), got "
+                         f"{request.ground_albedo}")
+    if not (math.isfinite(request.altitude_m) and request.altitude_m >= 0.0):
+        raise ValueError(f"altitude_m: must be >= 0 m, got {request.altitude_m}")
+    if request.width not in WIDTHS:
+        raise ValueError(f"width: must be one of {', '.join(map(str, WIDTHS))}, got "
+                         f"{request.width}")
+    if not (math.isfinite(request.exposure) and 0.0 < request.exposure <= 1e6):
+        raise ValueError(f"exposure: must be in (0, 1e6], got {request.exposure}")
+    s = request.sun_direction
+    if len(s) != 3 or not all(math.isfinite(c) for c in s) or math.hypot(*s) == 0.0:
+        raise ValueError(f"sun_direction: must be a finite non-zero vector, got {tuple(s)}")
+    resolve_method(request.method, native)
+
+
+def resolve_method(method, native):
+    """The module's method for `method`: "auto" is the module's own automatic choice
+    where it has one, else "lut" (Hillaire 2020, the fast default)."""
+    available = list(native.methods())
+    if method == "auto":
+        return "auto" if "auto" in available else "lut"
+    if method not in available or method not in LIVE_METHODS:
+        offered = [m for m in LIVE_METHODS if m == "auto" or m in available]
+        raise ValueError(f"method: must be one of {', '.join(offered)}, got {method!r}")
+    return method
+
+
+def build_atmosphere(request, native):
+    """The preset with the request's multipliers applied (validated by the core)."""
+    atm = native.Atmosphere.preset(request.preset)
+    if request.air_density != 1.0:
+        atm.rayleigh_scattering = atm.rayleigh_scattering * request.air_density
+    if request.aerosol_density != 1.0:
+        atm.mie_scattering = atm.mie_scattering * request.aerosol_density
+        atm.mie_extinction = atm.mie_extinction * request.aerosol_density
+    if request.ozone_density != 1.0:
+        atm.absorption_extinction = atm.absorption_extinction * request.ozone_density
+    if request.ground_albedo >= 0.0:
+        atm.ground_albedo = [request.ground_albedo] * len(atm.wavelengths_nm)
+    atm.validate()
+    return atm
+
+
+def observer_altitude(origin_altitude_m, camera_z_m):
+    """Altitude of the observer (the camera) above the ground: the scene origin's altitude
+    plus the camera's height in the scene (Z up, metres). Returns (altitude_m, warning or
+    None); an observer below the ground is put on it, with a warning."""
+    altitude = float(origin_altitude_m) + float(camera_z_m)
+    if altitude < 0.0:
+        return 0.0, (f"the camera is {-altitude:.3g} m below the ground (origin altitude "
+                     f"{origin_altitude_m:.6g} m + camera height {camera_z_m:.6g} m): the sky "
+                     f"is computed for an observer on the ground (0 m)")
+    return altitude, None

@@ -1,0 +1,139 @@
+// Aerial perspective: the air between a camera and the surfaces it renders (Hillaire 2020,
+// "A Scalable and Production Ready Sky and Atmosphere Rendering Technique", sec. 5.6).
+//
+// A surface at distance d along a view ray is seen through the air as
+//     L_seen = T(d) L_surface + L_in(d),
+// with T(d) the transmittance of the path and L_in(d) the light the air scatters into it
+// (single scattering of the sun, with the planet's shadow, plus Hillaire's multiple-
+// scattering term; the same integrand as the sky, inscattering.hpp):
+//     L_in(d) = integral_0^d T(t) E_sun [T_sun(t) (sigma_R P_R + sigma_M P_M)
+//                                       + (sigma_R + sigma_M) Psi_ms(t)] dt.
+// The passes hold exactly these two, per pixel: `Welkin.AerialInscatter` = L_in (RGB) and
+// `Welkin.AerialTransmittance` = T (RGB), so that a compositor's Image x T + Inscatter is
+// the hazed render. Sun transmittance and Psi_ms come from the atmosphere's LUTs
+// (atmosphere_luts.hpp); terrain shadows on the air (light shafts) are not modelled.
+//
+// Units and colour, as the sky's: L_in is linear Rec.709 in W m^-2 sr^-1 (CIE 1931
+// weighted, without the 683 lm/W factor; color.hpp, lambda power -3, the sky's
+// conversion), multiplied by the scene's exposure. T is dimensionless and is the
+// transmittance a sunlit surface sees: per Rec.709 channel k,
+//     T_k = rgb_k(E_sun(lambda) T(lambda)) / rgb_k(E_sun(lambda))
+// with the sun's conversion (lambda power 0), clamped to [0, 1]; T = 1 gives exactly 1.
+//
+// Two ways to the passes, behind one call (aerial_perspective()):
+//  * "froxel" (Hillaire's camera volume): a froxel_width x froxel_height x froxel_slices
+//    grid over the camera's screen (columns at screen coordinates i / (width - 1), so the
+//    image edges are columns) and its depth. Depth slices are spaced quadratically,
+//    z_k = z_max (k / N)^2, k = 1..N (dense near the camera, where haze builds fastest
+//    relative to its value), and z_max is fitted to the depth buffer unless given: the
+//    depth below which 99.9 % of the non-sky pixels lie, and no further than the farthest
+//    depth at which a column's ray leaves the atmosphere (beyond it nothing changes). The
+//    rarer deeper pixels (a far ridge's last pixels, the Moon) are marched one by one as
+//    by "raymarch", so that they do not stretch every slice. The volume is built by
+//    marching each column's ray through the slices (steps_per_slice sub-steps each). A pixel reads it bilinearly across the screen and
+//    linearly in depth between its two slices (with L = 0, T = 1 at depth 0); the
+//    transmittance is interpolated as optical depth, -ln T, so that exponential fall-off
+//    across deep slices does not band.
+//  * "raymarch": every pixel's ray marched to its own depth (raymarch_steps uniform steps,
+//    each integrated in Hillaire's energy-conserving form), the reference the froxels are
+//    tested and benchmarked against.
+//
+// Depth is Blender's Z pass (camera.hpp): along the view axis for perspective and
+// orthographic cameras, along the ray for panoramic ones; all three camera types are
+// supported by both ways (a full panorama needs more froxel columns than 32 x 32, which
+// it spreads over the whole sphere; 256 x 128 is tested).
+//
+// Sky pixels: a depth of +infinity, or at or beyond
+// aerial.sky_depth_m (Cycles writes 1e10 m for the background), gets T = 1 and
+// L_in = 0: the render's background already shows the sky (the world texture holds the
+// atmosphere's whole path radiance), so Image x T + Inscatter leaves it as rendered.
+// A NaN, negative or -infinite depth is an error naming the pixel.
+//
+// Frame: Blender's world, Z up, metres; the planet centre is straight below the scene
+// origin (scene.hpp), so every point's altitude is its distance from the centre minus the
+// ground radius, and a camera or a surface below the ground sphere sees the air of the
+// ground (densities are clamped at altitude 0).
+//
+// Threads: TBB; results do not depend on the thread count. Cancellable through Progress.
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+#include "welkin/atmosphere_luts.hpp"
+#include "welkin/scene.hpp"
+
+namespace welkin {
+
+struct AerialPasses {
+    int width = 0, height = 0;
+    std::vector<float> inscatter;      // (height, width, 3), top row first
+    std::vector<float> transmittance;  // (height, width, 3), top row first
+};
+
+// Bytes the passes of a width x height render take while computed (depth in, two RGB
+// passes out, float: 28 per pixel), plus what the caller holds besides
+// (`extra_bytes_per_pixel`: the CLI's EXR buffer, the module's numpy copies). Throws
+// InvalidArgument naming "resolution" when that is more than half of this machine's
+// physical memory.
+std::size_t aerial_pass_bytes(int width, int height, std::size_t extra_bytes_per_pixel = 0);
+void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixel = 0);
+
+// Throws InvalidArgument naming "depth" (and the pixel) for a NaN, negative or -infinite
+// value, or when depth.size() != width * height.
+void validate_depth(std::span<const float> depth, int width, int height);
+
+// The largest depth below sky_depth_m (0 when every pixel is sky).
+double largest_finite_depth(std::span<const float> depth, double sky_depth_m);
+
+// True for a sky pixel's depth.
+inline bool is_sky_depth(float depth, double sky_depth_m) {
+    return !(double(depth) < sky_depth_m);  // +inf, and beyond the threshold
+}
+
+// Hillaire's camera-frustum volume for one camera and sun.
+class AerialPerspectiveVolume {
+public:
+    // `luts` must be built from scene.atmosphere with scene.sky_options. max_depth_m > 0.
+    AerialPerspectiveVolume(const SceneDescription& scene, const AtmosphereLuts& luts, int width,
+                            int height, double max_depth_m, Progress* progress = nullptr);
+
+    struct Sample {
+        std::array<float, 3> inscatter, transmittance;
+    };
+    // Screen coordinates (sx, sy) in [0, 1], top-left origin (clamped); depth as the Z
+    // pass, clamped to [0, max_depth_m()] (the caller decides what sky pixels get).
+    Sample sample(double sx, double sy, double depth) const;
+
+    int columns() const { return nx_; }
+    int rows() const { return ny_; }
+    int slices() const { return nz_; }
+    double max_depth_m() const { return max_depth_; }
+    // The depth of slice k in 1..slices().
+    double slice_depth(int k) const;
+
+private:
+    int nx_, ny_, nz_;
+    double max_depth_;
+    // Per froxel (k - 1, j, i), RGB: inscatter (times exposure) and optical depth -ln T.
+    std::vector<float> inscatter_, optical_depth_;
+    std::size_t index(int i, int j, int k) const {
+        return ((std::size_t(k) * std::size_t(ny_) + std::size_t(j)) * std::size_t(nx_) + std::size_t(i)) * 3;
+    }
+};
+
+// The passes for `depth` ((height, width), top row first, the Z pass), width x height
+// being the scene's render resolution, by the scene's aerial.method. Throws
+// InvalidArgument naming "camera" (none), "depth" or "resolution".
+AerialPasses aerial_perspective(const SceneDescription& scene, std::span<const float> depth,
+                                int width, int height, Progress* progress = nullptr);
+
+// Either way explicitly (tests and the bench compare them).
+AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<const float> depth,
+                                       int width, int height, Progress* progress = nullptr);
+AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
+                                         std::span<const float> depth, int width, int height,
+                                         Progress* progress = nullptr);
+
+}  // namespace welkin

@@ -1,0 +1,92 @@
+// The scene description (../shared/DESIGN.md, data flow): everything one frame's sky and
+// camera passes depend on, as plain data, in and out of JSON.
+//
+// One description drives both Blender and the CLI: the add-on writes it from bpy data
+// (a few lines: the camera's matrix_world and its Camera data, the sun lamp's direction,
+// the render resolution) beside each frame's passes, and `welkin aerial --scene` or
+// `welkin sky --scene` reproduces the frame from the JSON alone. The schema is documented
+// in README.md ("Scene JSON"); scene_json.cpp reads and writes it. to_json writes the
+// atmosphere in full (not by preset name), so a file stays valid when a preset changes.
+//
+// Frame: Blender's world frame, Z up, metres. The scene origin (0, 0, 0) sits
+// origin_altitude_m above the ground; the planet centre is straight below it, at
+// (0, 0, -(bottom_radius + origin_altitude_m)). A point's altitude is its distance from
+// the centre minus bottom_radius, so a camera 10 km away along X at z = 0 stands about
+// 8 m higher than the origin (the ground curves away).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "welkin/atmosphere.hpp"
+#include "welkin/camera.hpp"
+#include "welkin/sky_method.hpp"
+
+namespace welkin {
+
+// How the aerial-perspective passes are computed (aerial_perspective.hpp).
+struct AerialOptions {
+    enum class Method { Froxel, Raymarch };
+    Method method = Method::Froxel;
+    // Froxel volume: screen-space columns and depth slices (Hillaire 2020: 32 x 32 x 32).
+    int froxel_width = 32, froxel_height = 32, froxel_slices = 32;
+    // Largest depth the volume covers, m; 0 fits it to the depth buffer's largest finite
+    // (non-sky) depth.
+    double max_depth_m = 0.0;
+    // Sub-steps per depth slice when the volume is built.
+    int steps_per_slice = 4;
+    // Per-pixel ray march ("raymarch" method, and the reference the froxels are tested
+    // against): steps along each pixel's ray up to its depth.
+    int raymarch_steps = 64;
+    // Depths at or beyond this (and +infinity) are sky pixels; Cycles writes 1e10 m for
+    // the background.
+    double sky_depth_m = 1e9;
+
+    void validate(const std::string& parameter = "aerial") const;
+};
+
+const char* aerial_method_name(AerialOptions::Method method);
+// "froxel" | "raymarch"; throws InvalidArgument naming `parameter`.
+AerialOptions::Method aerial_method_from_name(const std::string& name,
+                                              const std::string& parameter = "aerial.method");
+
+struct SceneDescription {
+    static constexpr int kVersion = 1;
+    int version = kVersion;
+
+    Atmosphere atmosphere = Atmosphere::preset("bruneton2017");
+    double origin_altitude_m = 0.0;          // the scene origin above the ground, >= 0
+    glm::dvec3 sun_direction{0.0, 0.5, 0.8660254037844386};  // towards the sun; normalised
+    double exposure = 1.0;                   // multiplies radiance once, at the output
+    std::string method = "auto";             // sky method (sky_method.hpp); auto by default
+    std::optional<Camera> camera;            // absent: no camera passes can be made
+    RenderResolution resolution;
+    AerialOptions aerial;
+    SkyOptions sky_options;                  // LUT sizes and method options
+
+    // Throws InvalidArgument naming the field (as in the JSON: "camera.lens_mm"). Does not
+    // require a camera; camera passes call require_camera().
+    void validate() const;
+    const Camera& require_camera() const;
+
+    // The observer at the scene origin (for the sky and the sun).
+    Observer origin_observer() const { return Observer{origin_altitude_m, sun_direction}.validated(); }
+    // The planet centre in the world frame.
+    glm::dvec3 planet_centre() const {
+        return {0.0, 0.0, -(atmosphere.bottom_radius_m + origin_altitude_m)};
+    }
+
+    static SceneDescription from_json_string(const std::string& text);
+    static SceneDescription from_json_file(const std::string& path);
+    std::string to_json_string() const;
+    // Refuses to replace an existing file unless `overwrite`; atomic.
+    void to_json_file(const std::string& path, bool overwrite = false) const;
+};
+
+// Elevation above the XY plane and azimuth counter-clockwise from +X (degrees, as at
+// every user edge) to the unit vector towards the sun, and back.
+glm::dvec3 sun_direction_from_angles_deg(double elevation_deg, double azimuth_deg);
+
+}  // namespace welkin

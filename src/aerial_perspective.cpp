@@ -1,0 +1,453 @@
+// Aerial perspective: Hillaire 2020's camera volume and the per-pixel march; see
+// aerial_perspective.hpp for what the passes mean.
+//
+// Both ways integrate the same thing along a ray x(t) = p0 + t d (p0 relative to the
+// planet centre, double precision, so r - R stays exact to well below a millimetre):
+// the segment [t0, t1] is cut into n equal steps, each sampled at its midpoint, and
+// each step adds, in Hillaire's energy-conserving form (Hillaire 2015, "Physically
+// Based and Unified Volumetric Rendering in Frostbite", sec. 5.6.3; also
+// inscattering.hpp),
+//     L += T S (1 - exp(-sigma_t dt)) / sigma_t,      T *= exp(-sigma_t dt),
+// with the source S = T_sun (sigma_R P_R(nu) + sigma_M P_M(nu)) + (sigma_R + sigma_M) Psi_ms
+// (Hillaire 2020 eqs. 1-4, 10; times E_sun at the end). The form is exact for a
+// constant source in a homogeneous step however optically thick the step is, which is
+// what keeps deep slices in strong haze from banding. The sun's direction is the same
+// at every point (the sun is at infinity), so its zenith cosine at x is dot(x, s) / |x|;
+// T_sun (with the planet's shadow) and Psi_ms are lookups in the atmosphere's LUTs.
+#include "welkin/aerial_perspective.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "welkin/color.hpp"
+#include "welkin/error.hpp"
+#include "welkin/geometry.hpp"
+#include "welkin/math.hpp"
+
+namespace welkin {
+namespace {
+
+// Largest optical depth kept in the volume (T = e^-80 ~ 2e-35, below any float image).
+constexpr float kMaxOpticalDepth = 80.0f;
+
+// One ray in planet-centred coordinates with its phase values (nu is constant along it).
+struct AirRay {
+    glm::dvec3 p0;   // origin relative to the planet centre, m
+    glm::dvec3 d;    // unit direction
+    glm::dvec3 sun;  // unit, towards the sun
+};
+
+// Adds [t0, t1] of the ray in n steps to (L, T) of one batch; L per unit sun irradiance.
+void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayleigh_p,
+                   float mie_p, double t0, double t1, int n, Spectrum4& L, Spectrum4& T) {
+    if (!(t1 > t0)) return;
+    const AtmosphereBatch& medium = b.medium;
+    const double R = medium.bottom_radius(), top = medium.top_radius();
+    const double dt = (t1 - t0) / double(n);
+    const float dtf = float(dt);
+    for (int i = 0; i < n; ++i) {
+        const double t = t0 + (double(i) + 0.5) * dt;
+        const glm::dvec3 x = ray.p0 + t * ray.d;
+        const double r = glm::length(x);
+        if (r >= top) continue;  // no air
+        const MediumSample m = medium.sample(r - R);
+        const double r_lookup = std::max(r, R);  // below the ground sphere: the ground's air
+        const double mu_s = clamp_cosine(glm::dot(x, ray.sun) / r);
+        const Spectrum4 sun_t = b.transmittance.to_sun(r_lookup, mu_s);
+        const Spectrum4 psi = b.multiscattering.psi(r_lookup, mu_s);
+        const Spectrum4 source = sun_t * (m.rayleigh_scattering * rayleigh_p + m.mie_scattering * mie_p) +
+                                 (m.rayleigh_scattering + m.mie_scattering) * psi;
+        const Spectrum4 T_seg = glm::exp(-m.extinction * dtf);
+        Spectrum4 w;
+        for (int c = 0; c < 4; ++c)
+            w[c] = m.extinction[c] > 1e-12f ? (1.0f - T_seg[c]) / m.extinction[c] : dtf;
+        L += T * w * source;
+        T *= T_seg;
+    }
+}
+
+// Spectral (L, T) of all channels -> the passes' RGB (see the header: the sky's
+// conversion for L, the sunlit-surface ratio for T).
+class PassColour {
+public:
+    PassColour(const Atmosphere& atm, double exposure)
+        : sky_(atm.wavelengths_nm, -3.0),
+          sun_(atm.wavelengths_nm, 0.0),
+          solar_(atm.solar_irradiance.begin(), atm.solar_irradiance.end()),
+          exposure_(exposure) {
+        white_ = sun_.convert(solar_);
+    }
+
+    std::size_t channels() const { return solar_.size(); }
+
+    // `scratch` holds channels() floats.
+    void convert(std::span<const float> L, std::span<const float> T, std::span<float> scratch,
+                 float* L3, float* T3) const {
+        const std::array<double, 3> l = sky_.convert(L);
+        for (std::size_t c = 0; c < solar_.size(); ++c) scratch[c] = solar_[c] * T[c];
+        const std::array<double, 3> t = sun_.convert(scratch);
+        for (int k = 0; k < 3; ++k) {
+            L3[k] = float(l[k] * exposure_);
+            T3[k] = float(white_[k] > 0.0 ? clamp01(t[k] / white_[k]) : 0.0);
+        }
+    }
+
+private:
+    SpectrumToRgb sky_, sun_;
+    std::vector<float> solar_;
+    std::array<double, 3> white_{};
+    double exposure_;
+};
+
+AirRay air_ray(const SceneDescription& scene, const CameraRays::Ray& ray, const glm::dvec3& sun) {
+    return {ray.origin - scene.planet_centre(), ray.direction, sun};
+}
+
+// The part of [0, t_end] of the ray inside the atmosphere's top sphere; empty when the
+// ray misses it.
+bool clip_to_atmosphere(const AirRay& ray, double top, double t_end, double& t0, double& t1) {
+    const double r = glm::length(ray.p0);
+    const double rmu = glm::dot(ray.p0, ray.d);
+    const double disc = rmu * rmu - (r - top) * (r + top);
+    if (disc < 0.0) return false;
+    const double q = std::sqrt(disc);
+    t0 = std::max(0.0, -rmu - q);
+    t1 = std::min(t_end, -rmu + q);
+    return t1 > t0;
+}
+
+void check_call(const SceneDescription& scene, std::span<const float> depth, int width, int height) {
+    scene.validate();
+    scene.require_camera();
+    const int w = scene.resolution.width(), h = scene.resolution.height();
+    if (width != w || height != h)
+        throw InvalidArgument("depth",
+                              fmt::format("is {} x {} pixels but the scene renders {} x {} "
+                                          "(resolution {} x {} at {} %)",
+                                          width, height, w, h, scene.resolution.x,
+                                          scene.resolution.y, scene.resolution.percentage));
+    check_aerial_memory(width, height);
+    validate_depth(depth, width, height);
+}
+
+// Marches one pixel's ray to its depth: the "raymarch" method, and the froxel method's
+// fallback for the few pixels beyond its fitted depth range.
+class PixelMarcher {
+public:
+    PixelMarcher(const SceneDescription& scene, const AtmosphereLuts& luts, int width, int height)
+        : scene_(scene),
+          luts_(luts),
+          rays_(scene.require_camera(), width, height),
+          sun_(scene.origin_observer().sun_direction),
+          colour_(scene.atmosphere, scene.exposure),
+          steps_(scene.aerial.raymarch_steps),
+          top_(scene.atmosphere.top_radius_m) {}
+
+    struct Scratch {
+        explicit Scratch(std::size_t C) : L(C), T(C), tmp(C) {}
+        std::vector<float> L, T, tmp;
+    };
+    std::size_t channels() const { return colour_.channels(); }
+
+    // Pixel (x, y) at Z-pass depth z >= 0 (not sky): RGB in-scattering and transmittance.
+    void operator()(int x, int y, float z, Scratch& s, float* L3, float* T3) const {
+        for (int c = 0; c < 3; ++c) {
+            L3[c] = 0.0f;
+            T3[c] = 1.0f;
+        }
+        if (!(z > 0.0f)) return;
+        const CameraRays::Ray cam = rays_.at_pixel(x, y);
+        const AirRay ray = air_ray(scene_, cam, sun_);
+        double t0, t1;
+        if (!clip_to_atmosphere(ray, top_, double(z) * cam.distance_per_depth, t0, t1)) return;
+        const float nu = float(clamp_cosine(glm::dot(ray.d, sun_)));
+        for (const auto& b : luts_.batches()) {
+            Spectrum4 Ls(0.0f), Ts(1.0f);
+            march_segment(*b, ray, b->medium.rayleigh_phase(nu), b->medium.mie_phase(nu), t0, t1, steps_, Ls, Ts);
+            store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(), &s.L[b->medium.first_channel()]);
+            store_channels(Ts, b->medium.channel_count(), &s.T[b->medium.first_channel()]);
+        }
+        colour_.convert(s.L, s.T, s.tmp, L3, T3);
+    }
+
+private:
+    const SceneDescription& scene_;
+    const AtmosphereLuts& luts_;
+    CameraRays rays_;
+    glm::dvec3 sun_;
+    PassColour colour_;
+    int steps_;
+    double top_;
+};
+
+// The fraction of the finite depths the froxel volume's range covers; deeper pixels (a far
+// ridge's last pixels, the Moon) are marched one by one instead of stretching every slice.
+constexpr double kFittedFraction = 0.999;
+
+// The depth below which kFittedFraction of the non-sky pixels lie (0 when all are sky).
+double fitted_depth(std::span<const float> depth, double sky_depth_m) {
+    std::vector<float> finite;
+    finite.reserve(depth.size());
+    for (const float z : depth)
+        if (!is_sky_depth(z, sky_depth_m) && z > 0.0f) finite.push_back(z);
+    if (finite.empty()) return 0.0;
+    const std::size_t k = std::size_t(kFittedFraction * double(finite.size() - 1));
+    std::nth_element(finite.begin(), finite.begin() + std::ptrdiff_t(k), finite.end());
+    return double(finite[k]);
+}
+
+// The largest view-axis depth at which any froxel column's ray leaves the top of the
+// atmosphere (0 when none is inside it): beyond it nothing changes along any column, so
+// the fitted depth range never needs to reach further, however far the farthest surface
+// is (a moon, the ground seen from orbit).
+double atmosphere_exit_depth(const SceneDescription& scene, int width, int height) {
+    const CameraRays rays(scene.require_camera(), width, height);
+    const int nx = scene.aerial.froxel_width, ny = scene.aerial.froxel_height;
+    const double top = scene.atmosphere.top_radius_m;
+    double z = 0.0;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const CameraRays::Ray cam = rays.at_screen(double(i) / double(nx - 1), double(j) / double(ny - 1));
+            const AirRay ray = air_ray(scene, cam, glm::dvec3(0.0, 0.0, 1.0));
+            double t0, t1;
+            if (clip_to_atmosphere(ray, top, std::numeric_limits<double>::infinity(), t0, t1))
+                z = std::max(z, t1 / cam.distance_per_depth);
+        }
+    return z;
+}
+
+AerialPasses allocate(int width, int height) {
+    AerialPasses p;
+    p.width = width;
+    p.height = height;
+    const std::size_t n = std::size_t(width) * std::size_t(height) * 3;
+    p.inscatter.assign(n, 0.0f);
+    p.transmittance.assign(n, 1.0f);
+    return p;
+}
+
+}  // namespace
+
+std::size_t aerial_pass_bytes(int width, int height, std::size_t extra_bytes_per_pixel) {
+    return std::size_t(width) * std::size_t(height) * (sizeof(float) * 7 + extra_bytes_per_pixel);
+}
+
+void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixel) {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+    const double physical = pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
+    // In double: 65536^2 pixels at 32767 % overflow any integer.
+    const double needed = double(width) * double(height) * double(sizeof(float) * 7 + extra_bytes_per_pixel);
+    if (physical > 0.0 && needed > 0.5 * physical)
+        throw InvalidArgument("resolution",
+                              fmt::format("a {} x {} render needs {:.1f} GiB for its depth and "
+                                          "aerial passes (float), more than half of this "
+                                          "machine's {:.1f} GiB of memory; lower "
+                                          "resolution.percentage",
+                                          width, height, needed / double(1 << 30),
+                                          physical / double(1 << 30)));
+}
+
+void validate_depth(std::span<const float> depth, int width, int height) {
+    if (depth.size() != std::size_t(width) * std::size_t(height))
+        throw InvalidArgument("depth", fmt::format("holds {} values, needs width x height = {} x {}",
+                                                   depth.size(), width, height));
+    for (std::size_t k = 0; k < depth.size(); ++k) {
+        const float z = depth[k];
+        if (z >= 0.0f) continue;  // +inf included
+        const std::size_t x = k % std::size_t(width), y = k / std::size_t(width);
+        throw InvalidArgument("depth",
+                              fmt::format("pixel (x {}, y {}, row 0 at the top) is {}; depths "
+                                          "must be >= 0 m (+inf or >= aerial.sky_depth_m marks "
+                                          "sky)",
+                                          x, y, std::isnan(z) ? "NaN" : fmt::format("{}", z)));
+    }
+}
+
+double largest_finite_depth(std::span<const float> depth, double sky_depth_m) {
+    double z_max = 0.0;
+    for (const float z : depth)
+        if (!is_sky_depth(z, sky_depth_m)) z_max = std::max(z_max, double(z));
+    return z_max;
+}
+
+AerialPerspectiveVolume::AerialPerspectiveVolume(const SceneDescription& scene,
+                                                 const AtmosphereLuts& luts, int width,
+                                                 int height, double max_depth_m,
+                                                 Progress* progress)
+    : nx_(scene.aerial.froxel_width),
+      ny_(scene.aerial.froxel_height),
+      nz_(scene.aerial.froxel_slices),
+      max_depth_(max_depth_m) {
+    scene.validate();
+    require_in_range("aerial.max_depth_m", max_depth_m, 1e-6, 1e12, "m");
+    const CameraRays rays(scene.require_camera(), width, height);
+    const glm::dvec3 sun = scene.origin_observer().sun_direction;
+    const PassColour colour(scene.atmosphere, scene.exposure);
+    const std::size_t C = colour.channels();
+    inscatter_.assign(std::size_t(nx_) * ny_ * nz_ * 3, 0.0f);
+    optical_depth_.assign(inscatter_.size(), 0.0f);
+    const int steps = scene.aerial.steps_per_slice;
+    ProgressTracker tracker(progress, std::size_t(nx_) * std::size_t(ny_));
+    tbb::parallel_for(tbb::blocked_range<int>(0, nx_ * ny_), [&](const tbb::blocked_range<int>& range) {
+        std::vector<float> L(std::size_t(nz_) * C), T(std::size_t(nz_) * C), scratch(C);
+        for (int column = range.begin(); column != range.end(); ++column) {
+            const int i = column % nx_, j = column / nx_;
+            const CameraRays::Ray cam = rays.at_screen(double(i) / double(nx_ - 1), double(j) / double(ny_ - 1));
+            const AirRay ray = air_ray(scene, cam, sun);
+            for (const auto& b : luts.batches()) {
+                const float nu = float(clamp_cosine(glm::dot(ray.d, sun)));
+                const float rp = b->medium.rayleigh_phase(nu), mp = b->medium.mie_phase(nu);
+                Spectrum4 Ls(0.0f), Ts(1.0f);
+                double t_prev = 0.0;
+                for (int k = 1; k <= nz_; ++k) {
+                    const double t = slice_depth(k) * cam.distance_per_depth;
+                    march_segment(*b, ray, rp, mp, t_prev, t, steps, Ls, Ts);
+                    t_prev = t;
+                    const Spectrum4 Le = Ls * b->medium.solar_irradiance();
+                    store_channels(Le, b->medium.channel_count(), &L[std::size_t(k - 1) * C + b->medium.first_channel()]);
+                    store_channels(Ts, b->medium.channel_count(), &T[std::size_t(k - 1) * C + b->medium.first_channel()]);
+                }
+            }
+            for (int k = 0; k < nz_; ++k) {
+                float L3[3], T3[3];
+                colour.convert({&L[std::size_t(k) * C], C}, {&T[std::size_t(k) * C], C}, scratch, L3, T3);
+                const std::size_t at = index(i, j, k);
+                for (int c = 0; c < 3; ++c) {
+                    inscatter_[at + c] = L3[c];
+                    optical_depth_[at + c] =
+                        T3[c] > 0.0f ? std::min(-std::log(T3[c]), kMaxOpticalDepth) : kMaxOpticalDepth;
+                }
+            }
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+}
+
+double AerialPerspectiveVolume::slice_depth(int k) const {
+    const double s = double(k) / double(nz_);
+    return max_depth_ * s * s;
+}
+
+AerialPerspectiveVolume::Sample AerialPerspectiveVolume::sample(double sx, double sy, double depth) const {
+    Sample out{{0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f}};
+    if (!(depth > 0.0)) return out;
+    depth = std::min(depth, max_depth_);  // beyond the volume (or +inf): its last slice
+    // Screen: bilinear between the four nearest columns.
+    const double fx = clamp01(sx) * double(nx_ - 1), fy = clamp01(sy) * double(ny_ - 1);
+    const int i = std::min(int(fx), nx_ - 2), j = std::min(int(fy), ny_ - 2);
+    const float wx = float(fx - i), wy = float(fy - j);
+    // Depth: the two slices around it (slice 0 is depth 0: L = 0, tau = 0), linear in depth.
+    const double s = std::sqrt(depth / max_depth_) * double(nz_);
+    const int k = std::min(int(s), nz_ - 1);  // depth lies between slices k and k + 1
+    const double z0 = k == 0 ? 0.0 : slice_depth(k), z1 = slice_depth(k + 1);
+    const float wz = float(clamp01((depth - z0) / (z1 - z0)));
+    float L[3] = {0, 0, 0}, tau[3] = {0, 0, 0};
+    const float wxy[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
+    const int di[4] = {0, 1, 0, 1}, dj[4] = {0, 0, 1, 1};
+    for (int corner = 0; corner < 4; ++corner) {
+        const std::size_t hi = index(i + di[corner], j + dj[corner], k);
+        for (int c = 0; c < 3; ++c) {
+            float l = wz * inscatter_[hi + c], t = wz * optical_depth_[hi + c];
+            if (k > 0) {
+                const std::size_t lo = index(i + di[corner], j + dj[corner], k - 1);
+                l += (1 - wz) * inscatter_[lo + c];
+                t += (1 - wz) * optical_depth_[lo + c];
+            }
+            L[c] += wxy[corner] * l;
+            tau[c] += wxy[corner] * t;
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        out.inscatter[c] = L[c];
+        out.transmittance[c] = std::exp(-tau[c]);
+    }
+    return out;
+}
+
+AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<const float> depth,
+                                       int width, int height, Progress* progress) {
+    check_call(scene, depth, width, height);
+    AerialPasses passes = allocate(width, height);
+    const double sky = scene.aerial.sky_depth_m;
+    double z_max = scene.aerial.max_depth_m;
+    if (!(z_max > 0.0)) {
+        z_max = fitted_depth(depth, sky);
+        const double exit = atmosphere_exit_depth(scene, width, height);
+        if (exit > 0.0) z_max = std::min(z_max, exit);
+    }
+    if (!(z_max > 0.0)) {  // nothing but sky (or depth 0): T = 1, L = 0 everywhere
+        if (progress) progress->report(1.0);
+        return passes;
+    }
+    const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
+    // Build ~ a few percent of the work; the application is one lookup per pixel.
+    const AerialPerspectiveVolume volume(scene, luts, width, height, z_max, nullptr);
+    const PixelMarcher march(scene, luts, width, height);
+    ProgressTracker tracker(progress, std::size_t(height));
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+        PixelMarcher::Scratch scratch(march.channels());
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            const double sy = (double(y) + 0.5) / double(height);
+            for (int x = 0; x < width; ++x) {
+                const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                const float z = depth[p];
+                if (is_sky_depth(z, sky)) continue;
+                if (double(z) > z_max && scene.aerial.max_depth_m <= 0.0) {  // beyond the fitted range
+                    march(x, y, z, scratch, &passes.inscatter[p * 3], &passes.transmittance[p * 3]);
+                    continue;
+                }
+                const AerialPerspectiveVolume::Sample s =
+                    volume.sample((double(x) + 0.5) / double(width), sy, double(z));
+                for (int c = 0; c < 3; ++c) {
+                    passes.inscatter[p * 3 + c] = s.inscatter[c];
+                    passes.transmittance[p * 3 + c] = s.transmittance[c];
+                }
+            }
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+    return passes;
+}
+
+AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
+                                         std::span<const float> depth, int width, int height,
+                                         Progress* progress) {
+    check_call(scene, depth, width, height);
+    AerialPasses passes = allocate(width, height);
+    const double sky = scene.aerial.sky_depth_m;
+    const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
+    const PixelMarcher march(scene, luts, width, height);
+    ProgressTracker tracker(progress, std::size_t(height));
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+        PixelMarcher::Scratch scratch(march.channels());
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            for (int x = 0; x < width; ++x) {
+                const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                if (is_sky_depth(depth[p], sky)) continue;
+                march(x, y, depth[p], scratch, &passes.inscatter[p * 3], &passes.transmittance[p * 3]);
+            }
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+    return passes;
+}
+
+AerialPasses aerial_perspective(const SceneDescription& scene, std::span<const float> depth, int width,
+                                int height, Progress* progress) {
+    return scene.aerial.method == AerialOptions::Method::Froxel
+               ? aerial_perspective_froxel(scene, depth, width, height, progress)
+               : aerial_perspective_raymarch(scene, depth, width, height, progress);
+}
+
+}  // namespace welkin

@@ -1,0 +1,131 @@
+// welkin.SceneDescription and welkin.aerial_perspective (include/welkin/scene.hpp,
+// aerial_perspective.hpp): what the Blender add-on needs to turn a rendered frame's depth
+// into its aerial-perspective passes (EXR files in and out: exr_bindings.cpp). Thin: the
+// scene travels as its JSON text, the depth as a numpy array, the passes come back as
+// numpy arrays the core wrote into.
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "welkin/aerial_perspective.hpp"
+#include "welkin/camera.hpp"
+#include "welkin/error.hpp"
+#include "welkin/scene.hpp"
+
+namespace welkin::python {
+namespace {
+
+const char* const kAerialDoc = R"doc(
+Aerial-perspective passes of a rendered frame.
+
+    inscatter, transmittance = welkin.aerial_perspective(scene, depth, method=None)
+
+Parameters
+----------
+scene : welkin.SceneDescription or str
+    The frame's scene description (or its JSON text); it must have a camera. Its
+    resolution (x, y, percentage) must give depth's shape.
+depth : array-like, shape (height, width)
+    Blender's Z pass, metres: along the view axis for perspective and orthographic
+    cameras, along the ray for panoramic ones. Rows top first (as in EXR files;
+    Blender's own pixel buffers are bottom row first: flip them with depth[::-1]).
+    +inf or >= aerial.sky_depth_m (default 1e9; Cycles writes 1e10 for the
+    background) marks sky pixels: transmittance 1, no in-scattering.
+method : None, "froxel" or "raymarch"
+    None: the scene's aerial.method. "froxel": Hillaire 2020's camera volume;
+    "raymarch": every pixel marched to its depth (slow, the reference).
+progress : callable(fraction) or None
+    Called with the fraction done; return False to cancel (KeyboardInterrupt).
+
+Returns
+-------
+(inscatter, transmittance), float32 arrays of shape (height, width, 3), rows top
+first. inscatter: linear Rec.709, W m^-2 sr^-1, times the scene's exposure;
+transmittance: dimensionless in [0, 1]. Image x transmittance + inscatter is the
+hazed render (the Welkin Aerial Perspective node group does exactly that).
+
+Raises ValueError naming the parameter (no camera, a NaN or negative depth, a
+depth whose shape is not the scene's resolution, a render too large for memory).
+)doc";
+
+SceneDescription to_scene(const py::handle& scene) {
+    if (py::isinstance<SceneDescription>(scene)) return scene.cast<SceneDescription>();
+    if (py::isinstance<py::str>(scene)) return SceneDescription::from_json_string(scene.cast<std::string>());
+    throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
+}
+
+py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& depth_in,
+                                const py::object& method, const py::object& progress) {
+    SceneDescription scene = to_scene(scene_in);
+    if (!method.is_none())
+        scene.aerial.method = aerial_method_from_name(method.cast<std::string>(), "method");
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    scene.require_camera();
+    const int width = scene.resolution.width(), height = scene.resolution.height();
+    check_aerial_memory(width, height, 6 * sizeof(float));  // plus the two returned arrays
+    const c_array<float> depth = to_c_array<float>(depth_in, "depth", -1, 2, 2,
+                                                   "a (height, width) array of depths in metres");
+    if (depth.shape(0) != height || depth.shape(1) != width)
+        throw InvalidArgument("depth", fmt::format("has shape ({}, {}) but the scene renders {} x {} "
+                                                   "(shape ({}, {}))",
+                                                   depth.shape(0), depth.shape(1), width, height,
+                                                   height, width));
+    const std::span<const float> z(depth.data(), std::size_t(depth.size()));
+    AerialPasses passes;
+    run_cancellable([&](Progress* p) { passes = aerial_perspective(scene, z, width, height, p); },
+                    progress);
+    py::array_t<float> L({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
+    py::array_t<float> T({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
+    std::copy(passes.inscatter.begin(), passes.inscatter.end(), L.mutable_data());
+    std::copy(passes.transmittance.begin(), passes.transmittance.end(), T.mutable_data());
+    return py::make_tuple(L, T);
+}
+
+}  // namespace
+
+void register_aerial(py::module_& m) {
+    py::class_<SceneDescription>(m, "SceneDescription", R"doc(
+A frame's scene description: atmosphere, sun, scene origin altitude, exposure, sky
+method, Blender camera, render resolution and aerial options (README "Scene JSON").
+Plain data: build it from JSON, write it back; to_json_string() reproduces the
+frame exactly (the atmosphere is written in full).
+)doc")
+        .def_static("from_json_string", &SceneDescription::from_json_string, py::arg("text"),
+                    "Parse and validate; ValueError names the key (e.g. camera.lens_mm).")
+        .def_static("from_json", &SceneDescription::from_json_file, py::arg("path"))
+        .def("to_json_string", &SceneDescription::to_json_string)
+        .def("to_json", &SceneDescription::to_json_file, py::arg("path"), py::arg("overwrite") = false,
+             "Write atomically; refuses to replace a file unless overwrite=True.")
+        .def_property_readonly("width", [](const SceneDescription& s) { return s.resolution.width(); },
+                               "Rendered width in pixels (resolution x times percentage / 100).")
+        .def_property_readonly("height", [](const SceneDescription& s) { return s.resolution.height(); })
+        .def_property_readonly("has_camera", [](const SceneDescription& s) { return bool(s.camera); })
+        .def_property_readonly("version", [](const SceneDescription& s) { return s.version; })
+        .def(
+            "camera_ray",
+            [](const SceneDescription& s, double sx, double sy) {
+                const CameraRays rays(s.require_camera(), s.resolution.width(), s.resolution.height());
+                const CameraRays::Ray r = rays.at_screen(sx, sy);
+                return py::make_tuple(py::make_tuple(r.origin.x, r.origin.y, r.origin.z),
+                                      py::make_tuple(r.direction.x, r.direction.y, r.direction.z),
+                                      r.distance_per_depth);
+            },
+            py::arg("sx"), py::arg("sy"), R"doc(
+The camera's ray at screen coordinates (sx, sy) in [0, 1], left to right and top to
+bottom (pixel (i, j)'s centre is ((i + 0.5) / width, (j + 0.5) / height)):
+(origin, unit direction, distance_per_depth), world frame, metres; a surface at Z-pass
+depth z lies z * distance_per_depth along the ray. ValueError without a camera.
+)doc")
+        .def("__repr__", [](const SceneDescription& s) {
+            return fmt::format("<welkin.SceneDescription {} x {}, atmosphere '{}', camera {}>",
+                               s.resolution.width(), s.resolution.height(), s.atmosphere.name,
+                               s.camera ? camera_type_name(s.camera->type) : "none");
+        });
+
+    m.def("aerial_perspective", &aerial_perspective_py, kAerialDoc, py::arg("scene"),
+          py::arg("depth"), py::arg("method") = py::none(), py::kw_only(),
+          py::arg("progress") = py::none());
+}
+
+}  // namespace welkin::python

@@ -1,0 +1,79 @@
+// The scene description's checks and small conversions; see scene.hpp. The JSON form is
+// in scene_json.cpp.
+#include "welkin/scene.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+
+#include "welkin/error.hpp"
+#include "welkin/math.hpp"
+
+namespace welkin {
+
+const char* aerial_method_name(AerialOptions::Method method) {
+    return method == AerialOptions::Method::Froxel ? "froxel" : "raymarch";
+}
+
+AerialOptions::Method aerial_method_from_name(const std::string& name, const std::string& parameter) {
+    if (name == "froxel") return AerialOptions::Method::Froxel;
+    if (name == "raymarch") return AerialOptions::Method::Raymarch;
+    throw InvalidArgument(parameter,
+                          fmt::format("must be \"froxel\" (Hillaire 2020's camera volume) or "
+                                      "\"raymarch\" (every pixel marched), got \"{}\"", name));
+}
+
+void AerialOptions::validate(const std::string& p) const {
+    require_in_range(p + ".froxels[0]", froxel_width, 2, 1024, "columns");
+    require_in_range(p + ".froxels[1]", froxel_height, 2, 1024, "rows");
+    require_in_range(p + ".froxels[2]", froxel_slices, 1, 1024, "slices");
+    if (double(froxel_width) * froxel_height * froxel_slices > double(1 << 26))
+        throw InvalidArgument(p + ".froxels", "more than 2^26 froxels");
+    require_in_range(p + ".max_depth_m", max_depth_m, 0.0, 1e12, "m (0: fitted to the depth)");
+    require_in_range(p + ".steps_per_slice", steps_per_slice, 1, 256);
+    require_in_range(p + ".raymarch_steps", raymarch_steps, 1, 4096);
+    require_in_range(p + ".sky_depth_m", sky_depth_m, 1.0, 1e30, "m");
+}
+
+void SceneDescription::validate() const {
+    if (version < 1 || version > kVersion)
+        throw InvalidArgument("version", fmt::format("must be in [1, {}] (this Welkin reads scene "
+                                                     "descriptions up to version {}), got {}",
+                                                     kVersion, kVersion, version));
+    try {
+        atmosphere.validate();
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument("atmosphere." + e.parameter(), e.what());
+    }
+    require_in_range("origin_altitude_m", origin_altitude_m, 0.0, 1e9, "m");
+    for (int i = 0; i < 3; ++i) require_finite("sun.direction", sun_direction[i]);
+    if (glm::length(sun_direction) < 1e-12)
+        throw InvalidArgument("sun.direction", "must be a non-zero vector (towards the sun)");
+    require_in_range("exposure", exposure, 1e-12, 1e6);
+    try {
+        sky_options.validate();
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument("sky_options." + e.parameter(), e.what());
+    }
+    make_sky_method(method, sky_options);  // an unknown name throws, naming "method"
+    if (camera) camera->validate("camera");
+    resolution.validate("resolution");
+    aerial.validate("aerial");
+}
+
+const Camera& SceneDescription::require_camera() const {
+    if (!camera)
+        throw InvalidArgument("camera", "the scene has no camera (an object \"camera\" with "
+                                        "matrix_world and type is needed for camera passes)");
+    return *camera;
+}
+
+glm::dvec3 sun_direction_from_angles_deg(double elevation_deg, double azimuth_deg) {
+    require_in_range("sun.elevation_deg", elevation_deg, -90.0, 90.0, "degrees");
+    require_in_range("sun.azimuth_deg", azimuth_deg, -360.0, 360.0, "degrees");
+    const double e = elevation_deg * kDegree, a = azimuth_deg * kDegree;
+    return {std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e)};
+}
+
+}  // namespace welkin

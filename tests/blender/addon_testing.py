@@ -1,0 +1,197 @@
+"""Shared by the headless Blender tests: install the add-on from its zip the way a user
+does, into a temporary scripts directory (the machine's Blender configuration is never
+touched), and build small scenes.
+
+Run by scripts/test.sh as
+    blender -b --factory-startup --python-use-system-env --python-exit-code 1 --python T
+The zip is $WELKIN_ADDON_ZIP when set (scripts/test.sh builds it once), else built here
+into the temporary directory by scripts/build_addon.sh.
+"""
+import atexit
+import math
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+
+import bpy
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+TMP = pathlib.Path(tempfile.mkdtemp(prefix="welkin_blender_test_"))
+atexit.register(shutil.rmtree, TMP, ignore_errors=True)
+
+
+def addon_zip():
+    path = os.environ.get("WELKIN_ADDON_ZIP")
+    if path:
+        return pathlib.Path(path)
+    subprocess.run(["bash", str(ROOT / "scripts" / "build_addon.sh"), str(TMP / "dist")],
+                   check=True, stdout=subprocess.DEVNULL)
+    return next((TMP / "dist").glob("welkin-*.zip"))
+
+
+def _drop_compiled_module_from_path():
+    # The add-on package is called `welkin`, like the compiled module on PYTHONPATH
+    # (scripts/test.sh puts build/ there): keep the latter from shadowing the add-on.
+    sys.path[:] = [p for p in sys.path
+                   if not (os.path.isdir(p) and any(n.startswith("welkin.cpython")
+                                                    for n in os.listdir(p)))]
+    sys.modules.pop("welkin", None)
+
+
+def scripts_dir():
+    return TMP / "scripts"
+
+
+def install_addon():
+    """Installs and enables the add-on from its zip; returns (add-on package, compiled
+    module)."""
+    _drop_compiled_module_from_path()
+    prefs = bpy.context.preferences
+    prefs.use_preferences_save = False
+    (scripts_dir() / "addons").mkdir(parents=True, exist_ok=True)
+    prefs.filepaths.script_directory = str(scripts_dir())
+    bpy.utils.refresh_script_paths()
+    bpy.ops.preferences.addon_install(filepath=str(addon_zip()), target='PREFS')
+    bpy.ops.preferences.addon_enable(module="welkin")
+    import welkin
+    assert hasattr(welkin, "bl_info"), f"`welkin` is not the add-on: {welkin}"
+    assert pathlib.Path(welkin.__file__).is_relative_to(scripts_dir()), welkin.__file__
+    from welkin import native
+    module = native.module()
+    assert module is not None, native.message()
+    return welkin, module
+
+
+def sun_direction(elevation_deg, azimuth_deg):
+    e, a = math.radians(elevation_deg), math.radians(azimuth_deg)
+    return (math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e))
+
+
+def aim_sun(obj, elevation_deg, azimuth_deg):
+    """Rotates a sun lamp so that its local +Z (towards the sun) points at the given
+    elevation and azimuth (counter-clockwise from +X)."""
+    from mathutils import Vector
+    obj.rotation_mode = 'QUATERNION'
+    obj.rotation_quaternion = Vector((0, 0, 1)).rotation_difference(
+        Vector(sun_direction(elevation_deg, azimuth_deg)))
+
+
+def new_scene(sun_elevation_deg=30.0, sun_azimuth_deg=60.0, resolution='256', camera_z=0.0):
+    """An empty scene (the factory objects removed) with one sun lamp and a camera at the
+    origin's height camera_z. Returns (scene, sun object)."""
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    scene = bpy.context.scene
+    data = bpy.data.lights.new("Sun", 'SUN')
+    sun = bpy.data.objects.new("Sun", data)
+    scene.collection.objects.link(sun)
+    aim_sun(sun, sun_elevation_deg, sun_azimuth_deg)
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.location = (0.0, 0.0, camera_z)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    scene.world.welkin.resolution = resolution
+    bpy.context.view_layer.update()
+    return scene, sun
+
+
+def world_pixels(image):
+    """The Blender image as (H, W, 3), top row first."""
+    import numpy as np
+    w, h = image.size
+    flat = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(flat)
+    return flat.reshape(h, w, 4)[::-1, :, :3]
+
+
+def check(condition, message):
+    if not condition:
+        raise AssertionError(message)
+
+
+def done(name):
+    print(f"{name}: OK")
+
+
+def panoramic_camera(scene, width, height, samples=2):
+    """Makes the scene camera an equirectangular panorama at the origin looking along +X
+    with +Z up, so that its image has Blender's Environment Texture mapping (the image
+    centre is +X, +Y to the left), and sets up a fast, exact-as-possible Cycles render:
+    a tiny pixel filter (samples at the pixel centres), no denoising, linear EXR."""
+    import math as m
+    cam = scene.camera
+    cam.location = (0.0, 0.0, cam.location.z)
+    cam.rotation_mode = 'XYZ'
+    cam.rotation_euler = (m.radians(90.0), 0.0, m.radians(-90.0))
+    cam.data.type = 'PANO'
+    if hasattr(cam.data, "panorama_type"):  # Blender 4.x
+        cam.data.panorama_type = 'EQUIRECTANGULAR'
+    else:                                   # Blender 3.x
+        cam.data.cycles.panorama_type = 'EQUIRECTANGULAR'
+    scene.render.engine = 'CYCLES'
+    scene.cycles.device = 'CPU'
+    scene.cycles.samples = samples
+    scene.cycles.use_adaptive_sampling = False
+    scene.cycles.use_denoising = False
+    scene.cycles.pixel_filter_type = 'BLACKMAN_HARRIS'
+    scene.cycles.filter_width = 0.01
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = False
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.image_settings.color_mode = 'RGB'
+    scene.view_settings.view_transform = 'Standard'
+
+
+def read_rgb_exr(welkin, path):
+    """(H, W, 3) float32, top row first, R G B in that order (read by the core)."""
+    import numpy as np
+    pixels, names = welkin.read_exr(str(path))
+    return np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1)
+
+
+def render_still(scene, path):
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+
+
+class FakeLayout:
+    """Records what a panel draws (labels, properties, operators), for headless tests."""
+
+    def __init__(self, log=None):
+        self.log = [] if log is None else log
+        self.use_property_split = False
+        self.active = True
+
+    def _child(self, *args, **kwargs):
+        return FakeLayout(self.log)
+
+    row = column = box = _child
+
+    def separator(self, *args, **kwargs):
+        pass
+
+    def label(self, text="", **kwargs):
+        self.log.append(("label", text))
+
+    def prop(self, data, name, **kwargs):
+        getattr(data, name)  # the property must exist
+        self.log.append(("prop", name))
+
+    def operator(self, idname, **kwargs):
+        self.log.append(("operator", idname))
+
+
+def draw_panel(scene):
+    """What Properties > World > Welkin Sky shows for `scene`: a list of (kind, text)."""
+    import types
+    panel_class = bpy.types.WORLD_PT_welkin_sky
+    layout = FakeLayout()
+    context = types.SimpleNamespace(world=scene.world, scene=scene)
+    T = types.SimpleNamespace(layout=layout)
+    panel_class.draw(T, context)
+    return layout.log

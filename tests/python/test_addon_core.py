@@ -1,0 +1,142 @@
+"""The add-on's Blender-free modules (addon/welkin/*.py, no bpy): loaded here as the
+package `welkin_addon` (the add-on's own name, `welkin`, is the compiled module's in this
+process) and driven with the module from build/."""
+import dataclasses
+import importlib.util
+import math
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+
+import welkin
+
+ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
+
+
+def _load_addon():
+    spec = importlib.util.spec_from_file_location(
+        "welkin_addon", ADDON / "__init__.py", submodule_search_locations=[str(ADDON)])
+    package = importlib.util.module_from_spec(spec)
+    sys.modules["welkin_addon"] = package
+    spec.loader.exec_module(package)
+    return package
+
+
+_load_addon()
+from welkin_addon import native, pixels, sky_compute, sky_request  # noqa: E402
+
+
+def test_addon_package_imports_without_bpy():
+    assert "bpy" not in sys.modules
+    assert sys.modules["welkin_addon"].bl_info["version"] == tuple(
+        int(x) for x in welkin.__version__.split("."))
+
+
+def test_native_missing_and_other_python(tmp_path):
+    path, message = native.find(tmp_path)
+    assert path is None and "missing" in message and "build_addon.sh" in message
+    (tmp_path / "welkin.cpython-310-x86_64-linux-gnu.so").write_bytes(b"")
+    path, message = native.find(tmp_path)
+    assert path is None and "another Python" in message and "3.11" in message
+    module, message = native.load(tmp_path)
+    assert module is None and "another Python" in message
+
+
+def test_native_finds_the_module_for_this_python():
+    build = pathlib.Path(welkin.__file__).parent
+    path, message = native.find(build)
+    assert message is None and path == pathlib.Path(welkin.__file__)
+
+
+def test_request_validation_names_the_parameter():
+    good = sky_request.SkyRequest(width=256)
+    sky_request.validate(good, welkin)
+    for change, parameter in (({"preset": "venus"}, "preset"), ({"width": 300}, "width"),
+                              ({"air_density": -1.0}, "air_density"),
+                              ({"exposure": 0.0}, "exposure"), ({"altitude_m": -5.0}, "altitude_m"),
+                              ({"ground_albedo": 1.5}, "ground_albedo"),
+                              ({"sun_direction": (0.0, 0.0, 0.0)}, "sun_direction"),
+                              ({"method": "reference"}, "method")):
+        with pytest.raises(ValueError, match=parameter):
+            sky_request.validate(dataclasses.replace(good, **change), welkin)
+
+
+def test_auto_method_falls_back_to_lut_without_the_modules_own():
+    expected = "auto" if "auto" in welkin.methods() else "lut"
+    assert sky_request.resolve_method("auto", welkin) == expected
+    assert sky_request.resolve_method("analytic", welkin) == "analytic"
+
+
+def test_atmosphere_multipliers_scale_the_presets_coefficients():
+    base = welkin.Atmosphere.preset("hazy")
+    req = sky_request.SkyRequest(preset="hazy", air_density=2.0, aerosol_density=0.5,
+                                 ozone_density=0.0, ground_albedo=0.3)
+    atm = sky_request.build_atmosphere(req, welkin)
+    np.testing.assert_allclose(atm.rayleigh_scattering, 2.0 * base.rayleigh_scattering)
+    np.testing.assert_allclose(atm.mie_scattering, 0.5 * base.mie_scattering)
+    np.testing.assert_allclose(atm.mie_extinction, 0.5 * base.mie_extinction)
+    np.testing.assert_allclose(atm.absorption_extinction, 0.0)
+    np.testing.assert_allclose(atm.ground_albedo, 0.3)
+
+
+def test_observer_altitude_below_the_ground_is_put_on_it():
+    assert sky_request.observer_altitude(100.0, 20.0) == (120.0, None)
+    altitude, warning = sky_request.observer_altitude(10.0, -30.0)
+    assert altitude == 0.0 and "20 m below the ground" in warning
+
+
+def test_key_follows_the_sun_and_the_settings():
+    a = sky_request.SkyRequest(sun_direction=(0.0, 0.6, 0.8))
+    assert a.key() == dataclasses.replace(a, sun_direction=(0.0, 0.6, 0.8 + 1e-12)).key()
+    assert a.key() != dataclasses.replace(a, sun_direction=(0.0, 0.61, 0.8)).key()
+    assert a.key() != dataclasses.replace(a, exposure=2.0).key()
+
+
+def test_compute_is_the_modules_sky_disc_and_sun(atm, sun_direction):
+    req = sky_request.SkyRequest(sun_direction=tuple(sun_direction), width=256, exposure=0.5,
+                                 altitude_m=250.0)
+    result = sky_compute.compute(welkin, req)
+    np.testing.assert_array_equal(
+        result.sky, welkin.sky_image(atm, 250.0, sun_direction, 256, sun_disc=False,
+                                     exposure=0.5))
+    np.testing.assert_array_equal(
+        result.disc, welkin.sun_disc_image(atm, 250.0, sun_direction, 256, exposure=0.5))
+    rgb = 0.5 * np.asarray(welkin.sun(atm, 250.0, sun_direction).direct_irradiance_rgb)
+    np.testing.assert_allclose(np.array(result.lamp.color) * result.lamp.strength_w_m2, rgb,
+                               rtol=1e-12)
+    assert max(result.lamp.color) == 1.0
+    assert result.lamp.angle_rad == pytest.approx(2 * atm.sun_angular_radius_rad)
+    assert result.warnings == []
+
+
+def test_sun_below_the_horizon_turns_the_lamp_off_with_a_warning():
+    e = math.radians(-5.0)
+    req = sky_request.SkyRequest(sun_direction=(math.cos(e), 0.0, math.sin(e)), width=256)
+    result = sky_compute.compute(welkin, req)
+    assert result.lamp.strength_w_m2 == 0.0
+    assert any("5.0 degrees below the horizon" in w for w in result.warnings)
+    assert np.all(np.isfinite(result.sky)) and result.sky.max() > 0.0
+    assert not result.disc.any()
+
+
+def test_blender_pixels_are_bottom_row_first_rgba():
+    img = np.arange(2 * 3 * 3, dtype=np.float32).reshape(2, 3, 3)
+    flat = pixels.to_blender(img)
+    assert flat.shape == (2 * 3 * 4,)
+    np.testing.assert_array_equal(flat[:3], img[1, 0])  # Blender's first pixel: bottom left
+    np.testing.assert_array_equal(flat.reshape(2, 3, 4)[..., 3], 1.0)
+    np.testing.assert_array_equal(pixels.from_blender(flat, 3, 2), img)
+
+
+def test_sparse_disc_pixels_are_written_and_cleared():
+    sparse = pixels.SparseImage(4, 2)
+    a = np.zeros((2, 4, 3), np.float32)
+    a[0, 1] = (1.0, 2.0, 3.0)
+    np.testing.assert_array_equal(sparse.to_blender(a), pixels.to_blender(a))
+    b = np.zeros((2, 4, 3), np.float32)
+    b[1, 3] = (4.0, 5.0, 6.0)
+    np.testing.assert_array_equal(sparse.to_blender(b), pixels.to_blender(b))
+    out = pixels.rgba_buffer(4, 2)
+    np.testing.assert_array_equal(pixels.to_blender(b, out), pixels.to_blender(b))
