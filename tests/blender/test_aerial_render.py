@@ -181,6 +181,31 @@ def main():
     scene.camera = camera
     print(f"ok: no camera reported: {scene.welkin_aerial.status}")
 
+    # The node group computes Image x T + Inscatter in the compositor: constant passes
+    # linked in, the written frame (the Composite node) against the render layer's Image.
+    scene.frame_set(8)
+    scene.camera.data.type = 'PERSP'
+    curves = tree.nodes["User Curves"]
+    rl = curves.inputs["Image"].links[0].from_node
+    tree.links.new(rl.outputs["Image"], group.inputs["Image"])  # the curves clamp at 1
+    t_node, i_node = tree.nodes.new('CompositorNodeRGB'), tree.nodes.new('CompositorNodeRGB')
+    t_node.outputs[0].default_value = (0.5, 0.25, 0.9, 1.0)
+    i_node.outputs[0].default_value = (0.1, 0.2, 0.3, 1.0)
+    tree.links.new(t_node.outputs[0], group.inputs["Transmittance"])
+    tree.links.new(i_node.outputs[0], group.inputs["Inscatter"])
+    at.render_still(scene, at.TMP / "out" / "composited_0008.exr")
+    written = rgb(module, at.TMP / "out" / "composited_0008.exr", "RGB")
+    base8 = scene_export.file_base(str(at.TMP / "out" / "composited_0008.exr"))
+    pixels, names = module.read_exr(scene_export.frame_path(base8, "render", 8))
+    image = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
+    expect = image * np.array([0.5, 0.25, 0.9], np.float32) + np.array([0.1, 0.2, 0.3], np.float32)
+    err = (np.abs(written - expect) / np.maximum(np.abs(expect), 1e-6)).max()
+    at.check(err < 1e-5, f"the node group's Image x T + I is off by {err}")
+    tree.nodes.remove(t_node)
+    tree.nodes.remove(i_node)
+    tree.links.new(curves.outputs["Image"], group.inputs["Image"])
+    print(f"ok: node group = Image x T + Inscatter (worst {err:.2e})")
+
     # Disable: our nodes out, the user's back in place.
     scene.welkin_aerial.enabled = False
     names = {n.name for n in tree.nodes}

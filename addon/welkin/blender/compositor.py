@@ -4,13 +4,14 @@
     Image and Depth (Z pass) for every frame, <base>welkin_render_<frame>.exr: the only
     way to read the Z pass back in `blender -b` (the Viewer node cannot be read there).
   * "Welkin Aerial Perspective", a node group (Image x Transmittance + Inscatter), placed
-    between the Composite node and what fed it, with its Transmittance and Inscatter fed
-    by Image nodes ("Welkin Aerial Transmittance" / "... Inscatter") loading the frame's
-    passes EXR as an image sequence (reloaded per frame). The passes are computed after the
-    render (render_post, from the Z pass the File Output node wrote), so they reach the
-    Composite node only when the frame is composited again (re-render, or the compositor
-    re-run in the UI); until its passes exist, the group passes the image through
-    unchanged. The handler writes the hazed frame itself as <base>welkin_composite_*.exr.
+    between the Composite node and what fed it (the user's last node). Its Transmittance
+    and Inscatter inputs are left unlinked, at 1 and 0, so the Composite node shows the
+    render unchanged: Blender 3.4 composites a frame before render_post, where the passes
+    are computed from the Z pass the File Output node wrote, so they cannot reach the same
+    frame's Composite node (and feeding them a frame late would be silently wrong). The
+    handler writes the hazed frame itself, <base>welkin_composite_<frame>.exr; to haze the
+    Composite node of one frame in the UI, add Image nodes with that frame's passes EXR
+    (layer Welkin, passes AerialTransmittance / AerialInscatter) and link them to the group.
 
 Our nodes are found by name; remove() takes them out and puts back the link they replaced.
 """
@@ -19,9 +20,7 @@ import bpy
 DEPTH_NODE = "Welkin Aerial Depth"
 GROUP_NODE = "Welkin Aerial Perspective"
 GROUP_NAME = "Welkin Aerial Perspective"
-T_NODE = "Welkin Aerial Transmittance"
-I_NODE = "Welkin Aerial Inscatter"
-OURS = (DEPTH_NODE, GROUP_NODE, T_NODE, I_NODE)
+OURS = (DEPTH_NODE, GROUP_NODE)
 
 
 def node_group():
