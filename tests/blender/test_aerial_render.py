@@ -126,7 +126,8 @@ def main():
         cli_pix, cli_names = module.read_exr(str(out))
         ours, our_names = module.read_exr(str(paths["aerial"]))
         for n in scene_export.PASS_CHANNELS:
-            diff = np.abs(cli_pix[..., cli_names.index(n)] - ours[..., our_names.index(n)]).max()
+            diff = np.abs(cli_pix[..., cli_names.index(n)]
+                          - ours[..., our_names.index(n)]).max()
             at.check(diff < 1e-5, f"frame {frame}: CLI {n} differs by {diff}")
     print("ok: 2 frames, passes + JSON + composite, CLI reproduces")
 

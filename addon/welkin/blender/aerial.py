@@ -27,8 +27,7 @@ from .scene_sun import UserError
 
 
 def _toggled(settings, context):
-    scene = context.scene if context is not None and context.scene is not None else None
-    scene = scene or next(s for s in bpy.data.scenes if s.welkin_aerial == settings)
+    scene = settings.id_data  # the Scene that owns these settings
     if settings.enabled:
         enable(scene)
     else:
@@ -215,9 +214,16 @@ def on_render_pre(scene, *_args):
     if not s.enabled:
         return
     try:
-        if not all(layer.use_pass_z for layer in scene.view_layers):
+        z_on = all(layer.use_pass_z for layer in scene.view_layers)
+        if not z_on:
             _log(scene, "the Z pass was off: turned on (takes effect from the next render)")
-        enable(scene)  # the File Output node follows the output path
+        tree = scene.node_tree
+        node = tree.nodes.get(compositor.DEPTH_NODE) if tree is not None else None
+        wanted = scene_export.file_output_base(base_of(scene))
+        # Touch the scene only when needed: UI renders call this beside the interface.
+        if not z_on or node is None or node.base_path != wanted \
+                or tree.nodes.get(compositor.GROUP_NODE) is None:
+            enable(scene)  # the File Output node follows the output path
     except Exception as error:
         _log(scene, f"aerial perspective: unexpected {type(error).__name__}: {error}")
 

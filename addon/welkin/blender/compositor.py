@@ -52,7 +52,8 @@ def node_group():
     links.new(mul.outputs[0], add.inputs[1])
     links.new(gin.outputs["Inscatter"], add.inputs[2])
     links.new(add.outputs[0], gout.inputs["Image"])
-    gin.location, mul.location, add.location, gout.location = (-400, 0), (-150, 0), (50, 0), (250, 0)
+    for node, x in ((gin, -400), (mul, -150), (add, 50), (gout, 250)):
+        node.location = (x, 0)
     return group
 
 
