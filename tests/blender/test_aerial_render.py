@@ -16,6 +16,7 @@ passes would go: a clear status line, no pass written (or the user's file left a
 """
 import json
 import math
+import os
 import pathlib
 import subprocess
 import sys
@@ -206,6 +207,31 @@ def main():
     tree.nodes.remove(i_node)
     tree.links.new(curves.outputs["Image"], group.inputs["Image"])
     print(f"ok: node group = Image x T + Inscatter (worst {err:.2e})")
+
+    # The same from a saved file, `blender -b file.blend --addons welkin -a` in a fresh
+    # process: the setting is saved, the handlers load with the add-on.
+    for frame, z in ((1, 20.0), (2, 60.0)):
+        scene.camera.location.z = z
+        scene.camera.keyframe_insert("location", index=2, frame=frame)
+    scene.render.filepath = str(at.TMP / "out2" / "shot_")
+    blend = at.TMP / "aerial.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env["BLENDER_USER_SCRIPTS"] = str(at.scripts_dir())
+    env["BLENDER_USER_CONFIG"] = str(at.TMP / "config")
+    run = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", str(blend),
+                          "--addons", "welkin", "-a"], env=env, capture_output=True, text=True,
+                         timeout=300)
+    at.check(run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:])
+    base2 = scene_export.file_base(str(at.TMP / "out2" / "shot_"))
+    for frame in (1, 2):
+        for kind in scene_export.KINDS:
+            at.check(pathlib.Path(scene_export.frame_path(base2, kind, frame)).is_file(),
+                     f"blender -a: frame {frame} has no {kind} file:\n{run.stdout[-3000:]}{run.stderr[-2000:]}")
+        text = pathlib.Path(scene_export.frame_path(base2, "scene", frame)).read_text()
+        cam_z = json.loads(text)["camera"]["matrix_world"][2][3]
+        at.check(abs(cam_z - (40.0 * frame - 20.0)) < 1e-3, f"blender -a: frame {frame} z {cam_z}")
+    print("ok: blender -b file.blend --addons welkin -a")
 
     # Disable: our nodes out, the user's back in place.
     scene.welkin_aerial.enabled = False

@@ -25,7 +25,8 @@ def test_paths_beside_the_render():
     assert scene_export.file_base("/r/out/shot") == "/r/out/shot_"
     assert scene_export.file_base("/r/out/shot_####.exr") == "/r/out/shot_"
     assert scene_export.file_base("/r/out/") == "/r/out/"
-    assert scene_export.frame_path("/r/out/shot_", "aerial", 7) == "/r/out/shot_welkin_aerial_0007.exr"
+    assert scene_export.frame_path("/r/out/shot_", "aerial", 7) == \
+        "/r/out/shot_welkin_aerial_0007.exr"
     assert scene_export.frame_path("/r/x_", "scene", 12345) == "/r/x_welkin_scene_12345.json"
     # Blender's File Output node appends the 4-digit frame to its base path.
     assert scene_export.file_output_base("/r/x_") + "0007.exr" == \

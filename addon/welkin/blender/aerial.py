@@ -208,6 +208,31 @@ def on_frame_change_post(scene, depsgraph=None):
     _at_frame[scene.name] = {scene.frame_current: text}
 
 
+def _sync_output_path(scene):
+    """Points the File Output node at the current output path. An animation render
+    copies the compositor before its first render_pre, so the path is kept in step
+    whenever the scene changes and when a file loads, not only when a render starts."""
+    tree = scene.node_tree
+    node = tree.nodes.get(compositor.DEPTH_NODE) if tree is not None else None
+    if node is not None:
+        wanted = scene_export.file_output_base(base_of(scene))
+        if node.base_path != wanted:
+            node.base_path = wanted
+
+
+@persistent
+def on_depsgraph_update(scene, *_args):
+    if scene.welkin_aerial.enabled:
+        _sync_output_path(scene)
+
+
+@persistent
+def on_load_post(*_args):
+    for scene in bpy.data.scenes:
+        if scene.welkin_aerial.enabled:
+            _sync_output_path(scene)
+
+
 @persistent
 def on_render_pre(scene, *_args):
     s = scene.welkin_aerial
@@ -263,6 +288,8 @@ class RENDER_PT_welkin_aerial(bpy.types.Panel):
 
 classes = (WelkinAerialSettings, RENDER_PT_welkin_aerial)
 _HANDLERS = ((bpy.app.handlers.frame_change_post, on_frame_change_post),
+             (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
+             (bpy.app.handlers.load_post, on_load_post),
              (bpy.app.handlers.render_pre, on_render_pre),
              (bpy.app.handlers.render_post, on_render_post))
 
