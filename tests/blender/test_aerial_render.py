@@ -123,7 +123,8 @@ def main():
         at.check(err.max() < 1e-6, f"frame {frame}: composite differs by {err.max()}")
         out = at.TMP / f"cli_{frame}.exr"
         subprocess.run([str(cli), "aerial", "--scene", str(paths["scene"]), "--depth",
-                        str(paths["render"]), "--depth-channel", "Depth.V", "-o", str(out)], check=True)
+                        str(paths["render"]), "--depth-channel", "Depth.V", "-o", str(out)],
+                       check=True)
         cli_pix, cli_names = module.read_exr(str(out))
         ours, our_names = module.read_exr(str(paths["aerial"]))
         for n in scene_export.PASS_CHANNELS:
@@ -149,9 +150,28 @@ def main():
     bpy.ops.render.render(write_still=True)
     at.check(scene.view_layers[0].use_pass_z, "the Z pass was not turned on again")
     wrote = pathlib.Path(scene_export.frame_path(base, "aerial", 4)).is_file()
+    if wrote:  # then from the frame's real depth, not the File Output's constant 0
+        tr = rgb(module, scene_export.frame_path(base, "aerial", 4),
+                 [f"Welkin.AerialTransmittance.{c}" for c in "RGB"])
+        at.check(tr.min() < 0.5, f"Z pass off: passes computed without depth (T min {tr.min()})")
     at.check(wrote or "Z pass" in scene.welkin_aerial.status, scene.welkin_aerial.status)
     print(f"ok: Z pass off -> {'computed' if wrote else 'reported'}: "
           f"{scene.welkin_aerial.status}")
+
+    # The Depth link to our File Output node removed: no depth written, reported.
+    scene.frame_set(9)
+    out_node = tree.nodes[compositor.DEPTH_NODE]
+    tree.links.remove(out_node.inputs["Depth"].links[0])
+    bpy.ops.render.render(write_still=True)
+    at.check("no Z pass" in scene.welkin_aerial.status, scene.welkin_aerial.status)
+    at.check(not pathlib.Path(scene_export.frame_path(base, "aerial", 9)).exists(),
+             "passes written without a Z pass")
+    scene.welkin_aerial.enabled = False
+    scene.welkin_aerial.enabled = True  # relinks
+    at.check(tree.nodes[compositor.DEPTH_NODE].inputs["Depth"].is_linked,
+             "toggling did not relink the Depth input")
+    group = tree.nodes[compositor.GROUP_NODE]  # made anew by the toggle
+    print(f"ok: unlinked Z pass reported: {scene.welkin_aerial.status}")
 
     # A fisheye camera: a clear report, no passes.
     scene.frame_set(5)
@@ -227,7 +247,8 @@ def main():
     for frame in (1, 2):
         for kind in scene_export.KINDS:
             at.check(pathlib.Path(scene_export.frame_path(base2, kind, frame)).is_file(),
-                     f"blender -a: frame {frame} has no {kind} file:\n{run.stdout[-3000:]}{run.stderr[-2000:]}")
+                     f"blender -a: frame {frame} has no {kind} file:\n"
+                     f"{run.stdout[-3000:]}{run.stderr[-2000:]}")
         text = pathlib.Path(scene_export.frame_path(base2, "scene", frame)).read_text()
         cam_z = json.loads(text)["camera"]["matrix_world"][2][3]
         at.check(abs(cam_z - (40.0 * frame - 20.0)) < 1e-3, f"blender -a: frame {frame} z {cam_z}")

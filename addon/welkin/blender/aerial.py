@@ -166,8 +166,14 @@ def write_frame(scene, frame):
     pixels, names = module.read_exr(render_path)
     depth_name = next((n for n in names if n.startswith("Depth.")), None)
     if depth_name is None:
-        raise UserError("the render has no Z pass (View Layer > Passes > Data > Z): it is "
-                        "on from the next render")
+        raise UserError("the render has no Z pass (View Layer > Passes > Data > Z, linked "
+                        f"to the '{compositor.DEPTH_NODE}' node): the pass is on from the "
+                        "next render; toggle Aerial Perspective off and on to relink it")
+    if not (pixels[..., names.index(depth_name)] > 0.0).any():
+        # An unlinked File Output input writes a constant 0: the Z pass did not arrive.
+        raise UserError("the render's Z pass is empty (View Layer > Passes > Data > Z off, "
+                        "or its link to the 'Welkin Aerial Depth' node removed): it is on "
+                        "from the next render; toggle Aerial Perspective off and on")
     image = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
     depth = pixels[..., names.index(depth_name)] * np.float32(scene.unit_settings.scale_length)
     try:
