@@ -9,11 +9,12 @@
   update.py      one sky update: request -> compute -> images, nodes, lamp
   operators.py   welkin.update_sky, welkin.remove_sky, welkin.export_hdri
   panel.py       Properties > World > Welkin Sky
+  aerial.py      aerial perspective per render (Scene.welkin_aerial), compositor.py its nodes
   handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
 """
 import bpy
 
-from . import handlers, operators, panel, properties
+from . import aerial, handlers, operators, panel, properties
 
 classes = (
     properties.WelkinWorldSettings,
@@ -29,12 +30,14 @@ def register():
         bpy.utils.register_class(cls)
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
     handlers.register()
+    aerial.register()
     from .. import native
     if native.message():
         print(f"Welkin: {native.message()}")
 
 
 def unregister():
+    aerial.unregister()
     handlers.unregister()
     del bpy.types.World.welkin
     for cls in reversed(classes):
