@@ -19,6 +19,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "welkin/cloud_illumination.hpp"
 #include "welkin/color.hpp"
 #include "welkin/equirect.hpp"
 #include "welkin/error.hpp"
@@ -227,6 +228,7 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
 void SkyImageOptions::validate() const {
     if (!(exposure > 0.0) || !(exposure <= 1e6))
         throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+    if (clouds) cloud_lighting.validate();
 }
 
 std::string spectral_channel_name(double wavelength_nm) {
@@ -298,6 +300,14 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
     const auto directions = huge_buffer<glm::dvec3>(band_pixels);
     const auto scratch = huge_buffer<float>(in_place ? 0 : band_pixels * nc);
     const std::vector<double>& m = rgb ? sky_to_rgb->matrix() : std::vector<double>{};
+    // Clouds: the illumination is built once; the cloud transmittance of every pixel is
+    // kept for the sun's disc.
+    std::unique_ptr<AtmosphereIllumination> cloud_light;
+    std::vector<float> cloud_transmittance;
+    if (options.clouds) {
+        cloud_light = std::make_unique<AtmosphereIllumination>(atm, obs);
+        cloud_transmittance.assign(std::size_t(W) * std::size_t(H), 1.0f);
+    }
     for (int band = 0; band < bands; ++band) {
         const int row0 = band * band_rows;
         const int rows = std::min(band_rows, H - row0);
@@ -315,6 +325,15 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         const std::span<float> out(in_place ? dst : scratch.get(), n * nc);
         method.radiance(atm, obs, std::span<const glm::dvec3>(directions.get(), n), out, {},
                         progress ? &sub : nullptr);
+        CloudResult clouds;
+        if (options.clouds) {
+            clouds = render_clouds(*options.clouds, *cloud_light, glm::dvec3(0.0),
+                                   std::span<const glm::dvec3>(directions.get(), n), options.cloud_lighting,
+                                   progress ? &sub : nullptr);
+            std::copy(clouds.transmittance.begin(), clouds.transmittance.end(),
+                      cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
+        }
+        const bool with_clouds = bool(options.clouds);
 
         // One pass: find the first non-finite value, and convert to RGB.
         std::atomic<std::size_t> bad{std::size_t(-1)};
@@ -323,7 +342,11 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
             if (rgb && nc == 3) std::copy(m.begin(), m.end(), m3.begin());
             std::size_t first = std::size_t(-1);
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                const float* s = &out[i * nc];
+                float* s = &out[i * nc];
+                if (with_clouds) {  // over: sky behind the cloud, then the cloud's own light
+                    const float T = clouds.transmittance[i];
+                    for (std::size_t c = 0; c < nc; ++c) s[c] = s[c] * T + clouds.radiance[i * nc + c];
+                }
                 bool finite = true;
                 for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(s[c]);
                 if (!finite && first == std::size_t(-1)) first = i;
@@ -365,7 +388,8 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
             std::vector<float> spectrum(nc);
             for (std::size_t k = 0; k < disc.pixel.size(); ++k) {
                 float* dst = image.pixels.data() + disc.pixel[k] * out_nc;
-                for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(disc.radiance[k * nc + c]);
+                const float T = cloud_transmittance.empty() ? 1.0f : cloud_transmittance[disc.pixel[k]];
+                for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(disc.radiance[k * nc + c]) * T;
                 if (rgb) {
                     const std::array<double, 3> add = sun_to_rgb->convert(spectrum);
                     for (int c = 0; c < 3; ++c) dst[c] = float(double(dst[c]) + add[c]);

@@ -23,12 +23,24 @@
 // Leave the disc out (sun_disc = false) when a sun lamp lights the scene: energy must
 // appear once.
 //
+// Clouds (optional). With `clouds` set, every pixel's ray from the observer (the world
+// origin) is also marched through the cloud density (cloud_lighting.hpp), lit by the same
+// atmosphere (AtmosphereIllumination: the sun through the air at the cloud, the sky's mean
+// radiance from the multiple-scattering LUT), and composited over the sky per wavelength
+// before any conversion: L = L_sky T_cloud + L_cloud (premultiplied "over"); the sun's
+// disc is dimmed by T_cloud of its pixels. The air between the observer and the cloud
+// (aerial perspective) is not applied to the cloud here. A procedural layer should be
+// built with origin_altitude_m equal to the observer's altitude (the density source does
+// not know the observer, so this is not checked).
+//
 // No NaN or infinity reaches the image: a method returning one is an error.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "welkin/cloud_lighting.hpp"
 #include "welkin/sky_method.hpp"
 
 namespace welkin {
@@ -38,6 +50,8 @@ struct SkyImageOptions {
     double exposure = 1.0;  // multiplies every output value; (0, 1e6]
     enum class Output { Rgb, Spectral };
     Output output = Output::Rgb;
+    std::shared_ptr<const CloudDensity> clouds;  // none: a clear sky
+    CloudLightingOptions cloud_lighting;
 
     void validate() const;
 };

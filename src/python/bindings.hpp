@@ -29,6 +29,7 @@ void register_color(py::module_& m);
 void register_image(py::module_& m);
 void register_exr(py::module_& m);
 void register_aerial(py::module_& m);
+void register_clouds(py::module_& m);
 void register_plate(py::module_& m);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it

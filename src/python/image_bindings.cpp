@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "welkin/cloud_density.hpp"
 #include "welkin/error.hpp"
 #include "welkin/sky_image.hpp"
 #include "welkin/sky_method.hpp"
@@ -44,8 +45,11 @@ py::array_t<float> sky_image(Atmosphere atmosphere, double altitude_m,
                              const py::object& sun_direction, int width,
                              const std::string& method, const std::string& output,
                              bool sun_disc, double exposure, int steps, int sun_steps,
-                             int paths, std::uint64_t seed, const py::object& progress) {
+                             int paths, std::uint64_t seed,
+                             std::shared_ptr<const CloudDensity> clouds,
+                             const py::object& progress) {
     SkyImageOptions options;
+    options.clouds = std::move(clouds);
     options.sun_disc = sun_disc;
     options.exposure = exposure;
     options.output = parse_output(output);
@@ -91,11 +95,11 @@ void register_image(py::module_& m) {
           py::arg("exposure") = 1.0, py::arg("steps") = defaults.raymarch_steps,
           py::arg("sun_steps") = defaults.raymarch_sun_steps,
           py::arg("paths") = defaults.reference_paths, py::arg("seed") = defaults.seed,
-          py::arg("progress") = py::none(), R"doc(
+          py::arg("clouds") = py::none(), py::arg("progress") = py::none(), R"doc(
 An equirectangular sky image (HDRI) of the whole sphere, as the CLI renders it.
 
     img = welkin.sky_image(atm, altitude_m, sun_direction, width, method="lut",
-                           output="rgb", sun_disc=True, exposure=1.0)
+                           output="rgb", sun_disc=True, exposure=1.0, clouds=None)
 
 Blender's Environment Texture mapping (see direction_to_equirect), width x
 width/2 pixels (width even, 4..16384), TOP ROW (zenith) FIRST as in EXR files;
@@ -105,7 +109,9 @@ output="rgb", or (height, width, C) W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm for
 "spectral"; every value times exposure. sun_disc adds the sun's disc, limb
 darkened and scaled so that the image delivers exactly welkin.sun()'s direct
 irradiance; leave it out when a sun lamp lights the scene. steps, sun_steps,
-paths, seed: as in sky_radiance. The GIL is released; Ctrl-C or a progress
+paths, seed: as in sky_radiance. clouds: None, a welkin.CloudLayer or a
+welkin.VdbClouds, composited over the sky (lit by the same atmosphere; the sun's
+disc dimmed behind them). The GIL is released; Ctrl-C or a progress
 callback returning False cancels (KeyboardInterrupt). ValueError names the
 parameter for bad input.
 )doc");

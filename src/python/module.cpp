@@ -7,6 +7,7 @@
 //   image_bindings.cpp       sky_image, sun_disc_image (equirect sky images)
 //   exr_bindings.cpp         write_exr, read_exr
 //   aerial_bindings.cpp      welkin.SceneDescription, aerial_perspective
+//   cloud_bindings.cpp       welkin.CloudLayer, VdbClouds, cloud_radiance
 //   plate_bindings.cpp       camera_plate
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
@@ -133,6 +134,7 @@ Quick start:
     register_sky(m);
     register_sun(m);
     register_color(m);
+    register_clouds(m);  // before register_image: sky_image takes clouds=
     register_image(m);
     register_exr(m);
     register_aerial(m);

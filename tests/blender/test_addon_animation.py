@@ -86,7 +86,7 @@ def compare(render, f):
     i_s, j_s = int(u * W), int((1.0 - v) * H)
     near_sun = (np.abs(jj - j_s) <= 3) & (np.minimum(np.abs(ii - i_s), W - np.abs(ii - i_s)) <= 3)
     upper = (jj < H // 2) & ~near_sun
-    ref = welkin.sky_image(atm, 0.0, directions[f], W)
+    ref = welkin.sky_image(atm, 0.0, directions[f], W, "auto")  # the add-on's default method
     floor = 0.01 * float(ref[upper].mean())
     e = (np.abs(render - ref) / (ref + floor)).max(axis=2)[upper]
     return float(np.median(e)), float(np.percentile(e, 99.5))

@@ -50,7 +50,7 @@ T.check(not H._state["armed"], "still armed after the update")
 s = tuple(sun.matrix_world.col[2][:3])
 atm = welkin.Atmosphere.preset("bruneton2017")
 sky = T.world_pixels(settings.sky_image)
-np.testing.assert_allclose(sky, welkin.sky_image(atm, 0.0, s, 256, sun_disc=False), rtol=1e-6)
+np.testing.assert_allclose(sky, welkin.sky_image(atm, 0.0, s, 256, "auto", sun_disc=False), rtol=1e-6)
 T.check(not H._stale(scene, None), "the sky is stale after the timer's update")
 print("lamp rotation -> one debounced update with the new sun")
 
@@ -64,7 +64,7 @@ T.check(H._state["armed"], "changing the exposure did not arm the update")
 H._state["due"] = 0.0
 H._tick()
 np.testing.assert_allclose(T.world_pixels(settings.sky_image),
-                           welkin.sky_image(atm, 0.0, s, 256, sun_disc=False, exposure=0.5),
+                           welkin.sky_image(atm, 0.0, s, 256, "auto", sun_disc=False, exposure=0.5),
                            rtol=1e-6)
 print("a settings change -> an update")
 

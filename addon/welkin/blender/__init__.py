@@ -9,12 +9,13 @@
   update.py      one sky update: request -> compute -> images, nodes, lamp
   operators.py   welkin.update_sky, welkin.remove_sky, welkin.export_hdri
   panel.py       Properties > World > Welkin Sky
+  aerial.py      aerial perspective per render (Scene.welkin_aerial), compositor.py its nodes
   handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
   render_engine.py  the render engine "WELKIN": the camera's plate with Welkin's passes
 """
 import bpy
 
-from . import handlers, operators, panel, properties, render_engine
+from . import aerial, handlers, operators, panel, properties, render_engine
 
 classes = (
     properties.WelkinWorldSettings,
@@ -31,6 +32,7 @@ def register():
         bpy.utils.register_class(cls)
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
     handlers.register()
+    aerial.register()
     render_engine.register()
     from .. import native
     if native.message():
@@ -39,6 +41,7 @@ def register():
 
 def unregister():
     render_engine.unregister()
+    aerial.unregister()
     handlers.unregister()
     del bpy.types.World.welkin
     for cls in reversed(classes):

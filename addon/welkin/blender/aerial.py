@@ -1,0 +1,318 @@
+"""Aerial perspective for camera renders (Scene.welkin_aerial, Properties > Render >
+Welkin Aerial Perspective). Off by default: enabling it turns on the Z pass and adds the
+add-on's compositor nodes (compositor.py); disabling takes them out again.
+
+For every rendered frame (F12, or `blender -b file.blend -f N / -a`), render_post reads
+the Image and Z pass the File Output node just wrote, and writes beside the render
+(scene_export.frame_path, from scene.render.filepath and the frame number):
+  welkin_scene_NNNN.json      the frame's SceneDescription (reproduces it with
+                              `welkin aerial --scene ... --depth welkin_render_NNNN.exr
+                              --depth-channel Depth.V`)
+  welkin_aerial_NNNN.exr      Welkin.AerialInscatter.RGB, Welkin.AerialTransmittance.RGB
+  welkin_composite_NNNN.exr   R G B: Image x Transmittance + Inscatter (the render layer's
+                              Image, before the user's compositing)
+A file that exists and was not written by the add-on is never replaced: the frame is
+reported instead. Problems (no camera, a fisheye camera, no sun lamp, no Z pass) are
+printed and shown in the panel's status line; a handler never raises.
+"""
+import json
+import os
+
+import bpy
+from bpy.app.handlers import persistent
+
+from .. import native, scene_export, sky_request
+from . import compositor, scene_sun
+from .scene_sun import UserError
+
+
+def _toggled(settings, context):
+    scene = settings.id_data  # the Scene that owns these settings
+    if settings.enabled:
+        enable(scene)
+    else:
+        disable(scene)
+
+
+class WelkinAerialSettings(bpy.types.PropertyGroup):
+    enabled: bpy.props.BoolProperty(
+        name="Aerial Perspective", default=False, update=_toggled,
+        description="Write Welkin's aerial-perspective passes, the frame's scene JSON and "
+                    "the hazed frame beside every render (turns on the Z pass)")
+    method: bpy.props.EnumProperty(
+        name="Method", default='froxel',
+        items=(('froxel', "Froxels", "Hillaire 2020 camera volume (fast)"),
+               ('raymarch', "Ray march", "Every pixel marched (reference, slow)")))
+    status: bpy.props.StringProperty(options={'HIDDEN'})
+    nodes_installed: bpy.props.BoolProperty(options={'HIDDEN'})
+    previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
+    previous_use_pass_z: bpy.props.BoolProperty(options={'HIDDEN'})
+    previous_source: bpy.props.StringProperty(options={'HIDDEN'})
+
+
+def _log(scene, text):
+    print(f"Welkin: {text}")
+    scene.welkin_aerial.status = text
+
+
+def base_of(scene):
+    return scene_export.file_base(bpy.path.abspath(scene.render.filepath))
+
+
+def enable(scene):
+    s = scene.welkin_aerial
+    if not s.nodes_installed:
+        s.previous_use_pass_z = all(layer.use_pass_z for layer in scene.view_layers)
+    for layer in scene.view_layers:
+        layer.use_pass_z = True
+    for warning in compositor.install(scene, s, scene_export.file_output_base(base_of(scene))):
+        _log(scene, warning)
+
+
+def disable(scene):
+    s = scene.welkin_aerial
+    was = s.nodes_installed
+    compositor.remove(scene, s)
+    if was and not s.previous_use_pass_z:
+        for layer in scene.view_layers:
+            layer.use_pass_z = False
+
+
+def camera_of(scene, depsgraph=None):
+    ob = scene.camera
+    if ob is None:
+        raise UserError("no scene camera: set Scene > Camera (aerial perspective needs one)")
+    if depsgraph is not None:
+        ob = ob.evaluated_get(depsgraph)
+    cam = ob.data
+    panorama = None
+    if cam.type == 'PANO':
+        c = cam.cycles
+        if c.panorama_type != 'EQUIRECTANGULAR':
+            raise UserError(f"camera '{ob.name}': panorama type {c.panorama_type} is not "
+                            f"supported by aerial perspective (only EQUIRECTANGULAR)")
+        import math
+        panorama = dict(panorama_type=c.panorama_type,
+                        latitude_min_deg=math.degrees(c.latitude_min),
+                        latitude_max_deg=math.degrees(c.latitude_max),
+                        longitude_min_deg=math.degrees(c.longitude_min),
+                        longitude_max_deg=math.degrees(c.longitude_max))
+    return scene_export.camera_dict(
+        [list(r) for r in ob.matrix_world], cam.type, cam.lens, cam.sensor_width,
+        cam.sensor_height, cam.sensor_fit, cam.ortho_scale, cam.shift_x, cam.shift_y,
+        cam.clip_start, cam.clip_end, scale_length=scene.unit_settings.scale_length,
+        panorama=panorama)
+
+
+def scene_json(scene, module, depsgraph=None):
+    """The frame's scene JSON text (validated by the core), from the world's Welkin sky
+    settings, the sun lamp the sky uses, the scene camera and the render size; the camera
+    and lamp as evaluated in `depsgraph` when given (the render's own, at its frame)."""
+    if scene.world is None:
+        raise UserError("the scene has no world: aerial perspective takes its atmosphere "
+                        "from World > Welkin Sky")
+    settings = scene.world.welkin
+    request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
+    atmosphere = json.loads(sky_request.build_atmosphere(request, module).to_json_string())
+    r = scene.render
+    d = scene_export.scene_dict(
+        atmosphere, settings.altitude_m, request.sun_direction, settings.exposure,
+        sky_request.resolve_method(settings.method, module), camera_of(scene, depsgraph),
+        (r.resolution_x, r.resolution_y, r.resolution_percentage),
+        aerial={"method": scene.welkin_aerial.method})
+    return module.SceneDescription.from_json_string(json.dumps(d)).to_json_string()
+
+
+def _ours(module, path, kind):
+    """True when `path` is absent or a file the add-on wrote (so it may be replaced)."""
+    if not os.path.exists(path):
+        return True
+    try:
+        if kind == "scene":
+            module.SceneDescription.from_json(path)
+            return True
+        _pixels, names = module.read_exr(path)
+    except Exception:
+        return False
+    wanted = scene_export.PASS_CHANNELS if kind == "aerial" else scene_export.COMPOSITE_CHANNELS
+    return sorted(names) == sorted(wanted)
+
+
+def write_frame(scene, frame):
+    """Writes the frame's scene JSON, passes and composite; returns their paths."""
+    import numpy as np
+    module = native.module()
+    if module is None:
+        raise UserError(native.message())
+    # Camera, sun and world first (the likelier faults), as the render's depsgraph had
+    # them at this frame (frame_change_post), else as they are now.
+    text = _at_frame.pop(scene.name, {}).get(frame)
+    if text is None or scene.camera is None:
+        text = scene_json(scene, module)
+    if isinstance(text, UserError):
+        raise text
+    base = base_of(scene)
+    paths = {k: scene_export.frame_path(base, k, frame) for k in ("scene", "aerial", "composite")}
+    for kind, path in paths.items():
+        if not _ours(module, path, kind):
+            raise UserError(f"{path} exists and was not written by Welkin: not replaced "
+                            f"(move it, or change Output > Output Path)")
+    render_path = scene_export.frame_path(base, "render", frame)
+    if not os.path.exists(render_path):
+        raise UserError(f"the render's depth file {render_path} is missing: the compositor "
+                        f"must run (Post Processing > Compositing on) with the node "
+                        f"'{compositor.DEPTH_NODE}'; toggle Aerial Perspective off and on")
+    desc = module.SceneDescription.from_json_string(text)
+    pixels, names = module.read_exr(render_path)
+    depth_name = next((n for n in names if n.startswith("Depth.")), None)
+    if depth_name is None:
+        raise UserError("the render has no Z pass (View Layer > Passes > Data > Z, linked "
+                        f"to the '{compositor.DEPTH_NODE}' node): the pass is on from the "
+                        "next render; toggle Aerial Perspective off and on to relink it")
+    if not (pixels[..., names.index(depth_name)] > 0.0).any():
+        # An unlinked File Output input writes a constant 0: the Z pass did not arrive.
+        raise UserError("the render's Z pass is empty (View Layer > Passes > Data > Z off, "
+                        "or its link to the 'Welkin Aerial Depth' node removed): it is on "
+                        "from the next render; toggle Aerial Perspective off and on")
+    image = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
+    depth = pixels[..., names.index(depth_name)] * np.float32(scene.unit_settings.scale_length)
+    try:
+        inscatter, transmittance = module.aerial_perspective(desc, np.ascontiguousarray(depth))
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    desc.to_json(paths["scene"], overwrite=True)
+    module.write_exr(paths["aerial"], np.concatenate([inscatter, transmittance], axis=-1),
+                     list(scene_export.PASS_CHANNELS), overwrite=True,
+                     attributes=[("welkinScene", text)])
+    module.write_exr(paths["composite"],
+                     np.ascontiguousarray(scene_export.composite(image, inscatter, transmittance),
+                                          dtype=np.float32),
+                     list(scene_export.COMPOSITE_CHANNELS), overwrite=True)
+    return paths
+
+
+# scene name -> {frame: the frame's scene JSON text, or the UserError it raised}
+_at_frame = {}
+
+
+@persistent
+def on_frame_change_post(scene, depsgraph=None):
+    """Renders evaluate the frame in their own depsgraph and leave the original objects
+    where they were: an animated camera or lamp is read here, where that depsgraph is
+    handed over (in `-a`, `-f` and F12 alike), and used by render_post."""
+    if depsgraph is None or not scene.welkin_aerial.enabled:
+        return
+    module = native.module()
+    if module is None:
+        return
+    try:
+        text = scene_json(scene, module, depsgraph)
+    except UserError as error:
+        text = error
+    except Exception as error:
+        text = UserError(f"unexpected {type(error).__name__}: {error}")
+    _at_frame[scene.name] = {scene.frame_current: text}
+
+
+def _sync_output_path(scene):
+    """Points the File Output node at the current output path. An animation render
+    copies the compositor before its first render_pre, so the path is kept in step
+    whenever the scene changes and when a file loads, not only when a render starts."""
+    tree = scene.node_tree
+    node = tree.nodes.get(compositor.DEPTH_NODE) if tree is not None else None
+    if node is not None:
+        wanted = scene_export.file_output_base(base_of(scene))
+        if node.base_path != wanted:
+            node.base_path = wanted
+
+
+@persistent
+def on_depsgraph_update(scene, *_args):
+    if scene.welkin_aerial.enabled:
+        _sync_output_path(scene)
+
+
+@persistent
+def on_load_post(*_args):
+    for scene in bpy.data.scenes:
+        if scene.welkin_aerial.enabled:
+            _sync_output_path(scene)
+
+
+@persistent
+def on_render_pre(scene, *_args):
+    s = scene.welkin_aerial
+    if not s.enabled:
+        return
+    try:
+        z_on = all(layer.use_pass_z for layer in scene.view_layers)
+        if not z_on:
+            _log(scene, "the Z pass was off: turned on (takes effect from the next render)")
+        tree = scene.node_tree
+        node = tree.nodes.get(compositor.DEPTH_NODE) if tree is not None else None
+        wanted = scene_export.file_output_base(base_of(scene))
+        # Touch the scene only when needed: UI renders call this beside the interface.
+        if not z_on or node is None or node.base_path != wanted \
+                or tree.nodes.get(compositor.GROUP_NODE) is None:
+            enable(scene)  # the File Output node follows the output path
+    except Exception as error:
+        _log(scene, f"aerial perspective: unexpected {type(error).__name__}: {error}")
+
+
+@persistent
+def on_render_post(scene, *_args):
+    if not scene.welkin_aerial.enabled:
+        return
+    frame = scene.frame_current
+    try:
+        paths = write_frame(scene, frame)
+        _log(scene, f"aerial perspective of frame {frame}: {paths['aerial']}")
+    except UserError as error:
+        _log(scene, f"aerial perspective not written for frame {frame}: {error}")
+    except Exception as error:  # a handler must never break Blender's render loop
+        _log(scene, f"aerial perspective not written for frame {frame}: unexpected "
+                    f"{type(error).__name__}: {error}")
+
+
+class RENDER_PT_welkin_aerial(bpy.types.Panel):
+    bl_label = "Welkin Aerial Perspective"
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    bl_context = "render"
+
+    def draw(self, context):
+        s = context.scene.welkin_aerial
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(s, "enabled")
+        row = layout.row()
+        row.active = s.enabled
+        row.prop(s, "method")
+        if s.status:
+            layout.label(text=s.status, icon='INFO')
+
+
+classes = (WelkinAerialSettings, RENDER_PT_welkin_aerial)
+_HANDLERS = ((bpy.app.handlers.frame_change_post, on_frame_change_post),
+             (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
+             (bpy.app.handlers.load_post, on_load_post),
+             (bpy.app.handlers.render_pre, on_render_pre),
+             (bpy.app.handlers.render_post, on_render_post))
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.welkin_aerial = bpy.props.PointerProperty(type=WelkinAerialSettings)
+    for handlers, function in _HANDLERS:
+        if function not in handlers:
+            handlers.append(function)
+
+
+def unregister():
+    for handlers, function in reversed(_HANDLERS):
+        if function in handlers:
+            handlers.remove(function)
+    del bpy.types.Scene.welkin_aerial
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,77 @@
+"""A frame's SceneDescription (README "Scene JSON") as plain data, and the files the
+aerial-perspective handler writes beside a render. Blender-free: the bpy layer
+(blender/aerial.py) reads the scene and hands plain values here.
+
+Everything the core takes is in metres: Blender's scene units are scaled by
+`unit_settings.scale_length` (the camera's translation, orthographic scale and clip range
+here; the Z pass in the handler), as README "Scene JSON" says.
+"""
+import os
+import re
+
+# The files of one frame, beside the render: <base>welkin_<kind>_<frame>.<ext>. Blender's
+# File Output node appends the frame number (4 digits) to its base path itself.
+KINDS = {"render": "exr", "aerial": "exr", "composite": "exr", "scene": "json"}
+PASS_CHANNELS = tuple(f"Welkin.Aerial{p}.{c}" for p in ("Inscatter", "Transmittance")
+                      for c in "RGB")
+COMPOSITE_CHANNELS = ("R", "G", "B")
+
+
+def file_base(render_filepath_abs):
+    """The prefix of the add-on's files, from the absolute render output path: a
+    directory gives `<dir>/`, a file pattern `<dir>/<stem>_` ('#' frame placeholders and
+    the extension dropped)."""
+    directory, name = os.path.split(render_filepath_abs)
+    stem = re.sub(r"#+", "", os.path.splitext(name)[0] if "." in name else name)
+    if stem and not stem.endswith(("_", "-", ".")):
+        stem += "_"
+    return os.path.join(directory, stem)
+
+
+def frame_path(base, kind, frame):
+    """The path of one of a frame's files (KINDS), frame numbers as Blender writes them."""
+    return f"{base}welkin_{kind}_{frame:04d}.{KINDS[kind]}"
+
+
+def file_output_base(base):
+    """The File Output node's base path (Blender appends '0001.exr')."""
+    return f"{base}welkin_render_"
+
+
+def camera_dict(matrix_world, cam_type, lens_mm, sensor_width_mm, sensor_height_mm,
+                sensor_fit, ortho_scale, shift_x, shift_y, clip_start, clip_end,
+                scale_length=1.0, panorama=None):
+    """The scene JSON's camera, in metres. `matrix_world` is a 4x4 list by rows in scene
+    units; `panorama` (PANO only) is a dict of panorama_type and the latitude / longitude
+    range in degrees."""
+    s = float(scale_length)
+    m = [[float(v) for v in row] for row in matrix_world]
+    for r in range(3):
+        m[r][3] *= s
+    d = {"matrix_world": m, "type": cam_type, "lens_mm": float(lens_mm),
+         "sensor_width_mm": float(sensor_width_mm), "sensor_height_mm": float(sensor_height_mm),
+         "sensor_fit": sensor_fit, "ortho_scale": float(ortho_scale) * s,
+         "shift_x": float(shift_x), "shift_y": float(shift_y),
+         "clip_start_m": float(clip_start) * s, "clip_end_m": float(clip_end) * s}
+    if cam_type == "PANO" and panorama:
+        d.update(panorama)
+    return d
+
+
+def scene_dict(atmosphere, origin_altitude_m, sun_direction, exposure, method, camera,
+               resolution, aerial=None):
+    """The whole scene JSON. `atmosphere` is a preset name or an atmosphere object (dict),
+    `resolution` (x, y, percentage)."""
+    x, y, pct = resolution
+    d = {"version": 1, "atmosphere": atmosphere, "origin_altitude_m": float(origin_altitude_m),
+         "sun": {"direction": [float(c) for c in sun_direction]},
+         "exposure": float(exposure), "method": method, "camera": camera,
+         "resolution": {"x": int(x), "y": int(y), "percentage": int(pct)}}
+    if aerial:
+        d["aerial"] = dict(aerial)
+    return d
+
+
+def composite(image_rgb, inscatter, transmittance):
+    """The hazed render: Image x Transmittance + Inscatter (README "Aerial perspective")."""
+    return image_rgb * transmittance + inscatter

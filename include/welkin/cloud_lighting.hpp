@@ -1,0 +1,107 @@
+// Fast cloud lighting: a view-ray march through any cloud density source.
+//
+// For each view ray from `origin` along d, through the density's majorant segments only
+// (empty-space skipping: outside the layer's shell, outside the VDB tree's occupied cells):
+//
+//  * Steps. The segments' total length L is cut into at most max_steps steps (no shorter
+//    than half the density's feature size, so a short path takes fewer); each segment gets
+//    a whole number of equal steps. The sample of each step sits at the same fraction u of
+//    it, u drawn once per ray from a seeded stream (PathRng(seed, ray)): the jittered start
+//    that turns banding into noise, the same on every machine.
+//  * Energy-conserving integration (Hillaire 2015, "Physically based and unified
+//    volumetric rendering in Frostbite", SIGGRAPH course, sec. 5.6.3): over a step of
+//    length dt with extinction sigma_t and scattering sigma_s = albedo sigma_t, the source
+//    S (in-scattered radiance per metre) is integrated analytically against the step's
+//    own attenuation,
+//        L += T S (1 - exp(-sigma_t dt)) / sigma_t,    T *= exp(-sigma_t dt),
+//    so a step never scatters more light than it removes, however long it is.
+//  * Early termination: once T < min_transmittance the ray stops (what is behind is
+//    dimmed below that fraction; T is left as it is, not rounded to 0).
+//  * Sun light. At each sample x a shadow ray towards the sun is marched through the
+//    density's segments (light_steps midpoint steps, at most light_distance_m) for the
+//    cloud's optical depth tau_sun, and the sun's irradiance E(x) comes through the
+//    atmosphere (cloud_illumination.hpp). Multiple scattering is approximated with
+//    Wrenninge et al. 2013's octaves ("Oz: the great and volumetric", SIGGRAPH talk; also
+//    Wrenninge 2015, "Art-directable multiple volumetric scattering", SIGGRAPH talk): with
+//    a, b, c in (0, 1] and nu = d . s,
+//        S_sun = sigma_s E(x) sum_{i<octaves} b^i exp(-a^i tau_sun) p(nu; c^i g),
+//    each octave standing for light that has scattered more often: it is less attenuated
+//    (a), weaker (b) and less peaked (c). octaves = 1 is single scattering. a <= b
+//    keeps each octave below the single-scattering energy (Wrenninge's condition).
+//  * Sky light. The sky is an isotropic radiance L_sky(x) around the cloud
+//    (cloud_illumination.hpp). In a uniform isotropic field a conservative medium
+//    (albedo 1) changes nothing: the radiance is L_sky everywhere inside, at all orders
+//    of scattering (in-scattering sigma_s L equals extinction sigma_t L), so the source
+//    is exactly S_sky = sigma_s L_sky, however deep the point. With absorption the field
+//    decays into the cloud; diffusion theory gives the asymptotic decay exp(-kappa tau)
+//    with kappa = sqrt(3 (1 - albedo) (1 - albedo g)) per unit optical depth (the inverse
+//    diffusion length, sigma_a and the transport coefficient sigma_t (1 - albedo g); e.g.
+//    Bohren & Clothiaux 2006, "Fundamentals of Atmospheric Radiation", ch. 6), g the
+//    phase's mean cosine. The march takes tau from one ray towards the local zenith
+//    (ambient_steps steps; skipped for albedo 1):
+//        S_sky = sigma_s L_sky(x) exp(-kappa tau_up).
+//    Exact for albedo 1 (tests/cpp/test_cloud_lighting.cpp, UniformSky...), an estimate
+//    otherwise (the true depth is over all directions, not the zenith alone).
+//
+// Outputs per ray (premultiplied, "over" the background): the in-scattered radiance per
+// channel (W m^-2 sr^-1 nm^-1, the illumination's channels), the transmittance T (grey:
+// cloud extinction does not depend on wavelength), and the depth: the distance from the
+// origin to the transmittance-weighted centre of the scattering, sum t dA / sum dA with
+// dA = T (1 - exp(-sigma_t dt)) the opacity each step adds; 0 where nothing was hit.
+// A background radiance B composites as L + T B.
+//
+// Results do not depend on the thread count (each ray is independent and seeded).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "welkin/cloud_density.hpp"
+#include "welkin/cloud_illumination.hpp"
+#include "welkin/cloud_phase.hpp"
+#include "welkin/progress.hpp"
+
+namespace welkin {
+
+struct CloudScattering {
+    double albedo = 1.0;  // single-scattering albedo of cloud droplets, [0, 1]
+    CloudPhase phase;
+    void validate() const;
+};
+
+struct CloudLightingOptions {
+    CloudScattering scattering;
+    int max_steps = 96;               // along each view ray, [1, 4096]
+    int light_steps = 8;              // along each shadow ray, [1, 256]
+    int ambient_steps = 4;            // along the ray towards the zenith, [0, 256] (0: no decay)
+    double light_distance_m = 4000.0; // how far the shadow and sky rays look, (0, 1e6]
+    int octaves = 4;                  // Wrenninge's multiple-scattering octaves, [1, 16]
+    double octave_extinction = 0.5;   // a, (0, 1]
+    double octave_contribution = 0.5; // b, (0, 1]
+    double octave_eccentricity = 0.5; // c, (0, 1]
+    double min_transmittance = 1e-3;  // early termination, [0, 1)
+    std::uint64_t seed = 1;
+    bool jitter = true;               // false: samples at step midpoints
+    double max_distance_m = 1e6;      // view rays end here, (0, 1e8]
+
+    void validate() const;
+};
+
+// (N, C) radiance, N transmittances and depths; standard errors from estimators only.
+struct CloudResult {
+    std::size_t channels = 0;
+    std::vector<float> radiance;              // (N, C)
+    std::vector<float> transmittance;         // N
+    std::vector<float> depth_m;               // N
+    std::vector<float> radiance_error;        // (N, C) standard error, or empty
+    std::vector<float> transmittance_error;   // N, or empty
+};
+
+// Throws InvalidArgument for bad options, a non-finite origin or a bad direction (naming
+// view_directions[i]); Cancelled when `progress` cancels.
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
+                          const glm::dvec3& origin, std::span<const glm::dvec3> directions,
+                          const CloudLightingOptions& options = {}, Progress* progress = nullptr);
+
+}  // namespace welkin

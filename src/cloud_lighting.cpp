@@ -1,0 +1,163 @@
+// Fast cloud lighting; see cloud_lighting.hpp.
+#include "welkin/cloud_lighting.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "welkin/error.hpp"
+#include "welkin/reference_rng.hpp"
+#include "welkin/sky_method.hpp"
+
+namespace welkin {
+
+void CloudScattering::validate() const {
+    require_in_range("albedo", albedo, 0.0, 1.0);
+    phase.validate();
+}
+
+void CloudLightingOptions::validate() const {
+    scattering.validate();
+    require_in_range("max_steps", max_steps, 1, 4096);
+    require_in_range("light_steps", light_steps, 1, 256);
+    require_in_range("ambient_steps", ambient_steps, 0, 256);
+    if (!(light_distance_m > 0.0 && light_distance_m <= 1e6))
+        throw InvalidArgument("light_distance_m", fmt::format("must be in (0, 1e6] m, got {}", light_distance_m));
+    require_in_range("octaves", octaves, 1, 16);
+    for (const auto& [name, v] : {std::pair{"octave_extinction", octave_extinction},
+                                  std::pair{"octave_contribution", octave_contribution},
+                                  std::pair{"octave_eccentricity", octave_eccentricity}})
+        if (!(v > 0.0 && v <= 1.0)) throw InvalidArgument(name, fmt::format("must be in (0, 1], got {}", v));
+    if (!(min_transmittance >= 0.0 && min_transmittance < 1.0))
+        throw InvalidArgument("min_transmittance", fmt::format("must be in [0, 1), got {}", min_transmittance));
+    if (!(max_distance_m > 0.0 && max_distance_m <= 1e8))
+        throw InvalidArgument("max_distance_m", fmt::format("must be in (0, 1e8] m, got {}", max_distance_m));
+}
+
+namespace {
+
+// Optical depth of the cloud along [0, max_distance] of `ray`, by the midpoint rule with
+// `steps` steps spread over the majorant segments in proportion to their length.
+double march_optical_depth(const CloudDensity& density, const CloudRay& ray, double max_distance, int steps,
+                           std::vector<MajorantSegment>& segs) {
+    density.segments(ray, max_distance, segs);
+    double total = 0.0;
+    for (const auto& s : segs) total += s.t1 - s.t0;
+    if (!(total > 0.0)) return 0.0;
+    const double dt = total / steps;
+    double tau = 0.0;
+    for (const auto& s : segs) {
+        const int n = std::max(1, int(std::ceil((s.t1 - s.t0) / dt - 1e-9)));
+        const double h = (s.t1 - s.t0) / n;
+        for (int k = 0; k < n; ++k) tau += density.sigma_t(ray.at(s.t0 + (k + 0.5) * h)) * h;
+    }
+    return tau;
+}
+
+}  // namespace
+
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
+                          std::span<const glm::dvec3> directions, const CloudLightingOptions& options,
+                          Progress* progress) {
+    options.validate();
+    for (int a = 0; a < 3; ++a) require_finite(fmt::format("origin[{}]", a), origin[a]);
+    validate_directions(directions);
+    const std::size_t n = directions.size(), nc = light.channels();
+    CloudResult result;
+    result.channels = nc;
+    result.radiance.assign(n * nc, 0.0f);
+    result.transmittance.assign(n, 1.0f);
+    result.depth_m.assign(n, 0.0f);
+
+    const glm::dvec3 s = light.sun_direction();
+    const CloudScattering& sc = options.scattering;
+    const int octaves = options.octaves;
+    // Per-octave weights b^i, extinction scales a^i, eccentricity scales c^i.
+    std::vector<double> ob(octaves), oa(octaves), oc(octaves);
+    for (int i = 0; i < octaves; ++i) {
+        ob[i] = std::pow(options.octave_contribution, i);
+        oa[i] = std::pow(options.octave_extinction, i);
+        oc[i] = std::pow(options.octave_eccentricity, i);
+    }
+
+    // The diffusion decay rate of sky light into an absorbing cloud, per unit optical depth
+    // (see the header): 0 for albedo 1.
+    const double mean_g = sc.phase.mean_cosine();
+    const double kappa = std::sqrt(std::max(0.0, 3.0 * (1.0 - sc.albedo) * (1.0 - sc.albedo * mean_g)));
+
+    ProgressTracker tracker(progress, n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const auto& range) {
+        std::vector<MajorantSegment> segs, light_segs;
+        std::vector<float> sun(nc), sky(nc);
+        std::vector<double> acc(nc);
+        for (std::size_t r = range.begin(); r != range.end(); ++r) {
+            const glm::dvec3 d = glm::normalize(directions[r]);
+            const CloudRay ray{origin, d};
+            density.segments(ray, options.max_distance_m, segs);
+            double total = 0.0;
+            for (const auto& g : segs) total += g.t1 - g.t0;
+            if (!(total > 0.0)) {
+                tracker.advance();
+                continue;
+            }
+            const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
+            PathRng rng(options.seed, r, 0, 0x636c6f7564ULL);
+            const double u = options.jitter ? rng.uniform() : 0.5;
+            // Phase values of the octaves: nu = d . s is the same at every sample.
+            const double nu = glm::dot(d, s);
+            std::vector<double> phase(octaves);
+            for (int i = 0; i < octaves; ++i) phase[i] = sc.phase(nu, oc[i]);
+
+            std::fill(acc.begin(), acc.end(), 0.0);
+            double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
+            bool done = false;
+            for (const auto& g : segs) {
+                if (done) break;
+                const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
+                const double dt = (g.t1 - g.t0) / steps;
+                for (int k = 0; k < steps; ++k) {
+                    const double t = g.t0 + (k + u) * dt;
+                    const glm::dvec3 x = ray.at(t);
+                    const double sigma_t = density.sigma_t(x);
+                    if (!(sigma_t > 0.0)) continue;
+                    const double tau_sun =
+                        march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps, light_segs);
+                    double sun_w = 0.0;
+                    for (int i = 0; i < octaves; ++i) sun_w += ob[i] * std::exp(-oa[i] * tau_sun) * phase[i];
+                    double sky_w = 1.0;
+                    if (options.ambient_steps > 0 && kappa > 0.0) {
+                        const double tau_up = march_optical_depth(density, {x, light.zenith(x)},
+                                                                  options.light_distance_m, options.ambient_steps,
+                                                                  light_segs);
+                        sky_w = std::exp(-kappa * tau_up);
+                    }
+                    light.sun_irradiance(x, sun.data());
+                    light.ambient_radiance(x, sky.data());
+                    // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
+                    const double step_opacity = 1.0 - std::exp(-sigma_t * dt);
+                    const double w = T * step_opacity * sc.albedo;
+                    for (std::size_t c = 0; c < nc; ++c) acc[c] += w * (sun[c] * sun_w + sky[c] * sky_w);
+                    depth_sum += t * T * step_opacity;
+                    opacity_sum += T * step_opacity;
+                    T *= 1.0 - step_opacity;
+                    if (T < options.min_transmittance) {
+                        done = true;
+                        break;
+                    }
+                }
+            }
+            for (std::size_t c = 0; c < nc; ++c) result.radiance[r * nc + c] = float(acc[c]);
+            result.transmittance[r] = float(T);
+            result.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+    return result;
+}
+
+}  // namespace welkin

@@ -1,0 +1,203 @@
+// welkin.CloudLayer, welkin.VdbClouds, welkin.cloud_radiance and welkin.sky_image: the cloud
+// density sources (include/welkin/procedural_clouds.hpp, vdb_clouds.hpp), their lighting
+// (cloud_lighting.hpp, cloud_reference.hpp) and the equirect sky with clouds (sky_image.hpp).
+// Thin: converts, releases the GIL, calls the core.
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "welkin/cloud_illumination.hpp"
+#include "welkin/cloud_lighting.hpp"
+#include "welkin/cloud_reference.hpp"
+#include "welkin/color.hpp"
+#include "welkin/error.hpp"
+#include "welkin/procedural_clouds.hpp"
+#include "welkin/sky_image.hpp"
+#include "welkin/vdb_clouds.hpp"
+
+namespace welkin::python {
+namespace {
+
+// Blender's Matrix (and numpy.array(obj.matrix_world)) is indexed [row][column]; glm is
+// [column][row].
+glm::dmat4 to_dmat4(const py::object& m, const std::string& parameter) {
+    if (m.is_none()) return glm::dmat4(1.0);
+    const c_array<double> a = to_c_array<double>(m, parameter, 4, 2, 2, "a 4 x 4 matrix (Blender's matrix_world)");
+    if (a.shape(0) != 4) throw_bad_shape(parameter, "a 4 x 4 matrix (Blender's matrix_world)", "shape " + shape_string(a));
+    glm::dmat4 g;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) g[c][r] = a.data()[r * 4 + c];
+    return g;
+}
+
+std::vector<glm::dvec3> to_points(const py::object& values, const std::string& parameter) {
+    const c_array<double> a = to_c_array<double>(values, parameter, 3, 2, 2, "an (N, 3) array");
+    std::vector<glm::dvec3> out(std::size_t(a.shape(0)));
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = {a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]};
+    return out;
+}
+
+py::array_t<float> to_array(const std::vector<float>& v, std::vector<py::ssize_t> shape) {
+    py::array_t<float> a(shape);
+    std::copy(v.begin(), v.end(), a.mutable_data());
+    return a;
+}
+
+const char* const kCloudRadianceDoc = R"doc(
+Cloud lighting for many view rays, lit by the atmosphere.
+
+    L, T, depth = welkin.cloud_radiance(clouds, atm, altitude_m, sun_direction,
+                                        view_directions, origin=(0, 0, 0),
+                                        method="fast")
+
+clouds: a welkin.CloudLayer or welkin.VdbClouds. The world origin stands altitude_m
+above the ground (Blender's world frame, Z up, metres); rays start at `origin`.
+method: "fast" (ray march, Wrenninge octaves) or "reference" (path tracing, all
+orders; `paths` per ray). Returns L (N, C) in-scattered radiance in
+W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm (premultiplied), T (N,) transmittance,
+depth (N,) m to the transmittance-weighted centre (0 where nothing was hit).
+Composite over a background B as L + T B. ValueError for bad input.
+)doc";
+
+py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere atmosphere, double altitude_m,
+                         const py::object& sun_direction, const py::object& view_directions, const py::object& origin,
+                         const std::string& method, int max_steps, int light_steps, int octaves, double albedo,
+                         int paths, std::uint64_t seed, const py::object& progress) {
+    if (!clouds) throw InvalidArgument("clouds", "must be a welkin.CloudLayer or welkin.VdbClouds");
+    if (method != "fast" && method != "reference")
+        throw InvalidArgument("method", fmt::format("must be \"fast\" or \"reference\", got \"{}\"", method));
+    const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
+    const glm::dvec3 o = to_dvec3(origin, "origin");
+    const std::vector<glm::dvec3> dirs = to_points(view_directions, "view_directions");
+    CloudResult result;
+    run_cancellable(
+        [&](Progress* p) {
+            const AtmosphereIllumination light(atmosphere, observer);
+            if (method == "fast") {
+                CloudLightingOptions opt;
+                opt.max_steps = max_steps;
+                opt.light_steps = light_steps;
+                opt.octaves = octaves;
+                opt.scattering.albedo = albedo;
+                opt.seed = seed;
+                result = render_clouds(*clouds, light, o, dirs, opt, p);
+            } else {
+                CloudReferenceOptions opt;
+                opt.paths = paths;
+                opt.seed = seed;
+                opt.scattering.albedo = albedo;
+                result = render_clouds_reference(*clouds, light, o, dirs, opt, p);
+            }
+        },
+        progress);
+    const auto n = py::ssize_t(dirs.size()), c = py::ssize_t(result.channels);
+    return py::make_tuple(to_array(result.radiance, {n, c}), to_array(result.transmittance, {n}),
+                          to_array(result.depth_m, {n}));
+}
+
+}  // namespace
+
+void register_clouds(py::module_& m) {
+    py::class_<CloudDensity, std::shared_ptr<CloudDensity>>(m, "CloudDensity", R"doc(
+A cloud density source (base class of CloudLayer and VdbClouds).
+)doc")
+        .def(
+            "sigma_t",
+            [](const CloudDensity& d, const py::object& points) {
+                const std::vector<glm::dvec3> p = to_points(points, "points");
+                std::vector<float> out(p.size());
+                for (std::size_t i = 0; i < p.size(); ++i) out[i] = float(d.sigma_t(p[i]));
+                return to_array(out, {py::ssize_t(p.size())});
+            },
+            py::arg("points"), "Extinction coefficient (m^-1) at world points, (N, 3) -> (N,).");
+
+    const CloudLayerParams d;
+    py::class_<ProceduralClouds, CloudDensity, std::shared_ptr<ProceduralClouds>>(m, "CloudLayer", R"doc(
+A procedural cloud layer on the curved planet (Schneider's Nubis: weather map,
+Perlin-Worley base shape, Worley erosion, height gradients per cloud type, wind).
+Altitudes in metres above the ground; cloud_type 0 stratus, 0.5 stratocumulus,
+1 cumulus; density_per_m the extinction of the densest cloud (m^-1); origin_altitude_m
+the world origin's (observer's) altitude. ValueError names a bad parameter.
+)doc")
+        .def(py::init([](double bottom, double top, double coverage, double type, double density, double base_scale,
+                         double detail_scale, double weather_scale, double detail_strength, double weather_variation,
+                         double type_variation, const py::object& wind, std::uint64_t seed, double planet_radius,
+                         double origin_altitude) {
+                 CloudLayerParams p;
+                 p.bottom_altitude_m = bottom;
+                 p.top_altitude_m = top;
+                 p.coverage = coverage;
+                 p.cloud_type = type;
+                 p.density_per_m = density;
+                 p.base_scale_m = base_scale;
+                 p.detail_scale_m = detail_scale;
+                 p.weather_scale_m = weather_scale;
+                 p.detail_strength = detail_strength;
+                 p.weather_variation = weather_variation;
+                 p.type_variation = type_variation;
+                 const c_array<double> w = to_c_array<double>(wind, "wind_offset_m", 2, 1, 1, "two numbers (x, y) in m");
+                 p.wind_offset_m = {w.data()[0], w.data()[1]};
+                 p.seed = seed;
+                 p.planet_radius_m = planet_radius;
+                 p.origin_altitude_m = origin_altitude;
+                 py::gil_scoped_release release;  // the noise is baked here (seconds, once per seed)
+                 return std::make_shared<ProceduralClouds>(p);
+             }),
+             py::kw_only(), py::arg("bottom_altitude_m") = d.bottom_altitude_m,
+             py::arg("top_altitude_m") = d.top_altitude_m, py::arg("coverage") = d.coverage,
+             py::arg("cloud_type") = d.cloud_type, py::arg("density_per_m") = d.density_per_m,
+             py::arg("base_scale_m") = d.base_scale_m, py::arg("detail_scale_m") = d.detail_scale_m,
+             py::arg("weather_scale_m") = d.weather_scale_m, py::arg("detail_strength") = d.detail_strength,
+             py::arg("weather_variation") = d.weather_variation, py::arg("type_variation") = d.type_variation,
+             py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0), py::arg("seed") = d.seed,
+             py::arg("planet_radius_m") = d.planet_radius_m, py::arg("origin_altitude_m") = d.origin_altitude_m)
+        .def_property_readonly("bottom_altitude_m", [](const ProceduralClouds& c) { return c.params().bottom_altitude_m; })
+        .def_property_readonly("top_altitude_m", [](const ProceduralClouds& c) { return c.params().top_altitude_m; })
+        .def_property_readonly("coverage", [](const ProceduralClouds& c) { return c.params().coverage; })
+        .def_property_readonly("seed", [](const ProceduralClouds& c) { return c.params().seed; });
+
+    py::class_<VdbClouds, CloudDensity, std::shared_ptr<VdbClouds>>(m, "VdbClouds", R"doc(
+Clouds from an OpenVDB file: the FloatGrid `grid` (default "density"), placed by
+matrix_world (Blender's Object.matrix_world, 4 x 4, [row][column]) on top of the
+grid's own transform; sigma_t = density_scale x the trilinearly interpolated value
+(m^-1). negative: "clamp" (set to 0, counted in negative_voxel_count and warning) or
+"reject". Raises OSError for a missing or corrupt file and ValueError for no such
+grid, a non-float grid, an empty grid, a grid over max_memory_bytes, non-finite
+values; every message names the file and the grid.
+)doc")
+        .def(py::init([](const std::string& path, const std::string& grid, const py::object& matrix_world,
+                         double density_scale, const std::string& negative, std::uint64_t max_memory_bytes) {
+                 VdbCloudOptions o;
+                 o.grid = grid;
+                 o.matrix_world = to_dmat4(matrix_world, "matrix_world");
+                 o.density_scale = density_scale;
+                 if (negative != "clamp" && negative != "reject")
+                     throw InvalidArgument("negative", fmt::format("must be \"clamp\" or \"reject\", got \"{}\"", negative));
+                 o.negative = negative == "clamp" ? VdbCloudOptions::Negative::Clamp : VdbCloudOptions::Negative::Reject;
+                 o.max_memory_bytes = max_memory_bytes;
+                 py::gil_scoped_release release;
+                 return std::make_shared<VdbClouds>(path, o);
+             }),
+             py::arg("path"), py::arg("grid") = "density", py::kw_only(), py::arg("matrix_world") = py::none(),
+             py::arg("density_scale") = 1.0, py::arg("negative") = "clamp",
+             py::arg("max_memory_bytes") = VdbCloudOptions{}.max_memory_bytes)
+        .def_property_readonly("negative_voxel_count", &VdbClouds::negative_voxel_count)
+        .def_property_readonly("active_voxel_count", &VdbClouds::active_voxel_count)
+        .def_property_readonly("memory_bytes", &VdbClouds::memory_bytes)
+        .def_property_readonly("warning", &VdbClouds::warning)
+        .def_property_readonly("bounds_m", [](const VdbClouds& v) {
+            const glm::dvec3 lo = v.world_bounds_min(), hi = v.world_bounds_max();
+            return py::make_tuple(py::make_tuple(lo.x, lo.y, lo.z), py::make_tuple(hi.x, hi.y, hi.z));
+        });
+
+    const CloudLightingOptions lo;
+    m.def("cloud_radiance", &cloud_radiance, kCloudRadianceDoc, py::arg("clouds"), py::arg("atmosphere"),
+          py::arg("altitude_m"), py::arg("sun_direction"), py::arg("view_directions"), py::kw_only(),
+          py::arg("origin") = py::make_tuple(0.0, 0.0, 0.0), py::arg("method") = "fast",
+          py::arg("max_steps") = lo.max_steps, py::arg("light_steps") = lo.light_steps,
+          py::arg("octaves") = lo.octaves, py::arg("albedo") = lo.scattering.albedo,
+          py::arg("paths") = CloudReferenceOptions{}.paths, py::arg("seed") = lo.seed,
+          py::arg("progress") = py::none());
+}
+
+}  // namespace welkin::python

@@ -1,0 +1,266 @@
+"""Headless Blender + Cycles: the add-on's aerial perspective, end to end.
+
+A ground plane and cubes out to 30 km, camera 20 m up looking along +X, `hazy` air; with
+Scene.welkin_aerial enabled, `render(animation=True)` for 2 frames must leave, per frame,
+the scene JSON, the passes EXR and the composited EXR beside the render, and:
+  * far pixels (depth > 10 km) have a lower transmittance and a higher in-scattering than
+    near ones (depth < 1 km);
+  * the composited file equals Image x T + Inscatter from the render's own Image and the
+    passes, to 1e-6 relative (float32 products);
+  * `build/welkin aerial --scene <frame json> --depth <frame's depth EXR>` reproduces the
+    passes to 1e-5 (same code, same inputs: only the JSON round trip can differ);
+  * the user's compositor nodes survive enable and disable, and disable restores the link
+    the add-on replaced.
+Bad input: no camera, a fisheye camera, the Z pass turned off, and a user's file where the
+passes would go: a clear status line, no pass written (or the user's file left alone).
+"""
+import json
+import math
+import os
+import pathlib
+import subprocess
+import sys
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import addon_testing as at  # noqa: E402
+
+ROOT = at.ROOT
+
+
+def build_scene():
+    scene, sun = at.new_scene(sun_elevation_deg=10.0, sun_azimuth_deg=20.0, camera_z=20.0)
+    cam = scene.camera
+    cam.rotation_euler = (math.radians(88.0), 0.0, math.radians(-90.0))  # along +X, 2 deg down
+    cam.data.clip_end = 1e6
+    for frame, z in ((1, 20.0), (2, 60.0)):  # each frame its own camera
+        cam.location.z = z
+        cam.keyframe_insert("location", index=2, frame=frame)
+    bpy.ops.mesh.primitive_plane_add(size=200000.0, location=(0.0, 0.0, 0.0))
+    for d, y in ((300.0, -40.0), (3000.0, 0.0), (30000.0, 4000.0)):
+        bpy.ops.mesh.primitive_cube_add(size=0.06 * d, location=(d, y, 0.03 * d))
+    scene.world.welkin.preset = "hazy"
+    scene.render.engine = 'CYCLES'
+    scene.cycles.device = 'CPU'
+    scene.cycles.samples = 4
+    scene.cycles.use_denoising = False
+    scene.render.resolution_x, scene.render.resolution_y = 96, 48
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.frame_start, scene.frame_end = 1, 2
+    scene.render.filepath = str(at.TMP / "out" / "frame_")
+    return scene
+
+
+def add_user_nodes(scene):
+    scene.use_nodes = True
+    tree = scene.node_tree
+    rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
+    comp = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeComposite')
+    curves = tree.nodes.new('CompositorNodeCurveRGB')
+    curves.name = "User Curves"
+    tree.links.new(rl.outputs["Image"], curves.inputs["Image"])
+    tree.links.new(curves.outputs["Image"], comp.inputs["Image"])
+    return comp
+
+
+def feeder(comp):
+    return comp.inputs["Image"].links[0].from_node.name
+
+
+def rgb(module, path, names):
+    pixels, channels = module.read_exr(str(path))
+    return np.stack([pixels[..., channels.index(n)] for n in names], axis=-1)
+
+
+def main():
+    addon, module = at.install_addon()
+    from welkin import scene_export
+    from welkin.blender import aerial, compositor
+    scene = build_scene()
+    comp = add_user_nodes(scene)
+    names_before = {n.name for n in scene.node_tree.nodes}
+
+    scene.welkin_aerial.enabled = True
+    tree = scene.node_tree
+    at.check(names_before <= {n.name for n in tree.nodes}, "enable removed a user node")
+    at.check(feeder(comp) == compositor.GROUP_NODE, "the group does not feed Composite")
+    group = tree.nodes[compositor.GROUP_NODE]
+    at.check(group.inputs["Image"].links[0].from_node.name == "User Curves",
+             "the group is not fed by the user's node")
+    at.check(scene.view_layers[0].use_pass_z, "enabling did not turn the Z pass on")
+
+    bpy.ops.render.render(animation=True)
+    base = scene_export.file_base(bpy.path.abspath(scene.render.filepath))
+    cli = ROOT / "build" / "welkin"
+    for frame in (1, 2):
+        paths = {k: pathlib.Path(scene_export.frame_path(base, k, frame))
+                 for k in scene_export.KINDS}
+        for kind, path in paths.items():
+            at.check(path.is_file(), f"frame {frame}: {kind} file {path} missing "
+                                     f"(status: {scene.welkin_aerial.status})")
+        cam_z = json.loads(paths["scene"].read_text())["camera"]["matrix_world"][2][3]
+        at.check(abs(cam_z - 40.0 * frame + 20.0) < 1e-3, f"frame {frame}: camera z {cam_z}")
+        pixels, names = module.read_exr(str(paths["render"]))
+        depth = pixels[..., next(i for i, n in enumerate(names) if n.startswith("Depth."))]
+        image = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
+        ins = rgb(module, paths["aerial"], [f"Welkin.AerialInscatter.{c}" for c in "RGB"])
+        tr = rgb(module, paths["aerial"], [f"Welkin.AerialTransmittance.{c}" for c in "RGB"])
+        near, far = depth < 1000.0, (depth > 10000.0) & (depth < 1e8)
+        at.check(near.sum() > 20 and far.sum() > 5, f"frame {frame}: too few near/far pixels "
+                                                    f"({near.sum()}, {far.sum()})")
+        t_near, t_far = tr[near].mean(), tr[far].mean()
+        i_near, i_far = ins[near].mean(), ins[far].mean()
+        print(f"frame {frame}: T near {t_near:.4f} far {t_far:.4f}; "
+              f"inscatter near {i_near:.5f} far {i_far:.5f}")
+        at.check(t_far < t_near - 0.05, f"frame {frame}: far T {t_far} not below near {t_near}")
+        at.check(i_far > 2.0 * i_near, f"frame {frame}: far inscatter {i_far} not above {i_near}")
+        composite = rgb(module, paths["composite"], "RGB")
+        expect = image * tr + ins
+        err = np.abs(composite - expect) / np.maximum(np.abs(expect), 1e-6)
+        at.check(err.max() < 1e-6, f"frame {frame}: composite differs by {err.max()}")
+        out = at.TMP / f"cli_{frame}.exr"
+        subprocess.run([str(cli), "aerial", "--scene", str(paths["scene"]), "--depth",
+                        str(paths["render"]), "--depth-channel", "Depth.V", "-o", str(out)],
+                       check=True)
+        cli_pix, cli_names = module.read_exr(str(out))
+        ours, our_names = module.read_exr(str(paths["aerial"]))
+        for n in scene_export.PASS_CHANNELS:
+            diff = np.abs(cli_pix[..., cli_names.index(n)]
+                          - ours[..., our_names.index(n)]).max()
+            at.check(diff < 1e-5, f"frame {frame}: CLI {n} differs by {diff}")
+    print("ok: 2 frames, passes + JSON + composite, CLI reproduces")
+
+    # The user's file where frame 3's passes would go is left alone.
+    user = pathlib.Path(scene_export.frame_path(base, "aerial", 3))
+    user.write_text("a user's file")
+    scene.camera.animation_data_clear()
+    scene.frame_set(3)
+    bpy.ops.render.render(write_still=True)
+    at.check(user.read_text() == "a user's file", "the user's file was replaced")
+    at.check("not replaced" in scene.welkin_aerial.status, scene.welkin_aerial.status)
+    user.unlink()
+    print("ok: a user's file is never replaced")
+
+    # Z pass turned off behind the add-on's back: turned on again, reported or computed.
+    scene.frame_set(4)
+    scene.view_layers[0].use_pass_z = False
+    bpy.ops.render.render(write_still=True)
+    at.check(scene.view_layers[0].use_pass_z, "the Z pass was not turned on again")
+    wrote = pathlib.Path(scene_export.frame_path(base, "aerial", 4)).is_file()
+    if wrote:  # then from the frame's real depth, not the File Output's constant 0
+        tr = rgb(module, scene_export.frame_path(base, "aerial", 4),
+                 [f"Welkin.AerialTransmittance.{c}" for c in "RGB"])
+        at.check(tr.min() < 0.5, f"Z pass off: passes computed without depth (T min {tr.min()})")
+    at.check(wrote or "Z pass" in scene.welkin_aerial.status, scene.welkin_aerial.status)
+    print(f"ok: Z pass off -> {'computed' if wrote else 'reported'}: "
+          f"{scene.welkin_aerial.status}")
+
+    # The Depth link to our File Output node removed: no depth written, reported.
+    scene.frame_set(9)
+    out_node = tree.nodes[compositor.DEPTH_NODE]
+    tree.links.remove(out_node.inputs["Depth"].links[0])
+    bpy.ops.render.render(write_still=True)
+    at.check("no Z pass" in scene.welkin_aerial.status, scene.welkin_aerial.status)
+    at.check(not pathlib.Path(scene_export.frame_path(base, "aerial", 9)).exists(),
+             "passes written without a Z pass")
+    scene.welkin_aerial.enabled = False
+    scene.welkin_aerial.enabled = True  # relinks
+    at.check(tree.nodes[compositor.DEPTH_NODE].inputs["Depth"].is_linked,
+             "toggling did not relink the Depth input")
+    group = tree.nodes[compositor.GROUP_NODE]  # made anew by the toggle
+    print(f"ok: unlinked Z pass reported: {scene.welkin_aerial.status}")
+
+    # A fisheye camera: a clear report, no passes.
+    scene.frame_set(5)
+    scene.camera.data.type = 'PANO'
+    scene.camera.data.cycles.panorama_type = 'FISHEYE_EQUIDISTANT'
+    bpy.ops.render.render(write_still=True)
+    at.check("FISHEYE" in scene.welkin_aerial.status, scene.welkin_aerial.status)
+    at.check(not pathlib.Path(scene_export.frame_path(base, "aerial", 5)).exists(),
+             "a fisheye frame got passes")
+    print(f"ok: fisheye reported: {scene.welkin_aerial.status}")
+
+    # Orthographic: supported by the core; passes finite, T in [0, 1].
+    scene.frame_set(6)
+    scene.camera.data.type = 'ORTHO'
+    scene.camera.data.ortho_scale = 200.0
+    bpy.ops.render.render(write_still=True)
+    path = scene_export.frame_path(base, "aerial", 6)
+    at.check(pathlib.Path(path).is_file(), f"ortho: no passes ({scene.welkin_aerial.status})")
+    tr = rgb(module, path, [f"Welkin.AerialTransmittance.{c}" for c in "RGB"])
+    at.check(np.isfinite(tr).all() and tr.min() >= 0.0 and tr.max() <= 1.0, "ortho: bad T")
+    print("ok: orthographic camera")
+
+    # No camera: the handler reports, never raises.
+    scene.frame_set(7)
+    camera = scene.camera
+    scene.camera = None
+    aerial.on_render_post(scene)
+    at.check("no scene camera" in scene.welkin_aerial.status, scene.welkin_aerial.status)
+    scene.camera = camera
+    print(f"ok: no camera reported: {scene.welkin_aerial.status}")
+
+    # The node group computes Image x T + Inscatter in the compositor: constant passes
+    # linked in, the written frame (the Composite node) against the render layer's Image.
+    scene.frame_set(8)
+    scene.camera.data.type = 'PERSP'
+    curves = tree.nodes["User Curves"]
+    rl = curves.inputs["Image"].links[0].from_node
+    tree.links.new(rl.outputs["Image"], group.inputs["Image"])  # the curves clamp at 1
+    t_node, i_node = tree.nodes.new('CompositorNodeRGB'), tree.nodes.new('CompositorNodeRGB')
+    t_node.outputs[0].default_value = (0.5, 0.25, 0.9, 1.0)
+    i_node.outputs[0].default_value = (0.1, 0.2, 0.3, 1.0)
+    tree.links.new(t_node.outputs[0], group.inputs["Transmittance"])
+    tree.links.new(i_node.outputs[0], group.inputs["Inscatter"])
+    at.render_still(scene, at.TMP / "out" / "composited_0008.exr")
+    written = rgb(module, at.TMP / "out" / "composited_0008.exr", "RGB")
+    base8 = scene_export.file_base(str(at.TMP / "out" / "composited_0008.exr"))
+    pixels, names = module.read_exr(scene_export.frame_path(base8, "render", 8))
+    image = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
+    expect = image * np.array([0.5, 0.25, 0.9], np.float32) + np.array([0.1, 0.2, 0.3], np.float32)
+    err = (np.abs(written - expect) / np.maximum(np.abs(expect), 1e-6)).max()
+    at.check(err < 1e-5, f"the node group's Image x T + I is off by {err}")
+    tree.nodes.remove(t_node)
+    tree.nodes.remove(i_node)
+    tree.links.new(curves.outputs["Image"], group.inputs["Image"])
+    print(f"ok: node group = Image x T + Inscatter (worst {err:.2e})")
+
+    # The same from a saved file, `blender -b file.blend --addons welkin -a` in a fresh
+    # process: the setting is saved, the handlers load with the add-on.
+    for frame, z in ((1, 20.0), (2, 60.0)):
+        scene.camera.location.z = z
+        scene.camera.keyframe_insert("location", index=2, frame=frame)
+    scene.render.filepath = str(at.TMP / "out2" / "shot_")
+    blend = at.TMP / "aerial.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env["BLENDER_USER_SCRIPTS"] = str(at.scripts_dir())
+    env["BLENDER_USER_CONFIG"] = str(at.TMP / "config")
+    run = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", str(blend),
+                          "--addons", "welkin", "-a"], env=env, capture_output=True, text=True,
+                         timeout=300)
+    at.check(run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:])
+    base2 = scene_export.file_base(str(at.TMP / "out2" / "shot_"))
+    for frame in (1, 2):
+        for kind in scene_export.KINDS:
+            at.check(pathlib.Path(scene_export.frame_path(base2, kind, frame)).is_file(),
+                     f"blender -a: frame {frame} has no {kind} file:\n"
+                     f"{run.stdout[-3000:]}{run.stderr[-2000:]}")
+        text = pathlib.Path(scene_export.frame_path(base2, "scene", frame)).read_text()
+        cam_z = json.loads(text)["camera"]["matrix_world"][2][3]
+        at.check(abs(cam_z - (40.0 * frame - 20.0)) < 1e-3, f"blender -a: frame {frame} z {cam_z}")
+    print("ok: blender -b file.blend --addons welkin -a")
+
+    # Disable: our nodes out, the user's back in place.
+    scene.welkin_aerial.enabled = False
+    names = {n.name for n in tree.nodes}
+    at.check(names == names_before, f"after disable: {sorted(names ^ names_before)}")
+    at.check(feeder(comp) == "User Curves", "disable did not restore the user's link")
+    print("ok: user nodes survive enable/disable")
+    at.done("test_aerial_render")
+
+
+main()

@@ -1,0 +1,84 @@
+// Shared by the cloud tests: a homogeneous box of cloud (closed forms) and small VDB
+// files written with OpenVDB into a temporary folder.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+#include <unistd.h>
+
+#include "welkin/cloud_density.hpp"
+
+namespace welkin::test {
+
+// sigma_t constant inside [lo, hi], zero outside.
+class HomogeneousBox final : public CloudDensity {
+public:
+    HomogeneousBox(glm::dvec3 lo, glm::dvec3 hi, double sigma_t) : lo_(lo), hi_(hi), sigma_(sigma_t) {}
+    double sigma_t(const glm::dvec3& p) const override {
+        for (int a = 0; a < 3; ++a)
+            if (p[a] < lo_[a] || p[a] > hi_[a]) return 0.0;
+        return sigma_;
+    }
+    void segments(const CloudRay& ray, double t_max, std::vector<MajorantSegment>& out) const override {
+        out.clear();
+        double t0 = 0.0, t1 = t_max;
+        if (clip_ray_to_box(ray, lo_, hi_, t0, t1) && t1 > t0) out.push_back({t0, t1, sigma_});
+    }
+    double feature_size_m() const override { return 1e-3; }
+
+private:
+    glm::dvec3 lo_, hi_;
+    double sigma_;
+};
+
+// A folder under the system temp directory, removed with its files at the end.
+struct TempDir {
+    std::filesystem::path path;
+    TempDir() {
+        path = std::filesystem::temp_directory_path() /
+               ("welkin_clouds_" + std::to_string(::getpid()) + "_" + std::to_string(counter()++));
+        std::filesystem::create_directories(path);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+    }
+    std::string file(const std::string& name) const { return (path / name).string(); }
+    static int& counter() {
+        static int c = 0;
+        return c;
+    }
+};
+
+// Writes grids to a .vdb file.
+inline void write_vdb(const std::string& path, const openvdb::GridPtrVec& grids) {
+    openvdb::initialize();
+    openvdb::io::File file(path);
+    file.write(grids);
+    file.close();
+}
+
+// A fog-volume FloatGrid named `name`, voxel size `voxel_m`, filled by value(i, j, k) on
+// the cube [-n, n]^3 (zeros are left inactive).
+inline openvdb::FloatGrid::Ptr make_float_grid(const std::string& name, double voxel_m, int n,
+                                               const std::function<float(int, int, int)>& value) {
+    openvdb::initialize();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName(name);
+    grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel_m));
+    auto acc = grid->getAccessor();
+    for (int k = -n; k <= n; ++k)
+        for (int j = -n; j <= n; ++j)
+            for (int i = -n; i <= n; ++i) {
+                const float v = value(i, j, k);
+                if (v != 0.0f) acc.setValue(openvdb::Coord(i, j, k), v);
+            }
+    return grid;
+}
+
+}  // namespace welkin::test

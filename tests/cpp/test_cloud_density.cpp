@@ -1,0 +1,348 @@
+// Cloud density sources: the procedural layer (determinism, tiling, bounds, majorants) and
+// OpenVDB volumes (sampling, transforms, empty-space skipping, and every bad input).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "cloud_test_util.hpp"
+#include "welkin/cloud_noise.hpp"
+#include "welkin/error.hpp"
+#include "welkin/procedural_clouds.hpp"
+#include "welkin/vdb_clouds.hpp"
+
+using namespace welkin;
+using welkin::test::TempDir;
+
+namespace {
+
+// Every point of a ray where sigma_t > 0 lies in a segment whose majorant bounds it.
+void expect_segments_bound(const CloudDensity& density, const CloudRay& ray, double t_max, int samples,
+                           std::mt19937_64& gen) {
+    std::vector<MajorantSegment> segs;
+    density.segments(ray, t_max, segs);
+    for (std::size_t i = 1; i < segs.size(); ++i) EXPECT_LE(segs[i - 1].t1, segs[i].t0 + 1e-9);
+    std::uniform_real_distribution<double> U(0.0, t_max);
+    for (int k = 0; k < samples; ++k) {
+        const double t = U(gen);
+        const double s = density.sigma_t(ray.at(t));
+        if (s <= 0.0) continue;
+        bool inside = false;
+        for (const auto& g : segs)
+            if (t >= g.t0 - 1e-6 && t <= g.t1 + 1e-6) {
+                inside = true;
+                EXPECT_LE(s, g.majorant * (1.0 + 1e-6)) << "t = " << t;
+            }
+        EXPECT_TRUE(inside) << "sigma_t = " << s << " at t = " << t << " outside every segment";
+    }
+}
+
+CloudLayerParams tile_params() {
+    CloudLayerParams p;
+    p.base_scale_m = 1000.0;
+    p.detail_scale_m = 500.0;
+    p.weather_scale_m = 2000.0;
+    p.coverage = 0.8;
+    p.density_per_m = 0.02;
+    return p;
+}
+
+}  // namespace
+
+TEST(CloudNoise, TileableAndDeterministic) {
+    for (double x : {0.13, 0.77}) {
+        for (int f : {4, 8}) {
+            EXPECT_NEAR(tileable_worley(x, 0.3, 0.9, f, 7), tileable_worley(x + 1.0, 0.3 - 2.0, 0.9 + 3.0, f, 7), 1e-12);
+            EXPECT_NEAR(tileable_perlin(x, 0.3, 0.9, f, 7), tileable_perlin(x + 1.0, 0.3 - 2.0, 0.9 + 3.0, f, 7), 1e-12);
+            EXPECT_EQ(tileable_worley(x, 0.3, 0.9, f, 7), tileable_worley(x, 0.3, 0.9, f, 7));
+        }
+        EXPECT_NE(tileable_worley(x, 0.3, 0.9, 4, 7), tileable_worley(x, 0.3, 0.9, 4, 8));
+        const double w = tileable_worley(x, 0.3, 0.9, 4, 7);
+        EXPECT_GE(w, 0.0);
+        EXPECT_LE(w, 1.0);
+    }
+}
+
+TEST(ProceduralClouds, DeterministicTiledAndSeeded) {
+    const ProceduralClouds a(tile_params()), b(tile_params());
+    CloudLayerParams p2 = tile_params();
+    p2.seed = 2;
+    const ProceduralClouds c(p2);
+    const double R = a.params().planet_radius_m;
+    const glm::dvec3 centre(0.0, 0.0, -R);
+    int nonzero = 0, differ = 0;
+    std::mt19937_64 gen(3);
+    std::uniform_real_distribution<double> U(-5000.0, 5000.0), H(1500.0, 3000.0);
+    for (int k = 0; k < 400; ++k) {
+        const double x = U(gen), y = U(gen), h = H(gen);
+        const auto at = [&](double xx, double yy) {
+            return glm::dvec3(xx, yy, -R + std::sqrt((R + h) * (R + h) - xx * xx - yy * yy));
+        };
+        const double v = a.sigma_t(at(x, y));
+        EXPECT_EQ(v, b.sigma_t(at(x, y)));
+        // Tiles every 2000 m (the common multiple of the three scales) at equal altitude.
+        EXPECT_NEAR(v, a.sigma_t(at(x + 2000.0, y - 4000.0)), 1e-6 * 0.02);
+        nonzero += v > 0.0;
+        differ += std::abs(v - c.sigma_t(at(x, y))) > 1e-6;
+    }
+    EXPECT_GT(nonzero, 40);
+    EXPECT_GT(differ, 40);
+}
+
+TEST(ProceduralClouds, WindShiftsTheField) {
+    CloudLayerParams p = tile_params();
+    const ProceduralClouds still(p);
+    p.wind_offset_m = {300.0, -120.0};
+    const ProceduralClouds windy(p);
+    // Altitude barely changes over a few hundred metres: 300^2 / (2 R) = 7 mm.
+    for (double x : {100.0, 900.0, 1700.0})
+        for (double z : {1800.0, 2300.0}) {
+            const double a = windy.sigma_t({x + 300.0, 40.0 - 120.0, z});
+            const double b = still.sigma_t({x, 40.0, z});
+            EXPECT_NEAR(a, b, 2e-3 * 0.02);
+        }
+}
+
+TEST(ProceduralClouds, ZeroOutsideTheLayerAndWithoutCoverage) {
+    CloudLayerParams p = tile_params();
+    const ProceduralClouds layer(p);
+    for (double x : {0.0, 333.0, 2500.0}) {
+        EXPECT_EQ(layer.sigma_t({x, 0.0, 1400.0}), 0.0);
+        EXPECT_EQ(layer.sigma_t({x, 0.0, 3100.0}), 0.0);
+    }
+    p.coverage = 0.0;
+    const ProceduralClouds clear(p);
+    std::vector<MajorantSegment> segs;
+    clear.segments({{0, 0, 0}, {0, 0, 1}}, 1e6, segs);
+    EXPECT_TRUE(segs.empty());
+    for (double z = 1500.0; z < 3000.0; z += 37.0) EXPECT_EQ(clear.sigma_t({17.0, 5.0, z}), 0.0);
+    for (double f : {-0.1, 0.0, 1.0, 1.5}) EXPECT_EQ(ProceduralClouds::height_gradient(1.0, f), 0.0);
+    EXPECT_NEAR(ProceduralClouds::height_gradient(1.0, 0.4), 1.0, 1e-12);
+    // Stratus is thin: nothing above 30 % of the layer.
+    EXPECT_EQ(ProceduralClouds::height_gradient(0.0, 0.5), 0.0);
+}
+
+TEST(ProceduralClouds, SegmentsCoverTheDensityAndBoundIt) {
+    const ProceduralClouds layer(tile_params());
+    std::mt19937_64 gen(11);
+    std::vector<MajorantSegment> segs;
+    // Straight up: exactly the layer's thickness.
+    layer.segments({{0, 0, 0}, {0, 0, 1}}, 1e6, segs);
+    ASSERT_EQ(segs.size(), 1u);
+    EXPECT_NEAR(segs[0].t0, 1500.0, 1e-6);
+    EXPECT_NEAR(segs[0].t1, 3000.0, 1e-6);
+    // From inside the layer, looking down past the ground: stops at the bottom of the layer.
+    layer.segments({{0, 0, 2000}, glm::normalize(glm::dvec3(1, 0, -0.2))}, 1e6, segs);
+    ASSERT_EQ(segs.size(), 1u);
+    EXPECT_NEAR(segs[0].t0, 0.0, 1e-9);
+    for (const glm::dvec3 d : {glm::dvec3(1, 0, 0.05), glm::dvec3(0.3, 1, 0.2), glm::dvec3(0, 0, 1), glm::dvec3(1, 1, 0.6)})
+        expect_segments_bound(layer, {{0, 0, 0}, glm::normalize(d)}, 40000.0, 4000, gen);
+}
+
+TEST(ProceduralClouds, RejectsBadParameters) {
+    const auto bad = [](auto edit, const char* name) {
+        CloudLayerParams p;
+        edit(p);
+        try {
+            ProceduralClouds c(p);
+            ADD_FAILURE() << name << " accepted";
+        } catch (const InvalidArgument& e) {
+            EXPECT_EQ(e.parameter(), name);
+        }
+    };
+    bad([](CloudLayerParams& p) { p.coverage = 1.5; }, "coverage");
+    bad([](CloudLayerParams& p) { p.top_altitude_m = 1000.0; }, "top_altitude_m");
+    bad([](CloudLayerParams& p) { p.density_per_m = -1.0; }, "density_per_m");
+    bad([](CloudLayerParams& p) { p.base_scale_m = std::nan(""); }, "base_scale_m");
+    bad([](CloudLayerParams& p) { p.wind_offset_m.x = INFINITY; }, "wind_offset_m[0]");
+    bad([](CloudLayerParams& p) { p.cloud_type = -0.1; }, "cloud_type");
+}
+
+// --- OpenVDB -----------------------------------------------------------------------
+
+namespace {
+
+float ball(int i, int j, int k, int radius) {
+    const double r = std::sqrt(double(i * i + j * j + k * k)) / radius;
+    return r < 1.0 ? float(1.0 - r * r) : 0.0f;
+}
+
+template <class E>
+std::string expect_throw_message(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const E& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << "wrong exception type: " << e.what();
+        return {};
+    }
+    ADD_FAILURE() << "no exception";
+    return {};
+}
+
+}  // namespace
+
+TEST(VdbClouds, SamplesThroughBothTransforms) {
+    TempDir dir;
+    const std::string path = dir.file("ball.vdb");
+    test::write_vdb(path, {test::make_float_grid("density", 10.0, 12, [](int i, int j, int k) { return ball(i, j, k, 10); })});
+    VdbCloudOptions o;
+    // Blender's object matrix: scale 2, then move to (100, 2000, 800).
+    o.matrix_world = glm::translate(glm::dmat4(1.0), glm::dvec3(100, 2000, 800)) * glm::scale(glm::dmat4(1.0), glm::dvec3(2.0));
+    o.density_scale = 0.05;
+    const VdbClouds v(path, o);
+    EXPECT_EQ(v.negative_voxel_count(), 0u);
+    EXPECT_TRUE(v.warning().empty());
+    EXPECT_NEAR(v.feature_size_m(), 20.0, 1e-9);
+    // Voxel (i, j, k) sits at index (i, j, k) -> object 10 (i, j, k) -> world 20 (i, j, k) + t.
+    for (const auto& c : {glm::ivec3(0, 0, 0), glm::ivec3(3, -2, 5), glm::ivec3(-7, 1, 0)}) {
+        const glm::dvec3 w = glm::dvec3(100, 2000, 800) + 20.0 * glm::dvec3(c);
+        EXPECT_NEAR(v.sigma_t(w), 0.05 * ball(c.x, c.y, c.z, 10), 1e-7);
+    }
+    // Halfway between two voxel centres: the mean (trilinear).
+    const glm::dvec3 mid = glm::dvec3(100, 2000, 800) + 20.0 * glm::dvec3(2.5, 0, 0);
+    EXPECT_NEAR(v.sigma_t(mid), 0.05 * 0.5 * (ball(2, 0, 0, 10) + ball(3, 0, 0, 10)), 1e-7);
+    EXPECT_EQ(v.sigma_t({100, 2000, 800 + 20.0 * 11.5}), 0.0);
+    // Empty-space skipping: segments cover every non-zero sample, and a ray that passes far
+    // away gets none.
+    std::mt19937_64 gen(5);
+    for (const glm::dvec3 d : {glm::dvec3(100, 2000, 800), glm::dvec3(130, 2000, 760), glm::dvec3(0, 1, 0.4)})
+        expect_segments_bound(v, {{0, 0, 0}, glm::normalize(d)}, 5000.0, 4000, gen);
+    std::vector<MajorantSegment> segs;
+    v.segments({{0, 0, 0}, {0, 0, 1}}, 1e6, segs);
+    EXPECT_TRUE(segs.empty());
+    v.segments({{0, 0, 0}, glm::normalize(glm::dvec3(100, 2000, 800))}, 1e6, segs);
+    ASSERT_FALSE(segs.empty());
+    double covered = 0.0;
+    for (const auto& g : segs) covered += g.t1 - g.t0;
+    EXPECT_LT(covered, 2.0 * 20.0 * 2 * 12 * 1.8);  // no more than the grid's (dilated) diagonal
+}
+
+TEST(VdbClouds, MissingFile) {
+    const std::string m = expect_throw_message<IoError>([] { VdbClouds v("/nonexistent/welkin/cloud.vdb"); });
+    EXPECT_NE(m.find("/nonexistent/welkin/cloud.vdb"), std::string::npos) << m;
+    EXPECT_NE(m.find("density"), std::string::npos) << m;
+}
+
+TEST(VdbClouds, CorruptFile) {
+    TempDir dir;
+    const std::string garbage = dir.file("garbage.vdb");
+    {
+        std::ofstream f(garbage, std::ios::binary);
+        for (int i = 0; i < 4096; ++i) f.put(char((i * 7919) & 0xff));
+    }
+    std::string m = expect_throw_message<IoError>([&] { VdbClouds v(garbage); });
+    EXPECT_NE(m.find(garbage), std::string::npos) << m;
+    // A valid file cut short.
+    const std::string good = dir.file("good.vdb"), cut = dir.file("cut.vdb");
+    test::write_vdb(good, {test::make_float_grid("density", 1.0, 12, [](int i, int j, int k) { return ball(i, j, k, 12); })});
+    {
+        std::ifstream in(good, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), {});
+        std::ofstream out(cut, std::ios::binary);
+        out.write(bytes.data(), std::streamsize(bytes.size() * 2 / 3));
+    }
+    m = expect_throw_message<IoError>([&] { VdbClouds v(cut); });
+    EXPECT_NE(m.find(cut), std::string::npos) << m;
+}
+
+TEST(VdbClouds, NoSuchGridListsTheGrids) {
+    TempDir dir;
+    const std::string path = dir.file("smoke.vdb");
+    test::write_vdb(path, {test::make_float_grid("smoke", 1.0, 3, [](int, int, int) { return 1.0f; }),
+                           test::make_float_grid("temperature", 1.0, 3, [](int, int, int) { return 1.0f; })});
+    const std::string m = expect_throw_message<InvalidArgument>([&] { VdbClouds v(path); });
+    for (const char* s : {"'density'", "'smoke'", "'temperature'"}) EXPECT_NE(m.find(s), std::string::npos) << m;
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+    VdbCloudOptions o;
+    o.grid = "smoke";
+    EXPECT_NO_THROW(VdbClouds(path, o));
+}
+
+TEST(VdbClouds, WrongGridType) {
+    TempDir dir;
+    const std::string path = dir.file("velocity.vdb");
+    auto grid = openvdb::Vec3SGrid::create();
+    grid->setName("density");
+    grid->getAccessor().setValue(openvdb::Coord(0, 0, 0), openvdb::Vec3s(1, 2, 3));
+    test::write_vdb(path, {grid});
+    const std::string m = expect_throw_message<InvalidArgument>([&] { VdbClouds v(path); });
+    EXPECT_NE(m.find("FloatGrid"), std::string::npos) << m;
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+    EXPECT_NE(m.find("'density'"), std::string::npos) << m;
+}
+
+TEST(VdbClouds, EmptyGrid) {
+    TempDir dir;
+    const std::string path = dir.file("empty.vdb");
+    test::write_vdb(path, {test::make_float_grid("density", 1.0, 2, [](int, int, int) { return 0.0f; })});
+    const std::string m = expect_throw_message<InvalidArgument>([&] { VdbClouds v(path); });
+    EXPECT_NE(m.find("empty"), std::string::npos) << m;
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+}
+
+TEST(VdbClouds, NegativeDensitiesClampedAndCountedOrRejected) {
+    TempDir dir;
+    const std::string path = dir.file("negative.vdb");
+    test::write_vdb(path, {test::make_float_grid("density", 1.0, 3, [](int i, int, int) { return i < 0 ? -0.5f : 1.0f; })});
+    const VdbClouds v(path);
+    EXPECT_EQ(v.negative_voxel_count(), 3u * 7u * 7u);
+    EXPECT_NE(v.warning().find(path), std::string::npos) << v.warning();
+    EXPECT_EQ(v.sigma_t({-2.0, 0.0, 0.0}), 0.0);
+    EXPECT_NEAR(v.sigma_t({2.0, 0.0, 0.0}), 1.0, 1e-7);
+    VdbCloudOptions o;
+    o.negative = VdbCloudOptions::Negative::Reject;
+    const std::string m = expect_throw_message<InvalidArgument>([&] { VdbClouds r(path, o); });
+    EXPECT_NE(m.find("negative"), std::string::npos) << m;
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+}
+
+TEST(VdbClouds, HugeGridRefusedBeforeReading) {
+    TempDir dir;
+    const std::string path = dir.file("big.vdb");
+    test::write_vdb(path, {test::make_float_grid("density", 1.0, 20, [](int, int, int) { return 1.0f; })});
+    VdbCloudOptions o;
+    o.max_memory_bytes = 64 * 1024;  // 41^3 voxels * 4 B = 270 KiB > 64 KiB
+    const std::string m = expect_throw_message<InvalidArgument>([&] { VdbClouds v(path, o); });
+    EXPECT_NE(m.find("MiB"), std::string::npos) << m;
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+    o.max_memory_bytes = std::uint64_t(1) << 30;
+    EXPECT_NO_THROW(VdbClouds(path, o));
+}
+
+TEST(VdbClouds, OtherBadInput) {
+    TempDir dir;
+    // A background that would fill space.
+    const std::string bg = dir.file("background.vdb");
+    auto g = openvdb::FloatGrid::create(0.5f);
+    g->setName("density");
+    g->getAccessor().setValue(openvdb::Coord(0, 0, 0), 1.0f);
+    test::write_vdb(bg, {g});
+    EXPECT_NE(expect_throw_message<InvalidArgument>([&] { VdbClouds v(bg); }).find("background"), std::string::npos);
+    // A NaN voxel.
+    const std::string nan = dir.file("nan.vdb");
+    test::write_vdb(nan, {test::make_float_grid("density", 1.0, 2, [](int i, int, int) { return i == 0 ? NAN : 1.0f; })});
+    EXPECT_NE(expect_throw_message<InvalidArgument>([&] { VdbClouds v(nan); }).find("non-finite"), std::string::npos);
+    // A singular object matrix, a bad density scale.
+    const std::string ok = dir.file("ok.vdb");
+    test::write_vdb(ok, {test::make_float_grid("density", 1.0, 2, [](int, int, int) { return 1.0f; })});
+    VdbCloudOptions o;
+    o.matrix_world = glm::scale(glm::dmat4(1.0), glm::dvec3(1.0, 0.0, 1.0));
+    try {
+        VdbClouds v(ok, o);
+        ADD_FAILURE();
+    } catch (const InvalidArgument& e) {
+        EXPECT_EQ(e.parameter(), "matrix_world");
+    }
+    o = {};
+    o.density_scale = -1.0;
+    EXPECT_THROW(VdbClouds(ok, o), InvalidArgument);
+    o = {};
+    o.grid = "";
+    EXPECT_THROW(VdbClouds(ok, o), InvalidArgument);
+}

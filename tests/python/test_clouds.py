@@ -1,0 +1,74 @@
+"""The cloud bindings: welkin.CloudLayer, welkin.VdbClouds (with a VDB written by
+pyopenvdb), welkin.cloud_radiance and welkin.sky_image(clouds=...)."""
+import math
+
+import numpy as np
+import pytest
+
+import welkin
+
+openvdb = pytest.importorskip("pyopenvdb")
+
+
+def write_ball(path, name="density", radius=8, voxel=10.0):
+    grid = openvdb.FloatGrid()
+    grid.name = name
+    grid.transform = openvdb.createLinearTransform(voxelSize=voxel)
+    acc = grid.getAccessor()
+    for i in range(-radius, radius + 1):
+        for j in range(-radius, radius + 1):
+            for k in range(-radius, radius + 1):
+                r = math.sqrt(i * i + j * j + k * k) / radius
+                if r < 1.0:
+                    acc.setValueOn((i, j, k), 1.0 - r * r)
+    openvdb.write(str(path), grids=[grid])
+
+
+def test_vdb_clouds_with_blender_matrix(tmp_path):
+    path = tmp_path / "ball.vdb"
+    write_ball(path)
+    # Blender's matrix_world, [row][column]: a translation in the last column.
+    m = np.eye(4)
+    m[:3, 3] = (0.0, 1000.0, 500.0)
+    v = welkin.VdbClouds(str(path), matrix_world=m, density_scale=0.02)
+    assert v.active_voxel_count > 0 and v.negative_voxel_count == 0 and v.warning == ""
+    s = v.sigma_t(np.array([[0.0, 1000.0, 500.0], [0.0, 0.0, 0.0]]))
+    assert s[0] == pytest.approx(0.02, rel=1e-6) and s[1] == 0.0
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    d = np.array([[0.0, 1000.0, 500.0]]) / math.hypot(1000.0, 500.0)
+    L, T, depth = welkin.cloud_radiance(v, atm, 0.0, (0.3, 0.2, 0.9), d)
+    assert L.shape == (1, 3) and T.shape == (1,)
+    assert 0.0 < T[0] < 1.0 and np.all(L > 0.0)
+    assert abs(depth[0] - math.hypot(1000.0, 500.0)) < 80.0
+
+
+def test_vdb_errors_name_file_and_grid(tmp_path):
+    with pytest.raises(OSError, match="missing.vdb"):
+        welkin.VdbClouds(str(tmp_path / "missing.vdb"))
+    path = tmp_path / "smoke.vdb"
+    write_ball(path, name="smoke")
+    with pytest.raises(ValueError, match="no grid 'density'.*'smoke'"):
+        welkin.VdbClouds(str(path))
+    assert welkin.VdbClouds(str(path), grid="smoke").active_voxel_count > 0
+    with pytest.raises(ValueError, match="matrix_world"):
+        welkin.VdbClouds(str(path), grid="smoke", matrix_world=np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="negative"):
+        welkin.VdbClouds(str(path), grid="smoke", negative="maybe")
+
+
+def test_cloud_layer_and_cloudy_sky_image():
+    with pytest.raises(ValueError, match="coverage"):
+        welkin.CloudLayer(coverage=2.0)
+    layer = welkin.CloudLayer(coverage=0.7, density_per_m=0.01, seed=3)
+    assert layer.coverage == 0.7
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    sun = (0.6, 0.2, 0.5)
+    clear = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False)
+    cloudy = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False, clouds=layer)
+    assert clear.shape == cloudy.shape == (16, 32, 3)
+    assert np.all(np.isfinite(cloudy))
+    # The lower half looks at the ground below the layer: unchanged; the upper half changes.
+    assert np.array_equal(clear[12:], cloudy[12:])
+    assert np.abs(cloudy[:6] - clear[:6]).max() > 0.0
+    rgb = welkin.sky_image(atm, 0.0, sun, 32, clouds=layer)
+    assert rgb.shape == (16, 32, 3)
