@@ -120,11 +120,7 @@ int run_aerial(const AerialArgs& args) {
                                                      std::string(e.what()).substr(e.parameter().size() + 2)));
     }
 
-    std::optional<tbb::global_control> threads;
-    if (args.threads > 0)
-        threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(args.threads));
-    set_exr_thread_count(args.threads > 0 ? args.threads
-                                          : int(std::max(1u, std::thread::hardware_concurrency())));
+    const auto threads = limit_threads(args.threads);
 
     install_interrupt_handler();
     const auto start = std::chrono::steady_clock::now();
@@ -153,14 +149,12 @@ int run_aerial(const AerialArgs& args) {
             exr.pixels[p * 6 + 3 + c] = passes.transmittance[p * 3 + c];
         }
     passes = {};
-    ExrWriteOptions write;
-    write.overwrite = args.overwrite;
-    write.pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
-    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
-                        {"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
+    write.attributes.insert(write.attributes.end(),
+                            {{"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
                         {"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
                         {"welkinUnits", "AerialInscatter: linear Rec.709, W m^-2 sr^-1 (times "
-                                        "exposure); AerialTransmittance: dimensionless"}};
+                                        "exposure); AerialTransmittance: dimensionless"}});
     write_exr(args.output, exr, write);
     fmt::print("wrote {} ({} x {}, Welkin.AerialInscatter and Welkin.AerialTransmittance, {}, "
                "method {}, {:.2f} s)\n",
