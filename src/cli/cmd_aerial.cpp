@@ -74,17 +74,8 @@ std::string find_depth_channel(const std::vector<std::string>& names, const std:
 int run_aerial(const AerialArgs& args) {
     // Everything that can be refused is refused before the work starts.
     check_output_path(args.output, args.overwrite);
-    SceneDescription scene;
-    try {
-        scene = SceneDescription::from_json_file(args.scene);
-        if (!args.method.empty()) scene.aerial.method = aerial_method_from_name(args.method, "--method");
-        scene.require_camera();
-    } catch (const InvalidArgument& e) {
-        if (e.parameter() == "--method") throw;
-        rethrow_as("--scene", e, args.scene);
-    } catch (const IoError& e) {
-        throw InvalidArgument("--scene", e.what());
-    }
+    SceneDescription scene = load_camera_scene(args.scene);
+    if (!args.method.empty()) scene.aerial.method = aerial_method_from_name(args.method, "--method");
     const int width = scene.resolution.width(), height = scene.resolution.height();
     try {
         // Besides the core's buffers: the EXR image (6 floats a pixel), and its half copy.

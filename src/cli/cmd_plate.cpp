@@ -31,15 +31,7 @@ struct PlateArgs {
 
 int run_plate(const PlateArgs& args) {
     check_output_path(args.output, args.overwrite);
-    SceneDescription scene;
-    try {
-        scene = SceneDescription::from_json_file(args.scene);
-        scene.require_camera();
-    } catch (const InvalidArgument& e) {
-        throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), args.scene));
-    } catch (const IoError& e) {
-        throw InvalidArgument("--scene", e.what());
-    }
+    const SceneDescription scene = load_camera_scene(args.scene);
     const auto threads = limit_threads(args.threads);
 
     install_interrupt_handler();

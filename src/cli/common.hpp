@@ -16,6 +16,7 @@
 
 #include "welkin/atmosphere.hpp"
 #include "welkin/exr_io.hpp"
+#include "welkin/scene.hpp"
 #include "welkin/sky_method.hpp"
 
 namespace welkin::cli {
@@ -55,6 +56,10 @@ struct ObserverArgs {
 void add_observer_options(CLI::App* app, ObserverArgs& args);
 // Unit vector towards the sun: azimuth counter-clockwise from +X, elevation above XY.
 Observer make_observer(const ObserverArgs& args);
+
+// The scene JSON of --scene, with a camera (for the commands that render through it).
+// Throws InvalidArgument naming --scene: the core's message and the file, or the read error.
+SceneDescription load_camera_scene(const std::string& path);
 
 // Before any long work: refuse an existing file (unless overwrite) and a directory that
 // does not exist or cannot be written. Throws IoError naming the path.
