@@ -27,24 +27,15 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
+#include "bench_timing.hpp"
 #include "welkin/aerial_perspective.hpp"
 #include "welkin/math.hpp"
 
 using namespace welkin;
-using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double median_ms(int repeats, const std::function<void()>& f) {
-    std::vector<double> t;
-    for (int i = 0; i < repeats; ++i) {
-        const auto a = Clock::now();
-        f();
-        t.push_back(std::chrono::duration<double, std::milli>(Clock::now() - a).count());
-    }
-    std::sort(t.begin(), t.end());
-    return t[t.size() / 2];
-}
+using bench::median_ms;
 
 Camera camera_along_x(double height_m, double pitch_rad) {
     const double c = std::cos(pitch_rad), s = std::sin(pitch_rad);

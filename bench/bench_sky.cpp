@@ -20,6 +20,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "bench_timing.hpp"
 #include "welkin/atmosphere_luts.hpp"
 #include "welkin/equirect.hpp"
 #include "welkin/lut_cache.hpp"
@@ -28,22 +29,8 @@
 #include "welkin/sky_method.hpp"
 
 using namespace welkin;
-using Clock = std::chrono::steady_clock;
 
-namespace {
-
-double median_ms(int repeats, const std::function<void()>& f) {
-    std::vector<double> t;
-    for (int i = 0; i < repeats; ++i) {
-        const auto a = Clock::now();
-        f();
-        t.push_back(std::chrono::duration<double, std::milli>(Clock::now() - a).count());
-    }
-    std::sort(t.begin(), t.end());
-    return t[t.size() / 2];
-}
-
-}  // namespace
+using bench::median_ms;
 
 int main(int argc, char** argv) {
     CLI::App app{"Welkin sky benchmark"};

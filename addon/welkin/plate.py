@@ -10,6 +10,8 @@ sky, sun disc and aerial perspective over the ground, no meshes. The core comput
 import json
 import math
 
+from . import scene_export
+
 # Pass name -> (channels, Blender chan_id, the plate array it comes from or None when the
 # pass is empty until clouds land: Clouds is transparent black, CloudDepth +infinity).
 PASSES = (
@@ -25,45 +27,27 @@ PASS_NAMES = tuple(p[0] for p in PASSES)
 def camera_dict(matrix_rows, data, scale_length=1.0):
     """The scene JSON's "camera" from an object's matrix_world (4 rows) and a dict of the
     Camera data's values (type, lens, sensor_*, ortho_scale, shift_*, clip_*, and for
-    panoramas panorama_type and the latitude/longitude range in radians)."""
-    rows = [[float(v) for v in row] for row in matrix_rows]
-    for r in range(3):
-        rows[r][3] *= scale_length
-    cam = {
-        "matrix_world": rows,
-        "type": data["type"],
-        "lens_mm": float(data["lens"]),
-        "sensor_width_mm": float(data["sensor_width"]),
-        "sensor_height_mm": float(data["sensor_height"]),
-        "sensor_fit": data["sensor_fit"],
-        "ortho_scale": float(data["ortho_scale"]) * scale_length,
-        "shift_x": float(data["shift_x"]),
-        "shift_y": float(data["shift_y"]),
-        "clip_start_m": float(data["clip_start"]) * scale_length,
-        "clip_end_m": float(data["clip_end"]) * scale_length,
-    }
+    panoramas panorama_type and the latitude/longitude range in radians); the JSON itself
+    is scene_export.camera_dict's."""
+    panorama = None
     if data["type"] == "PANO":
-        cam["panorama_type"] = data.get("panorama_type", "EQUIRECTANGULAR")
+        panorama = {"panorama_type": data.get("panorama_type", "EQUIRECTANGULAR")}
         for key in ("latitude_min", "latitude_max", "longitude_min", "longitude_max"):
-            cam[key + "_deg"] = math.degrees(float(data[key]))
-    return cam
+            panorama[key + "_deg"] = math.degrees(float(data[key]))
+    return scene_export.camera_dict(
+        matrix_rows, data["type"], data["lens"], data["sensor_width"], data["sensor_height"],
+        data["sensor_fit"], data["ortho_scale"], data["shift_x"], data["shift_y"],
+        data["clip_start"], data["clip_end"], scale_length=scale_length, panorama=panorama)
 
 
 def scene_json(atmosphere_json, origin_altitude_m, sun_direction, exposure, method, camera,
                resolution):
-    """The scene description's JSON text. `atmosphere_json`: Atmosphere.to_json_string()
-    (written in full, so the file reproduces the frame); `resolution`: (x, y, percentage)."""
-    x, y, percentage = resolution
-    return json.dumps({
-        "version": 1,
-        "atmosphere": json.loads(atmosphere_json),
-        "origin_altitude_m": float(origin_altitude_m),
-        "sun": {"direction": [float(c) for c in sun_direction]},
-        "exposure": float(exposure),
-        "method": method,
-        "camera": camera,
-        "resolution": {"x": int(x), "y": int(y), "percentage": int(percentage)},
-    })
+    """The scene description's JSON text (scene_export.scene_dict's). `atmosphere_json`:
+    Atmosphere.to_json_string() (written in full, so the file reproduces the frame);
+    `resolution`: (x, y, percentage)."""
+    return json.dumps(scene_export.scene_dict(json.loads(atmosphere_json), origin_altitude_m,
+                                              sun_direction, exposure, method, camera,
+                                              resolution))
 
 
 def pass_rect(np, plate, source, channels, rows=None):

@@ -25,6 +25,7 @@
 #include <tbb/info.h>
 #include <unistd.h>
 
+#include "../bench_timing.hpp"
 #include "welkin/cloud_illumination.hpp"
 #include "welkin/cloud_lighting.hpp"
 #include "welkin/cloud_noise.hpp"
@@ -39,16 +40,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double median_s(int repeats, const std::function<void()>& f) {
-    std::vector<double> t;
-    for (int i = 0; i < repeats; ++i) {
-        const auto a = Clock::now();
-        f();
-        t.push_back(std::chrono::duration<double>(Clock::now() - a).count());
-    }
-    std::sort(t.begin(), t.end());
-    return t[t.size() / 2];
-}
+using bench::median_s;
 
 std::vector<glm::dvec3> view_grid(glm::dvec3 centre, double half_angle, int k) {
     centre = glm::normalize(centre);

@@ -74,17 +74,8 @@ std::string find_depth_channel(const std::vector<std::string>& names, const std:
 int run_aerial(const AerialArgs& args) {
     // Everything that can be refused is refused before the work starts.
     check_output_path(args.output, args.overwrite);
-    SceneDescription scene;
-    try {
-        scene = SceneDescription::from_json_file(args.scene);
-        if (!args.method.empty()) scene.aerial.method = aerial_method_from_name(args.method, "--method");
-        scene.require_camera();
-    } catch (const InvalidArgument& e) {
-        if (e.parameter() == "--method") throw;
-        rethrow_as("--scene", e, args.scene);
-    } catch (const IoError& e) {
-        throw InvalidArgument("--scene", e.what());
-    }
+    SceneDescription scene = load_camera_scene(args.scene);
+    if (!args.method.empty()) scene.aerial.method = aerial_method_from_name(args.method, "--method");
     const int width = scene.resolution.width(), height = scene.resolution.height();
     try {
         // Besides the core's buffers: the EXR image (6 floats a pixel), and its half copy.
@@ -120,11 +111,7 @@ int run_aerial(const AerialArgs& args) {
                                                      std::string(e.what()).substr(e.parameter().size() + 2)));
     }
 
-    std::optional<tbb::global_control> threads;
-    if (args.threads > 0)
-        threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(args.threads));
-    set_exr_thread_count(args.threads > 0 ? args.threads
-                                          : int(std::max(1u, std::thread::hardware_concurrency())));
+    const auto threads = limit_threads(args.threads);
 
     install_interrupt_handler();
     const auto start = std::chrono::steady_clock::now();
@@ -153,14 +140,12 @@ int run_aerial(const AerialArgs& args) {
             exr.pixels[p * 6 + 3 + c] = passes.transmittance[p * 3 + c];
         }
     passes = {};
-    ExrWriteOptions write;
-    write.overwrite = args.overwrite;
-    write.pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
-    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
-                        {"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
+    write.attributes.insert(write.attributes.end(),
+                            {{"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
                         {"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
                         {"welkinUnits", "AerialInscatter: linear Rec.709, W m^-2 sr^-1 (times "
-                                        "exposure); AerialTransmittance: dimensionless"}};
+                                        "exposure); AerialTransmittance: dimensionless"}});
     write_exr(args.output, exr, write);
     fmt::print("wrote {} ({} x {}, Welkin.AerialInscatter and Welkin.AerialTransmittance, {}, "
                "method {}, {:.2f} s)\n",

@@ -31,18 +31,8 @@ struct PlateArgs {
 
 int run_plate(const PlateArgs& args) {
     check_output_path(args.output, args.overwrite);
-    SceneDescription scene;
-    try {
-        scene = SceneDescription::from_json_file(args.scene);
-        scene.require_camera();
-    } catch (const InvalidArgument& e) {
-        throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), args.scene));
-    } catch (const IoError& e) {
-        throw InvalidArgument("--scene", e.what());
-    }
-    std::optional<tbb::global_control> threads;
-    if (args.threads > 0)
-        threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(args.threads));
+    const SceneDescription scene = load_camera_scene(args.scene);
+    const auto threads = limit_threads(args.threads);
 
     install_interrupt_handler();
     const auto start = std::chrono::steady_clock::now();
@@ -79,14 +69,12 @@ int run_plate(const PlateArgs& args) {
             for (int c = 0; c < 3; ++c) exr.pixels[p * nch + l * 3 + c] = (*layers[l].second)[p * 3 + c];
         exr.pixels[p * nch + nch - 1] = plate.depth[p];
     }
-    ExrWriteOptions write;
-    write.overwrite = args.overwrite;
-    write.pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
-    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
-                        {"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
+    write.attributes.insert(write.attributes.end(),
+                            {{"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
                         {"welkinMethod", plate.method},
                         {"welkinUnits", "linear Rec.709, W m^-2 sr^-1 (times exposure); "
-                                        "AerialTransmittance dimensionless; Z metres"}};
+                                        "AerialTransmittance dimensionless; Z metres"}});
     write_exr(args.output, exr, write);
     fmt::print("wrote {} ({} x {}, sky method {}, {:.2f} s)\n",
                std::filesystem::absolute(args.output).string(), plate.width, plate.height,

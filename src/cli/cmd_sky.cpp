@@ -95,12 +95,7 @@ int run_sky(const SkyArgs& args) {
                                                   : SkyImageOptions::Output::Rgb;
     image_options.validate();
 
-    std::optional<tbb::global_control> threads;
-    if (args.threads > 0)
-        threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(args.threads));
-    // ZIP compression of a 2048 x 1024 float image takes ~0.4 s on one thread.
-    set_exr_thread_count(args.threads > 0 ? args.threads
-                                          : int(std::max(1u, std::thread::hardware_concurrency())));
+    const auto threads = limit_threads(args.threads);
 
     install_interrupt_handler();
     const auto start = std::chrono::steady_clock::now();
@@ -121,9 +116,7 @@ int run_sky(const SkyArgs& args) {
     for (const std::string& name : image.channel_names)
         exr.channel_names.push_back(args.multilayer ? "Welkin.Sky." + name : name);
     exr.pixels = std::move(image.pixels);
-    ExrWriteOptions write;
-    write.overwrite = args.overwrite;
-    write.pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
     // Provenance: the settings that reproduce the file.
     nlohmann::ordered_json settings = {
         {"atmosphere", !args.scene.empty()           ? atm.name
@@ -145,8 +138,7 @@ int run_sky(const SkyArgs& args) {
     } else {
         settings["scene"] = args.scene;
     }
-    write.attributes = {{"software", fmt::format("welkin {}", kVersion)},
-                        {"welkinSettings", settings.dump()}};
+    write.attributes.emplace_back("welkinSettings", settings.dump());
     if (args.spectral_channels)
         write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -115,6 +116,34 @@ void check_output_path(const std::string& path, bool overwrite) {
                                   dir.string(), std::strerror(errno)));
     ::close(fd);
     fs::remove(probe, ec);
+}
+
+SceneDescription load_camera_scene(const std::string& path) {
+    try {
+        SceneDescription scene = SceneDescription::from_json_file(path);
+        scene.require_camera();
+        return scene;
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), path));
+    } catch (const IoError& e) {
+        throw InvalidArgument("--scene", e.what());
+    }
+}
+
+std::unique_ptr<tbb::global_control> limit_threads(int threads) {
+    // ZIP compression of a 2048 x 1024 float image takes ~0.4 s on one thread.
+    set_exr_thread_count(threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
+    if (threads <= 0) return nullptr;
+    return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                 std::size_t(threads));
+}
+
+ExrWriteOptions exr_write_options(bool overwrite, bool half) {
+    ExrWriteOptions write;
+    write.overwrite = overwrite;
+    write.pixel_type = half ? ExrPixelType::Half : ExrPixelType::Float;
+    write.attributes = {{"software", fmt::format("welkin {}", kVersion)}};
+    return write;
 }
 
 }  // namespace welkin::cli

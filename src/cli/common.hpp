@@ -12,7 +12,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include <tbb/global_control.h>
+
 #include "welkin/atmosphere.hpp"
+#include "welkin/exr_io.hpp"
+#include "welkin/scene.hpp"
 #include "welkin/sky_method.hpp"
 
 namespace welkin::cli {
@@ -53,8 +57,20 @@ void add_observer_options(CLI::App* app, ObserverArgs& args);
 // Unit vector towards the sun: azimuth counter-clockwise from +X, elevation above XY.
 Observer make_observer(const ObserverArgs& args);
 
+// The scene JSON of --scene, with a camera (for the commands that render through it).
+// Throws InvalidArgument naming --scene: the core's message and the file, or the read error.
+SceneDescription load_camera_scene(const std::string& path);
+
 // Before any long work: refuse an existing file (unless overwrite) and a directory that
 // does not exist or cannot be written. Throws IoError naming the path.
 void check_output_path(const std::string& path, bool overwrite);
+
+// --threads N (0: all cores): caps TBB's workers while the returned object lives (null when
+// uncapped) and gives OpenEXR's compression as many threads.
+std::unique_ptr<tbb::global_control> limit_threads(int threads);
+
+// How an output EXR is written: --overwrite, --half (else 32-bit float), and the
+// "software" provenance attribute; commands append their own attributes.
+ExrWriteOptions exr_write_options(bool overwrite, bool half);
 
 }  // namespace welkin::cli

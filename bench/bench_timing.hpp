@@ -1,0 +1,27 @@
+// The benchmarks' timer: the median of repeated runs (robust to a stray slow run on a
+// shared machine), in milliseconds or seconds.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <functional>
+#include <vector>
+
+namespace welkin::bench {
+
+// Median wall time of `repeats` (>= 1) calls of f, in seconds.
+inline double median_s(int repeats, const std::function<void()>& f) {
+    std::vector<double> t;
+    for (int i = 0; i < repeats; ++i) {
+        const auto a = std::chrono::steady_clock::now();
+        f();
+        t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+    }
+    std::sort(t.begin(), t.end());
+    return t[t.size() / 2];
+}
+
+// The same in milliseconds.
+inline double median_ms(int repeats, const std::function<void()>& f) { return 1e3 * median_s(repeats, f); }
+
+}  // namespace welkin::bench
