@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <vector>
 
 namespace welkin {
 
@@ -11,5 +12,10 @@ inline constexpr std::array<double, 4> kGauss8Nodes = {0.1834346424956498, 0.525
                                                        0.7966664774136267, 0.9602898564975363};
 inline constexpr std::array<double, 4> kGauss8Weights = {0.3626837833783620, 0.3137066458778873,
                                                          0.2223810344533745, 0.1012285362903763};
+
+// n-point Gauss-Legendre rule on (0, 1), for any n >= 1: nodes x (descending) and weights
+// w, summing to 1. Nodes by Newton's method on P_n from Tricomi's initial guesses, weights
+// 2 / ((1 - t^2) P_n'(t)^2) on [-1, 1], halved for the unit interval.
+void gauss_legendre_unit(int n, std::vector<double>& x, std::vector<double>& w);
 
 }  // namespace welkin

@@ -26,6 +26,7 @@
 #include "welkin/error.hpp"
 #include "welkin/geometry.hpp"
 #include "welkin/phase.hpp"
+#include "welkin/quadrature.hpp"
 #include "welkin/reference_column_table.hpp"
 #include "welkin/reference_sky.hpp"
 
@@ -365,26 +366,10 @@ std::vector<double> plane_parallel_second_order(const Atmosphere& atm, const glm
     std::vector<double> z(N);
     for (int i = 0; i < N; ++i)  // graded: 0.08 m at the ground, 240 m at the top
         z[std::size_t(i)] = Z * std::expm1(8.0 * i / (N - 1.0)) / std::expm1(8.0);
-    // Gauss-Legendre cosines on (0, 1), by Newton on P_n.
+    // Gauss-Legendre cosines on (0, 1).
     const int M = 48;
-    std::vector<double> mu_up(M), w_up(M);
-    for (int i = 0; i < M; ++i) {
-        double x = std::cos(kPi * (i + 0.75) / (M + 0.5)), dp = 0.0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1.0, p1 = x;
-            for (int k = 2; k <= M; ++k) {
-                const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = M * (x * p1 - p0) / (x * x - 1.0);
-            const double dx = p1 / dp;
-            x -= dx;
-            if (std::abs(dx) < 1e-15) break;
-        }
-        mu_up[std::size_t(i)] = 0.5 * (x + 1.0);
-        w_up[std::size_t(i)] = 1.0 / ((1.0 - x * x) * dp * dp);  // 2/((1-x^2)P'^2) / 2
-    }
+    std::vector<double> mu_up, w_up;
+    gauss_legendre_unit(M, mu_up, w_up);
     std::vector<double> mus, wmu;  // downward then upward
     for (int i = 0; i < M; ++i) mus.push_back(-mu_up[std::size_t(i)]), wmu.push_back(w_up[std::size_t(i)]);
     for (int i = 0; i < M; ++i) mus.push_back(mu_up[std::size_t(i)]), wmu.push_back(w_up[std::size_t(i)]);
@@ -530,28 +515,6 @@ Atmosphere homogeneous_layer(double Z, std::vector<double> rayleigh, double mie_
     return atm;
 }
 
-// Gauss-Legendre nodes and weights on (0, 1).
-void gauss_legendre_01(int n, std::vector<double>& x, std::vector<double>& w) {
-    x.resize(std::size_t(n));
-    w.resize(std::size_t(n));
-    for (int i = 0; i < n; ++i) {
-        double t = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 0.0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1.0, p1 = t;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2.0 * k - 1.0) * t * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (t * p1 - p0) / (t * t - 1.0);
-            const double dt = p1 / dp;
-            t -= dt;
-            if (std::abs(dt) < 1e-15) break;
-        }
-        x[std::size_t(i)] = 0.5 * (t + 1.0);
-        w[std::size_t(i)] = 1.0 / ((1.0 - t * t) * dp * dp);
-    }
-}
 
 }  // namespace
 
@@ -595,7 +558,7 @@ TEST(ReferenceSkyClosedForm, GroundReflectedLightScatteredOnce) {
     const int n = 16384;
     const ReferenceSky sky(paths(n, 3), 2);
     std::vector<double> x, w;
-    gauss_legendre_01(64, x, w);
+    gauss_legendre_unit(64, x, w);
     for (double vz : {0.0, 50.0}) {
         const std::vector<glm::dvec3> dirs = {view_direction(vz, 0.0)};
         const SkyRun a = run(sky, white, sun_at(0.0), dirs), b = run(sky, black, sun_at(0.0), dirs);
@@ -630,7 +593,7 @@ TEST(ReferenceSkyClosedForm, ConservativeLayerConservesEnergy) {
     const double Z = 10e3;
     const Atmosphere atm = homogeneous_layer(Z, {2e-5, 4e-5, 8e-5}, 1e-5, 1e-5, 0.0, 0.0);
     std::vector<double> x, w;
-    gauss_legendre_01(24, x, w);
+    gauss_legendre_unit(24, x, w);
     std::vector<glm::dvec3> up, down;
     for (double mu : x) {
         up.push_back({std::sqrt(1.0 - mu * mu), 0.0, mu});
