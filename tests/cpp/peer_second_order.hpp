@@ -120,7 +120,8 @@ public:
                 const double nu2 = clamp_cosine(glm::dot(w, v));
                 const double pr = rayleigh_phase(nu2), pm = mie_phase(atm_.mie_phase, nu2, atm_.mie_g);
                 for (int c = 0; c < 3; ++c)
-                    J[c] += L[c] * (atm_.rayleigh_scattering[c] * rho_r * pr + atm_.mie_scattering[c] * rho_m * pm) * dw;
+                    J[c] += L[c] * dw *
+                            (atm_.rayleigh_scattering[c] * rho_r * pr + atm_.mie_scattering[c] * rho_m * pm);
             }
         }
         return J;

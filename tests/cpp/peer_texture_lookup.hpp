@@ -13,7 +13,8 @@
 //  * mu_s: texel k (0..31) holds x = k / 31 of x(mu_s) = max(1 - a / A, 0) / (1 + a),
 //    a = (d_s - d_min) / (d_max - d_min) with d_s the distance to the top along the sun
 //    ray from the ground, A = -2 mu_s_min R / (d_max - d_min); mu_s_min is the cosine of
-//    the model's largest sun zenith angle (102 degrees in the demo).
+//    the model's largest sun zenith angle (102 degrees in the demo; 120 degrees changes the
+//    emulated orders 2-4 by under 0.4 % of L at the table's views, measured).
 //  * nu: slice l (0..7) holds nu_l = -1 + 2 l / 7, CLAMPED to the range that is possible for
 //    the texel's mu and mu_s, [mu mu_s - s, mu mu_s + s], s = sqrt((1 - mu^2)(1 - mu_s^2)).
 //    At the zenith texel that range is the single value mu_s: every slice of it holds the

@@ -245,13 +245,14 @@ TEST(PeerMultipleScattering, LutAgainstThePeerCorrected) {
 // The first candidate, refuted: the peer's quadratures of its second order. At the view
 // with the strongest azimuthal structure (sun zenith 30, view zenith 60, towards and away
 // from the sun), the second order by deterministic quadrature (peer_second_order.hpp),
-// converged and with each of the peer's rules, against the reference's second order.
-// Asserted: (a) the converged quadrature agrees with the reference's second order within
-// 1.5 % (measured 0.2-0.4 %), which validates the machinery; (b) with all of the peer's
-// rules the towards/away ratio of the second order moves by less than 10 % (measured
-// +7.6-8.0 %: +5.8..+6.4 % towards, -1.1..-1.8 % away), while the peer's orders 2-4 are
-// 1.43-1.46 against the converged 1.03-1.04 (asserted: more than 25 % above it). So the quadratures are a minor part of it; the
-// texture lookup (above) is the cause. Runtime about 10 s on two cores.
+// converged and with all of the peer's rules together, against the reference's second
+// order (16384 paths). Asserted: (a) the converged quadrature agrees with the reference's
+// second order within 1.5 % (measured 0.0-0.3 %), which validates the machinery; (b) with
+// the peer's rules the towards/away ratio of the second order moves by less than 10 %
+// (measured +7.6-8.0 %: +5.8..+6.4 % towards, -1.1..-1.8 % away), while the peer's orders
+// 2-4 are 1.43-1.46 against the converged 1.03-1.04 (asserted: more than 25 % above it).
+// So the quadratures are a minor part of it; the texture lookup (above) is the cause.
+// Runtime about 12 s on two loaded cores.
 TEST(PeerMultipleScattering, PeerQuadraturesDoNotMakeTheAzimuthalStructure) {
     using welkin::test::SecondOrderRules;
     const Atmosphere atm = Atmosphere::preset("bruneton2017");
