@@ -29,7 +29,8 @@ AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::
       sun_angular_radius_(float(atm.sun_angular_radius_rad)),
       mie_model_(atm.mie_phase),
       mie_g_(float(atm.mie_g)),
-      table_(kTableSize) {
+      table_(kTableSize),
+      extinction_(kTableSize) {
     if (count < 1 || count > 4 || first + count > atm.channels())
         throw InvalidArgument("channels", "a batch holds 1 to 4 of the atmosphere's channels");
     const Spectrum4 rayleigh = pack(atm.rayleigh_scattering, first, count);
@@ -43,6 +44,11 @@ AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::
         const float rho_a = float(atm.absorption_density.density(h));
         table_[i] = {rayleigh * rho_r, mie_s * rho_m,
                      rayleigh * rho_r + mie_t * rho_m + absorption * rho_a};
+    }
+    for (int i = 0; i < kTableSize; ++i) {
+        const Float4 a = to_float4(table_[std::size_t(i)].extinction);
+        const Float4 b = i + 1 < kTableSize ? to_float4(table_[std::size_t(i) + 1].extinction) : a;
+        extinction_[std::size_t(i)] = {a, b - a};
     }
 }
 

@@ -75,6 +75,19 @@ public:
         return a + f * (b - a);
     }
 
+    // The same as a texel index i in [0, kTableSize - 1] and weight f in [0, 1] (the
+    // integer and fractional parts of a clamped coordinate): one entry of a compact table
+    // that holds, per altitude, the extinction a and its step to the next entry b - a
+    // (zero after the last), so that a lookup reads 32 adjacent bytes and does one
+    // multiply-add. Equal to extinction_at(i + f) but for rounding.
+    struct ExtinctionEntry {
+        Float4 value, step;
+    };
+    Float4 extinction_at(int i, float f) const {
+        const ExtinctionEntry& e = extinction_[std::size_t(i)];
+        return e.value + f * e.step;
+    }
+
     // Phase functions at scattering cosine nu (phase.hpp).
     float rayleigh_phase(float nu) const;
     float mie_phase(float nu) const;
@@ -89,6 +102,7 @@ private:
     MiePhaseModel mie_model_;
     float mie_g_;
     std::vector<MediumSample> table_;
+    std::vector<ExtinctionEntry> extinction_;
 };
 
 // Copies lanes [0, count) of v into out[0..count).
