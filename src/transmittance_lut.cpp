@@ -101,11 +101,17 @@ TransmittanceLut::TransmittanceLut(const AtmosphereBatch& batch, int width, int 
       texture_(width, height) {
     const GradedQuadrature quadrature(steps);
     tbb::parallel_for(0, height, [&](int j) {
+        // r_mu_from_uv, with the parts that depend on the row alone formed once.
+        const double H = H_;
+        const double rho = H * double(unit_from_texcoord((float(j) + 0.5f) / float(height), height));
+        const double r = std::sqrt(rho * rho + bottom_ * bottom_);
+        const double d_min = top_ - r, d_max = rho + H;
         for (int i = 0; i < width; ++i) {
-            double r, mu;
-            r_mu_from_uv((float(i) + 0.5f) / float(width), (float(j) + 0.5f) / float(height), r, mu);
+            const double x_mu = unit_from_texcoord((float(i) + 0.5f) / float(width), width);
+            const double d = d_min + x_mu * (d_max - d_min);
+            const double mu = d == 0.0 ? 1.0 : clamp_cosine((H * H - rho * rho - d * d) / (2.0 * r * d));
             const Spectrum4 tau = quadrature.optical_depth(batch, r, mu, distance_to_top(r, mu, top_));
-            texture_.at(i, j) = glm::exp(-tau);
+            texture_.at(i, j) = to_vec4(exp_nonpositive(-to_float4(tau)));
         }
     });
 }
