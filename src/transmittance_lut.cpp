@@ -45,7 +45,7 @@ namespace {
 // clamped to the table, as an entry and a weight (AtmosphereBatch::extinction_at).
 // r(t)^2 = (t + r mu)^2 + r^2 (1 - mu^2), a sum of two squares (never negative, so no
 // guard per node), with r^2 (1 - mu^2) = (r sin)^2 formed once per ray.
-void table_coordinates(double r_mu, double r_sin2, double R, double inv_step, double origin, double direction,
+WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double r_sin2, double R, double inv_step, double origin, double direction,
                        double x_max, const double* __restrict s2, std::size_t m, int* __restrict entry,
                        float* __restrict fraction) {
     for (std::size_t l = 0; l < m; ++l) {
@@ -67,7 +67,7 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     const double origin = toward_a ? a : b, direction = toward_a ? len : -len;
     const double r_mu = r * mu, r_sin2 = r * r * std::max((1.0 - mu) * (1.0 + mu), 0.0);
     const double x_max = double(AtmosphereBatch::kTableSize - 1);
-    constexpr std::size_t kBlock = 32;
+    constexpr std::size_t kBlock = 64;
     int entry[kBlock];
     float fraction[kBlock];
     const std::size_t n = piece.s2.size();
