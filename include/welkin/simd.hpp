@@ -21,9 +21,12 @@
 // AVX2 one takes ~20 % less time for the multiple-scattering and sky-view LUTs. Callees
 // inlined into such a function are compiled for its target; WELKIN_ALWAYS_INLINE makes
 // sure a helper pass is. Elsewhere (other processors or compilers) the macro is empty.
+// (Defining it empty on the command line, -DWELKIN_SIMD_CLONES=, builds the baseline only.)
+#ifndef WELKIN_SIMD_CLONES
 #if defined(__x86_64__) && defined(__linux__) && defined(__has_attribute)
 #if __has_attribute(target_clones)
 #define WELKIN_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
 #endif
 #endif
 #ifndef WELKIN_SIMD_CLONES
