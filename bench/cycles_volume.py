@@ -9,12 +9,19 @@ matched, and why it is the same problem for both renderers:
   Blender unit is a metre). sigma_t = density_scale x value, m^-1, in both: in Cycles the
   grid's value (Volume Info > Density) times density_scale feeds the scatter nodes' Density
   (Cycles' volume density is extinction per Blender unit), precision FULL (not half floats).
-* Albedo 1 and the phase: Welkin's CloudPhase (include/welkin/cloud_phase.hpp) is
-  w HG(g_f) + (1 - w) HG(g_b) with albedo 1. In Cycles two Volume Scatter closures (white,
-  anisotropy g_f and g_b) with densities w sigma_t and (1 - w) sigma_t, added: the medium's
-  extinction is their sum, sigma_t, and a scattering picks a closure in proportion to its
-  density, so the phase is exactly that mixture (Cycles' anisotropy is HG's g, positive
-  forward, as ours).
+  Cycles 3.4 places a voxel's value half a voxel off OpenVDB's convention (value i at
+  index i, which Welkin follows): at (i + 1/2) voxel along each axis (measured: Cycles'
+  opacity against Welkin's differs by up to 0.22 at the cloud's edges unshifted, 0.35 and
+  0.09, the noise, with Welkin's copy moved by -1/2 and +1/2 voxel). Welkin's copy is moved
+  by +1/2 voxel (welkin_render's voxel_m) so that both render the same density.
+* Albedo 1 and the phase: one Henyey-Greenstein lobe of eccentricity G (Cycles' Volume
+  Scatter anisotropy is HG's g, positive forward, as Welkin's), Welkin's CloudPhase set to
+  w_forward = 1, g_forward = G. Not Welkin's default two lobes: in Cycles 3.4 two Volume
+  Scatter closures added (or mixed) are lit as the SUM of their normalised lobes, not the
+  mixture weighted by their densities (measured with write_ball, optically thin, sun only:
+  HG(0.8) alone and HG(-0.3) alone match the single-scattering closed form, 0.8 HG(0.8) +
+  0.2 HG(-0.3) comes out 4.2 x the mixture = 0.91 x HG(0.8) + HG(-0.3), two identical
+  half-density lobes 2 x), so a mixture cannot be matched there.
 * Light: a sun lamp of strength E (Cycles: irradiance at normal incidence, W m^-2), angle 0
   (a delta, as Welkin's), and a world of uniform colour L (radiance, W m^-2 sr^-1) from every
   direction; Welkin gets the same through cloud_radiance(sun_irradiance=[E],
@@ -34,8 +41,9 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-# Welkin's CloudPhase defaults (include/welkin/cloud_phase.hpp), matched in Cycles.
-G_FORWARD, G_BACK, W_FORWARD = 0.8, -0.3, 0.8
+# The one HG lobe of both renderers: near the mean cosine of Welkin's default CloudPhase
+# (0.8 x 0.8 + 0.2 x -0.3 = 0.58).
+G = 0.6
 
 
 def write_cumulus(path, voxel_m=6.0, radius_m=220.0, seed=3):
@@ -64,6 +72,7 @@ def write_cumulus(path, voxel_m=6.0, radius_m=220.0, seed=3):
     d = np.minimum(d * 1.5, 1.0)
     d *= np.clip((z - base) / 30.0, 0.0, 1.0)
     _write_dense(vdb, path, d.astype(np.float32), n, voxel_m)
+    return voxel_m
 
 
 def write_ball(path, voxel_m=10.0, radius_m=100.0):
@@ -76,6 +85,7 @@ def write_ball(path, voxel_m=10.0, radius_m=100.0):
     x, y, z = np.meshgrid(ax, ax, ax, indexing="ij")
     d = (x * x + y * y + z * z <= radius_m * radius_m).astype(np.float32)
     _write_dense(vdb, path, d, n, voxel_m)
+    return voxel_m
 
 
 def _write_dense(vdb, path, d, n, voxel_m):
@@ -93,7 +103,8 @@ def look_at(obj, target):
 
 
 def build_scene(vdb_path, *, density_scale, sun_direction, sun_irradiance, sky_radiance, camera_location,
-                camera_target, width, height, samples, bounces=1024, step_rate=1.0, seed=0, lens_mm=50.0):
+                camera_target, width, height, samples, bounces=1024, step_rate=1.0, seed=0, lens_mm=50.0,
+                lobes=((G, 1.0),)):
     """Replaces the current scene's objects with the VDB volume, a sun lamp, a camera and a
     uniform world, all set for the comparison above. Returns the scene."""
     for obj in list(bpy.data.objects):
@@ -109,7 +120,7 @@ def build_scene(vdb_path, *, density_scale, sun_direction, sun_irradiance, sky_r
     vol.render.step_size = 0.0  # automatic: the voxel size times Cycles' step rate
     vol_obj = bpy.data.objects.new("Cloud", vol)
     scene.collection.objects.link(vol_obj)
-    vol_obj.data.materials.append(_cloud_material(density_scale))
+    vol_obj.data.materials.append(_cloud_material(density_scale, lobes))
 
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
     sun.data.energy = float(sun_irradiance)
@@ -121,6 +132,7 @@ def build_scene(vdb_path, *, density_scale, sun_direction, sun_irradiance, sky_r
 
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     cam.data.lens = lens_mm
+    cam.data.clip_start, cam.data.clip_end = 0.1, 1e6  # Cycles stops camera rays at clip_end
     cam.data.sensor_fit = "AUTO"
     cam.location = camera_location
     look_at(cam, camera_target)
@@ -166,7 +178,7 @@ def build_scene(vdb_path, *, density_scale, sun_direction, sun_irradiance, sky_r
     return scene
 
 
-def _cloud_material(density_scale):
+def _cloud_material(density_scale, lobes):
     m = bpy.data.materials.new("CloudPhase")
     m.use_nodes = True
     nodes, links = m.node_tree.nodes, m.node_tree.links
@@ -174,7 +186,7 @@ def _cloud_material(density_scale):
     out = nodes.new("ShaderNodeOutputMaterial")
     info = nodes.new("ShaderNodeVolumeInfo")
     add = nodes.new("ShaderNodeAddShader")
-    for i, (g, w) in enumerate(((G_FORWARD, W_FORWARD), (G_BACK, 1.0 - W_FORWARD))):
+    for i, (g, w) in enumerate(lobes):
         mul = nodes.new("ShaderNodeMath")
         mul.operation = "MULTIPLY"
         mul.inputs[1].default_value = float(density_scale) * w
@@ -222,17 +234,20 @@ def render(scene, path):
     return np.stack([pixels[..., names.index(c)] for c in "RGBA"], axis=-1)
 
 
-def welkin_render(scene, vdb_path, density_scale, sun_direction, sun_irradiance, sky_radiance, method, **kw):
+def welkin_render(scene, vdb_path, voxel_m, density_scale, sun_direction, sun_irradiance, sky_radiance, method, **kw):
     """Welkin's cloud_radiance for the scene camera's pixel rays: (H, W) radiance and
-    transmittance, rows top first."""
+    transmittance, rows top first; the grid moved by half a voxel (voxel_m) as Cycles 3.4
+    renders it."""
     import welkin
 
     r = scene.render
     h, w = r.resolution_y, r.resolution_x
     origin, dirs = camera_rays(scene)
-    clouds = welkin.VdbClouds(str(vdb_path), density_scale=density_scale)
+    m = np.eye(4)
+    m[:3, 3] = 0.5 * voxel_m
+    clouds = welkin.VdbClouds(str(vdb_path), density_scale=density_scale, matrix_world=m)
     atm = welkin.Atmosphere.preset("bruneton2017")  # does not light the cloud here
     L, T, _ = welkin.cloud_radiance(clouds, atm, 0.0, tuple(sun_direction), dirs, origin=origin, method=method,
                                     sun_irradiance=[float(sun_irradiance)],
-                                    ambient_radiance=[float(sky_radiance)], **kw)
+                                    ambient_radiance=[float(sky_radiance)], g_forward=G, w_forward=1.0, **kw)
     return L[:, 0].reshape(h, w), T.reshape(h, w)

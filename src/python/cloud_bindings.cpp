@@ -68,13 +68,20 @@ or neither; 1-D, one value per channel, as many channels as you like, W m^-2 and
 W m^-2 sr^-1): the sun's irradiance at normal incidence everywhere and a uniform sky of
 that radiance from every direction, below included (a Cycles sun lamp of that strength
 and a world of that colour); atm and altitude_m then do not light the cloud.
+g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
+(include/welkin/cloud_phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
 )doc";
 
 py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere atmosphere, double altitude_m,
                          const py::object& sun_direction, const py::object& view_directions, const py::object& origin,
                          const std::string& method, int max_steps, int light_steps, int octaves, double albedo,
                          int paths, std::uint64_t seed, const py::object& progress,
-                         const py::object& sun_irradiance, const py::object& ambient_radiance) {
+                         const py::object& sun_irradiance, const py::object& ambient_radiance, double g_forward,
+                         double g_back, double w_forward) {
+    CloudScattering scattering;
+    scattering.albedo = albedo;
+    scattering.phase = CloudPhase{g_forward, g_back, w_forward};
+    scattering.validate();
     if (!clouds) throw InvalidArgument("clouds", "must be a welkin.CloudLayer or welkin.VdbClouds");
     if (method != "fast" && method != "reference")
         throw InvalidArgument("method", fmt::format("must be \"fast\" or \"reference\", got \"{}\"", method));
@@ -100,14 +107,14 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
                 opt.max_steps = max_steps;
                 opt.light_steps = light_steps;
                 opt.octaves = octaves;
-                opt.scattering.albedo = albedo;
+                opt.scattering = scattering;
                 opt.seed = seed;
                 result = render_clouds(*clouds, light, o, dirs, opt, p);
             } else {
                 CloudReferenceOptions opt;
                 opt.paths = paths;
                 opt.seed = seed;
-                opt.scattering.albedo = albedo;
+                opt.scattering = scattering;
                 result = render_clouds_reference(*clouds, light, o, dirs, opt, p);
             }
         },
@@ -220,7 +227,8 @@ values; every message names the file and the grid.
           py::arg("octaves") = lo.octaves, py::arg("albedo") = lo.scattering.albedo,
           py::arg("paths") = CloudReferenceOptions{}.paths, py::arg("seed") = lo.seed,
           py::arg("progress") = py::none(), py::arg("sun_irradiance") = py::none(),
-          py::arg("ambient_radiance") = py::none());
+          py::arg("ambient_radiance") = py::none(), py::arg("g_forward") = CloudPhase{}.g_forward,
+          py::arg("g_back") = CloudPhase{}.g_back, py::arg("w_forward") = CloudPhase{}.w_forward);
 }
 
 }  // namespace welkin::python

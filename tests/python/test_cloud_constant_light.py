@@ -93,3 +93,22 @@ def test_constant_light_bad_input(ball):
         welkin.cloud_radiance(ball, atm, 0.0, (0, 0, 1), d, sun_irradiance=[-1.0], ambient_radiance=[1.0])
     with pytest.raises(ValueError, match="sun_irradiance"):
         welkin.cloud_radiance(ball, atm, 0.0, (0, 0, 1), d, sun_irradiance=[[1.0]], ambient_radiance=[1.0])
+
+
+def test_phase_parameters(ball):
+    # One HG lobe given as the forward lobe (w_forward = 1) or as the back lobe
+    # (w_forward = 0) is the same phase: the same numbers, seed for seed, both methods.
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    d = views()
+    sun = (0.3, -0.5, 0.8)
+    for method in ("fast", "reference"):
+        kw = dict(method=method, paths=64, sun_irradiance=[1.0], ambient_radiance=[0.1])
+        a = welkin.cloud_radiance(ball, atm, 0.0, sun, d, g_forward=0.6, w_forward=1.0, **kw)
+        b = welkin.cloud_radiance(ball, atm, 0.0, sun, d, g_back=0.6, w_forward=0.0, **kw)
+        np.testing.assert_array_equal(a[0], b[0])
+        # and the phase is used: the mirrored lobe gives other numbers.
+        c = welkin.cloud_radiance(ball, atm, 0.0, sun, d, g_forward=-0.6, w_forward=1.0, **kw)
+        assert not np.allclose(a[0], c[0])
+    for name, value in (("g_forward", 1.0), ("g_back", -1.5), ("w_forward", 1.2)):
+        with pytest.raises(ValueError, match=name):
+            welkin.cloud_radiance(ball, atm, 0.0, sun, d, **{name: value})
