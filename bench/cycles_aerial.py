@@ -8,7 +8,7 @@ against Welkin's own plate of the same world (issue #7), one Blender process, on
 1. blend/make_aerial_demo.py builds the demo (ground and blocks to 40 km, `hazy`, the Welkin
    world texture) at --size and renders it once with the add-on's aerial perspective on, which
    leaves the frame's scene JSON and its render + Z pass EXR (README "Aerial perspective in
-   Blender"); that call is timed as "cycles_with_aerial_addon".
+   Blender"); the whole script is timed as "demo_script_total".
 2. #5: the same frame rendered by Cycles alone (aerial perspective off: the render call,
    scene sync and BVH included), against, for the same frame's passes:
    `welkin aerial --scene ... --depth ...` (the CLI: LUTs, EXR read, froxels, write) and
@@ -87,7 +87,6 @@ def render_once():
     bpy.ops.render.render(write_still=False)
 
 
-row("cycles_with_aerial_addon", timed(render_once), f"{args.samples} spp, Scene.welkin_aerial on")
 scene.welkin_aerial.enabled = False
 t_cycles = timed(render_once)
 row("cycles_frame", t_cycles, f"{args.samples} spp, aerial off")
