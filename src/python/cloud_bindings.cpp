@@ -30,7 +30,7 @@ glm::dmat4 to_dmat4(const py::object& m, const std::string& parameter) {
     return g;
 }
 
-// A light spectrum given from Python: a number or a 1-D array, one value per channel.
+// A light spectrum given from Python: a 1-D array, one value per channel.
 std::vector<float> to_spectrum(const py::object& values, const std::string& parameter) {
     const c_array<float> a = to_c_array<float>(values, parameter, -1, 1, 1, "a 1-D array, one value per channel");
     return std::vector<float>(a.data(), a.data() + a.shape(0));
