@@ -85,6 +85,8 @@ int main(int argc, char** argv) {
     app.add_option("--width", width, "sky width in pixels (height = width / 2)");
     app.add_option("--repeats", repeats, "runs per timing; the median is reported");
     app.add_option("--csv", csv, "also write the figures as CSV");
+    bool sky_only = false;
+    app.add_flag("--sky-only", sky_only, "only the sky timings (for profiling)");
     CLI11_PARSE(app, argc, argv);
     std::vector<std::string> rows;
 
@@ -112,6 +114,8 @@ int main(int argc, char** argv) {
                t_cloudy);
     rows.push_back(fmt::format("sky,{},clear,{:.4f},,,,,", width, t_clear));
     rows.push_back(fmt::format("sky,{},cumulus,{:.4f},,,,,", width, t_cloudy));
+
+    if (sky_only) return 0;
 
     // --- fast vs reference --------------------------------------------------------------
     const double e = 35.0 * kDegree;

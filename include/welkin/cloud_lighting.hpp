@@ -84,6 +84,10 @@ struct CloudLightingOptions {
     std::uint64_t seed = 1;
     bool jitter = true;               // false: samples at step midpoints
     double max_distance_m = 1e6;      // view rays end here, (0, 1e8]
+    // Tabulate the optical depths towards the sun (and the zenith) on a lazily filled grid
+    // (cloud_depth_grid.hpp) instead of marching a shadow ray per sample.
+    bool shadow_grid = true;
+    double shadow_grid_spacing_m = 0.0;  // finest cell h_0, [0, 1e5] m; 0: twice the feature size
 
     void validate() const;
 };

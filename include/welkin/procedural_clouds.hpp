@@ -78,6 +78,7 @@ private:
     CloudLayerParams p_;
     glm::dvec3 centre_;
     std::shared_ptr<const CloudNoiseTextures> noise_;
+    double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
 };
 
 }  // namespace welkin
