@@ -76,10 +76,14 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
     const double h0 = options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m
                                                           : 2.0 * density.feature_size_m();
     const bool ambient_decay = options.ambient_steps > 0 && kappa > 0.0;
-    std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid;
+    std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid;
+    const bool sized = options.octave_optical_size && octaves > 1;
     if (options.shadow_grid) {
         sun_grid = std::make_unique<OpticalDepthGrid>(
             density, [s](const glm::dvec3&) { return s; }, h0, options.light_distance_m, options.light_steps);
+        if (sized)
+            anti_grid = std::make_unique<OpticalDepthGrid>(
+                density, [s](const glm::dvec3&) { return -s; }, h0, options.light_distance_m, options.light_steps);
         if (ambient_decay)
             sky_grid = std::make_unique<OpticalDepthGrid>(
                 density, [&light](const glm::dvec3& p) { return light.zenith(p); }, h0, options.light_distance_m,
@@ -91,7 +95,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
         std::vector<MajorantSegment> segs, light_segs;
         std::vector<float> sun(nc), sky(nc);
         std::vector<double> acc(nc);
-        OpticalDepthGrid::Cursor sun_cursor, sky_cursor;
+        OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor;
         for (std::size_t r = range.begin(); r != range.end(); ++r) {
             const glm::dvec3 d = glm::normalize(directions[r]);
             const CloudRay ray{origin, d};
@@ -133,8 +137,19 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                         sun_grid ? sun_grid->tau(x, sun_level, sun_cursor)
                                  : march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps,
                                                        light_segs);
-                    double sun_w = 0.0;
-                    for (int i = 0; i < octaves; ++i) sun_w += ob[i] * std::exp(-oa[i] * tau_sun) * phase[i];
+                    // The octaves' share scaled by the cloud's optical size along the sun line
+                    // through x (see the header): f = 1 - exp(-tau_line), octave i times f^i.
+                    double f = 1.0;
+                    if (sized) {
+                        const double tau_anti =
+                            anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)
+                                      : march_optical_depth(density, {x, -s}, options.light_distance_m,
+                                                            options.light_steps, light_segs);
+                        f = 1.0 - std::exp(-(tau_sun + tau_anti));
+                    }
+                    double sun_w = 0.0, fi = 1.0;
+                    for (int i = 0; i < octaves; ++i, fi *= f)
+                        sun_w += ob[i] * fi * std::exp(-oa[i] * tau_sun) * phase[i];
                     double sky_w = 1.0;
                     if (ambient_decay) {
                         const double tau_up =

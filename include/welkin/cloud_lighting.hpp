@@ -41,6 +41,19 @@
 //    each octave standing for light that has scattered more often: it is less attenuated
 //    (a), weaker (b) and less peaked (c). octaves = 1 is single scattering. a <= b
 //    keeps each octave below the single-scattering energy (Wrenninge's condition).
+//    The octaves' fixed shares b^i assume a cloud large enough for light to scatter many
+//    times; in an optically small cloud it leaves after the first event. With
+//    octave_optical_size (the default) octave i is weighted by f^i, f = 1 - exp(-tau_line),
+//    tau_line = tau_sun + tau_antisun the cloud's optical depth along the sun's line
+//    through x (both ways, each at most light_distance_m): f is the probability that
+//    light travelling along that line interacts once more before it leaves the cloud, so
+//    the i-times-further-scattered share goes as f^i, as the successive orders of
+//    scattering do in an optically thin medium (order n+1 / order n ~ tau, e.g. Hansen &
+//    Travis 1974, "Light scattering in planetary atmospheres", sec. 3) and tends to
+//    Wrenninge's b^i in a thick one. No fitted parameter. Measured against the
+//    reference (bench/clouds): thin wispy layer +47 % -> -2 % bias; dense cumulus base
+//    unchanged (-49 %: thick, f = 1); VDB ball +2.6 % -> -9 % bias at the same mean
+//    |error| (19 %: its thin edges no longer offset its too-dark core).
 //  * Sky light. The sky is an isotropic radiance L_sky(x) around the cloud
 //    (cloud_illumination.hpp). In a uniform isotropic field a conservative medium
 //    (albedo 1) changes nothing: the radiance is L_sky everywhere inside, at all orders
@@ -93,6 +106,7 @@ struct CloudLightingOptions {
     double octave_extinction = 0.5;   // a, (0, 1]
     double octave_contribution = 0.5; // b, (0, 1]
     double octave_eccentricity = 0.5; // c, (0, 1]
+    bool octave_optical_size = true;  // scale octave i by (1 - exp(-tau_line))^i (see above)
     double min_transmittance = 1e-3;  // early termination, [0, 1)
     double tail_transmittance = 0.1;  // below it, longer view steps (see above), [0, 1]; 0: off
     std::uint64_t seed = 1;
