@@ -3,12 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "welkin/cloud_depth_grid.hpp"
 #include "welkin/error.hpp"
 #include "welkin/reference_rng.hpp"
 #include "welkin/sky_method.hpp"
@@ -36,29 +38,9 @@ void CloudLightingOptions::validate() const {
         throw InvalidArgument("min_transmittance", fmt::format("must be in [0, 1), got {}", min_transmittance));
     if (!(max_distance_m > 0.0 && max_distance_m <= 1e8))
         throw InvalidArgument("max_distance_m", fmt::format("must be in (0, 1e8] m, got {}", max_distance_m));
+    require_in_range("tail_transmittance", tail_transmittance, 0.0, 1.0);
+    require_in_range("shadow_grid_spacing_m", shadow_grid_spacing_m, 0.0, 1e5, "m");
 }
-
-namespace {
-
-// Optical depth of the cloud along [0, max_distance] of `ray`, by the midpoint rule with
-// `steps` steps spread over the majorant segments in proportion to their length.
-double march_optical_depth(const CloudDensity& density, const CloudRay& ray, double max_distance, int steps,
-                           std::vector<MajorantSegment>& segs) {
-    density.segments(ray, max_distance, segs);
-    double total = 0.0;
-    for (const auto& s : segs) total += s.t1 - s.t0;
-    if (!(total > 0.0)) return 0.0;
-    const double dt = total / steps;
-    double tau = 0.0;
-    for (const auto& s : segs) {
-        const int n = std::max(1, int(std::ceil((s.t1 - s.t0) / dt - 1e-9)));
-        const double h = (s.t1 - s.t0) / n;
-        for (int k = 0; k < n; ++k) tau += density.sigma_t(ray.at(s.t0 + (k + 0.5) * h)) * h;
-    }
-    return tau;
-}
-
-}  // namespace
 
 CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
                           std::span<const glm::dvec3> directions, const CloudLightingOptions& options,
@@ -89,11 +71,31 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
     const double mean_g = sc.phase.mean_cosine();
     const double kappa = std::sqrt(std::max(0.0, 3.0 * (1.0 - sc.albedo) * (1.0 - sc.albedo * mean_g)));
 
+    // The optical-depth grids (cloud_depth_grid.hpp) towards the sun and, when the sky
+    // light decays (albedo < 1), towards the local zenith; filled lazily by the rays.
+    const double h0 = options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m
+                                                          : 2.0 * density.feature_size_m();
+    const bool ambient_decay = options.ambient_steps > 0 && kappa > 0.0;
+    std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid;
+    const bool sized = options.octave_optical_size && octaves > 1;
+    if (options.shadow_grid) {
+        sun_grid = std::make_unique<OpticalDepthGrid>(
+            density, [s](const glm::dvec3&) { return s; }, h0, options.light_distance_m, options.light_steps);
+        if (sized)
+            anti_grid = std::make_unique<OpticalDepthGrid>(
+                density, [s](const glm::dvec3&) { return -s; }, h0, options.light_distance_m, options.light_steps);
+        if (ambient_decay)
+            sky_grid = std::make_unique<OpticalDepthGrid>(
+                density, [&light](const glm::dvec3& p) { return light.zenith(p); }, h0, options.light_distance_m,
+                options.ambient_steps);
+    }
+
     ProgressTracker tracker(progress, n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const auto& range) {
         std::vector<MajorantSegment> segs, light_segs;
         std::vector<float> sun(nc), sky(nc);
         std::vector<double> acc(nc);
+        OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor;
         for (std::size_t r = range.begin(); r != range.end(); ++r) {
             const glm::dvec3 d = glm::normalize(directions[r]);
             const CloudRay ray{origin, d};
@@ -105,6 +107,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                 continue;
             }
             const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
+            const int sun_level = sun_grid ? sun_grid->level_for(dt_target) : 0;
             PathRng rng(options.seed, r, 0, 0x636c6f7564ULL);
             const double u = options.jitter ? rng.uniform() : 0.5;
             // Phase values of the octaves: nu = d . s is the same at every sample.
@@ -119,26 +122,46 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                 if (done) break;
                 const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
                 const double dt = (g.t1 - g.t0) / steps;
-                for (int k = 0; k < steps; ++k) {
-                    const double t = g.t0 + (k + u) * dt;
+                for (int k = 0, span = 1; k < steps; k += span) {
+                    // The dim tail: below tail_transmittance a step spans up to 8 base steps,
+                    // about tail_transmittance / T of them (whole steps, the same jitter u).
+                    span = T < options.tail_transmittance
+                               ? std::min({steps - k, 8, std::max(1, int(options.tail_transmittance / T))})
+                               : 1;
+                    const double h = span * dt;
+                    const double t = g.t0 + k * dt + u * h;
                     const glm::dvec3 x = ray.at(t);
                     const double sigma_t = density.sigma_t(x);
                     if (!(sigma_t > 0.0)) continue;
                     const double tau_sun =
-                        march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps, light_segs);
-                    double sun_w = 0.0;
-                    for (int i = 0; i < octaves; ++i) sun_w += ob[i] * std::exp(-oa[i] * tau_sun) * phase[i];
+                        sun_grid ? sun_grid->tau(x, sun_level, sun_cursor)
+                                 : march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps,
+                                                       light_segs);
+                    // The octaves' share scaled by the cloud's optical size along the sun line
+                    // through x (see the header): f = 1 - exp(-tau_line), octave i times f^i.
+                    double f = 1.0;
+                    if (sized) {
+                        const double tau_anti =
+                            anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)
+                                      : march_optical_depth(density, {x, -s}, options.light_distance_m,
+                                                            options.light_steps, light_segs);
+                        f = 1.0 - std::exp(-(tau_sun + tau_anti));
+                    }
+                    double sun_w = 0.0, fi = 1.0;
+                    for (int i = 0; i < octaves; ++i, fi *= f)
+                        sun_w += ob[i] * fi * std::exp(-oa[i] * tau_sun) * phase[i];
                     double sky_w = 1.0;
-                    if (options.ambient_steps > 0 && kappa > 0.0) {
-                        const double tau_up = march_optical_depth(density, {x, light.zenith(x)},
-                                                                  options.light_distance_m, options.ambient_steps,
-                                                                  light_segs);
+                    if (ambient_decay) {
+                        const double tau_up =
+                            sky_grid ? sky_grid->tau(x, sun_level, sky_cursor)
+                                     : march_optical_depth(density, {x, light.zenith(x)}, options.light_distance_m,
+                                                           options.ambient_steps, light_segs);
                         sky_w = std::exp(-kappa * tau_up);
                     }
                     light.sun_irradiance(x, sun.data());
                     light.ambient_radiance(x, sky.data());
                     // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
-                    const double step_opacity = 1.0 - std::exp(-sigma_t * dt);
+                    const double step_opacity = 1.0 - std::exp(-sigma_t * h);
                     const double w = T * step_opacity * sc.albedo;
                     for (std::size_t c = 0; c < nc; ++c) acc[c] += w * (sun[c] * sun_w + sky[c] * sky_w);
                     depth_sum += t * T * step_opacity;

@@ -68,19 +68,30 @@ double tileable_perlin(double x, double y, double z, int f, std::uint64_t seed) 
 }
 
 glm::vec4 TileableTexture3D::sample(double x, double y, double z) const {
-    // Texel centres at (i + 0.5) / n: shift by half a texel, wrap every corner.
-    const double fx = x * nx_ - 0.5, fy = y * ny_ - 0.5, fz = z * nz_ - 0.5;
-    const double bx = std::floor(fx), by = std::floor(fy), bz = std::floor(fz);
-    const float wx = float(fx - bx), wy = float(fy - by), wz = float(fz - bz);
-    // Wrap in double first: coordinates far from the origin stay exact integers.
-    const auto w = [](double b, int n) { return std::clamp(int(b - std::floor(b / n) * n), 0, n - 1); };
-    const int i0 = w(bx, nx_), j0 = w(by, ny_), k0 = w(bz, nz_);
-    const int i1 = (i0 + 1) % nx_, j1 = (j0 + 1) % ny_, k1 = (k0 + 1) % nz_;
-    const glm::vec4 a = glm::mix(glm::mix(at(i0, j0, k0), at(i1, j0, k0), wx),
-                                 glm::mix(at(i0, j1, k0), at(i1, j1, k0), wx), wy);
-    const glm::vec4 b = glm::mix(glm::mix(at(i0, j0, k1), at(i1, j0, k1), wx),
-                                 glm::mix(at(i0, j1, k1), at(i1, j1, k1), wx), wy);
-    return glm::mix(a, b, wz);
+    // Per axis: wrap to one period (u - floor(u) in [0, 1]), then texel centres at
+    // (i + 0.5) / n: the lower texel is floor(u n - 0.5), in [-1, n - 1] (-1 wraps to
+    // n - 1, and a rounding of u - floor(u) up to 1 gives n - 1 as well).
+    const auto axis = [](double u, int n, int& i0, int& i1, float& w) {
+        const double f = (u - std::floor(u)) * n - 0.5;
+        const double b = std::floor(f);
+        w = float(f - b);
+        int i = int(b);
+        if (i < 0) i += n;
+        if (i >= n) i = n - 1;
+        i0 = i;
+        i1 = i + 1 == n ? 0 : i + 1;
+    };
+    int i0, i1, j0, j1, k0 = 0, k1 = 0;
+    float wx, wy, wz = 0.0f;
+    axis(x, nx_, i0, i1, wx);
+    axis(y, ny_, j0, j1, wy);
+    if (nz_ > 1) axis(z, nz_, k0, k1, wz);  // a 2D texture (nz = 1): every z reads the one layer
+    const auto layer = [&](int k) {
+        return glm::mix(glm::mix(at(i0, j0, k), at(i1, j0, k), wx), glm::mix(at(i0, j1, k), at(i1, j1, k), wx), wy);
+    };
+    const glm::vec4 lo = layer(k0);
+    if (nz_ == 1) return lo;
+    return glm::mix(lo, layer(k1), wz);
 }
 
 CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, int detail_size, int weather_size) {

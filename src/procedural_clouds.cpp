@@ -86,6 +86,37 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     p_.validate();
     centre_ = {0.0, 0.0, -(p_.planet_radius_m + p_.origin_altitude_m)};
     noise_ = shared_noise(p_.seed);
+    // The fixed linear combinations of the noise channels (see the header's formulas).
+    const auto& nb = noise_->base;
+    const int n = nb.size();
+    base_ = PeriodicTexture<2>(n, n, n);
+    for (int k = 0; k < n; ++k)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const glm::vec4 v = nb.at(i, j, k);
+                base_.at(i, j, k)[0] = v.r;
+                base_.at(i, j, k)[1] = 0.625f * v.g + 0.25f * v.b + 0.125f * v.a;
+            }
+    const auto& nd = noise_->detail;
+    const int m = nd.size();
+    detail_ = PeriodicTexture<1>(m, m, m);
+    for (int k = 0; k < m; ++k)
+        for (int j = 0; j < m; ++j)
+            for (int i = 0; i < m; ++i) {
+                const glm::vec4 v = nd.at(i, j, k);
+                detail_.at(i, j, k)[0] = 0.625f * v.r + 0.25f * v.g + 0.125f * v.b;
+            }
+    const auto& nw = noise_->weather;
+    const int q = nw.size();
+    weather_ = PeriodicTexture<2>(q, q, 1);
+    for (int j = 0; j < q; ++j)
+        for (int i = 0; i < q; ++i) {
+            weather_.at(i, j, 0)[0] = nw.at(i, j, 0).r;
+            weather_.at(i, j, 0)[1] = nw.at(i, j, 0).g;
+        }
+    inv_weather_ = 1.0 / p_.weather_scale_m;
+    inv_base_ = 1.0 / p_.base_scale_m;
+    inv_detail_ = 1.0 / p_.detail_scale_m;
 }
 
 // Trapezoids (a0, a1, a2, a3): 0 below a0, rising to 1 at a1, 1 to a2, falling to 0 at a3.
@@ -116,22 +147,25 @@ double ProceduralClouds::sigma_t(const glm::dvec3& p) const {
     if (!(f > 0.0 && f < 1.0) || p_.coverage <= 0.0 || p_.density_per_m <= 0.0) return 0.0;
     const double x = p.x - p_.wind_offset_m.x, y = p.y - p_.wind_offset_m.y;
 
-    const glm::vec4 w = noise_->weather.sample(x / p_.weather_scale_m, y / p_.weather_scale_m, 0.0);
-    const double c = p_.coverage * clamp01d(1.0 + p_.weather_variation * (2.0 * w.r - 1.0));
-    const double t = clamp01d(p_.cloud_type + p_.type_variation * (2.0 * w.g - 1.0));
+    float w[2];
+    weather_.sample(x * inv_weather_, y * inv_weather_, 0.0, w);
+    const double c = p_.coverage * clamp01d(1.0 + p_.weather_variation * (2.0 * w[0] - 1.0));
+    const double t = clamp01d(p_.cloud_type + p_.type_variation * (2.0 * w[1] - 1.0));
     const double g = height_gradient(t, f);
     if (c <= 0.0 || g <= 0.0) return 0.0;
 
-    const double zb = (h - p_.bottom_altitude_m) / p_.base_scale_m;
-    const glm::vec4 b = noise_->base.sample(x / p_.base_scale_m, y / p_.base_scale_m, zb);
-    const double fbm_w = 0.625 * b.g + 0.25 * b.b + 0.125 * b.a;
-    const double base = remap(b.r, -(1.0 - fbm_w), 1.0, 0.0, 1.0) * g;
+    const double zb = (h - p_.bottom_altitude_m) * inv_base_;
+    float b[2];  // the Perlin-Worley channel and fbm_w = 0.625 g + 0.25 b + 0.125 a
+    base_.sample(x * inv_base_, y * inv_base_, zb, b);
+    const double fbm_w = b[1];
+    const double base = remap(b[0], -(1.0 - fbm_w), 1.0, 0.0, 1.0) * g;
     const double covered = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0)) * c;
     if (covered <= 0.0) return 0.0;  // erosion only removes: skip the detail lookup
 
-    const double zd = (h - p_.bottom_altitude_m) / p_.detail_scale_m;
-    const glm::vec4 d = noise_->detail.sample(x / p_.detail_scale_m, y / p_.detail_scale_m, zd);
-    const double fbm_d = 0.625 * d.r + 0.25 * d.g + 0.125 * d.b;
+    const double zd = (h - p_.bottom_altitude_m) * inv_detail_;
+    float fbm_d_f;  // 0.625 r + 0.25 g + 0.125 b of the detail texture
+    detail_.sample(x * inv_detail_, y * inv_detail_, zd, &fbm_d_f);
+    const double fbm_d = fbm_d_f;
     const double modifier = fbm_d + (1.0 - 2.0 * fbm_d) * clamp01d(10.0 * f);  // mix(fbm, 1 - fbm, .)
     const double density = remap(covered, p_.detail_strength * modifier, 1.0, 0.0, 1.0);
     return p_.density_per_m * clamp01d(density);

@@ -3,11 +3,16 @@
 //  * the fast march against the path-tracing reference on three clouds (a thin wispy
 //    layer, a dense cumulus layer, a VDB ball written here with OpenVDB): the error of the
 //    mean radiance (bias), the mean absolute error per view, the largest transmittance
-//    difference, and both times, for the march at its defaults and at a finer setting.
+//    difference, and the time per million rays, for the march at five quality settings
+//    and as it was before the optical-depth grid ("legacy"), and for the reference at
+//    fewer paths (its noise for its time); bench/clouds/chart.py draws them;
+//  * a 1920 x 1080 camera view of the VDB, the march at its defaults and legacy;
+//  * the optical-depth grid against a shadow ray per sample on a cloudy sky's rays.
 // Timings are medians of repeated runs on this machine.
 //
-//   build/welkin_bench_clouds [--width 2048] [--repeats 3] [--csv FILE]
+//   build/welkin_bench_clouds [--width 2048] [--repeats 3] [--csv FILE] [--sky-only]
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -85,6 +90,8 @@ int main(int argc, char** argv) {
     app.add_option("--width", width, "sky width in pixels (height = width / 2)");
     app.add_option("--repeats", repeats, "runs per timing; the median is reported");
     app.add_option("--csv", csv, "also write the figures as CSV");
+    bool sky_only = false;
+    app.add_flag("--sky-only", sky_only, "only the sky timings (for profiling)");
     CLI11_PARSE(app, argc, argv);
     std::vector<std::string> rows;
 
@@ -113,6 +120,8 @@ int main(int argc, char** argv) {
     rows.push_back(fmt::format("sky,{},clear,{:.4f},,,,,", width, t_clear));
     rows.push_back(fmt::format("sky,{},cumulus,{:.4f},,,,,", width, t_cloudy));
 
+    if (sky_only) return 0;
+
     // --- fast vs reference --------------------------------------------------------------
     const double e = 35.0 * kDegree;
     const ConstantIllumination light({std::cos(e), 0.0, std::sin(e)}, {1.0f, 1.0f, 1.0f}, {0.04f, 0.04f, 0.04f});
@@ -139,42 +148,144 @@ int main(int argc, char** argv) {
     struct Case {
         const char* name;
         const CloudDensity& density;
-        std::vector<glm::dvec3> dirs;
+        glm::dvec3 centre;
+        double half_angle;
         int paths;
     };
-    const std::vector<Case> cases = {{"thin wispy", thin_layer, view_grid({0.3, 0.4, 1.0}, 0.5, 6), 8192},
-                                     {"dense cumulus", dense_layer, view_grid({0.3, 0.4, 1.0}, 0.5, 6), 512},
-                                     {"vdb", vdb, view_grid({0.0, 1500.0, 900.0}, 0.12, 6), 2048}};
-    CloudLightingOptions fine;
-    fine.max_steps = 512;
-    fine.light_steps = 32;
-    fine.ambient_steps = 16;
-    fmt::print("\n| case | march | bias | mean abs err | max dT | ref se | march time | reference time (paths) |\n");
-    fmt::print("|---|---|---|---|---|---|---|---|\n");
+    const std::vector<Case> cases = {{"thin wispy", thin_layer, {0.3, 0.4, 1.0}, 0.5, 8192},
+                                     {"dense cumulus", dense_layer, {0.3, 0.4, 1.0}, 0.5, 512},
+                                     {"vdb", vdb, {0.0, 1500.0, 900.0}, 0.12, 2048}};
+    // Quality settings of the fast march: (view steps, shadow steps), the optical-depth grid
+    // on; "legacy" is the march as it was before the grid, the dim-tail steps and the
+    // octaves' optical size (a shadow ray per sample, fixed steps), at the defaults' steps.
+    struct Setting {
+        const char* label;
+        int max_steps, light_steps;
+        bool legacy;
+    };
+    const std::vector<Setting> settings = {{"24+4", 24, 4, false},    {"48+6", 48, 6, false},
+                                           {"96+8 (default)", 96, 8, false}, {"192+16", 192, 16, false},
+                                           {"512+32", 512, 32, false}, {"96+8 legacy", 96, 8, true}};
+    const auto options_of = [](const Setting& st) {
+        CloudLightingOptions o;
+        o.max_steps = st.max_steps;
+        o.light_steps = st.light_steps;
+        o.ambient_steps = std::max(4, st.light_steps / 2);
+        if (st.legacy) {
+            o.shadow_grid = false;
+            o.tail_transmittance = 0.0;
+            o.octave_optical_size = false;
+        }
+        return o;
+    };
+    // Error on 6 x 6 views against the reference; time per million rays from a 128 x 128
+    // grid of views in the same cone (the grid is shared by many rays, as in an image).
+    const auto errors = [](const std::vector<float>& L, const std::vector<float>& T, const CloudReferenceResult& ref,
+                           std::size_t nv) {
+        double sf = 0, sr = 0, sa = 0, var = 0, dT = 0;
+        for (std::size_t r = 0; r < nv; ++r) {
+            sf += L[r * 3 + 1];
+            sr += ref.radiance[r * 3 + 1];
+            sa += std::abs(L[r * 3 + 1] - ref.radiance[r * 3 + 1]);
+            var += double(ref.radiance_error[r * 3 + 1]) * ref.radiance_error[r * 3 + 1];
+            dT = std::max(dT, std::abs(double(T[r]) - ref.transmittance[r]));
+        }
+        return std::array<double, 4>{sf / sr - 1.0, sa / sr, dT, std::sqrt(var) / sr};
+    };
+    fmt::print("\n| case | method | bias | mean abs err | max dT | time per 1M rays |\n|---|---|---|---|---|---|\n");
     for (const Case& c : cases) {
+        const auto dirs = view_grid(c.centre, c.half_angle, 6);
+        const auto timing_dirs = view_grid(c.centre, c.half_angle, 128);
         CloudReferenceOptions ro;
         ro.paths = c.paths;
         CloudReferenceResult ref;
-        const double t_ref = median_s(1, [&] { ref = render_clouds_reference(c.density, light, {0, 0, 0}, c.dirs, ro); });
-        for (const auto& [label, opt] : {std::pair{"default", CloudLightingOptions{}}, std::pair{"fine", fine}}) {
-            CloudResult fast;
-            const double t_fast = median_s(repeats, [&] { fast = render_clouds(c.density, light, {0, 0, 0}, c.dirs, opt); });
-            double sf = 0, sr = 0, sa = 0, var = 0, dT = 0;
-            for (std::size_t r = 0; r < c.dirs.size(); ++r) {
-                sf += fast.radiance[r * 3 + 1];
-                sr += ref.radiance[r * 3 + 1];
-                sa += std::abs(fast.radiance[r * 3 + 1] - ref.radiance[r * 3 + 1]);
-                var += double(ref.radiance_error[r * 3 + 1]) * ref.radiance_error[r * 3 + 1];
-                dT = std::max(dT, std::abs(double(fast.transmittance[r]) - ref.transmittance[r]));
+        const double t_ref = median_s(1, [&] { ref = render_clouds_reference(c.density, light, {0, 0, 0}, dirs, ro); });
+        const double ref_se = errors(ref.radiance, ref.transmittance, ref, dirs.size())[3];
+        for (const Setting& st : settings) {
+            const CloudLightingOptions opt = options_of(st);
+            const CloudResult fast = render_clouds(c.density, light, {0, 0, 0}, dirs, opt);
+            const double t_fast =
+                median_s(repeats, [&] { render_clouds(c.density, light, {0, 0, 0}, timing_dirs, opt); });
+            const auto e = errors(fast.radiance, fast.transmittance, ref, dirs.size());
+            const double per_m = t_fast / double(timing_dirs.size()) * 1e6;
+            fmt::print("| {} | fast {} | {:+.1f} % | {:.1f} % | {:.3f} | {:.2f} s |\n", c.name, st.label, 100 * e[0],
+                       100 * e[1], e[2], per_m);
+            rows.push_back(fmt::format("case,{},fast {},{:.5f},{:.5f},{:.5f},{:.5f},{:.4f},{}", c.name, st.label,
+                                       per_m, e[0], e[1], e[2], t_ref, c.paths));
+        }
+        // The reference itself at fewer paths, against the full one: its noise for its time.
+        for (const int div : {64, 16, 4}) {
+            CloudReferenceOptions lo = ro;
+            lo.paths = std::max(1, c.paths / div);
+            lo.seed = ro.seed + 1000;  // independent of the full run
+            CloudReferenceResult r2;
+            const double t2 = median_s(1, [&] { r2 = render_clouds_reference(c.density, light, {0, 0, 0}, dirs, lo); });
+            const auto e = errors(r2.radiance, r2.transmittance, ref, dirs.size());
+            const double per_m = t2 / double(dirs.size()) * 1e6;
+            fmt::print("| {} | reference {} paths | {:+.1f} % | {:.1f} % | {:.3f} | {:.0f} s |\n", c.name, lo.paths,
+                       100 * e[0], 100 * e[1], e[2], per_m);
+            rows.push_back(fmt::format("reference,{},reference {} paths,{:.5f},{:.5f},{:.5f},{:.5f},{:.4f},{}", c.name,
+                                       lo.paths, per_m, e[0], e[1], e[2], t_ref, c.paths));
+        }
+        fmt::print("| {} | reference {} paths (truth) | se {:.1f} % | | | {:.0f} s |\n", c.name, c.paths, 100 * ref_se,
+                   t_ref / double(dirs.size()) * 1e6);
+        rows.push_back(fmt::format("truth,{},reference {} paths,{:.5f},,{:.5f},,{:.4f},{}", c.name, c.paths,
+                                   t_ref / double(dirs.size()) * 1e6, ref_se, t_ref, c.paths));
+    }
+    fmt::print("(errors on 36 views per case; sun 35 deg, constant sun and sky light; green channel)\n");
+
+    // --- a 1920 x 1080 camera view of the VDB ------------------------------------------
+    {
+        const int cw = 1920, ch = 1080;
+        const glm::dvec3 eye(0.0, 0.0, 0.0), target(0.0, 1500.0, 900.0);
+        const glm::dvec3 fwd = glm::normalize(target - eye);
+        const glm::dvec3 right = glm::normalize(glm::cross(fwd, glm::dvec3(0, 0, 1)));
+        const glm::dvec3 up = glm::cross(right, fwd);
+        const double tan_half = std::tan(0.5 * 20.0 * kDegree);  // 20 degrees across
+        std::vector<glm::dvec3> cam(std::size_t(cw) * ch);
+        for (int j = 0; j < ch; ++j)
+            for (int i = 0; i < cw; ++i) {
+                const double x = (2.0 * (i + 0.5) / cw - 1.0) * tan_half;
+                const double y = (1.0 - 2.0 * (j + 0.5) / ch) * tan_half * ch / cw;
+                cam[std::size_t(j) * cw + i] = glm::normalize(fwd + x * right + y * up);
             }
-            const double bias = sf / sr - 1.0, mae = sa / sr, se = std::sqrt(var) / sr;
-            fmt::print("| {} | {} | {:+.1f} % | {:.1f} % | {:.3f} | {:.1f} % | {:.4f} s | {:.2f} s ({}) |\n", c.name,
-                       label, 100 * bias, 100 * mae, dT, 100 * se, t_fast, t_ref, c.paths);
-            rows.push_back(fmt::format("case,{},{},{:.5f},{:.5f},{:.5f},{:.5f},{:.4f},{}", c.name, label, t_fast, bias,
-                                       mae, dT, t_ref, c.paths));
+        const AtmosphereIllumination atm_light(atm, obs);
+        fmt::print("\n| 1920x1080 camera view of the VDB (bruneton2017 light) | time |\n|---|---|\n");
+        for (const Setting& st : {settings[2], settings[5]}) {
+            const CloudLightingOptions opt = options_of(st);
+            // (legacy timed once: it is the slow one, and the point is the ratio)
+            const double t =
+                median_s(st.legacy ? 1 : repeats, [&] { render_clouds(vdb, atm_light, eye, cam, opt); });
+            fmt::print("| fast {} | {:.3f} s |\n", st.label, t);
+            rows.push_back(fmt::format("vdb_view,1920x1080,fast {},{:.4f},,,,,", st.label, t));
         }
     }
-    fmt::print("({} views per case; sun 35 deg, constant sun and sky light; green channel)\n", cases[0].dirs.size());
+
+    // --- the optical-depth grid against a shadow ray per sample, on the sky's rays -------
+    {
+        const int w = 512;
+        std::vector<glm::dvec3> sky_dirs;
+        for (int j = 0; j < w / 4; ++j)  // the upper hemisphere of a w x w/2 equirect
+            for (int i = 0; i < w; ++i) {
+                const double el = kPi / 2 * (1.0 - (j + 0.5) / (w / 4)), az = kTwoPi * (i + 0.5) / w;
+                sky_dirs.push_back({std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)});
+            }
+        const AtmosphereIllumination atm_light(atm, obs);
+        CloudLightingOptions with_grid, per_sample;
+        per_sample.shadow_grid = false;
+        const CloudResult a = render_clouds(*layer, atm_light, {0, 0, 0}, sky_dirs, with_grid);
+        const CloudResult b = render_clouds(*layer, atm_light, {0, 0, 0}, sky_dirs, per_sample);
+        double sa = 0, sb = 0, sd = 0;
+        for (std::size_t i = 0; i < sky_dirs.size(); ++i) {
+            sa += a.radiance[i * a.channels + 1];
+            sb += b.radiance[i * b.channels + 1];
+            sd += std::abs(a.radiance[i * a.channels + 1] - b.radiance[i * b.channels + 1]);
+        }
+        fmt::print("\nshadow grid vs a shadow ray per sample, cumulus sky {}x{} upper half: mean {:+.2f} %, mean abs "
+                   "{:.2f} % of the mean radiance\n", w, w / 4, 100 * (sa / sb - 1), 100 * sd / sb);
+        rows.push_back(fmt::format("grid_check,sky {}x{},grid vs per-sample,,{:.5f},{:.5f},,,", w, w / 4,
+                                   sa / sb - 1, sd / sb));
+    }
     if (!csv.empty()) {
         if (std::filesystem::exists(csv)) {
             fmt::print(stderr, "--csv: {} exists; not overwritten\n", csv);

@@ -15,11 +15,24 @@
 //    own attenuation,
 //        L += T S (1 - exp(-sigma_t dt)) / sigma_t,    T *= exp(-sigma_t dt),
 //    so a step never scatters more light than it removes, however long it is.
+//  * The dim tail: once T < tail_transmittance (0.1 by default: 90 % of the ray's
+//    opacity is behind it) a step spans n = min(8, floor(tail_transmittance / T)) base
+//    steps, at the same fraction u: what is left of the ray weighs at most T, so coarser
+//    steps there change the result little (measured with the reference cases: the bias
+//    moved by < 0.2 % on all three, bench/clouds) and save a third of the samples of a
+//    cloudy sky. The energy-conserving step keeps the opacity of a long step exact for
+//    its sample's sigma_t.
 //  * Early termination: once T < min_transmittance the ray stops (what is behind is
 //    dimmed below that fraction; T is left as it is, not rounded to 0).
 //  * Sun light. At each sample x a shadow ray towards the sun is marched through the
 //    density's segments (light_steps midpoint steps, at most light_distance_m) for the
-//    cloud's optical depth tau_sun, and the sun's irradiance E(x) comes through the
+//    cloud's optical depth tau_sun. With shadow_grid (the default) that march is made at
+//    the vertices of a lazily filled world-space grid instead (cloud_depth_grid.hpp) and
+//    tau_sun is interpolated trilinearly from it: the finest cell is h_0 =
+//    shadow_grid_spacing_m (by default twice the density's feature size), and a sample
+//    whose view step is dt reads the level of cell h_0 2^L <= max(dt, h_0), so far
+//    samples of a sky, a kilometre apart, share coarse cells. Each vertex march is shared
+//    by every sample around it. The sun's irradiance E(x) comes through the
 //    atmosphere (cloud_illumination.hpp). Multiple scattering is approximated with
 //    Wrenninge et al. 2013's octaves ("Oz: the great and volumetric", SIGGRAPH talk; also
 //    Wrenninge 2015, "Art-directable multiple volumetric scattering", SIGGRAPH talk): with
@@ -28,6 +41,19 @@
 //    each octave standing for light that has scattered more often: it is less attenuated
 //    (a), weaker (b) and less peaked (c). octaves = 1 is single scattering. a <= b
 //    keeps each octave below the single-scattering energy (Wrenninge's condition).
+//    The octaves' fixed shares b^i assume a cloud large enough for light to scatter many
+//    times; in an optically small cloud it leaves after the first event. With
+//    octave_optical_size (the default) octave i is weighted by f^i, f = 1 - exp(-tau_line),
+//    tau_line = tau_sun + tau_antisun the cloud's optical depth along the sun's line
+//    through x (both ways, each at most light_distance_m): f is the probability that
+//    light travelling along that line interacts once more before it leaves the cloud, so
+//    the i-times-further-scattered share goes as f^i, as the successive orders of
+//    scattering do in an optically thin medium (order n+1 / order n ~ tau, e.g. Hansen &
+//    Travis 1974, "Light scattering in planetary atmospheres", sec. 3) and tends to
+//    Wrenninge's b^i in a thick one. No fitted parameter. Measured against the
+//    reference (bench/clouds): thin wispy layer +47 % -> -2 % bias; dense cumulus base
+//    unchanged (-49 %: thick, f = 1); VDB ball +2.6 % -> -9 % bias at the same mean
+//    |error| (19 %: its thin edges no longer offset its too-dark core).
 //  * Sky light. The sky is an isotropic radiance L_sky(x) around the cloud
 //    (cloud_illumination.hpp). In a uniform isotropic field a conservative medium
 //    (albedo 1) changes nothing: the radiance is L_sky everywhere inside, at all orders
@@ -38,7 +64,7 @@
 //    diffusion length, sigma_a and the transport coefficient sigma_t (1 - albedo g); e.g.
 //    Bohren & Clothiaux 2006, "Fundamentals of Atmospheric Radiation", ch. 6), g the
 //    phase's mean cosine. The march takes tau from one ray towards the local zenith
-//    (ambient_steps steps; skipped for albedo 1):
+//    (ambient_steps steps; skipped for albedo 1; on a second grid with shadow_grid):
 //        S_sky = sigma_s L_sky(x) exp(-kappa tau_up).
 //    Exact for albedo 1 (tests/cpp/test_cloud_lighting.cpp, UniformSky...), an estimate
 //    otherwise (the true depth is over all directions, not the zenith alone).
@@ -80,10 +106,16 @@ struct CloudLightingOptions {
     double octave_extinction = 0.5;   // a, (0, 1]
     double octave_contribution = 0.5; // b, (0, 1]
     double octave_eccentricity = 0.5; // c, (0, 1]
+    bool octave_optical_size = true;  // scale octave i by (1 - exp(-tau_line))^i (see above)
     double min_transmittance = 1e-3;  // early termination, [0, 1)
+    double tail_transmittance = 0.1;  // below it, longer view steps (see above), [0, 1]; 0: off
     std::uint64_t seed = 1;
     bool jitter = true;               // false: samples at step midpoints
     double max_distance_m = 1e6;      // view rays end here, (0, 1e8]
+    // Tabulate the optical depths towards the sun (and the zenith) on a lazily filled grid
+    // (cloud_depth_grid.hpp) instead of marching a shadow ray per sample.
+    bool shadow_grid = true;
+    double shadow_grid_spacing_m = 0.0;  // finest cell h_0, [0, 1e5] m; 0: twice the feature size
 
     void validate() const;
 };

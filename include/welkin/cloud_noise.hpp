@@ -21,6 +21,7 @@
 // of cells per texture), so every octave, and hence the texture, repeats over [0, 1)^3.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -47,6 +48,58 @@ public:
 private:
     int nx_ = 0, ny_ = 0, nz_ = 0;
     std::vector<glm::vec4> texels_;
+};
+
+// A periodic n^3 (or n^2 x 1) texture of N float channels with the same wrap-around
+// trilinear lookup as TileableTexture3D::sample, for the few channels a density actually
+// reads (ProceduralClouds keeps its noise's fixed linear combinations here: trilinear
+// interpolation is linear, so interpolating the combination equals combining the
+// interpolations). Smaller texels stay in the caches: the lookups are the march's cost.
+template <int N>
+class PeriodicTexture {
+public:
+    PeriodicTexture() = default;
+    PeriodicTexture(int nx, int ny, int nz) : nx_(nx), ny_(ny), nz_(nz), texels_(std::size_t(nx) * ny * nz * N) {}
+    float* at(int i, int j, int k) { return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N]; }
+    const float* at(int i, int j, int k) const { return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N]; }
+
+    // (x, y, z) in texture units (one period = 1); out receives N values.
+    void sample(double x, double y, double z, float* out) const {
+        // Per axis: wrap to one period (u - floor(u) in [0, 1]), texel centres at
+        // (i + 0.5) / n: the lower texel floor(u n - 0.5) is in [-1, n - 1], -1 wrapping
+        // to n - 1 (and u - floor(u) rounded up to 1 clamped to n - 1).
+        const auto axis = [](double u, int n, int& i0, int& i1, float& w) {
+            const float f = float(u - std::floor(u)) * float(n) - 0.5f;
+            const float b = std::floor(f);
+            w = f - b;
+            int i = int(b);
+            if (i < 0) i += n;
+            if (i >= n) i = n - 1;
+            i0 = i;
+            i1 = i + 1 == n ? 0 : i + 1;
+        };
+        int i0, i1, j0, j1, k0 = 0, k1 = 0;
+        float wx, wy, wz = 0.0f;
+        axis(x, nx_, i0, i1, wx);
+        axis(y, ny_, j0, j1, wy);
+        if (nz_ > 1) axis(z, nz_, k0, k1, wz);
+        const auto layer = [&](int k, float* v) {
+            const float *a = at(i0, j0, k), *b = at(i1, j0, k), *c = at(i0, j1, k), *d = at(i1, j1, k);
+            for (int q = 0; q < N; ++q) {
+                const float lo = a[q] + wx * (b[q] - a[q]), hi = c[q] + wx * (d[q] - c[q]);
+                v[q] = lo + wy * (hi - lo);
+            }
+        };
+        layer(k0, out);
+        if (nz_ == 1) return;
+        float up[N];
+        layer(k1, up);
+        for (int q = 0; q < N; ++q) out[q] += wz * (up[q] - out[q]);
+    }
+
+private:
+    int nx_ = 0, ny_ = 0, nz_ = 0;
+    std::vector<float> texels_;
 };
 
 // Schneider's two textures and a weather texture, baked for one seed.

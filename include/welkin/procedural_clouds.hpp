@@ -78,6 +78,10 @@ private:
     CloudLayerParams p_;
     glm::dvec3 centre_;
     std::shared_ptr<const CloudNoiseTextures> noise_;
+    // The channels sigma_t reads, combined once: base (pw, fbm_w), detail fbm_d, weather (r, g).
+    PeriodicTexture<2> base_, weather_;
+    PeriodicTexture<1> detail_;
+    double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
 };
 
 }  // namespace welkin

@@ -87,12 +87,14 @@ ConstantIllumination test_daylight() {
 
 }  // namespace
 
-// Thin, wispy stratocumulus (optical depth of order 1). Where the approximation fails:
-// Wrenninge's octaves add a fixed fraction (b + b^2 + b^3 = 0.875 of single scattering at
-// tau -> 0) whatever the cloud's optical size, while in a thin cloud little light
-// scatters twice: the march is too bright, measured +58 % (4096 paths, se 1.7 %).
+// Thin, wispy stratocumulus (optical depth of order 1). Wrenninge's octaves alone add a
+// fixed share (b + b^2 + b^3 = 0.875 of single scattering at tau -> 0) whatever the
+// cloud's optical size, and came out too bright: +58 % (4096 paths, se 1.7 %). With the
+// octaves weighted by the optical size along the sun line (octave_optical_size, the
+// default; cloud_lighting.hpp) measured: bias +0.1 %, mean |error| 5.0 %.
 // Tolerance, the stated accuracy of the default march on such clouds: bias within
-// [-10 %, +70 %], mean |error| < 70 %; transmittance within 0.01 + 4 se.
+// +-10 %, mean |error| < 15 % (tightened from [-10 %, +70 %] and 70 %); transmittance
+// within 0.01 + 4 se.
 TEST(CloudFastVsReference, ThinWispyLayer) {
     CloudLayerParams p;
     p.bottom_altitude_m = 1500.0;
@@ -103,9 +105,8 @@ TEST(CloudFastVsReference, ThinWispyLayer) {
     p.detail_strength = 0.6;
     const ProceduralClouds layer(p);
     const Comparison c = compare("thin wispy", layer, test_daylight(), {0, 0, 0}, view_grid({0.3, 0.4, 1.0}, 0.5, 5), 4096);
-    EXPECT_GT(c.bias, -0.10 - 3.0 * c.ref_se);
-    EXPECT_LT(c.bias, 0.70 + 3.0 * c.ref_se);
-    EXPECT_LT(c.mean_abs, 0.70 + 3.0 * c.ref_se);
+    EXPECT_LT(std::abs(c.bias), 0.10 + 3.0 * c.ref_se);
+    EXPECT_LT(c.mean_abs, 0.15 + 3.0 * c.ref_se);
     EXPECT_LT(c.max_dT, 0.01 + 4.0 * c.dT_se);
 }
 
@@ -132,10 +133,10 @@ TEST(CloudFastVsReference, DenseCumulus) {
 
 // A VDB cloud: a ball of 400 m with Worley-noise structure, written by this test, placed
 // by a Blender-style object matrix; optical depth ~5 across, views from below and to the
-// side. Measured: bias +5 %, mean |error| 24 % (1024 paths, se 1.6 %): the errors of the
-// two cases above partly cancel over the views (too bright at the thin edges, too dark
-// through the core). Tolerance: bias within +-15 %, mean |error| < 35 %; transmittance
-// within 0.01 + 4 se.
+// side. Measured: bias -8.2 %, mean |error| 22 % (1024 paths, se 1.6 %): the thin edges
+// are right since the octaves follow the optical size (before: +4.6 % / 24 %, the edges'
+// excess offsetting the core), the core is too dark as in the dense case. Tolerance:
+// bias within +-15 %, mean |error| < 35 %; transmittance within 0.01 + 4 se.
 TEST(CloudFastVsReference, VdbVolume) {
     test::TempDir dir;
     const std::string path = dir.file("cloud.vdb");
