@@ -15,6 +15,13 @@
 //   inscatter      = Welkin.AerialInscatter (0 on sky pixels)
 //   transmittance  = Welkin.AerialTransmittance (1 on sky pixels)
 //   depth          = the Z pass: depth to the ground, +infinity on sky pixels
+//   clouds         = Welkin.Clouds (premultiplied RGBA, the air in front included) of the
+//                    scene's clouds (cloud_passes.hpp), the ground hiding what lies below it;
+//                    alpha 0 everywhere without clouds
+//   cloud_depth    = Welkin.CloudDepth (Z convention; 1e10 where no cloud)
+// With clouds, combined = Clouds.rgb + (1 - Clouds.a) x (the clear combined above): the
+// compositor's formula of cloud_passes.hpp with Image = sky (T = 1) or the black ground;
+// the sun's disc is dimmed by the cloud's transmittance 1 - alpha.
 //
 // Frame approximation: the sky method's observer stands at the camera's altitude with the
 // world's Z as its zenith; the true zenith at a camera d metres from the scene origin's
@@ -28,7 +35,8 @@
 // smaller than a pixel is antialiased and its energy is kept to the sampling error.
 //
 // Errors (InvalidArgument): no camera ("camera"), a camera below the ground
-// ("camera.matrix_world"), and whatever the scene's validation or the sky method refuse.
+// ("camera.matrix_world"), a cloud volume that cannot be read ("clouds.volumes[i].file",
+// before any work), and whatever the scene's validation or the sky method refuse.
 // Cancelled when `progress` cancels.
 #pragma once
 
@@ -43,6 +51,8 @@ struct CameraPlate {
     int width = 0, height = 0;
     std::vector<float> combined, sky, inscatter, transmittance;  // (height, width, 3)
     std::vector<float> depth;                                     // (height, width)
+    std::vector<float> clouds;                                    // (height, width, 4)
+    std::vector<float> cloud_depth;                               // (height, width)
     std::string method;  // the sky method that ran (auto resolved by the method itself)
 };
 
