@@ -41,13 +41,13 @@ def camera_dict(matrix_rows, data, scale_length=1.0):
 
 
 def scene_json(atmosphere_json, origin_altitude_m, sun_direction, exposure, method, camera,
-               resolution):
+               resolution, clouds=None):
     """The scene description's JSON text (scene_export.scene_dict's). `atmosphere_json`:
     Atmosphere.to_json_string() (written in full, so the file reproduces the frame);
     `resolution`: (x, y, percentage)."""
     return json.dumps(scene_export.scene_dict(json.loads(atmosphere_json), origin_altitude_m,
                                               sun_direction, exposure, method, camera,
-                                              resolution))
+                                              resolution, clouds=clouds))
 
 
 def pass_rect(np, plate, source, channels, rows=None):

@@ -59,9 +59,10 @@ def camera_dict(matrix_world, cam_type, lens_mm, sensor_width_mm, sensor_height_
 
 
 def scene_dict(atmosphere, origin_altitude_m, sun_direction, exposure, method, camera,
-               resolution, aerial=None):
+               resolution, aerial=None, clouds=None):
     """The whole scene JSON. `atmosphere` is a preset name or an atmosphere object (dict),
-    `resolution` (x, y, percentage)."""
+    `resolution` (x, y, percentage), `clouds` the "clouds" section (cloud_export.clouds_dict)
+    or None for a clear sky."""
     x, y, pct = resolution
     d = {"version": 1, "atmosphere": atmosphere, "origin_altitude_m": float(origin_altitude_m),
          "sun": {"direction": [float(c) for c in sun_direction]},
@@ -69,6 +70,8 @@ def scene_dict(atmosphere, origin_altitude_m, sun_direction, exposure, method, c
          "resolution": {"x": int(x), "y": int(y), "percentage": int(pct)}}
     if aerial:
         d["aerial"] = dict(aerial)
+    if clouds:
+        d["clouds"] = clouds
     return d
 
 
