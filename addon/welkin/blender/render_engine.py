@@ -2,11 +2,12 @@
 aerial perspective over the ground at the scene's ground altitude, no meshes.
 
 render() writes the scene description (plate.scene_json) from the world's Welkin
-settings, the sun lamp and the camera, has the core render it (welkin.camera_plate, the
-same plate as `welkin plate --scene`), and hands Blender the passes in bands of rows.
-Combined, Welkin.Sky, Welkin.AerialInscatter, Welkin.AerialTransmittance; Welkin.Clouds
-(transparent black) and Welkin.CloudDepth (+inf) stay empty until clouds land. Errors (no
-camera, no world, a camera below the ground, the compiled module missing) are reported
+settings, its cloud layers, the marked cloud volumes, the sun lamp and the camera, has the
+core render it (welkin.camera_plate, the same plate as `welkin plate --scene`), and hands
+Blender the passes in bands of rows: Combined, Welkin.Sky, Welkin.AerialInscatter,
+Welkin.AerialTransmittance, Welkin.Clouds and Welkin.CloudDepth (transparent and 1e10
+without clouds). Errors (no camera, no world, a camera below the ground, a marked volume
+whose VDB file is missing, the compiled module missing) are reported
 with self.report({'ERROR'}) and no result is written; a cancelled render (Esc,
 test_break) stops the core and writes nothing. No viewport preview (view_update /
 view_draw are not implemented): the viewport shows Blender's Workbench-like fallback.
@@ -14,7 +15,7 @@ view_draw are not implemented): the viewport shows Blender's Workbench-like fall
 import bpy
 
 from .. import plate, sky_request
-from . import scene_sun, update
+from . import cloud_scene, scene_sun, update
 from .scene_sun import UserError
 
 BAND_ROWS = 64
@@ -60,9 +61,13 @@ def scene_description_json(scene, depsgraph, native):
     if r.use_border:
         raise UserError("render region (Output > Format > Render Region) is not supported by "
                         "the Welkin engine: turn it off to render the full frame")
+    # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
+    # a UserError naming the object and the path: no frame is written).
+    clouds = cloud_scene.clouds_section(scene, depsgraph)
     return plate.scene_json(atm.to_json_string(), settings.altitude_m, request.sun_direction,
                             request.exposure, sky_request.resolve_method(request.method, native),
-                            cam, (r.resolution_x, r.resolution_y, r.resolution_percentage))
+                            cam, (r.resolution_x, r.resolution_y, r.resolution_percentage),
+                            clouds=clouds)
 
 
 def _set_rect(render_pass, rect):
@@ -97,7 +102,8 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
         except (UserError, ValueError) as error:
             self.report({'ERROR'}, f"Welkin: {error}")
             return
-        self.update_stats("Welkin", "sky, sun and aerial perspective")
+        self.update_stats("Welkin", "sky, sun, clouds and aerial perspective"
+                          if getattr(description, "has_clouds", False) else "sky, sun and aerial perspective")
 
         def progress(fraction):
             self.update_progress(0.9 * fraction)
