@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include "welkin/aerial_perspective.hpp"
+#include "welkin/auto_sky.hpp"
 #include "welkin/color.hpp"
 #include "welkin/error.hpp"
 #include "welkin/geometry.hpp"
@@ -44,11 +45,13 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
 
 }  // namespace
 
-CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progress) {
+CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progress, RowRange rows_in) {
     scene.validate();
     const Camera& camera = scene.require_camera();
     const Atmosphere& atm = scene.atmosphere;
     const int w = scene.resolution.width(), h = scene.resolution.height();
+    const RowRange band = rows_in.resolved(h);
+    const std::size_t q0 = std::size_t(band.begin) * std::size_t(w), q1 = std::size_t(band.end) * std::size_t(w);
     check_aerial_memory(w, h, 13 * sizeof(float));
     const CameraRays rays(camera, w, h);
     const glm::dvec3 centre = scene.planet_centre();
@@ -86,15 +89,27 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     });
     check(progress, 0.02);
 
-    // Sky radiance for the sky pixels, one call.
+    // Sky radiance for the band's sky pixels, one call.
     std::vector<std::size_t> sky_pixels;
     std::vector<glm::dvec3> sky_dirs;
-    for (std::size_t q = 0; q < n; ++q)
+    for (std::size_t q = q0; q < q1; ++q)
         if (std::isinf(plate.depth[q])) {
             sky_pixels.push_back(q);
             sky_dirs.push_back(dirs[q]);
         }
-    const std::unique_ptr<SkyMethod> method = make_sky_method(scene.method, scene.sky_options);
+    // "auto" chooses by the number of directions: choose here for the whole frame's sky
+    // pixels, so that a band renders with the method the whole frame would (AutoSky makes
+    // the same choice for a whole-frame call).
+    std::unique_ptr<SkyMethod> method;
+    if (scene.method == "auto") {
+        std::size_t frame_sky = 0;
+        for (std::size_t q = 0; q < n; ++q) frame_sky += std::isinf(plate.depth[q]) ? 1 : 0;
+        const AutoChoice c = choose_sky_method(atm, observer, std::max<std::size_t>(frame_sky, 1), scene.sky_options.tolerance,
+                                               scene.sky_options);
+        method = make_sky_method(c.method, c.options);
+    } else {
+        method = make_sky_method(scene.method, scene.sky_options);
+    }
     plate.method = method->name();
     const std::size_t nc = atm.channels();
     const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0), sun_to_rgb(atm.wavelengths_nm, 0.0);
@@ -127,7 +142,7 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     if (sun.visible_fraction > 0.0)
         for (std::size_t c = 0; c < nc; ++c)
             mean_radiance[c] = sun.direct_irradiance[c] / sun.visible_fraction / omega_sun;
-    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const auto& rows) {
+    tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const auto& rows) {
         std::vector<float> spectrum(nc);
         for (int j = rows.begin(); j != rows.end(); ++j)
             for (int i = 0; i < w; ++i) {
@@ -165,13 +180,27 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     });
     check(progress, 0.65);
 
-    // Aerial perspective over the ground pixels.
+    // Aerial perspective over the band's ground pixels (fitted to the whole frame's depth).
     Stage stage(progress, 0.65, 1.0);
-    AerialPasses aerial = aerial_perspective(scene, plate.depth, w, h, &stage);
+    AerialPasses aerial = aerial_perspective(scene, plate.depth, w, h, &stage, band);
     plate.inscatter = std::move(aerial.inscatter);
     plate.transmittance = std::move(aerial.transmittance);
-    plate.combined.resize(n * 3);
-    for (std::size_t k = 0; k < n * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
+    // Keep the band's rows only.
+    if (band.begin != 0 || band.end != h) {
+        const auto crop = [&](std::vector<float>& v, std::size_t channels) {
+            v = std::vector<float>(v.begin() + std::ptrdiff_t(q0 * channels), v.begin() + std::ptrdiff_t(q1 * channels));
+        };
+        crop(plate.sky, 3);
+        crop(plate.inscatter, 3);
+        crop(plate.transmittance, 3);
+        crop(plate.depth, 1);
+    }
+    plate.height = band.size();
+    plate.row_begin = band.begin;
+    plate.frame_height = h;
+    const std::size_t nb = q1 - q0;
+    plate.combined.resize(nb * 3);
+    for (std::size_t k = 0; k < nb * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
     check(progress, 1.0);
     return plate;
 }
