@@ -108,6 +108,17 @@ for frame in (1, 2, 3):
     texts.append(json.dumps(clouds))
 check(len(set(texts)) == 3, "each frame's section names its own file")
 
+# The frame's scene JSON (the aerial handler's, validated by the core) carries the section.
+from welkin.blender import aerial  # noqa: E402
+scene.frame_set(2)
+text = aerial.scene_json(scene, native, bpy.context.evaluated_depsgraph_get())
+desc = native.SceneDescription.from_json_string(text)
+check(desc.has_clouds, "the core reads no clouds from the scene JSON")
+exported = json.loads(text)["clouds"]
+check(exported["volumes"][0]["file"] == str(paths[1])
+      and abs(exported["layers"][0]["coverage"] - 0.3) < 1e-6
+      and exported["volumes"][0]["matrix_world"][2][3] == 2500.0, str(exported))
+
 # Outside a CLIP sequence's range the volume is left out (Blender hides it too).
 scene.frame_set(5)
 clouds = cloud_scene.clouds_section(scene, bpy.context.evaluated_depsgraph_get())
