@@ -70,7 +70,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
                           std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
                           std::span<const double> max_distances, const CloudLightingOptions& options,
-                          Progress* progress) {
+                          Progress* progress, std::uint64_t first_ray_index) {
     options.validate();
     validate_directions(directions);
     const std::size_t n = directions.size(), nc = light.channels();
@@ -126,7 +126,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                 continue;
             }
             const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
-            PathRng rng(options.seed, r, 0, 0x636c6f7564ULL);
+            PathRng rng(options.seed, first_ray_index + r, 0, 0x636c6f7564ULL);
             const double u = options.jitter ? rng.uniform() : 0.5;
             // Phase values of the octaves: nu = d . s is the same at every sample.
             const double nu = glm::dot(d, s);

@@ -23,8 +23,12 @@ void ProgressTracker::advance(std::size_t items) {
     // One thread at a time talks to the host; the others carry on.
     std::unique_lock lock(mutex_, std::try_to_lock);
     if (!lock.owns_lock()) return;
-    next_report_.store(done + step_, std::memory_order_relaxed);
-    if (!progress_->report(std::min(1.0, double(done) / double(total_)))) {
+    // Re-read the count under the lock: `done` may be stale (another thread may have
+    // reported a larger count between our fetch_add and taking the lock). done_ only
+    // grows and every report reads it here, so the fractions the host sees never go back.
+    const std::size_t now = done_.load(std::memory_order_relaxed);
+    next_report_.store(now + step_, std::memory_order_relaxed);
+    if (!progress_->report(std::min(1.0, double(now) / double(total_)))) {
         cancelled_ = true;
         throw Cancelled();
     }

@@ -28,16 +28,19 @@
 // whole path radiance) the same formula is exact as well: the sky is S(0, d_c) +
 // T(0, d_c) S(d_c, inf).
 //
-// The air terms T(0, d_c) and S(0, d_c) are the aerial-perspective passes
-// (aerial_perspective.hpp) of a depth image holding each pixel's cloud depth, by the
-// scene's aerial.method. With "froxel" the volume's depth range is fitted to those cloud
-// depths (the fit takes the 99.9 % quantile of the depths it is given, and marches the
-// rarer deeper pixels one by one), so every cloud depth is covered: the same
-// approximation, with the same tested accuracy, as the aerial passes of the geometry;
-// "raymarch" marches each pixel to its cloud. One path for both, and the test compares
-// them (tests/cpp/test_cloud_passes.cpp). The cloud's depth extent is collapsed to d_c: the
-// air between parts of one cloud is left out (a few hundred metres of air inside a cloud
-// several km away).
+// The air terms T(0, d_c) and S(0, d_c) are marched per pixel, from the camera to the
+// pixel's cloud depth (aerial_perspective_raymarch on an image of cloud depths: the
+// reference method of the aerial passes, aerial.raymarch_steps steps), not read from a
+// froxel volume. Why: (1) clouds lie kilometres to hundreds of kilometres away, where the
+// froxel volume's quadratic slices are coarsest, and its depth range would have to be
+// fitted to the cloud depths, which are known only after the cloud march; (2) a pixel's
+// value then depends on that pixel alone, so a band of rows (the render engine's tiles,
+// `rows`) has exactly the whole frame's values; (3) it is cheap next to the cloud march
+// (64 steps of LUT lookups against ~100 steps each with ~12 density samples), and only
+// pixels with cloud are marched. tests/cpp/test_cloud_passes.cpp checks it against the
+// froxel volume sampled at the same cloud depths (AirInFront...). The cloud's depth extent
+// is collapsed to d_c: the air between parts of one cloud is left out (a few hundred
+// metres of air inside a cloud several km away).
 //
 // Colour and units: the cloud radiance is converted to linear Rec.709 as the sky is
 // (color.hpp, lambda power -3; the same conversion the equirect sky applies to its clouds,
@@ -56,6 +59,7 @@
 
 #include "welkin/cloud_density.hpp"
 #include "welkin/progress.hpp"
+#include "welkin/row_range.hpp"
 #include "welkin/scene.hpp"
 
 namespace welkin {
@@ -63,22 +67,26 @@ namespace welkin {
 inline constexpr float kNoCloudDepth = 1e10f;
 
 struct CloudPasses {
-    int width = 0, height = 0;
+    int width = 0, height = 0;  // of the arrays: the band's rows
+    int row_begin = 0;          // the band's first row in the frame
     std::vector<float> clouds;  // (height, width, 4): premultiplied RGBA, top row first
     std::vector<float> depth;   // (height, width): Welkin.CloudDepth
 };
 
 // The passes of `density` (lit with scene.clouds' lighting options, or the defaults when
-// the scene has no "clouds"). `depth`: empty (no geometry) or the (height, width) Z pass at
-// the scene's resolution. Throws InvalidArgument naming "camera" (none), "depth" or
-// "resolution"; Cancelled.
+// the scene has no "clouds"). `depth`: empty (no geometry) or the whole frame's
+// (height, width) Z pass at the scene's resolution. `rows`: only those rows are computed
+// and returned, with the whole frame's values (every ray is seeded by its pixel's index in
+// the frame). Throws InvalidArgument naming "camera" (none), "depth", "resolution" or
+// "rows"; Cancelled.
 CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensity& density,
-                                std::span<const float> depth = {}, Progress* progress = nullptr);
+                                std::span<const float> depth = {}, Progress* progress = nullptr,
+                                RowRange rows = {});
 
 // The scene's own clouds (scene.cloud_density(): opens the VDBs). InvalidArgument naming
 // "clouds" when the scene has none, "clouds.volumes[i].file" for a bad volume.
 CloudPasses render_cloud_passes(const SceneDescription& scene, std::span<const float> depth = {},
-                                Progress* progress = nullptr);
+                                Progress* progress = nullptr, RowRange rows = {});
 
 // The composite of the header, for one pixel and channel (tests, and hosts without a
 // compositor): clouds_rgb + (1 - alpha) (image x aerial_transmittance + aerial_inscatter).

@@ -158,3 +158,24 @@ TEST(CameraPlate, BadCloudVolumeIsRefusedNamingTheFile) {
         EXPECT_NE(std::string(e.what()).find("/nonexistent/cloud.0001.vdb"), std::string::npos) << e.what();
     }
 }
+
+// The render engine's tiles: a band of a cloudy plate equals the whole plate in its rows.
+TEST(CameraPlate, CloudyBandsHaveTheWholePlatesValues) {
+    SceneDescription s = plate_scene(24, 12);
+    s.clouds = SceneClouds{};
+    CloudLayerParams layer;
+    layer.bottom_altitude_m = 600.0;
+    layer.top_altitude_m = 1400.0;
+    layer.coverage = 0.9;
+    s.clouds->layers.push_back(layer);
+    s.clouds->lighting.max_steps = 16;
+    const CameraPlate whole = render_camera_plate(s);
+    const CameraPlate band = render_camera_plate(s, nullptr, RowRange{4, 9});
+    ASSERT_EQ(band.height, 5);
+    const std::size_t q0 = 4 * 24;
+    for (std::size_t q = 0; q < band.cloud_depth.size(); ++q) {
+        EXPECT_EQ(band.cloud_depth[q], whole.cloud_depth[q0 + q]);
+        for (int k = 0; k < 4; ++k) EXPECT_EQ(band.clouds[q * 4 + k], whole.clouds[(q0 + q) * 4 + k]);
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(band.combined[q * 3 + k], whole.combined[(q0 + q) * 3 + k]);
+    }
+}
