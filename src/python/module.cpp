@@ -139,4 +139,5 @@ Quick start:
     register_exr(m);
     register_aerial(m);
     register_plate(m);
+    register_scene_sky(m);
 }
