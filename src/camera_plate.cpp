@@ -14,6 +14,7 @@
 
 #include "welkin/aerial_perspective.hpp"
 #include "welkin/auto_sky.hpp"
+#include "welkin/cloud_passes.hpp"
 #include "welkin/color.hpp"
 #include "welkin/error.hpp"
 #include "welkin/geometry.hpp"
@@ -23,17 +24,6 @@
 
 namespace welkin {
 namespace {
-
-// Maps a sub-task's [0, 1] onto [lo, hi] of the host's progress.
-class Stage final : public Progress {
-public:
-    Stage(Progress* host, double lo, double hi) : host_(host), lo_(lo), hi_(hi) {}
-    bool report(double f) override { return !host_ || host_->report(lo_ + (hi_ - lo_) * clamp01(f)); }
-
-private:
-    Progress* host_;
-    double lo_, hi_;
-};
 
 void check(Progress* p, double f) {
     if (p && !p->report(f)) throw Cancelled();
@@ -45,14 +35,19 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
 
 }  // namespace
 
-CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progress, RowRange rows_in) {
+CameraPlate render_camera_plate(const SceneDescription& scene, Progress* host_progress, RowRange rows_in) {
     scene.validate();
     const Camera& camera = scene.require_camera();
     const Atmosphere& atm = scene.atmosphere;
     const int w = scene.resolution.width(), h = scene.resolution.height();
     const RowRange band = rows_in.resolved(h);
     const std::size_t q0 = std::size_t(band.begin) * std::size_t(w), q1 = std::size_t(band.end) * std::size_t(w);
-    check_aerial_memory(w, h, 13 * sizeof(float));
+    check_aerial_memory(w, h, 18 * sizeof(float));
+    // The clouds' density first (a bad VDB is refused before any work), and their march
+    // takes most of the time: the sky and the air get the first 30 % of the progress.
+    const std::shared_ptr<const CloudDensity> clouds = scene.cloud_density();
+    ProgressStage clear_stage(host_progress, 0.0, clouds ? 0.3 : 1.0);
+    Progress* progress = host_progress ? &clear_stage : nullptr;
     const CameraRays rays(camera, w, h);
     const glm::dvec3 centre = scene.planet_centre();
     const double R = atm.bottom_radius_m;
@@ -115,7 +110,7 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0), sun_to_rgb(atm.wavelengths_nm, 0.0);
     plate.sky.assign(n * 3, 0.0f);
     if (!sky_dirs.empty()) {
-        Stage stage(progress, 0.02, 0.6);
+        ProgressStage stage(progress, 0.02, 0.6);
         const SkyResult sky = sky_radiance(*method, atm, observer, sky_dirs, &stage);
         std::vector<float> rgb(sky_dirs.size() * 3);
         sky_to_rgb.convert(sky.radiance, rgb);
@@ -181,10 +176,17 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     check(progress, 0.65);
 
     // Aerial perspective over the band's ground pixels (fitted to the whole frame's depth).
-    Stage stage(progress, 0.65, 1.0);
+    ProgressStage stage(progress, 0.65, 1.0);
     AerialPasses aerial = aerial_perspective(scene, plate.depth, w, h, &stage, band);
     plate.inscatter = std::move(aerial.inscatter);
     plate.transmittance = std::move(aerial.transmittance);
+    check(progress, 1.0);
+    // The band's clouds, ending at the whole frame's ground depth (before it is cropped).
+    CloudPasses passes;
+    if (clouds) {
+        ProgressStage cloud_stage(host_progress, 0.3, 1.0);
+        passes = render_cloud_passes(scene, *clouds, plate.depth, host_progress ? &cloud_stage : nullptr, band);
+    }
     // Keep the band's rows only.
     if (band.begin != 0 || band.end != h) {
         const auto crop = [&](std::vector<float>& v, std::size_t channels) {
@@ -201,7 +203,25 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     const std::size_t nb = q1 - q0;
     plate.combined.resize(nb * 3);
     for (std::size_t k = 0; k < nb * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
-    check(progress, 1.0);
+
+    // Clouds over the sky and the hazed ground (cloud_passes.hpp): the ground (depth) hides
+    // what is below it, and Combined = Clouds.rgb + (1 - Clouds.a) (Image x T + Inscatter)
+    // with Image x T + Inscatter = the clear plate's combined (Image = the sky with its
+    // disc, T = 1 on sky pixels; Image = 0 on the black ground): so the sun's disc is dimmed
+    // by the cloud's transmittance, 1 - alpha.
+    if (clouds) {
+        for (std::size_t q = 0; q < nb; ++q) {
+            const float* c = &passes.clouds[q * 4];
+            for (int k = 0; k < 3; ++k)
+                plate.combined[q * 3 + k] = composite_clouds(c[k], c[3], plate.combined[q * 3 + k], 1.0f, 0.0f);
+        }
+        plate.clouds = std::move(passes.clouds);
+        plate.cloud_depth = std::move(passes.depth);
+    } else {
+        plate.clouds.assign(nb * 4, 0.0f);
+        plate.cloud_depth.assign(nb, kNoCloudDepth);
+    }
+    if (host_progress && !host_progress->report(1.0)) throw Cancelled();
     return plate;
 }
 

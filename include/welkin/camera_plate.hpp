@@ -15,6 +15,13 @@
 //   inscatter      = Welkin.AerialInscatter (0 on sky pixels)
 //   transmittance  = Welkin.AerialTransmittance (1 on sky pixels)
 //   depth          = the Z pass: depth to the ground, +infinity on sky pixels
+//   clouds         = Welkin.Clouds (premultiplied RGBA, the air in front included) of the
+//                    scene's clouds (cloud_passes.hpp), the ground hiding what lies below it;
+//                    alpha 0 everywhere without clouds
+//   cloud_depth    = Welkin.CloudDepth (Z convention; 1e10 where no cloud)
+// With clouds, combined = Clouds.rgb + (1 - Clouds.a) x (the clear combined above): the
+// compositor's formula of cloud_passes.hpp with Image = sky (T = 1) or the black ground;
+// the sun's disc is dimmed by the cloud's transmittance 1 - alpha.
 //
 // Frame approximation: the sky method's observer stands at the camera's altitude with the
 // world's Z as its zenith; the true zenith at a camera d metres from the scene origin's
@@ -35,8 +42,9 @@
 // pixels only. Each call builds the atmosphere's LUTs again.
 //
 // Errors (InvalidArgument): no camera ("camera"), a camera below the ground
-// ("camera.matrix_world"), a bad row range ("rows"), and whatever the scene's validation
-// or the sky method refuse. Cancelled when `progress` cancels.
+// ("camera.matrix_world"), a bad row range ("rows"), a cloud volume that cannot be read
+// ("clouds.volumes[i].file", before any work), and whatever the scene's validation or the
+// sky method refuse. Cancelled when `progress` cancels.
 #pragma once
 
 #include <vector>
@@ -53,6 +61,8 @@ struct CameraPlate {
     int frame_height = 0;             // the whole frame's
     std::vector<float> combined, sky, inscatter, transmittance;  // (height, width, 3)
     std::vector<float> depth;                                     // (height, width)
+    std::vector<float> clouds;                                    // (height, width, 4)
+    std::vector<float> cloud_depth;                               // (height, width)
     std::string method;  // the sky method that ran (auto resolved by the method itself)
 };
 
