@@ -140,4 +140,5 @@ Quick start:
     register_aerial(m);
     register_plate(m);
     register_scene_sky(m);
+    register_cloud_passes(m);
 }

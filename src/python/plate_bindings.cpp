@@ -26,10 +26,15 @@ rows     : None (the whole frame) or (begin, end): only rows [begin, end) counte
            tiles); the arrays then have end - begin rows
 
 Returns a dict of float32 arrays, top row first: "combined", "sky", "inscatter",
-"transmittance" (height, width, 3) and "depth" (height, width; +inf on sky), plus
-"method" (the sky method that ran). Linear Rec.709, W m^-2 sr^-1, times the exposure.
+"transmittance" (height, width, 3) and "depth" (height, width; +inf on sky),
+"clouds" (height, width, 4: Welkin.Clouds, premultiplied; alpha 0 without clouds) and
+"cloud_depth" (height, width: Welkin.CloudDepth, 1e10 where no cloud), plus "method"
+(the sky method that ran). Linear Rec.709, W m^-2 sr^-1, times the exposure. With
+clouds, "combined" = clouds over the clear plate: clouds.rgb + (1 - clouds.a) (sky +
+inscatter), the sun's disc dimmed by the clouds.
 Raises ValueError naming the field: no camera ("camera"), a camera at or below the
-ground ("camera.matrix_world"), a bad row range ("rows").
+ground ("camera.matrix_world"), a bad row range ("rows"), a cloud volume that cannot
+be read ("clouds.volumes[i].file").
 )doc";
 
 py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress,
@@ -57,6 +62,10 @@ py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress,
     py::array_t<float> depth({py::ssize_t(h), py::ssize_t(w)});
     std::copy(plate.depth.begin(), plate.depth.end(), depth.mutable_data());
     out["depth"] = depth;
+    out["clouds"] = to_image_array(std::move(plate.clouds), w, h, 4);
+    py::array_t<float> cloud_depth({py::ssize_t(h), py::ssize_t(w)});
+    std::copy(plate.cloud_depth.begin(), plate.cloud_depth.end(), cloud_depth.mutable_data());
+    out["cloud_depth"] = cloud_depth;
     out["method"] = plate.method;
     return out;
 }
