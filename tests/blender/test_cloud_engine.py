@@ -64,6 +64,7 @@ vol.welkin_cloud.density_scale = 0.01
 scene.render.engine = 'WELKIN'
 scene.render.resolution_x, scene.render.resolution_y = 64, 32
 scene.render.resolution_percentage = 100
+scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
 scene.render.image_settings.color_depth = '32'
 scene.frame_start, scene.frame_end = 1, 3
 scene.frame_set(1)

@@ -69,21 +69,33 @@ def sky_key(settings, request, clouds):
 
 
 def cloudy_scene_json(scene, settings, request, clouds, module, depsgraph=None):
-    """The scene description of a cloudy sky (README "Scene JSON"): the world's atmosphere,
-    sun and clouds, and the scene camera where there is one (the clouds are seen from it)."""
-    from . import aerial
+    """The scene description of the world's cloudy sky (README "Scene JSON"), re-centred on
+    the observer: the world texture is the sky seen from the scene camera (with Add Camera
+    Height on and a camera; else from the scene origin), and the core renders a scene's sky
+    from its origin. So the origin moves to the camera: origin_altitude_m is the observer's
+    altitude (as the clear sky's), each volume's placement is translated by minus the
+    camera's position, and each layer's wind offset by minus its horizontal position (the
+    layer's field is f(x - wind), so seen from the camera it is f(x' - (wind - camera))).
+    A plain change of frame: every number is still the core's."""
     atmosphere = json.loads(sky_request.build_atmosphere(request, module).to_json_string())
-    try:
-        camera = aerial.camera_of(scene, depsgraph)
-    except UserError:
-        camera = None  # no camera, or one the passes refuse: the sky from the origin
+    cx = cy = 0.0
+    if settings.use_camera_height and scene.camera is not None:
+        camera = scene.camera.evaluated_get(depsgraph) if depsgraph is not None else scene.camera
+        s = scene.unit_settings.scale_length
+        cx, cy = (float(v) * s for v in camera.matrix_world.translation[:2])
+    cz = request.altitude_m - settings.altitude_m  # the camera height the sky uses
+    moved = json.loads(json.dumps(clouds))
+    for layer in moved["layers"]:
+        layer["wind_offset_m"] = [layer["wind_offset_m"][0] - cx, layer["wind_offset_m"][1] - cy]
+    for volume in moved["volumes"]:
+        for row, c in zip(volume["matrix_world"][:3], (cx, cy, cz)):
+            row[3] -= c
     r = scene.render
     d = scene_export.scene_dict(
-        atmosphere, settings.altitude_m, request.sun_direction, request.exposure,
-        sky_request.resolve_method(request.method, module), camera,
-        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=clouds)
-    if camera is None:
-        del d["camera"]
+        atmosphere, request.altitude_m, request.sun_direction, request.exposure,
+        sky_request.resolve_method(request.method, module), None,
+        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=moved)
+    del d["camera"]
     return json.dumps(d)
 
 
