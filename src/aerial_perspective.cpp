@@ -374,8 +374,9 @@ AerialPerspectiveVolume::Sample AerialPerspectiveVolume::sample(double sx, doubl
 }
 
 AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<const float> depth,
-                                       int width, int height, Progress* progress) {
+                                       int width, int height, Progress* progress, RowRange rows_in) {
     check_call(scene, depth, width, height);
+    const RowRange band = rows_in.resolved(height);
     AerialPasses passes = allocate(width, height);
     const double sky = scene.aerial.sky_depth_m;
     double z_max = scene.aerial.max_depth_m;
@@ -392,8 +393,8 @@ AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<
     // Build ~ a few percent of the work; the application is one lookup per pixel.
     const AerialPerspectiveVolume volume(scene, luts, width, height, z_max, nullptr);
     const PixelMarcher march(scene, luts, width, height);
-    ProgressTracker tracker(progress, std::size_t(height));
-    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    ProgressTracker tracker(progress, std::size_t(band.size()));
+    tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const tbb::blocked_range<int>& rows) {
         PixelMarcher::Scratch scratch(march.channels());
         for (int y = rows.begin(); y != rows.end(); ++y) {
             const double sy = (double(y) + 0.5) / double(height);
@@ -421,14 +422,15 @@ AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<
 
 AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
                                          std::span<const float> depth, int width, int height,
-                                         Progress* progress) {
+                                         Progress* progress, RowRange rows_in) {
     check_call(scene, depth, width, height);
+    const RowRange band = rows_in.resolved(height);
     AerialPasses passes = allocate(width, height);
     const double sky = scene.aerial.sky_depth_m;
     const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
     const PixelMarcher march(scene, luts, width, height);
-    ProgressTracker tracker(progress, std::size_t(height));
-    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    ProgressTracker tracker(progress, std::size_t(band.size()));
+    tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const tbb::blocked_range<int>& rows) {
         PixelMarcher::Scratch scratch(march.channels());
         for (int y = rows.begin(); y != rows.end(); ++y) {
             for (int x = 0; x < width; ++x) {
@@ -444,10 +446,10 @@ AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
 }
 
 AerialPasses aerial_perspective(const SceneDescription& scene, std::span<const float> depth, int width,
-                                int height, Progress* progress) {
+                                int height, Progress* progress, RowRange rows) {
     return scene.aerial.method == AerialOptions::Method::Froxel
-               ? aerial_perspective_froxel(scene, depth, width, height, progress)
-               : aerial_perspective_raymarch(scene, depth, width, height, progress);
+               ? aerial_perspective_froxel(scene, depth, width, height, progress, rows)
+               : aerial_perspective_raymarch(scene, depth, width, height, progress, rows);
 }
 
 }  // namespace welkin

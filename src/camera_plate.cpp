@@ -13,6 +13,8 @@
 #include <tbb/parallel_for.h>
 
 #include "welkin/aerial_perspective.hpp"
+#include "welkin/auto_sky.hpp"
+#include "welkin/cloud_passes.hpp"
 #include "welkin/color.hpp"
 #include "welkin/error.hpp"
 #include "welkin/geometry.hpp"
@@ -22,17 +24,6 @@
 
 namespace welkin {
 namespace {
-
-// Maps a sub-task's [0, 1] onto [lo, hi] of the host's progress.
-class Stage final : public Progress {
-public:
-    Stage(Progress* host, double lo, double hi) : host_(host), lo_(lo), hi_(hi) {}
-    bool report(double f) override { return !host_ || host_->report(lo_ + (hi_ - lo_) * clamp01(f)); }
-
-private:
-    Progress* host_;
-    double lo_, hi_;
-};
 
 void check(Progress* p, double f) {
     if (p && !p->report(f)) throw Cancelled();
@@ -44,12 +35,19 @@ double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
 
 }  // namespace
 
-CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progress) {
+CameraPlate render_camera_plate(const SceneDescription& scene, Progress* host_progress, RowRange rows_in) {
     scene.validate();
     const Camera& camera = scene.require_camera();
     const Atmosphere& atm = scene.atmosphere;
     const int w = scene.resolution.width(), h = scene.resolution.height();
-    check_aerial_memory(w, h, 13 * sizeof(float));
+    const RowRange band = rows_in.resolved(h);
+    const std::size_t q0 = std::size_t(band.begin) * std::size_t(w), q1 = std::size_t(band.end) * std::size_t(w);
+    check_aerial_memory(w, h, 18 * sizeof(float));
+    // The clouds' density first (a bad VDB is refused before any work), and their march
+    // takes most of the time: the sky and the air get the first 30 % of the progress.
+    const std::shared_ptr<const CloudDensity> clouds = scene.cloud_density();
+    ProgressStage clear_stage(host_progress, 0.0, clouds ? 0.3 : 1.0);
+    Progress* progress = host_progress ? &clear_stage : nullptr;
     const CameraRays rays(camera, w, h);
     const glm::dvec3 centre = scene.planet_centre();
     const double R = atm.bottom_radius_m;
@@ -86,21 +84,33 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     });
     check(progress, 0.02);
 
-    // Sky radiance for the sky pixels, one call.
+    // Sky radiance for the band's sky pixels, one call.
     std::vector<std::size_t> sky_pixels;
     std::vector<glm::dvec3> sky_dirs;
-    for (std::size_t q = 0; q < n; ++q)
+    for (std::size_t q = q0; q < q1; ++q)
         if (std::isinf(plate.depth[q])) {
             sky_pixels.push_back(q);
             sky_dirs.push_back(dirs[q]);
         }
-    const std::unique_ptr<SkyMethod> method = make_sky_method(scene.method, scene.sky_options);
+    // "auto" chooses by the number of directions: choose here for the whole frame's sky
+    // pixels, so that a band renders with the method the whole frame would (AutoSky makes
+    // the same choice for a whole-frame call).
+    std::unique_ptr<SkyMethod> method;
+    if (scene.method == "auto") {
+        std::size_t frame_sky = 0;
+        for (std::size_t q = 0; q < n; ++q) frame_sky += std::isinf(plate.depth[q]) ? 1 : 0;
+        const AutoChoice c = choose_sky_method(atm, observer, std::max<std::size_t>(frame_sky, 1), scene.sky_options.tolerance,
+                                               scene.sky_options);
+        method = make_sky_method(c.method, c.options);
+    } else {
+        method = make_sky_method(scene.method, scene.sky_options);
+    }
     plate.method = method->name();
     const std::size_t nc = atm.channels();
     const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0), sun_to_rgb(atm.wavelengths_nm, 0.0);
     plate.sky.assign(n * 3, 0.0f);
     if (!sky_dirs.empty()) {
-        Stage stage(progress, 0.02, 0.6);
+        ProgressStage stage(progress, 0.02, 0.6);
         const SkyResult sky = sky_radiance(*method, atm, observer, sky_dirs, &stage);
         std::vector<float> rgb(sky_dirs.size() * 3);
         sky_to_rgb.convert(sky.radiance, rgb);
@@ -127,7 +137,7 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     if (sun.visible_fraction > 0.0)
         for (std::size_t c = 0; c < nc; ++c)
             mean_radiance[c] = sun.direct_irradiance[c] / sun.visible_fraction / omega_sun;
-    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const auto& rows) {
+    tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const auto& rows) {
         std::vector<float> spectrum(nc);
         for (int j = rows.begin(); j != rows.end(); ++j)
             for (int i = 0; i < w; ++i) {
@@ -165,14 +175,53 @@ CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progres
     });
     check(progress, 0.65);
 
-    // Aerial perspective over the ground pixels.
-    Stage stage(progress, 0.65, 1.0);
-    AerialPasses aerial = aerial_perspective(scene, plate.depth, w, h, &stage);
+    // Aerial perspective over the band's ground pixels (fitted to the whole frame's depth).
+    ProgressStage stage(progress, 0.65, 1.0);
+    AerialPasses aerial = aerial_perspective(scene, plate.depth, w, h, &stage, band);
     plate.inscatter = std::move(aerial.inscatter);
     plate.transmittance = std::move(aerial.transmittance);
-    plate.combined.resize(n * 3);
-    for (std::size_t k = 0; k < n * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
     check(progress, 1.0);
+    // The band's clouds, ending at the whole frame's ground depth (before it is cropped).
+    CloudPasses passes;
+    if (clouds) {
+        ProgressStage cloud_stage(host_progress, 0.3, 1.0);
+        passes = render_cloud_passes(scene, *clouds, plate.depth, host_progress ? &cloud_stage : nullptr, band);
+    }
+    // Keep the band's rows only.
+    if (band.begin != 0 || band.end != h) {
+        const auto crop = [&](std::vector<float>& v, std::size_t channels) {
+            v = std::vector<float>(v.begin() + std::ptrdiff_t(q0 * channels), v.begin() + std::ptrdiff_t(q1 * channels));
+        };
+        crop(plate.sky, 3);
+        crop(plate.inscatter, 3);
+        crop(plate.transmittance, 3);
+        crop(plate.depth, 1);
+    }
+    plate.height = band.size();
+    plate.row_begin = band.begin;
+    plate.frame_height = h;
+    const std::size_t nb = q1 - q0;
+    plate.combined.resize(nb * 3);
+    for (std::size_t k = 0; k < nb * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
+
+    // Clouds over the sky and the hazed ground (cloud_passes.hpp): the ground (depth) hides
+    // what is below it, and Combined = Clouds.rgb + (1 - Clouds.a) (Image x T + Inscatter)
+    // with Image x T + Inscatter = the clear plate's combined (Image = the sky with its
+    // disc, T = 1 on sky pixels; Image = 0 on the black ground): so the sun's disc is dimmed
+    // by the cloud's transmittance, 1 - alpha.
+    if (clouds) {
+        for (std::size_t q = 0; q < nb; ++q) {
+            const float* c = &passes.clouds[q * 4];
+            for (int k = 0; k < 3; ++k)
+                plate.combined[q * 3 + k] = composite_clouds(c[k], c[3], plate.combined[q * 3 + k], 1.0f, 0.0f);
+        }
+        plate.clouds = std::move(passes.clouds);
+        plate.cloud_depth = std::move(passes.depth);
+    } else {
+        plate.clouds.assign(nb * 4, 0.0f);
+        plate.cloud_depth.assign(nb, kNoCloudDepth);
+    }
+    if (host_progress && !host_progress->report(1.0)) throw Cancelled();
     return plate;
 }
 

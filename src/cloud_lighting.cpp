@@ -45,10 +45,29 @@ void CloudLightingOptions::validate() const {
 CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
                           std::span<const glm::dvec3> directions, const CloudLightingOptions& options,
                           Progress* progress) {
-    options.validate();
     for (int a = 0; a < 3; ++a) require_finite(fmt::format("origin[{}]", a), origin[a]);
+    return render_clouds(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options, progress);
+}
+
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
+                          std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                          std::span<const double> max_distances, const CloudLightingOptions& options,
+                          Progress* progress, std::uint64_t first_ray_index) {
+    options.validate();
     validate_directions(directions);
     const std::size_t n = directions.size(), nc = light.channels();
+    if (origins.size() != 1 && origins.size() != n)
+        throw InvalidArgument("origins", fmt::format("must hold 1 or {} points (one per direction), got {}", n,
+                                                     origins.size()));
+    for (std::size_t i = 0; i < origins.size(); ++i)
+        for (int a = 0; a < 3; ++a) require_finite(fmt::format("origins[{}][{}]", i, a), origins[i][a]);
+    if (!max_distances.empty() && max_distances.size() != n)
+        throw InvalidArgument("max_distances", fmt::format("must be empty or hold {} values (one per direction), "
+                                                           "got {}", n, max_distances.size()));
+    for (std::size_t i = 0; i < max_distances.size(); ++i)
+        if (!(max_distances[i] >= 0.0))
+            throw InvalidArgument(fmt::format("max_distances[{}]", i),
+                                  fmt::format("must be >= 0 m, got {}", max_distances[i]));
     CloudResult result;
     result.channels = nc;
     result.radiance.assign(n * nc, 0.0f);
@@ -98,8 +117,10 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
         OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor;
         for (std::size_t r = range.begin(); r != range.end(); ++r) {
             const glm::dvec3 d = glm::normalize(directions[r]);
-            const CloudRay ray{origin, d};
-            density.segments(ray, options.max_distance_m, segs);
+            const CloudRay ray{origins[origins.size() == 1 ? 0 : r], d};
+            const double t_end =
+                max_distances.empty() ? options.max_distance_m : std::min(max_distances[r], options.max_distance_m);
+            density.segments(ray, t_end, segs);
             double total = 0.0;
             for (const auto& g : segs) total += g.t1 - g.t0;
             if (!(total > 0.0)) {
@@ -108,7 +129,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
             }
             const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
             const int sun_level = sun_grid ? sun_grid->level_for(dt_target) : 0;
-            PathRng rng(options.seed, r, 0, 0x636c6f7564ULL);
+            PathRng rng(options.seed, first_ray_index + r, 0, 0x636c6f7564ULL);
             const double u = options.jitter ? rng.uniform() : 0.5;
             // Phase values of the octaves: nu = d . s is the same at every sample.
             const double nu = glm::dot(d, s);

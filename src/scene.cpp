@@ -60,6 +60,12 @@ void SceneDescription::validate() const {
     if (camera) camera->validate("camera");
     resolution.validate("resolution");
     aerial.validate("aerial");
+    if (clouds) clouds->validate(atmosphere.bottom_radius_m, origin_altitude_m);
+}
+
+std::shared_ptr<const CloudDensity> SceneDescription::cloud_density() const {
+    if (!has_clouds()) return nullptr;
+    return make_scene_cloud_density(*clouds, atmosphere.bottom_radius_m, origin_altitude_m);
 }
 
 const Camera& SceneDescription::require_camera() const {

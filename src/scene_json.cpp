@@ -14,8 +14,13 @@
 //     "resolution": {"x": 1920, "y": 1080, "percentage": 100},
 //     "aerial": {"method": "froxel" | "raymarch", "froxels": [32, 32, 32], "max_depth_m": 0,
 //                "steps_per_slice": 4, "raymarch_steps": 64, "sky_depth_m": 1e9},
-//     "sky_options": {"transmittance_width": 256, ...}
+//     "sky_options": {"transmittance_width": 256, ...},
+//     "clouds": {"layers": [...], "volumes": [...], "scattering": {...}, "lighting": {...}}
 //   }
+// "clouds" (scene_clouds.hpp) follows notes/clouds_schema.md, agreed with the add-on:
+// layers are CloudLayerParams without planet_radius_m / origin_altitude_m (the scene's),
+// volumes {name, file, grid, matrix_world (by rows), density_scale, negative}, scattering
+// {albedo, g_forward, g_back, w_forward}, lighting CloudLightingOptions' other fields.
 // Every key but "version" is optional on reading (the defaults are scene.hpp's); unknown
 // keys are errors (a typo would otherwise be ignored). matrix_world is written by rows,
 // as Python's [list(row) for row in camera.matrix_world] gives them. Errors name the key
@@ -76,6 +81,188 @@ glm::dvec3 vec3(const json& j, const std::string& parameter) {
             number(j[2], parameter + "[2]")};
 }
 
+// Blender's Object.matrix_world by rows ([list(row) for row in m]) into glm's m[col][row].
+glm::dmat4 matrix_rows(const json& m, const std::string& parameter) {
+    if (!m.is_array() || m.size() != 4)
+        throw InvalidArgument(parameter, "must be 4 rows of 4 numbers (Blender's "
+                                         "Object.matrix_world, by rows)");
+    glm::dmat4 out(1.0);
+    for (int r = 0; r < 4; ++r) {
+        const std::string pr = fmt::format("{}[{}]", parameter, r);
+        if (!m[r].is_array() || m[r].size() != 4)
+            throw InvalidArgument(pr, "must be a row of 4 numbers");
+        for (int col = 0; col < 4; ++col) out[col][r] = number(m[r][col], fmt::format("{}[{}]", pr, col));
+    }
+    return out;
+}
+
+ordered_json matrix_rows_json(const glm::dmat4& m) {
+    ordered_json rows = ordered_json::array();
+    for (int r = 0; r < 4; ++r) rows.push_back({m[0][r], m[1][r], m[2][r], m[3][r]});
+    return rows;
+}
+
+std::uint64_t unsigned_integer(const json& j, const std::string& parameter) {
+    if (!j.is_number_unsigned()) throw InvalidArgument(parameter, fmt::format("must be an integer >= 0, got {}", j.dump()));
+    return j.get<std::uint64_t>();
+}
+
+bool boolean(const json& j, const std::string& parameter) {
+    if (!j.is_boolean()) throw InvalidArgument(parameter, fmt::format("must be true or false, got {}", j.dump()));
+    return j.get<bool>();
+}
+
+// "clouds" (notes/clouds_schema.md; README "Scene JSON"). Relative VDB paths are taken
+// relative to `base` (the scene file's folder).
+SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
+    check_keys(j, "clouds", {"layers", "volumes", "scattering", "lighting"});
+    SceneClouds out;
+    const auto array = [&](const char* key) -> const json& {
+        const json& a = j[key];
+        if (!a.is_array()) throw InvalidArgument(std::string("clouds.") + key, "must be an array of objects");
+        return a;
+    };
+    if (j.contains("layers")) {
+        const json& layers = array("layers");
+        for (std::size_t i = 0; i < layers.size(); ++i) {
+            const json& l = layers[i];
+            const std::string p = fmt::format("clouds.layers[{}]", i);
+            check_keys(l, p, {"bottom_altitude_m", "top_altitude_m", "coverage", "cloud_type", "density_per_m",
+                              "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
+                              "weather_variation", "type_variation", "wind_offset_m", "seed"});
+            CloudLayerParams c;
+            const auto get = [&](const char* key, double& v) {
+                if (l.contains(key)) v = number(l[key], p + "." + key);
+            };
+            get("bottom_altitude_m", c.bottom_altitude_m);
+            get("top_altitude_m", c.top_altitude_m);
+            get("coverage", c.coverage);
+            get("cloud_type", c.cloud_type);
+            get("density_per_m", c.density_per_m);
+            get("base_scale_m", c.base_scale_m);
+            get("detail_scale_m", c.detail_scale_m);
+            get("weather_scale_m", c.weather_scale_m);
+            get("detail_strength", c.detail_strength);
+            get("weather_variation", c.weather_variation);
+            get("type_variation", c.type_variation);
+            if (l.contains("wind_offset_m")) {
+                const json& w = l["wind_offset_m"];
+                if (!w.is_array() || w.size() != 2)
+                    throw InvalidArgument(p + ".wind_offset_m", "must be an array of 2 numbers [x, y] (m)");
+                c.wind_offset_m = {number(w[0], p + ".wind_offset_m[0]"), number(w[1], p + ".wind_offset_m[1]")};
+            }
+            if (l.contains("seed")) c.seed = unsigned_integer(l["seed"], p + ".seed");
+            out.layers.push_back(c);
+        }
+    }
+    if (j.contains("volumes")) {
+        const json& volumes = array("volumes");
+        for (std::size_t i = 0; i < volumes.size(); ++i) {
+            const json& v = volumes[i];
+            const std::string p = fmt::format("clouds.volumes[{}]", i);
+            check_keys(v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative"});
+            SceneCloudVolume vol;
+            if (v.contains("name")) vol.name = string(v["name"], p + ".name");
+            if (!v.contains("file"))
+                throw InvalidArgument(p + ".file", "is required: the volume's .vdb file for this frame");
+            const std::string file = string(v["file"], p + ".file");
+            if (file.empty()) throw InvalidArgument(p + ".file", "must not be empty");
+            const std::filesystem::path fp(file);
+            vol.file = fp.is_absolute() || base.empty() ? file : (base / fp).lexically_normal().string();
+            if (v.contains("grid")) vol.options.grid = string(v["grid"], p + ".grid");
+            if (v.contains("matrix_world")) vol.options.matrix_world = matrix_rows(v["matrix_world"], p + ".matrix_world");
+            if (v.contains("density_scale")) vol.options.density_scale = number(v["density_scale"], p + ".density_scale");
+            if (v.contains("negative"))
+                vol.options.negative = vdb_negative_from_name(string(v["negative"], p + ".negative"), p + ".negative");
+            out.volumes.push_back(vol);
+        }
+    }
+    if (j.contains("scattering")) {
+        const json& sc = j["scattering"];
+        check_keys(sc, "clouds.scattering", {"albedo", "g_forward", "g_back", "w_forward"});
+        CloudScattering& c = out.lighting.scattering;
+        if (sc.contains("albedo")) c.albedo = number(sc["albedo"], "clouds.scattering.albedo");
+        if (sc.contains("g_forward")) c.phase.g_forward = number(sc["g_forward"], "clouds.scattering.g_forward");
+        if (sc.contains("g_back")) c.phase.g_back = number(sc["g_back"], "clouds.scattering.g_back");
+        if (sc.contains("w_forward")) c.phase.w_forward = number(sc["w_forward"], "clouds.scattering.w_forward");
+    }
+    if (j.contains("lighting")) {
+        const json& li = j["lighting"];
+        const std::string p = "clouds.lighting.";
+        check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "octaves",
+                                           "octave_extinction", "octave_contribution", "octave_eccentricity",
+                                           "min_transmittance", "seed", "jitter", "max_distance_m"});
+        CloudLightingOptions& o = out.lighting;
+        const auto geti = [&](const char* key, int& v) {
+            if (li.contains(key)) v = integer(li[key], p + key);
+        };
+        const auto getd = [&](const char* key, double& v) {
+            if (li.contains(key)) v = number(li[key], p + key);
+        };
+        geti("max_steps", o.max_steps);
+        geti("light_steps", o.light_steps);
+        geti("ambient_steps", o.ambient_steps);
+        getd("light_distance_m", o.light_distance_m);
+        geti("octaves", o.octaves);
+        getd("octave_extinction", o.octave_extinction);
+        getd("octave_contribution", o.octave_contribution);
+        getd("octave_eccentricity", o.octave_eccentricity);
+        getd("min_transmittance", o.min_transmittance);
+        if (li.contains("seed")) o.seed = unsigned_integer(li["seed"], p + "seed");
+        if (li.contains("jitter")) o.jitter = boolean(li["jitter"], p + "jitter");
+        getd("max_distance_m", o.max_distance_m);
+    }
+    return out;
+}
+
+ordered_json clouds_json(const SceneClouds& c) {
+    ordered_json j;
+    ordered_json layers = ordered_json::array();
+    for (const CloudLayerParams& l : c.layers)
+        layers.push_back({{"bottom_altitude_m", l.bottom_altitude_m},
+                          {"top_altitude_m", l.top_altitude_m},
+                          {"coverage", l.coverage},
+                          {"cloud_type", l.cloud_type},
+                          {"density_per_m", l.density_per_m},
+                          {"base_scale_m", l.base_scale_m},
+                          {"detail_scale_m", l.detail_scale_m},
+                          {"weather_scale_m", l.weather_scale_m},
+                          {"detail_strength", l.detail_strength},
+                          {"weather_variation", l.weather_variation},
+                          {"type_variation", l.type_variation},
+                          {"wind_offset_m", {l.wind_offset_m.x, l.wind_offset_m.y}},
+                          {"seed", l.seed}});
+    j["layers"] = layers;
+    ordered_json volumes = ordered_json::array();
+    for (const SceneCloudVolume& v : c.volumes)
+        volumes.push_back({{"name", v.name},
+                           {"file", v.file},
+                           {"grid", v.options.grid},
+                           {"matrix_world", matrix_rows_json(v.options.matrix_world)},
+                           {"density_scale", v.options.density_scale},
+                           {"negative", vdb_negative_name(v.options.negative)}});
+    j["volumes"] = volumes;
+    const CloudScattering& sc = c.lighting.scattering;
+    j["scattering"] = {{"albedo", sc.albedo},
+                       {"g_forward", sc.phase.g_forward},
+                       {"g_back", sc.phase.g_back},
+                       {"w_forward", sc.phase.w_forward}};
+    const CloudLightingOptions& o = c.lighting;
+    j["lighting"] = {{"max_steps", o.max_steps},
+                     {"light_steps", o.light_steps},
+                     {"ambient_steps", o.ambient_steps},
+                     {"light_distance_m", o.light_distance_m},
+                     {"octaves", o.octaves},
+                     {"octave_extinction", o.octave_extinction},
+                     {"octave_contribution", o.octave_contribution},
+                     {"octave_eccentricity", o.octave_eccentricity},
+                     {"min_transmittance", o.min_transmittance},
+                     {"seed", o.seed},
+                     {"jitter", o.jitter},
+                     {"max_distance_m", o.max_distance_m}};
+    return j;
+}
+
 // Runs f, prefixing the parameter of any InvalidArgument it throws.
 template <class F>
 auto prefixed(const std::string& prefix, F&& f) {
@@ -98,17 +285,7 @@ Camera parse_camera(const json& j) {
     if (!j.contains("matrix_world"))
         throw InvalidArgument("camera.matrix_world",
                               "is required: Blender's Object.matrix_world, 4 rows of 4 numbers");
-    const json& m = j["matrix_world"];
-    if (!m.is_array() || m.size() != 4)
-        throw InvalidArgument("camera.matrix_world", "must be 4 rows of 4 numbers (Blender's "
-                                                     "Object.matrix_world, by rows)");
-    for (int r = 0; r < 4; ++r) {
-        const std::string pr = fmt::format("camera.matrix_world[{}]", r);
-        if (!m[r].is_array() || m[r].size() != 4)
-            throw InvalidArgument(pr, "must be a row of 4 numbers");
-        for (int col = 0; col < 4; ++col)
-            c.matrix_world[col][r] = number(m[r][col], fmt::format("{}[{}]", pr, col));
-    }
+    c.matrix_world = matrix_rows(j["matrix_world"], "camera.matrix_world");
     if (!j.contains("type"))
         throw InvalidArgument("camera.type", "is required: \"PERSP\", \"ORTHO\" or \"PANO\"");
     c.type = camera_type_from_name(string(j["type"], "camera.type"), "camera.type");
@@ -152,9 +329,9 @@ Camera parse_camera(const json& j) {
     return c;
 }
 
-SceneDescription parse(const json& j) {
+SceneDescription parse(const json& j, const std::filesystem::path& base) {
     check_keys(j, "", {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "method",
-                       "camera", "resolution", "aerial", "sky_options", "$schema", "comment"});
+                       "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
     SceneDescription s;
     if (!j.contains("version"))
         throw InvalidArgument("version", fmt::format("is required (this Welkin writes version {})",
@@ -244,20 +421,22 @@ SceneDescription parse(const json& j) {
             k.seed = o["seed"].get<std::uint64_t>();
         }
     }
+    if (j.contains("clouds") && !j["clouds"].is_null()) s.clouds = parse_clouds(j["clouds"], base);
     s.validate();
     return s;
 }
 
 }  // namespace
 
-SceneDescription SceneDescription::from_json_string(const std::string& text) {
+SceneDescription SceneDescription::from_json_string(const std::string& text, const std::string& base_directory) {
     json j;
     try {
         j = json::parse(text);
     } catch (const json::parse_error& e) {
         throw InvalidArgument("scene JSON", fmt::format("malformed at byte {}: {}", e.byte, e.what()));
     }
-    return parse(j);
+    return parse(j, base_directory.empty() ? std::filesystem::path()
+                                           : std::filesystem::absolute(std::filesystem::path(base_directory)));
 }
 
 SceneDescription SceneDescription::from_json_file(const std::string& path) {
@@ -265,7 +444,9 @@ SceneDescription SceneDescription::from_json_file(const std::string& path) {
     if (!in) throw IoError(fmt::format("cannot read scene file '{}'", path));
     std::stringstream ss;
     ss << in.rdbuf();
-    return from_json_string(ss.str());
+    std::error_code ec;
+    const std::filesystem::path dir = std::filesystem::absolute(std::filesystem::path(path), ec).parent_path();
+    return from_json_string(ss.str(), dir.string());
 }
 
 std::string SceneDescription::to_json_string() const {
@@ -280,11 +461,7 @@ std::string SceneDescription::to_json_string() const {
     if (camera) {
         const Camera& c = *camera;
         ordered_json cj;
-        ordered_json rows = ordered_json::array();
-        for (int r = 0; r < 4; ++r)
-            rows.push_back({c.matrix_world[0][r], c.matrix_world[1][r], c.matrix_world[2][r],
-                            c.matrix_world[3][r]});
-        cj["matrix_world"] = rows;
+        cj["matrix_world"] = matrix_rows_json(c.matrix_world);
         cj["type"] = camera_type_name(c.type);
         if (c.fov_rad > 0.0)
             cj["fov_deg"] = c.fov_rad / kDegree;
@@ -322,6 +499,7 @@ std::string SceneDescription::to_json_string() const {
                         {"raymarch_sun_steps", k.raymarch_sun_steps},
                         {"reference_paths", k.reference_paths},
                         {"seed", k.seed}};
+    if (clouds) j["clouds"] = clouds_json(*clouds);
     return j.dump(2);
 }
 

@@ -400,6 +400,7 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         }
     }
 
+    image.cloud_transmittance = std::move(cloud_transmittance);
     if (options.exposure != 1.0) {
         const float e = float(options.exposure);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.pixels.size(), 1 << 16),

@@ -12,15 +12,19 @@ import math
 
 from . import scene_export
 
-# Pass name -> (channels, Blender chan_id, the plate array it comes from or None when the
-# pass is empty until clouds land: Clouds is transparent black, CloudDepth +infinity).
+# Pass name -> (channels, Blender chan_id, the plate array it comes from). A scene without
+# clouds has no "clouds" / "cloud_depth" arrays: Clouds is then transparent black and
+# CloudDepth NO_CLOUD_DEPTH, as where a cloudy plate has no cloud.
 PASSES = (
     ("Welkin.Sky", 4, "RGBA", "sky"),
     ("Welkin.AerialInscatter", 3, "RGB", "inscatter"),
     ("Welkin.AerialTransmittance", 3, "RGB", "transmittance"),
-    ("Welkin.Clouds", 4, "RGBA", None),
-    ("Welkin.CloudDepth", 1, "Z", None),
+    ("Welkin.Clouds", 4, "RGBA", "clouds"),
+    ("Welkin.CloudDepth", 1, "Z", "cloud_depth"),
 )
+# Welkin.CloudDepth where no cloud: what Cycles writes for the background, so the pass
+# Z-combines with Blender's Z pass (the clouds schema).
+NO_CLOUD_DEPTH = 1e10
 PASS_NAMES = tuple(p[0] for p in PASSES)
 
 
@@ -41,26 +45,31 @@ def camera_dict(matrix_rows, data, scale_length=1.0):
 
 
 def scene_json(atmosphere_json, origin_altitude_m, sun_direction, exposure, method, camera,
-               resolution):
+               resolution, clouds=None):
     """The scene description's JSON text (scene_export.scene_dict's). `atmosphere_json`:
     Atmosphere.to_json_string() (written in full, so the file reproduces the frame);
     `resolution`: (x, y, percentage)."""
     return json.dumps(scene_export.scene_dict(json.loads(atmosphere_json), origin_altitude_m,
                                               sun_direction, exposure, method, camera,
-                                              resolution))
+                                              resolution, clouds=clouds))
 
 
 def pass_rect(np, plate, source, channels, rows=None):
     """One pass as Blender's rect: (n, channels) float32, bottom row first, for the plate's
-    rows [r0, r1) counted from the top (`rows`, default all). `source` None: the empty
-    cloud passes (0 colour and alpha; depth +infinity)."""
+    rows [r0, r1) counted from the top (`rows`, default all). A `source` the plate lacks
+    (the cloud passes of a clear sky): 0 colour and alpha; depth NO_CLOUD_DEPTH."""
     height, width = plate["depth"].shape
     r0, r1 = rows or (0, height)
     n = (r1 - r0) * width
-    if source is None:
-        fill = math.inf if channels == 1 else 0.0
+    if source not in plate:
+        fill = NO_CLOUD_DEPTH if channels == 1 else 0.0
         return np.full((n, channels), fill, dtype=np.float32)
-    rgb = plate[source][r0:r1][::-1].reshape(n, 3)
+    array = np.asarray(plate[source])
+    if array.ndim == 2:
+        array = array[..., None]
+    if array.shape[-1] == channels:
+        return np.ascontiguousarray(array[r0:r1][::-1].reshape(n, channels), dtype=np.float32)
+    rgb = array[r0:r1][::-1].reshape(n, 3)
     if channels == 3:
         return np.ascontiguousarray(rgb, dtype=np.float32)
     out = np.ones((n, 4), dtype=np.float32)

@@ -15,6 +15,8 @@ KINDS = {"render": "exr", "aerial": "exr", "composite": "exr", "scene": "json"}
 PASS_CHANNELS = tuple(f"Welkin.Aerial{p}.{c}" for p in ("Inscatter", "Transmittance")
                       for c in "RGB")
 COMPOSITE_CHANNELS = ("R", "G", "B")
+# With clouds the passes file holds these too (the engine's pass names and channels).
+CLOUD_CHANNELS = tuple(f"Welkin.Clouds.{c}" for c in "RGBA") + ("Welkin.CloudDepth.Z",)
 
 
 def file_base(render_filepath_abs):
@@ -59,9 +61,10 @@ def camera_dict(matrix_world, cam_type, lens_mm, sensor_width_mm, sensor_height_
 
 
 def scene_dict(atmosphere, origin_altitude_m, sun_direction, exposure, method, camera,
-               resolution, aerial=None):
+               resolution, aerial=None, clouds=None):
     """The whole scene JSON. `atmosphere` is a preset name or an atmosphere object (dict),
-    `resolution` (x, y, percentage)."""
+    `resolution` (x, y, percentage), `clouds` the "clouds" section (cloud_export.clouds_dict)
+    or None for a clear sky."""
     x, y, pct = resolution
     d = {"version": 1, "atmosphere": atmosphere, "origin_altitude_m": float(origin_altitude_m),
          "sun": {"direction": [float(c) for c in sun_direction]},
@@ -69,9 +72,16 @@ def scene_dict(atmosphere, origin_altitude_m, sun_direction, exposure, method, c
          "resolution": {"x": int(x), "y": int(y), "percentage": int(pct)}}
     if aerial:
         d["aerial"] = dict(aerial)
+    if clouds:
+        d["clouds"] = clouds
     return d
 
 
-def composite(image_rgb, inscatter, transmittance):
-    """The hazed render: Image x Transmittance + Inscatter (README "Aerial perspective")."""
-    return image_rgb * transmittance + inscatter
+def composite(image_rgb, inscatter, transmittance, clouds=None):
+    """The hazed render: Image x Transmittance + Inscatter (README "Aerial perspective"),
+    and with clouds (premultiplied RGBA, the air in front of them included) the clouds
+    over it: Clouds.rgb + (1 - Clouds.a) x (Image x T + Inscatter)."""
+    hazed = image_rgb * transmittance + inscatter
+    if clouds is None:
+        return hazed
+    return clouds[..., :3] + (1.0 - clouds[..., 3:4]) * hazed

@@ -59,22 +59,41 @@ def sun_elevation_rad(sun_direction):
     return math.atan2(z, math.hypot(x, y))
 
 
-def compute(native, request, *, disc=True):
-    """SkyResult for `request`; ValueError naming the parameter for bad input."""
+def _warnings(atm, request):
+    elevation = sun_elevation_rad(request.sun_direction)
+    if elevation < -float(atm.sun_angular_radius_rad):
+        return elevation, [f"the sun is {math.degrees(-elevation):.1f} degrees below the horizon: "
+                           f"the sun lamp gets strength 0 and the sky shows twilight"]
+    return elevation, []
+
+
+def compute(native, request, *, disc=True, scene_json=None, progress=None):
+    """SkyResult for `request`; ValueError naming the parameter for bad input.
+
+    `scene_json`: the scene description of the sky with its clouds (its origin at the
+    observer, update.cloudy_scene_json); the core then renders the sky with them
+    (welkin.scene_sky_image, as `welkin sky --scene`), lit by the same atmosphere, and the
+    disc image is dimmed by the clouds' transmittance of its pixels (the factor the core
+    dims a disc in the sky image by). `progress`: callable(fraction) -> bool (False
+    cancels: KeyboardInterrupt)."""
     start = time.perf_counter()
     sky_request.validate(request, native)
     method = sky_request.resolve_method(request.method, native)
     atm = sky_request.build_atmosphere(request, native)
-    warnings = []
-    elevation = sun_elevation_rad(request.sun_direction)
-    if elevation < -float(atm.sun_angular_radius_rad):
-        warnings.append(f"the sun is {math.degrees(-elevation):.1f} degrees below the horizon: "
-                        f"the sun lamp gets strength 0 and the sky shows twilight")
-    sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
-                           method, "rgb", sun_disc=False, exposure=request.exposure)
+    elevation, warnings = _warnings(atm, request)
+    transmittance = None
+    if scene_json is not None:
+        sky, transmittance = native.scene_sky_image(
+            native.SceneDescription.from_json_string(scene_json), request.width, sun_disc=False,
+            return_transmittance=True, progress=progress)
+    else:
+        sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
+                               method, "rgb", sun_disc=False, exposure=request.exposure)
     if disc:
         disc_image = native.sun_disc_image(atm, request.altitude_m, request.sun_direction,
                                            request.width, "rgb", exposure=request.exposure)
+        if transmittance is not None:
+            disc_image *= transmittance[..., None]
     else:
         disc_image = np.zeros_like(sky)
     lamp = lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure)

@@ -62,6 +62,7 @@
 #include <vector>
 
 #include "welkin/atmosphere_luts.hpp"
+#include "welkin/row_range.hpp"
 #include "welkin/scene.hpp"
 
 namespace welkin {
@@ -125,15 +126,20 @@ private:
 
 // The passes for `depth` ((height, width), top row first, the Z pass), width x height
 // being the scene's render resolution, by the scene's aerial.method. Throws
-// InvalidArgument naming "camera" (none), "depth" or "resolution".
+// InvalidArgument naming "camera" (none), "depth", "resolution" or "rows".
+// `rows`: only those rows of the passes are computed (the others are left at T = 1,
+// L = 0), with exactly the values of the whole frame's call: the froxel depth range is
+// fitted to the whole depth buffer and the volume spans the whole screen either way.
 AerialPasses aerial_perspective(const SceneDescription& scene, std::span<const float> depth,
-                                int width, int height, Progress* progress = nullptr);
+                                int width, int height, Progress* progress = nullptr,
+                                RowRange rows = {});
 
 // Either way explicitly (tests and the bench compare them).
 AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<const float> depth,
-                                       int width, int height, Progress* progress = nullptr);
+                                       int width, int height, Progress* progress = nullptr,
+                                       RowRange rows = {});
 AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
                                          std::span<const float> depth, int width, int height,
-                                         Progress* progress = nullptr);
+                                         Progress* progress = nullptr, RowRange rows = {});
 
 }  // namespace welkin

@@ -15,6 +15,13 @@
 //   inscatter      = Welkin.AerialInscatter (0 on sky pixels)
 //   transmittance  = Welkin.AerialTransmittance (1 on sky pixels)
 //   depth          = the Z pass: depth to the ground, +infinity on sky pixels
+//   clouds         = Welkin.Clouds (premultiplied RGBA, the air in front included) of the
+//                    scene's clouds (cloud_passes.hpp), the ground hiding what lies below it;
+//                    alpha 0 everywhere without clouds
+//   cloud_depth    = Welkin.CloudDepth (Z convention; 1e10 where no cloud)
+// With clouds, combined = Clouds.rgb + (1 - Clouds.a) x (the clear combined above): the
+// compositor's formula of cloud_passes.hpp with Image = sky (T = 1) or the black ground;
+// the sun's disc is dimmed by the cloud's transmittance 1 - alpha.
 //
 // Frame approximation: the sky method's observer stands at the camera's altitude with the
 // world's Z as its zenith; the true zenith at a camera d metres from the scene origin's
@@ -27,25 +34,39 @@
 // that the sample spacing is at most 1/8 of the disc's radius (2 <= S <= 64), so a disc
 // smaller than a pixel is antialiased and its energy is kept to the sampling error.
 //
+// Rows (the render engine's tiles): with `rows`, only rows [rows.begin, rows.end) of the
+// frame are computed and returned (height = rows.size(), row_begin = rows.begin), with the
+// values the whole frame has in those rows: the depth of the whole frame is computed (one
+// ray-sphere test per pixel) so that the aerial perspective's froxel range is fitted to
+// the whole frame; the sky, the disc and the aerial passes are computed for the band's
+// pixels only. Each call builds the atmosphere's LUTs again.
+//
 // Errors (InvalidArgument): no camera ("camera"), a camera below the ground
-// ("camera.matrix_world"), and whatever the scene's validation or the sky method refuse.
-// Cancelled when `progress` cancels.
+// ("camera.matrix_world"), a bad row range ("rows"), a cloud volume that cannot be read
+// ("clouds.volumes[i].file", before any work), and whatever the scene's validation or the
+// sky method refuse. Cancelled when `progress` cancels.
 #pragma once
 
 #include <vector>
 
 #include "welkin/progress.hpp"
+#include "welkin/row_range.hpp"
 #include "welkin/scene.hpp"
 
 namespace welkin {
 
 struct CameraPlate {
-    int width = 0, height = 0;
+    int width = 0, height = 0;        // of the arrays: the band's rows
+    int row_begin = 0;                // the band's first row in the frame
+    int frame_height = 0;             // the whole frame's
     std::vector<float> combined, sky, inscatter, transmittance;  // (height, width, 3)
     std::vector<float> depth;                                     // (height, width)
+    std::vector<float> clouds;                                    // (height, width, 4)
+    std::vector<float> cloud_depth;                               // (height, width)
     std::string method;  // the sky method that ran (auto resolved by the method itself)
 };
 
-CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progress = nullptr);
+CameraPlate render_camera_plate(const SceneDescription& scene, Progress* progress = nullptr,
+                                RowRange rows = {});
 
 }  // namespace welkin

@@ -136,4 +136,15 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                           const glm::dvec3& origin, std::span<const glm::dvec3> directions,
                           const CloudLightingOptions& options = {}, Progress* progress = nullptr);
 
+// The same for rays with their own origins and lengths (camera passes: orthographic rays
+// start on the camera's plane, and rays end at the scene's geometry): ray i starts at
+// origins[i] (origins[0] for all when there is one) and ends at min(max_distances[i],
+// options.max_distance_m) (at options.max_distance_m when max_distances is empty). Ray i
+// is seeded by first_ray_index + i (a band of a frame seeded as in the whole frame).
+// InvalidArgument names origins[i] or max_distances[i] (negative or NaN) or a size mismatch.
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
+                          std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                          std::span<const double> max_distances, const CloudLightingOptions& options = {},
+                          Progress* progress = nullptr, std::uint64_t first_ray_index = 0);
+
 }  // namespace welkin

@@ -39,4 +39,19 @@ private:
     std::mutex mutex_;
 };
 
+// One stage of a longer operation: maps the stage's fractions [0, 1] onto [lo, hi] of the
+// host's (a null host: reports nothing, never cancels).
+class ProgressStage final : public Progress {
+public:
+    ProgressStage(Progress* host, double lo, double hi) : host_(host), lo_(lo), hi_(hi) {}
+    bool report(double f) override {
+        const double c = f < 0.0 ? 0.0 : (f > 1.0 ? 1.0 : f);
+        return !host_ || host_->report(lo_ + (hi_ - lo_) * c);
+    }
+
+private:
+    Progress* host_;
+    double lo_, hi_;
+};
+
 }  // namespace welkin

@@ -15,6 +15,7 @@
 // 8 m higher than the origin (the ground curves away).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -22,6 +23,7 @@
 
 #include "welkin/atmosphere.hpp"
 #include "welkin/camera.hpp"
+#include "welkin/scene_clouds.hpp"
 #include "welkin/sky_method.hpp"
 
 namespace welkin {
@@ -65,6 +67,7 @@ struct SceneDescription {
     RenderResolution resolution;
     AerialOptions aerial;
     SkyOptions sky_options;                  // LUT sizes and method options
+    std::optional<SceneClouds> clouds;       // absent: a clear sky (scene_clouds.hpp)
 
     // Throws InvalidArgument naming the field (as in the JSON: "camera.lens_mm"). Does not
     // require a camera; camera passes call require_camera().
@@ -78,7 +81,14 @@ struct SceneDescription {
         return {0.0, 0.0, -(atmosphere.bottom_radius_m + origin_altitude_m)};
     }
 
-    static SceneDescription from_json_string(const std::string& text);
+    // True when the scene has at least one cloud layer or volume.
+    bool has_clouds() const { return clouds && !clouds->empty(); }
+    // The union of the scene's layers and volumes (opens the VDB files); nullptr without clouds.
+    std::shared_ptr<const CloudDensity> cloud_density() const;
+
+    // Relative paths in the JSON (clouds.volumes[i].file) are resolved against
+    // `base_directory` (from_json_file: the file's folder; empty: the working directory).
+    static SceneDescription from_json_string(const std::string& text, const std::string& base_directory = "");
     static SceneDescription from_json_file(const std::string& path);
     std::string to_json_string() const;
     // Refuses to replace an existing file unless `overwrite`; atomic.

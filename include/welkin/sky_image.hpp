@@ -64,6 +64,10 @@ struct SkyImage {
     std::vector<std::string> channel_names;
     std::vector<double> wavelengths_nm;  // of the spectral channels (empty for RGB)
     std::vector<float> pixels;           // (height, width, channels), top row first
+    // With clouds: their transmittance per pixel, (height, width), top row first (the
+    // factor the disc is dimmed by), for hosts that keep the disc in an image of its own;
+    // empty without clouds.
+    std::vector<float> cloud_transmittance;
 
     std::size_t channels() const { return channel_names.size(); }
 };

@@ -15,6 +15,7 @@
 #include "common.hpp"
 #include "terminal_progress.hpp"
 #include "welkin/aerial_perspective.hpp"
+#include "welkin/cloud_passes.hpp"
 #include "welkin/error.hpp"
 #include "welkin/exr_io.hpp"
 #include "welkin/scene.hpp"
@@ -41,36 +42,6 @@ struct AerialArgs {
                                                 : fmt::format("{} (in '{}')", e.what(), where));
 }
 
-// The depth channel: --depth-channel, else "Z" (a plain EXR with Blender's Z buffer),
-// "Depth.Z", or the one "<view layer>.Depth.Z" of a multilayer render.
-std::string find_depth_channel(const std::vector<std::string>& names, const std::string& asked,
-                               const std::string& path) {
-    const auto has = [&](const std::string& n) {
-        return std::find(names.begin(), names.end(), n) != names.end();
-    };
-    const std::string listed = fmt::format("{}", fmt::join(names, ", "));
-    if (!asked.empty()) {
-        if (has(asked)) return asked;
-        throw InvalidArgument("--depth-channel",
-                              fmt::format("'{}' has no channel '{}'; its channels: {}", path, asked, listed));
-    }
-    for (const char* n : {"Z", "Depth.Z"})
-        if (has(n)) return n;
-    std::vector<std::string> layered;
-    for (const std::string& n : names)
-        if (n.size() > 8 && n.compare(n.size() - 8, 8, ".Depth.Z") == 0) layered.push_back(n);
-    if (layered.size() == 1) return layered.front();
-    if (layered.size() > 1)
-        throw InvalidArgument("--depth-channel",
-                              fmt::format("'{}' has several depth channels ({}); name one",
-                                          path, fmt::join(layered, ", ")));
-    throw InvalidArgument("--depth-channel",
-                          fmt::format("'{}' has no depth channel (looked for Z, Depth.Z and "
-                                      "<layer>.Depth.Z; its channels: {}); enable the Z pass "
-                                      "in Blender's View Layer properties, or name the channel",
-                                      path, listed));
-}
-
 int run_aerial(const AerialArgs& args) {
     // Everything that can be refused is refused before the work starts.
     check_output_path(args.output, args.overwrite);
@@ -84,32 +55,11 @@ int run_aerial(const AerialArgs& args) {
         rethrow_as("--scene", e, args.scene);
     }
 
-    ExrHeaderInfo header;
-    try {
-        header = read_exr_header(args.depth);
-    } catch (const IoError& e) {
-        throw InvalidArgument("--depth", e.what());
-    }
-    const std::string channel = find_depth_channel(header.channel_names, args.depth_channel, args.depth);
-    if (header.width != width || header.height != height)
-        throw InvalidArgument("--depth",
-                              fmt::format("'{}' is {} x {} pixels but the scene renders {} x {} "
-                                          "(resolution {} x {} at {} %)",
-                                          args.depth, header.width, header.height, width, height,
-                                          scene.resolution.x, scene.resolution.y,
-                                          scene.resolution.percentage));
-    ExrImage depth;
-    try {
-        depth = read_exr_channels(args.depth, {channel});
-    } catch (const IoError& e) {
-        throw InvalidArgument("--depth", e.what());
-    }
-    try {
-        validate_depth(depth.pixels, width, height);
-    } catch (const InvalidArgument& e) {
-        throw InvalidArgument("--depth", fmt::format("channel '{}' of '{}': {}", channel, args.depth,
-                                                     std::string(e.what()).substr(e.parameter().size() + 2)));
-    }
+    const DepthImage depth_image = load_depth(args.depth, args.depth_channel, scene);
+    const std::vector<float>& depth = depth_image.pixels;
+    const std::string& channel = depth_image.channel;
+    // The scene's clouds (their VDBs opened now: a bad one is refused before any work).
+    const std::shared_ptr<const CloudDensity> clouds = load_scene_clouds(scene, args.scene);
 
     const auto threads = limit_threads(args.threads);
 
@@ -119,12 +69,19 @@ int run_aerial(const AerialArgs& args) {
     {
         TerminalProgress progress(fmt::format("aerial {}x{} ({})", width, height,
                                               aerial_method_name(scene.aerial.method)));
-        passes = aerial_perspective(scene, depth.pixels, width, height, &progress);
+        passes = aerial_perspective(scene, depth, width, height, &progress);
+        progress.finish();
+    }
+    if (interrupted()) throw Cancelled();
+    // With clouds: Welkin.Clouds and Welkin.CloudDepth, marched up to the render's depth.
+    CloudPasses cloud_passes;
+    if (clouds) {
+        TerminalProgress progress(fmt::format("clouds {}x{}", width, height));
+        cloud_passes = render_cloud_passes(scene, *clouds, depth, &progress);
         progress.finish();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (interrupted()) throw Cancelled();
-    depth = {};
 
     ExrImage exr;
     exr.width = width;
@@ -132,25 +89,34 @@ int run_aerial(const AerialArgs& args) {
     exr.channel_names = {"Welkin.AerialInscatter.R",    "Welkin.AerialInscatter.G",
                          "Welkin.AerialInscatter.B",    "Welkin.AerialTransmittance.R",
                          "Welkin.AerialTransmittance.G", "Welkin.AerialTransmittance.B"};
-    const std::size_t n = std::size_t(width) * std::size_t(height);
-    exr.pixels.resize(n * 6);
-    for (std::size_t p = 0; p < n; ++p)
+    if (clouds)
+        for (const std::string& c : cloud_channel_names()) exr.channel_names.push_back(c);
+    const std::size_t n = std::size_t(width) * std::size_t(height), nch = exr.channel_names.size();
+    exr.pixels.resize(n * nch);
+    for (std::size_t p = 0; p < n; ++p) {
         for (int c = 0; c < 3; ++c) {
-            exr.pixels[p * 6 + c] = passes.inscatter[p * 3 + c];
-            exr.pixels[p * 6 + 3 + c] = passes.transmittance[p * 3 + c];
+            exr.pixels[p * nch + c] = passes.inscatter[p * 3 + c];
+            exr.pixels[p * nch + 3 + c] = passes.transmittance[p * 3 + c];
         }
+        if (clouds) {
+            for (int c = 0; c < 4; ++c) exr.pixels[p * nch + 6 + c] = cloud_passes.clouds[p * 4 + c];
+            exr.pixels[p * nch + 10] = cloud_passes.depth[p];
+        }
+    }
     passes = {};
+    cloud_passes = {};
     ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
     write.attributes.insert(write.attributes.end(),
                             {{"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
                         {"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
-                        {"welkinUnits", "AerialInscatter: linear Rec.709, W m^-2 sr^-1 (times "
-                                        "exposure); AerialTransmittance: dimensionless"}});
+                        {"welkinUnits", "AerialInscatter, Clouds: linear Rec.709, W m^-2 sr^-1 (times "
+                                        "exposure); AerialTransmittance: dimensionless; CloudDepth: m"}});
     write_exr(args.output, exr, write);
-    fmt::print("wrote {} ({} x {}, Welkin.AerialInscatter and Welkin.AerialTransmittance, {}, "
+    fmt::print("wrote {} ({} x {}, Welkin.AerialInscatter and Welkin.AerialTransmittance{}, {}, "
                "method {}, {:.2f} s)\n",
                std::filesystem::absolute(args.output).string(), width, height,
-               args.half ? "half" : "float", aerial_method_name(scene.aerial.method), seconds);
+               clouds ? ", Welkin.Clouds and Welkin.CloudDepth" : "", args.half ? "half" : "float",
+               aerial_method_name(scene.aerial.method), seconds);
     return 0;
 }
 
@@ -192,7 +158,9 @@ Command add_aerial_command(CLI::App& app) {
     sub->footer(
         "Layers: Welkin.AerialInscatter (R, G, B: linear Rec.709, W m^-2 sr^-1, times the "
         "scene's exposure) and Welkin.AerialTransmittance (R, G, B), so that Image x "
-        "Transmittance + Inscatter is the hazed render. Sky pixels get transmittance 1 and "
+        "Transmittance + Inscatter is the hazed render. With \"clouds\" in the scene also "
+        "Welkin.Clouds (R, G, B, A: premultiplied, the air in front included) and "
+        "Welkin.CloudDepth (Z; 1e10 where no cloud): final = Clouds + (1 - Clouds.A) x hazed. Sky pixels get transmittance 1 and "
         "no in-scattering (the rendered sky already holds the atmosphere). Rows top first, "
         "as EXR files are. Ctrl-C cancels cleanly; nothing is written.");
     return {sub, [args] { return run_aerial(*args); }};

@@ -1,6 +1,7 @@
 // `welkin plate`: the scene camera's plate (camera_plate.hpp) from a scene JSON, as a
 // multilayer OpenEXR: RGB (Combined) plus the layers Welkin.Sky, Welkin.AerialInscatter,
-// Welkin.AerialTransmittance (R, G, B each) and Z (depth to the ground, +inf on sky).
+// Welkin.AerialTransmittance (R, G, B each), Welkin.Clouds (R, G, B, A), Welkin.CloudDepth
+// (Z) and Z (depth to the ground, +inf on sky).
 // The same plate the Blender render engine "WELKIN" renders.
 #include <chrono>
 #include <filesystem>
@@ -60,13 +61,16 @@ int run_plate(const PlateArgs& args) {
         {"Welkin.AerialTransmittance.", &plate.transmittance}};
     for (const auto& [prefix, data] : layers)
         for (const char* c : {"R", "G", "B"}) exr.channel_names.push_back(prefix + c);
+    for (const std::string& c : cloud_channel_names()) exr.channel_names.push_back(c);
     exr.channel_names.push_back("Z");
     const std::size_t n = std::size_t(plate.width) * std::size_t(plate.height);
-    const std::size_t nch = exr.channel_names.size();
+    const std::size_t nch = exr.channel_names.size(), clouds_at = layers.size() * 3;
     exr.pixels.resize(n * nch);
     for (std::size_t p = 0; p < n; ++p) {
         for (std::size_t l = 0; l < layers.size(); ++l)
             for (int c = 0; c < 3; ++c) exr.pixels[p * nch + l * 3 + c] = (*layers[l].second)[p * 3 + c];
+        for (int c = 0; c < 4; ++c) exr.pixels[p * nch + clouds_at + c] = plate.clouds[p * 4 + c];
+        exr.pixels[p * nch + clouds_at + 4] = plate.cloud_depth[p];
         exr.pixels[p * nch + nch - 1] = plate.depth[p];
     }
     ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
@@ -74,7 +78,8 @@ int run_plate(const PlateArgs& args) {
                             {{"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
                         {"welkinMethod", plate.method},
                         {"welkinUnits", "linear Rec.709, W m^-2 sr^-1 (times exposure); "
-                                        "AerialTransmittance dimensionless; Z metres"}});
+                                        "AerialTransmittance dimensionless; Clouds premultiplied; "
+                                        "Z, CloudDepth metres (1e10: no cloud)"}});
     write_exr(args.output, exr, write);
     fmt::print("wrote {} ({} x {}, sky method {}, {:.2f} s)\n",
                std::filesystem::absolute(args.output).string(), plate.width, plate.height,
@@ -103,8 +108,11 @@ Command add_plate_command(CLI::App& app) {
         ->type_name("N")
         ->check(CLI::Range(1, 1024));
     sub->footer("Channels: R, G, B (Combined), Welkin.Sky.{R,G,B}, Welkin.AerialInscatter.{R,G,B}, "
-                "Welkin.AerialTransmittance.{R,G,B}, Z. Linear Rec.709, W m^-2 sr^-1, times the "
-                "scene's exposure; top row first. Ctrl-C cancels; nothing is written.");
+                "Welkin.AerialTransmittance.{R,G,B}, Welkin.Clouds.{R,G,B,A} (premultiplied; alpha "
+                "0 without \"clouds\" in the scene), Welkin.CloudDepth.Z (1e10 where no cloud), Z. "
+                "Linear Rec.709, W m^-2 sr^-1, times the scene's exposure; top row first. With "
+                "clouds, Combined = Clouds + (1 - Clouds.A) x the clear plate. Ctrl-C cancels; "
+                "nothing is written.");
     return {sub, [args] { return run_plate(*args); }};
 }
 

@@ -48,6 +48,9 @@ struct SkySettings {
     SkyOptions options;
     std::string method;
     double exposure;
+    std::shared_ptr<const CloudDensity> clouds;  // the scene's (none without --scene)
+    CloudLightingOptions cloud_lighting;
+    std::size_t cloud_layers = 0, cloud_volumes = 0;
 };
 
 SkySettings settings_from(const SkyArgs& args) {
@@ -60,7 +63,15 @@ SkySettings settings_from(const SkyArgs& args) {
     }
     try {
         const SceneDescription scene = SceneDescription::from_json_file(args.scene);
-        return {scene.atmosphere, scene.origin_observer(), scene.sky_options, scene.method, scene.exposure};
+        SkySettings out{scene.atmosphere, scene.origin_observer(), scene.sky_options, scene.method, scene.exposure};
+        // The scene's clouds (VDBs opened now, before the render), seen from the scene origin.
+        out.clouds = scene.cloud_density();
+        if (scene.clouds) {
+            out.cloud_lighting = scene.clouds->lighting;
+            out.cloud_layers = scene.clouds->layers.size();
+            out.cloud_volumes = scene.clouds->volumes.size();
+        }
+        return out;
     } catch (const InvalidArgument& e) {
         throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), args.scene));
     } catch (const IoError& e) {
@@ -93,6 +104,8 @@ int run_sky(const SkyArgs& args) {
     image_options.exposure = sky.exposure;
     image_options.output = args.spectral_channels ? SkyImageOptions::Output::Spectral
                                                   : SkyImageOptions::Output::Rgb;
+    image_options.clouds = sky.clouds;
+    image_options.cloud_lighting = sky.cloud_lighting;
     image_options.validate();
 
     const auto threads = limit_threads(args.threads);
@@ -130,6 +143,7 @@ int run_sky(const SkyArgs& args) {
         {"tolerance", args.tolerance},
         {"exposure", sky.exposure},
         {"sun_disc", !args.no_sun_disc},
+        {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
         {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
                                          : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
     if (args.scene.empty()) {
@@ -227,8 +241,9 @@ Command add_sky_command(CLI::App& app) {
         ->capture_default_str();
     auto* scene = sub->add_option("--scene", args->scene,
                                   "Take the atmosphere, the sun, the observer altitude (the scene "
-                                  "origin's), the method and the exposure from a scene JSON (the "
-                                  "schema `welkin aerial` reads); replaces those options")
+                                  "origin's), the method, the exposure and the clouds (layers, "
+                                  "VDB volumes, their lighting) from a scene JSON (the schema "
+                                  "`welkin aerial` reads); replaces those options")
                       ->type_name("FILE.json");
     for (const char* name : {"--preset", "--atmosphere", "--spectral", "--sun-elevation", "--sun-azimuth",
                              "--altitude", "--method", "--exposure", "--reference-paths", "--seed"})

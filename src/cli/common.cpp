@@ -11,7 +11,9 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include "welkin/aerial_perspective.hpp"
 #include "welkin/error.hpp"
 #include "welkin/math.hpp"
 
@@ -128,6 +130,84 @@ SceneDescription load_camera_scene(const std::string& path) {
     } catch (const IoError& e) {
         throw InvalidArgument("--scene", e.what());
     }
+}
+
+// The depth channel: --depth-channel, else "Z" (a plain EXR with Blender's Z buffer),
+// "Depth.Z", or the one "<view layer>.Depth.Z" of a multilayer render.
+static std::string find_depth_channel(const std::vector<std::string>& names, const std::string& asked,
+                               const std::string& path) {
+    const auto has = [&](const std::string& n) {
+        return std::find(names.begin(), names.end(), n) != names.end();
+    };
+    const std::string listed = fmt::format("{}", fmt::join(names, ", "));
+    if (!asked.empty()) {
+        if (has(asked)) return asked;
+        throw InvalidArgument("--depth-channel",
+                              fmt::format("'{}' has no channel '{}'; its channels: {}", path, asked, listed));
+    }
+    for (const char* n : {"Z", "Depth.Z"})
+        if (has(n)) return n;
+    std::vector<std::string> layered;
+    for (const std::string& n : names)
+        if (n.size() > 8 && n.compare(n.size() - 8, 8, ".Depth.Z") == 0) layered.push_back(n);
+    if (layered.size() == 1) return layered.front();
+    if (layered.size() > 1)
+        throw InvalidArgument("--depth-channel",
+                              fmt::format("'{}' has several depth channels ({}); name one",
+                                          path, fmt::join(layered, ", ")));
+    throw InvalidArgument("--depth-channel",
+                          fmt::format("'{}' has no depth channel (looked for Z, Depth.Z and "
+                                      "<layer>.Depth.Z; its channels: {}); enable the Z pass "
+                                      "in Blender's View Layer properties, or name the channel",
+                                      path, listed));
+}
+
+DepthImage load_depth(const std::string& path, const std::string& asked_channel, const SceneDescription& scene) {
+    const int width = scene.resolution.width(), height = scene.resolution.height();
+    ExrHeaderInfo header;
+    try {
+        header = read_exr_header(path);
+    } catch (const IoError& e) {
+        throw InvalidArgument("--depth", e.what());
+    }
+    DepthImage out;
+    out.channel = find_depth_channel(header.channel_names, asked_channel, path);
+    if (header.width != width || header.height != height)
+        throw InvalidArgument("--depth",
+                              fmt::format("'{}' is {} x {} pixels but the scene renders {} x {} "
+                                          "(resolution {} x {} at {} %)",
+                                          path, header.width, header.height, width, height,
+                                          scene.resolution.x, scene.resolution.y,
+                                          scene.resolution.percentage));
+    ExrImage depth;
+    try {
+        depth = read_exr_channels(path, {out.channel});
+    } catch (const IoError& e) {
+        throw InvalidArgument("--depth", e.what());
+    }
+    try {
+        validate_depth(depth.pixels, width, height);
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument("--depth", fmt::format("channel '{}' of '{}': {}", out.channel, path,
+                                                     std::string(e.what()).substr(e.parameter().size() + 2)));
+    }
+    out.pixels = std::move(depth.pixels);
+    return out;
+}
+
+std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& scene, const std::string& scene_path) {
+    try {
+        const auto clouds = scene.cloud_density();
+        // Besides the passes: the cloud march's buffers and the EXR's 5 cloud channels.
+        if (clouds) check_aerial_memory(scene.resolution.width(), scene.resolution.height(), 96 + 48 + 20);
+        return clouds;
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), scene_path));
+    }
+}
+
+std::vector<std::string> cloud_channel_names() {
+    return {"Welkin.Clouds.R", "Welkin.Clouds.G", "Welkin.Clouds.B", "Welkin.Clouds.A", "Welkin.CloudDepth.Z"};
 }
 
 std::unique_ptr<tbb::global_control> limit_threads(int threads) {

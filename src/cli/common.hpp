@@ -36,6 +36,7 @@ Command add_atmosphere_command(CLI::App& app);
 Command add_exr_info_command(CLI::App& app);
 Command add_aerial_command(CLI::App& app);
 Command add_plate_command(CLI::App& app);
+Command add_clouds_command(CLI::App& app);
 
 // --preset NAME | --atmosphere FILE.json, and --spectral.
 struct AtmosphereArgs {
@@ -60,6 +61,24 @@ Observer make_observer(const ObserverArgs& args);
 // The scene JSON of --scene, with a camera (for the commands that render through it).
 // Throws InvalidArgument naming --scene: the core's message and the file, or the read error.
 SceneDescription load_camera_scene(const std::string& path);
+
+// --depth FILE.exr (and --depth-channel NAME, empty: Z, Depth.Z or the one <layer>.Depth.Z):
+// the Z pass at the scene's resolution, validated. InvalidArgument naming --depth or
+// --depth-channel.
+struct DepthImage {
+    std::vector<float> pixels;  // (height, width), top row first
+    std::string channel;        // the channel read
+};
+DepthImage load_depth(const std::string& path, const std::string& channel, const SceneDescription& scene);
+
+// The scene's clouds (scene.cloud_density(): the VDB files are opened here, before any
+// work), or nullptr without clouds. InvalidArgument naming --scene with the core's key
+// ("clouds.volumes[0].file: ...") and the scene file.
+std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& scene, const std::string& scene_path);
+
+// The EXR channels of the cloud passes: Welkin.Clouds.{R,G,B,A}, Welkin.CloudDepth.Z (the
+// add-on's pass channels).
+std::vector<std::string> cloud_channel_names();
 
 // Before any long work: refuse an existing file (unless overwrite) and a directory that
 // does not exist or cannot be written. Throws IoError naming the path.

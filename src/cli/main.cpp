@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
     const std::vector<Command> commands = {add_sky_command(app), add_sun_command(app),
                                            add_presets_command(app), add_atmosphere_command(app),
                                            add_exr_info_command(app), add_aerial_command(app),
-                                           add_plate_command(app)};
+                                           add_plate_command(app), add_clouds_command(app)};
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -92,7 +92,10 @@ Plain data: build it from JSON, write it back; to_json_string() reproduces the
 frame exactly (the atmosphere is written in full).
 )doc")
         .def_static("from_json_string", &SceneDescription::from_json_string, py::arg("text"),
-                    "Parse and validate; ValueError names the key (e.g. camera.lens_mm).")
+                    py::arg("base_directory") = "",
+                    "Parse and validate; ValueError names the key (e.g. camera.lens_mm). Relative "
+                    "clouds.volumes[i].file paths are resolved against base_directory (default: "
+                    "the working directory); from_json resolves them against the file's folder.")
         .def_static("from_json", &SceneDescription::from_json_file, py::arg("path"))
         .def("to_json_string", &SceneDescription::to_json_string)
         .def("to_json", &SceneDescription::to_json_file, py::arg("path"), py::arg("overwrite") = false,
@@ -102,6 +105,8 @@ frame exactly (the atmosphere is written in full).
         .def_property_readonly("height", [](const SceneDescription& s) { return s.resolution.height(); })
         .def_property_readonly("has_camera", [](const SceneDescription& s) { return bool(s.camera); })
         .def_property_readonly("version", [](const SceneDescription& s) { return s.version; })
+        .def_property_readonly("has_clouds", &SceneDescription::has_clouds,
+                               "True when the scene's \"clouds\" hold a layer or a volume.")
         .def(
             "camera_ray",
             [](const SceneDescription& s, double sx, double sy) {

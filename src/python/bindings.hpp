@@ -17,6 +17,7 @@
 #include <pybind11/pybind11.h>
 
 #include "welkin/progress.hpp"
+#include "welkin/sky_image.hpp"
 
 namespace welkin::python {
 
@@ -31,6 +32,8 @@ void register_exr(py::module_& m);
 void register_aerial(py::module_& m);
 void register_clouds(py::module_& m);
 void register_plate(py::module_& m);
+void register_scene_sky(py::module_& m);
+void register_cloud_passes(py::module_& m);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
 // is not one.
@@ -72,6 +75,9 @@ std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array,
 // A (height, width, channels) float32 array that owns `pixels` (moved, not copied).
 py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height,
                                   std::size_t channels);
+
+// "rgb" | "spectral" -> the sky image's output (InvalidArgument naming "output").
+SkyImageOptions::Output parse_output(const std::string& output);
 
 // A sequence of three numbers -> glm::dvec3 (InvalidArgument naming `parameter` otherwise).
 glm::dvec3 to_dvec3(const py::handle& values, const std::string& parameter);

@@ -16,14 +16,14 @@
 
 namespace welkin::python {
 
-namespace {
-
 SkyImageOptions::Output parse_output(const std::string& output) {
     if (output == "rgb") return SkyImageOptions::Output::Rgb;
     if (output == "spectral") return SkyImageOptions::Output::Spectral;
     throw InvalidArgument("output", fmt::format("must be \"rgb\" or \"spectral\", got \"{}\"",
                                                 output));
 }
+
+namespace {
 
 py::array_t<float> render(const SkyMethod& method, const Atmosphere& atmosphere,
                           double altitude_m, const py::object& sun_direction, int width,

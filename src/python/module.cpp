@@ -139,4 +139,6 @@ Quick start:
     register_exr(m);
     register_aerial(m);
     register_plate(m);
+    register_scene_sky(m);
+    register_cloud_passes(m);
 }

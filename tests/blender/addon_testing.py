@@ -185,6 +185,10 @@ class FakeLayout:
     def operator(self, idname, **kwargs):
         self.log.append(("operator", idname))
 
+    def template_list(self, list_type, list_id, data, name, *args, **kwargs):
+        getattr(data, name)
+        self.log.append(("list", name))
+
 
 def draw_panel(scene):
     """What Properties > World > Welkin Sky shows for `scene`: a list of (kind, text)."""

@@ -12,10 +12,14 @@
   aerial.py      aerial perspective per render (Scene.welkin_aerial), compositor.py its nodes
   handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
   render_engine.py  the render engine "WELKIN": the camera's plate with Welkin's passes
+  cloud_properties.py  World.welkin_clouds (layers, lighting), Object.welkin_cloud
+  cloud_scene.py     the scene's clouds as the scene JSON's "clouds" section
+  cloud_operators.py, cloud_panel.py  Welkin Clouds: add/remove layers, mark volumes
 """
 import bpy
 
-from . import aerial, handlers, operators, panel, properties, render_engine
+from . import (aerial, cloud_operators, cloud_panel, cloud_properties, handlers, operators,
+               panel, properties, render_engine)
 
 classes = (
     properties.WelkinWorldSettings,
@@ -23,11 +27,14 @@ classes = (
     operators.WELKIN_OT_remove_sky,
     operators.WELKIN_OT_export_hdri,
     panel.WORLD_PT_welkin_sky,
+    *cloud_operators.classes,
+    *cloud_panel.classes,
     render_engine.WelkinRenderEngine,
 )
 
 
 def register():
+    cloud_properties.register()
     for cls in classes:
         bpy.utils.register_class(cls)
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
@@ -46,3 +53,4 @@ def unregister():
     del bpy.types.World.welkin
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)
+    cloud_properties.unregister()

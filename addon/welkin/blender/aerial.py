@@ -22,7 +22,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .. import native, scene_export, sky_request
-from . import compositor, scene_sun
+from . import cloud_scene, compositor, scene_sun
 from .scene_sun import UserError
 
 
@@ -119,7 +119,8 @@ def scene_json(scene, module, depsgraph=None):
         atmosphere, settings.altitude_m, request.sun_direction, settings.exposure,
         sky_request.resolve_method(settings.method, module), camera_of(scene, depsgraph),
         (r.resolution_x, r.resolution_y, r.resolution_percentage),
-        aerial={"method": scene.welkin_aerial.method})
+        aerial={"method": scene.welkin_aerial.method},
+        clouds=cloud_scene.clouds_section(scene, depsgraph))
     return module.SceneDescription.from_json_string(json.dumps(d)).to_json_string()
 
 
@@ -134,8 +135,10 @@ def _ours(module, path, kind):
         _pixels, names = module.read_exr(path)
     except Exception:
         return False
-    wanted = scene_export.PASS_CHANNELS if kind == "aerial" else scene_export.COMPOSITE_CHANNELS
-    return sorted(names) == sorted(wanted)
+    if kind == "aerial":
+        return sorted(names) in (sorted(scene_export.PASS_CHANNELS),
+                                 sorted(scene_export.PASS_CHANNELS + scene_export.CLOUD_CHANNELS))
+    return sorted(names) == sorted(scene_export.COMPOSITE_CHANNELS)
 
 
 def write_frame(scene, frame):
@@ -176,17 +179,27 @@ def write_frame(scene, frame):
                         "from the next render; toggle Aerial Perspective off and on")
     image = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
     depth = pixels[..., names.index(depth_name)] * np.float32(scene.unit_settings.scale_length)
+    depth = np.ascontiguousarray(depth)
+    clouds = None
     try:
-        inscatter, transmittance = module.aerial_perspective(desc, np.ascontiguousarray(depth))
-    except ValueError as error:
+        inscatter, transmittance = module.aerial_perspective(desc, depth)
+        if "clouds" in json.loads(text):
+            # Welkin.Clouds marched up to the render's depth (geometry in front hides it).
+            passes = module.cloud_passes(desc, depth)
+            clouds = np.asarray(passes["Welkin.Clouds"], dtype=np.float32)
+            cloud_depth = np.asarray(passes["Welkin.CloudDepth"], dtype=np.float32)
+    except (ValueError, OSError) as error:
         raise UserError(str(error)) from None
+    layers, channels = [inscatter, transmittance], list(scene_export.PASS_CHANNELS)
+    if clouds is not None:
+        layers += [clouds, cloud_depth[..., None]]
+        channels += list(scene_export.CLOUD_CHANNELS)
     desc.to_json(paths["scene"], overwrite=True)
-    module.write_exr(paths["aerial"], np.concatenate([inscatter, transmittance], axis=-1),
-                     list(scene_export.PASS_CHANNELS), overwrite=True,
+    module.write_exr(paths["aerial"], np.concatenate(layers, axis=-1), channels, overwrite=True,
                      attributes=[("welkinScene", text)])
     module.write_exr(paths["composite"],
-                     np.ascontiguousarray(scene_export.composite(image, inscatter, transmittance),
-                                          dtype=np.float32),
+                     np.ascontiguousarray(scene_export.composite(image, inscatter, transmittance,
+                                                                 clouds), dtype=np.float32),
                      list(scene_export.COMPOSITE_CHANNELS), overwrite=True)
     return paths
 

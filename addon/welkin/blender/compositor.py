@@ -3,7 +3,8 @@
   * "Welkin Aerial Depth", a File Output node writing a multilayer EXR of the render's
     Image and Depth (Z pass) for every frame, <base>welkin_render_<frame>.exr: the only
     way to read the Z pass back in `blender -b` (the Viewer node cannot be read there).
-  * "Welkin Aerial Perspective", a node group (Image x Transmittance + Inscatter), placed
+  * "Welkin Aerial Perspective", a node group (Image x Transmittance + Inscatter, and the
+    clouds over it: Clouds.rgb + (1 - Clouds.a) x that), placed
     between the Composite node and what fed it (the user's last node). Its Transmittance
     and Inscatter inputs are left unlinked, at 1 and 0, so the Composite node shows the
     render unchanged: Blender 3.4 composites a frame before render_post, where the passes
@@ -24,36 +25,64 @@ OURS = (DEPTH_NODE, GROUP_NODE)
 
 
 def node_group():
-    """The group Image x Transmittance + Inscatter (made once per file)."""
+    """The group (Image x Transmittance + Inscatter), then the clouds over it:
+    Clouds.rgb + (1 - Clouds.a) x that (Welkin.Clouds is premultiplied and holds the air in
+    front of the cloud: README "Clouds in Blender"). Made once per file; a group from an
+    earlier version without the Clouds input is rebuilt in place (it is the add-on's own:
+    the nodes that use it keep their links)."""
     group = bpy.data.node_groups.get(GROUP_NAME)
-    if group is not None:
+    if group is not None and "Clouds" in group.inputs:
         return group
-    group = bpy.data.node_groups.new(GROUP_NAME, 'CompositorNodeTree')
+    if group is None:
+        group = bpy.data.node_groups.new(GROUP_NAME, 'CompositorNodeTree')
+    for node in list(group.nodes):
+        group.nodes.remove(node)
     gin = group.nodes.new('NodeGroupInput')
     gout = group.nodes.new('NodeGroupOutput')
-    image = group.inputs.new('NodeSocketColor', "Image")
-    image.default_value = (0.0, 0.0, 0.0, 1.0)
-    t = group.inputs.new('NodeSocketColor', "Transmittance")
-    t.default_value = (1.0, 1.0, 1.0, 1.0)  # no passes yet: the image passes through
-    i = group.inputs.new('NodeSocketColor', "Inscatter")
-    i.default_value = (0.0, 0.0, 0.0, 1.0)
-    group.outputs.new('NodeSocketColor', "Image")
-    mul = group.nodes.new('CompositorNodeMixRGB')
-    mul.blend_type = 'MULTIPLY'
-    mul.use_clamp = False
-    mul.inputs[0].default_value = 1.0
-    add = group.nodes.new('CompositorNodeMixRGB')
-    add.blend_type = 'ADD'
-    add.use_clamp = False
-    add.inputs[0].default_value = 1.0
+
+    def socket(sockets, name, default=None):
+        sock = sockets.get(name) or sockets.new('NodeSocketColor', name)
+        if default is not None:
+            sock.default_value = default
+        return sock
+
+    socket(group.inputs, "Image", (0.0, 0.0, 0.0, 1.0))
+    socket(group.inputs, "Transmittance", (1.0, 1.0, 1.0, 1.0))  # no passes: pass through
+    socket(group.inputs, "Inscatter", (0.0, 0.0, 0.0, 1.0))
+    socket(group.inputs, "Clouds", (0.0, 0.0, 0.0, 0.0))  # transparent: no clouds
+    socket(group.outputs, "Image")
+
+    def mix(blend_type, x):
+        node = group.nodes.new('CompositorNodeMixRGB')
+        node.blend_type = blend_type
+        node.use_clamp = False
+        node.inputs[0].default_value = 1.0
+        node.location = (x, 0)
+        return node
+
+    mul, add = mix('MULTIPLY', -150), mix('ADD', 50)
+    split = group.nodes.new('CompositorNodeSepRGBA')
+    split.location = (50, -250)
+    one_minus = group.nodes.new('CompositorNodeMath')
+    one_minus.operation = 'SUBTRACT'
+    one_minus.use_clamp = False
+    one_minus.inputs[0].default_value = 1.0
+    one_minus.location = (250, -250)
+    behind, over = mix('MULTIPLY', 250), mix('ADD', 450)
     links = group.links
     links.new(gin.outputs["Image"], mul.inputs[1])
     links.new(gin.outputs["Transmittance"], mul.inputs[2])
     links.new(mul.outputs[0], add.inputs[1])
     links.new(gin.outputs["Inscatter"], add.inputs[2])
-    links.new(add.outputs[0], gout.inputs["Image"])
-    for node, x in ((gin, -400), (mul, -150), (add, 50), (gout, 250)):
-        node.location = (x, 0)
+    links.new(gin.outputs["Clouds"], split.inputs[0])
+    links.new(split.outputs["A"], one_minus.inputs[1])
+    links.new(add.outputs[0], behind.inputs[1])
+    links.new(one_minus.outputs[0], behind.inputs[2])
+    links.new(behind.outputs[0], over.inputs[1])
+    links.new(gin.outputs["Clouds"], over.inputs[2])
+    links.new(over.outputs[0], gout.inputs["Image"])
+    gin.location = (-400, 0)
+    gout.location = (650, 0)
     return group
 
 

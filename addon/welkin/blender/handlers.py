@@ -44,9 +44,9 @@ def _live(scene):
     return world is not None and world.welkin.active and world.welkin.auto_update
 
 
-def _run(scene, depsgraph, *, pack):
+def _run(scene, depsgraph, *, pack, live=False):
     try:
-        outcome = update.update_sky(scene, depsgraph, pack=pack)
+        outcome = update.update_sky(scene, depsgraph, pack=pack, live=live)
         for warning in outcome.warnings if outcome.updated else ():
             print(f"Welkin: warning: {warning}")
     except UserError as error:
@@ -62,7 +62,7 @@ def _tick():
     _state["armed"] = False
     scene = bpy.context.scene
     if scene is not None and _live(scene):
-        _run(scene, None, pack=False)
+        _run(scene, None, pack=False, live=True)
     return None
 
 
@@ -83,9 +83,10 @@ def _stale(scene, depsgraph):
     settings = scene.world.welkin
     try:
         request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
+        clouds = update.clouds_of(scene, depsgraph)
     except UserError:
         return False
-    return request.key() + repr((settings.show_sun_disc, settings.sync_lamp)) != settings.last_key
+    return update.sky_key(settings, request, clouds) != settings.last_key
 
 
 def settings_changed(settings, context):

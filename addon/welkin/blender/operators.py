@@ -34,11 +34,23 @@ class WELKIN_OT_update_sky(bpy.types.Operator):
     bl_options = {'REGISTER', 'UNDO'}
 
     def execute(self, context):
+        wm = context.window_manager
+        wm.progress_begin(0.0, 1.0)
+
+        def progress(fraction):
+            # A cloudy sky takes seconds: the cursor shows how far it is.
+            wm.progress_update(fraction)
+            return True
+
         try:
             outcome = update.update_sky(context.scene, context.evaluated_depsgraph_get(),
-                                        force=True, pack=True)
+                                        force=True, pack=True, progress=progress)
         except UserError as error:
             return _fail(self, error)
+        except KeyboardInterrupt:
+            return _fail(self, "cancelled: the sky was not changed")
+        finally:
+            wm.progress_end()
         _report_warnings(self, outcome.warnings)
         self.report({'INFO'}, f"Welkin: {context.scene.world.welkin.status}")
         return {'FINISHED'}

@@ -2,19 +2,22 @@
 aerial perspective over the ground at the scene's ground altitude, no meshes.
 
 render() writes the scene description (plate.scene_json) from the world's Welkin
-settings, the sun lamp and the camera, has the core render it (welkin.camera_plate, the
-same plate as `welkin plate --scene`), and hands Blender the passes in bands of rows.
-Combined, Welkin.Sky, Welkin.AerialInscatter, Welkin.AerialTransmittance; Welkin.Clouds
-(transparent black) and Welkin.CloudDepth (+inf) stay empty until clouds land. Errors (no
-camera, no world, a camera below the ground, the compiled module missing) are reported
+settings, its cloud layers, the marked cloud volumes, the sun lamp and the camera, has the
+core render it (welkin.camera_plate, the same plate as `welkin plate --scene`), and hands
+Blender the passes in bands of rows: Combined, Welkin.Sky, Welkin.AerialInscatter,
+Welkin.AerialTransmittance, Welkin.Clouds and Welkin.CloudDepth (transparent and 1e10
+without clouds). Errors (no camera, no world, a camera below the ground, a marked volume
+whose VDB file is missing, the compiled module missing) are reported
 with self.report({'ERROR'}) and no result is written; a cancelled render (Esc,
-test_break) stops the core and writes nothing. No viewport preview (view_update /
+test_break) stops the core. A cloudy plate is computed in tiles of BAND_ROWS rows
+(welkin.camera_plate(rows=...), each tile with the whole frame's values), each shown as
+soon as it is done, with update_progress and test_break between tiles. No viewport preview (view_update /
 view_draw are not implemented): the viewport shows Blender's Workbench-like fallback.
 """
 import bpy
 
 from .. import plate, sky_request
-from . import scene_sun, update
+from . import cloud_scene, scene_sun, update
 from .scene_sun import UserError
 
 BAND_ROWS = 64
@@ -60,9 +63,13 @@ def scene_description_json(scene, depsgraph, native):
     if r.use_border:
         raise UserError("render region (Output > Format > Render Region) is not supported by "
                         "the Welkin engine: turn it off to render the full frame")
+    # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
+    # a UserError naming the object and the path: no frame is written).
+    clouds = cloud_scene.clouds_section(scene, depsgraph)
     return plate.scene_json(atm.to_json_string(), settings.altitude_m, request.sun_direction,
                             request.exposure, sky_request.resolve_method(request.method, native),
-                            cam, (r.resolution_x, r.resolution_y, r.resolution_percentage))
+                            cam, (r.resolution_x, r.resolution_y, r.resolution_percentage),
+                            clouds=clouds)
 
 
 def _set_rect(render_pass, rect):
@@ -97,32 +104,46 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
         except (UserError, ValueError) as error:
             self.report({'ERROR'}, f"Welkin: {error}")
             return
-        self.update_stats("Welkin", "sky, sun and aerial perspective")
+        cloudy = bool(getattr(description, "has_clouds", False))
+        self.update_stats("Welkin", "sky, sun, clouds and aerial perspective" if cloudy
+                          else "sky, sun and aerial perspective")
+        width, height = description.width, description.height
+        # Tiles: a cloudy plate (seconds to minutes) is computed band by band, each band
+        # handed to Blender as soon as it is done; a clear plate (about a second at 1080p)
+        # at once, since every band rebuilds the atmosphere's LUTs (0.5 s at 1080p).
+        compute_rows = BAND_ROWS if cloudy else height
+        for name, channels, chan_id, _source in plate.PASSES:
+            self.add_pass(name, channels, chan_id)
+        done = 0
+        for rows, _y, h in plate.bands(height, compute_rows):
+            def progress(fraction, done=done, h=h):
+                self.update_progress((done + fraction * h) / height)
+                return not self.test_break()
 
-        def progress(fraction):
-            self.update_progress(0.9 * fraction)
-            return not self.test_break()
-
-        try:
-            result = native.camera_plate(description, progress=progress)
-        except ValueError as error:
-            self.report({'ERROR'}, f"Welkin: {error}")
-            return
-        except KeyboardInterrupt:
-            return  # cancelled (the core raises KeyboardInterrupt): nothing is written
-        height, width = result["depth"].shape
-        for name, channels, _chan_id, _source in plate.PASSES:
-            self.add_pass(name, channels, _chan_id)
-        for rows, y, h in plate.bands(height, BAND_ROWS):
             if self.test_break():
                 return
-            band = self.begin_result(0, y, width, h)
+            try:
+                result = native.camera_plate(description, progress=progress, rows=rows)
+            except (ValueError, OSError) as error:
+                self.report({'ERROR'}, f"Welkin: {error}")
+                return
+            except KeyboardInterrupt:
+                return  # cancelled (the core raises KeyboardInterrupt): nothing more is written
+            self._hand_over(np, result, rows, width, height)
+            done += h
+            self.update_progress(done / height)
+
+    def _hand_over(self, np, result, rows, width, height):
+        """The plate of rows [r0, r1) (from the top) into Blender, in bands of BAND_ROWS."""
+        r0, r1 = rows
+        for sub, _y, h in plate.bands(r1 - r0, BAND_ROWS):
+            local = (sub[0], sub[1])
+            band = self.begin_result(0, height - (r0 + sub[1]), width, h)
             layer = band.layers[0]
-            _set_rect(layer.passes["Combined"], plate.pass_rect(np, result, "combined", 4, rows))
+            _set_rect(layer.passes["Combined"], plate.pass_rect(np, result, "combined", 4, local))
             for name, channels, _chan_id, source in plate.PASSES:
-                _set_rect(layer.passes[name], plate.pass_rect(np, result, source, channels, rows))
+                _set_rect(layer.passes[name], plate.pass_rect(np, result, source, channels, local))
             self.end_result(band)
-            self.update_progress(0.9 + 0.1 * rows[1] / height)
 
 
 def _panels():

@@ -4,10 +4,12 @@ module -> the world's images and nodes, and the sun lamp.
 Problems the user can fix raise scene_sun.UserError (nothing is changed then); warnings
 (several sun lamps, sun below the horizon, camera below the ground) come back to be
 reported. The world's user nodes are never touched (world_nodes.py)."""
+import json
+
 import bpy
 
-from .. import native, sky_compute
-from . import images, scene_sun, world_nodes
+from .. import native, scene_export, sky_compute, sky_request
+from . import cloud_scene, images, scene_sun, world_nodes
 from .scene_sun import UserError
 
 WORLD_NAME = "Welkin World"
@@ -52,8 +54,56 @@ def _sync_lamp(lamp, values, depsgraph):
     data.angle = values.angle_rad
 
 
-def update_sky(scene, depsgraph=None, *, force=False, pack=True):
-    """Brings the world's sky up to date with the scene. Returns an Outcome."""
+def clouds_of(scene, depsgraph=None):
+    """The scene's "clouds" section at the current frame, or None (clear sky)."""
+    return cloud_scene.clouds_section(scene, depsgraph) if cloud_scene.has_clouds(scene) else None
+
+
+def sky_key(settings, request, clouds):
+    """Changes whenever the world's images would: the request, the disc and lamp switches,
+    and the clouds (their layers, and each volume's file for the frame and placement)."""
+    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp))
+    if clouds:
+        key += json.dumps(clouds, sort_keys=True)
+    return key
+
+
+def cloudy_scene_json(scene, settings, request, clouds, module, depsgraph=None):
+    """The scene description of the world's cloudy sky (README "Scene JSON"), re-centred on
+    the observer: the world texture is the sky seen from the scene camera (with Add Camera
+    Height on and a camera; else from the scene origin), and the core renders a scene's sky
+    from its origin. So the origin moves to the camera: origin_altitude_m is the observer's
+    altitude (as the clear sky's), each volume's placement is translated by minus the
+    camera's position, and each layer's wind offset by minus its horizontal position (the
+    layer's field is f(x - wind), so seen from the camera it is f(x' - (wind - camera))).
+    A plain change of frame: every number is still the core's."""
+    atmosphere = json.loads(sky_request.build_atmosphere(request, module).to_json_string())
+    cx = cy = 0.0
+    if settings.use_camera_height and scene.camera is not None:
+        camera = scene.camera.evaluated_get(depsgraph) if depsgraph is not None else scene.camera
+        s = scene.unit_settings.scale_length
+        cx, cy = (float(v) * s for v in camera.matrix_world.translation[:2])
+    cz = request.altitude_m - settings.altitude_m  # the camera height the sky uses
+    moved = json.loads(json.dumps(clouds))
+    for layer in moved["layers"]:
+        layer["wind_offset_m"] = [layer["wind_offset_m"][0] - cx, layer["wind_offset_m"][1] - cy]
+    for volume in moved["volumes"]:
+        for row, c in zip(volume["matrix_world"][:3], (cx, cy, cz)):
+            row[3] -= c
+    r = scene.render
+    d = scene_export.scene_dict(
+        atmosphere, request.altitude_m, request.sun_direction, request.exposure,
+        sky_request.resolve_method(request.method, module), None,
+        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=moved)
+    del d["camera"]
+    return json.dumps(d)
+
+
+def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, live=False):
+    """Brings the world's sky up to date with the scene. Returns an Outcome. `progress`:
+    callable(fraction) -> bool for a cloudy sky (seconds); `live` (the UI's debounced
+    timer): a cloudy sky is not recomputed there (it would hold the interface for seconds
+    at every nudge of the lamp), the status says to press Update Sky."""
     module = module_or_error()
     outcome = Outcome()
     if scene.world is None:
@@ -61,7 +111,8 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
     world = _world(scene)
     settings = world.welkin
     request, lamp, outcome.warnings = scene_sun.request_for(scene, settings, depsgraph)
-    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp))
+    clouds = clouds_of(scene, depsgraph)
+    key = sky_key(settings, request, clouds)
     render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
     if (not force and settings.active and settings.last_key == key
             and settings.sky_image is not None):
@@ -73,9 +124,16 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
             except ValueError as error:
                 raise UserError(str(error)) from None
         return outcome
+    if clouds and live and not force:
+        settings.status = ("the sky has clouds: press Update Sky to recompute it (seconds); "
+                           "renders update it every frame")
+        return outcome
     try:
-        result = sky_compute.compute(module, request, disc=settings.show_sun_disc)
-    except ValueError as error:
+        scene_json = (cloudy_scene_json(scene, settings, request, clouds, module, depsgraph)
+                      if clouds else None)
+        result = sky_compute.compute(module, request, disc=settings.show_sun_disc,
+                                     scene_json=scene_json, progress=progress)
+    except (ValueError, OSError) as error:
         raise UserError(str(error)) from None
     outcome.warnings += result.warnings
     height = request.width // 2
@@ -95,7 +153,8 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True):
     outcome.seconds = result.seconds
     outcome.method = result.method
     settings.warnings = "\n".join(outcome.warnings)
-    settings.status = (f"sky {request.width}x{height} by {result.method} in "
+    settings.status = (f"sky {request.width}x{height}{' with clouds' if clouds else ''} by "
+                       f"{result.method} in "
                        f"{result.seconds:.2f} s from '{lamp.name}'"
                        + (f"; {len(outcome.warnings)} warning(s)" if outcome.warnings else ""))
     return outcome

@@ -1,0 +1,109 @@
+"""World.welkin_clouds (the world's procedural cloud layers and cloud lighting) and
+Object.welkin_cloud (a Volume object marked as Welkin clouds).
+
+Defaults and hard ranges are the core's (procedural_clouds.hpp CloudLayerParams,
+cloud_lighting.hpp CloudLightingOptions); the soft ranges are what the sliders offer.
+"""
+import bpy
+
+
+def _changed(_self, context):
+    # A cloud edit changes the sky: the live update follows as for the sky's settings.
+    world = getattr(context, "world", None) or getattr(context.scene, "world", None)
+    if world is not None:
+        from . import handlers
+        handlers.settings_changed(world.welkin, context)
+
+
+class WelkinCloudLayer(bpy.types.PropertyGroup):
+    name: bpy.props.StringProperty(name="Name", default="Cloud Layer")
+    enabled: bpy.props.BoolProperty(name="Enabled", default=True, update=_changed)
+    bottom_altitude_m: bpy.props.FloatProperty(
+        name="Bottom (m)", default=1500.0, min=0.0, max=19999.0, soft_max=12000.0,
+        update=_changed, description="Altitude of the layer's base above the ground, m")
+    top_altitude_m: bpy.props.FloatProperty(
+        name="Top (m)", default=3000.0, min=1.0, max=20000.0, soft_max=15000.0,
+        update=_changed, description="Altitude of the layer's top above the ground, m "
+                                     "(above the bottom)")
+    coverage: bpy.props.FloatProperty(
+        name="Coverage", default=0.5, min=0.0, max=1.0, update=_changed,
+        description="Fraction of the sky the weather map covers")
+    cloud_type: bpy.props.FloatProperty(
+        name="Type", default=1.0, min=0.0, max=1.0, update=_changed,
+        description="0 stratus, 0.5 stratocumulus, 1 cumulus (height gradient)")
+    density_per_m: bpy.props.FloatProperty(
+        name="Density (1/m)", default=0.03, min=0.0, max=10.0, soft_max=0.2, precision=4,
+        update=_changed, description="Extinction of the densest cloud, m^-1")
+    base_scale_m: bpy.props.FloatProperty(
+        name="Base Scale (m)", default=6000.0, min=10.0, max=1e6, soft_max=50000.0,
+        update=_changed, description="Tile size of the base shape noise, m")
+    detail_scale_m: bpy.props.FloatProperty(
+        name="Detail Scale (m)", default=800.0, min=1.0, max=1e6, soft_max=10000.0,
+        update=_changed, description="Tile size of the erosion noise, m")
+    weather_scale_m: bpy.props.FloatProperty(
+        name="Weather Scale (m)", default=40000.0, min=10.0, max=1e7, soft_max=500000.0,
+        update=_changed, description="Tile size of the weather map, m")
+    detail_strength: bpy.props.FloatProperty(
+        name="Detail", default=0.35, min=0.0, max=1.0, update=_changed,
+        description="How much the detail noise erodes the base shape")
+    weather_variation: bpy.props.FloatProperty(
+        name="Weather Variation", default=0.5, min=0.0, max=1.0, update=_changed,
+        description="How much the coverage varies across the weather map")
+    type_variation: bpy.props.FloatProperty(
+        name="Type Variation", default=0.0, min=0.0, max=1.0, update=_changed,
+        description="How much the cloud type varies across the weather map")
+    wind_offset_m: bpy.props.FloatVectorProperty(
+        name="Wind Offset (m)", size=2, default=(0.0, 0.0), soft_min=-1e6, soft_max=1e6,
+        update=_changed, description="Horizontal offset of the layer (animate it for wind), m")
+    seed: bpy.props.IntProperty(name="Seed", default=1, min=0, update=_changed,
+                                description="Seed of the layer's noise")
+
+
+class WelkinCloudSettings(bpy.types.PropertyGroup):
+    layers: bpy.props.CollectionProperty(type=WelkinCloudLayer)
+    active_layer: bpy.props.IntProperty(name="Active Layer", default=0, min=0)
+    albedo: bpy.props.FloatProperty(
+        name="Albedo", default=1.0, min=0.0, max=1.0, update=_changed,
+        description="Single-scattering albedo of the cloud droplets (1: no absorption)")
+    max_steps: bpy.props.IntProperty(
+        name="Max Steps", default=96, min=1, max=4096, soft_max=512, update=_changed,
+        description="Samples along each view ray through the clouds")
+    light_steps: bpy.props.IntProperty(
+        name="Light Steps", default=8, min=1, max=256, soft_max=64, update=_changed,
+        description="Samples along each shadow ray towards the sun")
+    ambient_steps: bpy.props.IntProperty(
+        name="Ambient Steps", default=4, min=0, max=256, soft_max=32, update=_changed,
+        description="Samples towards the zenith for the sky light's decay (0: none)")
+    octaves: bpy.props.IntProperty(
+        name="Octaves", default=4, min=1, max=16, update=_changed,
+        description="Wrenninge's multiple-scattering octaves")
+
+
+class WelkinObjectCloud(bpy.types.PropertyGroup):
+    enabled: bpy.props.BoolProperty(
+        name="Welkin Cloud", default=False, update=_changed,
+        description="Render this volume's VDB file as a Welkin cloud (sky, passes, engine)")
+    grid: bpy.props.StringProperty(
+        name="Grid", default="density", update=_changed,
+        description="Name of the VDB FloatGrid holding the density")
+    density_scale: bpy.props.FloatProperty(
+        name="Density Scale (1/m)", default=1.0, min=0.0, max=1e6, soft_max=100.0,
+        precision=4, update=_changed,
+        description="Extinction per unit grid value, m^-1")
+
+
+classes = (WelkinCloudLayer, WelkinCloudSettings, WelkinObjectCloud)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.World.welkin_clouds = bpy.props.PointerProperty(type=WelkinCloudSettings)
+    bpy.types.Object.welkin_cloud = bpy.props.PointerProperty(type=WelkinObjectCloud)
+
+
+def unregister():
+    del bpy.types.Object.welkin_cloud
+    del bpy.types.World.welkin_clouds
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)
