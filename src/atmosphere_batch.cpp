@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <tbb/parallel_for.h>
+
 #include "welkin/error.hpp"
 #include "welkin/phase.hpp"
 
@@ -29,20 +31,29 @@ AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::
       sun_angular_radius_(float(atm.sun_angular_radius_rad)),
       mie_model_(atm.mie_phase),
       mie_g_(float(atm.mie_g)),
-      table_(kTableSize) {
+      table_(kTableSize),
+      extinction_(kTableSize) {
     if (count < 1 || count > 4 || first + count > atm.channels())
         throw InvalidArgument("channels", "a batch holds 1 to 4 of the atmosphere's channels");
     const Spectrum4 rayleigh = pack(atm.rayleigh_scattering, first, count);
     const Spectrum4 mie_s = pack(atm.mie_scattering, first, count);
     const Spectrum4 mie_t = pack(atm.mie_extinction, first, count);
     const Spectrum4 absorption = pack(atm.absorption_extinction, first, count);
+    // Entries are independent: filled in parallel (the same values at any thread count).
+    tbb::parallel_for(tbb::blocked_range<int>(0, kTableSize, 1024), [&](const tbb::blocked_range<int>& range) {
+        for (int i = range.begin(); i != range.end(); ++i) {
+            const double h = double(i) / inv_table_step_;
+            const float rho_r = float(atm.rayleigh_density.density(h));
+            const float rho_m = float(atm.mie_density.density(h));
+            const float rho_a = float(atm.absorption_density.density(h));
+            table_[std::size_t(i)] = {rayleigh * rho_r, mie_s * rho_m,
+                                      rayleigh * rho_r + mie_t * rho_m + absorption * rho_a};
+        }
+    });
     for (int i = 0; i < kTableSize; ++i) {
-        const double h = double(i) / inv_table_step_;
-        const float rho_r = float(atm.rayleigh_density.density(h));
-        const float rho_m = float(atm.mie_density.density(h));
-        const float rho_a = float(atm.absorption_density.density(h));
-        table_[i] = {rayleigh * rho_r, mie_s * rho_m,
-                     rayleigh * rho_r + mie_t * rho_m + absorption * rho_a};
+        const Float4 a = to_float4(table_[std::size_t(i)].extinction);
+        const Float4 b = i + 1 < kTableSize ? to_float4(table_[std::size_t(i) + 1].extinction) : a;
+        extinction_[std::size_t(i)] = {a, b - a};
     }
 }
 

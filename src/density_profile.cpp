@@ -10,8 +10,9 @@
 namespace welkin {
 
 double DensityLayer::density(double h) const {
-    return std::clamp(exp_term * std::exp(exp_scale_per_m * h) + linear_per_m * h + constant,
-                      0.0, 1.0);
+    // (A layer without an exponential term, such as the ozone tent, skips the exp.)
+    const double e = exp_term == 0.0 ? 0.0 : exp_term * std::exp(exp_scale_per_m * h);
+    return std::clamp(e + linear_per_m * h + constant, 0.0, 1.0);
 }
 
 DensityProfile::DensityProfile(std::vector<DensityLayer> layers) : layers_(std::move(layers)) {}

@@ -16,11 +16,13 @@ namespace welkin {
 namespace {
 
 // The arithmetic pass over the (phi, mu_s) pairs at one point: mu_s there = C mu_s + D
-// sin_s cos(phi), clamped, and the transmittance lookup's texel and weights; `ground`
-// also weighs by the cosine of the sun on the ground, max(mu_s, 0). The arrays do not
-// overlap (__restrict), which lets the compiler vectorise the loop.
-void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, const float* __restrict mu_s,
-                     const float* __restrict sin_cos, std::size_t n, bool ground, int* __restrict texel,
+// sin_s cos(phi), clamped, and the transmittance lookup's texel and weights, the visible
+// fraction weighed by clamp(mu_s, cosine_floor, 1): by 1 for the sun seen from the air
+// (floor 1), by the cosine of the sun on the ground, max(mu_s, 0), for the ground (floor
+// 0). (A flag and a select there kept GCC from vectorising the loop.) The arrays do not
+// overlap (__restrict), which lets the compiler vectorise it.
+WELKIN_SIMD_CLONES void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, const float* __restrict mu_s,
+                     const float* __restrict sin_cos, std::size_t n, float cosine_floor, int* __restrict texel,
                      float* __restrict fx, float* __restrict fraction) {
     const TransmittanceLut::AtRadius at = at_in;
     for (std::size_t l = 0; l < n; ++l) {
@@ -28,7 +30,7 @@ void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, 
         float x, f;
         TransmittanceLut::sun_lookup(at, mu, x, f);
         Texture2D::Row::split(x, at.row.last, texel[l], fx[l]);
-        fraction[l] = ground ? f * max_value(mu, 0.0f) : f;
+        fraction[l] = f * clamp_value(mu, cosine_floor, 1.0f);
     }
 }
 
@@ -121,7 +123,7 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                     f += w_r + w_m;
                     const float C = float((r + st.t * mu) / st.r), D = float(st.t * sin_theta / st.r);
                     const TransmittanceLut::AtRadius& at = st.sun_at;
-                    sun_coordinates(at, C, D, pm, psc, n_pairs, false, texel, fx, fraction);
+                    sun_coordinates(at, C, D, pm, psc, n_pairs, 1.0f, texel, fx, fraction);
                     const Float4 w_r4 = to_float4(w_r), w_m4 = to_float4(w_m);
                     for (std::size_t l = 0; l < n_pairs; ++l) {
                         const Float4 T = at.row.sample4(texel[l], fx[l]) * fraction[l];
@@ -142,7 +144,7 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                     const double d = distance_to_bottom(r, mu, R);
                     const float C = float((r + d * mu) / R), D = float(d * sin_theta / R);
                     const Float4 k = to_float4(ray.transmittance * albedo_over_pi);
-                    sun_coordinates(ground_at, C, D, pm, psc, n_pairs, true, texel, fx, fraction);
+                    sun_coordinates(ground_at, C, D, pm, psc, n_pairs, 0.0f, texel, fx, fraction);
                     for (std::size_t l = 0; l < n_pairs; ++l)
                         ground[l] = (k * fraction[l]) * ground_at.row.sample4(texel[l], fx[l]);
                 }

@@ -21,16 +21,17 @@ constexpr std::array<double, 4> kGlWeights = {0.5 * 0.3478548451374538, 0.5 * 0.
 // Integral of extinction over [a, b] of the ray, densest at `a` (toward_a) or `b`.
 // Substituting t = a + (b - a) s^2 (or the mirror image) clusters samples at the dense
 // end; the integrand in s, rho(t(s)) 2 (b - a) s, is smooth, so composite Gauss-Legendre
-// in s converges fast. A piece keeps its nodes' s^2 and weights w 2 s / panels; each
-// block of samples is one pass computing the altitudes (in double; it vectorises) and
-// one fetching the extinction.
+// in s converges fast. A piece keeps its nodes' s^2 and weights w 2 s / panels (the
+// factor b - a is applied to the sum); each block of samples is one pass computing the
+// altitudes (in double; it vectorises) and their table entries, and one fetching the
+// extinction.
 GradedQuadrature::Piece GradedQuadrature::make_piece(int panels) {
     Piece piece;
     for (int p = 0; p < panels; ++p)
         for (int k = 0; k < 4; ++k) {
             const double s = (double(p) + kGlNodes[k]) / double(panels);
             piece.s2.push_back(s * s);
-            piece.weight.push_back(kGlWeights[k] * 2.0 * s / double(panels));
+            piece.weight.push_back(float(kGlWeights[k] * 2.0 * s / double(panels)));
         }
     return piece;
 }
@@ -40,16 +41,19 @@ GradedQuadrature::GradedQuadrature(int samples)
 
 namespace {
 
-// The arithmetic pass over a block of nodes: the table coordinate of each node's altitude
-// and its weight. r(t)^2 = (t + r mu)^2 + r^2 (1 - mu^2), a sum of two squares (never
-// negative, so no guard per node), with r^2 (1 - mu^2) = (r sin)^2 formed once per ray.
-void table_coordinates(double r_mu, double r_sin2, double R, double inv_step, double origin, double direction,
-                       double len, const double* __restrict s2, const double* __restrict w, std::size_t m,
-                       double* __restrict x, float* __restrict weight) {
+// The arithmetic pass over a block of nodes: the table coordinate of each node's altitude,
+// clamped to the table, as an entry and a weight (AtmosphereBatch::extinction_at).
+// r(t)^2 = (t + r mu)^2 + r^2 (1 - mu^2), a sum of two squares (never negative, so no
+// guard per node), with r^2 (1 - mu^2) = (r sin)^2 formed once per ray.
+WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double r_sin2, double R, double inv_step, double origin, double direction,
+                       double x_max, const double* __restrict s2, std::size_t m, int* __restrict entry,
+                       float* __restrict fraction) {
     for (std::size_t l = 0; l < m; ++l) {
         const double t_low = origin + direction * s2[l] + r_mu;  // t + r mu
-        x[l] = (std::sqrt(t_low * t_low + r_sin2) - R) * inv_step;
-        weight[l] = float(len * w[l]);
+        const double x = min_value(max_value((std::sqrt(t_low * t_low + r_sin2) - R) * inv_step, 0.0), x_max);
+        const int i = int(x);
+        entry[l] = i;
+        fraction[l] = float(x - double(i));
     }
 }
 
@@ -63,19 +67,18 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     const double origin = toward_a ? a : b, direction = toward_a ? len : -len;
     const double r_mu = r * mu, r_sin2 = r * r * std::max((1.0 - mu) * (1.0 + mu), 0.0);
     const double x_max = double(AtmosphereBatch::kTableSize - 1);
-    constexpr std::size_t kBlock = 32;
-    double x[kBlock];
-    float weight[kBlock];
+    constexpr std::size_t kBlock = 64;
+    int entry[kBlock];
+    float fraction[kBlock];
     const std::size_t n = piece.s2.size();
     for (std::size_t first = 0; first < n; first += kBlock) {
         const std::size_t m = std::min(kBlock, n - first);
-        table_coordinates(r_mu, r_sin2, batch.bottom_radius(), batch.inv_table_step(), origin, direction, len,
-                          piece.s2.data() + first, piece.weight.data() + first, m, x, weight);
-        // (The clamp to the table is scalar here: one minsd and one maxsd.)
-        for (std::size_t l = 0; l < m; ++l)
-            sum += weight[l] * batch.extinction_at(std::min(std::max(x[l], 0.0), x_max));
+        table_coordinates(r_mu, r_sin2, batch.bottom_radius(), batch.inv_table_step(), origin, direction, x_max,
+                          piece.s2.data() + first, m, entry, fraction);
+        const float* const w = piece.weight.data() + first;
+        for (std::size_t l = 0; l < m; ++l) sum += w[l] * batch.extinction_at(entry[l], fraction[l]);
     }
-    return to_vec4(sum);
+    return to_vec4(sum * float(len));
 }
 
 Spectrum4 GradedQuadrature::optical_depth(const AtmosphereBatch& batch, double r, double mu, double length) const {
@@ -98,11 +101,17 @@ TransmittanceLut::TransmittanceLut(const AtmosphereBatch& batch, int width, int 
       texture_(width, height) {
     const GradedQuadrature quadrature(steps);
     tbb::parallel_for(0, height, [&](int j) {
+        // r_mu_from_uv, with the parts that depend on the row alone formed once.
+        const double H = H_;
+        const double rho = H * double(unit_from_texcoord((float(j) + 0.5f) / float(height), height));
+        const double r = std::sqrt(rho * rho + bottom_ * bottom_);
+        const double d_min = top_ - r, d_max = rho + H;
         for (int i = 0; i < width; ++i) {
-            double r, mu;
-            r_mu_from_uv((float(i) + 0.5f) / float(width), (float(j) + 0.5f) / float(height), r, mu);
+            const double x_mu = unit_from_texcoord((float(i) + 0.5f) / float(width), width);
+            const double d = d_min + x_mu * (d_max - d_min);
+            const double mu = d == 0.0 ? 1.0 : clamp_cosine((H * H - rho * rho - d * d) / (2.0 * r * d));
             const Spectrum4 tau = quadrature.optical_depth(batch, r, mu, distance_to_top(r, mu, top_));
-            texture_.at(i, j) = glm::exp(-tau);
+            texture_.at(i, j) = to_vec4(exp_nonpositive(-to_float4(tau)));
         }
     });
 }

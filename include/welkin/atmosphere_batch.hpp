@@ -64,15 +64,19 @@ public:
                 a.extinction + f * (b.extinction - a.extinction)};
     }
 
-    // The extinction alone at table coordinate x = altitude * inv_table_step(), already
-    // clamped to [0, kTableSize - 1] (for loops that compute many coordinates first);
-    // equal to sample(altitude).extinction inside the atmosphere.
+    // The extinction alone, for loops that compute many table coordinates first
+    // (x = altitude * inv_table_step(), clamped to [0, kTableSize - 1]), given as the
+    // entry i = int(x) and the weight f = x - i: a compact table holds, per altitude, the
+    // extinction a and its step to the next entry b - a (zero after the last), so that a
+    // lookup reads 32 adjacent bytes and does one multiply-add. Equal to
+    // sample(altitude).extinction inside the atmosphere (but for rounding).
     double inv_table_step() const { return inv_table_step_; }
-    Float4 extinction_at(double x) const {
-        const int i = std::min(int(x), kTableSize - 2);
-        const float f = float(x - double(i));
-        const Float4 a = to_float4(table_[i].extinction), b = to_float4(table_[i + 1].extinction);
-        return a + f * (b - a);
+    struct ExtinctionEntry {
+        Float4 value, step;
+    };
+    Float4 extinction_at(int i, float f) const {
+        const ExtinctionEntry& e = extinction_[std::size_t(i)];
+        return e.value + f * e.step;
     }
 
     // Phase functions at scattering cosine nu (phase.hpp).
@@ -89,6 +93,7 @@ private:
     MiePhaseModel mie_model_;
     float mie_g_;
     std::vector<MediumSample> table_;
+    std::vector<ExtinctionEntry> extinction_;
 };
 
 // Copies lanes [0, count) of v into out[0..count).

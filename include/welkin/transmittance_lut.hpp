@@ -101,7 +101,8 @@ private:
     // One graded piece of `panels` 4-point panels: per node, s^2 and the weight
     // w 2 s / panels of the substitution t = len s^2 (transmittance_lut.cpp).
     struct Piece {
-        std::vector<double> s2, weight;
+        std::vector<double> s2;
+        std::vector<float> weight;
     };
     static Piece make_piece(int panels);
     Spectrum4 integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b, bool toward_a,

@@ -30,6 +30,12 @@ glm::dmat4 to_dmat4(const py::object& m, const std::string& parameter) {
     return g;
 }
 
+// A light spectrum given from Python: a 1-D array, one value per channel.
+std::vector<float> to_spectrum(const py::object& values, const std::string& parameter) {
+    const c_array<float> a = to_c_array<float>(values, parameter, -1, 1, 1, "a 1-D array, one value per channel");
+    return std::vector<float>(a.data(), a.data() + a.shape(0));
+}
+
 std::vector<glm::dvec3> to_points(const py::object& values, const std::string& parameter) {
     const c_array<double> a = to_c_array<double>(values, parameter, 3, 2, 2, "an (N, 3) array");
     std::vector<glm::dvec3> out(std::size_t(a.shape(0)));
@@ -57,35 +63,58 @@ orders; `paths` per ray). Returns L (N, C) in-scattered radiance in
 W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm (premultiplied), T (N,) transmittance,
 depth (N,) m to the transmittance-weighted centre (0 where nothing was hit).
 Composite over a background B as L + T B. ValueError for bad input.
+sun_irradiance, ambient_radiance: a constant light instead of the atmosphere's (both
+or neither; 1-D, one value per channel, as many channels as you like, W m^-2 and
+W m^-2 sr^-1): the sun's irradiance at normal incidence everywhere and a uniform sky of
+that radiance from every direction, below included (a Cycles sun lamp of that strength
+and a world of that colour); atm and altitude_m then do not light the cloud.
+g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
+(include/welkin/cloud_phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
 )doc";
 
 py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere atmosphere, double altitude_m,
                          const py::object& sun_direction, const py::object& view_directions, const py::object& origin,
                          const std::string& method, int max_steps, int light_steps, int octaves, double albedo,
-                         int paths, std::uint64_t seed, const py::object& progress) {
+                         int paths, std::uint64_t seed, const py::object& progress,
+                         const py::object& sun_irradiance, const py::object& ambient_radiance, double g_forward,
+                         double g_back, double w_forward) {
+    CloudScattering scattering;
+    scattering.albedo = albedo;
+    scattering.phase = CloudPhase{g_forward, g_back, w_forward};
+    scattering.validate();
     if (!clouds) throw InvalidArgument("clouds", "must be a welkin.CloudLayer or welkin.VdbClouds");
     if (method != "fast" && method != "reference")
         throw InvalidArgument("method", fmt::format("must be \"fast\" or \"reference\", got \"{}\"", method));
     const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
     const glm::dvec3 o = to_dvec3(origin, "origin");
     const std::vector<glm::dvec3> dirs = to_points(view_directions, "view_directions");
+    if (sun_irradiance.is_none() != ambient_radiance.is_none())
+        throw InvalidArgument(sun_irradiance.is_none() ? "sun_irradiance" : "ambient_radiance",
+                              "must be given together with the other (a constant light), or both left None");
+    std::unique_ptr<const CloudIllumination> constant;
+    if (!sun_irradiance.is_none())
+        constant = std::make_unique<ConstantIllumination>(observer.sun_direction,
+                                                          to_spectrum(sun_irradiance, "sun_irradiance"),
+                                                          to_spectrum(ambient_radiance, "ambient_radiance"));
     CloudResult result;
     run_cancellable(
         [&](Progress* p) {
-            const AtmosphereIllumination light(atmosphere, observer);
+            std::unique_ptr<const CloudIllumination> from_atmosphere;
+            if (!constant) from_atmosphere = std::make_unique<AtmosphereIllumination>(atmosphere, observer);
+            const CloudIllumination& light = constant ? *constant : *from_atmosphere;
             if (method == "fast") {
                 CloudLightingOptions opt;
                 opt.max_steps = max_steps;
                 opt.light_steps = light_steps;
                 opt.octaves = octaves;
-                opt.scattering.albedo = albedo;
+                opt.scattering = scattering;
                 opt.seed = seed;
                 result = render_clouds(*clouds, light, o, dirs, opt, p);
             } else {
                 CloudReferenceOptions opt;
                 opt.paths = paths;
                 opt.seed = seed;
-                opt.scattering.albedo = albedo;
+                opt.scattering = scattering;
                 result = render_clouds_reference(*clouds, light, o, dirs, opt, p);
             }
         },
@@ -197,7 +226,9 @@ values; every message names the file and the grid.
           py::arg("max_steps") = lo.max_steps, py::arg("light_steps") = lo.light_steps,
           py::arg("octaves") = lo.octaves, py::arg("albedo") = lo.scattering.albedo,
           py::arg("paths") = CloudReferenceOptions{}.paths, py::arg("seed") = lo.seed,
-          py::arg("progress") = py::none());
+          py::arg("progress") = py::none(), py::arg("sun_irradiance") = py::none(),
+          py::arg("ambient_radiance") = py::none(), py::arg("g_forward") = CloudPhase{}.g_forward,
+          py::arg("g_back") = CloudPhase{}.g_back, py::arg("w_forward") = CloudPhase{}.w_forward);
 }
 
 }  // namespace welkin::python

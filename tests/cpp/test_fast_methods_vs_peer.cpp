@@ -15,7 +15,9 @@
 // peer's orders 2-4 have an azimuthal structure (up to 1.38x brighter towards the sun than
 // away from it at 440 nm) that the reference does not have and whose second order an
 // independent quadrature confirms (test_multiscattering_vs_reference.cpp prints these; there
-// lut is within 5 % of the reference for every view, which is asserted). Before the
+// lut is within 5 % of the reference for every view, which is asserted). That structure is
+// the peer's 4D-texture lookup (test_peer_multiple_scattering.cpp, which also asserts lut
+// within 5 % of the peer with that error and the single-scattering one taken out). Before the
 // extension (Hillaire's isotropic term) lut measured median 1.6 / 2.3 / 3.3 %, worst
 // 6.1 / 7.1 / 10.3 % here. The analytic method (single scattering only) is held to the
 // peer's single scattering within 25 %, its measured envelope.

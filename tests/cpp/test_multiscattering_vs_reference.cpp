@@ -8,8 +8,9 @@
 // SecondOrderMatchesPlaneParallelQuadrature), and the peer's orders 2-4 have an azimuthal
 // structure at sun zenith 30 and 60 deg that neither shows (e.g. sun 30, view 30, 440 nm:
 // the peer's orders 2-4 are 1.38x brighter towards the sun than away from it, the
-// reference's 1.02x), so the peer cannot tell a better multiple-scattering model from a
-// worse one there. Both comparisons are printed.
+// reference's 1.02x; it comes from the peer's texture lookup, test_peer_multiple_scattering.cpp),
+// so the peer cannot tell a better multiple-scattering model from a worse one there. Both
+// comparisons are printed.
 //
 // What is asserted, with the bounds stated against what was measured when this was
 // written (16384 paths, seed 17; the reference's relative standard error on the

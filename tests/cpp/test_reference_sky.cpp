@@ -240,7 +240,8 @@ std::vector<PeerGeometry> peer_geometries(const std::vector<PeerRow>& rows) {
 //    azimuth far more than ours (up to +-25 % of the multiple-scattering part at 440 nm,
 //    i.e. up to 7.5 % of the total): there the rows are printed, and the azimuthal
 //    structure of our second order is checked against an independent deterministic
-//    quadrature instead (SecondOrderMatchesPlaneParallelQuadrature). See the report.
+//    quadrature instead (SecondOrderMatchesPlaneParallelQuadrature). The peer's structure is its
+//    texture lookup; test_peer_multiple_scattering.cpp emulates it and asserts 2-2.5 % there.
 //  * All orders vs the peer's 4 orders is printed: the 5th and higher orders add up to
 //    ~2 % at 440 nm.
 TEST(ReferenceSkyPeer, AllOrdersAgainstThePeer) {
