@@ -43,8 +43,10 @@
 // metres of air inside a cloud several km away).
 //
 // Colour and units: the cloud radiance is converted to linear Rec.709 as the sky is
-// (color.hpp, lambda power -3; the same conversion the equirect sky applies to its clouds,
-// so a panoramic camera's passes match the HDRI), W m^-2 sr^-1, times the scene's exposure.
+// (color.hpp, lambda power -3; the same conversion the equirect sky applies to its clouds),
+// W m^-2 sr^-1, times the scene's exposure. (The equirect sky, sky_image.hpp, leaves the air
+// in front of its clouds out; these passes include it, so a panoramic plate with clouds is
+// hazier towards distant clouds than the HDRI.)
 // The air's RGB transmittance multiplies the RGB cloud radiance (as the compositor does for
 // surfaces). Welkin.CloudDepth is d_c in Blender's Z convention (along the view axis for
 // perspective and orthographic cameras, along the ray for panoramas), kNoCloudDepth (1e10,
