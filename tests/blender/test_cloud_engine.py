@@ -1,8 +1,8 @@
 """The render engine "WELKIN" with clouds (headless, `blender -b file.blend -E WELKIN`): a
 procedural layer and a marked VDB sequence (3 frames, written by the test with pyopenvdb).
 
-  * `-f 1`: Combined equals `welkin plate --scene` on the same scene JSON within 1 % per
-    pixel (relative to max(value, 1e-3 x the image mean): the same core call, so any
+  * `-f 1` (computed in two tiles of rows): Combined equals `welkin plate --scene` (the
+    whole frame at once) on the same scene JSON within 1 % per pixel (relative to max(value, 1e-3 x the image mean): the same core call, so any
     difference is the add-on's); Welkin.Clouds and Welkin.CloudDepth are filled (finite,
     alpha in [0, 1], some cloud in view, CloudDepth 1e10 where alpha is 0).
   * `-a` over frames 1-3: three frames, finite, pairwise different (the volume's density
@@ -62,7 +62,8 @@ paths = ct.write_vdb_sequence(t.TMP / "vdb", frames=(1, 2, 3))
 vol = ct.add_volume(scene, paths[0], location=(2500.0, 0.0, 450.0))
 vol.welkin_cloud.density_scale = 0.01
 scene.render.engine = 'WELKIN'
-scene.render.resolution_x, scene.render.resolution_y = 64, 32
+# 72 rows: the cloudy plate is computed in two tiles (64 + 8 rows, render_engine.BAND_ROWS).
+scene.render.resolution_x, scene.render.resolution_y = 48, 72
 scene.render.resolution_percentage = 100
 scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
 scene.render.image_settings.color_depth = '32'
@@ -75,7 +76,7 @@ run = render(blend, t.TMP / "still", ["-f", "1"])
 check(run.returncode == 0, "blender -f 1 failed")
 got = layers(t.TMP / "still_0001.exr")
 cl, cd = got["Welkin.Clouds"], got["Welkin.CloudDepth"][..., 0]
-check(cl.shape == (32, 64, 4) and np.isfinite(cl).all() and np.isfinite(cd).all(),
+check(cl.shape == (72, 48, 4) and np.isfinite(cl).all() and np.isfinite(cd).all(),
       "cloud passes missing or not finite")
 a = cl[..., 3]
 check(((a >= 0) & (a <= 1)).all() and (a > 0.05).mean() > 0.05,
