@@ -75,7 +75,7 @@ def report(stage, name, x, ref, mask, note=""):
 
 tmp = tempfile.mkdtemp(prefix="welkin_cycles_clouds_")
 vdb = os.path.join(tmp, "cumulus.vdb")
-voxel_m = cv.write_cumulus(vdb)
+cv.write_cumulus(vdb)
 light = dict(density_scale=SIGMA, sun_direction=SUN, sun_irradiance=E_SUN, sky_radiance=L_SKY)
 
 
@@ -100,10 +100,10 @@ for seed in (1, 2):
     t_cyc += t
 ref, t_ref = [], 0.0
 for seed in (1, 2):
-    out, t = timed(lambda: cv.welkin_render(scene, vdb, voxel_m, method="reference", paths=args.paths, seed=seed, **light))
+    out, t = timed(lambda: cv.welkin_render(scene, vdb, method="reference", paths=args.paths, seed=seed, **light))
     ref.append(out)
     t_ref += t
-(fast_L, fast_T), t_fast = timed(lambda: cv.welkin_render(scene, vdb, voxel_m, method="fast", **light))
+(fast_L, fast_T), t_fast = timed(lambda: cv.welkin_render(scene, vdb, method="fast", **light))
 c1, c2 = cyc[0][..., 0], cyc[1][..., 0]
 r1, r2 = ref[0][0], ref[1][0]
 cm, rm = 0.5 * (c1 + c2), 0.5 * (r1 + r2)
@@ -142,7 +142,7 @@ if not args.no_full:
     sf = f"{full[0]}x{full[1]}"
     scene = scene_at(full, s_match, 4)
     img, t_c = timed(lambda: cv.render(scene, os.path.join(tmp, "cycles_full.exr")))
-    (fL, fT), t_f = timed(lambda: cv.welkin_render(scene, vdb, voxel_m, method="fast", **light))
+    (fL, fT), t_f = timed(lambda: cv.welkin_render(scene, vdb, method="fast", **light))
     row(sf, "cycles_seconds", t_c, "s", f"{s_match} spp, whole render call")
     row(sf, "fast_seconds", t_f, "s", "VDB load + rays + cloud_radiance")
     row(sf, "cycles_over_fast", t_c / t_f, "x", "target >= 20")

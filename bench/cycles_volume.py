@@ -12,8 +12,9 @@ matched, and why it is the same problem for both renderers:
   Cycles 3.4 places a voxel's value half a voxel off OpenVDB's convention (value i at
   index i, which Welkin follows): at (i + 1/2) voxel along each axis (measured: Cycles'
   opacity against Welkin's differs by up to 0.22 at the cloud's edges unshifted, 0.35 and
-  0.09, the noise, with Welkin's copy moved by -1/2 and +1/2 voxel). Welkin's copy is moved
-  by +1/2 voxel (welkin_render's voxel_m) so that both render the same density.
+  0.09, the noise, with Welkin's copy moved by -1/2 and +1/2 voxel). That +1/2 is Welkin's
+  default placement="blender" (include/welkin/vdb_clouds.hpp), which welkin_render uses
+  unless told placement="openvdb", so both render the same density.
 * Albedo 1 and the phase: one Henyey-Greenstein lobe of eccentricity G (Cycles' Volume
   Scatter anisotropy is HG's g, positive forward, as Welkin's), Welkin's CloudPhase set to
   w_forward = 1, g_forward = G. Not Welkin's default two lobes: in Cycles 3.4 two Volume
@@ -234,18 +235,17 @@ def render(scene, path):
     return np.stack([pixels[..., names.index(c)] for c in "RGBA"], axis=-1)
 
 
-def welkin_render(scene, vdb_path, voxel_m, density_scale, sun_direction, sun_irradiance, sky_radiance, method, **kw):
+def welkin_render(scene, vdb_path, density_scale, sun_direction, sun_irradiance, sky_radiance, method,
+                  placement="blender", **kw):
     """Welkin's cloud_radiance for the scene camera's pixel rays: (H, W) radiance and
-    transmittance, rows top first; the grid moved by half a voxel (voxel_m) as Cycles 3.4
-    renders it."""
+    transmittance, rows top first; the voxels placed by `placement` (VdbClouds' default,
+    "blender", is where Cycles 3.4 renders them)."""
     import welkin
 
     r = scene.render
     h, w = r.resolution_y, r.resolution_x
     origin, dirs = camera_rays(scene)
-    m = np.eye(4)
-    m[:3, 3] = 0.5 * voxel_m
-    clouds = welkin.VdbClouds(str(vdb_path), density_scale=density_scale, matrix_world=m)
+    clouds = welkin.VdbClouds(str(vdb_path), density_scale=density_scale, matrix_world=np.eye(4), placement=placement)
     atm = welkin.Atmosphere.preset("bruneton2017")  # does not light the cloud here
     L, T, _ = welkin.cloud_radiance(clouds, atm, 0.0, tuple(sun_direction), dirs, origin=origin, method=method,
                                     sun_irradiance=[float(sun_irradiance)],

@@ -36,6 +36,16 @@ VdbCloudOptions::Negative vdb_negative_from_name(const std::string& name, const 
     throw InvalidArgument(parameter, fmt::format("must be \"clamp\" or \"reject\", got \"{}\"", name));
 }
 
+const char* vdb_placement_name(VdbCloudOptions::VoxelPlacement placement) {
+    return placement == VdbCloudOptions::VoxelPlacement::Blender ? "blender" : "openvdb";
+}
+
+VdbCloudOptions::VoxelPlacement vdb_placement_from_name(const std::string& name, const std::string& parameter) {
+    if (name == "blender") return VdbCloudOptions::VoxelPlacement::Blender;
+    if (name == "openvdb") return VdbCloudOptions::VoxelPlacement::OpenVdb;
+    throw InvalidArgument(parameter, fmt::format("must be \"blender\" or \"openvdb\", got \"{}\"", name));
+}
+
 CloudLayerParams scene_cloud_layer(const CloudLayerParams& layer, double planet_radius_m,
                                    double origin_altitude_m) {
     CloudLayerParams p = layer;

@@ -19,7 +19,7 @@
 //   }
 // "clouds" (scene_clouds.hpp) follows notes/clouds_schema.md, agreed with the add-on:
 // layers are CloudLayerParams without planet_radius_m / origin_altitude_m (the scene's),
-// volumes {name, file, grid, matrix_world (by rows), density_scale, negative}, scattering
+// volumes {name, file, grid, matrix_world (by rows), density_scale, negative, placement}, scattering
 // {albedo, g_forward, g_back, w_forward}, lighting CloudLightingOptions' other fields.
 // Every key but "version" is optional on reading (the defaults are scene.hpp's); unknown
 // keys are errors (a typo would otherwise be ignored). matrix_world is written by rows,
@@ -160,7 +160,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         for (std::size_t i = 0; i < volumes.size(); ++i) {
             const json& v = volumes[i];
             const std::string p = fmt::format("clouds.volumes[{}]", i);
-            check_keys(v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative"});
+            check_keys(v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative", "placement"});
             SceneCloudVolume vol;
             if (v.contains("name")) vol.name = string(v["name"], p + ".name");
             if (!v.contains("file"))
@@ -174,6 +174,9 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
             if (v.contains("density_scale")) vol.options.density_scale = number(v["density_scale"], p + ".density_scale");
             if (v.contains("negative"))
                 vol.options.negative = vdb_negative_from_name(string(v["negative"], p + ".negative"), p + ".negative");
+            if (v.contains("placement"))
+                vol.options.placement =
+                    vdb_placement_from_name(string(v["placement"], p + ".placement"), p + ".placement");
             out.volumes.push_back(vol);
         }
     }
@@ -240,7 +243,8 @@ ordered_json clouds_json(const SceneClouds& c) {
                            {"grid", v.options.grid},
                            {"matrix_world", matrix_rows_json(v.options.matrix_world)},
                            {"density_scale", v.options.density_scale},
-                           {"negative", vdb_negative_name(v.options.negative)}});
+                           {"negative", vdb_negative_name(v.options.negative)},
+                           {"placement", vdb_placement_name(v.options.placement)}});
     j["volumes"] = volumes;
     const CloudScattering& sc = c.lighting.scattering;
     j["scattering"] = {{"albedo", sc.albedo},

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
@@ -142,7 +143,11 @@ VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : 
     glm::dmat4 index_to_object;
     for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) index_to_object[c][r] = vm(c, r);
-    m.index_to_world = options.matrix_world * index_to_object;
+    // The voxel placement (see the header): Blender's puts voxel ijk's value at index point
+    // ijk + 1/2, i.e. the grid's index frame is translated by +1/2 before its transform.
+    const double offset = options.placement == VdbCloudOptions::VoxelPlacement::Blender ? 0.5 : 0.0;
+    const glm::dmat4 placement = glm::translate(glm::dmat4(1.0), glm::dvec3(offset));
+    m.index_to_world = options.matrix_world * index_to_object * placement;
     const double det = glm::determinant(glm::dmat3(m.index_to_world));
     if (!(std::abs(det) > 1e-30) || !std::isfinite(det))
         throw InvalidArgument("matrix_world", fmt::format("maps {} to a degenerate (singular) volume", m.where()));

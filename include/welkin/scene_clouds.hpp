@@ -59,5 +59,8 @@ std::shared_ptr<const CloudDensity> make_scene_cloud_density(const SceneClouds& 
 // "clamp" | "reject" (the JSON's "negative").
 const char* vdb_negative_name(VdbCloudOptions::Negative negative);
 VdbCloudOptions::Negative vdb_negative_from_name(const std::string& name, const std::string& parameter);
+// "blender" | "openvdb" (VdbCloudOptions::VoxelPlacement).
+const char* vdb_placement_name(VdbCloudOptions::VoxelPlacement placement);
+VdbCloudOptions::VoxelPlacement vdb_placement_from_name(const std::string& name, const std::string& parameter);
 
 }  // namespace welkin

@@ -6,10 +6,24 @@
 // object's world transform (Blender's Object.matrix_world, object -> world) and the grid's
 // own transform (index -> object, stored in the file):
 //     index = grid_transform^-1 (matrix_world^-1 p),
-// and sigma_t(p) = density_scale * trilinear(grid, index), the values interpolated between
-// voxel centres at integer index coordinates (openvdb::tools::BoxSampler), as Cycles does
-// for Blender volumes. Both transforms are affine, so a ray maps to a ray and keeps its
-// parameter t (world metres): empty space is skipped in index space.
+// and sigma_t(p) = density_scale * trilinear(grid, index - offset), the values interpolated
+// between voxel centres (openvdb::tools::BoxSampler). Both transforms are affine, so a ray
+// maps to a ray and keeps its parameter t (world metres): empty space is skipped in index
+// space.
+//
+// Voxel placement (where voxel ijk's value sits). OpenVDB's convention puts it at index
+// point ijk (offset 0: VoxelPlacement::OpenVdb). Blender 3.4 / Cycles render it half a voxel
+// further along every index axis, at index point ijk + (1/2, 1/2, 1/2) (offset 1/2:
+// VoxelPlacement::Blender, the default, so that a Welkin cloud sits where Blender shows the
+// volume object). Measured (README "Clouds" > "Against Cycles", bench/cycles_volume.py): the
+// same .vdb rendered by Cycles and by Welkin, Cycles' opacity differs from Welkin's by up to
+// 0.22 at the cloud's edges with offset 0, 0.35 with offset -1/2 and 0.09 (the noise) with
+// offset +1/2; the radiance bias of tests/blender/test_cycles_clouds.py is -0.2 % (se 0.4 %)
+// with +1/2 and -2.9 % (se 0.4 %) with 0. The offset is applied once, to the index -> world
+// map (index_to_world = matrix_world * grid_transform * translate(offset)), so sigma_t, the
+// majorant DDA and world_bounds_* all move together and empty-space skipping stays
+// conservative. For a grid transform of scale s (and no rotation) this is the world
+// translation +s/2 per axis that bench/cycles_volume.py used to add to matrix_world.
 //
 // Empty-space skipping. At load, the grid's active voxels and tiles (the tree's occupied
 // leaf nodes and tiles) are binned into a coarse majorant grid: cells of 8 voxels (one
@@ -54,6 +68,10 @@ struct VdbCloudOptions {
     double density_scale = 1.0;  // sigma_t per unit grid value, m^-1, [0, 1e6]
     enum class Negative { Clamp, Reject };
     Negative negative = Negative::Clamp;
+    // Where voxel ijk's value sits in index space: Blender (ijk + 1/2, as Cycles 3.4 renders
+    // it; the default) or OpenVdb (ijk, OpenVDB's own convention). See the file comment.
+    enum class VoxelPlacement { Blender, OpenVdb };
+    VoxelPlacement placement = VoxelPlacement::Blender;
     // Refuse grids larger than this in memory (the file's own estimate), bytes, >= 1.
     std::uint64_t max_memory_bytes = std::uint64_t(4) << 30;
 };

@@ -12,6 +12,7 @@
 #include "welkin/color.hpp"
 #include "welkin/error.hpp"
 #include "welkin/procedural_clouds.hpp"
+#include "welkin/scene_clouds.hpp"
 #include "welkin/sky_image.hpp"
 #include "welkin/vdb_clouds.hpp"
 
@@ -190,12 +191,15 @@ Clouds from an OpenVDB file: the FloatGrid `grid` (default "density"), placed by
 matrix_world (Blender's Object.matrix_world, 4 x 4, [row][column]) on top of the
 grid's own transform; sigma_t = density_scale x the trilinearly interpolated value
 (m^-1). negative: "clamp" (set to 0, counted in negative_voxel_count and warning) or
-"reject". Raises OSError for a missing or corrupt file and ValueError for no such
+"reject". placement: where voxel ijk's value sits, "blender" (index ijk + 1/2, as
+Blender/Cycles 3.4 show the volume object; the default) or "openvdb" (index ijk,
+OpenVDB's convention). Raises OSError for a missing or corrupt file and ValueError for no such
 grid, a non-float grid, an empty grid, a grid over max_memory_bytes, non-finite
 values; every message names the file and the grid.
 )doc")
         .def(py::init([](const std::string& path, const std::string& grid, const py::object& matrix_world,
-                         double density_scale, const std::string& negative, std::uint64_t max_memory_bytes) {
+                         double density_scale, const std::string& negative, std::uint64_t max_memory_bytes,
+                         const std::string& placement) {
                  VdbCloudOptions o;
                  o.grid = grid;
                  o.matrix_world = to_dmat4(matrix_world, "matrix_world");
@@ -204,12 +208,13 @@ values; every message names the file and the grid.
                      throw InvalidArgument("negative", fmt::format("must be \"clamp\" or \"reject\", got \"{}\"", negative));
                  o.negative = negative == "clamp" ? VdbCloudOptions::Negative::Clamp : VdbCloudOptions::Negative::Reject;
                  o.max_memory_bytes = max_memory_bytes;
+                 o.placement = vdb_placement_from_name(placement, "placement");
                  py::gil_scoped_release release;
                  return std::make_shared<VdbClouds>(path, o);
              }),
              py::arg("path"), py::arg("grid") = "density", py::kw_only(), py::arg("matrix_world") = py::none(),
              py::arg("density_scale") = 1.0, py::arg("negative") = "clamp",
-             py::arg("max_memory_bytes") = VdbCloudOptions{}.max_memory_bytes)
+             py::arg("max_memory_bytes") = VdbCloudOptions{}.max_memory_bytes, py::arg("placement") = "blender")
         .def_property_readonly("negative_voxel_count", &VdbClouds::negative_voxel_count)
         .def_property_readonly("active_voxel_count", &VdbClouds::active_voxel_count)
         .def_property_readonly("memory_bytes", &VdbClouds::memory_bytes)

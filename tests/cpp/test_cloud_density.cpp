@@ -195,6 +195,10 @@ TEST(VdbClouds, SamplesThroughBothTransforms) {
     // Blender's object matrix: scale 2, then move to (100, 2000, 800).
     o.matrix_world = glm::translate(glm::dmat4(1.0), glm::dvec3(100, 2000, 800)) * glm::scale(glm::dmat4(1.0), glm::dvec3(2.0));
     o.density_scale = 0.05;
+    // The closed forms below are OpenVDB's convention (value ijk at index ijk), so this test
+    // asks for that placement explicitly; BlenderPlacementIsOpenVdbMovedHalfAVoxel relates
+    // the default (Blender's) to it.
+    o.placement = VdbCloudOptions::VoxelPlacement::OpenVdb;
     const VdbClouds v(path, o);
     EXPECT_EQ(v.negative_voxel_count(), 0u);
     EXPECT_TRUE(v.warning().empty());
@@ -221,6 +225,67 @@ TEST(VdbClouds, SamplesThroughBothTransforms) {
     double covered = 0.0;
     for (const auto& g : segs) covered += g.t1 - g.t0;
     EXPECT_LT(covered, 2.0 * 20.0 * 2 * 12 * 1.8);  // no more than the grid's (dilated) diagonal
+}
+
+// Blender's placement (the default) is OpenVDB's moved by +1/2 voxel along every index
+// axis, through both transforms: with index_to_world = matrix_world * grid_transform (linear
+// part A), every world point p of the OpenVDB placement reads the same density at
+// p + A (1/2, 1/2, 1/2) in Blender's; the majorant segments of a ray moved by that offset
+// are the same (same t, same majorants), and so are the world bounds, moved. The matrix
+// rotates and scales non-uniformly so that the offset is not along a world axis.
+TEST(VdbClouds, BlenderPlacementIsOpenVdbMovedHalfAVoxel) {
+    TempDir dir;
+    const std::string path = dir.file("ball.vdb");
+    const double voxel = 10.0;
+    test::write_vdb(path, {test::make_float_grid("density", voxel, 12, [](int i, int j, int k) {
+                        return ball(i - 1, j + 2, k, 9) * float(1.0 + 0.05 * i);
+                    })});
+    VdbCloudOptions o;
+    o.matrix_world = glm::translate(glm::dmat4(1.0), glm::dvec3(-300, 1500, 900)) *
+                     glm::rotate(glm::dmat4(1.0), 0.7, glm::normalize(glm::dvec3(1, 2, 3))) *
+                     glm::scale(glm::dmat4(1.0), glm::dvec3(1.5, 2.0, 0.8));
+    o.density_scale = 0.04;
+    EXPECT_EQ(o.placement, VdbCloudOptions::VoxelPlacement::Blender);  // the default
+    const VdbClouds blender(path, o);
+    o.placement = VdbCloudOptions::VoxelPlacement::OpenVdb;
+    const VdbClouds openvdb(path, o);
+    const glm::dvec3 offset = glm::dmat3(o.matrix_world) * glm::dvec3(0.5 * voxel);
+    // Voxel (i, j, k): in OpenVDB's placement at matrix_world (10 (i, j, k)), in Blender's at
+    // matrix_world (10 (i + 1/2, j + 1/2, k + 1/2)).
+    for (const auto& c : {glm::ivec3(1, -2, 0), glm::ivec3(4, 0, -3), glm::ivec3(-5, -1, 2)}) {
+        const glm::dvec3 at_openvdb = glm::dvec3(o.matrix_world * glm::dvec4(voxel * glm::dvec3(c), 1.0));
+        const double expected = 0.04 * ball(c.x - 1, c.y + 2, c.z, 9) * (1.0 + 0.05 * c.x);
+        ASSERT_GT(expected, 0.0);
+        EXPECT_NEAR(openvdb.sigma_t(at_openvdb), expected, 1e-7);
+        EXPECT_NEAR(blender.sigma_t(at_openvdb + offset), expected, 1e-7);
+        EXPECT_GT(std::abs(blender.sigma_t(at_openvdb) - expected), 1e-5);  // not where OpenVDB puts it
+    }
+    std::mt19937_64 gen(11);
+    std::uniform_real_distribution<double> U(-1.0, 1.0);
+    const glm::dvec3 centre(-300, 1500, 900);
+    for (int n = 0; n < 2000; ++n) {
+        const glm::dvec3 p = centre + 160.0 * glm::dvec3(U(gen), U(gen), U(gen));
+        EXPECT_NEAR(blender.sigma_t(p + offset), openvdb.sigma_t(p), 1e-9);
+    }
+    for (int n = 0; n < 50; ++n) {
+        const glm::dvec3 origin = centre + glm::dvec3(2000.0 * U(gen), 2000.0 * U(gen), 2000.0 * U(gen));
+        const glm::dvec3 dir = glm::normalize(centre + 100.0 * glm::dvec3(U(gen), U(gen), U(gen)) - origin);
+        std::vector<MajorantSegment> a, b;
+        openvdb.segments({origin, dir}, 5000.0, a);
+        blender.segments({origin + offset, dir}, 5000.0, b);
+        ASSERT_EQ(a.size(), b.size());
+        for (std::size_t s = 0; s < a.size(); ++s) {
+            EXPECT_NEAR(a[s].t0, b[s].t0, 1e-6);
+            EXPECT_NEAR(a[s].t1, b[s].t1, 1e-6);
+            EXPECT_EQ(a[s].majorant, b[s].majorant);
+        }
+        // And the Blender placement's segments still bound its own density.
+        expect_segments_bound(blender, {origin, dir}, 5000.0, 200, gen);
+    }
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(blender.world_bounds_min()[a], openvdb.world_bounds_min()[a] + offset[a], 1e-6);
+        EXPECT_NEAR(blender.world_bounds_max()[a], openvdb.world_bounds_max()[a] + offset[a], 1e-6);
+    }
 }
 
 TEST(VdbClouds, MissingFile) {

@@ -82,7 +82,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
                   "type_variation": 0.2, "wind_offset_m": [10, -20], "seed": 7}],
       "volumes": [{"name": "Cloud", "file": "/abs/cloud.0007.vdb", "grid": "dens",
                    "matrix_world": [[2,0,0,5],[0,2,0,6],[0,0,2,7],[0,0,0,1]],
-                   "density_scale": 0.5, "negative": "reject"}],
+                   "density_scale": 0.5, "negative": "reject", "placement": "openvdb"}],
       "scattering": {"albedo": 0.99, "g_forward": 0.7, "g_back": -0.2, "w_forward": 0.9},
       "lighting": {"max_steps": 64, "light_steps": 6, "ambient_steps": 2, "light_distance_m": 3000,
                    "octaves": 3, "octave_extinction": 0.4, "octave_contribution": 0.6,
@@ -119,6 +119,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     EXPECT_EQ(v.options.matrix_world[0][0], 2);
     EXPECT_EQ(v.options.density_scale, 0.5);
     EXPECT_EQ(v.options.negative, VdbCloudOptions::Negative::Reject);
+    EXPECT_EQ(v.options.placement, VdbCloudOptions::VoxelPlacement::OpenVdb);
     const CloudLightingOptions& o = c.lighting;
     EXPECT_EQ(o.scattering.albedo, 0.99);
     EXPECT_EQ(o.scattering.phase.g_forward, 0.7);
@@ -151,11 +152,12 @@ TEST(SceneClouds, DefaultsAreTheCoresAndAreAllWritten) {
     EXPECT_EQ(c.layers[0].density_per_m, d.density_per_m);
     EXPECT_EQ(c.volumes[0].options.grid, "density");
     EXPECT_EQ(c.volumes[0].options.negative, VdbCloudOptions::Negative::Clamp);
+    EXPECT_EQ(c.volumes[0].options.placement, VdbCloudOptions::VoxelPlacement::Blender);
     EXPECT_EQ(c.lighting.max_steps, lo.max_steps);
     EXPECT_EQ(c.lighting.scattering.albedo, lo.scattering.albedo);
     const std::string text = s.to_json_string();
     for (const char* key : {"\"bottom_altitude_m\"", "\"wind_offset_m\"", "\"seed\"", "\"name\"", "\"grid\"",
-                            "\"matrix_world\"", "\"density_scale\"", "\"negative\"", "\"albedo\"", "\"g_forward\"",
+                            "\"matrix_world\"", "\"density_scale\"", "\"negative\"", "\"placement\"", "\"albedo\"", "\"g_forward\"",
                             "\"w_forward\"", "\"max_steps\"", "\"octave_eccentricity\"", "\"jitter\"",
                             "\"max_distance_m\""})
         EXPECT_NE(text.find(key), std::string::npos) << key;
@@ -174,6 +176,7 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"volumes": [{}]})"), "clouds.volumes[0].file");
     EXPECT_EQ(bad(R"({"volumes": [{"file": ""}]})"), "clouds.volumes[0].file");
     EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "negative": "abs"}]})"), "clouds.volumes[0].negative");
+    EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "placement": "cycles"}]})"), "clouds.volumes[0].placement");
     EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "density_scale": -1}]})"), "clouds.volumes[0].density_scale");
     EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "matrix_world": [[1,0,0,0]]}]})"),
               "clouds.volumes[0].matrix_world");

@@ -32,8 +32,16 @@ def test_vdb_clouds_with_blender_matrix(tmp_path):
     m[:3, 3] = (0.0, 1000.0, 500.0)
     v = welkin.VdbClouds(str(path), matrix_world=m, density_scale=0.02)
     assert v.active_voxel_count > 0 and v.negative_voxel_count == 0 and v.warning == ""
-    s = v.sigma_t(np.array([[0.0, 1000.0, 500.0], [0.0, 0.0, 0.0]]))
-    assert s[0] == pytest.approx(0.02, rel=1e-6) and s[1] == 0.0
+    # The default placement is Blender's: voxel (0, 0, 0), value 1, sits at index
+    # (1/2, 1/2, 1/2), i.e. half a voxel (5 m) further along each axis than OpenVDB's
+    # convention puts it; placement="openvdb" puts it at the object's origin.
+    s = v.sigma_t(np.array([[5.0, 1005.0, 505.0], [0.0, 1000.0, 500.0], [0.0, 0.0, 0.0]]))
+    assert s[0] == pytest.approx(0.02, rel=1e-6) and s[1] < 0.02 * (1.0 - 1e-3) and s[2] == 0.0
+    o = welkin.VdbClouds(str(path), matrix_world=m, density_scale=0.02, placement="openvdb")
+    s = o.sigma_t(np.array([[0.0, 1000.0, 500.0], [5.0, 1005.0, 505.0]]))
+    assert s[0] == pytest.approx(0.02, rel=1e-6) and s[1] < 0.02 * (1.0 - 1e-3)
+    (lo_b, hi_b), (lo_o, hi_o) = v.bounds_m, o.bounds_m
+    assert np.allclose(np.subtract(lo_b, lo_o), 5.0) and np.allclose(np.subtract(hi_b, hi_o), 5.0)
     atm = welkin.Atmosphere.preset("bruneton2017")
     d = np.array([[0.0, 1000.0, 500.0]]) / math.hypot(1000.0, 500.0)
     L, T, depth = welkin.cloud_radiance(v, atm, 0.0, (0.3, 0.2, 0.9), d)
@@ -54,6 +62,8 @@ def test_vdb_errors_name_file_and_grid(tmp_path):
         welkin.VdbClouds(str(path), grid="smoke", matrix_world=np.zeros((3, 3)))
     with pytest.raises(ValueError, match="negative"):
         welkin.VdbClouds(str(path), grid="smoke", negative="maybe")
+    with pytest.raises(ValueError, match="placement"):
+        welkin.VdbClouds(str(path), grid="smoke", placement="cycles")
 
 
 def test_cloud_layer_and_cloudy_sky_image():
