@@ -15,11 +15,10 @@ same run, from the two seeds of each renderer:
   se 0.4 %, with VdbClouds' default placement="blender"; placement="openvdb", half a voxel
   off, gives -1.4 %, se 0.4 %: this mean hides the shift, the per-pixel tests see it);
 * the per-pixel median of |C - R| / R within 1.5 x the median that noise alone gives,
-  (c1 - c2)/2 - (r1 - r2)/2 (same variance, no bias): a shifted or misshapen cloud (half a
-  voxel off, a wrong phase) fails it;
+  (c1 - c2)/2 - (r1 - r2)/2 (same variance, no bias): a misshapen cloud (a wrong phase)
+  fails it;
 * Cycles' alpha (1 - T) against the reference's 1 - T: mean difference within 4 standard
-  errors plus 0.005 (measured -0.0018, se 0.0005: Cycles' marching again).
-
+  errors plus 0.005 (measured -0.0018, se 0.0005: Cycles' marching again);
 * per-pixel opacity: the RMS of Cycles' alpha - (1 - T) over the pixels where either shows
   cloud (alpha > 0.01) within 1.5 x the RMS that noise alone gives (seed differences);
   measured 0.0243 vs noise 0.0223 with the default placement.
