@@ -124,6 +124,22 @@ bool clip_to_atmosphere(const AirRay& ray, double top, double t_end, double& t0,
     return t1 > t0;
 }
 
+// One ray's spectral air over [0, t_end] (L with E_sun, T; all channels): false, with L
+// and T untouched, when the ray misses the atmosphere.
+bool march_ray(const AtmosphereLuts& luts, const AirRay& ray, double top, double t_end, int steps, float* L,
+               float* T) {
+    double t0, t1;
+    if (!clip_to_atmosphere(ray, top, t_end, t0, t1)) return false;
+    const float nu = float(clamp_cosine(glm::dot(ray.d, ray.sun)));
+    for (const auto& b : luts.batches()) {
+        Spectrum4 Ls(0.0f), Ts(1.0f);
+        march_segment(*b, ray, b->medium.rayleigh_phase(nu), b->medium.mie_phase(nu), t0, t1, steps, Ls, Ts);
+        store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(), L + b->medium.first_channel());
+        store_channels(Ts, b->medium.channel_count(), T + b->medium.first_channel());
+    }
+    return true;
+}
+
 void check_call(const SceneDescription& scene, std::span<const float> depth, int width, int height) {
     scene.validate();
     scene.require_camera();
@@ -166,15 +182,8 @@ public:
         if (!(z > 0.0f)) return;
         const CameraRays::Ray cam = rays_.at_pixel(x, y);
         const AirRay ray = air_ray(scene_, cam, sun_);
-        double t0, t1;
-        if (!clip_to_atmosphere(ray, top_, double(z) * cam.distance_per_depth, t0, t1)) return;
-        const float nu = float(clamp_cosine(glm::dot(ray.d, sun_)));
-        for (const auto& b : luts_.batches()) {
-            Spectrum4 Ls(0.0f), Ts(1.0f);
-            march_segment(*b, ray, b->medium.rayleigh_phase(nu), b->medium.mie_phase(nu), t0, t1, steps_, Ls, Ts);
-            store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(), &s.L[b->medium.first_channel()]);
-            store_channels(Ts, b->medium.channel_count(), &s.T[b->medium.first_channel()]);
-        }
+        if (!march_ray(luts_, ray, top_, double(z) * cam.distance_per_depth, steps_, s.L.data(), s.T.data()))
+            return;
         colour_.convert(s.L, s.T, s.tmp, L3, T3);
     }
 
@@ -450,6 +459,46 @@ AerialPasses aerial_perspective(const SceneDescription& scene, std::span<const f
     return scene.aerial.method == AerialOptions::Method::Froxel
                ? aerial_perspective_froxel(scene, depth, width, height, progress, rows)
                : aerial_perspective_raymarch(scene, depth, width, height, progress, rows);
+}
+
+AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
+                               const glm::dvec3& planet_centre, const glm::dvec3& sun_direction,
+                               std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                               std::span<const double> distances, int steps, double exposure, bool spectral) {
+    const std::size_t n = directions.size();
+    if (distances.size() != n)
+        throw InvalidArgument("distances", fmt::format("has {} values for {} directions", distances.size(), n));
+    if (origins.size() != 1 && origins.size() != n)
+        throw InvalidArgument("origins", fmt::format("has {} points for {} directions (1 or one per ray)",
+                                                     origins.size(), n));
+    require_in_range("steps", steps, 1, 1 << 20, "steps");
+    const PassColour colour(atmosphere, exposure);
+    const std::size_t C = colour.channels();
+    const glm::dvec3 sun = glm::normalize(sun_direction);
+    const double top = atmosphere.top_radius_m;
+    AirAlongRays out;
+    out.inscatter.assign(n * 3, 0.0f);
+    out.transmittance.assign(n * 3, 1.0f);
+    if (spectral) {
+        out.inscatter_spectral.assign(n * C, 0.0f);
+        out.transmittance_spectral.assign(n * C, 1.0f);
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<float> L(C), T(C), tmp(C);
+        for (std::size_t q = r.begin(); q != r.end(); ++q) {
+            if (!(distances[q] > 0.0)) continue;
+            const AirRay ray{origins[origins.size() == 1 ? 0 : q] - planet_centre, directions[q], sun};
+            std::fill(L.begin(), L.end(), 0.0f);
+            std::fill(T.begin(), T.end(), 1.0f);
+            if (!march_ray(luts, ray, top, distances[q], steps, L.data(), T.data())) continue;
+            colour.convert(L, T, tmp, &out.inscatter[q * 3], &out.transmittance[q * 3]);
+            if (spectral) {
+                std::copy(L.begin(), L.end(), out.inscatter_spectral.begin() + std::ptrdiff_t(q * C));
+                std::copy(T.begin(), T.end(), out.transmittance_spectral.begin() + std::ptrdiff_t(q * C));
+            }
+        }
+    });
+    return out;
 }
 
 }  // namespace welkin

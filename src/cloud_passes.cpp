@@ -57,11 +57,9 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
 
     ProgressStage march_stage(progress, 0.05, 0.9);
     CloudResult march = render_clouds(density, light, origins, dirs, lengths, options, &march_stage, q0);
-    origins = {};
-    dirs = {};
     lengths = {};
 
-    // Cloud radiance to Rec.709 (the sky's conversion) and the cloud depth as a Z pass.
+    // Cloud radiance to Rec.709 (the sky's conversion).
     CloudPasses out;
     out.width = w;
     out.height = band.size();
@@ -71,24 +69,32 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
     std::vector<float> rgb(n * 3);
     SpectrumToRgb(scene.atmosphere.wavelengths_nm, -3.0).convert(march.radiance, rgb);
     march.radiance = {};
-    // The whole frame's image of cloud depths (+inf: no cloud, or outside the band).
-    std::vector<float> cloud_z(std::size_t(w) * std::size_t(h), std::numeric_limits<float>::infinity());
-    for (std::size_t q = 0; q < n; ++q)
-        if (march.transmittance[q] < 1.0f) cloud_z[q0 + q] = float(double(march.depth_m[q]) / per_depth[q]);
 
-    // The air in front of each cloud, marched per pixel to its cloud (header).
+    // The air in front of each cloud, marched per pixel to its cloud depth d_c (header;
+    // the shared march of aerial_along_rays, as the equirect sky's clouds get it).
     ProgressStage air_stage(progress, 0.9, 1.0);
-    const AerialPasses air = aerial_perspective_raymarch(scene, cloud_z, w, h, &air_stage, band);
+    if (!air_stage.report(0.0)) throw Cancelled();
+    // 0: no cloud, or a cloud at a sky depth (>= aerial.sky_depth_m), as the aerial
+    // passes treat it: not marched, T = 1, S = 0.
+    std::vector<double> cloud_d(n, 0.0);
+    for (std::size_t q = 0; q < n; ++q)
+        if (march.transmittance[q] < 1.0f &&
+            !is_sky_depth(float(double(march.depth_m[q]) / per_depth[q]), scene.aerial.sky_depth_m))
+            cloud_d[q] = double(march.depth_m[q]);
+    const AirAlongRays air = aerial_along_rays(scene.atmosphere, light.luts(), scene.planet_centre(),
+                                               scene.origin_observer().sun_direction, origins, dirs, cloud_d,
+                                               scene.aerial.raymarch_steps, scene.exposure);
+    origins = {};
+    dirs = {};
     const float exposure = float(scene.exposure);
     for (std::size_t q = 0; q < n; ++q) {
-        const std::size_t f = q0 + q;  // in the frame
-        if (!std::isfinite(cloud_z[f])) continue;
+        if (!(march.transmittance[q] < 1.0f)) continue;
         const float alpha = 1.0f - march.transmittance[q];
         for (int c = 0; c < 3; ++c)
-            out.clouds[q * 4 + c] = air.transmittance[f * 3 + c] * rgb[q * 3 + c] * exposure +
-                                    alpha * air.inscatter[f * 3 + c];
+            out.clouds[q * 4 + c] =
+                air.transmittance[q * 3 + c] * rgb[q * 3 + c] * exposure + alpha * air.inscatter[q * 3 + c];
         out.clouds[q * 4 + 3] = alpha;
-        out.depth[q] = cloud_z[f];
+        out.depth[q] = float(double(march.depth_m[q]) / per_depth[q]);
     }
     if (progress && !progress->report(1.0)) throw Cancelled();
     return out;

@@ -19,6 +19,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "welkin/aerial_perspective.hpp"
 #include "welkin/cloud_illumination.hpp"
 #include "welkin/color.hpp"
 #include "welkin/equirect.hpp"
@@ -229,6 +230,7 @@ void SkyImageOptions::validate() const {
     if (!(exposure > 0.0) || !(exposure <= 1e6))
         throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
     if (clouds) cloud_lighting.validate();
+    require_in_range("air_steps", air_steps, 1, 4096);
 }
 
 std::string spectral_channel_name(double wavelength_nm) {
@@ -326,15 +328,34 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         method.radiance(atm, obs, std::span<const glm::dvec3>(directions.get(), n), out, {},
                         progress ? &sub : nullptr);
         CloudResult clouds;
+        AirAlongRays air;          // in front of the clouds (header)
+        std::vector<float> cloud_rgb;  // RGB output: L_c in Rec.709
         if (options.clouds) {
-            clouds = render_clouds(*options.clouds, *cloud_light, glm::dvec3(0.0),
-                                   std::span<const glm::dvec3>(directions.get(), n), options.cloud_lighting,
+            const std::span<const glm::dvec3> dirs(directions.get(), n);
+            clouds = render_clouds(*options.clouds, *cloud_light, glm::dvec3(0.0), dirs, options.cloud_lighting,
                                    progress ? &sub : nullptr);
             std::copy(clouds.transmittance.begin(), clouds.transmittance.end(),
                       cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
+            std::vector<double> cloud_d(n, 0.0);  // 0: no cloud, not marched
+            for (std::size_t q = 0; q < n; ++q)
+                if (clouds.transmittance[q] < 1.0f) cloud_d[q] = double(clouds.depth_m[q]);
+            const glm::dvec3 origin(0.0);
+            air = aerial_along_rays(atm, cloud_light->luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},
+                                    obs.sun_direction, std::span<const glm::dvec3>(&origin, 1), dirs, cloud_d,
+                                    options.air_steps, 1.0, !rgb);
+            if (rgb) {
+                cloud_rgb.resize(n * 3);
+                sky_to_rgb->convert(clouds.radiance, cloud_rgb);
+            }
         }
         const bool with_clouds = bool(options.clouds);
 
+        // RGB output: the passes' Welkin.Clouds.rgb, T(0, d_c) L_c + (1 - T_c) S(0, d_c)
+        // in Rec.709 (cloud_passes.cpp), added to the converted T_c L_sky.
+        const auto add_cloud_rgb = [&](std::size_t i, float T, float* d) {
+            for (int k = 0; k < 3; ++k)
+                d[k] += air.transmittance[i * 3 + k] * cloud_rgb[i * 3 + k] + (1.0f - T) * air.inscatter[i * 3 + k];
+        };
         // One pass: find the first non-finite value, and convert to RGB.
         std::atomic<std::size_t> bad{std::size_t(-1)};
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& range) {
@@ -343,9 +364,18 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
             std::size_t first = std::size_t(-1);
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 float* s = &out[i * nc];
-                if (with_clouds) {  // over: sky behind the cloud, then the cloud's own light
-                    const float T = clouds.transmittance[i];
-                    for (std::size_t c = 0; c < nc; ++c) s[c] = s[c] * T + clouds.radiance[i * nc + c];
+                // The sky behind the cloud: T_c L_sky; with spectral output also the cloud's
+                // own light through the air and the air in front of it (header).
+                const float T = with_clouds ? clouds.transmittance[i] : 1.0f;
+                if (with_clouds) {
+                    if (rgb) {
+                        for (std::size_t c = 0; c < nc; ++c) s[c] *= T;
+                    } else {
+                        const float* Ta = &air.transmittance_spectral[i * nc];
+                        const float* Sa = &air.inscatter_spectral[i * nc];
+                        for (std::size_t c = 0; c < nc; ++c)
+                            s[c] = s[c] * T + Ta[c] * clouds.radiance[i * nc + c] + (1.0f - T) * Sa[c];
+                    }
                 }
                 bool finite = true;
                 for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(s[c]);
@@ -357,6 +387,7 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
                     d[0] = float(m3[0] * a + m3[1] * b + m3[2] * c);
                     d[1] = float(m3[3] * a + m3[4] * b + m3[5] * c);
                     d[2] = float(m3[6] * a + m3[7] * b + m3[8] * c);
+                    if (with_clouds) add_cloud_rgb(i, T, d);
                 } else {
                     double r = 0.0, g = 0.0, b = 0.0;
                     for (std::size_t c = 0; c < nc; ++c) {
@@ -366,6 +397,7 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
                     }
                     float* d = &dst[3 * i];
                     d[0] = float(r), d[1] = float(g), d[2] = float(b);
+                    if (with_clouds) add_cloud_rgb(i, T, d);
                 }
             }
             std::size_t cur = bad.load();

@@ -61,6 +61,8 @@
 #include <span>
 #include <vector>
 
+#include <glm/vec3.hpp>
+
 #include "welkin/atmosphere_luts.hpp"
 #include "welkin/row_range.hpp"
 #include "welkin/scene.hpp"
@@ -141,5 +143,26 @@ AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<
 AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
                                          std::span<const float> depth, int width, int height,
                                          Progress* progress = nullptr, RowRange rows = {});
+
+// The air along explicit rays: the per-pixel march of "raymarch" (the same steps, the same
+// colour) for rays that are not a camera's pixels, each ending at its own distance. This
+// is the air in front of clouds, shared by the camera cloud passes (cloud_passes.hpp) and
+// the equirect sky's clouds (sky_image.hpp), so that both apply exactly the same air.
+// Ray i starts at origins[i] (origins[0] for all when there is one; world frame, the
+// planet centre at `planet_centre`) along unit directions[i] and ends at distances[i] m;
+// a distance that is not > 0 (or NaN) gives T = 1, L = 0 without marching. `luts`: of
+// `atmosphere`. `steps`: per ray (aerial.raymarch_steps), >= 1.
+struct AirAlongRays {
+    // RGB as the passes': L_in times `exposure`, and the sunlit-surface T; (n, 3).
+    std::vector<float> inscatter, transmittance;
+    // With `spectral`: per atmosphere channel, (n, channels): L_in in W m^-2 sr^-1 nm^-1
+    // (E_sun included, no exposure) and T; empty otherwise.
+    std::vector<float> inscatter_spectral, transmittance_spectral;
+};
+AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
+                               const glm::dvec3& planet_centre, const glm::dvec3& sun_direction,
+                               std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                               std::span<const double> distances, int steps, double exposure,
+                               bool spectral = false);
 
 }  // namespace welkin

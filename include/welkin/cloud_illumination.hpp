@@ -63,6 +63,8 @@ public:
     glm::dvec3 zenith(const glm::dvec3& p) const override;
     void sun_irradiance(const glm::dvec3& p, float* out) const override;
     void ambient_radiance(const glm::dvec3& p, float* out) const override;
+    // Its atmosphere's LUTs (for the air in front of the clouds, aerial_along_rays).
+    const AtmosphereLuts& luts() const { return *luts_; }
 
 private:
     std::shared_ptr<const AtmosphereLuts> luts_;

@@ -29,8 +29,9 @@
 // T(0, d_c) S(d_c, inf).
 //
 // The air terms T(0, d_c) and S(0, d_c) are marched per pixel, from the camera to the
-// pixel's cloud depth (aerial_perspective_raymarch on an image of cloud depths: the
-// reference method of the aerial passes, aerial.raymarch_steps steps), not read from a
+// pixel's cloud depth (aerial_along_rays, aerial_perspective.hpp: the per-pixel march of
+// the aerial passes' reference method, aerial.raymarch_steps steps; the equirect sky's
+// clouds get their air from the same function, sky_image.hpp), not read from a
 // froxel volume. Why: (1) clouds lie kilometres to hundreds of kilometres away, where the
 // froxel volume's quadratic slices are coarsest, and its depth range would have to be
 // fitted to the cloud depths, which are known only after the cloud march; (2) a pixel's
@@ -44,9 +45,10 @@
 //
 // Colour and units: the cloud radiance is converted to linear Rec.709 as the sky is
 // (color.hpp, lambda power -3; the same conversion the equirect sky applies to its clouds),
-// W m^-2 sr^-1, times the scene's exposure. (The equirect sky, sky_image.hpp, leaves the air
-// in front of its clouds out; these passes include it, so a panoramic plate with clouds is
-// hazier towards distant clouds than the HDRI.)
+// W m^-2 sr^-1, times the scene's exposure. (The equirect sky, sky_image.hpp, applies the
+// same air in front of its clouds, so a panoramic camera's passes composited over the clear
+// HDRI give the cloudy HDRI.) A cloud at a sky depth (d_c / distance_per_depth >=
+// aerial.sky_depth_m) gets no air, as the aerial passes treat such depths.
 // The air's RGB transmittance multiplies the RGB cloud radiance (as the compositor does for
 // surfaces). Welkin.CloudDepth is d_c in Blender's Z convention (along the view axis for
 // perspective and orthographic cameras, along the ray for panoramas), kNoCloudDepth (1e10,

@@ -24,14 +24,31 @@
 // appear once.
 //
 // Clouds (optional). With `clouds` set, every pixel's ray from the observer (the world
-// origin) is also marched through the cloud density (cloud_lighting.hpp), lit by the same
-// atmosphere (AtmosphereIllumination: the sun through the air at the cloud, the sky's mean
-// radiance from the multiple-scattering LUT), and composited over the sky per wavelength
-// before any conversion: L = L_sky T_cloud + L_cloud (premultiplied "over"); the sun's
-// disc is dimmed by T_cloud of its pixels. The air between the observer and the cloud
-// (aerial perspective) is not applied to the cloud here. A procedural layer should be
-// built with origin_altitude_m equal to the observer's altitude (the density source does
-// not know the observer, so this is not checked).
+// origin, the planet centre straight below it) is also marched through the cloud density
+// (cloud_lighting.hpp), lit by the same atmosphere (AtmosphereIllumination: the sun
+// through the air at the cloud, the sky's mean radiance from the multiple-scattering LUT).
+// The march gives the cloud's in-scattered radiance L_c (premultiplied), its transmittance
+// T_c and the transmittance-weighted depth d_c of its scattering. The air between the
+// observer and the cloud is applied as the camera cloud passes apply it (cloud_passes.hpp,
+// the same function: aerial_along_rays, air_steps uniform steps to d_c). Along the ray,
+// with the air's in-scattering S(a, b) and transmittance T(a, b), a cloud taken at d_c in
+// front of the rest of the sky:
+//     L = S(0, d_c) + T(0, d_c) [L_c + T_c S(d_c, inf)]
+//       = T(0, d_c) L_c + (1 - T_c) S(0, d_c) + T_c [S(0, d_c) + T(0, d_c) S(d_c, inf)]
+//       = T(0, d_c) L_c + (1 - T_c) S(0, d_c) + T_c L_sky,
+// since the clear sky L_sky holds the air's whole path radiance S(0, inf) =
+// S(0, d_c) + T(0, d_c) S(d_c, inf). (The sky method's S(0, inf) and the march's S(0, d_c)
+// are two numerical integrals of the same air; their difference is the method's error.)
+// This is the passes' Welkin.Clouds.rgb composited "over" the clear sky, so a panoramic
+// camera's cloud passes over the clear HDRI give this image (tests/cpp/
+// test_cloud_sky_image.cpp). Colour: in RGB output the composite is taken in Rec.709 as
+// the passes take it (the air's sunlit-surface RGB T(0, d_c) times the RGB cloud radiance,
+// aerial_perspective.hpp); in spectral output per wavelength (T(lambda) L_c(lambda)). Where
+// there is no air (T = 1, S = 0) this is the plain premultiplied "over" L_sky T_c + L_c.
+// The cloud's depth extent is collapsed to d_c (the air inside one cloud is left out). The
+// sun's disc is dimmed by T_c of its pixels. A procedural layer should be built with
+// origin_altitude_m equal to the observer's altitude (the density source does not know
+// the observer, so this is not checked).
 //
 // No NaN or infinity reaches the image: a method returning one is an error.
 #pragma once
@@ -52,6 +69,9 @@ struct SkyImageOptions {
     Output output = Output::Rgb;
     std::shared_ptr<const CloudDensity> clouds;  // none: a clear sky
     CloudLightingOptions cloud_lighting;
+    // Steps of the air's march from the observer to each cloud (a scene's
+    // aerial.raymarch_steps); [1, 4096].
+    int air_steps = 64;
 
     void validate() const;
 };

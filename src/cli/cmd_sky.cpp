@@ -50,6 +50,7 @@ struct SkySettings {
     double exposure;
     std::shared_ptr<const CloudDensity> clouds;  // the scene's (none without --scene)
     CloudLightingOptions cloud_lighting;
+    int air_steps = AerialOptions{}.raymarch_steps;  // the air in front of the clouds
     std::size_t cloud_layers = 0, cloud_volumes = 0;
 };
 
@@ -68,6 +69,7 @@ SkySettings settings_from(const SkyArgs& args) {
         out.clouds = scene.cloud_density();
         if (scene.clouds) {
             out.cloud_lighting = scene.clouds->lighting;
+            out.air_steps = scene.aerial.raymarch_steps;
             out.cloud_layers = scene.clouds->layers.size();
             out.cloud_volumes = scene.clouds->volumes.size();
         }
@@ -106,6 +108,7 @@ int run_sky(const SkyArgs& args) {
                                                   : SkyImageOptions::Output::Rgb;
     image_options.clouds = sky.clouds;
     image_options.cloud_lighting = sky.cloud_lighting;
+    image_options.air_steps = sky.air_steps;
     image_options.validate();
 
     const auto threads = limit_threads(args.threads);
