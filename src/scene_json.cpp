@@ -17,7 +17,7 @@
 //     "sky_options": {"transmittance_width": 256, ...},
 //     "clouds": {"layers": [...], "volumes": [...], "scattering": {...}, "lighting": {...}}
 //   }
-// "clouds" (scene_clouds.hpp) follows notes/clouds_schema.md, agreed with the add-on:
+// "clouds" (scene_clouds.hpp; README "Scene JSON"), the schema the add-on writes:
 // layers are CloudLayerParams without planet_radius_m / origin_altitude_m (the scene's),
 // volumes {name, file, grid, matrix_world (by rows), density_scale, negative, placement}, scattering
 // {albedo, g_forward, g_back, w_forward}, lighting CloudLightingOptions' other fields.
@@ -112,7 +112,7 @@ bool boolean(const json& j, const std::string& parameter) {
     return j.get<bool>();
 }
 
-// "clouds" (notes/clouds_schema.md; README "Scene JSON"). Relative VDB paths are taken
+// "clouds" (README "Scene JSON"). Relative VDB paths are taken
 // relative to `base` (the scene file's folder).
 SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
     check_keys(j, "clouds", {"layers", "volumes", "scattering", "lighting"});

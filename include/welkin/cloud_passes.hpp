@@ -1,6 +1,6 @@
 // Camera cloud passes: what the scene camera sees of the scene's clouds, in front of the
 // scene's geometry, with the air between the camera and the cloud (DESIGN.md pass names;
-// the definition agreed with the add-on is notes/clouds_schema.md).
+// README "Clouds in scenes" gives the same definition).
 //
 // For every pixel of the scene's render (scene.resolution, camera.hpp's rays: perspective,
 // orthographic and equirectangular panoramas) the pixel's centre ray is marched through

@@ -1,6 +1,6 @@
 // The clouds of a scene, as plain data: procedural layers, OpenVDB volumes and how they are
 // lit. Part of the SceneDescription (scene.hpp, key "clouds" of the scene JSON, README
-// "Scene JSON"; the schema agreed with the Blender add-on is notes/clouds_schema.md).
+// "Scene JSON", the schema the Blender add-on writes).
 //
 // A scene's clouds are the union of all its layers and volumes: one density,
 // sigma_t = the sum of every source's (cloud_union.hpp), lit once. make_scene_cloud_density
