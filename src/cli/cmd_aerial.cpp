@@ -9,7 +9,6 @@
 #include <thread>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
 #include "common.hpp"
@@ -105,10 +104,9 @@ int run_aerial(const AerialArgs& args) {
     }
     passes = {};
     cloud_passes = {};
-    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half, scene);
     write.attributes.insert(write.attributes.end(),
                             {{"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
-                        {"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
                         {"welkinUnits", "AerialInscatter, Clouds: linear Rec.709, W m^-2 sr^-1 (times "
                                         "exposure); AerialTransmittance: dimensionless; CloudDepth: m"}});
     write_exr(args.output, exr, write);

@@ -6,7 +6,6 @@
 #include <memory>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include "common.hpp"
 #include "terminal_progress.hpp"
@@ -67,10 +66,9 @@ int run_clouds(const CloudsArgs& args) {
         exr.pixels[p * 5 + 4] = passes.depth[p];
         cloudy += passes.clouds[p * 4 + 3] > 0.0f;
     }
-    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half, scene);
     write.attributes.insert(write.attributes.end(),
-                            {{"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
-                             {"welkinUnits", "Clouds: linear Rec.709, W m^-2 sr^-1 (times exposure), "
+                            {{"welkinUnits", "Clouds: linear Rec.709, W m^-2 sr^-1 (times exposure), "
                                              "premultiplied; CloudDepth: m (Blender's Z), 1e10 where no cloud"}});
     if (!args.depth.empty())
         write.attributes.push_back({"welkinDepth", fmt::format("{} ({})", args.depth, depth.channel)});

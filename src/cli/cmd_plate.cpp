@@ -9,7 +9,6 @@
 #include <optional>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
 #include "common.hpp"
@@ -73,10 +72,9 @@ int run_plate(const PlateArgs& args) {
         exr.pixels[p * nch + clouds_at + 4] = plate.cloud_depth[p];
         exr.pixels[p * nch + nch - 1] = plate.depth[p];
     }
-    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half, scene);
     write.attributes.insert(write.attributes.end(),
-                            {{"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()},
-                        {"welkinMethod", plate.method},
+                            {{"welkinMethod", plate.method},
                         {"welkinUnits", "linear Rec.709, W m^-2 sr^-1 (times exposure); "
                                         "AerialTransmittance dimensionless; Clouds premultiplied; "
                                         "Z, CloudDepth metres (1e10: no cloud)"}});

@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
 
 #include "welkin/aerial_perspective.hpp"
 #include "welkin/error.hpp"
@@ -223,6 +224,12 @@ ExrWriteOptions exr_write_options(bool overwrite, bool half) {
     write.overwrite = overwrite;
     write.pixel_type = half ? ExrPixelType::Half : ExrPixelType::Float;
     write.attributes = {{"software", fmt::format("welkin {}", kVersion)}};
+    return write;
+}
+
+ExrWriteOptions exr_write_options(bool overwrite, bool half, const SceneDescription& scene) {
+    ExrWriteOptions write = exr_write_options(overwrite, half);
+    write.attributes.push_back({"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()});
     return write;
 }
 

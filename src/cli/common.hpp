@@ -91,5 +91,8 @@ std::unique_ptr<tbb::global_control> limit_threads(int threads);
 // How an output EXR is written: --overwrite, --half (else 32-bit float), and the
 // "software" provenance attribute; commands append their own attributes.
 ExrWriteOptions exr_write_options(bool overwrite, bool half);
+// The same, plus the "welkinScene" attribute: the scene description the passes were made
+// from (compact JSON), so a file reproduces its frame (aerial, clouds, plate).
+ExrWriteOptions exr_write_options(bool overwrite, bool half, const SceneDescription& scene);
 
 }  // namespace welkin::cli
