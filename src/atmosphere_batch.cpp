@@ -50,6 +50,11 @@ AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::
                                       rayleigh * rho_r + mie_t * rho_m + absorption * rho_a};
         }
     });
+    for (const DensityProfile* profile : {&atm.rayleigh_density, &atm.mie_density, &atm.absorption_density})
+        for (double h : profile->breakpoints_m())
+            if (h > 0.0 && h < thickness_) breakpoint_radii_.push_back(bottom_radius_ + h);
+    std::sort(breakpoint_radii_.begin(), breakpoint_radii_.end());
+    breakpoint_radii_.erase(std::unique(breakpoint_radii_.begin(), breakpoint_radii_.end()), breakpoint_radii_.end());
     for (int i = 0; i < kTableSize; ++i) {
         const Float4 a = to_float4(table_[std::size_t(i)].extinction);
         const Float4 b = i + 1 < kTableSize ? to_float4(table_[std::size_t(i) + 1].extinction) : a;

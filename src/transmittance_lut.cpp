@@ -1,7 +1,9 @@
 #include "welkin/transmittance_lut.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 
@@ -15,6 +17,10 @@ constexpr std::array<double, 4> kGlNodes = {0.5 - 0.5 * 0.8611363115940526, 0.5 
                                             0.5 + 0.5 * 0.3399810435848563, 0.5 + 0.5 * 0.8611363115940526};
 constexpr std::array<double, 4> kGlWeights = {0.5 * 0.3478548451374538, 0.5 * 0.6521451548625461,
                                               0.5 * 0.6521451548625461, 0.5 * 0.3478548451374538};
+
+// At most this many breakpoint radii are cut at (each crossed at most once by a piece,
+// which is monotone in altitude; twice counted for safety); more are left uncut.
+constexpr int ColumnCutLimit = 16;
 
 }  // namespace
 
@@ -32,6 +38,8 @@ GradedQuadrature::Piece GradedQuadrature::make_piece(int panels) {
             const double s = (double(p) + kGlNodes[k]) / double(panels);
             piece.s2.push_back(s * s);
             piece.weight.push_back(float(kGlWeights[k] * 2.0 * s / double(panels)));
+            piece.offset.push_back(double(p) + kGlNodes[k]);
+            piece.gl_weight.push_back(kGlWeights[k]);
         }
     return piece;
 }
@@ -57,27 +65,105 @@ WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double r_sin2, double R, 
     }
 }
 
+// The nodes of one part of a ray cut at breakpoints (GradedQuadrature::Piece::offset).
+WELKIN_SIMD_CLONES void part_nodes(double s0, double h, const double* __restrict offset,
+                                   const double* __restrict gl_weight, std::size_t m, double* __restrict s2,
+                                   float* __restrict weight) {
+    for (std::size_t l = 0; l < m; ++l) {
+        const double x = s0 + offset[l] * h;
+        s2[l] = x * x;
+        weight[l] = float(gl_weight[l] * 2.0 * x * h);
+    }
+}
+
 }  // namespace
 
+// Where a density profile has a kink (the ozone tent's 10, 25 and 40 km), the integrand is
+// only continuous, and a panel across the kink converges like the midpoint rule, not like
+// Gauss-Legendre: with 40 nodes, up to 0.024 in tau (2.4 % in T) on grazing rays through
+// the tent, against 4e-6 for an atmosphere without kinks (mars). So the ray's crossings of
+// the batch's breakpoint radii inside [a, b], at (t + r mu)^2 = r_b^2 - r^2 (1 - mu^2),
+// cut the substitution's s axis, and each part gets the whole piece's panel density
+// (round(panels * its length in s), at least one panel): every panel then integrates a
+// smooth function, and the nodes stay where they were, but for the few panels added.
+// Rays crossing no breakpoint use the precomputed piece.
 Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b,
                                       bool toward_a, const Piece& piece) const {
     const double len = b - a;
     if (!(len > 0.0)) return Spectrum4(0.0f);
-    Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f};
     const double origin = toward_a ? a : b, direction = toward_a ? len : -len;
     const double r_mu = r * mu, r_sin2 = r * r * std::max((1.0 - mu) * (1.0 + mu), 0.0);
     const double x_max = double(AtmosphereBatch::kTableSize - 1);
     constexpr std::size_t kBlock = 64;
-    int entry[kBlock];
-    float fraction[kBlock];
-    const std::size_t n = piece.s2.size();
-    for (std::size_t first = 0; first < n; first += kBlock) {
-        const std::size_t m = std::min(kBlock, n - first);
-        table_coordinates(r_mu, r_sin2, batch.bottom_radius(), batch.inv_table_step(), origin, direction, x_max,
-                          piece.s2.data() + first, m, entry, fraction);
-        const float* const w = piece.weight.data() + first;
-        for (std::size_t l = 0; l < m; ++l) sum += w[l] * batch.extinction_at(entry[l], fraction[l]);
+    Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f};
+    auto accumulate = [&](const double* s2, const float* weight, std::size_t n) {
+        int entry[kBlock];
+        float fraction[kBlock];
+        for (std::size_t first = 0; first < n; first += kBlock) {
+            const std::size_t m = std::min(kBlock, n - first);
+            table_coordinates(r_mu, r_sin2, batch.bottom_radius(), batch.inv_table_step(), origin, direction, x_max,
+                              s2 + first, m, entry, fraction);
+            const float* const w = weight + first;
+            for (std::size_t l = 0; l < m; ++l) sum += w[l] * batch.extinction_at(entry[l], fraction[l]);
+        }
+    };
+    // The crossings, as s = sqrt((t - origin) / direction) in (0, 1).
+    constexpr int kMaxCuts = 2 * ColumnCutLimit;
+    double cuts[kMaxCuts + 2];
+    int n_cuts = 0;
+    cuts[n_cuts++] = 0.0;
+    // [a, b] never contains the tangent point inside it, so its radius is monotone and each
+    // breakpoint between its end radii is crossed once: on the far side of the tangent
+    // (rising) at t = -r mu + q, on the near side at -r mu - q, q^2 = r_b^2 - r^2 sin^2.
+    const double ta = a + r_mu, tb = b + r_mu;  // t + r mu at both ends
+    const double ra2 = ta * ta + r_sin2, rb2 = tb * tb + r_sin2;
+    const double lo2 = std::min(ra2, rb2), hi2 = std::max(ra2, rb2);
+    const bool rising = ta + tb > 0.0;
+    for (double rb : batch.breakpoint_radii()) {
+        const double rb2_k = rb * rb;
+        if (!(rb2_k > lo2 && rb2_k < hi2) || n_cuts > kMaxCuts) continue;
+        const double q = std::sqrt(rb2_k - r_sin2);
+        const double t = rising ? q - r_mu : -q - r_mu;
+        cuts[n_cuts++] = std::sqrt(std::clamp((t - origin) / direction, 0.0, 1.0));
     }
+    if (n_cuts == 1) {
+        accumulate(piece.s2.data(), piece.weight.data(), piece.s2.size());
+        return to_vec4(sum * float(len));
+    }
+    cuts[n_cuts++] = 1.0;
+    std::sort(cuts, cuts + n_cuts);
+    // Panels of the parts, then their nodes, in stack arrays (a heap buffer only for
+    // quadratures with more nodes than kStackNodes).
+    const int panels = int(piece.s2.size() / 4);
+    double lo[kMaxCuts + 2], step[kMaxCuts + 2];
+    int count[kMaxCuts + 2], total = 0;
+    for (int k = 0; k + 1 < n_cuts; ++k) {
+        const double width = cuts[k + 1] - cuts[k];
+        count[k] = width > 0.0 ? std::max(1, int(double(panels) * width + 0.5)) : 0;
+        lo[k] = cuts[k];
+        step[k] = count[k] > 0 ? width / double(count[k]) : 0.0;
+        total += count[k];
+    }
+    constexpr int kStackNodes = 256;
+    double s2_stack[kStackNodes];
+    float weight_stack[kStackNodes];
+    std::vector<double> s2_heap;
+    std::vector<float> weight_heap;
+    double* s2 = s2_stack;
+    float* weight = weight_stack;
+    if (4 * total > kStackNodes) {
+        s2_heap.resize(std::size_t(4 * total));
+        weight_heap.resize(std::size_t(4 * total));
+        s2 = s2_heap.data();
+        weight = weight_heap.data();
+    }
+    std::size_t n = 0;
+    for (int k = 0; k + 1 < n_cuts; ++k) {
+        part_nodes(lo[k], step[k], piece.offset.data(), piece.gl_weight.data(), std::size_t(4 * count[k]), s2 + n,
+                   weight + n);
+        n += std::size_t(4 * count[k]);
+    }
+    accumulate(s2, weight, n);
     return to_vec4(sum * float(len));
 }
 

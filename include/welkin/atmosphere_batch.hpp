@@ -79,6 +79,12 @@ public:
         return e.value + f * e.step;
     }
 
+    // Radii where a density profile has a kink or a jump (DensityProfile::breakpoints_m of
+    // the three constituents, inside the atmosphere; sorted, distinct): quadratures along
+    // rays cut their panels there (GradedQuadrature), since a panel across a kink loses
+    // Gauss-Legendre's order.
+    const std::vector<double>& breakpoint_radii() const { return breakpoint_radii_; }
+
     // Phase functions at scattering cosine nu (phase.hpp).
     float rayleigh_phase(float nu) const;
     float mie_phase(float nu) const;
@@ -94,6 +100,7 @@ private:
     float mie_g_;
     std::vector<MediumSample> table_;
     std::vector<ExtinctionEntry> extinction_;
+    std::vector<double> breakpoint_radii_;
 };
 
 // Copies lanes [0, count) of v into out[0..count).

@@ -103,6 +103,10 @@ private:
     struct Piece {
         std::vector<double> s2;
         std::vector<float> weight;
+        // For rays cut at breakpoints: node l of a part of n <= panels panels of width h
+        // starting at s_0 is s = s_0 + offset[l] h (offset = panel index + GL node), weight
+        // gl_weight[l] 2 s h.
+        std::vector<double> offset, gl_weight;
     };
     static Piece make_piece(int panels);
     Spectrum4 integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b, bool toward_a,
