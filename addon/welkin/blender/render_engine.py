@@ -9,9 +9,10 @@ Welkin.AerialTransmittance, Welkin.Clouds and Welkin.CloudDepth (transparent and
 without clouds). Errors (no camera, no world, a camera below the ground, a marked volume
 whose VDB file is missing, the compiled module missing) are reported
 with self.report({'ERROR'}) and no result is written; a cancelled render (Esc,
-test_break) stops the core. A cloudy plate is computed in tiles of BAND_ROWS rows
-(welkin.camera_plate(rows=...), each tile with the whole frame's values), each shown as
-soon as it is done, with update_progress and test_break between tiles. No viewport preview (view_update /
+test_break) stops the core. The plate, clear or cloudy, is computed in tiles of BAND_ROWS
+rows (welkin.CameraPlateRenderer: the frame-wide part once, then render(rows=...) per
+tile, with the whole frame's values), each shown as soon as it is done, with
+update_progress and test_break between tiles. No viewport preview (view_update /
 view_draw are not implemented): the viewport shows Blender's Workbench-like fallback.
 """
 import bpy
@@ -108,14 +109,19 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
         self.update_stats("Welkin", "sky, sun, clouds and aerial perspective" if cloudy
                           else "sky, sun and aerial perspective")
         width, height = description.width, description.height
-        # Tiles: a cloudy plate (seconds to minutes) is computed band by band, each band
-        # handed to Blender as soon as it is done; a clear plate (about a second at 1080p)
-        # at once, since every band rebuilds the atmosphere's LUTs (0.5 s at 1080p).
-        compute_rows = BAND_ROWS if cloudy else height
         for name, channels, chan_id, _source in plate.PASSES:
             self.add_pass(name, channels, chan_id)
+        try:
+            # The frame-wide part once (depth, sky method, aerial LUTs and volume); then
+            # tiles of BAND_ROWS rows, each handed to Blender as soon as it is done.
+            renderer = native.CameraPlateRenderer(description)
+        except (ValueError, OSError) as error:
+            self.report({'ERROR'}, f"Welkin: {error}")
+            return
+        except KeyboardInterrupt:
+            return
         done = 0
-        for rows, _y, h in plate.bands(height, compute_rows):
+        for rows, _y, h in plate.bands(height, BAND_ROWS):
             def progress(fraction, done=done, h=h):
                 self.update_progress((done + fraction * h) / height)
                 return not self.test_break()
@@ -123,7 +129,7 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
             if self.test_break():
                 return
             try:
-                result = native.camera_plate(description, progress=progress, rows=rows)
+                result = renderer.render(rows=rows, progress=progress)
             except (ValueError, OSError) as error:
                 self.report({'ERROR'}, f"Welkin: {error}")
                 return
