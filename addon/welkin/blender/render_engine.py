@@ -12,13 +12,13 @@ with self.report({'ERROR'}) and no result is written; a cancelled render (Esc,
 test_break) stops the core. The plate, clear or cloudy, is computed in tiles of BAND_ROWS
 rows (welkin.CameraPlateRenderer: the frame-wide part once, then render(rows=...) per
 tile, with the whole frame's values), each shown as soon as it is done, with
-update_progress and test_break between tiles. No viewport preview (view_update /
-view_draw are not implemented): the viewport shows Blender's Workbench-like fallback.
+update_progress and test_break between tiles. view_update / view_draw: the viewport
+preview (viewport_preview.py), the same plate for the viewport's view.
 """
 import bpy
 
 from .. import plate, sky_request
-from . import cloud_scene, scene_sun, update
+from . import cloud_scene, scene_sun, update, viewport_preview
 from .scene_sun import UserError
 
 BAND_ROWS = 64
@@ -43,11 +43,10 @@ def _camera_data(cam):
     return data
 
 
-def scene_description_json(scene, depsgraph, native):
-    """The frame's scene JSON (README "Scene JSON"); UserError for what the user can fix."""
-    if scene.camera is None:
-        raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
-                        "active (Ctrl+Numpad 0)")
+def scene_world(scene, depsgraph, native):
+    """What the plate sees besides the camera: a dict of plate.scene_json's arguments
+    (atmosphere, altitude, sun, exposure, method, clouds) from the world's Welkin settings,
+    the sun lamp and the clouds at this frame; UserError for what the user can fix."""
     if scene.world is None:
         raise UserError("the scene has no world: add one (World properties); its Welkin Sky "
                         "settings drive the plate")
@@ -55,6 +54,20 @@ def scene_description_json(scene, depsgraph, native):
     request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
     sky_request.validate(request, native)
     atm = sky_request.build_atmosphere(request, native)
+    # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
+    # a UserError naming the object and the path: no frame is written).
+    clouds = cloud_scene.clouds_section(scene, depsgraph)
+    return {"atmosphere_json": atm.to_json_string(), "origin_altitude_m": settings.altitude_m,
+            "sun_direction": tuple(request.sun_direction), "exposure": request.exposure,
+            "method": sky_request.resolve_method(request.method, native), "clouds": clouds}
+
+
+def scene_description_json(scene, depsgraph, native):
+    """The frame's scene JSON (README "Scene JSON"); UserError for what the user can fix."""
+    if scene.camera is None:
+        raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
+                        "active (Ctrl+Numpad 0)")
+    world = scene_world(scene, depsgraph, native)
     camera = scene.camera.evaluated_get(depsgraph)
     if camera.type != "CAMERA":
         raise UserError(f"the active camera '{camera.name}' is not a camera object")
@@ -64,13 +77,8 @@ def scene_description_json(scene, depsgraph, native):
     if r.use_border:
         raise UserError("render region (Output > Format > Render Region) is not supported by "
                         "the Welkin engine: turn it off to render the full frame")
-    # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
-    # a UserError naming the object and the path: no frame is written).
-    clouds = cloud_scene.clouds_section(scene, depsgraph)
-    return plate.scene_json(atm.to_json_string(), settings.altitude_m, request.sun_direction,
-                            request.exposure, sky_request.resolve_method(request.method, native),
-                            cam, (r.resolution_x, r.resolution_y, r.resolution_percentage),
-                            clouds=clouds)
+    return plate.scene_json(camera=cam, resolution=(r.resolution_x, r.resolution_y,
+                                                    r.resolution_percentage), **world)
 
 
 def _set_rect(render_pass, rect):
@@ -88,6 +96,26 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
     bl_label = "Welkin"
     bl_use_postprocess = True
     bl_use_preview = False
+
+    def __init__(self):
+        self.preview = None
+
+    def __del__(self):
+        preview = getattr(self, "preview", None)
+        if preview is not None:
+            preview.stop()
+
+    # The viewport preview (Rendered shading): viewport_preview.py.
+    def view_update(self, context, depsgraph):
+        if self.preview is None:
+            self.preview = viewport_preview.Preview(self)
+        self.preview.update(context, depsgraph)
+
+    def view_draw(self, context, depsgraph):
+        if self.preview is None:
+            self.preview = viewport_preview.Preview(self)
+            self.preview.update(context, depsgraph)
+        self.preview.draw(self, context, depsgraph)
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
