@@ -30,8 +30,11 @@ from .. import plate, viewport
 from . import update
 from .scene_sun import UserError
 
-# The newest preview drawn (tests/blender/viewport_window_script.py reads it).
+# The newest preview drawn (tests/blender/viewport_window_script.py reads it), and, when
+# READBACK is a (x, y, width, height) box of region pixels, the viewport's framebuffer
+# there after the draw (LAST["readback"], RGBA rows bottom first).
 LAST = {}
+READBACK = None
 POLL_S = 0.05
 
 
@@ -169,14 +172,22 @@ class Preview:
             engine.update_stats("", f"Welkin preview {w} x {h} ({state})")
         else:
             engine.update_stats("", "Welkin preview: rendering")
+        upload = 0.0
         if job.image is not None and (self.texture_key is not job.image):
+            upload = time.perf_counter()
             self._upload(job.image)
+            upload = time.perf_counter() - upload
         if self.texture is not None:
             self._draw_texture(engine, context)
-        self.draw_seconds.append(time.perf_counter() - t0)
-        LAST.update(key=key, image=self.texture_key, job_key=job.key, done=job.done,
-                    timings=list(job.timings), draw_seconds=list(self.draw_seconds[-200:]),
+        self.draw_seconds.append((time.perf_counter() - t0, upload))
+        LAST.update(key=key, image=self.texture_key, job=job, done=job.done,
+                    timings=list(job.timings), draw_seconds=list(self.draw_seconds[-500:]),
                     drawn_size=self.drawn_size, error=job.error)
+        if READBACK is not None and self.texture is not None:
+            import gpu
+            x, y, w, h = READBACK
+            fb = gpu.state.active_framebuffer_get()
+            LAST["readback"] = fb.read_color(x, y, w, h, 4, 0, 'FLOAT').to_list()
 
     def _upload(self, image):
         import gpu
