@@ -3,7 +3,7 @@
 with $WELKIN_VIEWPORT_RESULT the JSON file to write. Not a test_* file: it needs a window.
 
 The factory 3D viewport is switched to Rendered shading with the Welkin engine; a timer
-forces redraws (wm.redraw_timer DRAW_WIN_SWAP) until the preview's last level is drawn,
+tags redraws (area.tag_redraw; Blender's main loop draws) until the preview's last level is drawn,
 for a free perspective view, an orthographic one, the camera view, and a view changed
 while a preview runs. Checked for each (viewport_preview.LAST):
   * view_draw ran and drew the region's full-size level, finite and non-negative;
@@ -162,8 +162,12 @@ def tick():
             set_view("PERSP" if kind == "CHANGE" else kind)
             vp.READBACK = (region.width // 2 - 4, region.height // 2 - 4, 8, 8)
             state.update(started=True, t_step=time.time(), changed=False)
-        with bpy.context.temp_override(window=win, area=area, region=region):
-            bpy.ops.wm.redraw_timer(type='DRAW_WIN_SWAP', iterations=1)
+        # Redraws by Blender's own main loop: a Python context override around
+        # wm.redraw_timer would make every context lookup of the draw read the override's
+        # Python dict, which Blender 3.4 does without the GIL when another Python thread
+        # (the preview's) holds it (BPY_context_member_get trusts PyC_IsInterpreterActive):
+        # Blender crashed so, 1 run in 3. Users never draw under an override.
+        area.tag_redraw()
         L = vp.LAST
         if kind == "CHANGE" and not state["changed"] and L.get("job") is not None:
             # Mid-preview: turn the view; the running job must be cancelled.

@@ -108,12 +108,12 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
     # The viewport preview (Rendered shading): viewport_preview.py.
     def view_update(self, context, depsgraph):
         if self.preview is None:
-            self.preview = viewport_preview.Preview(self)
+            self.preview = viewport_preview.Preview(self, scene_world)
         self.preview.update(context, depsgraph)
 
     def view_draw(self, context, depsgraph):
         if self.preview is None:
-            self.preview = viewport_preview.Preview(self)
+            self.preview = viewport_preview.Preview(self, scene_world)
             self.preview.update(context, depsgraph)
         self.preview.draw(self, context, depsgraph)
 

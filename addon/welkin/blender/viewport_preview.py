@@ -25,7 +25,14 @@ import time
 import weakref
 
 import bpy
+# Imported here, on the main thread, before any preview thread runs: a first import of
+# Blender's gpu module inside view_draw while a preview thread ran crashed Blender 3.4
+# (SIGSEGV in PyType_Ready under the import, seen under Xvfb).
+import gpu
+import numpy as np
+from gpu_extras.presets import draw_texture_2d
 
+from .. import native as native_module
 from .. import plate, viewport
 from . import update
 from .scene_sun import UserError
@@ -56,7 +63,6 @@ class Job(threading.Thread):
         self.cancelled = True
 
     def run(self):
-        import numpy as np
         try:
             for (w, h), camera in self.cameras:
                 if self.cancelled:
@@ -86,8 +92,9 @@ class Job(threading.Thread):
 class Preview:
     """One viewport's preview (the engine instance owns one)."""
 
-    def __init__(self, engine):
+    def __init__(self, engine, scene_world):
         self.engine = weakref.ref(engine)
+        self.scene_world = scene_world  # render_engine.scene_world
         self.world = None      # render_engine.scene_world's dict, or None
         self.error = None      # a UserError's text from view_update
         self.generation = 0    # bumped by each view_update
@@ -100,11 +107,10 @@ class Preview:
 
     # --- main thread -------------------------------------------------------------------
     def update(self, context, depsgraph):
-        from .render_engine import scene_world
         self.generation += 1
         try:
             native = update.module_or_error()
-            self.world = scene_world(depsgraph.scene, depsgraph, native)
+            self.world = self.scene_world(depsgraph.scene, depsgraph, native)
             self.error = None
         except (UserError, ValueError) as error:
             self.world, self.error = None, f"Welkin: {error}"
@@ -117,7 +123,6 @@ class Preview:
                 tuple(tuple(r) for r in rv3d.window_matrix))
 
     def start(self, context, key):
-        from .. import native as native_module
         region, rv3d = context.region, context.region_data
         scale = context.scene.unit_settings.scale_length
         cameras = []
@@ -184,21 +189,17 @@ class Preview:
                     timings=list(job.timings), draw_seconds=list(self.draw_seconds[-500:]),
                     drawn_size=self.drawn_size, error=job.error)
         if READBACK is not None and self.texture is not None:
-            import gpu
             x, y, w, h = READBACK
             fb = gpu.state.active_framebuffer_get()
             LAST["readback"] = fb.read_color(x, y, w, h, 4, 0, 'FLOAT').to_list()
 
     def _upload(self, image):
-        import gpu
         _key, w, h, pixels = image
         buffer = gpu.types.Buffer('FLOAT', len(pixels), pixels)
         self.texture = gpu.types.GPUTexture((w, h), format='RGBA32F', data=buffer)
         self.texture_key = image
 
     def _draw_texture(self, engine, context):
-        import gpu
-        from gpu_extras.presets import draw_texture_2d
         _key, w, h, _pixels = self.texture_key
         dw, dh = viewport.drawn_size(context.region.width, w, h)
         self.drawn_size = (dw, dh)
