@@ -53,20 +53,9 @@ Safe to call render() from several Python threads (the GIL is released while it 
 )doc";
 
 SceneDescription scene_from(const py::handle& scene_in) {
-    SceneDescription scene;
-    if (py::isinstance<SceneDescription>(scene_in))
-        scene = scene_in.cast<SceneDescription>();
-    else if (py::isinstance<py::str>(scene_in))
-        scene = SceneDescription::from_json_string(scene_in.cast<std::string>());
-    else
-        throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
+    SceneDescription scene = to_scene(scene_in);
     scene.require_camera();
     return scene;
-}
-
-void check_progress(const py::object& progress) {
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw py::type_error("progress: must be a callable taking the fraction done, or None");
 }
 
 py::dict plate_dict(CameraPlate&& plate) {
@@ -94,7 +83,7 @@ RowRange band_of(const std::optional<std::pair<int, int>>& rows, int height) {
 py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress,
                          const std::optional<std::pair<int, int>>& rows) {
     const SceneDescription scene = scene_from(scene_in);
-    check_progress(progress);
+    require_progress_callback(progress);
     const RowRange band = band_of(rows, scene.resolution.height());
     CameraPlate plate;
     run_cancellable([&](Progress* p) { plate = render_camera_plate(scene, p, band); }, progress);
@@ -110,7 +99,7 @@ std::shared_ptr<CameraPlateRenderer> make_renderer(const py::handle& scene_in) {
 
 py::dict renderer_render(const CameraPlateRenderer& renderer, const std::optional<std::pair<int, int>>& rows,
                          const py::object& progress) {
-    check_progress(progress);
+    require_progress_callback(progress);
     const RowRange band = band_of(rows, renderer.height());
     CameraPlate plate;
     run_cancellable([&](Progress* p) { plate = renderer.render(band, p); }, progress);
