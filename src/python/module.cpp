@@ -8,7 +8,7 @@
 //   exr_bindings.cpp         write_exr, read_exr
 //   aerial_bindings.cpp      welkin.SceneDescription, aerial_perspective
 //   cloud_bindings.cpp       welkin.CloudLayer, VdbClouds, cloud_radiance
-//   plate_bindings.cpp       camera_plate
+//   plate_bindings.cpp       camera_plate, CameraPlateRenderer
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
 #include <cstring>
@@ -73,6 +73,17 @@ glm::dvec3 to_dvec3(const py::handle& values, const std::string& parameter) {
     const c_array<double> v =
         to_c_array<double>(values, parameter, 3, 1, 1, "a sequence of 3 numbers (x, y, z), Z up");
     return {v.data()[0], v.data()[1], v.data()[2]};
+}
+
+SceneDescription to_scene(const py::handle& scene) {
+    if (py::isinstance<SceneDescription>(scene)) return scene.cast<SceneDescription>();
+    if (py::isinstance<py::str>(scene)) return SceneDescription::from_json_string(scene.cast<std::string>());
+    throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
+}
+
+void require_progress_callback(const py::object& progress) {
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+        throw py::type_error("progress: must be a callable taking the fraction done, or None");
 }
 
 void throw_bad_shape(const std::string& parameter, const std::string& expected,
