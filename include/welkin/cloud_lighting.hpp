@@ -96,13 +96,20 @@ struct CloudScattering {
     void validate() const;
 };
 
+// How the march approximates the orders of sun light beyond the first (see above).
+enum class CloudMultipleScattering {
+    octaves,    // Wrenninge's octaves (weighted by the optical size when octave_optical_size)
+    diffusion,  // the delta-Eddington slab along the sun line (cloud_diffusion.hpp)
+};
+
 struct CloudLightingOptions {
     CloudScattering scattering;
     int max_steps = 96;               // along each view ray, [1, 4096]
     int light_steps = 8;              // along each shadow ray, [1, 256]
     int ambient_steps = 4;            // along the ray towards the zenith, [0, 256] (0: no decay)
     double light_distance_m = 4000.0; // how far the shadow and sky rays look, (0, 1e6]
-    int octaves = 4;                  // Wrenninge's multiple-scattering octaves, [1, 16]
+    CloudMultipleScattering multiple_scattering = CloudMultipleScattering::diffusion;
+    int octaves = 4;                  // Wrenninge's octaves, [1, 16]; 1: single scattering in either mode
     double octave_extinction = 0.5;   // a, (0, 1]
     double octave_contribution = 0.5; // b, (0, 1]
     double octave_eccentricity = 0.5; // c, (0, 1]

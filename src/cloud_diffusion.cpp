@@ -1,0 +1,69 @@
+// The delta-Eddington slab along the sun line; see cloud_diffusion.hpp.
+#include "welkin/cloud_diffusion.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "welkin/math.hpp"
+
+namespace welkin {
+
+DiffuseField eddington_slab(double Z, double z, double albedo, double mu0) {
+    Z = std::max(Z, 0.0);
+    z = std::clamp(z, 0.0, Z);
+    const double q = 2.0 / (3.0 * mu0);  // the faces' conditions carry (2/3) (1/mu0) of the beam term
+    const double beam_z = std::exp(-z / mu0), beam_Z = std::exp(-Z / mu0);
+    const double k2 = 3.0 * (1.0 - albedo);
+    if (k2 < 3e-12) {
+        // Conservative: phi = A + B z + C e^{-z/mu0}, C = -3 mu0^2; the faces give
+        //   A - (2/3) B = -C (1 + q),   A + B (Z + 2/3) = -C e^{-Z/mu0} (1 - q).
+        const double C = -3.0 * mu0 * mu0;
+        const double B = -C * (beam_Z * (1.0 - q) - (1.0 + q)) / (Z + 4.0 / 3.0);
+        const double A = (2.0 / 3.0) * B - C * (1.0 + q);
+        return {A + B * z + C * beam_z, -(B - C / mu0 * beam_z) / 3.0};
+    }
+    // The particular solution C e^{-z/mu0} is resonant at k mu0 = 1; there k^2 mu0^2 is
+    // moved by 1e-6, which changes phi by O(1e-6) relative (the homogeneous part absorbs
+    // the large C; double precision loses ~1e-10 to the cancellation).
+    double km2 = k2 * mu0 * mu0;
+    if (std::abs(km2 - 1.0) < 1e-6) km2 = 1.0 + 1e-6;
+    const double k = std::sqrt(km2) / mu0;
+    const double C = 3.0 * albedo * mu0 * mu0 / (km2 - 1.0);
+    // phi = A e^{-kz} + B e^{-k(Z-z)} + C e^{-z/mu0}; the faces give
+    //   A p + B m = -C (1 + q),   A m + B p = -C e^{-Z/mu0} (1 - q),
+    //   p = 1 + 2k/3, m = (1 - 2k/3) e^{-kZ}.
+    const double p = 1.0 + 2.0 * k / 3.0, m = (1.0 - 2.0 * k / 3.0) * std::exp(-k * Z);
+    const double r1 = -C * (1.0 + q), r2 = -C * beam_Z * (1.0 - q);
+    const double det = p * p - m * m;  // > 0: p > |m|
+    const double A = (p * r1 - m * r2) / det, B = (p * r2 - m * r1) / det;
+    const double ea = std::exp(-k * z), eb = std::exp(-k * (Z - z));
+    const double phi = A * ea + B * eb + C * beam_z;
+    const double dphi = -k * A * ea + k * B * eb - C / mu0 * beam_z;
+    return {phi, -dphi / 3.0};
+}
+
+SimilarityScaling::SimilarityScaling(double a, double g) {
+    forward = std::max(g, 0.0);
+    depth_scale = 1.0 - a * forward;
+    albedo = depth_scale > 0.0 ? (1.0 - forward) * a / depth_scale : 1.0;
+}
+
+double diffusion_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g,
+                        double p2) {
+    const double ts = sim.depth_scale * tau_sun, T = sim.depth_scale * (tau_sun + tau_anti);
+    const double forward = (std::exp(-ts) - std::exp(-tau_sun)) * p2;
+    // The orientation average (see the header): int_0^1 2 mu0 f(mu0) dmu0 = int_0^1 f(sqrt(v)) dv,
+    // by 3-point Gauss-Legendre in v = mu0^2 (exact for f polynomial of degree 5 in v).
+    static constexpr double kR = 0.3872983346207417;  // sqrt(3/5) / 2
+    static constexpr std::array<double, 3> v = {0.5 - kR, 0.5, 0.5 + kR}, w = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+    double diffuse = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double mu0 = std::sqrt(v[i]);
+        const DiffuseField d = eddington_slab(mu0 * T, mu0 * ts, sim.albedo, mu0);
+        diffuse += w[i] * std::max(0.0, d.fluence + 3.0 * g * d.flux * mu0 * nu);
+    }
+    return forward + diffuse / (4.0 * kPi);
+}
+
+}  // namespace welkin
