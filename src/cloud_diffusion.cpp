@@ -12,10 +12,10 @@ namespace welkin {
 DiffuseField eddington_slab(double Z, double z, double albedo, double mu0) {
     Z = std::max(Z, 0.0);
     z = std::clamp(z, 0.0, Z);
-    const double q = 2.0 / (3.0 * mu0);  // the faces' conditions carry (2/3) (1/mu0) of the beam term
-    const double beam_z = std::exp(-z / mu0), beam_Z = std::exp(-Z / mu0);
     const double k2 = 3.0 * (1.0 - albedo);
     if (k2 < 3e-12) {
+        const double q = 2.0 / (3.0 * mu0);  // the faces' conditions carry (2/3) (1/mu0) of the beam term
+        const double beam_z = std::exp(-z / mu0), beam_Z = std::exp(-Z / mu0);
         // Conservative: phi = A + B z + C e^{-z/mu0}, C = -3 mu0^2; the faces give
         //   A - (2/3) B = -C (1 + q),   A + B (Z + 2/3) = -C e^{-Z/mu0} (1 - q).
         const double C = -3.0 * mu0 * mu0;
@@ -23,23 +23,38 @@ DiffuseField eddington_slab(double Z, double z, double albedo, double mu0) {
         const double A = (2.0 / 3.0) * B - C * (1.0 + q);
         return {A + B * z + C * beam_z, -(B - C / mu0 * beam_z) / 3.0};
     }
-    // The particular solution C e^{-z/mu0} is resonant at k mu0 = 1; there k^2 mu0^2 is
-    // moved by 1e-6, which changes phi by O(1e-6) relative (the homogeneous part absorbs
-    // the large C; double precision loses ~1e-10 to the cancellation).
-    double km2 = k2 * mu0 * mu0;
-    if (std::abs(km2 - 1.0) < 1e-6) km2 = 1.0 + 1e-6;
-    const double k = std::sqrt(km2) / mu0;
-    const double C = 3.0 * albedo * mu0 * mu0 / (km2 - 1.0);
-    // phi = A e^{-kz} + B e^{-k(Z-z)} + C e^{-z/mu0}; the faces give
-    //   A p + B m = -C (1 + q),   A m + B p = -C e^{-Z/mu0} (1 - q),
+    // phi = A e^{-kz} + B e^{-k(Z-z)} + P(z), P a particular solution; the faces give
+    //   A p + B m = -(P(0) - (2/3) P'(0)),   A m + B p = -(P(Z) + (2/3) P'(Z)),
     //   p = 1 + 2k/3, m = (1 - 2k/3) e^{-kZ}.
+    // P = C e^{-z/mu0}, C = 3 albedo mu0^2 / (k^2 mu0^2 - 1), except at the resonance
+    // k mu0 = 1, where P = D z e^{-z/mu0}, D = 3 albedo mu0 / 2 (P'' - k^2 P = -(2 D / mu0)
+    // e^{-z/mu0} there). C's rounding grows as 1 / |k^2 mu0^2 - 1|, the resonant form's
+    // error as |k^2 mu0^2 - 1|: the switch at 1e-8 keeps both near 1e-8.
+    const double km2 = k2 * mu0 * mu0;
+    const double k = std::sqrt(k2);
+    const bool resonant = std::abs(km2 - 1.0) < 1e-8;
+    const double C = resonant ? 1.5 * albedo * mu0 : 3.0 * albedo * mu0 * mu0 / (km2 - 1.0);
+    const auto particular = [&](double x, double& P, double& dP) {
+        const double e = std::exp(-x / mu0);
+        if (resonant) {
+            P = C * x * e;
+            dP = C * e * (1.0 - x / mu0);
+        } else {
+            P = C * e;
+            dP = -C / mu0 * e;
+        }
+    };
+    double P0, dP0, PZ, dPZ, Pz, dPz;
+    particular(0.0, P0, dP0);
+    particular(Z, PZ, dPZ);
+    particular(z, Pz, dPz);
     const double p = 1.0 + 2.0 * k / 3.0, m = (1.0 - 2.0 * k / 3.0) * std::exp(-k * Z);
-    const double r1 = -C * (1.0 + q), r2 = -C * beam_Z * (1.0 - q);
+    const double r1 = -(P0 - (2.0 / 3.0) * dP0), r2 = -(PZ + (2.0 / 3.0) * dPZ);
     const double det = p * p - m * m;  // > 0: p > |m|
     const double A = (p * r1 - m * r2) / det, B = (p * r2 - m * r1) / det;
     const double ea = std::exp(-k * z), eb = std::exp(-k * (Z - z));
-    const double phi = A * ea + B * eb + C * beam_z;
-    const double dphi = -k * A * ea + k * B * eb - C / mu0 * beam_z;
+    const double phi = A * ea + B * eb + Pz;
+    const double dphi = -k * A * ea + k * B * eb + dPz;
     return {phi, -dphi / 3.0};
 }
 
