@@ -9,20 +9,29 @@
 
 namespace welkin {
 
+namespace {
+
+// The conservative slab, phi = A + B z + C e^{-z/mu0}, C = -3 mu0^2, given the beam's
+// e^{-z/mu0} and e^{-Z/mu0} (shared by every inclination along one sun line: z / mu0 and
+// Z / mu0 are the sun line's own depths); the faces give
+//   A - (2/3) B = -C (1 + q),   A + B (Z + 2/3) = -C e^{-Z/mu0} (1 - q),   q = 2 / (3 mu0).
+DiffuseField conservative_slab(double Z, double z, double mu0, double beam_z, double beam_Z) {
+    const double q = 2.0 / (3.0 * mu0);
+    const double C = -3.0 * mu0 * mu0;
+    const double B = -C * (beam_Z * (1.0 - q) - (1.0 + q)) / (Z + 4.0 / 3.0);
+    const double A = (2.0 / 3.0) * B - C * (1.0 + q);
+    return {A + B * z + C * beam_z, -(B - C / mu0 * beam_z) / 3.0};
+}
+
+constexpr double kConservative = 3e-12;  // k^2 below this: albedo' = 1 to 1e-12
+
+}  // namespace
+
 DiffuseField eddington_slab(double Z, double z, double albedo, double mu0) {
     Z = std::max(Z, 0.0);
     z = std::clamp(z, 0.0, Z);
     const double k2 = 3.0 * (1.0 - albedo);
-    if (k2 < 3e-12) {
-        const double q = 2.0 / (3.0 * mu0);  // the faces' conditions carry (2/3) (1/mu0) of the beam term
-        const double beam_z = std::exp(-z / mu0), beam_Z = std::exp(-Z / mu0);
-        // Conservative: phi = A + B z + C e^{-z/mu0}, C = -3 mu0^2; the faces give
-        //   A - (2/3) B = -C (1 + q),   A + B (Z + 2/3) = -C e^{-Z/mu0} (1 - q).
-        const double C = -3.0 * mu0 * mu0;
-        const double B = -C * (beam_Z * (1.0 - q) - (1.0 + q)) / (Z + 4.0 / 3.0);
-        const double A = (2.0 / 3.0) * B - C * (1.0 + q);
-        return {A + B * z + C * beam_z, -(B - C / mu0 * beam_z) / 3.0};
-    }
+    if (k2 < kConservative) return conservative_slab(Z, z, mu0, std::exp(-z / mu0), std::exp(-Z / mu0));
     // phi = A e^{-kz} + B e^{-k(Z-z)} + P(z), P a particular solution; the faces give
     //   A p + B m = -(P(0) - (2/3) P'(0)),   A m + B p = -(P(Z) + (2/3) P'(Z)),
     //   p = 1 + 2k/3, m = (1 - 2k/3) e^{-kZ}.
@@ -64,21 +73,25 @@ SimilarityScaling::SimilarityScaling(double a, double g) {
     albedo = depth_scale > 0.0 ? (1.0 - forward) * a / depth_scale : 1.0;
 }
 
-double diffusion_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g,
-                        double p2) {
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g, double p,
+                  double p2) {
+    const double single = std::exp(-tau_sun);
     const double ts = sim.depth_scale * tau_sun, T = sim.depth_scale * (tau_sun + tau_anti);
-    const double forward = (std::exp(-ts) - std::exp(-tau_sun)) * p2;
     // The orientation average (see the header): int_0^1 2 mu0 f(mu0) dmu0 = int_0^1 f(sqrt(v)) dv,
     // by 3-point Gauss-Legendre in v = mu0^2 (exact for f polynomial of degree 5 in v).
-    static constexpr double kR = 0.3872983346207417;  // sqrt(3/5) / 2
-    static constexpr std::array<double, 3> v = {0.5 - kR, 0.5, 0.5 + kR}, w = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+    // Nodes v = 1/2 -+ sqrt(3/5) / 2, 1/2; weights 5/18, 8/18, 5/18.
+    static constexpr std::array<double, 3> w = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+    static constexpr std::array<double, 3> mu = {0.3357106870197288, 0.7071067811865476, 0.9419651451198934};  // sqrt(v)
+    const bool conservative = 3.0 * (1.0 - sim.albedo) < kConservative;
+    const double beam_t = conservative ? std::exp(-ts) : 0.0, beam_T = conservative ? std::exp(-T) : 0.0;
     double diffuse = 0.0;
     for (int i = 0; i < 3; ++i) {
-        const double mu0 = std::sqrt(v[i]);
-        const DiffuseField d = eddington_slab(mu0 * T, mu0 * ts, sim.albedo, mu0);
-        diffuse += w[i] * std::max(0.0, d.fluence + 3.0 * g * d.flux * mu0 * nu);
+        const DiffuseField d = conservative ? conservative_slab(mu[i] * T, mu[i] * ts, mu[i], beam_t, beam_T)
+                                            : eddington_slab(mu[i] * T, mu[i] * ts, sim.albedo, mu[i]);
+        diffuse += w[i] * std::max(0.0, d.fluence + 3.0 * g * d.flux * mu[i] * nu);
     }
-    return forward + diffuse / (4.0 * kPi);
+    const double forward = ((conservative ? beam_t : std::exp(-ts)) - single) * p2;
+    return single * p + forward + diffuse / (4.0 * kPi);
 }
 
 }  // namespace welkin

@@ -174,8 +174,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                     double sun_w = 0.0;
                     if (diffusion) {
                         // Single scattering plus the forward-scattered and diffuse parts.
-                        sun_w = std::exp(-tau_sun) * phase[0] +
-                                diffusion_source(similarity, tau_sun, tau_anti, nu, mean_g, phase2);
+                        sun_w = sun_source(similarity, tau_sun, tau_anti, nu, mean_g, phase[0], phase2);
                     } else {
                         const double f = sized ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
                         double fi = 1.0;

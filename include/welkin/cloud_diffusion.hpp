@@ -88,10 +88,10 @@ struct SimilarityScaling {
     SimilarityScaling(double albedo, double mean_cosine);
 };
 
-// Parts 2 and 3 of the source above per unit sigma_s E, for the sun-line depths tau_sun,
-// tau_anti (unscaled), nu = d . s, g the phase's mean cosine and p2 = the twice-scattered
-// phase at nu.
-double diffusion_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g,
-                        double p2);
+// The source of sun light above per unit sigma_s E (parts 1, 2 and 3), for the sun-line
+// depths tau_sun, tau_anti (unscaled), nu = d . s, g the phase's mean cosine, p the phase
+// and p2 the twice-scattered phase at nu.
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g, double p,
+                  double p2);
 
 }  // namespace welkin
