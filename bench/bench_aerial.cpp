@@ -27,6 +27,7 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
+#include "aerial_comparison.hpp"  // tests/cpp: the comparison the tests assert on
 #include "bench_timing.hpp"
 #include "welkin/aerial_perspective.hpp"
 #include "welkin/math.hpp"
@@ -65,27 +66,6 @@ std::vector<float> terrain_depth(const Camera& cam, int W, int H, double height_
             depth[std::size_t(y) * W + x] = float(t / r.distance_per_depth);
         }
     return depth;
-}
-
-struct Errors {
-    double median, p99, max, max_T;
-};
-
-Errors compare(const AerialPasses& f, const AerialPasses& r, const std::vector<float>& depth) {
-    float L_max = 0.0f;
-    for (float v : r.inscatter) L_max = std::max(L_max, v);
-    std::vector<double> rel;
-    double max_T = 0.0;
-    for (std::size_t p = 0; p < depth.size(); ++p) {
-        if (!std::isfinite(depth[p])) continue;
-        for (int c = 0; c < 3; ++c) {
-            const double lr = r.inscatter[p * 3 + c], lf = f.inscatter[p * 3 + c];
-            if (lr > 1e-3 * L_max) rel.push_back(std::abs(lf - lr) / lr);
-            max_T = std::max(max_T, double(std::abs(f.transmittance[p * 3 + c] - r.transmittance[p * 3 + c])));
-        }
-    }
-    std::sort(rel.begin(), rel.end());
-    return {rel[rel.size() / 2], rel[rel.size() * 99 / 100], rel.back(), max_T};
 }
 
 }  // namespace
@@ -153,13 +133,13 @@ int main(int argc, char** argv) {
         });
         AerialPasses full;
         const double t_total = median_ms(repeats, [&] { full = aerial_perspective_froxel(s, depth, width, height); });
-        const Errors e = compare(full, reference, depth);
+        const test::AerialComparison e = test::compare_aerial_passes(full, reference, depth);
         fmt::print("  {:>10} {:10.2f} {:10.2f} {:10.2f} {:8.0f}x {:11.3f} {:10.3f} {:10.3f} {:9.5f}\n",
                    fmt::format("{0}x{0}x{0}", n), t_build, t_apply, t_total, t_march / t_total,
-                   100 * e.median, 100 * e.p99, 100 * e.max, e.max_T);
+                   100 * e.median_rel_L, 100 * e.p99_rel_L, 100 * e.max_rel_L, e.max_abs_T);
         if (out)
             std::fprintf(out, "%d,%.3f,%.3f,%.3f,%.1f,%.6f,%.6f,%.6f,%.6f\n", n, t_build, t_apply, t_total,
-                         t_march, e.median, e.p99, e.max, e.max_T);
+                         t_march, e.median_rel_L, e.p99_rel_L, e.max_rel_L, e.max_abs_T);
     }
     if (out) std::fclose(out);
     fmt::print("  (total: the whole froxel call, LUTs, volume and application included; errors "

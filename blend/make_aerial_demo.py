@@ -17,34 +17,19 @@ import sys
 
 import bpy
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import demo_scene as ds  # noqa: E402
+
 parser = argparse.ArgumentParser()
-parser.add_argument("--out", default=os.path.join(ROOT, "out", "aerial_demo"))
+parser.add_argument("--out", default=os.path.join(ds.ROOT, "out", "aerial_demo"))
 parser.add_argument("--size", type=int, default=480, help="image width, pixels")
 parser.add_argument("--samples", type=int, default=16)
 parser.add_argument("--sheet", help="write the before / after pair as one PNG")
-args = parser.parse_args(argv)
+args = ds.script_args(parser)
 os.makedirs(args.out, exist_ok=True)
-
-import addon_utils  # noqa: E402
-
-if not addon_utils.check("welkin")[1]:
-    sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
-    import addon_testing  # installs from the zip into a temporary scripts directory
-    addon_testing.install_addon()
-from mathutils import Vector  # noqa: E402
-
-for obj in list(bpy.data.objects):
-    bpy.data.objects.remove(obj)
-scene = bpy.context.scene
-
-
-def material(name, rgb):
-    m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    m.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (*rgb, 1.0)
-    return m
+ds.enable_welkin()
+scene = ds.empty_scene()
+material = ds.material
 
 
 bpy.ops.mesh.primitive_plane_add(size=200000.0)
@@ -57,30 +42,15 @@ for k, d in enumerate((300.0, 700.0, 1500.0, 3000.0, 6000.0, 12000.0, 24000.0, 4
         bpy.ops.mesh.primitive_cube_add(size=s, location=(d, y, 0.5 * s))
         bpy.context.active_object.data.materials.append(block)
 
-cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-scene.collection.objects.link(cam)
-cam.location = (0.0, 0.0, 30.0)
-cam.rotation_euler = (math.radians(88.5), 0.0, math.radians(-90.0))  # towards +X
-cam.data.lens = 30.0
-cam.data.clip_end = 1e6
-scene.camera = cam
-sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
-scene.collection.objects.link(sun)
-sun.rotation_mode = 'QUATERNION'
-e, a = math.radians(8.0), math.radians(60.0)
-sun.rotation_quaternion = Vector((0, 0, 1)).rotation_difference(
-    Vector((math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e))))
+ds.add_camera(scene, (0.0, 0.0, 30.0), 88.5, 30.0, clip_end_m=1e6)
+ds.aim_sun(ds.add_sun(scene), 8.0, 60.0)
 
 settings = scene.world.welkin
 settings.preset = "hazy"
 settings.resolution = '1024'
 bpy.ops.welkin.update_sky()
 
-scene.render.engine = 'CYCLES'
-scene.cycles.samples = args.samples
-scene.cycles.use_denoising = False
-scene.render.resolution_x, scene.render.resolution_y = args.size, args.size * 9 // 16
-scene.render.resolution_percentage = 100
+ds.cycles(scene, args.samples, args.size)
 scene.render.image_settings.file_format = 'OPEN_EXR'
 scene.render.filepath = os.path.join(args.out, "frame_")
 scene.frame_set(1)
@@ -107,9 +77,5 @@ if args.sheet:
     gap = np.ones((before.shape[0], 4, 3), np.float32)
     sheet = np.concatenate([display(before), gap, display(after)], axis=1)[::-1]  # bottom first
     rgba = np.concatenate([sheet, np.ones(sheet.shape[:2] + (1,), np.float32)], axis=-1)
-    out = bpy.data.images.new("sheet", rgba.shape[1], rgba.shape[0], alpha=True)
-    out.pixels.foreach_set(np.ascontiguousarray(rgba, dtype=np.float32).ravel())
-    out.filepath_raw = os.path.abspath(args.sheet)
-    out.file_format = 'PNG'
-    out.save()
+    ds.save_png(rgba, args.sheet)
     print(f"make_aerial_demo: before / after {args.sheet}")

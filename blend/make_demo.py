@@ -17,48 +17,26 @@ Frames go to OUT/frame_####.png (Filmic, exposure -5 for the physical W m^-2 sr^
 radiance scale, as with Blender's Nishita sky).
 """
 import argparse
-import math
 import os
 import sys
 
 import bpy
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import demo_scene as ds  # noqa: E402
+
 parser = argparse.ArgumentParser()
 parser.add_argument("--frames", type=int, default=6)
-parser.add_argument("--out", default=os.path.join(ROOT, "out", "demo"))
+parser.add_argument("--out", default=os.path.join(ds.ROOT, "out", "demo"))
 parser.add_argument("--size", type=int, default=480, help="image width, pixels")
 parser.add_argument("--samples", type=int, default=16)
 parser.add_argument("--no-render", action="store_true")
 parser.add_argument("--sheet", help="also write the frames as one contact-sheet PNG")
-args = parser.parse_args(argv)
+args = ds.script_args(parser)
 os.makedirs(args.out, exist_ok=True)
-
-import addon_utils  # noqa: E402
-
-if not addon_utils.check("welkin")[1]:
-    sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
-    import addon_testing  # installs from the zip into a temporary scripts directory
-    addon_testing.install_addon()
-
-for obj in list(bpy.data.objects):
-    bpy.data.objects.remove(obj)
-scene = bpy.context.scene
-
-
-def add(obj):
-    scene.collection.objects.link(obj)
-    return obj
-
-
-def material(name, rgb, roughness=0.6):
-    m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    bsdf = m.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Base Color"].default_value = (*rgb, 1.0)
-    bsdf.inputs["Roughness"].default_value = roughness
-    return m
+ds.enable_welkin()
+scene = ds.empty_scene()
+material = ds.material
 
 
 bpy.ops.mesh.primitive_plane_add(size=400.0)
@@ -70,24 +48,14 @@ for i, (x, y, r, rgb) in enumerate(((6, -2, 1.0, (0.8, 0.8, 0.8)), (9, 2, 1.5, (
     bpy.ops.object.shade_smooth()
     bpy.context.active_object.data.materials.append(material(f"Ball {i}", rgb, 0.3))
 bpy.ops.mesh.primitive_cube_add(size=3.0, location=(11, 6, 1.5))
-bpy.context.active_object.data.materials.append(material("Block", (0.6, 0.6, 0.55)))
+bpy.context.active_object.data.materials.append(material("Block", (0.6, 0.6, 0.55), 0.6))
 
-cam = add(bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera")))
-cam.location = (-4.0, 0.0, 1.7)
-cam.rotation_euler = (math.radians(84.0), 0.0, math.radians(-90.0))  # towards +X
-cam.data.lens = 24.0
-scene.camera = cam
-
-sun = add(bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN')))
-sun.rotation_mode = 'QUATERNION'
-from mathutils import Vector  # noqa: E402
-
+ds.add_camera(scene, (-4.0, 0.0, 1.7), 84.0, 24.0)
+sun = ds.add_sun(scene)
 scene.frame_start, scene.frame_end = 1, args.frames
 for f in range(1, args.frames + 1):
     t = (f - 1) / max(1, args.frames - 1)
-    e, a = math.radians(-1.0 + 61.0 * t), math.radians(100.0 + 60.0 * t)
-    d = Vector((math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)))
-    sun.rotation_quaternion = Vector((0, 0, 1)).rotation_difference(d)
+    ds.aim_sun(sun, -1.0 + 61.0 * t, 100.0 + 60.0 * t)
     sun.keyframe_insert("rotation_quaternion", frame=f)
 
 settings = scene.world.welkin
@@ -95,11 +63,7 @@ settings.resolution = '1024'
 scene.frame_set(1)
 bpy.ops.welkin.update_sky()
 
-scene.render.engine = 'CYCLES'
-scene.cycles.samples = args.samples
-scene.cycles.use_denoising = False
-scene.render.resolution_x, scene.render.resolution_y = args.size, args.size * 9 // 16
-scene.render.resolution_percentage = 100
+ds.cycles(scene, args.samples, args.size)
 scene.render.image_settings.file_format = 'PNG'
 scene.view_settings.view_transform = 'Filmic'
 scene.view_settings.exposure = -4.0
@@ -125,9 +89,5 @@ if not args.no_render:
         top = np.concatenate(frames[:cols], axis=1)
         bottom = np.concatenate(frames[cols:], axis=1)
         sheet = np.concatenate([bottom, top], axis=0)  # bottom-first: first row on top
-        out = bpy.data.images.new("sheet", sheet.shape[1], sheet.shape[0], alpha=True)
-        out.pixels.foreach_set(sheet.ravel())
-        out.filepath_raw = os.path.abspath(args.sheet)
-        out.file_format = 'PNG'
-        out.save()
+        ds.save_png(sheet, args.sheet)
         print(f"make_demo: contact sheet {args.sheet}")

@@ -22,15 +22,11 @@
 namespace welkin::cli {
 namespace {
 
-struct AerialArgs {
-    std::string scene;
+struct AerialArgs : SceneOutputArgs {
+    AerialArgs() { output = "welkin_aerial.exr"; }
     std::string depth;
     std::string depth_channel;
     std::string method;  // empty: the scene's
-    std::string output = "welkin_aerial.exr";
-    bool half = false;
-    bool overwrite = false;
-    int threads = 0;
 };
 
 // Re-raises an InvalidArgument from the core under the option it came through, keeping
@@ -104,7 +100,7 @@ int run_aerial(const AerialArgs& args) {
     }
     passes = {};
     cloud_passes = {};
-    ExrWriteOptions write = exr_write_options(args.overwrite, args.half, scene);
+    ExrWriteOptions write = exr_write_options(args, scene);
     write.attributes.insert(write.attributes.end(),
                             {{"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
                         {"welkinUnits", "AerialInscatter, Clouds: linear Rec.709, W m^-2 sr^-1 (times "
@@ -125,11 +121,9 @@ Command add_aerial_command(CLI::App& app) {
     CLI::App* sub = app.add_subcommand(
         "aerial", "Aerial-perspective passes (in-scattering and transmittance) for a rendered "
                   "frame, from its scene JSON and its depth (Z pass), as a multilayer OpenEXR");
-    sub->add_option("--scene", args->scene,
-                    "Scene description JSON (the schema the Blender add-on writes; see README "
-                    "\"Scene JSON\"): atmosphere, sun, camera, render resolution")
-        ->type_name("FILE.json")
-        ->required();
+    add_scene_output_options(sub, *args,
+                             "Scene description JSON (the schema the Blender add-on writes; see README "
+                             "\"Scene JSON\"): atmosphere, sun, camera, render resolution");
     sub->add_option("--depth", args->depth,
                     "OpenEXR holding the frame's depth: Blender's Z pass, metres along the "
                     "view axis (along the ray for panoramic cameras); +inf or >= 1e9 m is sky")
@@ -144,15 +138,6 @@ Command add_aerial_command(CLI::App& app) {
                     "marched); default: the scene's aerial.method")
         ->type_name("NAME")
         ->check(CLI::IsMember({"froxel", "raymarch"}));
-    sub->add_flag("--half", args->half, "Write 16-bit half floats (default: 32-bit float)");
-    sub->add_flag("--overwrite", args->overwrite, "Replace the output file if it exists");
-    sub->add_option("-o,--output", args->output,
-                    "Output multilayer EXR; never replaced unless --overwrite")
-        ->type_name("FILE.exr")
-        ->capture_default_str();
-    sub->add_option("--threads", args->threads, "Worker threads, in [1, 1024] (default: all cores)")
-        ->type_name("N")
-        ->check(CLI::Range(1, 1024));
     sub->footer(
         "Layers: Welkin.AerialInscatter (R, G, B: linear Rec.709, W m^-2 sr^-1, times the "
         "scene's exposure) and Welkin.AerialTransmittance (R, G, B), so that Image x "

@@ -17,14 +17,10 @@
 namespace welkin::cli {
 namespace {
 
-struct CloudsArgs {
-    std::string scene;
+struct CloudsArgs : SceneOutputArgs {
+    CloudsArgs() { output = "welkin_clouds.exr"; }
     std::string depth;
     std::string depth_channel;
-    std::string output = "welkin_clouds.exr";
-    bool half = false;
-    bool overwrite = false;
-    int threads = 0;
 };
 
 int run_clouds(const CloudsArgs& args) {
@@ -66,7 +62,7 @@ int run_clouds(const CloudsArgs& args) {
         exr.pixels[p * 5 + 4] = passes.depth[p];
         cloudy += passes.clouds[p * 4 + 3] > 0.0f;
     }
-    ExrWriteOptions write = exr_write_options(args.overwrite, args.half, scene);
+    ExrWriteOptions write = exr_write_options(args, scene);
     write.attributes.insert(write.attributes.end(),
                             {{"welkinUnits", "Clouds: linear Rec.709, W m^-2 sr^-1 (times exposure), "
                                              "premultiplied; CloudDepth: m (Blender's Z), 1e10 where no cloud"}});
@@ -87,10 +83,8 @@ Command add_clouds_command(CLI::App& app) {
     CLI::App* sub = app.add_subcommand(
         "clouds", "The scene camera's cloud passes (Welkin.Clouds, Welkin.CloudDepth) from a scene "
                   "JSON with \"clouds\", as a multilayer OpenEXR");
-    sub->add_option("--scene", args->scene,
-                    "Scene description JSON with a camera and \"clouds\" (README \"Scene JSON\")")
-        ->type_name("FILE.json")
-        ->required();
+    add_scene_output_options(sub, *args,
+                             "Scene description JSON with a camera and \"clouds\" (README \"Scene JSON\")");
     sub->add_option("--depth", args->depth,
                     "OpenEXR holding the render's depth (Blender's Z pass); rays end at the "
                     "geometry, so that it hides the clouds behind it (default: no geometry)")
@@ -98,14 +92,6 @@ Command add_clouds_command(CLI::App& app) {
     sub->add_option("--depth-channel", args->depth_channel,
                     "Channel of --depth to read (default: Z, Depth.Z, or the one <layer>.Depth.Z)")
         ->type_name("NAME");
-    sub->add_flag("--half", args->half, "Write 16-bit half floats (default: 32-bit float)");
-    sub->add_flag("--overwrite", args->overwrite, "Replace the output file if it exists");
-    sub->add_option("-o,--output", args->output, "Output multilayer EXR; never replaced unless --overwrite")
-        ->type_name("FILE.exr")
-        ->capture_default_str();
-    sub->add_option("--threads", args->threads, "Worker threads, in [1, 1024] (default: all cores)")
-        ->type_name("N")
-        ->check(CLI::Range(1, 1024));
     sub->footer(
         "Channels: Welkin.Clouds.{R,G,B,A} (premultiplied; linear Rec.709, W m^-2 sr^-1, times the "
         "scene's exposure; the air between the camera and the cloud included) and "

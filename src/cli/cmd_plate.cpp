@@ -21,15 +21,7 @@
 namespace welkin::cli {
 namespace {
 
-struct PlateArgs {
-    std::string scene;
-    std::string output = "welkin_plate.exr";
-    bool half = false;
-    bool overwrite = false;
-    int threads = 0;
-};
-
-int run_plate(const PlateArgs& args) {
+int run_plate(const SceneOutputArgs& args) {
     check_output_path(args.output, args.overwrite);
     const SceneDescription scene = load_camera_scene(args.scene);
     const auto threads = limit_threads(args.threads);
@@ -72,7 +64,7 @@ int run_plate(const PlateArgs& args) {
         exr.pixels[p * nch + clouds_at + 4] = plate.cloud_depth[p];
         exr.pixels[p * nch + nch - 1] = plate.depth[p];
     }
-    ExrWriteOptions write = exr_write_options(args.overwrite, args.half, scene);
+    ExrWriteOptions write = exr_write_options(args, scene);
     write.attributes.insert(write.attributes.end(),
                             {{"welkinMethod", plate.method},
                         {"welkinUnits", "linear Rec.709, W m^-2 sr^-1 (times exposure); "
@@ -88,23 +80,12 @@ int run_plate(const PlateArgs& args) {
 }  // namespace
 
 Command add_plate_command(CLI::App& app) {
-    auto args = std::make_shared<PlateArgs>();
+    auto args = std::make_shared<SceneOutputArgs>();
+    args->output = "welkin_plate.exr";
     CLI::App* sub = app.add_subcommand(
         "plate", "The scene camera's plate: sky, sun disc and aerial perspective over the "
                  "ground (no meshes), as the Blender render engine \"Welkin\" renders it");
-    sub->add_option("--scene", args->scene,
-                    "Scene description JSON with a camera (README \"Scene JSON\")")
-        ->type_name("FILE.json")
-        ->required();
-    sub->add_flag("--half", args->half, "Write 16-bit half floats (default: 32-bit float)");
-    sub->add_flag("--overwrite", args->overwrite, "Replace the output file if it exists");
-    sub->add_option("-o,--output", args->output,
-                    "Output multilayer EXR; never replaced unless --overwrite")
-        ->type_name("FILE.exr")
-        ->capture_default_str();
-    sub->add_option("--threads", args->threads, "Worker threads, in [1, 1024] (default: all cores)")
-        ->type_name("N")
-        ->check(CLI::Range(1, 1024));
+    add_scene_output_options(sub, *args, "Scene description JSON with a camera (README \"Scene JSON\")");
     sub->footer("Channels: R, G, B (Combined), Welkin.Sky.{R,G,B}, Welkin.AerialInscatter.{R,G,B}, "
                 "Welkin.AerialTransmittance.{R,G,B}, Welkin.Clouds.{R,G,B,A} (premultiplied; alpha "
                 "0 without \"clouds\" in the scene), Welkin.CloudDepth.Z (1e10 where no cloud), Z. "

@@ -227,8 +227,20 @@ ExrWriteOptions exr_write_options(bool overwrite, bool half) {
     return write;
 }
 
-ExrWriteOptions exr_write_options(bool overwrite, bool half, const SceneDescription& scene) {
-    ExrWriteOptions write = exr_write_options(overwrite, half);
+void add_scene_output_options(CLI::App* app, SceneOutputArgs& args, const std::string& scene_help) {
+    app->add_option("--scene", args.scene, scene_help)->type_name("FILE.json")->required();
+    app->add_flag("--half", args.half, "Write 16-bit half floats (default: 32-bit float)");
+    app->add_flag("--overwrite", args.overwrite, "Replace the output file if it exists");
+    app->add_option("-o,--output", args.output, "Output multilayer EXR; never replaced unless --overwrite")
+        ->type_name("FILE.exr")
+        ->capture_default_str();
+    app->add_option("--threads", args.threads, "Worker threads, in [1, 1024] (default: all cores)")
+        ->type_name("N")
+        ->check(CLI::Range(1, 1024));
+}
+
+ExrWriteOptions exr_write_options(const SceneOutputArgs& args, const SceneDescription& scene) {
+    ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
     write.attributes.push_back({"welkinScene", nlohmann::json::parse(scene.to_json_string()).dump()});
     return write;
 }

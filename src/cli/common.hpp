@@ -91,8 +91,21 @@ std::unique_ptr<tbb::global_control> limit_threads(int threads);
 // How an output EXR is written: --overwrite, --half (else 32-bit float), and the
 // "software" provenance attribute; commands append their own attributes.
 ExrWriteOptions exr_write_options(bool overwrite, bool half);
-// The same, plus the "welkinScene" attribute: the scene description the passes were made
-// from (compact JSON), so a file reproduces its frame (aerial, clouds, plate).
-ExrWriteOptions exr_write_options(bool overwrite, bool half, const SceneDescription& scene);
+
+// The commands that render a scene's camera to a multilayer EXR (aerial, clouds, plate)
+// take their scene and write their file alike: --scene FILE.json (required; `scene_help`
+// says what the command needs of it), -o/--output (default `output`, never replaced unless
+// --overwrite), --half, --overwrite and --threads N.
+struct SceneOutputArgs {
+    std::string scene;
+    std::string output;
+    bool half = false;
+    bool overwrite = false;
+    int threads = 0;
+};
+void add_scene_output_options(CLI::App* app, SceneOutputArgs& args, const std::string& scene_help);
+// exr_write_options(args.overwrite, args.half) plus the "welkinScene" attribute: the scene
+// description the passes were made from (compact JSON), so a file reproduces its frame.
+ExrWriteOptions exr_write_options(const SceneOutputArgs& args, const SceneDescription& scene);
 
 }  // namespace welkin::cli

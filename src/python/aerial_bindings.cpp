@@ -48,19 +48,12 @@ Raises ValueError naming the parameter (no camera, a NaN or negative depth, a
 depth whose shape is not the scene's resolution, a render too large for memory).
 )doc";
 
-SceneDescription to_scene(const py::handle& scene) {
-    if (py::isinstance<SceneDescription>(scene)) return scene.cast<SceneDescription>();
-    if (py::isinstance<py::str>(scene)) return SceneDescription::from_json_string(scene.cast<std::string>());
-    throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
-}
-
 py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& depth_in,
                                 const py::object& method, const py::object& progress) {
     SceneDescription scene = to_scene(scene_in);
     if (!method.is_none())
         scene.aerial.method = aerial_method_from_name(method.cast<std::string>(), "method");
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    require_progress_callback(progress);
     scene.require_camera();
     const int width = scene.resolution.width(), height = scene.resolution.height();
     check_aerial_memory(width, height, 6 * sizeof(float));  // plus the two returned arrays

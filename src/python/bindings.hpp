@@ -17,6 +17,7 @@
 #include <pybind11/pybind11.h>
 
 #include "welkin/progress.hpp"
+#include "welkin/scene.hpp"
 #include "welkin/sky_image.hpp"
 
 namespace welkin::python {
@@ -81,6 +82,14 @@ SkyImageOptions::Output parse_output(const std::string& output);
 
 // A sequence of three numbers -> glm::dvec3 (InvalidArgument naming `parameter` otherwise).
 glm::dvec3 to_dvec3(const py::handle& values, const std::string& parameter);
+
+// The `scene` argument of the scene calls: a welkin.SceneDescription, or its JSON text
+// (parsed; the core's InvalidArgument names the key). Else InvalidArgument "scene".
+SceneDescription to_scene(const py::handle& scene);
+
+// The `progress` argument of the long calls: None, or a callable taking the fraction done
+// (py::type_error otherwise), passed to run_cancellable.
+void require_progress_callback(const py::object& progress);
 
 // Runs `work` (which calls the core, and must not touch Python) on a worker thread with
 // the GIL released, while this thread keeps Python responsive: it checks for Ctrl-C

@@ -41,15 +41,8 @@ wrong shape or with NaN / negative values ("depth"), a bad row range ("rows").
 
 py::dict cloud_passes_py(const py::handle& scene_in, const py::object& depth_in, const py::object& progress,
                          const std::optional<std::pair<int, int>>& rows) {
-    SceneDescription scene;
-    if (py::isinstance<SceneDescription>(scene_in))
-        scene = scene_in.cast<SceneDescription>();
-    else if (py::isinstance<py::str>(scene_in))
-        scene = SceneDescription::from_json_string(scene_in.cast<std::string>());
-    else
-        throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    SceneDescription scene = to_scene(scene_in);
+    require_progress_callback(progress);
     scene.require_camera();
     const int width = scene.resolution.width(), height = scene.resolution.height();
     std::vector<float> depth;

@@ -28,8 +28,7 @@ namespace {
 py::array_t<float> render(const SkyMethod& method, const Atmosphere& atmosphere,
                           double altitude_m, const py::object& sun_direction, int width,
                           const SkyImageOptions& options, const py::object& progress) {
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    require_progress_callback(progress);
     const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
     SkyImage image;
     run_cancellable(

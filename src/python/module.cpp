@@ -75,6 +75,17 @@ glm::dvec3 to_dvec3(const py::handle& values, const std::string& parameter) {
     return {v.data()[0], v.data()[1], v.data()[2]};
 }
 
+SceneDescription to_scene(const py::handle& scene) {
+    if (py::isinstance<SceneDescription>(scene)) return scene.cast<SceneDescription>();
+    if (py::isinstance<py::str>(scene)) return SceneDescription::from_json_string(scene.cast<std::string>());
+    throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
+}
+
+void require_progress_callback(const py::object& progress) {
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+}
+
 void throw_bad_shape(const std::string& parameter, const std::string& expected,
                      const std::string& got) {
     throw InvalidArgument(parameter, fmt::format("must be {}, got {}", expected, got));

@@ -39,15 +39,8 @@ be read ("clouds.volumes[i].file").
 
 py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress,
                          const std::optional<std::pair<int, int>>& rows) {
-    SceneDescription scene;
-    if (py::isinstance<SceneDescription>(scene_in))
-        scene = scene_in.cast<SceneDescription>();
-    else if (py::isinstance<py::str>(scene_in))
-        scene = SceneDescription::from_json_string(scene_in.cast<std::string>());
-    else
-        throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    SceneDescription scene = to_scene(scene_in);
+    require_progress_callback(progress);
     scene.require_camera();
     CameraPlate plate;
     RowRange band;

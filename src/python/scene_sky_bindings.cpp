@@ -33,15 +33,8 @@ scene's key (clouds.volumes[i].file for a bad VDB). Cancellable (progress, Ctrl-
 py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
                            const std::string& output, bool return_transmittance,
                            const py::object& progress) {
-    SceneDescription scene;
-    if (py::isinstance<SceneDescription>(scene_in))
-        scene = scene_in.cast<SceneDescription>();
-    else if (py::isinstance<py::str>(scene_in))
-        scene = SceneDescription::from_json_string(scene_in.cast<std::string>());
-    else
-        throw InvalidArgument("scene", "must be a welkin.SceneDescription or its JSON text");
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    SceneDescription scene = to_scene(scene_in);
+    require_progress_callback(progress);
     SkyImageOptions options;
     options.sun_disc = sun_disc;
     options.exposure = scene.exposure;

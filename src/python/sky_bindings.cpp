@@ -103,8 +103,7 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
     if (rgb && return_standard_error)
         throw InvalidArgument("return_standard_error",
                               "is only available with output=\"spectral\"");
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw py::type_error("progress: must be a callable taking the fraction done, or None");
+    require_progress_callback(progress);
 
     SkyOptions options;
     options.raymarch_steps = steps;

@@ -5,7 +5,6 @@ warning where the sky can still be made), never a traceback from the add-on, and
 data is lost."""
 import math
 import os
-import pathlib
 import sys
 import zipfile
 

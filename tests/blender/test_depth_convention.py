@@ -20,6 +20,7 @@ import math
 import os
 import pathlib
 import subprocess
+import sys
 import tempfile
 
 import bpy
@@ -27,6 +28,9 @@ from mathutils import Euler
 
 import numpy as np
 import welkin
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from camera_testing import camera_json  # noqa: E402
 
 CLI = os.environ.get("WELKIN_CLI",
                      str(pathlib.Path(__file__).resolve().parents[2] / "build" / "welkin"))
@@ -53,23 +57,6 @@ def build_scene():
     scene.collection.objects.link(cam)
     scene.camera = cam
     return scene, cam
-
-
-def camera_json(ob):
-    cam = ob.data
-    d = {"matrix_world": [list(r) for r in ob.matrix_world], "type": cam.type,
-         "lens_mm": cam.lens, "sensor_width_mm": cam.sensor_width,
-         "sensor_height_mm": cam.sensor_height, "sensor_fit": cam.sensor_fit,
-         "ortho_scale": cam.ortho_scale, "shift_x": cam.shift_x, "shift_y": cam.shift_y,
-         "clip_start_m": cam.clip_start, "clip_end_m": cam.clip_end}
-    if cam.type == "PANO":
-        c = cam.cycles
-        d.update(panorama_type=c.panorama_type,
-                 latitude_min_deg=math.degrees(c.latitude_min),
-                 latitude_max_deg=math.degrees(c.latitude_max),
-                 longitude_min_deg=math.degrees(c.longitude_min),
-                 longitude_max_deg=math.degrees(c.longitude_max))
-    return d
 
 
 def expected_distance(o, d):

@@ -13,34 +13,21 @@ Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
 """
 import json
 import math
+import pathlib
+import sys
 
 import bpy
 from mathutils import Euler, Vector
 
 import welkin
 
-
-def camera_json(ob, scene):
-    """The add-on's export of a camera, from bpy data (README "Scene JSON")."""
-    cam = ob.data
-    d = {"matrix_world": [list(r) for r in ob.matrix_world], "type": cam.type,
-         "lens_mm": cam.lens, "sensor_width_mm": cam.sensor_width,
-         "sensor_height_mm": cam.sensor_height, "sensor_fit": cam.sensor_fit,
-         "ortho_scale": cam.ortho_scale, "shift_x": cam.shift_x, "shift_y": cam.shift_y,
-         "clip_start_m": cam.clip_start, "clip_end_m": cam.clip_end}
-    if cam.type == "PANO":
-        c = cam.cycles
-        d.update(panorama_type=c.panorama_type,
-                 latitude_min_deg=math.degrees(c.latitude_min),
-                 latitude_max_deg=math.degrees(c.latitude_max),
-                 longitude_min_deg=math.degrees(c.longitude_min),
-                 longitude_max_deg=math.degrees(c.longitude_max))
-    return d
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from camera_testing import camera_json  # noqa: E402
 
 
 def scene_json(ob, scene, sun_ob):
     r = scene.render
-    return json.dumps({"version": 1, "camera": camera_json(ob, scene),
+    return json.dumps({"version": 1, "camera": camera_json(ob),
                        "sun": {"direction": list(sun_ob.matrix_world.to_3x3().col[2])},
                        "resolution": {"x": r.resolution_x, "y": r.resolution_y,
                                       "percentage": r.resolution_percentage}})

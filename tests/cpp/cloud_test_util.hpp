@@ -1,5 +1,5 @@
-// Shared by the cloud tests: a homogeneous box of cloud (closed forms) and small VDB
-// files written with OpenVDB into a temporary folder.
+// Shared by the cloud tests: a homogeneous box of cloud (closed forms), an airless
+// atmosphere, and small VDB files written with OpenVDB into a temporary folder.
 #pragma once
 
 #include <filesystem>
@@ -10,9 +10,23 @@
 #include <openvdb/openvdb.h>
 #include <unistd.h>
 
+#include "welkin/atmosphere.hpp"
 #include "welkin/cloud_density.hpp"
 
 namespace welkin::test {
+
+// The bruneton2017 sun over no air at all: the sun's light reaches a cloud unchanged, there
+// is no sky light, no air in front of the cloud and no aerial perspective.
+inline Atmosphere airless() {
+    Atmosphere a = Atmosphere::preset("bruneton2017");
+    const std::size_t n = a.channels();
+    a.rayleigh_scattering.assign(n, 0.0);
+    a.mie_scattering.assign(n, 0.0);
+    a.mie_extinction.assign(n, 0.0);
+    a.absorption_extinction.assign(n, 0.0);
+    a.ground_albedo.assign(n, 0.0);
+    return a;
+}
 
 // sigma_t constant inside [lo, hi], zero outside.
 class HomogeneousBox final : public CloudDensity {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "aerial_comparison.hpp"
 #include "welkin/aerial_perspective.hpp"
 #include "welkin/color.hpp"
 #include "welkin/error.hpp"
@@ -224,28 +225,10 @@ std::vector<float> terrain_depth(const SceneDescription& s, int W, int H, double
     return depth;
 }
 
-struct Comparison {
-    double median_rel_L, p99_rel_L, max_abs_T;
-};
+using Comparison = test::AerialComparison;
 
-// Errors of the froxel passes against the per-pixel march over the non-sky pixels: L
-// relative to the march's value (where that exceeds 1e-3 of the image's largest, so that
-// pixels a few metres away do not dominate by dividing by almost nothing), T absolute.
 Comparison compare(const AerialPasses& f, const AerialPasses& r, const std::vector<float>& depth) {
-    float L_max = 0.0f;
-    for (float v : r.inscatter) L_max = std::max(L_max, v);
-    std::vector<double> rel;
-    double max_T = 0.0;
-    for (std::size_t p = 0; p < depth.size(); ++p) {
-        if (!std::isfinite(depth[p])) continue;
-        for (int c = 0; c < 3; ++c) {
-            const double lr = r.inscatter[p * 3 + c], lf = f.inscatter[p * 3 + c];
-            if (lr > 1e-3 * L_max) rel.push_back(std::abs(lf - lr) / lr);
-            max_T = std::max(max_T, double(std::abs(f.transmittance[p * 3 + c] - r.transmittance[p * 3 + c])));
-        }
-    }
-    std::sort(rel.begin(), rel.end());
-    return {rel[rel.size() / 2], rel[rel.size() * 99 / 100], max_T};
+    return test::compare_aerial_passes(f, r, depth);
 }
 
 }  // namespace

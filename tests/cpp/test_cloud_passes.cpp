@@ -19,22 +19,10 @@
 #include "welkin/math.hpp"
 
 using namespace welkin;
+using welkin::test::airless;
 using welkin::test::HomogeneousBox;
 
 namespace {
-
-// The bruneton2017 sun over no air at all: the sun's light reaches the cloud unchanged,
-// there is no sky light and no aerial perspective.
-Atmosphere airless() {
-    Atmosphere a = Atmosphere::preset("bruneton2017");
-    const std::size_t n = a.channels();
-    a.rayleigh_scattering.assign(n, 0.0);
-    a.mie_scattering.assign(n, 0.0);
-    a.mie_extinction.assign(n, 0.0);
-    a.absorption_extinction.assign(n, 0.0);
-    a.ground_albedo.assign(n, 0.0);
-    return a;
-}
 
 // A camera at the origin looking straight up (local -Z to world +Z: 180 degrees about X).
 Camera camera_up(CameraType type) {

@@ -21,23 +21,8 @@
 #include "welkin/sky_image.hpp"
 
 using namespace welkin;
+using welkin::test::airless;
 using welkin::test::HomogeneousBox;
-
-namespace {
-
-// The bruneton2017 sun over no air at all (no sky light, no air in front of the cloud).
-Atmosphere airless() {
-    Atmosphere a = Atmosphere::preset("bruneton2017");
-    const std::size_t n = a.channels();
-    a.rayleigh_scattering.assign(n, 0.0);
-    a.mie_scattering.assign(n, 0.0);
-    a.mie_extinction.assign(n, 0.0);
-    a.absorption_extinction.assign(n, 0.0);
-    a.ground_albedo.assign(n, 0.0);
-    return a;
-}
-
-}  // namespace
 
 // The consistency the render engine needs: a full equirectangular panorama at the scene
 // origin pointed along +X (Blender's Environment mapping, camera.hpp) sees the same pixel

@@ -13,18 +13,14 @@ Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_aerial.py
 import json
 import math
 import os
-import pathlib
-import signal
 import subprocess
-import time
 
 import numpy as np
 import pytest
 
 import welkin
+from cli_testing import CLI, assert_ctrl_c_cancels, files
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-CLI = os.environ.get("WELKIN_CLI", str(ROOT / "build" / "welkin"))
 
 PASS_CHANNELS = [f"Welkin.Aerial{p}.{c}" for p in ("Inscatter", "Transmittance") for c in "RGB"]
 
@@ -48,9 +44,6 @@ def run(*args, cwd=None, timeout=120):
     return subprocess.run([CLI, *map(str, args)], cwd=cwd, capture_output=True, text=True,
                           timeout=timeout)
 
-
-def files(path):
-    return sorted(p.name for p in pathlib.Path(path).iterdir())
 
 
 def assert_one_line_error(r, *needles):
@@ -332,17 +325,4 @@ def test_ctrl_c_cancels_cleanly(tmp_path):
     s = scene_dict(width=1920, height=1080, aerial={"method": "raymarch", "raymarch_steps": 256})
     (tmp_path / "s.json").write_text(json.dumps(s))
     write_channels(tmp_path / "d.exr", {"Z": depth_image(1080, 1920)})
-    before = files(tmp_path)
-    p = subprocess.Popen([CLI, "aerial", "--scene", "s.json", "--depth", "d.exr", "-o", "c.exr"],
-                         cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.5)
-    if p.poll() is not None:
-        out, err = p.communicate()
-        pytest.skip(f"finished (rc {p.returncode}) before it could be interrupted: {err}")
-    t0 = time.monotonic()
-    p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=30)
-    assert p.returncode == 130, err
-    assert "cancelled" in err
-    assert time.monotonic() - t0 < 5.0
-    assert files(tmp_path) == before
+    assert_ctrl_c_cancels(["aerial", "--scene", "s.json", "--depth", "d.exr", "-o", "c.exr"], tmp_path)

@@ -13,7 +13,6 @@ in bench/, never in timed tests): the choice must be cheaper than raymarch at it
 default steps and than the reference at its default paths.
 """
 import importlib.util
-import math
 import pathlib
 
 import numpy as np

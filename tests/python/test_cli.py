@@ -11,15 +11,13 @@ Run with /usr/bin/python3 -m pytest tests/python/test_cli.py.
 """
 import json
 import os
-import pathlib
-import signal
 import subprocess
 import time
 
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-CLI = os.environ.get("WELKIN_CLI", str(ROOT / "build" / "welkin"))
+from cli_testing import CLI, assert_ctrl_c_cancels, files
+
 
 pytestmark = pytest.mark.skipif(not os.access(CLI, os.X_OK), reason=f"no CLI binary at {CLI}")
 
@@ -27,11 +25,6 @@ pytestmark = pytest.mark.skipif(not os.access(CLI, os.X_OK), reason=f"no CLI bin
 def welkin(*args, cwd=None, timeout=120):
     return subprocess.run([CLI, *map(str, args)], cwd=cwd, capture_output=True, text=True,
                           timeout=timeout)
-
-
-def files(path):
-    """Every entry of a directory, hidden ones (temporary files) included."""
-    return sorted(p.name for p in pathlib.Path(path).iterdir())
 
 
 def exr_info(path, integral=False):
@@ -315,16 +308,4 @@ def test_render_variants(tmp_path):
 
 def test_ctrl_c_cancels_cleanly_and_writes_nothing(tmp_path):
     # raymarch at 1024 x 512 runs for many seconds on two cores; interrupt it midway.
-    p = subprocess.Popen([CLI, "sky", "--method", "raymarch", "--width", "1024", "-o", "c.exr"],
-                         cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.5)
-    if p.poll() is not None:
-        out, err = p.communicate()
-        pytest.skip(f"render finished (rc {p.returncode}) before it could be interrupted: {err}")
-    t0 = time.monotonic()
-    p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=30)
-    assert p.returncode == 130, err
-    assert "cancelled" in err
-    assert time.monotonic() - t0 < 5.0  # promptly
-    assert files(tmp_path) == []  # no output, no temporary file
+    assert_ctrl_c_cancels(["sky", "--method", "raymarch", "--width", "1024", "-o", "c.exr"], tmp_path)

@@ -11,6 +11,7 @@
   panel.py       Properties > World > Welkin Sky
   aerial.py      aerial perspective per render (Scene.welkin_aerial), compositor.py its nodes
   handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
+  background.py  a cloudy sky for the live UI, computed on a thread beside the interface
   render_engine.py  the render engine "WELKIN": the camera's plate with Welkin's passes
   cloud_properties.py  World.welkin_clouds (layers, lighting), Object.welkin_cloud
   cloud_scene.py     the scene's clouds as the scene JSON's "clouds" section

@@ -2,13 +2,16 @@
 
   * In the UI, depsgraph_update_post notices that the sky's request changed (the sun lamp
     turned, a setting changed) and arms a timer; the update runs once the changes have
-    stopped for DEBOUNCE_S, so dragging a lamp recomputes a few times, not per event.
+    stopped for DEBOUNCE_S, so dragging a lamp recomputes a few times, not per event. A
+    clear sky is recomputed there and then (a fraction of a second); a cloudy one (seconds)
+    beside the interface, with its progress in the status line (background.py).
   * In animation (playback, and `blender -b file.blend -a` renders, where no timer or UI
     runs), frame_change_post updates the sky synchronously from the depsgraph it is given
     (the render's own one during renders): the lamp's evaluated transform at that frame.
     Blender evaluates that depsgraph again when a frame_change_post handler changed data,
     so the lamp's new strength and the new image reach the frame being rendered.
-    frame_change_pre only drops a pending UI timer (the frame's own update follows).
+    frame_change_pre only drops a pending UI timer and cancels a background sky (the
+    frame's own update follows).
   * save_pre packs images that changed since they were last packed, so the saved file
     carries the sky it shows.
 All are @persistent (they stay across file loads) and need no UI. Failures are printed and
@@ -20,7 +23,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import scene_sun, update
+from . import background, cloud_scene, scene_sun, update
 from .scene_sun import UserError
 
 DEBOUNCE_S = 0.15
@@ -55,6 +58,15 @@ def _run(scene, depsgraph, *, pack, live=False):
         _log(scene.world.welkin, f"sky not updated: unexpected {type(error).__name__}: {error}")
 
 
+def _start_background(scene):
+    try:
+        background.start(scene)
+    except UserError as error:
+        _log(scene.world.welkin, f"sky not updated: {error}")
+    except Exception as error:  # a timer must never break Blender's loop
+        _log(scene.world.welkin, f"sky not updated: unexpected {type(error).__name__}: {error}")
+
+
 def _tick():
     wait = _state["due"] - time.monotonic()
     if wait > 0.0:
@@ -62,7 +74,11 @@ def _tick():
     _state["armed"] = False
     scene = bpy.context.scene
     if scene is not None and _live(scene):
-        _run(scene, None, pack=False, live=True)
+        if cloud_scene.has_clouds(scene):
+            _start_background(scene)
+        else:
+            background.cancel()  # the clouds were switched off while a cloudy sky computed
+            _run(scene, None, pack=False, live=True)
     return None
 
 
@@ -86,7 +102,10 @@ def _stale(scene, depsgraph):
         clouds = update.clouds_of(scene, depsgraph)
     except UserError:
         return False
-    return update.sky_key(settings, request, clouds) != settings.last_key
+    key = update.sky_key(settings, request, clouds)
+    # Not stale while a background job computes this very state (its own status updates
+    # come back here as depsgraph updates of the world).
+    return key != settings.last_key and key != background.pending_key()
 
 
 def settings_changed(settings, context):
@@ -116,6 +135,7 @@ def _concerns_sky(id_):
 @persistent
 def on_frame_change_pre(scene, depsgraph=None):
     _disarm()
+    background.cancel()
 
 
 @persistent
@@ -143,6 +163,11 @@ def on_save_pre(*_args):
 
 
 @persistent
+def on_load_pre(*_args):
+    background.stop()
+
+
+@persistent
 def on_load_post(*_args):
     _disarm()
 
@@ -152,6 +177,7 @@ _HANDLERS = (
     (bpy.app.handlers.frame_change_pre, on_frame_change_pre),
     (bpy.app.handlers.frame_change_post, on_frame_change_post),
     (bpy.app.handlers.save_pre, on_save_pre),
+    (bpy.app.handlers.load_pre, on_load_pre),
     (bpy.app.handlers.load_post, on_load_post),
 )
 
@@ -164,6 +190,7 @@ def register():
 
 def unregister():
     _disarm()
+    background.stop()
     for handlers, function in reversed(_HANDLERS):
         if function in handlers:
             handlers.remove(function)

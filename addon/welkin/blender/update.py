@@ -101,9 +101,9 @@ def cloudy_scene_json(scene, settings, request, clouds, module, depsgraph=None):
 
 def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, live=False):
     """Brings the world's sky up to date with the scene. Returns an Outcome. `progress`:
-    callable(fraction) -> bool for a cloudy sky (seconds); `live` (the UI's debounced
-    timer): a cloudy sky is not recomputed there (it would hold the interface for seconds
-    at every nudge of the lamp), the status says to press Update Sky."""
+    callable(fraction) -> bool for a cloudy sky (seconds); `live`: a cloudy sky is not
+    computed here (it would hold the interface for seconds at every nudge of the lamp; the
+    UI's timer computes it beside the interface, background.py), the status says so."""
     module = module_or_error()
     outcome = Outcome()
     if scene.world is None:
@@ -125,6 +125,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
                 raise UserError(str(error)) from None
         return outcome
     if clouds and live and not force:
+        # The UI's timer computes a cloudy sky beside the interface instead (background.py).
         settings.status = ("the sky has clouds: press Update Sky to recompute it (seconds); "
                            "renders update it every frame")
         return outcome
@@ -135,6 +136,15 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
                                      scene_json=scene_json, progress=progress)
     except (ValueError, OSError) as error:
         raise UserError(str(error)) from None
+    apply_sky(scene, request, lamp, key, result, outcome, pack=pack, depsgraph=depsgraph,
+              cloudy=bool(clouds))
+    return outcome
+
+
+def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=None, cloudy=False):
+    """Writes a computed sky (sky_compute.SkyResult for `request`, whose sky_key is `key`)
+    into the scene's world: images, nodes, the lamp, the status line. Main thread only."""
+    settings = scene.world.welkin
     outcome.warnings += result.warnings
     height = request.width // 2
     sky = images.ensure(settings, "sky", request.width, height)
@@ -144,7 +154,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     if pack:
         images.pack(sky)
         images.pack(disc)
-    world_nodes.install(world, settings, sky, disc)
+    world_nodes.install(scene.world, settings, sky, disc)
     if settings.sync_lamp:
         _sync_lamp(lamp, result.lamp, depsgraph)
     settings.active = True
@@ -153,11 +163,10 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     outcome.seconds = result.seconds
     outcome.method = result.method
     settings.warnings = "\n".join(outcome.warnings)
-    settings.status = (f"sky {request.width}x{height}{' with clouds' if clouds else ''} by "
+    settings.status = (f"sky {request.width}x{height}{' with clouds' if cloudy else ''} by "
                        f"{result.method} in "
                        f"{result.seconds:.2f} s from '{lamp.name}'"
                        + (f"; {len(outcome.warnings)} warning(s)" if outcome.warnings else ""))
-    return outcome
 
 
 def remove_sky(scene):
