@@ -81,7 +81,8 @@ double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti,
     // by 3-point Gauss-Legendre in v = mu0^2 (exact for f polynomial of degree 5 in v).
     // Nodes v = 1/2 -+ sqrt(3/5) / 2, 1/2; weights 5/18, 8/18, 5/18.
     static constexpr std::array<double, 3> w = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
-    static constexpr std::array<double, 3> mu = {0.3357106870197288, 0.7071067811865476, 0.9419651451198934};  // sqrt(v)
+    // mu = sqrt(v):
+    static constexpr std::array<double, 3> mu = {0.3357106870197288, 0.7071067811865476, 0.9419651451198934};
     const bool conservative = 3.0 * (1.0 - sim.albedo) < kConservative;
     const double beam_t = conservative ? std::exp(-ts) : 0.0, beam_T = conservative ? std::exp(-T) : 0.0;
     double diffuse = 0.0;

@@ -118,8 +118,8 @@ int main(int argc, char** argv) {
     fmt::print("\n| what | time |\n|---|---|\n");
     fmt::print("| noise bake (once per seed) | {:.2f} s |\n", bake);
     fmt::print("| lut sky {}x{}, clear | {:.3f} s |\n", width, width / 2, t_clear);
-    fmt::print("| lut sky {}x{}, cumulus layer (defaults: 96 + 8 steps, delta-Eddington) | {:.3f} s |\n", width, width / 2,
-               t_cloudy);
+    fmt::print("| lut sky {}x{}, cumulus layer (defaults: 96 + 8 steps, delta-Eddington) | {:.3f} s |\n", width,
+               width / 2, t_cloudy);
     rows.push_back(fmt::format("sky,{},clear,{:.4f},,,,,", width, t_clear));
     rows.push_back(fmt::format("sky,{},cumulus,{:.4f},,,,,", width, t_cloudy));
 
