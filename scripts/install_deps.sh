@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages Welkin needs to build, test and render.
+# Installs the Debian 12 packages Welkin needs to build, test and render (xvfb: the
+# viewport preview's windowed Blender test, tests/blender/test_viewport_window.py).
 # Idempotent and quick when everything is there: it asks dpkg first, and runs
 # apt-get (update + install, non-interactively) only for what is missing.
 set -euo pipefail
@@ -10,6 +11,7 @@ packages=(
   pybind11-dev nlohmann-json3-dev libcli11-dev libfmt-dev libspdlog-dev libgtest-dev
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-openvdb python3-skimage
   blender
+  xvfb xauth
 )
 
 missing=()

@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -382,83 +383,119 @@ AerialPerspectiveVolume::Sample AerialPerspectiveVolume::sample(double sx, doubl
     return out;
 }
 
-AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<const float> depth,
-                                       int width, int height, Progress* progress, RowRange rows_in) {
-    check_call(scene, depth, width, height);
-    const RowRange band = rows_in.resolved(height);
-    AerialPasses passes = allocate(width, height);
-    const double sky = scene.aerial.sky_depth_m;
-    double z_max = scene.aerial.max_depth_m;
-    if (!(z_max > 0.0)) {
-        z_max = fitted_depth(depth, sky);
-        const double exit = atmosphere_exit_depth(scene, width, height);
-        if (exit > 0.0) z_max = std::min(z_max, exit);
+// The frame-wide part, once (AerialFrame in the header): the checks, the LUTs, the fitted
+// depth range and the froxel volume, or the LUTs and the marcher alone for "raymarch".
+struct AerialFrame::Impl {
+    Impl(const SceneDescription& s, std::span<const float> d, int w, int h, AerialOptions::Method m)
+        : scene(s), depth(d), width(w), height(h), method(m), sky(s.aerial.sky_depth_m) {
+        check_call(scene, depth, width, height);
+        if (method == AerialOptions::Method::Froxel) {
+            z_max = scene.aerial.max_depth_m;
+            fitted = !(z_max > 0.0);
+            if (fitted) {
+                z_max = fitted_depth(depth, sky);
+                const double exit = atmosphere_exit_depth(scene, width, height);
+                if (exit > 0.0) z_max = std::min(z_max, exit);
+            }
+            if (!(z_max > 0.0)) return;  // nothing but sky (or depth 0): T = 1, L = 0 everywhere
+        }
+        luts = std::make_unique<AtmosphereLuts>(scene.atmosphere, scene.sky_options);
+        // Build ~ a few percent of the work; the application is one lookup per pixel.
+        if (method == AerialOptions::Method::Froxel)
+            volume = std::make_unique<AerialPerspectiveVolume>(scene, *luts, width, height, z_max, nullptr);
+        march = std::make_unique<PixelMarcher>(scene, *luts, width, height);
     }
-    if (!(z_max > 0.0)) {  // nothing but sky (or depth 0): T = 1, L = 0 everywhere
-        if (progress) progress->report(1.0);
-        return passes;
+
+    SceneDescription scene;
+    std::span<const float> depth;
+    int width, height;
+    AerialOptions::Method method;
+    double sky, z_max = 0.0;
+    bool fitted = false;
+    std::unique_ptr<AtmosphereLuts> luts;
+    std::unique_ptr<AerialPerspectiveVolume> volume;
+    std::unique_ptr<PixelMarcher> march;
+};
+
+AerialFrame::AerialFrame(const SceneDescription& scene, std::span<const float> depth, int width, int height,
+                         std::optional<AerialOptions::Method> method)
+    : impl_(std::make_unique<Impl>(scene, depth, width, height, method.value_or(scene.aerial.method))) {}
+
+AerialFrame::~AerialFrame() = default;
+
+void AerialFrame::render(RowRange rows_in, std::span<float> inscatter, std::span<float> transmittance,
+                         Progress* progress) const {
+    const Impl& f = *impl_;
+    const RowRange band = rows_in.resolved(f.height);
+    const std::size_t w = std::size_t(f.width), n = std::size_t(band.size()) * w * 3;
+    if (inscatter.size() != n || transmittance.size() != n)
+        throw InvalidArgument("rows", fmt::format("passes of {} values for a band of {} rows of {} pixels",
+                                                  inscatter.size(), band.size(), f.width));
+    std::fill(inscatter.begin(), inscatter.end(), 0.0f);
+    std::fill(transmittance.begin(), transmittance.end(), 1.0f);
+    if (!f.march) {  // nothing but sky
+        if (progress && !progress->report(1.0)) throw Cancelled();
+        return;
     }
-    const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
-    // Build ~ a few percent of the work; the application is one lookup per pixel.
-    const AerialPerspectiveVolume volume(scene, luts, width, height, z_max, nullptr);
-    const PixelMarcher march(scene, luts, width, height);
     ProgressTracker tracker(progress, std::size_t(band.size()));
     tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const tbb::blocked_range<int>& rows) {
-        PixelMarcher::Scratch scratch(march.channels());
+        PixelMarcher::Scratch scratch(f.march->channels());
         for (int y = rows.begin(); y != rows.end(); ++y) {
-            const double sy = (double(y) + 0.5) / double(height);
-            for (int x = 0; x < width; ++x) {
-                const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
-                const float z = depth[p];
-                if (is_sky_depth(z, sky)) continue;
-                if (double(z) > z_max && scene.aerial.max_depth_m <= 0.0) {  // beyond the fitted range
-                    march(x, y, z, scratch, &passes.inscatter[p * 3], &passes.transmittance[p * 3]);
+            const double sy = (double(y) + 0.5) / double(f.height);
+            for (int x = 0; x < f.width; ++x) {
+                const std::size_t p = std::size_t(y) * w + std::size_t(x);
+                const std::size_t o = (std::size_t(y - band.begin) * w + std::size_t(x)) * 3;
+                const float z = f.depth[p];
+                if (is_sky_depth(z, f.sky)) continue;
+                // "raymarch", and the froxel way's pixels beyond its fitted range.
+                if (!f.volume || (f.fitted && double(z) > f.z_max)) {
+                    (*f.march)(x, y, z, scratch, &inscatter[o], &transmittance[o]);
                     continue;
                 }
                 const AerialPerspectiveVolume::Sample s =
-                    volume.sample((double(x) + 0.5) / double(width), sy, double(z));
+                    f.volume->sample((double(x) + 0.5) / double(f.width), sy, double(z));
                 for (int c = 0; c < 3; ++c) {
-                    passes.inscatter[p * 3 + c] = s.inscatter[c];
-                    passes.transmittance[p * 3 + c] = s.transmittance[c];
+                    inscatter[o + c] = s.inscatter[c];
+                    transmittance[o + c] = s.transmittance[c];
                 }
             }
             tracker.advance();
         }
     });
     tracker.finish();
+}
+
+namespace {
+
+// The whole frame's passes with only `rows` computed, by either way.
+AerialPasses whole_frame(const SceneDescription& scene, std::span<const float> depth, int width, int height,
+                         Progress* progress, RowRange rows_in, AerialOptions::Method method) {
+    const AerialFrame frame(scene, depth, width, height, method);
+    const RowRange band = rows_in.resolved(height);
+    AerialPasses passes = allocate(width, height);
+    const std::size_t q0 = std::size_t(band.begin) * std::size_t(width) * 3;
+    const std::size_t n = std::size_t(band.size()) * std::size_t(width) * 3;
+    frame.render(band, std::span<float>(passes.inscatter).subspan(q0, n),
+                 std::span<float>(passes.transmittance).subspan(q0, n), progress);
     return passes;
+}
+
+}  // namespace
+
+AerialPasses aerial_perspective_froxel(const SceneDescription& scene, std::span<const float> depth,
+                                       int width, int height, Progress* progress, RowRange rows) {
+    return whole_frame(scene, depth, width, height, progress, rows, AerialOptions::Method::Froxel);
 }
 
 AerialPasses aerial_perspective_raymarch(const SceneDescription& scene,
                                          std::span<const float> depth, int width, int height,
-                                         Progress* progress, RowRange rows_in) {
-    check_call(scene, depth, width, height);
-    const RowRange band = rows_in.resolved(height);
-    AerialPasses passes = allocate(width, height);
-    const double sky = scene.aerial.sky_depth_m;
-    const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
-    const PixelMarcher march(scene, luts, width, height);
-    ProgressTracker tracker(progress, std::size_t(band.size()));
-    tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const tbb::blocked_range<int>& rows) {
-        PixelMarcher::Scratch scratch(march.channels());
-        for (int y = rows.begin(); y != rows.end(); ++y) {
-            for (int x = 0; x < width; ++x) {
-                const std::size_t p = std::size_t(y) * std::size_t(width) + std::size_t(x);
-                if (is_sky_depth(depth[p], sky)) continue;
-                march(x, y, depth[p], scratch, &passes.inscatter[p * 3], &passes.transmittance[p * 3]);
-            }
-            tracker.advance();
-        }
-    });
-    tracker.finish();
-    return passes;
+                                         Progress* progress, RowRange rows) {
+    return whole_frame(scene, depth, width, height, progress, rows, AerialOptions::Method::Raymarch);
 }
 
 AerialPasses aerial_perspective(const SceneDescription& scene, std::span<const float> depth, int width,
                                 int height, Progress* progress, RowRange rows) {
-    return scene.aerial.method == AerialOptions::Method::Froxel
-               ? aerial_perspective_froxel(scene, depth, width, height, progress, rows)
-               : aerial_perspective_raymarch(scene, depth, width, height, progress, rows);
+    return whole_frame(scene, depth, width, height, progress, rows, scene.aerial.method);
 }
 
 AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLuts& luts,

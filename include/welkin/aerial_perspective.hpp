@@ -58,6 +58,8 @@
 #pragma once
 
 #include <array>
+#include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -124,6 +126,32 @@ private:
     std::size_t index(int i, int j, int k) const {
         return ((std::size_t(k) * std::size_t(ny_) + std::size_t(j)) * std::size_t(nx_) + std::size_t(i)) * 3;
     }
+};
+
+// One frame's passes prepared once and computed band by band (the render engine's tiles):
+// the constructor does the frame-wide work (the checks of aerial_perspective(), the LUTs,
+// the froxel depth range fitted to the whole depth buffer and the volume over the whole
+// screen), render() the per-pixel part for a band of rows. A band's values are exactly
+// those of aerial_perspective() in those rows, so bands of any size tile the whole frame
+// exactly. `depth` is not copied: it must outlive the AerialFrame. `method`: the scene's
+// aerial.method unless given. render() may be called from several threads at once.
+class AerialFrame {
+public:
+    AerialFrame(const SceneDescription& scene, std::span<const float> depth, int width, int height,
+                std::optional<AerialOptions::Method> method = std::nullopt);
+    ~AerialFrame();
+    AerialFrame(const AerialFrame&) = delete;
+    AerialFrame& operator=(const AerialFrame&) = delete;
+
+    // Rows [rows.begin, rows.end) into `inscatter` and `transmittance`, each
+    // rows.size() x width x 3 (RGB, the band's top row first); sky pixels get T = 1,
+    // L = 0. Throws InvalidArgument naming "rows" for a bad range or wrong sizes.
+    void render(RowRange rows, std::span<float> inscatter, std::span<float> transmittance,
+                Progress* progress = nullptr) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
 };
 
 // The passes for `depth` ((height, width), top row first, the Z pass), width x height

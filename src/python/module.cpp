@@ -8,7 +8,7 @@
 //   exr_bindings.cpp         write_exr, read_exr
 //   aerial_bindings.cpp      welkin.SceneDescription, aerial_perspective
 //   cloud_bindings.cpp       welkin.CloudLayer, VdbClouds, cloud_radiance
-//   plate_bindings.cpp       camera_plate
+//   plate_bindings.cpp       camera_plate, CameraPlateRenderer
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
 #include <cstring>

@@ -1,4 +1,5 @@
 // welkin.camera_plate: the scene camera's plate (camera_plate.hpp) as numpy arrays.
+#include <memory>
 #include <optional>
 #include <utility>
 
@@ -37,15 +38,27 @@ ground ("camera.matrix_world"), a bad row range ("rows"), a cloud volume that ca
 be read ("clouds.volumes[i].file").
 )doc";
 
-py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress,
-                         const std::optional<std::pair<int, int>>& rows) {
+constexpr const char* kRendererDoc = R"doc(
+A frame's plate prepared once and rendered band by band (camera_plate.hpp, "Rows"): the
+constructor does the frame-wide work (checks, cloud density, the whole frame's depth, the
+sky method's choice, the aerial perspective's LUTs and froxel volume), render(rows=...)
+the band's pixels, with exactly camera_plate(scene, rows=...)'s values. What the render
+engine's tiles and the viewport preview use.
+
+CameraPlateRenderer(scene): scene a welkin.SceneDescription or its JSON text; raises
+ValueError as camera_plate does.
+render(rows=None, progress=None): camera_plate's dict for rows (begin, end) (None: all).
+width, height: the frame's pixels; method: the sky method; has_clouds.
+Safe to call render() from several Python threads (the GIL is released while it runs).
+)doc";
+
+SceneDescription scene_from(const py::handle& scene_in) {
     SceneDescription scene = to_scene(scene_in);
-    require_progress_callback(progress);
     scene.require_camera();
-    CameraPlate plate;
-    RowRange band;
-    if (rows) band = RowRange{rows->first, rows->second}.resolved(scene.resolution.height());
-    run_cancellable([&](Progress* p) { plate = render_camera_plate(scene, p, band); }, progress);
+    return scene;
+}
+
+py::dict plate_dict(CameraPlate&& plate) {
     const int w = plate.width, h = plate.height;
     py::dict out;
     out["combined"] = to_image_array(std::move(plate.combined), w, h, 3);
@@ -63,11 +76,49 @@ py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress,
     return out;
 }
 
+RowRange band_of(const std::optional<std::pair<int, int>>& rows, int height) {
+    return rows ? RowRange{rows->first, rows->second}.resolved(height) : RowRange{};
+}
+
+py::dict camera_plate_py(const py::handle& scene_in, const py::object& progress,
+                         const std::optional<std::pair<int, int>>& rows) {
+    const SceneDescription scene = scene_from(scene_in);
+    require_progress_callback(progress);
+    const RowRange band = band_of(rows, scene.resolution.height());
+    CameraPlate plate;
+    run_cancellable([&](Progress* p) { plate = render_camera_plate(scene, p, band); }, progress);
+    return plate_dict(std::move(plate));
+}
+
+std::shared_ptr<CameraPlateRenderer> make_renderer(const py::handle& scene_in) {
+    const SceneDescription scene = scene_from(scene_in);
+    std::shared_ptr<CameraPlateRenderer> renderer;
+    run_cancellable([&](Progress*) { renderer = std::make_shared<CameraPlateRenderer>(scene); }, py::none());
+    return renderer;
+}
+
+py::dict renderer_render(const CameraPlateRenderer& renderer, const std::optional<std::pair<int, int>>& rows,
+                         const py::object& progress) {
+    require_progress_callback(progress);
+    const RowRange band = band_of(rows, renderer.height());
+    CameraPlate plate;
+    run_cancellable([&](Progress* p) { plate = renderer.render(band, p); }, progress);
+    return plate_dict(std::move(plate));
+}
+
 }  // namespace
 
 void register_plate(py::module_& m) {
     m.def("camera_plate", &camera_plate_py, kPlateDoc, py::arg("scene"), py::kw_only(),
           py::arg("progress") = py::none(), py::arg("rows") = py::none());
+    py::class_<CameraPlateRenderer, std::shared_ptr<CameraPlateRenderer>>(m, "CameraPlateRenderer", kRendererDoc)
+        .def(py::init(&make_renderer), py::arg("scene"))
+        .def("render", &renderer_render, py::kw_only(), py::arg("rows") = py::none(),
+             py::arg("progress") = py::none())
+        .def_property_readonly("width", &CameraPlateRenderer::width)
+        .def_property_readonly("height", &CameraPlateRenderer::height)
+        .def_property_readonly("method", &CameraPlateRenderer::method)
+        .def_property_readonly("has_clouds", &CameraPlateRenderer::has_clouds);
 }
 
 }  // namespace welkin::python

@@ -36,3 +36,50 @@ def test_bands_equal_the_whole_frame(method, aerial):
 def test_bad_rows(rows):
     with pytest.raises(ValueError, match="rows"):
         welkin.camera_plate(scene("lut", "froxel"), rows=rows)
+
+
+def cloudy_scene():
+    d = json.loads(scene("lut", "froxel").to_json_string())
+    d["clouds"] = {"layers": [{"coverage": 0.6}]}
+    # Looking a little up, so that the band crosses cloud, sky and ground.
+    d["camera"]["matrix_world"] = [[0, 0.2, -1, 0], [-1, 0, 0, 0], [0, 1, 0.2, 50], [0, 0, 0, 1]]
+    d["resolution"] = {"x": 40, "y": 30, "percentage": 100}
+    return welkin.SceneDescription.from_json_string(json.dumps(d))
+
+
+KEYS = ("combined", "sky", "inscatter", "transmittance", "depth", "clouds", "cloud_depth")
+
+
+@pytest.mark.parametrize("make", [lambda: scene("auto", "froxel"), lambda: scene("lut", "raymarch"),
+                                  cloudy_scene], ids=["auto-froxel", "lut-raymarch", "clouds"])
+def test_prepared_bands_tile_the_whole_frame_exactly(make):
+    """CameraPlateRenderer: the frame-wide part once, bands of uneven sizes (1 row, 7, the
+    rest) rendered in any order concatenate to exactly camera_plate's whole frame."""
+    s = make()
+    full = welkin.camera_plate(s)
+    renderer = welkin.CameraPlateRenderer(s)
+    h = renderer.height
+    assert (renderer.width, h) == full["depth"].shape[::-1]
+    assert renderer.method == full["method"] and renderer.has_clouds == ("clouds" in s.to_json_string())
+    cuts = [(8, h), (0, 1), (1, 8)]
+    bands = dict((c, renderer.render(rows=c)) for c in cuts)
+    whole = renderer.render()
+    for key in KEYS:
+        joined = np.concatenate([bands[c][key] for c in sorted(cuts)])
+        np.testing.assert_array_equal(joined, full[key], err_msg=key)
+        np.testing.assert_array_equal(whole[key], full[key], err_msg=key)
+    if renderer.has_clouds:
+        assert (full["clouds"][..., 3] > 0.01).any()  # some cloud in the frame
+
+
+def test_prepared_bad_rows_and_scene():
+    renderer = welkin.CameraPlateRenderer(scene("lut", "froxel"))
+    for rows in [(10, 5), (-1, 4), (0, 71), (3, 3)]:
+        with pytest.raises(ValueError, match="rows"):
+            renderer.render(rows=rows)
+    d = json.loads(scene("lut", "froxel").to_json_string())
+    d["camera"]["matrix_world"][2][3] = -10.0
+    with pytest.raises(ValueError, match="camera.matrix_world"):
+        welkin.CameraPlateRenderer(json.dumps(d))
+    with pytest.raises(ValueError, match="scene"):
+        welkin.CameraPlateRenderer(3)

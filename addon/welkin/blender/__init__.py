@@ -13,6 +13,7 @@
   handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
   background.py  a cloudy sky for the live UI, computed on a thread beside the interface
   render_engine.py  the render engine "WELKIN": the camera's plate with Welkin's passes
+  viewport_preview.py  its viewport preview (Rendered shading), in a background thread
   cloud_properties.py  World.welkin_clouds (layers, lighting), Object.welkin_cloud
   cloud_scene.py     the scene's clouds as the scene JSON's "clouds" section
   cloud_operators.py, cloud_panel.py  Welkin Clouds: add/remove layers, mark volumes

@@ -9,15 +9,16 @@ Welkin.AerialTransmittance, Welkin.Clouds and Welkin.CloudDepth (transparent and
 without clouds). Errors (no camera, no world, a camera below the ground, a marked volume
 whose VDB file is missing, the compiled module missing) are reported
 with self.report({'ERROR'}) and no result is written; a cancelled render (Esc,
-test_break) stops the core. A cloudy plate is computed in tiles of BAND_ROWS rows
-(welkin.camera_plate(rows=...), each tile with the whole frame's values), each shown as
-soon as it is done, with update_progress and test_break between tiles. No viewport preview (view_update /
-view_draw are not implemented): the viewport shows Blender's Workbench-like fallback.
+test_break) stops the core. The plate, clear or cloudy, is computed in tiles of BAND_ROWS
+rows (welkin.CameraPlateRenderer: the frame-wide part once, then render(rows=...) per
+tile, with the whole frame's values), each shown as soon as it is done, with
+update_progress and test_break between tiles. view_update / view_draw: the viewport
+preview (viewport_preview.py), the same plate for the viewport's view.
 """
 import bpy
 
 from .. import plate, sky_request
-from . import cloud_scene, scene_sun, update
+from . import cloud_scene, scene_sun, update, viewport_preview
 from .scene_sun import UserError
 
 BAND_ROWS = 64
@@ -42,11 +43,10 @@ def _camera_data(cam):
     return data
 
 
-def scene_description_json(scene, depsgraph, native):
-    """The frame's scene JSON (README "Scene JSON"); UserError for what the user can fix."""
-    if scene.camera is None:
-        raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
-                        "active (Ctrl+Numpad 0)")
+def scene_world(scene, depsgraph, native):
+    """What the plate sees besides the camera: a dict of plate.scene_json's arguments
+    (atmosphere, altitude, sun, exposure, method, clouds) from the world's Welkin settings,
+    the sun lamp and the clouds at this frame; UserError for what the user can fix."""
     if scene.world is None:
         raise UserError("the scene has no world: add one (World properties); its Welkin Sky "
                         "settings drive the plate")
@@ -54,6 +54,20 @@ def scene_description_json(scene, depsgraph, native):
     request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
     sky_request.validate(request, native)
     atm = sky_request.build_atmosphere(request, native)
+    # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
+    # a UserError naming the object and the path: no frame is written).
+    clouds = cloud_scene.clouds_section(scene, depsgraph)
+    return {"atmosphere_json": atm.to_json_string(), "origin_altitude_m": settings.altitude_m,
+            "sun_direction": tuple(request.sun_direction), "exposure": request.exposure,
+            "method": sky_request.resolve_method(request.method, native), "clouds": clouds}
+
+
+def scene_description_json(scene, depsgraph, native):
+    """The frame's scene JSON (README "Scene JSON"); UserError for what the user can fix."""
+    if scene.camera is None:
+        raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
+                        "active (Ctrl+Numpad 0)")
+    world = scene_world(scene, depsgraph, native)
     camera = scene.camera.evaluated_get(depsgraph)
     if camera.type != "CAMERA":
         raise UserError(f"the active camera '{camera.name}' is not a camera object")
@@ -63,13 +77,8 @@ def scene_description_json(scene, depsgraph, native):
     if r.use_border:
         raise UserError("render region (Output > Format > Render Region) is not supported by "
                         "the Welkin engine: turn it off to render the full frame")
-    # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
-    # a UserError naming the object and the path: no frame is written).
-    clouds = cloud_scene.clouds_section(scene, depsgraph)
-    return plate.scene_json(atm.to_json_string(), settings.altitude_m, request.sun_direction,
-                            request.exposure, sky_request.resolve_method(request.method, native),
-                            cam, (r.resolution_x, r.resolution_y, r.resolution_percentage),
-                            clouds=clouds)
+    return plate.scene_json(camera=cam, resolution=(r.resolution_x, r.resolution_y,
+                                                    r.resolution_percentage), **world)
 
 
 def _set_rect(render_pass, rect):
@@ -87,6 +96,26 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
     bl_label = "Welkin"
     bl_use_postprocess = True
     bl_use_preview = False
+
+    def __init__(self):
+        self.preview = None
+
+    def __del__(self):
+        preview = getattr(self, "preview", None)
+        if preview is not None:
+            preview.stop()
+
+    # The viewport preview (Rendered shading): viewport_preview.py.
+    def view_update(self, context, depsgraph):
+        if self.preview is None:
+            self.preview = viewport_preview.Preview(self, scene_world)
+        self.preview.update(context, depsgraph)
+
+    def view_draw(self, context, depsgraph):
+        if self.preview is None:
+            self.preview = viewport_preview.Preview(self, scene_world)
+            self.preview.update(context, depsgraph)
+        self.preview.draw(self, context, depsgraph)
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
@@ -108,14 +137,19 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
         self.update_stats("Welkin", "sky, sun, clouds and aerial perspective" if cloudy
                           else "sky, sun and aerial perspective")
         width, height = description.width, description.height
-        # Tiles: a cloudy plate (seconds to minutes) is computed band by band, each band
-        # handed to Blender as soon as it is done; a clear plate (about a second at 1080p)
-        # at once, since every band rebuilds the atmosphere's LUTs (0.5 s at 1080p).
-        compute_rows = BAND_ROWS if cloudy else height
         for name, channels, chan_id, _source in plate.PASSES:
             self.add_pass(name, channels, chan_id)
+        try:
+            # The frame-wide part once (depth, sky method, aerial LUTs and volume); then
+            # tiles of BAND_ROWS rows, each handed to Blender as soon as it is done.
+            renderer = native.CameraPlateRenderer(description)
+        except (ValueError, OSError) as error:
+            self.report({'ERROR'}, f"Welkin: {error}")
+            return
+        except KeyboardInterrupt:
+            return
         done = 0
-        for rows, _y, h in plate.bands(height, compute_rows):
+        for rows, _y, h in plate.bands(height, BAND_ROWS):
             def progress(fraction, done=done, h=h):
                 self.update_progress((done + fraction * h) / height)
                 return not self.test_break()
@@ -123,7 +157,7 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
             if self.test_break():
                 return
             try:
-                result = native.camera_plate(description, progress=progress, rows=rows)
+                result = renderer.render(rows=rows, progress=progress)
             except (ValueError, OSError) as error:
                 self.report({'ERROR'}, f"Welkin: {error}")
                 return
