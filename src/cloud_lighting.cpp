@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "welkin/cloud_depth_grid.hpp"
+#include "welkin/cloud_diffusion.hpp"
 #include "welkin/error.hpp"
 #include "welkin/reference_rng.hpp"
 #include "welkin/sky_method.hpp"
@@ -96,7 +97,11 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                                                           : 2.0 * density.feature_size_m();
     const bool ambient_decay = options.ambient_steps > 0 && kappa > 0.0;
     std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid;
-    const bool sized = options.octave_optical_size && octaves > 1;
+    // Orders >= 2: the delta-Eddington slab along the sun line (cloud_diffusion.hpp) or
+    // the octaves; either way octaves = 1 is single scattering.
+    const bool diffusion = options.multiple_scattering == CloudMultipleScattering::diffusion && octaves > 1;
+    const bool sized = octaves > 1 && (diffusion || options.octave_optical_size);
+    const SimilarityScaling similarity(sc.albedo, mean_g);
     if (options.shadow_grid) {
         sun_grid = std::make_unique<OpticalDepthGrid>(
             density, [s](const glm::dvec3&) { return s; }, h0, options.light_distance_m, options.light_steps);
@@ -135,6 +140,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
             const double nu = glm::dot(d, s);
             std::vector<double> phase(octaves);
             for (int i = 0; i < octaves; ++i) phase[i] = sc.phase(nu, oc[i]);
+            const double phase2 = diffusion ? sc.phase.twice(nu) : 0.0;
 
             std::fill(acc.begin(), acc.end(), 0.0);
             double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
@@ -160,17 +166,21 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                                                        light_segs);
                     // The octaves' share scaled by the cloud's optical size along the sun line
                     // through x (see the header): f = 1 - exp(-tau_line), octave i times f^i.
-                    double f = 1.0;
-                    if (sized) {
-                        const double tau_anti =
-                            anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)
-                                      : march_optical_depth(density, {x, -s}, options.light_distance_m,
-                                                            options.light_steps, light_segs);
-                        f = 1.0 - std::exp(-(tau_sun + tau_anti));
+                    const double tau_anti =
+                        !sized ? 0.0
+                        : anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)
+                                    : march_optical_depth(density, {x, -s}, options.light_distance_m,
+                                                          options.light_steps, light_segs);
+                    double sun_w = 0.0;
+                    if (diffusion) {
+                        // Single scattering plus the forward-scattered and diffuse parts.
+                        sun_w = sun_source(similarity, tau_sun, tau_anti, nu, mean_g, phase[0], phase2);
+                    } else {
+                        const double f = sized ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
+                        double fi = 1.0;
+                        for (int i = 0; i < octaves; ++i, fi *= f)
+                            sun_w += ob[i] * fi * std::exp(-oa[i] * tau_sun) * phase[i];
                     }
-                    double sun_w = 0.0, fi = 1.0;
-                    for (int i = 0; i < octaves; ++i, fi *= f)
-                        sun_w += ob[i] * fi * std::exp(-oa[i] * tau_sun) * phase[i];
                     double sky_w = 1.0;
                     if (ambient_decay) {
                         const double tau_up =

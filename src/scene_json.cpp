@@ -192,7 +192,8 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
     if (j.contains("lighting")) {
         const json& li = j["lighting"];
         const std::string p = "clouds.lighting.";
-        check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "octaves",
+        check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m",
+                                           "multiple_scattering", "octaves",
                                            "octave_extinction", "octave_contribution", "octave_eccentricity",
                                            "min_transmittance", "seed", "jitter", "max_distance_m"});
         CloudLightingOptions& o = out.lighting;
@@ -206,6 +207,16 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         geti("light_steps", o.light_steps);
         geti("ambient_steps", o.ambient_steps);
         getd("light_distance_m", o.light_distance_m);
+        if (li.contains("multiple_scattering")) {
+            const std::string m = string(li["multiple_scattering"], p + "multiple_scattering");
+            if (m == "diffusion")
+                o.multiple_scattering = CloudMultipleScattering::diffusion;
+            else if (m == "octaves")
+                o.multiple_scattering = CloudMultipleScattering::octaves;
+            else
+                throw InvalidArgument(p + "multiple_scattering",
+                                      fmt::format("must be \"diffusion\" or \"octaves\", got \"{}\"", m));
+        }
         geti("octaves", o.octaves);
         getd("octave_extinction", o.octave_extinction);
         getd("octave_contribution", o.octave_contribution);
@@ -256,6 +267,8 @@ ordered_json clouds_json(const SceneClouds& c) {
                      {"light_steps", o.light_steps},
                      {"ambient_steps", o.ambient_steps},
                      {"light_distance_m", o.light_distance_m},
+                     {"multiple_scattering",
+                      o.multiple_scattering == CloudMultipleScattering::diffusion ? "diffusion" : "octaves"},
                      {"octaves", o.octaves},
                      {"octave_extinction", o.octave_extinction},
                      {"octave_contribution", o.octave_contribution},

@@ -8,7 +8,9 @@ writes with OpenVDB). x: time per million rays (the fast march timed on 128 x 12
 of the case's cone; the reference per view, extrapolated); y: the mean absolute error
 per view relative to the mean radiance, on 6 x 6 views, against the reference at its
 full path count. Lines: the fast march at five quality settings (view + shadow steps)
-with the optical-depth grid, the same before the grid ("legacy"), and the reference at
+with the optical-depth grid and the delta-Eddington multiple scattering (the default),
+at the defaults with Wrenninge's octaves instead ("octaves", the default before it), the
+march before the grid ("legacy", octaves), and the reference at
 1/64, 1/16 and 1/4 of its paths (its own noise for its time). The dotted line is the
 full reference's standard error: errors below it are not resolved.
 """
@@ -42,8 +44,10 @@ def main() -> int:
     fig, axes = plt.subplots(1, len(cases), figsize=(5 * len(cases), 4.2), squeeze=False)
     for ax, case in zip(axes[0], cases):
         mine = [r for r in rows if r["name"] == case]
-        fast = [r for r in mine if r["kind"] == "case" and "legacy" not in r["variant"]]
+        cases_of = [r for r in mine if r["kind"] == "case"]
+        fast = [r for r in cases_of if "legacy" not in r["variant"] and "octaves" not in r["variant"]]
         legacy = [r for r in mine if r["kind"] == "case" and "legacy" in r["variant"]]
+        octaves = [r for r in mine if r["kind"] == "case" and r["variant"].endswith("octaves")]
         ref = [r for r in mine if r["kind"] == "reference"]
         truth = [r for r in mine if r["kind"] == "truth"][0]
         t = lambda rs: [float(r["time_s"]) for r in rs]  # noqa: E731
@@ -52,7 +56,8 @@ def main() -> int:
         for r in fast:
             ax.annotate(r["variant"].replace("fast ", ""), (float(r["time_s"]), 100 * float(r["mean_abs_error"])),
                         textcoords="offset points", xytext=(4, 4), fontsize=7)
-        ax.plot(t(legacy), e(legacy), "s", color="tab:gray", label="fast march, legacy (shadow ray per sample)")
+        ax.plot(t(octaves), e(octaves), "D", color="tab:green", label="fast march 96+8, Wrenninge octaves")
+        ax.plot(t(legacy), e(legacy), "s", color="tab:gray", label="legacy (octaves, shadow ray per sample)")
         ax.plot(t(ref), e(ref), "^-", color="tab:red", label="reference, fewer paths")
         ax.axhline(100 * float(truth["mean_abs_error"]), ls=":", color="tab:red", label="reference standard error")
         ax.set_xscale("log")

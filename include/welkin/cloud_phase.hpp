@@ -42,6 +42,18 @@ struct CloudPhase {
     }
     double mean_cosine() const { return w_forward * g_forward + (1.0 - w_forward) * g_back; }
 
+    // The angular distribution of light scattered twice, p convolved with itself over the
+    // sphere (the path between the two events left out; cloud_diffusion.hpp). A phase's
+    // Legendre moments multiply under this convolution (Funk-Hecke), and HG(g)'s moments
+    // are g^l, so HG(g1) * HG(g2) = HG(g1 g2) and for the two lobes
+    //     p2 = w^2 HG(g_f^2) + 2 w (1 - w) HG(g_f g_b) + (1 - w)^2 HG(g_b^2).
+    double twice(double nu) const {
+        const double w = w_forward;
+        return w * w * henyey_greenstein_phase(nu, g_forward * g_forward) +
+               2.0 * w * (1.0 - w) * henyey_greenstein_phase(nu, g_forward * g_back) +
+               (1.0 - w) * (1.0 - w) * henyey_greenstein_phase(nu, g_back * g_back);
+    }
+
     // A direction distributed as p(d . result) about the unit direction d; u0 picks the
     // lobe, (u1, u2) the direction, all uniform in [0, 1).
     glm::dvec3 sample(const glm::dvec3& d, double u0, double u1, double u2) const {

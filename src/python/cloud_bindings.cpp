@@ -59,7 +59,7 @@ Cloud lighting for many view rays, lit by the atmosphere.
 
 clouds: a welkin.CloudLayer or welkin.VdbClouds. The world origin stands altitude_m
 above the ground (Blender's world frame, Z up, metres); rays start at `origin`.
-method: "fast" (ray march, Wrenninge octaves) or "reference" (path tracing, all
+method: "fast" (ray march, delta-Eddington multiple scattering) or "reference" (path tracing, all
 orders; `paths` per ray). Returns L (N, C) in-scattered radiance in
 W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm (premultiplied), T (N,) transmittance,
 depth (N,) m to the transmittance-weighted centre (0 where nothing was hit).

@@ -85,7 +85,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
                    "density_scale": 0.5, "negative": "reject", "placement": "openvdb"}],
       "scattering": {"albedo": 0.99, "g_forward": 0.7, "g_back": -0.2, "w_forward": 0.9},
       "lighting": {"max_steps": 64, "light_steps": 6, "ambient_steps": 2, "light_distance_m": 3000,
-                   "octaves": 3, "octave_extinction": 0.4, "octave_contribution": 0.6,
+                   "multiple_scattering": "octaves", "octaves": 3, "octave_extinction": 0.4, "octave_contribution": 0.6,
                    "octave_eccentricity": 0.7, "min_transmittance": 0.01, "seed": 3,
                    "jitter": false, "max_distance_m": 5e5}})");
     const SceneDescription s = SceneDescription::from_json_string(text);
@@ -129,6 +129,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     EXPECT_EQ(o.light_steps, 6);
     EXPECT_EQ(o.ambient_steps, 2);
     EXPECT_EQ(o.light_distance_m, 3000);
+    EXPECT_EQ(o.multiple_scattering, CloudMultipleScattering::octaves);
     EXPECT_EQ(o.octaves, 3);
     EXPECT_EQ(o.octave_extinction, 0.4);
     EXPECT_EQ(o.octave_contribution, 0.6);
@@ -154,11 +155,12 @@ TEST(SceneClouds, DefaultsAreTheCoresAndAreAllWritten) {
     EXPECT_EQ(c.volumes[0].options.negative, VdbCloudOptions::Negative::Clamp);
     EXPECT_EQ(c.volumes[0].options.placement, VdbCloudOptions::VoxelPlacement::Blender);
     EXPECT_EQ(c.lighting.max_steps, lo.max_steps);
+    EXPECT_EQ(c.lighting.multiple_scattering, CloudMultipleScattering::diffusion);
     EXPECT_EQ(c.lighting.scattering.albedo, lo.scattering.albedo);
     const std::string text = s.to_json_string();
     for (const char* key : {"\"bottom_altitude_m\"", "\"wind_offset_m\"", "\"seed\"", "\"name\"", "\"grid\"",
                             "\"matrix_world\"", "\"density_scale\"", "\"negative\"", "\"placement\"", "\"albedo\"", "\"g_forward\"",
-                            "\"w_forward\"", "\"max_steps\"", "\"octave_eccentricity\"", "\"jitter\"",
+                            "\"w_forward\"", "\"max_steps\"", "\"multiple_scattering\"", "\"octave_eccentricity\"", "\"jitter\"",
                             "\"max_distance_m\""})
         EXPECT_NE(text.find(key), std::string::npos) << key;
 }
@@ -185,6 +187,7 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"scattering": {"g_forward": 1}})"), "clouds.scattering.g_forward");
     EXPECT_EQ(bad(R"({"lighting": {"max_steps": 0}})"), "clouds.lighting.max_steps");
     EXPECT_EQ(bad(R"({"lighting": {"jitter": 1}})"), "clouds.lighting.jitter");
+    EXPECT_EQ(bad(R"({"lighting": {"multiple_scattering": "wrenninge"}})"), "clouds.lighting.multiple_scattering");
     EXPECT_EQ(bad(R"({"lighting": {"steps": 1}})"), "clouds.lighting.steps");
     EXPECT_EQ(bad(R"({"layer": []})"), "clouds.layer");
     EXPECT_EQ(bad(R"([])"), "clouds");
