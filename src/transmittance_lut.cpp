@@ -38,8 +38,6 @@ GradedQuadrature::Piece GradedQuadrature::make_piece(int panels) {
             const double s = (double(p) + kGlNodes[k]) / double(panels);
             piece.s2.push_back(s * s);
             piece.weight.push_back(float(kGlWeights[k] * 2.0 * s / double(panels)));
-            piece.offset.push_back(double(p) + kGlNodes[k]);
-            piece.gl_weight.push_back(kGlWeights[k]);
         }
     return piece;
 }
@@ -65,27 +63,16 @@ WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double r_sin2, double R, 
     }
 }
 
-// The nodes of one part of a ray cut at breakpoints (GradedQuadrature::Piece::offset).
-WELKIN_SIMD_CLONES void part_nodes(double s0, double h, const double* __restrict offset,
-                                   const double* __restrict gl_weight, std::size_t m, double* __restrict s2,
-                                   float* __restrict weight) {
-    for (std::size_t l = 0; l < m; ++l) {
-        const double x = s0 + offset[l] * h;
-        s2[l] = x * x;
-        weight[l] = float(gl_weight[l] * 2.0 * x * h);
-    }
-}
-
 }  // namespace
 
 // Where a density profile has a kink (the ozone tent's 10, 25 and 40 km), the integrand is
 // only continuous, and a panel across the kink converges like the midpoint rule, not like
-// Gauss-Legendre: with 40 nodes, up to 0.024 in tau (2.4 % in T) on grazing rays through
-// the tent, against 4e-6 for an atmosphere without kinks (mars). So the ray's crossings of
+// Gauss-Legendre: with 40 nodes and no cuts, up to 0.024 in tau (2.4 % in T) on grazing
+// rays through the tent, against 4e-6 for an atmosphere without kinks (mars). So the ray's crossings of
 // the batch's breakpoint radii inside [a, b], at (t + r mu)^2 = r_b^2 - r^2 (1 - mu^2),
-// cut the substitution's s axis, and each part gets the whole piece's panel density
-// (round(panels * its length in s), at least one panel): every panel then integrates a
-// smooth function, and the nodes stay where they were, but for the few panels added.
+// cut the substitution's s axis: a panel holding a crossing is split there into
+// Gauss-Legendre sub-panels, so every panel integrates a smooth function, and the other
+// panels keep their precomputed nodes.
 // Rays crossing no breakpoint use the precomputed piece.
 Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b,
                                       bool toward_a, const Piece& piece) const {
@@ -130,38 +117,51 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
         accumulate(piece.s2.data(), piece.weight.data(), piece.s2.size());
         return to_vec4(sum * float(len));
     }
-    cuts[n_cuts++] = 1.0;
-    std::sort(cuts, cuts + n_cuts);
-    // Panels of the parts, then their nodes, in stack arrays (a heap buffer only for
-    // quadratures with more nodes than kStackNodes).
+    std::sort(cuts + 1, cuts + n_cuts);
+    // Panels without a cut keep the piece's nodes; a panel with cuts is split at them into
+    // sub-panels of the piece's four Gauss-Legendre nodes each. A ray crossing k breakpoints
+    // so costs 4k nodes more than an uncut one, and only those panels' nodes are made here.
     const int panels = int(piece.s2.size() / 4);
-    double lo[kMaxCuts + 2], step[kMaxCuts + 2];
-    int count[kMaxCuts + 2], total = 0;
-    for (int k = 0; k + 1 < n_cuts; ++k) {
-        const double width = cuts[k + 1] - cuts[k];
-        count[k] = width > 0.0 ? std::max(1, int(double(panels) * width + 0.5)) : 0;
-        lo[k] = cuts[k];
-        step[k] = count[k] > 0 ? width / double(count[k]) : 0.0;
-        total += count[k];
-    }
-    constexpr int kStackNodes = 256;
+    constexpr int kStackNodes = 512;
     double s2_stack[kStackNodes];
     float weight_stack[kStackNodes];
     std::vector<double> s2_heap;
     std::vector<float> weight_heap;
     double* s2 = s2_stack;
     float* weight = weight_stack;
-    if (4 * total > kStackNodes) {
-        s2_heap.resize(std::size_t(4 * total));
-        weight_heap.resize(std::size_t(4 * total));
+    const std::size_t most = piece.s2.size() + std::size_t(4 * (n_cuts - 1));
+    if (most > std::size_t(kStackNodes)) {
+        s2_heap.resize(most);
+        weight_heap.resize(most);
         s2 = s2_heap.data();
         weight = weight_heap.data();
     }
     std::size_t n = 0;
-    for (int k = 0; k + 1 < n_cuts; ++k) {
-        part_nodes(lo[k], step[k], piece.offset.data(), piece.gl_weight.data(), std::size_t(4 * count[k]), s2 + n,
-                   weight + n);
-        n += std::size_t(4 * count[k]);
+    int next_cut = 1;
+    for (int p = 0; p < panels; ++p) {
+        const double u0 = double(p) / double(panels), u1 = double(p + 1) / double(panels);
+        if (next_cut >= n_cuts || cuts[next_cut] >= u1) {
+            for (int k = 0; k < 4; ++k, ++n) {
+                s2[n] = piece.s2[std::size_t(4 * p + k)];
+                weight[n] = piece.weight[std::size_t(4 * p + k)];
+            }
+            continue;
+        }
+        double lo = u0;
+        for (;;) {
+            const bool cut_here = next_cut < n_cuts && cuts[next_cut] < u1;
+            const double hi = cut_here ? cuts[next_cut] : u1;
+            if (cut_here) ++next_cut;
+            const double h = hi - lo;
+            if (h > 0.0)
+                for (int k = 0; k < 4; ++k, ++n) {
+                    const double x = lo + h * kGlNodes[std::size_t(k)];
+                    s2[n] = x * x;
+                    weight[n] = float(kGlWeights[std::size_t(k)] * 2.0 * x * h);
+                }
+            lo = hi;
+            if (!cut_here) break;
+        }
     }
     accumulate(s2, weight, n);
     return to_vec4(sum * float(len));

@@ -22,7 +22,7 @@ namespace welkin {
 
 class TransmittanceLut {
 public:
-    TransmittanceLut(const AtmosphereBatch& batch, int width, int height, int steps = 40);
+    TransmittanceLut(const AtmosphereBatch& batch, int width, int height, int steps = 32);
 
     // Transmittance to the top (mu clamped to the horizon for rays that would hit the ground).
     Spectrum4 to_top(double r, double mu) const;
@@ -88,7 +88,8 @@ private:
 double sun_visible_fraction(double bottom_radius, double r, double mu_s, double angular_radius);
 
 // Optical depth (as a Spectrum4 of tau) along [0, length] of the ray (r, mu), by
-// Gauss-Legendre on panels graded towards the lowest altitude; `samples` evaluations.
+// Gauss-Legendre on panels graded towards the lowest altitude; `samples` evaluations, plus
+// four for each panel split where the ray crosses a density profile's breakpoint.
 // The kernel of the transmittance LUT and of the ray-march method's sun rays. The nodes
 // and weights depend on `samples` alone: GradedQuadrature holds them for loops that march
 // many rays, march_optical_depth builds them for one.
@@ -103,10 +104,6 @@ private:
     struct Piece {
         std::vector<double> s2;
         std::vector<float> weight;
-        // For rays cut at breakpoints: node l of a part of n <= panels panels of width h
-        // starting at s_0 is s = s_0 + offset[l] h (offset = panel index + GL node), weight
-        // gl_weight[l] 2 s h.
-        std::vector<double> offset, gl_weight;
     };
     static Piece make_piece(int panels);
     Spectrum4 integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b, bool toward_a,
