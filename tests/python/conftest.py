@@ -4,7 +4,12 @@ The module is the one built in build/ (scripts/test.sh sets PYTHONPATH=build); w
 pytest runs without it, build/ is put on sys.path here so `python3 -m pytest
 tests/python` works from a fresh build. Run with /usr/bin/python3, the Python the module
 is built for.
+
+The add-on's bpy-free modules (addon/welkin, without its blender/ subpackage) are loaded
+here as the package `welkin_addon` (its name would clash with the compiled `welkin`), so
+tests import them as `from welkin_addon import scene_export`.
 """
+import importlib.util
 import pathlib
 import sys
 
@@ -16,6 +21,14 @@ if str(_BUILD) not in sys.path:
     sys.path.append(str(_BUILD))
 
 import welkin  # noqa: E402
+
+_ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
+if "welkin_addon" not in sys.modules:
+    _spec = importlib.util.spec_from_file_location(
+        "welkin_addon", _ADDON / "__init__.py", submodule_search_locations=[str(_ADDON)])
+    _package = importlib.util.module_from_spec(_spec)
+    sys.modules["welkin_addon"] = _package
+    _spec.loader.exec_module(_package)
 
 
 @pytest.fixture

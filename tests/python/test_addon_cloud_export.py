@@ -3,20 +3,10 @@ sequence rule written out by hand from its definition (frame n = f - start + 1, 
 mode, then the offset; the last digits of the name replaced, zero-padded), the volume's
 placement in metres, a missing file refused naming object and path. The rule is checked
 against Blender's own Volume.grids.frame_filepath in tests/blender/test_cloud_export.py."""
-import importlib.util
-import pathlib
-import sys
 
 import pytest
 
-ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
-if "welkin_addon" not in sys.modules:
-    spec = importlib.util.spec_from_file_location(
-        "welkin_addon", ADDON / "__init__.py", submodule_search_locations=[str(ADDON)])
-    package = importlib.util.module_from_spec(spec)
-    sys.modules["welkin_addon"] = package
-    spec.loader.exec_module(package)
-from welkin_addon import cloud_export  # noqa: E402
+from welkin_addon import cloud_export
 
 
 @pytest.mark.parametrize("mode,frames", [

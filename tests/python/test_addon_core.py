@@ -2,7 +2,6 @@
 package `welkin_addon` (the add-on's own name, `welkin`, is the compiled module's in this
 process) and driven with the module from build/."""
 import dataclasses
-import importlib.util
 import math
 import pathlib
 import sys
@@ -15,17 +14,7 @@ import welkin
 ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
 
 
-def _load_addon():
-    spec = importlib.util.spec_from_file_location(
-        "welkin_addon", ADDON / "__init__.py", submodule_search_locations=[str(ADDON)])
-    package = importlib.util.module_from_spec(spec)
-    sys.modules["welkin_addon"] = package
-    spec.loader.exec_module(package)
-    return package
-
-
-_load_addon()
-from welkin_addon import native, pixels, sky_compute, sky_request  # noqa: E402
+from welkin_addon import native, pixels, sky_compute, sky_request
 
 
 def test_addon_package_imports_without_bpy():

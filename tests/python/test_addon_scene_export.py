@@ -1,23 +1,13 @@
 """The add-on's Blender-free scene export (addon/welkin/scene_export.py): file paths beside
 a render, the camera in metres under a scene unit scale, and a scene dict the core accepts
 whose camera rays scale with the unit scale."""
-import importlib.util
 import json
-import pathlib
-import sys
 
 import numpy as np
 
 import welkin
 
-ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
-if "welkin_addon" not in sys.modules:
-    spec = importlib.util.spec_from_file_location(
-        "welkin_addon", ADDON / "__init__.py", submodule_search_locations=[str(ADDON)])
-    package = importlib.util.module_from_spec(spec)
-    sys.modules["welkin_addon"] = package
-    spec.loader.exec_module(package)
-from welkin_addon import scene_export  # noqa: E402
+from welkin_addon import scene_export
 
 
 def test_paths_beside_the_render():

@@ -5,25 +5,15 @@ near-plane point (l + sx (r - l), t - sy (t - b), -n) from the eye; orthographic
 view axis from the point (l + sx (r - l), t - sy (t - b), 0) of the view's plane; both
 turned by the view's rotation. Off-axis frusta (lens shift, Blender's camera view) too.
 The preview's levels and drawn size."""
-import importlib.util
 import json
 import math
-import pathlib
-import sys
 
 import numpy as np
 import pytest
 
 import welkin
 
-ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
-if "welkin_addon" not in sys.modules:
-    spec = importlib.util.spec_from_file_location(
-        "welkin_addon", ADDON / "__init__.py", submodule_search_locations=[str(ADDON)])
-    package = importlib.util.module_from_spec(spec)
-    sys.modules["welkin_addon"] = package
-    spec.loader.exec_module(package)
-from welkin_addon import viewport  # noqa: E402
+from welkin_addon import viewport
 
 
 def rotation(yaw, pitch, roll):
