@@ -96,9 +96,8 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     };
     // The crossings, as s = sqrt((t - origin) / direction) in (0, 1).
     constexpr int kMaxCuts = 2 * ColumnCutLimit;
-    double cuts[kMaxCuts + 2];
+    double cuts[kMaxCuts];
     int n_cuts = 0;
-    cuts[n_cuts++] = 0.0;
     // [a, b] never contains the tangent point inside it, so its radius is monotone and each
     // breakpoint between its end radii is crossed once: on the far side of the tangent
     // (rising) at t = -r mu + q, on the near side at -r mu - q, q^2 = r_b^2 - r^2 sin^2.
@@ -108,16 +107,16 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     const bool rising = ta + tb > 0.0;
     for (double rb : batch.breakpoint_radii()) {
         const double rb2_k = rb * rb;
-        if (!(rb2_k > lo2 && rb2_k < hi2) || n_cuts > kMaxCuts) continue;
+        if (!(rb2_k > lo2 && rb2_k < hi2) || n_cuts == kMaxCuts) continue;
         const double q = std::sqrt(rb2_k - r_sin2);
         const double t = rising ? q - r_mu : -q - r_mu;
         cuts[n_cuts++] = std::sqrt(std::clamp((t - origin) / direction, 0.0, 1.0));
     }
-    if (n_cuts == 1) {
+    if (n_cuts == 0) {
         accumulate(piece.s2.data(), piece.weight.data(), piece.s2.size());
         return to_vec4(sum * float(len));
     }
-    std::sort(cuts + 1, cuts + n_cuts);
+    std::sort(cuts, cuts + n_cuts);
     // Panels without a cut keep the piece's nodes; a panel with cuts is split at them into
     // sub-panels of the piece's four Gauss-Legendre nodes each. A ray crossing k breakpoints
     // so costs 4k nodes more than an uncut one, and only those panels' nodes are made here.
@@ -129,7 +128,7 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     std::vector<float> weight_heap;
     double* s2 = s2_stack;
     float* weight = weight_stack;
-    const std::size_t most = piece.s2.size() + std::size_t(4 * (n_cuts - 1));
+    const std::size_t most = piece.s2.size() + std::size_t(4 * n_cuts);
     if (most > std::size_t(kStackNodes)) {
         s2_heap.resize(most);
         weight_heap.resize(most);
@@ -137,7 +136,7 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
         weight = weight_heap.data();
     }
     std::size_t n = 0;
-    int next_cut = 1;
+    int next_cut = 0;
     for (int p = 0; p < panels; ++p) {
         const double u0 = double(p) / double(panels), u1 = double(p + 1) / double(panels);
         if (next_cut >= n_cuts || cuts[next_cut] >= u1) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "aerial_comparison.hpp"
+#include "invalid_argument_testing.hpp"
 #include "welkin/aerial_perspective.hpp"
 #include "welkin/color.hpp"
 #include "welkin/error.hpp"
@@ -19,6 +20,7 @@
 #include "welkin/optical_depth.hpp"
 
 using namespace welkin;
+using welkin::test::parameter_of;
 
 namespace {
 
@@ -42,16 +44,6 @@ SceneDescription scene_for(const std::string& preset, const Camera& cam, int wid
     s.resolution = {width, height, 100};
     s.sun_direction = sun_direction_from_angles_deg(sun_elevation_deg, sun_azimuth_deg);
     return s;
-}
-
-template <class F>
-std::string parameter_of(F&& f) {
-    try {
-        f();
-    } catch (const InvalidArgument& e) {
-        return e.parameter();
-    }
-    return "";
 }
 
 }  // namespace

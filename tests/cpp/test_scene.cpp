@@ -7,6 +7,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "invalid_argument_testing.hpp"
 #include "welkin/camera.hpp"
 #include "welkin/equirect.hpp"
 #include "welkin/error.hpp"
@@ -14,19 +15,9 @@
 #include "welkin/scene.hpp"
 
 using namespace welkin;
+using welkin::test::parameter_of;
 
 namespace {
-
-// The parameter an InvalidArgument names, or "" when `f` does not throw one.
-template <class F>
-std::string parameter_of(F&& f) {
-    try {
-        f();
-    } catch (const InvalidArgument& e) {
-        return e.parameter();
-    }
-    return "";
-}
 
 std::string scene_with(const std::string& extra) {
     return R"({"version": 1, "camera": {"matrix_world": [[1,0,0,0],[0,1,0,0],[0,0,1,2],[0,0,0,1]],

@@ -12,25 +12,17 @@
 #include <glm/geometric.hpp>
 
 #include "cloud_test_util.hpp"
+#include "invalid_argument_testing.hpp"
 #include "welkin/cloud_lighting.hpp"
 #include "welkin/cloud_union.hpp"
 #include "welkin/error.hpp"
 #include "welkin/scene.hpp"
 
 using namespace welkin;
+using welkin::test::parameter_of;
 using welkin::test::HomogeneousBox;
 
 namespace {
-
-template <class F>
-std::string parameter_of(F&& f) {
-    try {
-        f();
-    } catch (const InvalidArgument& e) {
-        return e.parameter();
-    }
-    return "";
-}
 
 std::string scene_with_clouds(const std::string& clouds) {
     return R"({"version": 1, "clouds": )" + clouds + "}";

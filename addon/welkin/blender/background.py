@@ -33,8 +33,8 @@ class Job:
     """One cloudy sky in the making. Only its own thread writes result / error."""
 
     def __init__(self, module, request, scene_json, disc, key):
-        self.request = request
         self.key = key
+        self.cloudy = scene_json is not None
         self.fraction = 0.0
         self.cancelled = False
         self.result = None
@@ -126,7 +126,7 @@ def poll():
         outcome = update.Outcome()
         outcome.warnings = warnings
         update.apply_sky(scene, request, lamp, key, job.result, outcome, pack=False,
-                         cloudy=True)
+                         cloudy=job.cloudy)
     except UserError as error:
         settings.status = f"sky not updated: {error}"
     _redraw_properties()

@@ -47,24 +47,23 @@ def _live(scene):
     return world is not None and world.welkin.active and world.welkin.auto_update
 
 
-def _run(scene, depsgraph, *, pack, live=False):
+def _guarded(scene, action):
+    """Runs action(); a failure goes to the status line, since a handler or a timer must
+    never break Blender's loop."""
     try:
+        action()
+    except UserError as error:
+        _log(scene.world.welkin, f"sky not updated: {error}")
+    except Exception as error:
+        _log(scene.world.welkin, f"sky not updated: unexpected {type(error).__name__}: {error}")
+
+
+def _run(scene, depsgraph, *, pack, live=False):
+    def update_now():
         outcome = update.update_sky(scene, depsgraph, pack=pack, live=live)
         for warning in outcome.warnings if outcome.updated else ():
             print(f"Welkin: warning: {warning}")
-    except UserError as error:
-        _log(scene.world.welkin, f"sky not updated: {error}")
-    except Exception as error:  # a handler must never break Blender's loop
-        _log(scene.world.welkin, f"sky not updated: unexpected {type(error).__name__}: {error}")
-
-
-def _start_background(scene):
-    try:
-        background.start(scene)
-    except UserError as error:
-        _log(scene.world.welkin, f"sky not updated: {error}")
-    except Exception as error:  # a timer must never break Blender's loop
-        _log(scene.world.welkin, f"sky not updated: unexpected {type(error).__name__}: {error}")
+    _guarded(scene, update_now)
 
 
 def _tick():
@@ -75,7 +74,7 @@ def _tick():
     scene = bpy.context.scene
     if scene is not None and _live(scene):
         if cloud_scene.has_clouds(scene):
-            _start_background(scene)
+            _guarded(scene, lambda: background.start(scene))
         else:
             background.cancel()  # the clouds were switched off while a cloudy sky computed
             _run(scene, None, pack=False, live=True)
