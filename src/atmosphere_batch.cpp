@@ -1,6 +1,7 @@
 #include "welkin/atmosphere_batch.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <tbb/parallel_for.h>
 
@@ -25,7 +26,8 @@ AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::
       bottom_radius_(atm.bottom_radius_m),
       top_radius_(atm.top_radius_m),
       thickness_(atm.top_radius_m - atm.bottom_radius_m),
-      inv_table_step_(double(kTableSize - 1) / (atm.top_radius_m - atm.bottom_radius_m)),
+      inv_table_step_(double(kTableSize - 1) /
+                      ((atm.top_radius_m - atm.bottom_radius_m) * (atm.top_radius_m + atm.bottom_radius_m))),
       solar_irradiance_(pack(atm.solar_irradiance, first, count)),
       ground_albedo_(pack(atm.ground_albedo, first, count)),
       sun_angular_radius_(float(atm.sun_angular_radius_rad)),
@@ -42,7 +44,9 @@ AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::
     // Entries are independent: filled in parallel (the same values at any thread count).
     tbb::parallel_for(tbb::blocked_range<int>(0, kTableSize, 1024), [&](const tbb::blocked_range<int>& range) {
         for (int i = range.begin(); i != range.end(); ++i) {
-            const double h = double(i) / inv_table_step_;
+            // r^2 - R^2 = s at entry i, so h = r - R = s / (r + R), without cancellation.
+            const double s = double(i) / inv_table_step_;
+            const double h = i + 1 == kTableSize ? thickness_ : s / (std::sqrt(bottom_radius_ * bottom_radius_ + s) + bottom_radius_);
             const float rho_r = float(atm.rayleigh_density.density(h));
             const float rho_m = float(atm.mie_density.density(h));
             const float rho_a = float(atm.absorption_density.density(h));

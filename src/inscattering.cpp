@@ -1,5 +1,7 @@
 #include "welkin/inscattering.hpp"
 
+#include <algorithm>
+
 namespace welkin {
 namespace {
 
@@ -25,6 +27,10 @@ WELKIN_SIMD_CLONES void inscatter_row(const AtmosphereBatch& batch, const MultiS
                    const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,
                    InscatterRowScratch& scratch) {
     const std::size_t n = nu.size();
+    if (ray.steps.empty()) {  // a ray that crosses no air
+        std::fill(out.begin(), out.end(), Spectrum4(0.0f));
+        return;
+    }
     const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
     scratch.i_sun.resize(n);
     scratch.i_ms.resize(n);

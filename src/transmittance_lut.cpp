@@ -29,7 +29,7 @@ constexpr int ColumnCutLimit = 16;
 // end; the integrand in s, rho(t(s)) 2 (b - a) s, is smooth, so composite Gauss-Legendre
 // in s converges fast. A piece keeps its nodes' s^2 and weights w 2 s / panels (the
 // factor b - a is applied to the sum); each block of samples is one pass computing the
-// altitudes (in double; it vectorises) and their table entries, and one fetching the
+// squared radii (in double; it vectorises) and their table entries, and one fetching the
 // extinction.
 GradedQuadrature::Piece GradedQuadrature::make_piece(int panels) {
     Piece piece;
@@ -47,16 +47,16 @@ GradedQuadrature::GradedQuadrature(int samples)
 
 namespace {
 
-// The arithmetic pass over a block of nodes: the table coordinate of each node's altitude,
-// clamped to the table, as an entry and a weight (AtmosphereBatch::extinction_at).
-// r(t)^2 = (t + r mu)^2 + r^2 (1 - mu^2), a sum of two squares (never negative, so no
-// guard per node), with r^2 (1 - mu^2) = (r sin)^2 formed once per ray.
-WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double r_sin2, double R, double inv_step, double origin, double direction,
-                       double x_max, const double* __restrict s2, std::size_t m, int* __restrict entry,
-                       float* __restrict fraction) {
+// The arithmetic pass over a block of nodes: the table coordinate of each node's radius,
+// clamped to the table, as an entry and a weight (AtmosphereBatch::extinction_at). The
+// table is uniform in r^2 - R^2 = (t + r mu)^2 + c with c = r^2 (1 - mu^2) - R^2 formed once
+// per ray: a multiply-add per node, no square root.
+WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double c, double inv_step, double origin, double direction,
+                                          double x_max, const double* __restrict s2, std::size_t m,
+                                          int* __restrict entry, float* __restrict fraction) {
     for (std::size_t l = 0; l < m; ++l) {
         const double t_low = origin + direction * s2[l] + r_mu;  // t + r mu
-        const double x = min_value(max_value((std::sqrt(t_low * t_low + r_sin2) - R) * inv_step, 0.0), x_max);
+        const double x = min_value(max_value((t_low * t_low + c) * inv_step, 0.0), x_max);
         const int i = int(x);
         entry[l] = i;
         fraction[l] = float(x - double(i));
@@ -81,17 +81,25 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     const double origin = toward_a ? a : b, direction = toward_a ? len : -len;
     const double r_mu = r * mu, r_sin2 = r * r * std::max((1.0 - mu) * (1.0 + mu), 0.0);
     const double x_max = double(AtmosphereBatch::kTableSize - 1);
+    const double R = batch.bottom_radius(), c = r_sin2 - R * R;
     constexpr std::size_t kBlock = 64;
-    Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f};
+    // Two partial sums (even and odd nodes), so that consecutive nodes' additions do not
+    // wait on each other.
+    Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f}, sum_odd = sum;
     auto accumulate = [&](const double* s2, const float* weight, std::size_t n) {
         int entry[kBlock];
         float fraction[kBlock];
         for (std::size_t first = 0; first < n; first += kBlock) {
             const std::size_t m = std::min(kBlock, n - first);
-            table_coordinates(r_mu, r_sin2, batch.bottom_radius(), batch.inv_table_step(), origin, direction, x_max,
-                              s2 + first, m, entry, fraction);
+            table_coordinates(r_mu, c, batch.inv_table_step(), origin, direction, x_max, s2 + first, m, entry,
+                              fraction);
             const float* const w = weight + first;
-            for (std::size_t l = 0; l < m; ++l) sum += w[l] * batch.extinction_at(entry[l], fraction[l]);
+            std::size_t l = 0;
+            for (; l + 1 < m; l += 2) {
+                sum += w[l] * batch.extinction_at(entry[l], fraction[l]);
+                sum_odd += w[l + 1] * batch.extinction_at(entry[l + 1], fraction[l + 1]);
+            }
+            if (l < m) sum += w[l] * batch.extinction_at(entry[l], fraction[l]);
         }
     };
     // The crossings, as s = sqrt((t - origin) / direction) in (0, 1).
@@ -114,7 +122,7 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     }
     if (n_cuts == 0) {
         accumulate(piece.s2.data(), piece.weight.data(), piece.s2.size());
-        return to_vec4(sum * float(len));
+        return to_vec4((sum + sum_odd) * float(len));
     }
     std::sort(cuts, cuts + n_cuts);
     // Panels without a cut keep the piece's nodes; a panel with cuts is split at them into
@@ -163,7 +171,7 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
         }
     }
     accumulate(s2, weight, n);
-    return to_vec4(sum * float(len));
+    return to_vec4((sum + sum_odd) * float(len));
 }
 
 Spectrum4 GradedQuadrature::optical_depth(const AtmosphereBatch& batch, double r, double mu, double length) const {

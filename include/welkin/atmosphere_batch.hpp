@@ -6,9 +6,14 @@
 // Geometry stays in double (geometry.hpp); radiance and coefficients are float.
 //
 // Densities are tabulated once per batch: the scattering and extinction coefficients at
-// kTableSize altitudes evenly spaced through the atmosphere, interpolated linearly. For an
-// exponential layer sampled every dh the relative interpolation error is at most
-// dh^2 / (8 H^2): with 8192 entries over Earth's 60 km and H = 1.2 km it is 1.5e-6.
+// kTableSize radii r evenly spaced in r^2 from the ground to the top, interpolated
+// linearly in r^2. A ray's r(t)^2 = (t + r mu)^2 + r^2 (1 - mu^2) is a polynomial in t, so
+// a quadrature along a ray finds its table coordinate without a square root, the cost
+// that dominated the transmittance LUT's build; an altitude h has r^2 - R^2 = h (2R + h).
+// The spacing in altitude, d(r^2) / 2r, varies by only (top - R) / R across the
+// atmosphere (0.9 % on Earth, 7.4 m there with 8192 entries). For an exponential layer
+// sampled every dh the relative interpolation error is at most dh^2 / (8 H^2): with
+// 8192 entries over Earth's 60 km and H = 1.2 km it is 1.5e-6.
 #pragma once
 
 #include <algorithm>
@@ -52,7 +57,7 @@ public:
 
     // Coefficients at altitude h (clamped to the atmosphere; zero above its top).
     MediumSample sample(double altitude_m) const {
-        const double x = altitude_m * inv_table_step_;
+        const double x = altitude_m * (2.0 * bottom_radius_ + altitude_m) * inv_table_step_;
         if (!(x >= 0.0)) return table_.front();
         if (x >= double(kTableSize - 1)) return altitude_m > thickness_ ? MediumSample{} : table_.back();
         const int i = int(x);
@@ -65,12 +70,12 @@ public:
     }
 
     // The extinction alone, for loops that compute many table coordinates first
-    // (x = altitude * inv_table_step(), clamped to [0, kTableSize - 1]), given as the
+    // (x = (r^2 - R^2) * inv_table_step(), clamped to [0, kTableSize - 1]), given as the
     // entry i = int(x) and the weight f = x - i: a compact table holds, per altitude, the
     // extinction a and its step to the next entry b - a (zero after the last), so that a
     // lookup reads 32 adjacent bytes and does one multiply-add. Equal to
     // sample(altitude).extinction inside the atmosphere (but for rounding).
-    double inv_table_step() const { return inv_table_step_; }
+    double inv_table_step() const { return inv_table_step_; }  // entries per m^2 of r^2
     struct ExtinctionEntry {
         Float4 value, step;
     };

@@ -26,7 +26,7 @@
 // arranged for many nu at once.
 //
 // An observer above the atmosphere is first moved to where the ray enters it; rays that
-// miss the atmosphere see nothing.
+// miss the atmosphere, and rays of no length (from the ground, below its horizon), see nothing.
 #pragma once
 
 #include <cmath>
@@ -71,6 +71,10 @@ inline void prepare_ray(const AtmosphereBatch& batch, double r, double mu, int s
         r = r_entry;
     }
     const double d = distance_to_boundary(r, mu, R, top);
+    // A ray of no length (looking below the horizon from the ground itself, as half of a
+    // ground-level sky-view LUT does) crosses no air: no steps, rather than steps of
+    // weight zero.
+    if (!(d > 0.0)) return;
     out.steps.resize(std::size_t(steps));
     Spectrum4 T(1.0f);
     const double inv_n = 1.0 / double(steps);
