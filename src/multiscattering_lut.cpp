@@ -126,6 +126,9 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                     sun_coordinates(at, C, D, pm, psc, n_pairs, 1.0f, texel, fx, fraction);
                     const Float4 w_r4 = to_float4(w_r), w_m4 = to_float4(w_m);
                     for (std::size_t l = 0; l < n_pairs; ++l) {
+                        // The sun below this point's horizon adds nothing: skip the fetch
+                        // (whole runs of pairs, so the branch is well predicted).
+                        if (fraction[l] == 0.0f) continue;
                         const Float4 T = at.row.sample4(texel[l], fx[l]) * fraction[l];
                         sum_r[l] += w_r4 * T;
                         sum_m[l] += w_m4 * T;
