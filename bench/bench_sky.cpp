@@ -71,6 +71,14 @@ int main(int argc, char** argv) {
                MultiScatteringLut ms(m, t, options.multiscattering_size);
                SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
            }));
+    // From the ground itself the sky-view rows below the horizon are rays of no length
+    // (no steps); 1 km up they cross air too, so this is the rebuild of an elevated camera.
+    report("full LUT rebuild, observer 1 km up", median_ms(repeats, [&] {
+               AtmosphereBatch m(atm, 0, 3);
+               TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
+               MultiScatteringLut ms(m, t, options.multiscattering_size);
+               SkyViewLut s(m, t, ms, r + 1000.0, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+           }));
 
     // Whole-image skies through the SkyMethod interface.
     const int height = width / 2;

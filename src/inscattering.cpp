@@ -8,7 +8,7 @@ namespace {
 // The arithmetic pass of one step: for every view, mu_s(t) = A + B nu, the transmittance
 // lookup's texel and weights, and the multiple-scattering lookup's (ms.texel_x). The
 // arrays do not overlap (__restrict), which lets the compiler vectorise the loop.
-WELKIN_SIMD_CLONES void coordinates(const TransmittanceLut::AtRadius& at_in, float A, float B, float ms_scale, int ms_last,
+WELKIN_SIMD_CLONES_WIDE void coordinates(const TransmittanceLut::AtRadius& at_in, float A, float B, float ms_scale, int ms_last,
                  const float* __restrict nu, std::size_t n, int* __restrict i_sun, float* __restrict fx_sun,
                  float* __restrict fraction, int* __restrict i_ms, float* __restrict fx_ms) {
     const TransmittanceLut::AtRadius at = at_in;
@@ -23,7 +23,7 @@ WELKIN_SIMD_CLONES void coordinates(const TransmittanceLut::AtRadius& at_in, flo
 
 }  // namespace
 
-WELKIN_SIMD_CLONES void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
+WELKIN_SIMD_CLONES_WIDE void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
                    const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,
                    InscatterRowScratch& scratch) {
     const std::size_t n = nu.size();

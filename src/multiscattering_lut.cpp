@@ -21,7 +21,7 @@ namespace {
 // (floor 1), by the cosine of the sun on the ground, max(mu_s, 0), for the ground (floor
 // 0). (A flag and a select there kept GCC from vectorising the loop.) The arrays do not
 // overlap (__restrict), which lets the compiler vectorise it.
-WELKIN_SIMD_CLONES void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, const float* __restrict mu_s,
+WELKIN_SIMD_CLONES_WIDE void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, const float* __restrict mu_s,
                      const float* __restrict sin_cos, std::size_t n, float cosine_floor, int* __restrict texel,
                      float* __restrict fx, float* __restrict fraction) {
     const TransmittanceLut::AtRadius at = at_in;
