@@ -5,7 +5,10 @@
 // the reference is timed on a strided subset of the image's pixels and extrapolated
 // (printed as such), since a full-image Monte-Carlo render takes hours on two cores.
 //
-//   build/welkin_bench [--width 2048] [--repeats 7] [--reference-stride 4096] [--csv FILE]
+//   build/welkin_bench [--width 2048] [--repeats 31] [--reference-stride 4096] [--csv FILE]
+//
+// 31 repeats by default: the LUT rows take milliseconds, and on a shared machine the
+// median of a few runs moves with the neighbours (raymarch is timed min(repeats, 3) times).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -34,7 +37,7 @@ using bench::median_ms;
 
 int main(int argc, char** argv) {
     CLI::App app{"Welkin sky benchmark"};
-    int width = 2048, repeats = 7, stride = 4096;
+    int width = 2048, repeats = 31, stride = 4096;
     std::string csv;
     app.add_option("--width", width, "HDRI width in pixels (height = width / 2)");
     app.add_option("--repeats", repeats, "runs per timing; the median is reported");

@@ -45,41 +45,76 @@ SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlu
     });
 }
 
-float SkyViewLut::v_of_theta(double theta) const {
-    const int h = texture_.height();
-    float v;
-    if (theta < theta_h_) {
-        v = float(0.5 * (1.0 - safe_sqrt(1.0 - theta / theta_h_)));
-        v = std::min(v, (float(h / 2) - 0.5f) / float(h));  // stay above the horizon
-    } else {
-        v = float(0.5 * (1.0 + safe_sqrt((theta - theta_h_) / beta_)));
-        v = std::max(v, (float(h / 2) + 0.5f) / float(h));  // stay below it
-    }
-    return v;
+// acos for the latitude mapping, without a branch, so that a loop of it vectorises:
+// acos a = pi/2 - asin a for 0 <= a <= 1/2, 2 asin sqrt((1 - a) / 2) above, and
+// acos(-a) = pi - acos a, with asin t = t + t z P(z) (z = t^2) on [0, 1/2] by the
+// polynomial of Cephes' asinf (S. Moshier, Cephes Math Library), evaluated in double.
+// Within 1e-8 rad of std::acos (measured 5.1e-9, at mu = 1/2; tests/cpp/
+// test_skyview_lut.cpp): a millionth of a sky-view texel row.
+namespace {
+
+WELKIN_ALWAYS_INLINE double zenith_angle_of(double mu) {
+    const double a = mu < 0.0 ? -mu : mu;
+    const bool big = a > 0.5;
+    const double z = big ? 0.5 * (1.0 - a) : a * a;
+    const double t = big ? std::sqrt(z) : a;
+    const double p =
+        ((((4.2163199048e-2 * z + 2.4181311049e-2) * z + 4.5470025998e-2) * z + 7.4953002686e-2) * z +
+         1.6666752422e-1) * z * t + t;
+    const double acos_a = big ? 2.0 * p : 0.5 * kPi - p;
+    return mu < 0.0 ? kPi - acos_a : acos_a;
+}
+
+// Hillaire's latitude mapping (above), computed both ways and one selected.
+WELKIN_ALWAYS_INLINE float v_of_zenith_angle(double theta, double theta_h, double beta, int h) {
+    const float above = min_value(float(0.5 * (1.0 - std::sqrt(max_value(1.0 - theta / theta_h, 0.0)))),
+                                  (float(h / 2) - 0.5f) / float(h));  // stay above the horizon
+    const float below = max_value(float(0.5 * (1.0 + std::sqrt(max_value((theta - theta_h) / beta, 0.0)))),
+                                  (float(h / 2) + 0.5f) / float(h));  // stay below it
+    return theta < theta_h ? above : below;
+}
+
+}  // namespace
+
+double SkyViewLut::zenith_angle(double mu) { return zenith_angle_of(mu); }
+float SkyViewLut::v_of_theta(double theta, double theta_h, double beta, int height) {
+    return v_of_zenith_angle(theta, theta_h, beta, height);
 }
 
 Spectrum4 SkyViewLut::radiance(double mu, double cos_phi) const {
-    const double theta = std::acos(clamp_cosine(mu));
+    const double theta = zenith_angle(clamp_cosine(mu));
     const float u = float(safe_sqrt(0.5 * (1.0 - clamp_cosine(cos_phi))));
     // The stored texel centres sit at u = (i + 0.5) / width exactly, so sample without the
     // texcoord_from_unit remapping.
-    return texture_.sample(u, v_of_theta(theta));
+    return texture_.sample(u, v_of_theta(theta, theta_h_, beta_, texture_.height()));
 }
 
 namespace {
 
-// The arithmetic pass of a block of lookups: mu and u = sqrt((1 - cos_phi) / 2) of each
-// view, as view_geometry() and radiance(mu, cos_phi) compute them.
-void view_angles(const glm::dvec3* __restrict d, std::size_t n, double sx, double sy, double hs2,
-                 double* __restrict mu, float* __restrict u) {
+// The arithmetic pass of a block of lookups: from each view, mu and u =
+// sqrt((1 - cos_phi) / 2) as view_geometry() and radiance(mu, cos_phi) compute them, then
+// the texel coordinates of (u, v_of_theta(zenith_angle(mu))) as Texture2D::sample takes
+// them: the left texel and weight in u, the lower row and weight in v.
+WELKIN_SIMD_CLONES_WIDE void lookup_coordinates(const glm::dvec3* __restrict d, std::size_t n, double sx, double sy,
+                                                double hs2, double theta_h, double beta, int width, int height,
+                                                int* __restrict i_out, float* __restrict fx_out,
+                                                int* __restrict j_out, float* __restrict fy_out) {
     for (std::size_t k = 0; k < n; ++k) {
         const double inv = 1.0 / std::sqrt(d[k].x * d[k].x + d[k].y * d[k].y + d[k].z * d[k].z);
         const double x = d[k].x * inv, y = d[k].y * inv;
-        mu[k] = clamp_value(d[k].z * inv, -1.0, 1.0);
+        const double mu = clamp_value(d[k].z * inv, -1.0, 1.0);
         const double hv2 = x * x + y * y;
         const double c = clamp_value((x * sx + y * sy) / std::sqrt(max_value(hv2 * hs2, 1e-300)), -1.0, 1.0);
         const double cos_phi = (hv2 > 1e-24 && hs2 > 1e-24) ? c : 1.0;
-        u[k] = float(std::sqrt(max_value(0.5 * (1.0 - cos_phi), 0.0)));
+        const float u = float(std::sqrt(max_value(0.5 * (1.0 - cos_phi), 0.0)));
+        const float v = v_of_zenith_angle(zenith_angle_of(mu), theta_h, beta, height);
+        const float tx = clamp_value(u * float(width) - 0.5f, 0.0f, float(width - 1));
+        const float ty = clamp_value(v * float(height) - 0.5f, 0.0f, float(height - 1));
+        const int i = min_value(int(tx), width - 2), j = min_value(int(ty), height - 2);
+        i_out[k] = i;
+        fx_out[k] = tx - float(i);
+        j_out[k] = j;
+        fy_out[k] = ty - float(j);
     }
 }
 
@@ -89,15 +124,17 @@ void SkyViewLut::radiance(std::span<const glm::dvec3> directions, const glm::dve
                           float* out, std::size_t stride) const {
     const double hs2 = sun.x * sun.x + sun.y * sun.y;
     constexpr std::size_t kBlock = 64;
-    double mu[kBlock];
-    float u[kBlock];
-    const float width = float(texture_.width());
+    int i_tex[kBlock], j_tex[kBlock];
+    float fx[kBlock], fy[kBlock];
+    const int width = texture_.width(), height = texture_.height();
     for (std::size_t first = 0; first < directions.size(); first += kBlock) {
         const std::size_t n = std::min(kBlock, directions.size() - first);
-        view_angles(directions.data() + first, n, sun.x, sun.y, hs2, mu, u);
+        lookup_coordinates(directions.data() + first, n, sun.x, sun.y, hs2, theta_h_, beta_, width, height, i_tex, fx,
+                           j_tex, fy);
         for (std::size_t k = 0; k < n; ++k) {
-            const float v = v_of_theta(std::acos(mu[k]));
-            const Float4 L = texture_.row(v).sample4(u[k] * width - 0.5f);
+            const Spectrum4* const lo = &texture_.at(0, j_tex[k]);
+            const Spectrum4* const hi = lo + width;
+            const Float4 L = Texture2D::Row{lo, hi, fy[k], width - 1}.sample4(i_tex[k], fx[k]);
             float* const o = out + (first + k) * stride;
             for (std::size_t c = 0; c < count; ++c) o[c] = L[c];
         }

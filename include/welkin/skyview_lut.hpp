@@ -39,15 +39,20 @@ public:
     // here; Z up) around the sun `sun` (a unit vector), with mu and cos_phi as
     // view_geometry() gives them. Writes lanes [0, count) of each view's radiance to
     // out[i * stride + c]. The same values as one call per view, computed in blocks: a
-    // pass over the block for the angles (arithmetic only, it vectorises), then the acos,
-    // the latitude mapping and the bilinear fetches.
+    // pass over the block for the texel coordinates (the angles, the acos and the latitude
+    // mapping: arithmetic only, it vectorises), then the bilinear fetches.
     void radiance(std::span<const glm::dvec3> directions, const glm::dvec3& sun, std::size_t count, float* out,
                   std::size_t stride) const;
 
     const Texture2D& texture() const { return texture_; }
 
+    // The view's zenith angle, acos(mu) to 1e-8 rad, and the texture's v of a zenith
+    // angle (Hillaire's latitude mapping, above; theta_h, beta of the observer): in a form
+    // that vectorises, used by both radiance() forms.
+    static double zenith_angle(double mu);
+    static float v_of_theta(double theta, double theta_h, double beta, int height);
+
 private:
-    float v_of_theta(double theta) const;  // Hillaire's latitude mapping, above
 
     double r_, theta_h_, beta_;
     Texture2D texture_;
