@@ -108,8 +108,11 @@ WELKIN_SIMD_CLONES_WIDE void lookup_coordinates(const glm::dvec3* __restrict d, 
         const double cos_phi = (hv2 > 1e-24 && hs2 > 1e-24) ? c : 1.0;
         const float u = float(std::sqrt(max_value(0.5 * (1.0 - cos_phi), 0.0)));
         const float v = v_of_zenith_angle(zenith_angle_of(mu), theta_h, beta, height);
-        const float tx = clamp_value(u * float(width) - 0.5f, 0.0f, float(width - 1));
-        const float ty = clamp_value(v * float(height) - 0.5f, 0.0f, float(height - 1));
+        // (A zero or non-finite direction, which callers reject, gives NaN here: the
+        // selects send it to texel 0 rather than to an index out of the texture.)
+        const float ux = u * float(width) - 0.5f, vy = v * float(height) - 0.5f;
+        const float tx = ux > 0.0f ? min_value(ux, float(width - 1)) : 0.0f;
+        const float ty = vy > 0.0f ? min_value(vy, float(height - 1)) : 0.0f;
         const int i = min_value(int(tx), width - 2), j = min_value(int(ty), height - 2);
         i_out[k] = i;
         fx_out[k] = tx - float(i);

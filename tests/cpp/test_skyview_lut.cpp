@@ -31,6 +31,21 @@ TEST(SkyViewLut, ZenithAngleIsWithinItsBoundOfAcos) {
     EXPECT_LT(worst, 1e-8);
 }
 
+// Callers reject zero and non-finite directions (LutSky validates them); the block lookup
+// still stays inside its texture for them.
+TEST(SkyViewLut, BlockLookupStaysInsideTheTextureForDirectionsCallersReject) {
+    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const AtmosphereBatch batch(atm, 0, 3);
+    const TransmittanceLut t(batch, 256, 64);
+    const MultiScatteringLut ms(batch, t, 32);
+    const SkyViewLut sky(batch, t, ms, atm.bottom_radius_m, 0.5, 192, 108);
+    const double nan = std::nan(""), inf = INFINITY;
+    const std::vector<glm::dvec3> dirs = {{0, 0, 0}, {nan, 0, 1}, {0, 0, nan}, {inf, 0, 0}, {0, -inf, 1}};
+    std::vector<float> out(dirs.size() * 3);
+    sky.radiance(dirs, glm::normalize(glm::dvec3(1.0, 0.0, 1.0)), 3, out.data(), 3);
+    for (float x : out) EXPECT_TRUE(std::isfinite(x));
+}
+
 TEST(SkyViewLut, BlockLookupEqualsOneLookupPerView) {
     const Atmosphere atm = Atmosphere::preset("bruneton2017");
     const AtmosphereBatch batch(atm, 0, 3);
