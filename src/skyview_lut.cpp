@@ -45,14 +45,14 @@ SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlu
     });
 }
 
+namespace {
+
 // acos for the latitude mapping, without a branch, so that a loop of it vectorises:
 // acos a = pi/2 - asin a for 0 <= a <= 1/2, 2 asin sqrt((1 - a) / 2) above, and
 // acos(-a) = pi - acos a, with asin t = t + t z P(z) (z = t^2) on [0, 1/2] by the
 // polynomial of Cephes' asinf (S. Moshier, Cephes Math Library), evaluated in double.
 // Within 1e-8 rad of std::acos (measured 5.1e-9, at mu = 1/2; tests/cpp/
 // test_skyview_lut.cpp): a millionth of a sky-view texel row.
-namespace {
-
 WELKIN_ALWAYS_INLINE double zenith_angle_of(double mu) {
     const double a = mu < 0.0 ? -mu : mu;
     const bool big = a > 0.5;
