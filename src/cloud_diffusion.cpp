@@ -84,14 +84,14 @@ double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti,
     // mu = sqrt(v):
     static constexpr std::array<double, 3> mu = {0.3357106870197288, 0.7071067811865476, 0.9419651451198934};
     const bool conservative = 3.0 * (1.0 - sim.albedo) < kConservative;
-    const double beam_t = conservative ? std::exp(-ts) : 0.0, beam_T = conservative ? std::exp(-T) : 0.0;
+    const double beam_t = std::exp(-ts), beam_T = conservative ? std::exp(-T) : 0.0;  // the scaled beam
     double diffuse = 0.0;
     for (int i = 0; i < 3; ++i) {
         const DiffuseField d = conservative ? conservative_slab(mu[i] * T, mu[i] * ts, mu[i], beam_t, beam_T)
                                             : eddington_slab(mu[i] * T, mu[i] * ts, sim.albedo, mu[i]);
         diffuse += w[i] * std::max(0.0, d.fluence + 3.0 * g * d.flux * mu[i] * nu);
     }
-    const double forward = ((conservative ? beam_t : std::exp(-ts)) - single) * p2;
+    const double forward = (beam_t - single) * p2;
     return single * p + forward + diffuse / (4.0 * kPi);
 }
 

@@ -164,8 +164,9 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                         sun_grid ? sun_grid->tau(x, sun_level, sun_cursor)
                                  : march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps,
                                                        light_segs);
-                    // The octaves' share scaled by the cloud's optical size along the sun line
-                    // through x (see the header): f = 1 - exp(-tau_line), octave i times f^i.
+                    // The cloud's depth away from the sun along the sun line through x: the
+                    // slab's thickness (diffusion), or the octaves' optical size f =
+                    // 1 - exp(-tau_line), octave i weighted by f^i (see the header).
                     const double tau_anti =
                         !sized ? 0.0
                         : anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)

@@ -74,27 +74,45 @@ WELKIN_ALWAYS_INLINE float v_of_zenith_angle(double theta, double theta_h, doubl
     return theta < theta_h ? above : below;
 }
 
+// (u, v) as the texel coordinates of a bilinear lookup, as Texture2D::sample takes them:
+// the left texel i and weight fx in u, the lower row j and weight fy in v. A NaN (from a
+// zero or non-finite direction, which callers reject) selects texel 0 rather than an
+// index out of the texture.
+WELKIN_ALWAYS_INLINE void texel_of(float u, float v, int width, int height, int& i, float& fx, int& j, float& fy) {
+    const float ux = u * float(width) - 0.5f, vy = v * float(height) - 0.5f;
+    const float tx = ux > 0.0f ? min_value(ux, float(width - 1)) : 0.0f;
+    const float ty = vy > 0.0f ? min_value(vy, float(height - 1)) : 0.0f;
+    i = min_value(int(tx), width - 2);
+    j = min_value(int(ty), height - 2);
+    fx = tx - float(i);
+    fy = ty - float(j);
+}
+
+Float4 fetch(const Texture2D& t, int i, float fx, int j, float fy) {
+    const Spectrum4* const lo = &t.at(0, j);
+    return Texture2D::Row{lo, lo + t.width(), fy, t.width() - 1}.sample4(i, fx);
+}
+
 }  // namespace
 
 double SkyViewLut::zenith_angle(double mu) { return zenith_angle_of(mu); }
-float SkyViewLut::v_of_theta(double theta, double theta_h, double beta, int height) {
-    return v_of_zenith_angle(theta, theta_h, beta, height);
-}
 
 Spectrum4 SkyViewLut::radiance(double mu, double cos_phi) const {
-    const double theta = zenith_angle(clamp_cosine(mu));
-    const float u = float(safe_sqrt(0.5 * (1.0 - clamp_cosine(cos_phi))));
     // The stored texel centres sit at u = (i + 0.5) / width exactly, so sample without the
     // texcoord_from_unit remapping.
-    return texture_.sample(u, v_of_theta(theta, theta_h_, beta_, texture_.height()));
+    const float u = float(safe_sqrt(0.5 * (1.0 - clamp_cosine(cos_phi))));
+    const float v = v_of_zenith_angle(zenith_angle_of(clamp_cosine(mu)), theta_h_, beta_, texture_.height());
+    int i, j;
+    float fx, fy;
+    texel_of(u, v, texture_.width(), texture_.height(), i, fx, j, fy);
+    return to_vec4(fetch(texture_, i, fx, j, fy));
 }
 
 namespace {
 
 // The arithmetic pass of a block of lookups: from each view, mu and u =
 // sqrt((1 - cos_phi) / 2) as view_geometry() and radiance(mu, cos_phi) compute them, then
-// the texel coordinates of (u, v_of_theta(zenith_angle(mu))) as Texture2D::sample takes
-// them: the left texel and weight in u, the lower row and weight in v.
+// the texel coordinates (texel_of) of u and v = v_of_zenith_angle(zenith_angle_of(mu)).
 WELKIN_SIMD_CLONES_WIDE void lookup_coordinates(const glm::dvec3* __restrict d, std::size_t n, double sx, double sy,
                                                 double hs2, double theta_h, double beta, int width, int height,
                                                 int* __restrict i_out, float* __restrict fx_out,
@@ -108,16 +126,7 @@ WELKIN_SIMD_CLONES_WIDE void lookup_coordinates(const glm::dvec3* __restrict d, 
         const double cos_phi = (hv2 > 1e-24 && hs2 > 1e-24) ? c : 1.0;
         const float u = float(std::sqrt(max_value(0.5 * (1.0 - cos_phi), 0.0)));
         const float v = v_of_zenith_angle(zenith_angle_of(mu), theta_h, beta, height);
-        // (A zero or non-finite direction, which callers reject, gives NaN here: the
-        // selects send it to texel 0 rather than to an index out of the texture.)
-        const float ux = u * float(width) - 0.5f, vy = v * float(height) - 0.5f;
-        const float tx = ux > 0.0f ? min_value(ux, float(width - 1)) : 0.0f;
-        const float ty = vy > 0.0f ? min_value(vy, float(height - 1)) : 0.0f;
-        const int i = min_value(int(tx), width - 2), j = min_value(int(ty), height - 2);
-        i_out[k] = i;
-        fx_out[k] = tx - float(i);
-        j_out[k] = j;
-        fy_out[k] = ty - float(j);
+        texel_of(u, v, width, height, i_out[k], fx_out[k], j_out[k], fy_out[k]);
     }
 }
 
@@ -135,9 +144,7 @@ void SkyViewLut::radiance(std::span<const glm::dvec3> directions, const glm::dve
         lookup_coordinates(directions.data() + first, n, sun.x, sun.y, hs2, theta_h_, beta_, width, height, i_tex, fx,
                            j_tex, fy);
         for (std::size_t k = 0; k < n; ++k) {
-            const Spectrum4* const lo = &texture_.at(0, j_tex[k]);
-            const Spectrum4* const hi = lo + width;
-            const Float4 L = Texture2D::Row{lo, hi, fy[k], width - 1}.sample4(i_tex[k], fx[k]);
+            const Float4 L = fetch(texture_, i_tex[k], fx[k], j_tex[k], fy[k]);
             float* const o = out + (first + k) * stride;
             for (std::size_t c = 0; c < count; ++c) o[c] = L[c];
         }

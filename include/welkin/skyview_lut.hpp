@@ -46,14 +46,11 @@ public:
 
     const Texture2D& texture() const { return texture_; }
 
-    // The view's zenith angle, acos(mu) to 1e-8 rad, and the texture's v of a zenith
-    // angle (Hillaire's latitude mapping, above; theta_h, beta of the observer): in a form
-    // that vectorises, used by both radiance() forms.
+    // The view's zenith angle, acos(mu) to 1e-8 rad, in a form that vectorises (both
+    // radiance() forms map it to the texture's v by Hillaire's latitude mapping, above).
     static double zenith_angle(double mu);
-    static float v_of_theta(double theta, double theta_h, double beta, int height);
 
 private:
-
     double r_, theta_h_, beta_;
     Texture2D texture_;
 };
