@@ -20,6 +20,7 @@ Needs only the GL context Blender already has for any viewport: no GPU compute.
 LAST records what the newest draw showed (tests read it): the level's size, its pixels,
 the key of the view, how long the draws took.
 """
+import collections
 import threading
 import time
 import weakref
@@ -43,6 +44,7 @@ from .scene_sun import UserError
 LAST = {}
 READBACK = None
 POLL_S = 0.05
+DRAW_HISTORY = 500  # draws whose timings are kept (a long session draws without end)
 
 
 class Job(threading.Thread):
@@ -102,7 +104,7 @@ class Preview:
         self.texture = None
         self.texture_key = None
         self.drawn_size = None
-        self.draw_seconds = []
+        self.draw_seconds = collections.deque(maxlen=DRAW_HISTORY)  # (draw, upload) s, the newest
         self.timer = None
 
     # --- main thread -------------------------------------------------------------------
@@ -186,7 +188,7 @@ class Preview:
             self._draw_texture(engine, context)
         self.draw_seconds.append((time.perf_counter() - t0, upload))
         LAST.update(key=key, image=self.texture_key, job=job, done=job.done,
-                    timings=list(job.timings), draw_seconds=list(self.draw_seconds[-500:]),
+                    timings=list(job.timings), draw_seconds=list(self.draw_seconds),
                     drawn_size=self.drawn_size, error=job.error)
         if READBACK is not None and self.texture is not None:
             x, y, w, h = READBACK
