@@ -29,8 +29,9 @@
 
 #include "aerial_comparison.hpp"  // tests/cpp: the comparison the tests assert on
 #include "bench_timing.hpp"
-#include "welkin/aerial_perspective.hpp"
-#include "welkin/math.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/base/math.hpp"
 
 using namespace welkin;
 
@@ -95,8 +96,8 @@ int main(int argc, char** argv) {
                tbb::info::default_concurrency(), preset, width, height, z_max / 1e3);
 
     AerialPasses reference;
-    const double t_luts = median_ms(repeats, [&] { AtmosphereLuts luts(scene.atmosphere, scene.sky_options); });
-    const double t_march = median_ms(1, [&] { reference = aerial_perspective_raymarch(scene, depth, width, height); });
+    const double t_luts = median_ms(repeats, [&] { AtmosphereLuts luts(scene.atmosphere, scene.sky_options.luts()); });
+    const double t_march = median_ms(1, [&] { reference = aerial_perspective_raymarch(scene.aerial_view(), depth, width, height); });
     fmt::print("  transmittance + multiple-scattering LUTs           {:9.2f} ms\n", t_luts);
     fmt::print("  per-pixel march ({} steps, LUTs included)          {:9.1f} ms\n", steps, t_march);
 
@@ -105,14 +106,14 @@ int main(int argc, char** argv) {
         out = std::fopen(csv.c_str(), "w");
         if (out) std::fprintf(out, "froxels,build_ms,apply_ms,total_ms,march_ms,median_rel_L,p99_rel_L,max_rel_L,max_abs_T\n");
     }
-    const AtmosphereLuts luts(scene.atmosphere, scene.sky_options);
+    const AtmosphereLuts luts(scene.atmosphere, scene.sky_options.luts());
     fmt::print("  {:>10} {:>10} {:>10} {:>10} {:>9} {:>11} {:>10} {:>10} {:>9}\n", "froxels", "build ms",
                "apply ms", "total ms", "speed-up", "L median %", "L p99 %", "L max %", "T max");
     for (const int n : {16, 32, 64}) {
         SceneDescription s = scene;
         s.aerial.froxel_width = s.aerial.froxel_height = s.aerial.froxel_slices = n;
         std::optional<AerialPerspectiveVolume> volume;
-        const double t_build = median_ms(repeats, [&] { volume.emplace(s, luts, width, height, z_max); });
+        const double t_build = median_ms(repeats, [&] { volume.emplace(s.aerial_view(), luts, width, height, z_max); });
         // The application: one volume lookup per pixel (the loop aerial_perspective_froxel runs).
         AerialPasses passes;
         passes.inscatter.resize(std::size_t(width) * height * 3);
@@ -132,7 +133,7 @@ int main(int argc, char** argv) {
             });
         });
         AerialPasses full;
-        const double t_total = median_ms(repeats, [&] { full = aerial_perspective_froxel(s, depth, width, height); });
+        const double t_total = median_ms(repeats, [&] { full = aerial_perspective_froxel(s.aerial_view(), depth, width, height); });
         const test::AerialComparison e = test::compare_aerial_passes(full, reference, depth);
         fmt::print("  {:>10} {:10.2f} {:10.2f} {:10.2f} {:8.0f}x {:11.3f} {:10.3f} {:10.3f} {:9.5f}\n",
                    fmt::format("{0}x{0}x{0}", n), t_build, t_apply, t_total, t_march / t_total,

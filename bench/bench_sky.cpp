@@ -24,12 +24,12 @@
 #include <tbb/info.h>
 
 #include "bench_timing.hpp"
-#include "welkin/atmosphere_luts.hpp"
-#include "welkin/equirect.hpp"
-#include "welkin/lut_cache.hpp"
-#include "welkin/lut_sky.hpp"
-#include "welkin/skyview_lut.hpp"
-#include "welkin/sky_method.hpp"
+#include "welkin/atmosphere/luts.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/atmosphere/lut_cache.hpp"
+#include "welkin/sky/lut.hpp"
+#include "welkin/atmosphere/skyview_lut.hpp"
+#include "welkin/sky/method.hpp"
 
 using namespace welkin;
 

@@ -31,14 +31,14 @@
 #include <unistd.h>
 
 #include "../bench_timing.hpp"
-#include "welkin/cloud_illumination.hpp"
-#include "welkin/cloud_lighting.hpp"
-#include "welkin/cloud_noise.hpp"
-#include "welkin/cloud_reference.hpp"
-#include "welkin/math.hpp"
-#include "welkin/procedural_clouds.hpp"
-#include "welkin/sky_image.hpp"
-#include "welkin/vdb_clouds.hpp"
+#include "welkin/clouds/illumination.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/clouds/noise.hpp"
+#include "welkin/clouds/reference.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/clouds/procedural.hpp"
+#include "welkin/render/sky_image.hpp"
+#include "welkin/clouds/vdb.hpp"
 
 using namespace welkin;
 using Clock = std::chrono::steady_clock;

@@ -13,11 +13,11 @@
 
 #include "common.hpp"
 #include "terminal_progress.hpp"
-#include "welkin/aerial_perspective.hpp"
-#include "welkin/cloud_passes.hpp"
-#include "welkin/error.hpp"
-#include "welkin/exr_io.hpp"
-#include "welkin/scene.hpp"
+#include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/io/exr.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::cli {
 namespace {
@@ -64,7 +64,7 @@ int run_aerial(const AerialArgs& args) {
     {
         TerminalProgress progress(fmt::format("aerial {}x{} ({})", width, height,
                                               aerial_method_name(scene.aerial.method)));
-        passes = aerial_perspective(scene, depth, width, height, &progress);
+        passes = aerial_perspective(scene.aerial_view(), depth, width, height, &progress);
         progress.finish();
     }
     if (interrupted()) throw Cancelled();

@@ -9,10 +9,10 @@
 
 #include "common.hpp"
 #include "terminal_progress.hpp"
-#include "welkin/cloud_passes.hpp"
-#include "welkin/error.hpp"
-#include "welkin/exr_io.hpp"
-#include "welkin/scene.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/io/exr.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::cli {
 namespace {

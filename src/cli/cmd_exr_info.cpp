@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "common.hpp"
-#include "welkin/equirect.hpp"
-#include "welkin/exr_io.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/io/exr.hpp"
 
 namespace welkin::cli {
 namespace {

@@ -13,10 +13,10 @@
 
 #include "common.hpp"
 #include "terminal_progress.hpp"
-#include "welkin/camera_plate.hpp"
-#include "welkin/error.hpp"
-#include "welkin/exr_io.hpp"
-#include "welkin/scene.hpp"
+#include "welkin/render/camera_plate.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/io/exr.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::cli {
 namespace {

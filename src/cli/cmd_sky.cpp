@@ -12,11 +12,11 @@
 
 #include "common.hpp"
 #include "terminal_progress.hpp"
-#include "welkin/auto_sky.hpp"
-#include "welkin/error.hpp"
-#include "welkin/exr_io.hpp"
-#include "welkin/scene.hpp"
-#include "welkin/sky_image.hpp"
+#include "welkin/sky/auto.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/io/exr.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/render/sky_image.hpp"
 
 namespace welkin::cli {
 namespace {

@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include "common.hpp"
-#include "welkin/color.hpp"
-#include "welkin/math.hpp"
-#include "welkin/sun.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/atmosphere/sun.hpp"
 
 namespace welkin::cli {
 namespace {

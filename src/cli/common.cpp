@@ -14,9 +14,10 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "welkin/aerial_perspective.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 
 namespace welkin::cli {
 

@@ -14,10 +14,10 @@
 
 #include <tbb/global_control.h>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/exr_io.hpp"
-#include "welkin/scene.hpp"
-#include "welkin/sky_method.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/io/exr.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/sky/method.hpp"
 
 namespace welkin::cli {
 

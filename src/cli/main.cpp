@@ -16,7 +16,7 @@
 #include <fmt/format.h>
 
 #include "common.hpp"
-#include "welkin/error.hpp"
+#include "welkin/base/error.hpp"
 
 namespace {
 

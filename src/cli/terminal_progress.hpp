@@ -11,7 +11,7 @@
 #include <chrono>
 #include <string>
 
-#include "welkin/progress.hpp"
+#include "welkin/base/progress.hpp"
 
 namespace welkin::cli {
 

@@ -7,10 +7,10 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "welkin/aerial_perspective.hpp"
-#include "welkin/camera.hpp"
-#include "welkin/error.hpp"
-#include "welkin/scene.hpp"
+#include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/base/camera.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::python {
 namespace {
@@ -18,7 +18,7 @@ namespace {
 const char* const kAerialDoc = R"doc(
 Aerial-perspective passes of a rendered frame.
 
-    inscatter, transmittance = welkin.aerial_perspective(scene, depth, method=None)
+    inscatter, transmittance = welkin.aerial_perspective(scene.aerial_view(), depth, method=None)
 
 Parameters
 ----------
@@ -66,7 +66,7 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
                                                    height, width));
     const std::span<const float> z(depth.data(), std::size_t(depth.size()));
     AerialPasses passes;
-    run_cancellable([&](Progress* p) { passes = aerial_perspective(scene, z, width, height, p); },
+    run_cancellable([&](Progress* p) { passes = aerial_perspective(scene.aerial_view(), z, width, height, p); },
                     progress);
     py::array_t<float> L({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
     py::array_t<float> T({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});

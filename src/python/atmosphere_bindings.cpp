@@ -13,8 +13,8 @@
 #include <pybind11/stl/filesystem.h>
 
 #include "bindings.hpp"
-#include "welkin/atmosphere.hpp"
-#include "welkin/error.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/base/error.hpp"
 
 namespace welkin::python {
 namespace {

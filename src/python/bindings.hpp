@@ -16,9 +16,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include "welkin/progress.hpp"
-#include "welkin/scene.hpp"
-#include "welkin/sky_image.hpp"
+#include "welkin/base/progress.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/render/sky_image.hpp"
 
 namespace welkin::python {
 

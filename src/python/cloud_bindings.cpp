@@ -6,15 +6,15 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "welkin/cloud_illumination.hpp"
-#include "welkin/cloud_lighting.hpp"
-#include "welkin/cloud_reference.hpp"
-#include "welkin/color.hpp"
-#include "welkin/error.hpp"
-#include "welkin/procedural_clouds.hpp"
-#include "welkin/scene_clouds.hpp"
-#include "welkin/sky_image.hpp"
-#include "welkin/vdb_clouds.hpp"
+#include "welkin/clouds/illumination.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/clouds/reference.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/clouds/procedural.hpp"
+#include "welkin/scene/clouds.hpp"
+#include "welkin/render/sky_image.hpp"
+#include "welkin/clouds/vdb.hpp"
 
 namespace welkin::python {
 namespace {

@@ -8,9 +8,10 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "welkin/cloud_passes.hpp"
-#include "welkin/error.hpp"
-#include "welkin/row_range.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/row_range.hpp"
 
 namespace welkin::python {
 namespace {

@@ -4,11 +4,11 @@
 #include <fmt/format.h>
 
 #include "bindings.hpp"
-#include "welkin/atmosphere.hpp"
-#include "welkin/color.hpp"
-#include "welkin/equirect.hpp"
-#include "welkin/error.hpp"
-#include "welkin/sky_method.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/sky/method.hpp"
 
 namespace welkin::python {
 namespace {

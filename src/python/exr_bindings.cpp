@@ -5,8 +5,8 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "welkin/error.hpp"
-#include "welkin/exr_io.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/io/exr.hpp"
 
 namespace welkin::python {
 namespace {

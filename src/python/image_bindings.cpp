@@ -9,10 +9,10 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "welkin/cloud_density.hpp"
-#include "welkin/error.hpp"
-#include "welkin/sky_image.hpp"
-#include "welkin/sky_method.hpp"
+#include "welkin/clouds/density.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/render/sky_image.hpp"
+#include "welkin/sky/method.hpp"
 
 namespace welkin::python {
 

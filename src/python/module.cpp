@@ -17,7 +17,8 @@
 #include <fmt/format.h>
 
 #include "bindings.hpp"
-#include "welkin/error.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/base/error.hpp"
 
 #ifndef WELKIN_VERSION
 #define WELKIN_VERSION "unknown"

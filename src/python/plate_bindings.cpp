@@ -7,9 +7,10 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "welkin/camera_plate.hpp"
-#include "welkin/error.hpp"
-#include "welkin/row_range.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/render/camera_plate.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/row_range.hpp"
 
 namespace welkin::python {
 namespace {

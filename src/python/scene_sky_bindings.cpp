@@ -5,9 +5,9 @@
 #include <fmt/format.h>
 
 #include "bindings.hpp"
-#include "welkin/error.hpp"
-#include "welkin/scene.hpp"
-#include "welkin/sky_image.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/render/sky_image.hpp"
 
 namespace welkin::python {
 

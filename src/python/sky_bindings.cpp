@@ -10,11 +10,11 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "welkin/auto_sky.hpp"
-#include "welkin/auto_sky_table.hpp"
-#include "welkin/color.hpp"
-#include "welkin/error.hpp"
-#include "welkin/sky_method.hpp"
+#include "welkin/sky/auto.hpp"
+#include "welkin/sky/auto_table.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/sky/method.hpp"
 
 namespace welkin::python {
 namespace {

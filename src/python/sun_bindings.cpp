@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include "bindings.hpp"
-#include "welkin/color.hpp"
-#include "welkin/sun.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/atmosphere/sun.hpp"
 
 namespace welkin::python {
 namespace {

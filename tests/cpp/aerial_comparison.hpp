@@ -9,7 +9,7 @@
 #include <cmath>
 #include <vector>
 
-#include "welkin/aerial_perspective.hpp"
+#include "welkin/aerial/aerial_perspective.hpp"
 
 namespace welkin::test {
 

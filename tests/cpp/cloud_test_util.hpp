@@ -10,8 +10,8 @@
 #include <openvdb/openvdb.h>
 #include <unistd.h>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/cloud_density.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/clouds/density.hpp"
 
 namespace welkin::test {
 

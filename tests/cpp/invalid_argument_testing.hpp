@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "welkin/error.hpp"
+#include "welkin/base/error.hpp"
 
 namespace welkin::test {
 

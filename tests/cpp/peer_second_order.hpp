@@ -45,12 +45,12 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/geometry.hpp"
-#include "welkin/math.hpp"
-#include "welkin/phase.hpp"
-#include "welkin/quadrature.hpp"
-#include "welkin/reference_column_table.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/atmosphere/geometry.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/atmosphere/phase.hpp"
+#include "welkin/base/quadrature.hpp"
+#include "welkin/reference/column_table.hpp"
 
 namespace welkin::test {
 

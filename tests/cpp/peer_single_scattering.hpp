@@ -7,10 +7,10 @@
 #include <array>
 
 #include "peer_table.hpp"
-#include "welkin/atmosphere.hpp"
-#include "welkin/geometry.hpp"
-#include "welkin/optical_depth.hpp"
-#include "welkin/phase.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/atmosphere/geometry.hpp"
+#include "welkin/atmosphere/optical_depth.hpp"
+#include "welkin/atmosphere/phase.hpp"
 
 namespace welkin::test {
 

@@ -1,4 +1,4 @@
-// Reads ../shared/reference/bruneton2017_sky_subset.csv: comment lines start with '#',
+// Reads tests/data/bruneton2017_sky_subset.csv: comment lines start with '#',
 // then a header row naming the columns, then one row per geometry.
 #pragma once
 
@@ -12,7 +12,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "welkin/math.hpp"
+#include "welkin/base/math.hpp"
 
 namespace welkin::test {
 
@@ -33,7 +33,7 @@ struct PeerRow {
 };
 
 inline std::vector<PeerRow> read_peer_table() {
-    const std::string path = std::string(WELKIN_SHARED_REFERENCE_DIR) + "/bruneton2017_sky_subset.csv";
+    const std::string path = std::string(WELKIN_TEST_DATA_DIR) + "/bruneton2017_sky_subset.csv";
     std::ifstream in(path);
     if (!in) throw std::runtime_error("cannot open the peer table " + path);
     std::vector<std::string> names;

@@ -36,8 +36,8 @@
 #include <cmath>
 #include <vector>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/phase.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/atmosphere/phase.hpp"
 
 namespace welkin::test {
 

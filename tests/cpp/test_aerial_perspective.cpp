@@ -13,11 +13,12 @@
 
 #include "aerial_comparison.hpp"
 #include "invalid_argument_testing.hpp"
-#include "welkin/aerial_perspective.hpp"
-#include "welkin/color.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
-#include "welkin/optical_depth.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/atmosphere/optical_depth.hpp"
 
 using namespace welkin;
 using welkin::test::parameter_of;
@@ -59,7 +60,7 @@ TEST(AerialPerspective, NoAirGivesFullTransmittanceAndNoInscatter) {
     for (std::size_t k = 0; k < depth.size(); ++k) depth[k] = float(10.0 + 3000.0 * double(k));
     for (const auto method : {AerialOptions::Method::Froxel, AerialOptions::Method::Raymarch}) {
         s.aerial.method = method;
-        const AerialPasses p = aerial_perspective(s, depth, 24, 16);
+        const AerialPasses p = aerial_perspective(s.aerial_view(), depth, 24, 16);
         for (std::size_t k = 0; k < p.inscatter.size(); ++k) {
             EXPECT_EQ(p.inscatter[k], 0.0f) << k;
             EXPECT_EQ(p.transmittance[k], 1.0f) << k;
@@ -91,7 +92,7 @@ TEST(AerialPerspective, TransmittanceMatchesExactOpticalDepthAlongAHorizontalRay
         const std::array<double, 3> num = sun.convert(E_T), den = sun.convert(E);
         for (const auto method : {AerialOptions::Method::Raymarch, AerialOptions::Method::Froxel}) {
             s.aerial.method = method;
-            const AerialPasses p = aerial_perspective(s, depth, W, H);
+            const AerialPasses p = aerial_perspective(s.aerial_view(), depth, W, H);
             const std::size_t centre = (std::size_t(H / 2) * W + W / 2) * 3;
             const double tol = method == AerialOptions::Method::Raymarch ? 2e-4 : 1e-3;
             for (int k = 0; k < 3; ++k) {
@@ -125,7 +126,7 @@ TEST(AerialPerspective, MonotoneInDepth) {
         s.aerial.method = method;
         const double slack = method == AerialOptions::Method::Froxel ? 2e-6 : 1e-5;
         s.aerial.raymarch_steps = 1024;
-        const AerialPasses p = aerial_perspective(s, depth, W, H);
+        const AerialPasses p = aerial_perspective(s.aerial_view(), depth, W, H);
         for (int x = 1; x < W; ++x) {
             for (int c = 0; c < 3; ++c)
                 EXPECT_LE(p.transmittance[x * 3 + c], p.transmittance[(x - 1) * 3 + c] * (1 + slack)) << x;
@@ -145,7 +146,7 @@ TEST(AerialPerspective, SkyPixelsAreLeftToTheSky) {
     depth[5] = 0.0f;
     for (const auto method : {AerialOptions::Method::Froxel, AerialOptions::Method::Raymarch}) {
         s.aerial.method = method;
-        const AerialPasses p = aerial_perspective(s, depth, 8, 4);
+        const AerialPasses p = aerial_perspective(s.aerial_view(), depth, 8, 4);
         for (int k : {3, 4, 5})
             for (int c = 0; c < 3; ++c) {
                 EXPECT_EQ(p.transmittance[k * 3 + c], 1.0f);
@@ -156,7 +157,7 @@ TEST(AerialPerspective, SkyPixelsAreLeftToTheSky) {
     // All sky: nothing to fit the volume to, still T = 1, L = 0.
     std::vector<float> sky(32, std::numeric_limits<float>::infinity());
     s.aerial.method = AerialOptions::Method::Froxel;
-    const AerialPasses p = aerial_perspective(s, sky, 8, 4);
+    const AerialPasses p = aerial_perspective(s.aerial_view(), sky, 8, 4);
     EXPECT_EQ(*std::min_element(p.transmittance.begin(), p.transmittance.end()), 1.0f);
     EXPECT_EQ(*std::max_element(p.inscatter.begin(), p.inscatter.end()), 0.0f);
 }
@@ -166,13 +167,13 @@ TEST(AerialPerspective, BadInputNamesTheParameter) {
     std::vector<float> depth(32, 100.0f);
     std::vector<float> bad = depth;
     bad[9] = std::nanf("");
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(s, bad, 8, 4); }), "depth");
+    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), bad, 8, 4); }), "depth");
     bad[9] = -1.0f;
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(s, bad, 8, 4); }), "depth");
+    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), bad, 8, 4); }), "depth");
     bad[9] = -std::numeric_limits<float>::infinity();
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(s, bad, 8, 4); }), "depth");
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(s, depth, 4, 8); }), "depth");  // wrong size
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(s, std::span<const float>(depth).first(31), 8, 4); }),
+    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), bad, 8, 4); }), "depth");
+    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), depth, 4, 8); }), "depth");  // wrong size
+    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), std::span<const float>(depth).first(31), 8, 4); }),
               "depth");
     SceneDescription huge = s;
     huge.resolution = {65536, 65536, 32767};
@@ -180,11 +181,11 @@ TEST(AerialPerspective, BadInputNamesTheParameter) {
               "resolution");
     SceneDescription none = s;
     none.camera.reset();
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(none, depth, 8, 4); }), "camera");
+    EXPECT_EQ(parameter_of([&] { aerial_perspective(none.aerial_view(), depth, 8, 4); }), "camera");
     // The message names the pixel.
     bad[9] = std::nanf("");
     try {
-        aerial_perspective(s, bad, 8, 4);
+        aerial_perspective(s.aerial_view(), bad, 8, 4);
         FAIL();
     } catch (const InvalidArgument& e) {
         EXPECT_NE(std::string(e.what()).find("x 1, y 1"), std::string::npos) << e.what();
@@ -240,9 +241,9 @@ TEST(AerialPerspective, FroxelsAgreeWithPerPixelMarchInStrongHaze) {
             SceneDescription s = scene_for(preset, cam, W, H, 6.0, sun_azimuth);
             const std::vector<float> depth = terrain_depth(s, W, H, h0);
             s.aerial.method = AerialOptions::Method::Froxel;
-            const AerialPasses f = aerial_perspective(s, depth, W, H);
+            const AerialPasses f = aerial_perspective(s.aerial_view(), depth, W, H);
             s.aerial.method = AerialOptions::Method::Raymarch;
-            const AerialPasses r = aerial_perspective(s, depth, W, H);
+            const AerialPasses r = aerial_perspective(s.aerial_view(), depth, W, H);
             const Comparison e = compare(f, r, depth);
             EXPECT_LT(e.median_rel_L, 0.01) << preset << " sun azimuth " << sun_azimuth;
             EXPECT_LT(e.p99_rel_L, 0.05) << preset << " sun azimuth " << sun_azimuth;
@@ -251,7 +252,7 @@ TEST(AerialPerspective, FroxelsAgreeWithPerPixelMarchInStrongHaze) {
                         sun_azimuth, 100 * e.median_rel_L, 100 * e.p99_rel_L, e.max_abs_T);
             if (std::string(preset) == "polluted" && sun_azimuth == 10.0) {
                 s.aerial.raymarch_steps *= 2;
-                const Comparison conv = compare(aerial_perspective(s, depth, W, H), r, depth);
+                const Comparison conv = compare(aerial_perspective(s.aerial_view(), depth, W, H), r, depth);
                 EXPECT_LT(conv.p99_rel_L, 0.005);
                 EXPECT_LT(conv.max_abs_T, 0.002);
             }
@@ -274,9 +275,9 @@ TEST(AerialPerspective, FarSurfacesDoNotStretchTheVolume) {
         depth[p] = 3.8e8f;
     }
     s.aerial.method = AerialOptions::Method::Froxel;
-    const AerialPasses f = aerial_perspective(s, depth, W, H);
+    const AerialPasses f = aerial_perspective(s.aerial_view(), depth, W, H);
     s.aerial.method = AerialOptions::Method::Raymarch;
-    const AerialPasses r = aerial_perspective(s, depth, W, H);
+    const AerialPasses r = aerial_perspective(s.aerial_view(), depth, W, H);
     const Comparison e = compare(f, r, depth);
     EXPECT_LT(e.median_rel_L, 0.01);
     EXPECT_LT(e.p99_rel_L, 0.05);
@@ -317,9 +318,9 @@ TEST(AerialPerspective, OrthographicAndPanoramicCamerasAgreeWithTheMarch) {
                         float(std::min(r.origin.z / -r.direction.z, 60e3) / r.distance_per_depth);
             }
         s.aerial.method = AerialOptions::Method::Froxel;
-        const AerialPasses f = aerial_perspective(s, depth, W, H);
+        const AerialPasses f = aerial_perspective(s.aerial_view(), depth, W, H);
         s.aerial.method = AerialOptions::Method::Raymarch;
-        const AerialPasses r = aerial_perspective(s, depth, W, H);
+        const AerialPasses r = aerial_perspective(s.aerial_view(), depth, W, H);
         const Comparison e = compare(f, r, depth);
         std::printf("%s: L median %.3f %%, p99 %.3f %%, T max abs %.4f\n", camera_type_name(type),
                     100 * e.median_rel_L, 100 * e.p99_rel_L, e.max_abs_T);

@@ -3,13 +3,13 @@
 
 #include <cmath>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/error.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/base/error.hpp"
 
 using namespace welkin;
 
 TEST(Atmosphere, Bruneton2017PresetMatchesPeerParameters) {
-    // ../shared/reference/README.md: the peer's coefficients at 680/550/440 nm.
+    // tests/data/README.md: the peer's coefficients at 680/550/440 nm.
     const Atmosphere a = Atmosphere::preset("bruneton2017");
     ASSERT_EQ(a.channels(), 3u);
     const double rayleigh[] = {5.802e-6, 13.558e-6, 33.1e-6};

@@ -12,9 +12,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "welkin/atmosphere_batch.hpp"
-#include "welkin/inscattering.hpp"
-#include "welkin/skyview_lut.hpp"
+#include "welkin/atmosphere/batch.hpp"
+#include "welkin/atmosphere/inscattering.hpp"
+#include "welkin/atmosphere/skyview_lut.hpp"
 
 using namespace welkin;
 

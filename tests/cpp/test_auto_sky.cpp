@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "welkin/auto_sky.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
+#include "welkin/sky/auto.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 
 namespace welkin {
 namespace {

@@ -10,10 +10,11 @@
 #include <glm/geometric.hpp>
 
 #include "cloud_test_util.hpp"
-#include "welkin/camera_plate.hpp"
-#include "welkin/cloud_passes.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/render/camera_plate.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 
 using namespace welkin;
 

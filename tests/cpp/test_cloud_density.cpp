@@ -10,10 +10,10 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "cloud_test_util.hpp"
-#include "welkin/cloud_noise.hpp"
-#include "welkin/error.hpp"
-#include "welkin/procedural_clouds.hpp"
-#include "welkin/vdb_clouds.hpp"
+#include "welkin/clouds/noise.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/clouds/procedural.hpp"
+#include "welkin/clouds/vdb.hpp"
 
 using namespace welkin;
 using welkin::test::TempDir;

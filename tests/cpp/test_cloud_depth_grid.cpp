@@ -8,11 +8,11 @@
 #include <tbb/global_control.h>
 
 #include "cloud_test_util.hpp"
-#include "welkin/cloud_depth_grid.hpp"
-#include "welkin/cloud_lighting.hpp"
-#include "welkin/math.hpp"
-#include "welkin/procedural_clouds.hpp"
-#include "welkin/reference_rng.hpp"
+#include "welkin/clouds/depth_grid.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/clouds/procedural.hpp"
+#include "welkin/base/rng.hpp"
 
 using namespace welkin;
 

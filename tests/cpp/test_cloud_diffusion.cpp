@@ -11,10 +11,10 @@
 #include <glm/geometric.hpp>
 
 #include "cloud_test_util.hpp"
-#include "welkin/cloud_diffusion.hpp"
-#include "welkin/cloud_lighting.hpp"
-#include "welkin/cloud_reference.hpp"
-#include "welkin/math.hpp"
+#include "welkin/clouds/diffusion.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/clouds/reference.hpp"
+#include "welkin/base/math.hpp"
 
 using namespace welkin;
 using welkin::test::HomogeneousBox;

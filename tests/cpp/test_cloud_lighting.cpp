@@ -11,12 +11,12 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "cloud_test_util.hpp"
-#include "welkin/cloud_lighting.hpp"
-#include "welkin/cloud_reference.hpp"
-#include "welkin/math.hpp"
-#include "welkin/procedural_clouds.hpp"
-#include "welkin/reference_rng.hpp"
-#include "welkin/vdb_clouds.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/clouds/reference.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/clouds/procedural.hpp"
+#include "welkin/base/rng.hpp"
+#include "welkin/clouds/vdb.hpp"
 
 using namespace welkin;
 using welkin::test::HomogeneousBox;

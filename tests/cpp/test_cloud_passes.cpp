@@ -12,11 +12,12 @@
 #include <tbb/global_control.h>
 
 #include "cloud_test_util.hpp"
-#include "welkin/aerial_perspective.hpp"
-#include "welkin/cloud_passes.hpp"
-#include "welkin/color.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 
 using namespace welkin;
 using welkin::test::airless;
@@ -173,7 +174,7 @@ TEST(CloudPasses, AirInFrontMarchAgreesWithFroxels) {
     bare_scene.aerial.sky_depth_m = 1.0;
     const CloudPasses bare = render_cloud_passes(bare_scene, box);
     // T and S of the froxel volume at the pass's cloud depths (1e10 where none: sky).
-    const AerialPasses froxel = aerial_perspective_froxel(s, pass.depth, W, H);
+    const AerialPasses froxel = aerial_perspective_froxel(s.aerial_view(), pass.depth, W, H);
     SceneDescription fine = s;
     fine.aerial.raymarch_steps *= 2;
     const CloudPasses converged = render_cloud_passes(fine, box);

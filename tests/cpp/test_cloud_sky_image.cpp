@@ -13,12 +13,13 @@
 #include <glm/geometric.hpp>
 
 #include "cloud_test_util.hpp"
-#include "welkin/cloud_illumination.hpp"
-#include "welkin/cloud_passes.hpp"
-#include "welkin/color.hpp"
-#include "welkin/equirect.hpp"
-#include "welkin/procedural_clouds.hpp"
-#include "welkin/sky_image.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/clouds/illumination.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/clouds/procedural.hpp"
+#include "welkin/render/sky_image.hpp"
 
 using namespace welkin;
 using welkin::test::airless;

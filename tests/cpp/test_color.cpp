@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/color.hpp"
-#include "welkin/error.hpp"
-#include "welkin/spectral_data.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/color/spectral_data.hpp"
 
 using namespace welkin;
 
@@ -207,7 +207,7 @@ TEST(Color, RejectsBadWavelengths) {
 }
 
 TEST(Color, ThreeSampleConversionAgainstPeerSpectralRgb) {
-    // ../shared/reference/bruneton2017_sky_subset.csv: the peer's radiance at 680/550/440
+    // tests/data/bruneton2017_sky_subset.csv: the peer's radiance at 680/550/440
     // nm and its RGB from the full 47-sample spectrum (CIE table at 1 nm). Converting the
     // three samples with the approximate method cannot be exact: it assumes the spectrum
     // is the solar one times lambda^-3 around each sample, while the real sky is close to
@@ -228,7 +228,7 @@ TEST(Color, ThreeSampleConversionAgainstPeerSpectralRgb) {
     // a channel swap, a wrong lambda power) fails. Direct sunlight (p = 0) is checked the
     // same way against Esun_n_R/G/B; there the spectrum is E T, and T reddens it at
     // 60 degrees from the zenith.
-    const std::string path = std::string(WELKIN_SHARED_REFERENCE_DIR) +
+    const std::string path = std::string(WELKIN_TEST_DATA_DIR) +
                              "/bruneton2017_sky_subset.csv";
     std::ifstream in(path);
     ASSERT_TRUE(in) << "cannot open " << path;

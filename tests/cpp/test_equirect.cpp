@@ -6,8 +6,8 @@
 
 #include <glm/geometric.hpp>
 
-#include "welkin/equirect.hpp"
-#include "welkin/math.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/base/math.hpp"
 
 using namespace welkin;
 

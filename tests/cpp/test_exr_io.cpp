@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <string>
 
-#include "welkin/error.hpp"
-#include "welkin/exr_io.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/io/exr.hpp"
 
 using namespace welkin;
 namespace fs = std::filesystem;

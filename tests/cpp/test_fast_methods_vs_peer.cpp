@@ -28,7 +28,7 @@
 
 #include "peer_single_scattering.hpp"
 #include "peer_table.hpp"
-#include "welkin/sky_method.hpp"
+#include "welkin/sky/method.hpp"
 
 using namespace welkin;
 using welkin::test::PeerRow;

@@ -11,9 +11,9 @@
 #include <glm/geometric.hpp>
 #include <tbb/global_control.h>
 
-#include "welkin/equirect.hpp"
-#include "welkin/lut_cache.hpp"
-#include "welkin/lut_sky.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/atmosphere/lut_cache.hpp"
+#include "welkin/sky/lut.hpp"
 
 using namespace welkin;
 
@@ -83,7 +83,7 @@ TEST(LutCache, KeepsTheMostRecentlyUsedEntries) {
     const Atmosphere a = Atmosphere::preset("bruneton2017"), b = Atmosphere::preset("hazy"),
                      c = Atmosphere::preset("mars");
     AtmosphereLutCache cache(2);
-    const SkyOptions o;
+    const LutResolution o;
     const auto la = cache.get(a, o);
     cache.get(b, o);
     EXPECT_EQ(cache.get(a, o), la);  // a is now the most recent, b the least

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "welkin/transmittance_lut.hpp"
+#include "welkin/atmosphere/transmittance_lut.hpp"
 
 using namespace welkin;
 

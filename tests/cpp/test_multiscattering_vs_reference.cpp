@@ -37,11 +37,11 @@
 
 #include "peer_single_scattering.hpp"
 #include "peer_table.hpp"
-#include "welkin/atmosphere_luts.hpp"
-#include "welkin/inscattering.hpp"
-#include "welkin/reference_sky.hpp"
-#include "welkin/sky_method.hpp"
-#include "welkin/view_geometry.hpp"
+#include "welkin/atmosphere/luts.hpp"
+#include "welkin/atmosphere/inscattering.hpp"
+#include "welkin/sky/reference.hpp"
+#include "welkin/sky/method.hpp"
+#include "welkin/atmosphere/view_geometry.hpp"
 
 using namespace welkin;
 using welkin::test::PeerRow;
@@ -76,7 +76,7 @@ TEST(MultipleScatteringVsReference, TermAndLutAgainstTheReferenceByOrder) {
     options.reference_paths = 16384;
     options.seed = 17;
     const ReferenceSky all(options), single(options, 1);
-    const AtmosphereLuts luts(atm, SkyOptions{});
+    const AtmosphereLuts luts(atm, LutResolution{});
     const AtmosphereLuts::Batch& b = *luts.batches()[0];
     const auto lut = make_sky_method("lut");
     std::vector<double> ms_err[3], iso_err[3], lut_err[3], lut_peer_err[3], ref_peer_err[3], rel_se[3];
@@ -151,7 +151,7 @@ TEST(MultipleScatteringLut, SourceIsNeverNegative) {
     int unclamped_negative = 0;
     for (const std::string& name : Atmosphere::preset_names()) {
         const Atmosphere atm = Atmosphere::preset(name);
-        const AtmosphereLuts luts(atm, SkyOptions{});
+        const AtmosphereLuts luts(atm, LutResolution{});
         for (const auto& b : luts.batches()) {
             const MultiScatteringLut& ms = b->multiscattering;
             const int n = ms.texture().width();
@@ -191,7 +191,7 @@ TEST(MultipleScatteringLut, SourceIsNeverNegative) {
 TEST(MultipleScatteringLut, RowAndPerViewMarchesAgree) {
     for (const char* name : {"bruneton2017", "hazy"}) {
         const Atmosphere atm = Atmosphere::preset(name);
-        const AtmosphereLuts luts(atm, SkyOptions{});
+        const AtmosphereLuts luts(atm, LutResolution{});
         const AtmosphereLuts::Batch& b = *luts.batches()[0];
         InscatterRowScratch scratch;
         double worst = 0.0;

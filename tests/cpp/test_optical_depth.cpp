@@ -6,11 +6,11 @@
 #include <cmath>
 #include <cstdio>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/geometry.hpp"
-#include "welkin/optical_depth.hpp"
-#include "welkin/reference_column_table.hpp"
-#include "welkin/reference_rng.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/atmosphere/geometry.hpp"
+#include "welkin/atmosphere/optical_depth.hpp"
+#include "welkin/reference/column_table.hpp"
+#include "welkin/base/rng.hpp"
 
 using namespace welkin;
 

@@ -73,8 +73,8 @@
 #include "peer_single_scattering.hpp"
 #include "peer_table.hpp"
 #include "peer_texture_lookup.hpp"
-#include "welkin/reference_sky.hpp"
-#include "welkin/sky_method.hpp"
+#include "welkin/sky/reference.hpp"
+#include "welkin/sky/method.hpp"
 
 using namespace welkin;
 using welkin::test::PeerRow;

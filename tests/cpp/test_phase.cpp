@@ -9,9 +9,9 @@
 #include <set>
 #include <vector>
 
-#include "welkin/phase.hpp"
-#include "welkin/reference_rng.hpp"
-#include "welkin/reference_sampling.hpp"
+#include "welkin/atmosphere/phase.hpp"
+#include "welkin/base/rng.hpp"
+#include "welkin/reference/sampling.hpp"
 
 using namespace welkin;
 

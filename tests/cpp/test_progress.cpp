@@ -8,8 +8,8 @@
 
 #include <tbb/parallel_for.h>
 
-#include "welkin/error.hpp"
-#include "welkin/progress.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/progress.hpp"
 
 using namespace welkin;
 

@@ -1,5 +1,5 @@
 // The reference sky (Monte-Carlo path tracing): against the peer table
-// (../shared/reference/bruneton2017_sky_subset.csv, Bruneton 2017's reference model),
+// (tests/data/bruneton2017_sky_subset.csv, Bruneton 2017's reference model),
 // against closed forms and an independent deterministic quadrature, energy conservation,
 // its standard error, determinism, and its behaviour at the edges of its domain.
 //
@@ -23,12 +23,12 @@
 
 #include <glm/geometric.hpp>
 
-#include "welkin/error.hpp"
-#include "welkin/geometry.hpp"
-#include "welkin/phase.hpp"
-#include "welkin/quadrature.hpp"
-#include "welkin/reference_column_table.hpp"
-#include "welkin/reference_sky.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/atmosphere/geometry.hpp"
+#include "welkin/atmosphere/phase.hpp"
+#include "welkin/base/quadrature.hpp"
+#include "welkin/reference/column_table.hpp"
+#include "welkin/sky/reference.hpp"
 
 using namespace welkin;
 
@@ -89,7 +89,7 @@ struct PeerRow {
 
 std::vector<PeerRow> load_peer() {
     const std::string path =
-        std::string(WELKIN_SHARED_REFERENCE_DIR) + "/bruneton2017_sky_subset.csv";
+        std::string(WELKIN_TEST_DATA_DIR) + "/bruneton2017_sky_subset.csv";
     std::ifstream f(path);
     EXPECT_TRUE(f.good()) << "cannot open " << path;
     std::vector<PeerRow> rows;

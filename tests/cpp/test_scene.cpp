@@ -8,11 +8,11 @@
 #include <glm/geometric.hpp>
 
 #include "invalid_argument_testing.hpp"
-#include "welkin/camera.hpp"
-#include "welkin/equirect.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
-#include "welkin/scene.hpp"
+#include "welkin/base/camera.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/scene/scene.hpp"
 
 using namespace welkin;
 using welkin::test::parameter_of;

@@ -13,10 +13,10 @@
 
 #include "cloud_test_util.hpp"
 #include "invalid_argument_testing.hpp"
-#include "welkin/cloud_lighting.hpp"
-#include "welkin/cloud_union.hpp"
-#include "welkin/error.hpp"
-#include "welkin/scene.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/clouds/union.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/scene/scene.hpp"
 
 using namespace welkin;
 using welkin::test::parameter_of;

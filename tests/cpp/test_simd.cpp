@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "welkin/simd.hpp"
+#include "welkin/base/simd.hpp"
 
 using namespace welkin;
 

@@ -11,12 +11,12 @@
 
 #include <glm/geometric.hpp>
 
-#include "welkin/color.hpp"
-#include "welkin/equirect.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
-#include "welkin/sky_image.hpp"
-#include "welkin/sun.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/render/sky_image.hpp"
+#include "welkin/atmosphere/sun.hpp"
 
 using namespace welkin;
 

@@ -9,7 +9,7 @@
 
 #include <glm/geometric.hpp>
 
-#include "welkin/skyview_lut.hpp"
+#include "welkin/atmosphere/skyview_lut.hpp"
 
 using namespace welkin;
 

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "welkin/atmosphere.hpp"
-#include "welkin/error.hpp"
-#include "welkin/math.hpp"
-#include "welkin/optical_depth.hpp"
-#include "welkin/sun.hpp"
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/atmosphere/optical_depth.hpp"
+#include "welkin/atmosphere/sun.hpp"
 
 using namespace welkin;
 
@@ -157,9 +157,9 @@ TEST(Sun, BelowTheHorizonAndFromSpace) {
 }
 
 TEST(Sun, TransmittanceAgreesWithThePeer) {
-    // ../shared/reference: T_sun at the ground for sun zenith 0, 30, 60 degrees (the
+    // tests/data: T_sun at the ground for sun zenith 0, 30, 60 degrees (the
     // peer's transmittance texture); ours is exact quadrature. Measured: worst 0.001 %.
-    const std::string path = std::string(WELKIN_SHARED_REFERENCE_DIR) +
+    const std::string path = std::string(WELKIN_TEST_DATA_DIR) +
                              "/bruneton2017_sky_subset.csv";
     std::ifstream in(path);
     ASSERT_TRUE(in) << path;

@@ -15,8 +15,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "welkin/reference_column_table.hpp"
-#include "welkin/transmittance_lut.hpp"
+#include "welkin/reference/column_table.hpp"
+#include "welkin/atmosphere/transmittance_lut.hpp"
 
 using namespace welkin;
 

@@ -1,0 +1,117 @@
+// Transmittance LUT: T(r, mu) from a point at radius r along zenith cosine mu to the top
+// of the atmosphere, for rays that do not hit the ground (Bruneton 2017 sec. 4.1;
+// Hillaire 2020 sec. 4, 256 x 64 texels).
+//
+// Parametrisation (Bruneton 2017, GetTransmittanceTextureUvFromRMu): with
+// H = sqrt(top^2 - R^2) and rho = sqrt(r^2 - R^2), x_r = rho / H and
+// x_mu = (d - d_min) / (d_max - d_min), where d is the distance to the top, d_min = top - r
+// and d_max = rho + H. This spends texels where transmittance varies: near the horizon.
+//
+// Transmittance between two points follows from two lookups (Bruneton 2017,
+// GetTransmittance): T(p -> q) = T(p) / T(q) for rays going up to the top, and
+// T(q, -mu_q) / T(p, -mu_p) for rays going down to the ground.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "welkin/atmosphere/texture2d.hpp"
+
+namespace welkin {
+
+class TransmittanceLut {
+public:
+    TransmittanceLut(const AtmosphereBatch& batch, int width, int height, int steps = 32);
+
+    // Transmittance to the top (mu clamped to the horizon for rays that would hit the ground).
+    Spectrum4 to_top(double r, double mu) const;
+
+    // Transmittance over the segment [0, d] of the ray (r, mu).
+    Spectrum4 segment(double r, double mu, double d, bool ray_hits_ground) const;
+
+    // Sun transmittance at (r, mu_s), with the planet's shadow: the fraction of the sun disc
+    // above the horizon, linear in the sine of the elevation across the disc (Bruneton
+    // 2017, GetTransmittanceToSun).
+    Spectrum4 to_sun(double r, double mu_s) const;
+
+    // The parts of a sun lookup that depend on the radius alone, computed once in double
+    // for many sun angles at the same radius (the marches evaluate a whole row of the
+    // sky-view LUT, or every sun angle of the multiple-scattering LUT, at each sample).
+    // What varies with the sun angle is then done in float without losing digits. The
+    // distance to the top, d = -r mu_s + sqrt(r^2 mu_s^2 + K) with K = top^2 - r^2 =
+    // (top - r)(top + r) >= 0, cancels for mu_s > 0 and is written there as
+    // d = K / (r mu_s + sqrt(r^2 mu_s^2 + K)); for mu_s < 0 both terms are positive. K and
+    // d_min = top - r, where digits matter, are rounded from double; r itself in float is
+    // off by at most 0.25 m (4e-8 relative), which only scales r mu_s. The texel
+    // coordinate is x = (d - d_min) / (d_max - d_min) (width - 1) (Texture2D::Row), and the
+    // visible fraction's smoothstep argument (sun_visible_fraction) is linear in mu_s.
+    struct AtRadius {
+        double r;  // clamped to the top
+        float r_f, top_k, d_min, x_scale, fraction_scale, fraction_offset;
+        Texture2D::Row row;
+    };
+    AtRadius at_radius(double r) const;
+
+    // The two halves of a sun lookup at one radius: the texel coordinate and the visible
+    // fraction (arithmetic only, so loops over many sun angles vectorise), then the fetch.
+    // (Both forms of d are computed and one selected, so that the loop has no branch.)
+    static void sun_lookup(const AtRadius& at, float mu_s, float& x, float& fraction) {
+        const float s = clamp_value(mu_s * at.fraction_scale + at.fraction_offset, 0.0f, 1.0f);
+        fraction = s * s * (3.0f - 2.0f * s);
+        const float rm = at.r_f * mu_s;
+        const float q = std::sqrt(rm * rm + at.top_k);
+        const float d_up = at.top_k / max_value(rm + q, 1e-30f), d_down = q - rm;
+        x = ((rm >= 0.0f ? d_up : d_down) - at.d_min) * at.x_scale;
+    }
+    static Spectrum4 to_sun(const AtRadius& at, float mu_s) {
+        float x, fraction;
+        sun_lookup(at, mu_s, x, fraction);
+        return at.row.sample(x) * fraction;
+    }
+
+    const Texture2D& texture() const { return texture_; }
+
+    // (u, v) of (r, mu) and back; exposed for tests.
+    void uv_from_r_mu(double r, double mu, float& u, float& v) const;
+    void r_mu_from_uv(float u, float v, double& r, double& mu) const;
+
+private:
+    double bottom_, top_, H_;  // H = sqrt(top^2 - bottom^2)
+    float sun_angular_radius_;
+    Texture2D texture_;
+};
+
+// Fraction of the sun's disc (angular radius `angular_radius`) above the horizon of a
+// point at radius r: 0 when the sun is set, 1 when risen, smooth in between (a smoothstep
+// in the sine of the elevation across the disc, as Bruneton 2017's GetTransmittanceToSun).
+double sun_visible_fraction(double bottom_radius, double r, double mu_s, double angular_radius);
+
+// Optical depth (as a Spectrum4 of tau) along [0, length] of the ray (r, mu), by
+// Gauss-Legendre on panels graded towards the lowest altitude; `samples` evaluations, plus
+// four for each panel split where the ray crosses a density profile's breakpoint.
+// The kernel of the transmittance LUT and of the ray-march method's sun rays. The nodes
+// and weights depend on `samples` alone: GradedQuadrature holds them for loops that march
+// many rays, march_optical_depth builds them for one.
+class GradedQuadrature {
+public:
+    explicit GradedQuadrature(int samples);
+    Spectrum4 optical_depth(const AtmosphereBatch& batch, double r, double mu, double length) const;
+
+private:
+    // One graded piece of `panels` 4-point panels: per node, s^2 and the weight
+    // w 2 s / panels of the substitution t = len s^2 (transmittance_lut.cpp).
+    struct Piece {
+        std::vector<double> s2;
+        std::vector<float> weight;
+    };
+    static Piece make_piece(int panels);
+    Spectrum4 integrate(const AtmosphereBatch& batch, double r, double mu, double a, double b, bool toward_a,
+                        const Piece& piece) const;
+    Piece whole_, half_;  // a ray densest at one end; each side of an interior lowest point
+};
+
+Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length,
+                              int samples);
+
+}  // namespace welkin

@@ -1,0 +1,218 @@
+// Fast cloud lighting; see cloud_lighting.hpp.
+#include "welkin/clouds/lighting.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "welkin/clouds/depth_grid.hpp"
+#include "welkin/clouds/diffusion.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/rng.hpp"
+#include "welkin/atmosphere/observer.hpp"
+
+namespace welkin {
+
+void CloudScattering::validate() const {
+    require_in_range("albedo", albedo, 0.0, 1.0);
+    phase.validate();
+}
+
+void CloudLightingOptions::validate() const {
+    scattering.validate();
+    require_in_range("max_steps", max_steps, 1, 4096);
+    require_in_range("light_steps", light_steps, 1, 256);
+    require_in_range("ambient_steps", ambient_steps, 0, 256);
+    if (!(light_distance_m > 0.0 && light_distance_m <= 1e6))
+        throw InvalidArgument("light_distance_m", fmt::format("must be in (0, 1e6] m, got {}", light_distance_m));
+    require_in_range("octaves", octaves, 1, 16);
+    for (const auto& [name, v] : {std::pair{"octave_extinction", octave_extinction},
+                                  std::pair{"octave_contribution", octave_contribution},
+                                  std::pair{"octave_eccentricity", octave_eccentricity}})
+        if (!(v > 0.0 && v <= 1.0)) throw InvalidArgument(name, fmt::format("must be in (0, 1], got {}", v));
+    if (!(min_transmittance >= 0.0 && min_transmittance < 1.0))
+        throw InvalidArgument("min_transmittance", fmt::format("must be in [0, 1), got {}", min_transmittance));
+    if (!(max_distance_m > 0.0 && max_distance_m <= 1e8))
+        throw InvalidArgument("max_distance_m", fmt::format("must be in (0, 1e8] m, got {}", max_distance_m));
+    require_in_range("tail_transmittance", tail_transmittance, 0.0, 1.0);
+    require_in_range("shadow_grid_spacing_m", shadow_grid_spacing_m, 0.0, 1e5, "m");
+}
+
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
+                          std::span<const glm::dvec3> directions, const CloudLightingOptions& options,
+                          Progress* progress) {
+    for (int a = 0; a < 3; ++a) require_finite(fmt::format("origin[{}]", a), origin[a]);
+    return render_clouds(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options, progress);
+}
+
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
+                          std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                          std::span<const double> max_distances, const CloudLightingOptions& options,
+                          Progress* progress, std::uint64_t first_ray_index) {
+    options.validate();
+    validate_directions(directions);
+    const std::size_t n = directions.size(), nc = light.channels();
+    if (origins.size() != 1 && origins.size() != n)
+        throw InvalidArgument("origins", fmt::format("must hold 1 or {} points (one per direction), got {}", n,
+                                                     origins.size()));
+    for (std::size_t i = 0; i < origins.size(); ++i)
+        for (int a = 0; a < 3; ++a) require_finite(fmt::format("origins[{}][{}]", i, a), origins[i][a]);
+    if (!max_distances.empty() && max_distances.size() != n)
+        throw InvalidArgument("max_distances", fmt::format("must be empty or hold {} values (one per direction), "
+                                                           "got {}", n, max_distances.size()));
+    for (std::size_t i = 0; i < max_distances.size(); ++i)
+        if (!(max_distances[i] >= 0.0))
+            throw InvalidArgument(fmt::format("max_distances[{}]", i),
+                                  fmt::format("must be >= 0 m, got {}", max_distances[i]));
+    CloudResult result;
+    result.channels = nc;
+    result.radiance.assign(n * nc, 0.0f);
+    result.transmittance.assign(n, 1.0f);
+    result.depth_m.assign(n, 0.0f);
+
+    const glm::dvec3 s = light.sun_direction();
+    const CloudScattering& sc = options.scattering;
+    const int octaves = options.octaves;
+    // Per-octave weights b^i, extinction scales a^i, eccentricity scales c^i.
+    std::vector<double> ob(octaves), oa(octaves), oc(octaves);
+    for (int i = 0; i < octaves; ++i) {
+        ob[i] = std::pow(options.octave_contribution, i);
+        oa[i] = std::pow(options.octave_extinction, i);
+        oc[i] = std::pow(options.octave_eccentricity, i);
+    }
+
+    // The diffusion decay rate of sky light into an absorbing cloud, per unit optical depth
+    // (see the header): 0 for albedo 1.
+    const double mean_g = sc.phase.mean_cosine();
+    const double kappa = std::sqrt(std::max(0.0, 3.0 * (1.0 - sc.albedo) * (1.0 - sc.albedo * mean_g)));
+
+    // The optical-depth grids (cloud_depth_grid.hpp) towards the sun and, when the sky
+    // light decays (albedo < 1), towards the local zenith; filled lazily by the rays.
+    const double h0 = options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m
+                                                          : 2.0 * density.feature_size_m();
+    const bool ambient_decay = options.ambient_steps > 0 && kappa > 0.0;
+    std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid;
+    // Orders >= 2: the delta-Eddington slab along the sun line (cloud_diffusion.hpp) or
+    // the octaves; either way octaves = 1 is single scattering.
+    const bool diffusion = options.multiple_scattering == CloudMultipleScattering::diffusion && octaves > 1;
+    const bool sized = octaves > 1 && (diffusion || options.octave_optical_size);
+    const SimilarityScaling similarity(sc.albedo, mean_g);
+    if (options.shadow_grid) {
+        sun_grid = std::make_unique<OpticalDepthGrid>(
+            density, [s](const glm::dvec3&) { return s; }, h0, options.light_distance_m, options.light_steps);
+        if (sized)
+            anti_grid = std::make_unique<OpticalDepthGrid>(
+                density, [s](const glm::dvec3&) { return -s; }, h0, options.light_distance_m, options.light_steps);
+        if (ambient_decay)
+            sky_grid = std::make_unique<OpticalDepthGrid>(
+                density, [&light](const glm::dvec3& p) { return light.zenith(p); }, h0, options.light_distance_m,
+                options.ambient_steps);
+    }
+
+    ProgressTracker tracker(progress, n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const auto& range) {
+        std::vector<MajorantSegment> segs, light_segs;
+        std::vector<float> sun(nc), sky(nc);
+        std::vector<double> acc(nc);
+        OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor;
+        for (std::size_t r = range.begin(); r != range.end(); ++r) {
+            const glm::dvec3 d = glm::normalize(directions[r]);
+            const CloudRay ray{origins[origins.size() == 1 ? 0 : r], d};
+            const double t_end =
+                max_distances.empty() ? options.max_distance_m : std::min(max_distances[r], options.max_distance_m);
+            density.segments(ray, t_end, segs);
+            double total = 0.0;
+            for (const auto& g : segs) total += g.t1 - g.t0;
+            if (!(total > 0.0)) {
+                tracker.advance();
+                continue;
+            }
+            const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
+            const int sun_level = sun_grid ? sun_grid->level_for(dt_target) : 0;
+            PathRng rng(options.seed, first_ray_index + r, 0, 0x636c6f7564ULL);
+            const double u = options.jitter ? rng.uniform() : 0.5;
+            // Phase values of the octaves: nu = d . s is the same at every sample.
+            const double nu = glm::dot(d, s);
+            std::vector<double> phase(octaves);
+            for (int i = 0; i < octaves; ++i) phase[i] = sc.phase(nu, oc[i]);
+            const double phase2 = diffusion ? sc.phase.twice(nu) : 0.0;
+
+            std::fill(acc.begin(), acc.end(), 0.0);
+            double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
+            bool done = false;
+            for (const auto& g : segs) {
+                if (done) break;
+                const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
+                const double dt = (g.t1 - g.t0) / steps;
+                for (int k = 0, span = 1; k < steps; k += span) {
+                    // The dim tail: below tail_transmittance a step spans up to 8 base steps,
+                    // about tail_transmittance / T of them (whole steps, the same jitter u).
+                    span = T < options.tail_transmittance
+                               ? std::min({steps - k, 8, std::max(1, int(options.tail_transmittance / T))})
+                               : 1;
+                    const double h = span * dt;
+                    const double t = g.t0 + k * dt + u * h;
+                    const glm::dvec3 x = ray.at(t);
+                    const double sigma_t = density.sigma_t(x);
+                    if (!(sigma_t > 0.0)) continue;
+                    const double tau_sun =
+                        sun_grid ? sun_grid->tau(x, sun_level, sun_cursor)
+                                 : march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps,
+                                                       light_segs);
+                    // The cloud's depth away from the sun along the sun line through x: the
+                    // slab's thickness (diffusion), or the octaves' optical size f =
+                    // 1 - exp(-tau_line), octave i weighted by f^i (see the header).
+                    const double tau_anti =
+                        !sized ? 0.0
+                        : anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)
+                                    : march_optical_depth(density, {x, -s}, options.light_distance_m,
+                                                          options.light_steps, light_segs);
+                    double sun_w = 0.0;
+                    if (diffusion) {
+                        // Single scattering plus the forward-scattered and diffuse parts.
+                        sun_w = sun_source(similarity, tau_sun, tau_anti, nu, mean_g, phase[0], phase2);
+                    } else {
+                        const double f = sized ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
+                        double fi = 1.0;
+                        for (int i = 0; i < octaves; ++i, fi *= f)
+                            sun_w += ob[i] * fi * std::exp(-oa[i] * tau_sun) * phase[i];
+                    }
+                    double sky_w = 1.0;
+                    if (ambient_decay) {
+                        const double tau_up =
+                            sky_grid ? sky_grid->tau(x, sun_level, sky_cursor)
+                                     : march_optical_depth(density, {x, light.zenith(x)}, options.light_distance_m,
+                                                           options.ambient_steps, light_segs);
+                        sky_w = std::exp(-kappa * tau_up);
+                    }
+                    light.sun_irradiance(x, sun.data());
+                    light.ambient_radiance(x, sky.data());
+                    // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
+                    const double step_opacity = 1.0 - std::exp(-sigma_t * h);
+                    const double w = T * step_opacity * sc.albedo;
+                    for (std::size_t c = 0; c < nc; ++c) acc[c] += w * (sun[c] * sun_w + sky[c] * sky_w);
+                    depth_sum += t * T * step_opacity;
+                    opacity_sum += T * step_opacity;
+                    T *= 1.0 - step_opacity;
+                    if (T < options.min_transmittance) {
+                        done = true;
+                        break;
+                    }
+                }
+            }
+            for (std::size_t c = 0; c < nc; ++c) result.radiance[r * nc + c] = float(acc[c]);
+            result.transmittance[r] = float(T);
+            result.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+    return result;
+}
+
+}  // namespace welkin

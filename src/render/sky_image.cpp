@@ -1,0 +1,448 @@
+// Equirectangular sky images with the sun's disc; see sky_image.hpp.
+#include "welkin/render/sky_image.hpp"
+
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <span>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/clouds/illumination.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/atmosphere/geometry.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/atmosphere/sun.hpp"
+
+namespace welkin {
+namespace {
+
+// Radiance values held at once: the method is called with every pixel of the image when
+// (pixels x channels) fits in this many floats (512 MiB: any 3-channel image up to 8192
+// wide, a 48-channel spectral one up to 2048 wide), else with bands of whole rows, so that
+// the spectral mode at large sizes does not need gigabytes. Bands cost: the lut method
+// builds its tables once per call (~1.2 s at 48 wavelengths on two cores).
+constexpr std::size_t kMaxValuesPerCall = std::size_t(128) << 20;
+
+// Large scratch buffers: 2 MiB aligned and marked for transparent huge pages, where the
+// kernel allows them (Linux, THP in "madvise" or "always" mode). First-touch page faults
+// of 4 KiB pages dominated the image assembly at 2048 x 1024 (48 MiB of directions);
+// huge pages cut their number 512-fold. Elsewhere this is a plain aligned allocation.
+constexpr std::size_t kHugePage = std::size_t(2) << 20;
+struct FreeDeleter {
+    void operator()(void* p) const { std::free(p); }
+};
+template <class T>
+std::unique_ptr<T[], FreeDeleter> huge_buffer(std::size_t n) {
+    const std::size_t pages = std::max<std::size_t>(1, (n * sizeof(T) + kHugePage - 1) / kHugePage);
+    const std::size_t bytes = pages * kHugePage;
+    void* p = std::aligned_alloc(kHugePage, bytes);
+    if (!p) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    ::madvise(p, bytes, MADV_HUGEPAGE);
+#endif
+    return std::unique_ptr<T[], FreeDeleter>(static_cast<T*>(p));
+}
+
+// The image's own vector: reserved first, so that the same advice applies before resize()
+// touches (zeroes) its pages.
+void advise_huge_pages(std::vector<float>& v, std::size_t n) {
+    v.reserve(n);
+#ifdef MADV_HUGEPAGE
+    const std::uintptr_t begin = reinterpret_cast<std::uintptr_t>(v.data());
+    const std::uintptr_t end = begin + n * sizeof(float);
+    const std::uintptr_t a = (begin + kHugePage - 1) / kHugePage * kHugePage;
+    if (end > a + kHugePage)
+        ::madvise(reinterpret_cast<void*>(a), (end - a) / kHugePage * kHugePage, MADV_HUGEPAGE);
+#endif
+}
+
+// Maps a sub-task's [0, 1] onto [lo, hi] of the host's progress.
+class SubProgress final : public Progress {
+public:
+    SubProgress(Progress* host, double lo, double hi) : host_(host), lo_(lo), hi_(hi) {}
+    bool report(double fraction) override {
+        return !host_ || host_->report(lo_ + (hi_ - lo_) * clamp01(fraction));
+    }
+
+private:
+    Progress* host_;
+    double lo_, hi_;
+};
+
+// Adds the sun's disc to `pixels` (height x width x channels, top row first): spectral
+// radiance per atmosphere wavelength in `disc` (the caller converts it), keyed by pixel.
+struct DiscSplat {
+    std::vector<std::size_t> pixel;   // index y * width + x
+    std::vector<double> radiance;     // (pixel.size(), channels), W m^-2 sr^-1 nm^-1
+};
+
+// The disc, supersampled. For every pixel that the disc's cap can touch, a regular grid
+// of samples over the part of the pixel inside the cap's bounding box (u, v); a sample at
+// elevation e stands for the solid angle cos(e) dphi de of its cell. With rho the
+// sample's angle from the disc centre, the pixel gathers
+//     S(p, c) = sum over samples above the horizon of LD_c(rho) dOmega,
+// an estimate of the integral of the limb-darkening factor over the visible part of the
+// disc inside p. With V_c = sum_p S(p, c), the pixel's added radiance is
+//     L(p, c) = direct_irradiance_c * S(p, c) / V_c / Omega_p,
+// so that sum_p L(p, c) Omega_p = direct_irradiance_c exactly, whatever the sampling
+// error of each S: the sampling only decides how that energy is shared between pixels,
+// and pixels the disc covers partly get a partial (antialiased) value. Sample spacing:
+// at most alpha / 8, so the disc is resolved at any image size. If no sample lands on the
+// visible disc (a sliver at the horizon), its energy goes to the pixel of its centre.
+DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, int height,
+                         const SunRadiometry& sun) {
+    const std::size_t nc = atm.channels();
+    const double alpha = atm.sun_angular_radius_rad;
+    const glm::dvec3 s = obs.sun_direction;
+    const double r = atm.bottom_radius_m + obs.altitude_m;
+    const double e_s = std::asin(clamp_cosine(s.z));
+    const double dv_angle = kPi / height;
+
+    // The cap's bounding box: elevations [e_s - alpha, e_s + alpha]; in u, the centre's u
+    // plus or minus the cap's azimuth half-width asin(sin alpha / cos e_s) / (2 pi), or
+    // every u when the cap holds a pole.
+    const double e_lo = e_s - alpha, e_hi = e_s + alpha;
+    const int j0 = std::max(0, int(std::floor((0.5 * kPi - e_hi) / dv_angle)));
+    const int j1 = std::min(height - 1, int(std::floor((0.5 * kPi - e_lo) / dv_angle)));
+    bool all_u = true;
+    double u_lo = 0.0, u_hi = 1.0;
+    int i0 = 0, ncols = width;
+    if (e_hi < 0.5 * kPi && e_lo > -0.5 * kPi) {
+        const double half = std::asin(std::min(1.0, std::sin(alpha) / std::cos(e_s))) / kTwoPi;
+        const double u_c = direction_to_equirect(s).x;
+        const int a = int(std::floor((u_c - half) * width));
+        const int b = int(std::floor((u_c + half) * width));
+        if (b - a + 1 < width) {
+            all_u = false;
+            u_lo = u_c - half;
+            u_hi = u_c + half;
+            i0 = a;
+            ncols = b - a + 1;
+        }
+    }
+    const int nrows = j1 - j0 + 1;
+
+    std::vector<LimbDarkening> ld;
+    for (double w : atm.wavelengths_nm) ld.emplace_back(alpha, w);
+
+    // Each pixel samples only its intersection with the box, on a grid of spacing at most
+    // alpha / 8 in elevation and in azimuth (at the latitude where the intersection is
+    // widest): the cost follows the disc's size, not the pixel's.
+    const std::size_t npix = std::size_t(nrows) * std::size_t(ncols);
+    std::vector<double> s_vis(npix * nc, 0.0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, npix), [&](const auto& range) {
+        for (std::size_t q = range.begin(); q != range.end(); ++q) {
+            const int j = j0 + int(q / std::size_t(ncols));
+            const int ii = i0 + int(q % std::size_t(ncols));  // may lie outside [0, width)
+            // Elevation and u extent of pixel (ii, j) intersected with the box.
+            const double e_top = std::min(0.5 * kPi - dv_angle * j, e_hi);
+            const double e_bot = std::max(0.5 * kPi - dv_angle * (j + 1), e_lo);
+            const double pu0 = double(ii) / width, pu1 = double(ii + 1) / width;
+            const double u0 = all_u ? pu0 : std::max(pu0, u_lo);
+            const double u1 = all_u ? pu1 : std::min(pu1, u_hi);
+            if (!(e_top > e_bot) || !(u1 > u0)) continue;
+            const double cos_max = (e_top >= 0.0 && e_bot <= 0.0)
+                                       ? 1.0
+                                       : std::max(std::cos(e_top), std::cos(e_bot));
+            const double de = e_top - e_bot, dphi = kTwoPi * (u1 - u0);
+            const int kv = std::clamp(int(std::ceil(8.0 * de / alpha)), 2, 512);
+            const int ku = std::clamp(int(std::ceil(8.0 * cos_max * dphi / alpha)), 2, 512);
+            const double cell = dphi / ku * de / kv;
+            double* vis = &s_vis[q * nc];
+            for (int b = 0; b < kv; ++b) {
+                const double e = e_top - de * (b + 0.5) / kv;
+                const double ce = std::cos(e), se = std::sin(e);
+                if (ray_hits_ground(r, se, atm.bottom_radius_m)) continue;  // behind the ground
+                for (int a = 0; a < ku; ++a) {
+                    const double phi = kPi - kTwoPi * (u0 + (u1 - u0) * (a + 0.5) / ku);
+                    const glm::dvec3 d{ce * std::cos(phi), ce * std::sin(phi), se};
+                    const double rho =
+                        std::atan2(glm::length(glm::cross(d, s)), glm::dot(d, s));
+                    if (rho > alpha) continue;
+                    const double w = ce * cell;
+                    for (std::size_t c = 0; c < nc; ++c) vis[c] += ld[c](rho) * w;
+                }
+            }
+        }
+    });
+
+    DiscSplat out;
+    std::vector<double> visible_total(nc, 0.0);
+    for (std::size_t q = 0; q < npix; ++q)
+        for (std::size_t c = 0; c < nc; ++c) visible_total[c] += s_vis[q * nc + c];
+
+    auto pixel_of = [&](int q) {
+        const int j = j0 + q / ncols;
+        const int i = ((i0 + q % ncols) % width + width) % width;
+        return std::size_t(j) * std::size_t(width) + std::size_t(i);
+    };
+    for (std::size_t q = 0; q < npix; ++q) {
+        bool any = false;
+        for (std::size_t c = 0; c < nc; ++c) any = any || s_vis[q * nc + c] > 0.0;
+        if (!any) continue;
+        const int j = j0 + int(q / std::size_t(ncols));
+        const double omega = equirect_pixel_solid_angle(j, width, height);
+        out.pixel.push_back(pixel_of(int(q)));
+        for (std::size_t c = 0; c < nc; ++c)
+            out.radiance.push_back(visible_total[c] > 0.0 ? sun.direct_irradiance[c] *
+                                                                s_vis[q * nc + c] /
+                                                                visible_total[c] / omega
+                                                          : 0.0);
+    }
+    // Channels whose visible disc no sample caught (a sliver at the horizon in a tiny
+    // image): their energy goes to the pixel of the disc centre.
+    for (std::size_t c = 0; c < nc; ++c) {
+        if (visible_total[c] > 0.0 || !(sun.direct_irradiance[c] > 0.0)) continue;
+        const glm::dvec2 uv = direction_to_equirect(s);
+        const int i = std::min(width - 1, int(uv.x * width));
+        const int j = std::clamp(int((1.0 - uv.y) * height), 0, height - 1);
+        const std::size_t p = std::size_t(j) * std::size_t(width) + std::size_t(i);
+        auto it = std::find(out.pixel.begin(), out.pixel.end(), p);
+        std::size_t k = std::size_t(it - out.pixel.begin());
+        if (it == out.pixel.end()) {
+            out.pixel.push_back(p);
+            out.radiance.resize(out.radiance.size() + nc, 0.0);
+        }
+        out.radiance[k * nc + c] +=
+            sun.direct_irradiance[c] / equirect_pixel_solid_angle(j, width, height);
+    }
+    return out;
+}
+
+}  // namespace
+
+void SkyImageOptions::validate() const {
+    if (!(exposure > 0.0) || !(exposure <= 1e6))
+        throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+    if (clouds) cloud_lighting.validate();
+    require_in_range("air_steps", air_steps, 1, 4096);
+}
+
+std::string spectral_channel_name(double wavelength_nm) {
+    std::string number = fmt::format("{}", wavelength_nm);
+    std::replace(number.begin(), number.end(), '.', ',');
+    return "S0." + number + "nm";
+}
+
+SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
+                             const Observer& observer, int width,
+                             const SkyImageOptions& options, Progress* progress) {
+    options.validate();
+    require_in_range("width", width, 4, 16384, "pixels");
+    if (width % 2 != 0)
+        throw InvalidArgument("width", fmt::format("must be even (height = width / 2), got {}",
+                                                   width));
+    atm.validate();
+    const Observer obs = observer.validated();
+    const bool rgb = options.output == SkyImageOptions::Output::Rgb;
+    const std::size_t nc = atm.channels();
+    // Conversions first: they reject unusable wavelengths before the expensive part.
+    std::optional<SpectrumToRgb> sky_to_rgb, sun_to_rgb;
+    if (rgb) {
+        sky_to_rgb.emplace(atm.wavelengths_nm, -3.0);
+        sun_to_rgb.emplace(atm.wavelengths_nm, 0.0);
+    }
+
+    SkyImage image;
+    image.width = width;
+    image.height = width / 2;
+    const int W = image.width, H = image.height;
+    if (rgb) {
+        image.channel_names = {"R", "G", "B"};
+    } else {
+        image.wavelengths_nm = atm.wavelengths_nm;
+        for (double w : atm.wavelengths_nm) image.channel_names.push_back(spectral_channel_name(w));
+    }
+    const std::size_t out_nc = image.channels();
+    advise_huge_pages(image.pixels, std::size_t(W) * std::size_t(H) * out_nc);
+    image.pixels.resize(std::size_t(W) * std::size_t(H) * out_nc, 0.0f);
+
+    // Per-column and per-row factors of the pixel-centre directions (equirect.cpp):
+    // direction = (cos e cos phi, cos e sin phi, sin e).
+    std::vector<double> cos_phi(W), sin_phi(W), cos_e(H), sin_e(H);
+    for (int i = 0; i < W; ++i) {
+        const glm::dvec3 d = equirect_pixel_direction(i, H / 2, W, H);
+        const double l = std::hypot(d.x, d.y);
+        cos_phi[i] = d.x / l;
+        sin_phi[i] = d.y / l;
+    }
+    for (int j = 0; j < H; ++j) {
+        const glm::dvec3 d = equirect_pixel_direction(0, j, W, H);
+        sin_e[j] = d.z;
+        cos_e[j] = std::hypot(d.x, d.y);
+    }
+
+    // Sky radiance, in bands of rows (one band for all but very large images). Where the
+    // method's output has the image's layout (spectral output, or three wavelengths to
+    // RGB) it writes straight into the image and is converted in place; otherwise into a
+    // scratch band. Scratch buffers are left uninitialised and first touched by the
+    // parallel loops that fill them: at 2048 x 1024, zeroing them serially cost more than
+    // everything else here.
+    const std::size_t row_values = std::size_t(W) * nc;
+    const int band_rows = int(std::clamp<std::size_t>(kMaxValuesPerCall / row_values, 1,
+                                                      std::size_t(H)));
+    const int bands = (H + band_rows - 1) / band_rows;
+    const bool in_place = !rgb || nc == 3;
+    const std::size_t band_pixels = std::size_t(band_rows) * std::size_t(W);
+    const auto directions = huge_buffer<glm::dvec3>(band_pixels);
+    const auto scratch = huge_buffer<float>(in_place ? 0 : band_pixels * nc);
+    const std::vector<double>& m = rgb ? sky_to_rgb->matrix() : std::vector<double>{};
+    // Clouds: the illumination is built once; the cloud transmittance of every pixel is
+    // kept for the sun's disc.
+    std::unique_ptr<AtmosphereIllumination> cloud_light;
+    std::vector<float> cloud_transmittance;
+    if (options.clouds) {
+        cloud_light = std::make_unique<AtmosphereIllumination>(atm, obs);
+        cloud_transmittance.assign(std::size_t(W) * std::size_t(H), 1.0f);
+    }
+    for (int band = 0; band < bands; ++band) {
+        const int row0 = band * band_rows;
+        const int rows = std::min(band_rows, H - row0);
+        const std::size_t n = std::size_t(rows) * std::size_t(W);
+        tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& range) {
+            for (int jj = range.begin(); jj != range.end(); ++jj) {
+                const int j = row0 + jj;
+                glm::dvec3* row = &directions[std::size_t(jj) * std::size_t(W)];
+                for (int i = 0; i < W; ++i)
+                    row[i] = {cos_e[j] * cos_phi[i], cos_e[j] * sin_phi[i], sin_e[j]};
+            }
+        });
+        SubProgress sub(progress, double(band) / bands, double(band + 1) / bands);
+        float* dst = image.pixels.data() + std::size_t(row0) * std::size_t(W) * out_nc;
+        const std::span<float> out(in_place ? dst : scratch.get(), n * nc);
+        method.radiance(atm, obs, std::span<const glm::dvec3>(directions.get(), n), out, {},
+                        progress ? &sub : nullptr);
+        CloudResult clouds;
+        AirAlongRays air;          // in front of the clouds (header)
+        std::vector<float> cloud_rgb;  // RGB output: L_c in Rec.709
+        if (options.clouds) {
+            const std::span<const glm::dvec3> dirs(directions.get(), n);
+            clouds = render_clouds(*options.clouds, *cloud_light, glm::dvec3(0.0), dirs, options.cloud_lighting,
+                                   progress ? &sub : nullptr);
+            std::copy(clouds.transmittance.begin(), clouds.transmittance.end(),
+                      cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
+            std::vector<double> cloud_d(n, 0.0);  // 0: no cloud, not marched
+            for (std::size_t q = 0; q < n; ++q)
+                if (clouds.transmittance[q] < 1.0f) cloud_d[q] = double(clouds.depth_m[q]);
+            const glm::dvec3 origin(0.0);
+            air = aerial_along_rays(atm, cloud_light->luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},
+                                    obs.sun_direction, std::span<const glm::dvec3>(&origin, 1), dirs, cloud_d,
+                                    options.air_steps, 1.0, !rgb);
+            if (rgb) {
+                cloud_rgb.resize(n * 3);
+                sky_to_rgb->convert(clouds.radiance, cloud_rgb);
+            }
+        }
+        const bool with_clouds = bool(options.clouds);
+
+        // RGB output: the passes' Welkin.Clouds.rgb, T(0, d_c) L_c + (1 - T_c) S(0, d_c)
+        // in Rec.709 (cloud_passes.cpp), added to the converted T_c L_sky.
+        const auto add_cloud_rgb = [&](std::size_t i, float T, float* d) {
+            for (int k = 0; k < 3; ++k)
+                d[k] += air.transmittance[i * 3 + k] * cloud_rgb[i * 3 + k] + (1.0f - T) * air.inscatter[i * 3 + k];
+        };
+        // One pass: find the first non-finite value, and convert to RGB.
+        std::atomic<std::size_t> bad{std::size_t(-1)};
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& range) {
+            std::array<double, 9> m3{};  // local copy: no reloads through possible aliases
+            if (rgb && nc == 3) std::copy(m.begin(), m.end(), m3.begin());
+            std::size_t first = std::size_t(-1);
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                float* s = &out[i * nc];
+                // The sky behind the cloud: T_c L_sky; with spectral output also the cloud's
+                // own light through the air and the air in front of it (header).
+                const float T = with_clouds ? clouds.transmittance[i] : 1.0f;
+                if (with_clouds) {
+                    if (rgb) {
+                        for (std::size_t c = 0; c < nc; ++c) s[c] *= T;
+                    } else {
+                        const float* Ta = &air.transmittance_spectral[i * nc];
+                        const float* Sa = &air.inscatter_spectral[i * nc];
+                        for (std::size_t c = 0; c < nc; ++c)
+                            s[c] = s[c] * T + Ta[c] * clouds.radiance[i * nc + c] + (1.0f - T) * Sa[c];
+                    }
+                }
+                bool finite = true;
+                for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(s[c]);
+                if (!finite && first == std::size_t(-1)) first = i;
+                if (!rgb) continue;
+                if (nc == 3) {  // in place
+                    const float a = s[0], b = s[1], c = s[2];
+                    float* d = &dst[3 * i];
+                    d[0] = float(m3[0] * a + m3[1] * b + m3[2] * c);
+                    d[1] = float(m3[3] * a + m3[4] * b + m3[5] * c);
+                    d[2] = float(m3[6] * a + m3[7] * b + m3[8] * c);
+                    if (with_clouds) add_cloud_rgb(i, T, d);
+                } else {
+                    double r = 0.0, g = 0.0, b = 0.0;
+                    for (std::size_t c = 0; c < nc; ++c) {
+                        r += m[c] * s[c];
+                        g += m[nc + c] * s[c];
+                        b += m[2 * nc + c] * s[c];
+                    }
+                    float* d = &dst[3 * i];
+                    d[0] = float(r), d[1] = float(g), d[2] = float(b);
+                    if (with_clouds) add_cloud_rgb(i, T, d);
+                }
+            }
+            std::size_t cur = bad.load();
+            while (first < cur && !bad.compare_exchange_weak(cur, first)) {
+            }
+        });
+        if (bad.load() != std::size_t(-1)) {
+            const glm::dvec3 d = directions[bad.load()];
+            throw std::runtime_error(fmt::format(
+                "sky method '{}' returned a non-finite radiance for direction "
+                "({:.6f}, {:.6f}, {:.6f})",
+                method.name(), d.x, d.y, d.z));
+        }
+    }
+
+    if (options.sun_disc) {
+        const SunRadiometry sun = sun_radiometry(atm, obs);
+        if (sun.visible_fraction > 0.0) {
+            const DiscSplat disc = splat_sun_disc(atm, obs, W, H, sun);
+            std::vector<float> spectrum(nc);
+            for (std::size_t k = 0; k < disc.pixel.size(); ++k) {
+                float* dst = image.pixels.data() + disc.pixel[k] * out_nc;
+                const float T = cloud_transmittance.empty() ? 1.0f : cloud_transmittance[disc.pixel[k]];
+                for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(disc.radiance[k * nc + c]) * T;
+                if (rgb) {
+                    const std::array<double, 3> add = sun_to_rgb->convert(spectrum);
+                    for (int c = 0; c < 3; ++c) dst[c] = float(double(dst[c]) + add[c]);
+                } else {
+                    for (std::size_t c = 0; c < nc; ++c) dst[c] += spectrum[c];
+                }
+            }
+        }
+    }
+
+    image.cloud_transmittance = std::move(cloud_transmittance);
+    if (options.exposure != 1.0) {
+        const float e = float(options.exposure);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.pixels.size(), 1 << 16),
+                          [&](const auto& range) {
+                              for (std::size_t k = range.begin(); k != range.end(); ++k)
+                                  image.pixels[k] *= e;
+                          });
+    }
+    if (progress) progress->report(1.0);
+    return image;
+}
+
+}  // namespace welkin
