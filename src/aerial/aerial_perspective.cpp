@@ -241,10 +241,6 @@ AerialPasses allocate(int width, int height) {
 
 }  // namespace
 
-std::size_t aerial_pass_bytes(int width, int height, std::size_t extra_bytes_per_pixel) {
-    return std::size_t(width) * std::size_t(height) * (sizeof(float) * 7 + extra_bytes_per_pixel);
-}
-
 void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixel) {
     const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
     const double physical = pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;

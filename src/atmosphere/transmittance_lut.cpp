@@ -237,14 +237,6 @@ Spectrum4 TransmittanceLut::to_top(double r, double mu) const {
     return texture_.sample(u, v);
 }
 
-Spectrum4 TransmittanceLut::segment(double r, double mu, double d, bool hits_ground) const {
-    const double r_d = std::clamp(radius_at(r, mu, d), bottom_, top_);
-    const double mu_d = mu_at(r, mu, d, r_d);
-    const Spectrum4 a = hits_ground ? to_top(r_d, -mu_d) : to_top(r, mu);
-    const Spectrum4 b = hits_ground ? to_top(r, -mu) : to_top(r_d, mu_d);
-    return glm::min(a / glm::max(b, Spectrum4(1e-30f)), Spectrum4(1.0f));
-}
-
 double sun_visible_fraction(double bottom_radius, double r, double mu_s, double angular_radius) {
     const double sin_h = std::min(bottom_radius / r, 1.0);
     const double cos_h = -safe_sqrt(1.0 - sin_h * sin_h);  // zenith cosine of the horizon

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "peer_table.hpp"
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/color/color.hpp"
 #include "welkin/base/error.hpp"
@@ -228,28 +229,8 @@ TEST(Color, ThreeSampleConversionAgainstPeerSpectralRgb) {
     // a channel swap, a wrong lambda power) fails. Direct sunlight (p = 0) is checked the
     // same way against Esun_n_R/G/B; there the spectrum is E T, and T reddens it at
     // 60 degrees from the zenith.
-    const std::string path = std::string(WELKIN_TEST_DATA_DIR) +
-                             "/bruneton2017_sky_subset.csv";
-    std::ifstream in(path);
-    ASSERT_TRUE(in) << "cannot open " << path;
-    std::string line;
-    std::vector<std::string> header;
     std::vector<std::map<std::string, double>> rows;
-    while (std::getline(in, line)) {
-        if (line.empty() || line[0] == '#') continue;
-        std::stringstream ss(line);
-        std::string cell;
-        std::vector<std::string> cells;
-        while (std::getline(ss, cell, ',')) cells.push_back(cell);
-        if (header.empty()) {
-            header = cells;
-            continue;
-        }
-        std::map<std::string, double> row;
-        for (std::size_t k = 0; k < cells.size() && k < header.size(); ++k)
-            row[header[k]] = std::stod(cells[k]);
-        rows.push_back(row);
-    }
+    for (const test::PeerRow& row : test::read_peer_table()) rows.push_back(row.v);
     ASSERT_GT(rows.size(), 100u);
 
     const std::vector<double> w3 = default_wavelengths_nm();

@@ -23,6 +23,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "peer_table.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/phase.hpp"
@@ -81,37 +82,16 @@ double worst(const std::vector<double>& v) {
 }
 
 // ---------------------------------------------------------------------------------------
-// The peer table.
+// The peer table, with each row's geometry in degrees.
 struct PeerRow {
     double sun_zenith, view_zenith, azimuth;
     std::map<std::string, double> v;
 };
 
 std::vector<PeerRow> load_peer() {
-    const std::string path =
-        std::string(WELKIN_TEST_DATA_DIR) + "/bruneton2017_sky_subset.csv";
-    std::ifstream f(path);
-    EXPECT_TRUE(f.good()) << "cannot open " << path;
     std::vector<PeerRow> rows;
-    std::vector<std::string> header;
-    std::string line;
-    while (std::getline(f, line)) {
-        if (line.empty() || line[0] == '#') continue;
-        std::stringstream ss(line);
-        std::vector<std::string> cells;
-        for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(cell);
-        if (header.empty()) {
-            header = cells;
-            continue;
-        }
-        PeerRow row;
-        for (std::size_t i = 0; i < cells.size() && i < header.size(); ++i)
-            row.v[header[i]] = std::stod(cells[i]);
-        row.sun_zenith = row.v.at("sun_zenith_deg");
-        row.view_zenith = row.v.at("view_zenith_deg");
-        row.azimuth = row.v.at("rel_azimuth_deg");
-        rows.push_back(row);
-    }
+    for (const test::PeerRow& r : test::read_peer_table())
+        rows.push_back({r["sun_zenith_deg"], r["view_zenith_deg"], r["rel_azimuth_deg"], r.v});
     return rows;
 }
 

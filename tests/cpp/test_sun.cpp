@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "peer_table.hpp"
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
@@ -159,31 +160,11 @@ TEST(Sun, BelowTheHorizonAndFromSpace) {
 TEST(Sun, TransmittanceAgreesWithThePeer) {
     // tests/data: T_sun at the ground for sun zenith 0, 30, 60 degrees (the
     // peer's transmittance texture); ours is exact quadrature. Measured: worst 0.001 %.
-    const std::string path = std::string(WELKIN_TEST_DATA_DIR) +
-                             "/bruneton2017_sky_subset.csv";
-    std::ifstream in(path);
-    ASSERT_TRUE(in) << path;
-    std::string line;
-    std::vector<std::string> header;
     const Atmosphere atm = Atmosphere::preset("bruneton2017");
     int checked = 0;
     double worst = 0.0;
-    while (std::getline(in, line)) {
-        if (line.empty() || line[0] == '#') continue;
-        std::stringstream ss(line);
-        std::string cell;
-        std::vector<std::string> cells;
-        while (std::getline(ss, cell, ',')) cells.push_back(cell);
-        if (header.empty()) {
-            header = cells;
-            continue;
-        }
-        auto col = [&](const std::string& name) {
-            for (std::size_t k = 0; k < header.size(); ++k)
-                if (header[k] == name) return std::stod(cells[k]);
-            ADD_FAILURE() << "no column " << name;
-            return 0.0;
-        };
+    for (const test::PeerRow& row : test::read_peer_table()) {
+        auto col = [&](const std::string& name) { return row[name]; };
         const double zenith = col("sun_zenith_deg") * kDegree;
         const SunRadiometry s = sun_radiometry(atm, sun_at(0.5 * kPi - zenith));
         const double peer[3] = {col("T_sun_680nm"), col("T_sun_550nm"), col("T_sun_440nm")};

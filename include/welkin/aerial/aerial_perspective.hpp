@@ -125,12 +125,10 @@ struct AerialPasses {
     std::vector<float> transmittance;  // (height, width, 3), top row first
 };
 
-// Bytes the passes of a width x height render take while computed (depth in, two RGB
-// passes out, float: 28 per pixel), plus what the caller holds besides
-// (`extra_bytes_per_pixel`: the CLI's EXR buffer, the module's numpy copies). Throws
-// InvalidArgument naming "resolution" when that is more than half of this machine's
-// physical memory.
-std::size_t aerial_pass_bytes(int width, int height, std::size_t extra_bytes_per_pixel = 0);
+// Throws InvalidArgument naming "resolution" when the passes of a width x height render
+// (depth in, two RGB passes out, float: 28 bytes per pixel) plus what the caller holds
+// besides (`extra_bytes_per_pixel`: the CLI's EXR buffer, the module's numpy copies) need
+// more than half of this machine's physical memory.
 void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixel = 0);
 
 // Throws InvalidArgument naming "depth" (and the pixel) for a NaN, negative or -infinite

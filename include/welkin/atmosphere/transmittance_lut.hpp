@@ -27,9 +27,6 @@ public:
     // Transmittance to the top (mu clamped to the horizon for rays that would hit the ground).
     Spectrum4 to_top(double r, double mu) const;
 
-    // Transmittance over the segment [0, d] of the ray (r, mu).
-    Spectrum4 segment(double r, double mu, double d, bool ray_hits_ground) const;
-
     // Sun transmittance at (r, mu_s), with the planet's shadow: the fraction of the sun disc
     // above the horizon, linear in the sine of the elevation across the disc (Bruneton
     // 2017, GetTransmittanceToSun).
