@@ -39,7 +39,7 @@ Outputs (in --out, default bench/results/):
                        cells above --tolerance marked, non-finite values crossed, and the
                        reference's own noise
 and (full run only, or with --table) the table `auto` chooses from:
-  src/auto_sky_table.cpp  (generated; rerun this script to refresh it, then rebuild)
+  src/sky/auto_table.cpp  (generated; rerun this script to refresh it, then rebuild)
 """
 import argparse
 import csv
@@ -214,7 +214,7 @@ def main():
     ap.add_argument("--out", default=None, help="output folder (default bench/results, "
                                                  "quick: bench/results/quick)")
     ap.add_argument("--table", default=None,
-                    help="write the auto table here (full run default: src/auto_sky_table.cpp)")
+                    help="write the auto table here (full run default: src/sky/auto_table.cpp)")
     ap.add_argument("--no-table", action="store_true", help="do not write the auto table")
     ap.add_argument("--replot", action="store_true",
                     help="only redraw chart.png and stability.png from the CSV files in --out")
@@ -235,7 +235,7 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     table = None
     if not args.no_table:
-        table = args.table or (None if args.quick else str(ROOT / "src/auto_sky_table.cpp"))
+        table = args.table or (None if args.quick else str(ROOT / "src/sky/auto_table.cpp"))
 
     start = time.perf_counter()
     atms = Atmospheres()
@@ -474,7 +474,7 @@ def retime(out, args):
         paths = int(min(r["paths"] for r in noise_rows))
         suns = sorted({r["sun_elevation_deg"] for r in noise_rows})
         alts = sorted({r["altitude_m"] for r in noise_rows})
-        table = pathlib.Path(args.table or (ROOT / "src/auto_sky_table.cpp"))
+        table = pathlib.Path(args.table or (ROOT / "src/sky/auto_table.cpp"))
         write_table(table, settings, timing, scene_rows, noise_rows, suns, alts, paths,
                     ref["per_direction_cpu_s"] / paths, args.directions or 160)
         print(f"wrote {table}")
