@@ -44,7 +44,6 @@ and (full run only, or with --table) the table `auto` chooses from:
 import argparse
 import csv
 import math
-import os
 import pathlib
 import sys
 import time
@@ -396,7 +395,7 @@ def draw_chart(path, rows, n_dirs, paths, n_scenes):
                            "relative luminance error, p95, all scenes (twilight too)")):
         pts = [(r["hdri_2048x1024_cpu_s"], r[key]) for r in methods]
         front = pareto(pts)
-        for i, r in enumerate(methods):
+        for r in methods:
             ax.scatter(r["hdri_2048x1024_cpu_s"], r[key], color=colours[r["method"]],
                        marker="s" if r["spectral"] else "o", s=46, zorder=3)
             ax.annotate(r["setting"], (r["hdri_2048x1024_cpu_s"], r[key]), fontsize=7,

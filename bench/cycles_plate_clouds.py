@@ -27,7 +27,6 @@ import tempfile
 import time
 
 import bpy
-import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))

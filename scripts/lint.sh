@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# One way to format and lint: clang-format (.clang-format) on the C++ of src/, include/,
+# tests/ and bench/; ruff (ruff.toml) and mypy (mypy.ini) on the Python. Pinned versions,
+# in a venv of their own (build/venv-lint). Exits non-zero on any finding.
+#   bash scripts/lint.sh          check
+#   bash scripts/lint.sh --fix    apply clang-format and ruff's safe fixes, then check
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+venv=build/venv-lint
+want="ruff==0.17.6 mypy==1.19.1"
+if [[ ! -x $venv/bin/ruff || ! -x $venv/bin/mypy || "$(cat $venv/.pins 2>/dev/null)" != "$want" ]]; then
+  rm -rf "$venv"
+  /usr/bin/python3 -m venv "$venv"
+  # shellcheck disable=SC2086
+  "$venv/bin/pip" install -q --disable-pip-version-check $want
+  echo "$want" > "$venv/.pins"
+fi
+command -v clang-format >/dev/null || { echo "lint: clang-format is missing (scripts/install_deps.sh installs it)" >&2; exit 1; }
+
+mapfile -t cxx < <(git ls-files '*.cpp' '*.hpp')
+if [[ ${1:-} == --fix ]]; then
+  clang-format -i "${cxx[@]}"
+  "$venv/bin/ruff" check --fix .
+fi
+
+failed=()
+clang-format --dry-run -Werror "${cxx[@]}" || failed+=(clang-format)
+"$venv/bin/ruff" check . || failed+=(ruff)
+if [[ -f mypy.ini ]]; then
+  "$venv/bin/mypy" --config-file mypy.ini || failed+=(mypy)
+fi
+if ((${#failed[@]})); then
+  echo "lint: FAILED: ${failed[*]} (bash scripts/lint.sh --fix applies the formatting)" >&2
+  exit 1
+fi
+echo "lint: clean (${#cxx[@]} C++ files, ruff, mypy)"
