@@ -6,7 +6,7 @@
 set -euo pipefail
 
 packages=(
-  cmake g++ make pkg-config
+  cmake g++ make pkg-config ccache clang-format
   libglm-dev libtbb-dev libopenexr-dev libopenvdb-dev libboost-iostreams-dev
   pybind11-dev nlohmann-json3-dev libcli11-dev libfmt-dev libspdlog-dev libgtest-dev
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-openvdb python3-skimage

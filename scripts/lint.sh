@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 venv=build/venv-lint
-want="ruff==0.17.6 mypy==1.19.1"
+want="ruff==0.17.6 mypy==2.4.1"
 if [[ ! -x $venv/bin/ruff || ! -x $venv/bin/mypy || "$(cat $venv/.pins 2>/dev/null)" != "$want" ]]; then
   rm -rf "$venv"
   /usr/bin/python3 -m venv "$venv"
