@@ -13,11 +13,10 @@
 //   Psi_ms = L_2nd (1 + f_ms + f_ms^2 + ...) = L_2nd / (1 - f_ms)          (eq. 9)
 // and the point scatters sigma_s(x) Psi_ms(r, mu_s) E_sun towards any viewer (eq. 10).
 //
-// What that misses, measured against the reference path tracer (all orders, split by
-// order; tests/cpp/test_multiscattering_vs_reference.cpp, bruneton2017, camera on the
-// ground, the peer table's 90 views): Hillaire's multiple scattering is up to 24 % too
-// low near the horizon with the sun 60 deg from the zenith, and 5-8 % too high at the
-// zenith with the sun overhead (440 nm; its worst case is 30 % at 680 nm, 27 % at 550 nm).
+// What that misses (measured against the reference path tracer, order by order, in
+// tests/cpp/test_multiscattering_vs_reference.cpp; figures in docs/validation.md,
+// "Multiple-scattering LUT"): Hillaire's term is too low near the horizon with the sun low
+// and too high at the zenith with the sun overhead.
 // The multiply-scattered light is not isotropic: seen from the low air it is brightest
 // near the horizon (long paths), and Rayleigh's phase 3/4 (1 + nu^2) sends that light
 // into a horizontal view with weight 3/4 (1 + cos^2) ~ 1.125 on average over the horizon
@@ -56,15 +55,10 @@
 // azimuth strata over [0, pi] (the field is symmetric about the sun's vertical plane),
 // 32 directions in all at Hillaire's 20 steps per ray.
 //
-// Result, same test (16384 paths): the multiple scattering against the reference's orders
-// >= 2 is within 2.2 / 1.2 / 1.2 % in the median and 16 / 12 / 13 % in the worst case at
-// 680 / 550 / 440 nm (the worst: the last degrees above the horizon with the sun low, where
-// the local approximation of orders >= 3 fails), against 7.4 / 6.1 / 6.1 % and
-// 30 / 27 / 24 % for Hillaire's isotropic term (measured on the same views with 32768
-// paths). The lut method as a whole is then within 5 % of the reference on every view.
-// Not done: the field's azimuthal structure about the sun (the l = 1, 2 harmonics with
-// cos(phi), cos(2 phi), three more textures) takes the worst case at 440 nm from 13 % to
-// ~10 % of the multiple scattering in a prototype but changes the total radiance by < 0.1 %.
+// The error of the extended term against the reference, and of the lut method as a whole,
+// is in docs/validation.md ("Multiple-scattering LUT"); the field's azimuthal structure
+// about the sun (harmonics in cos(phi), cos(2 phi)) is left out: it moves the total
+// radiance very little.
 //
 // Positivity. The truncated series can undershoot: a strongly forward Mie phase looking
 // into the dark side of a lopsided field (hazy and polluted air at the ground with the sun
@@ -75,14 +69,12 @@
 // bruneton2017, whose smallest (*) over view cosines -1, -0.5, ..., 1 is 0.15 times the
 // isotropic term). Limiting the
 // moments so that the truncated field itself stays >= 0 would also do, but it flattens
-// the horizon peak near the ground and was measured to cost accuracy (lut worst case
-// against the reference at 440 nm 4.9 -> 5.2 %).
+// the horizon peak near the ground and costs accuracy (docs/validation.md).
 //
 // Cost: three 32 x 32 textures instead of one, filled by the same loop (one more sum per
-// step and pair, and the phases once per ray and pair: the LUT build measured 5.2 -> 5.9 ms
-// of CPU on one thread against the isotropic version, in a throw-away A/B program); at lookup (*) takes three texels at one coordinate, and the
-// weights sigma_k chi_kl P_l(mu_v) depend on the step alone, so a sky-view row combines the
-// three texel rows once per step and each view does one lookup, as before (7.3 -> 7.2 ms).
+// step and pair, and the phases once per ray and pair). At lookup (*) takes three texels at
+// one coordinate, and the weights sigma_k chi_kl P_l(mu_v) depend on the step alone, so a
+// sky-view row combines the three texel rows once per step and each view does one lookup.
 #pragma once
 
 #include <vector>

@@ -18,9 +18,8 @@
 //  * The dim tail: once T < tail_transmittance (0.1 by default: 90 % of the ray's
 //    opacity is behind it) a step spans n = min(8, floor(tail_transmittance / T)) base
 //    steps, at the same fraction u: what is left of the ray weighs at most T, so coarser
-//    steps there change the result little (measured with the reference cases: the bias
-//    moved by < 0.2 % on all three, bench/clouds) and save a third of the samples of a
-//    cloudy sky. The energy-conserving step keeps the opacity of a long step exact for
+//    steps there change the result little (docs/validation.md, "Clouds") and save
+//    samples. The energy-conserving step keeps the opacity of a long step exact for
 //    its sample's sigma_t.
 //  * Early termination: once T < min_transmittance the ray stops (what is behind is
 //    dimmed below that fraction; T is left as it is, not rounded to 0).
@@ -45,13 +44,9 @@
 //    scaling tau' = (1 - albedo g) tau, the twice-scattered phase p2), and Eddington's
 //    diffuse field of the scaled slab, averaged over the slab's unknown inclination: the
 //    diffuse light falls off linearly with depth, as diffusion theory has it, where the
-//    octaves below vanish. No fitted parameter. Measured against the reference
-//    (bench/clouds, 36 views, bias / mean |error|): thin wispy layer -2.7 % / 5.2 %,
-//    dense cumulus base +4.6 % / 7.6 % (octaves: -49 % / 49 %), VDB ball +9.5 % / 14 %
-//    (octaves: -9 % / 18 %; too bright now: the slab has no sides for light to leave
-//    by, which a small round cloud has); a thick conservative slab within -16 % below and
-//    -6 % above (tests/cpp/test_cloud_diffusion.cpp); the Cycles VDB cumulus
-//    (bench/cycles_clouds.py) median 10 %, bias -0.6 % (octaves: 18 %, -17 %).
+//    octaves below vanish. No fitted parameter. Its error against the reference (bench/clouds) and
+//    against Cycles (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"); a small
+//    round cloud comes out too bright, since the slab has no sides for light to leave by.
 //    octaves = 1 is single scattering in either mode.
 //  * The octaves (multiple_scattering = octaves): Wrenninge et al. 2013 ("Oz: the great
 //    and volumetric", SIGGRAPH talk; also Wrenninge 2015, "Art-directable multiple
@@ -68,10 +63,7 @@
 //    the i-times-further-scattered share goes as f^i, as the successive orders of
 //    scattering do in an optically thin medium (order n+1 / order n ~ tau, e.g. Hansen &
 //    Travis 1974, "Light scattering in planetary atmospheres", sec. 3) and tends to
-//    Wrenninge's b^i in a thick one. Measured against the
-//    reference (bench/clouds): thin wispy layer +47 % -> -2 % bias; dense cumulus base
-//    unchanged (-49 %: thick, f = 1); VDB ball +2.6 % -> -9 % bias at the same mean
-//    |error| (19 %: its thin edges no longer offset its too-dark core).
+//    Wrenninge's b^i in a thick one (docs/validation.md, "Clouds").
 //  * Sky light. The sky is an isotropic radiance L_sky(x) around the cloud
 //    (cloud_illumination.hpp). In a uniform isotropic field a conservative medium
 //    (albedo 1) changes nothing: the radiance is L_sky everywhere inside, at all orders

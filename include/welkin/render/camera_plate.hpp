@@ -43,8 +43,7 @@
 // the sky, the disc, the aerial and cloud passes of the band's pixels only. So bands tile
 // the frame exactly and a band costs its share of the frame (plus the sky method's
 // per-call set-up: the lut method's sky-view LUT, a few ms). render_camera_plate() is one
-// CameraPlateRenderer's render(). (Before it, every band call redid the whole-frame part:
-// rays, depth and ~150 MB of whole-frame buffers at 1080p, 0.4 s a band.)
+// CameraPlateRenderer's render().
 //
 // Errors (InvalidArgument): no camera ("camera"), a camera below the ground
 // ("camera.matrix_world"), a bad row range ("rows"), a cloud volume that cannot be read
