@@ -18,13 +18,27 @@ def script_args(parser):
 
 
 def enable_welkin():
-    """The Welkin add-on, installed from its zip into a temporary scripts directory when it
-    is not enabled already (`bash scripts/build_addon.sh` first)."""
+    """Enables the Welkin add-on: the one the user installed when there is one (legacy
+    add-on or Extension), else the zip that `bash scripts/build_addon.sh` built (dist/),
+    installed into the user's add-ons as Preferences > Install would."""
+    import glob
+
     import addon_utils
-    if not addon_utils.check("welkin")[1]:
-        sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
-        import addon_testing
-        addon_testing.install_addon()
+    names = [m.__name__ for m in addon_utils.modules() if m.__name__.split(".")[-1] == "welkin"]
+    for name in names:
+        if addon_utils.check(name)[1]:
+            return name
+    if names:
+        bpy.ops.preferences.addon_enable(module=names[0])
+        return names[0]
+    zips = sorted(glob.glob(os.path.join(ROOT, "dist", "welkin-*.zip")))
+    zips = [z for z in zips if not z.endswith("linux_x64.zip")]  # the Extension: 4.2+
+    if not zips:
+        raise SystemExit("demo: the Welkin add-on is not installed and dist/ holds no "
+                         "welkin-<version>.zip; run bash scripts/build_addon.sh first")
+    bpy.ops.preferences.addon_install(filepath=zips[-1])
+    bpy.ops.preferences.addon_enable(module="welkin")
+    return "welkin"
 
 
 def empty_scene():

@@ -27,7 +27,7 @@ parser.add_argument("--samples", type=int, default=16)
 parser.add_argument("--sheet", help="write the before / after pair as one PNG")
 args = ds.script_args(parser)
 os.makedirs(args.out, exist_ok=True)
-ds.enable_welkin()
+addon_name = ds.enable_welkin()
 scene = ds.empty_scene()
 material = ds.material
 
@@ -60,8 +60,11 @@ bpy.ops.render.render(write_still=True)
 print(f"make_aerial_demo: {scene.welkin_aerial.status}")
 
 if args.sheet:
+    import importlib
+
     import numpy as np
-    from welkin import native, scene_export
+    native = importlib.import_module(f"{addon_name}.native")
+    scene_export = importlib.import_module(f"{addon_name}.scene_export")
     module = native.module()
     base = scene_export.file_base(bpy.path.abspath(scene.render.filepath))
     pixels, names = module.read_exr(scene_export.frame_path(base, "render", 1))
