@@ -24,11 +24,46 @@ bl_info = {
 }
 
 
+MINIMUM_BLENDER = (3, 4, 0)
+_registered = False
+
+
 def register():
+    global _registered
+    import bpy
+    if bpy.app.version < MINIMUM_BLENDER:
+        print(f"Welkin: Blender {bpy.app.version_string} is not supported: Welkin needs "
+              f"Blender {'.'.join(map(str, MINIMUM_BLENDER))} or later (4.2 and later: "
+              "install the Extension); nothing was registered")
+        return
     from . import blender
     blender.register()
+    _registered = True
 
 
 def unregister():
+    global _registered
+    if not _registered:
+        return
     from . import blender
     blender.unregister()
+    _registered = False
+
+
+def __getattr__(name):
+    """The compiled module's names, served from the add-on package: where `import welkin`
+    finds this add-on first (Blender 3.x puts the add-ons folder on sys.path), scripts
+    still get `welkin.Atmosphere.preset(...)`, `welkin.sky_radiance(...)` (native.py)."""
+    import importlib
+    import pathlib
+    here = pathlib.Path(__file__).parent
+    # Our own submodules are imported, never forwarded (the import system asks for them
+    # here before it imports them).
+    if name.startswith("_") or (here / f"{name}.py").exists() or (here / name).is_dir():
+        raise AttributeError(name)
+    native = importlib.import_module(__name__ + ".native")
+    module = native.module()
+    if module is None or not hasattr(module, name):
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}"
+                             + (f" ({native.message()})" if module is None else ""))
+    return getattr(module, name)

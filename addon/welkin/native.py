@@ -6,6 +6,17 @@ is itself called `welkin`, so the compiled module is imported under the dotted n
 `<package>._native.welkin` (its init function, PyInit_welkin, is found from the last part
 of that name); a top-level `welkin` elsewhere on sys.path is never picked up by mistake.
 
+As a Blender Extension (4.2+) there is no `_native/`: the compiled module comes as the wheel
+(scripts/build_wheel.sh) that Blender installs into the extensions' site-packages, a
+top-level extension module file `welkin<suffix>`. It is found by that file name on
+sys.path, never by `import welkin` (which may give this add-on: Blender 3.x puts the
+add-ons folder on sys.path, where this package is `welkin`). It is loaded as `welkin` when
+that name is free, so that scripts doing `import welkin` share the one instance (a pybind11
+module initialised twice in one process fails), else under the private dotted name above.
+The add-on's own package (`welkin` or `bl_ext.<repo>.welkin`) forwards the module's names
+(its __getattr__), so `import welkin; welkin.Atmosphere.preset(...)` works in whichever
+order the two are found.
+
 Loading never raises: `load()` returns the module, or None and a message that says what is
 wrong and how to fix it (missing, built for another Python, failing to load), for the
 panel and for operator reports.
@@ -16,8 +27,10 @@ import pathlib
 import sys
 
 NATIVE_DIR = pathlib.Path(__file__).resolve().parent / "_native"
-BUILD_HINT = ("build the add-on zip with `bash scripts/build_addon.sh` (it builds the module "
-              "for /usr/bin/python3) and install that zip")
+BUILD_HINT = ("Welkin needs Blender 3.4 or later with Python 3.11 on x86-64 Linux: for "
+              "Blender 4.2 and later install the Extension (welkin-<version>-linux_x64.zip, "
+              "scripts/build_extension.sh), for 3.4-4.1 the add-on zip "
+              "(scripts/build_addon.sh)")
 
 _cache = {}
 
@@ -26,10 +39,37 @@ def _python_tag():
     return f"Python {sys.version_info.major}.{sys.version_info.minor}"
 
 
+def installed():
+    """The module file of an installed welkin wheel on sys.path for this Python, or None."""
+    for entry in sys.path:
+        for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+            path = pathlib.Path(entry or ".") / ("welkin" + suffix)
+            if path.is_file():
+                return path.resolve()
+    return None
+
+
+def _installed_elsewhere():
+    """Names of welkin module files on sys.path built for another Python."""
+    names = set()
+    for entry in sys.path:
+        try:
+            names.update(p.name for p in pathlib.Path(entry or ".").glob("welkin.*")
+                         if p.suffix in (".so", ".pyd") and p.is_file())
+        except OSError:
+            pass
+    return sorted(names)
+
+
 def find(directory=NATIVE_DIR):
     """(path of a loadable module file or None, message or None)."""
     directory = pathlib.Path(directory)
     candidates = sorted(p for p in directory.glob("welkin*") if p.suffix in (".so", ".pyd"))
+    if not candidates and directory == NATIVE_DIR:
+        path = installed()
+        if path is not None:
+            return path, None
+        candidates = [pathlib.Path(n) for n in _installed_elsewhere()]
     if not candidates:
         return None, (f"Welkin's compiled module is missing (nothing in {directory}); "
                       + BUILD_HINT)
@@ -53,6 +93,10 @@ def load(directory=NATIVE_DIR, package=None):
     module = None
     if path is not None:
         name = f"{package or __package__ or 'welkin_addon'}._native.welkin"
+        if path.parent != directory:  # the installed wheel's module
+            current = sys.modules.get("welkin")
+            if current is None or pathlib.Path(getattr(current, "__file__", "") or "") == path:
+                name = "welkin"
         try:
             module = sys.modules.get(name)
             if module is None:

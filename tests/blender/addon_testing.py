@@ -6,8 +6,17 @@ Run by scripts/test.sh as
     blender -b --factory-startup --python-use-system-env --python-exit-code 1 --python T
 The zip is $WELKIN_ADDON_ZIP when set (scripts/test.sh builds it once), else built here
 into the temporary directory by scripts/build_addon.sh.
+
+Blender 4.2 and later (PyPI's bpy 4.5 / 5.0, through tests/blender/bpy_blender.py) install
+the Extension instead, $WELKIN_EXTENSION_ZIP (else scripts/build_extension.sh builds it),
+with bpy.ops.extensions.package_install_files as a user installs one from disk. The add-on
+package is then bl_ext.user_default.welkin; the tests' `import welkin` / `from
+welkin.blender import ...` are pointed at it (an alias kept to these tests).
 """
 import atexit
+import importlib
+import importlib.abc
+import importlib.util
 import math
 import os
 import pathlib
@@ -32,6 +41,70 @@ def addon_zip():
     return next((TMP / "dist").glob("welkin-*.zip"))
 
 
+EXTENSION = bpy.app.version >= (4, 2, 0)
+EXTENSION_PACKAGE = "bl_ext.user_default.welkin"
+
+
+def is_module_bpy():
+    """Blender as a Python module (PyPI's bpy): no Blender binary, no window."""
+    return not bpy.app.binary_path
+
+
+def blender_command():
+    """The command that runs this Blender from the command line: its binary, or for the
+    bpy module, tests/blender/bpy_blender.py in the same Python."""
+    if is_module_bpy():
+        return [sys.executable, str(pathlib.Path(__file__).resolve().parent / "bpy_blender.py")]
+    return [bpy.app.binary_path]
+
+
+def skip(name, reason):
+    """A test that cannot run on this Blender: says why and exits successfully."""
+    print(f"{name}: SKIPPED on Blender {bpy.app.version_string}: {reason}")
+    sys.stdout.flush()
+    sys.exit(0)
+
+
+def extension_zip():
+    path = os.environ.get("WELKIN_EXTENSION_ZIP")
+    if path:
+        return pathlib.Path(path)
+    subprocess.run(["bash", str(ROOT / "scripts" / "build_extension.sh"), str(TMP / "dist")],
+                   check=True, stdout=subprocess.DEVNULL)
+    return next((TMP / "dist").glob("welkin-*-linux_x64.zip"))
+
+
+class _AliasFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """`welkin`, `welkin.x` -> the installed extension's bl_ext.user_default.welkin(.x)."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name == "welkin" or name.startswith("welkin."):
+            return importlib.util.spec_from_loader(name, self)
+        return None
+
+    def create_module(self, spec):
+        return importlib.import_module(EXTENSION_PACKAGE + spec.name[len("welkin"):])
+
+    def exec_module(self, module):
+        pass
+
+
+def _install_extension():
+    prefs = bpy.context.preferences
+    prefs.use_preferences_save = False
+    result = bpy.ops.extensions.package_install_files(
+        filepath=str(extension_zip()), repo="user_default", enable_on_install=True)
+    check(result == {'FINISHED'}, f"installing the extension: {result}")
+    package = importlib.import_module(EXTENSION_PACKAGE)
+    sys.modules.pop("welkin", None)
+    sys.meta_path.insert(0, _AliasFinder())
+    import welkin
+    check(welkin is package, f"`welkin` is not the extension: {welkin}")
+    module = package.native.module()
+    check(module is not None, package.native.message())
+    return package, module
+
+
 def _drop_compiled_module_from_path():
     # The add-on package is called `welkin`, like the compiled module on PYTHONPATH
     # (scripts/test.sh puts build/ there): keep the latter from shadowing the add-on.
@@ -49,10 +122,16 @@ def install_addon():
     """Installs and enables the add-on from its zip; returns (add-on package, compiled
     module)."""
     _drop_compiled_module_from_path()
+    if EXTENSION:
+        return _install_extension()
     prefs = bpy.context.preferences
     prefs.use_preferences_save = False
     (scripts_dir() / "addons").mkdir(parents=True, exist_ok=True)
-    prefs.filepaths.script_directory = str(scripts_dir())
+    filepaths = prefs.filepaths
+    if hasattr(filepaths, "script_directories"):  # Blender 3.6+
+        filepaths.script_directories.new().directory = str(scripts_dir())
+    else:
+        filepaths.script_directory = str(scripts_dir())
     bpy.utils.refresh_script_paths()
     bpy.ops.preferences.addon_install(filepath=str(addon_zip()), target='PREFS')
     bpy.ops.preferences.addon_enable(module="welkin")
@@ -63,6 +142,17 @@ def install_addon():
     module = native.module()
     assert module is not None, native.message()
     return welkin, module
+
+
+def installed_in_temp(package):
+    """Whether the add-on package was installed in the tests' own folders (the machine's
+    Blender configuration untouched)."""
+    where = pathlib.Path(package.__file__).resolve()
+    homes = [scripts_dir()]
+    if EXTENSION:
+        homes.append(pathlib.Path(bpy.utils.user_resource('EXTENSIONS')))
+    return any(where.is_relative_to(h.resolve()) for h in homes) and \
+        not str(where).startswith(os.path.expanduser("~/.config/blender"))
 
 
 def sun_direction(elevation_deg, azimuth_deg):

@@ -1,0 +1,127 @@
+"""The `blender` command line, for Blender as a Python module (PyPI's `bpy`, 4.5 / 5.0).
+
+scripts/test.sh runs each headless test under a bpy venv as
+    build/venv-bpy-4.5/bin/python tests/blender/bpy_blender.py -b --factory-startup \
+        --python-use-system-env --python-exit-code 1 --python T
+and the tests' own `blender -b scene.blend --addons welkin -E WELKIN -o ... -f 1` calls go
+through addon_testing.blender_command(), which names this script there. The arguments are
+taken in order as Blender takes them: a .blend file opens, -E/-o/-F/-x/-s/-e/-j set the
+scene, -f renders frames (write_still), -a the animation, --addons enables add-ons (a name
+that is not a legacy add-on is looked up among the installed extensions, bl_ext.<repo>.),
+--python runs a script (its exceptions exit with --python-exit-code). Enough for the
+project's tests, not a full emulation: unknown options fail loudly.
+
+The user folders (scripts, config, extensions) are a temporary directory unless the
+environment names them, so the machine's Blender settings are never touched.
+"""
+import os
+import pathlib
+import runpy
+import sys
+import tempfile
+import traceback
+
+if "BLENDER_USER_RESOURCES" not in os.environ:
+    _home = tempfile.mkdtemp(prefix="welkin_bpy_home_")
+    os.environ["BLENDER_USER_RESOURCES"] = _home
+    os.environ.setdefault("BLENDER_USER_CONFIG", os.path.join(_home, "config"))
+    os.environ.setdefault("BLENDER_USER_EXTENSIONS", os.path.join(_home, "extensions"))
+
+import bpy  # noqa: E402
+
+FLAGS = {"-b", "--background", "--factory-startup", "--python-use-system-env",
+         "--disable-autoexec", "-noaudio"}
+
+
+def enable_addon(name):
+    import addon_utils
+    candidates = [name]
+    if not any(m.__name__ == name for m in addon_utils.modules()):
+        candidates = [m.__name__ for m in addon_utils.modules()
+                      if m.__name__.startswith("bl_ext.") and m.__name__.split(".")[-1] == name]
+    if not candidates:
+        raise SystemExit(f"bpy_blender: add-on {name!r} is not installed")
+    module = addon_utils.enable(candidates[0], default_set=True, handle_error=None)
+    if module is None:
+        raise SystemExit(f"bpy_blender: add-on {candidates[0]!r} could not be enabled")
+
+
+def render_frames(frames):
+    scene = bpy.context.scene
+    for frame in frames:
+        scene.frame_set(frame)
+        bpy.ops.render.render(write_still=True)
+
+
+def frame_list(text):
+    frames = []
+    for part in text.split(","):
+        a, _, b = part.partition("..")
+        frames += list(range(int(a), int(b) + 1)) if b else [int(a)]
+    return frames
+
+
+def main(argv):
+    exit_code = 0
+    i = 0
+    if "--factory-startup" in argv:
+        bpy.ops.wm.read_factory_settings(use_empty=False)
+        bpy.context.preferences.use_preferences_save = False
+    while i < len(argv):
+        arg = argv[i]
+        value = argv[i + 1] if i + 1 < len(argv) else None
+        scene = bpy.context.scene
+        if arg in FLAGS:
+            i += 1
+            continue
+        if arg == "--":
+            break
+        i += 2
+        if arg == "--python-exit-code":
+            exit_code = int(value)
+        elif arg in ("-P", "--python"):
+            sys.argv = [value] + argv[argv.index("--") + 1:] if "--" in argv else [value]
+            try:
+                runpy.run_path(value, run_name="__main__")
+            except SystemExit as stop:
+                if stop.code not in (None, 0):
+                    raise
+            except BaseException:
+                traceback.print_exc()
+                if exit_code:
+                    sys.stdout.flush()
+                    os._exit(exit_code)
+        elif arg == "--addons":
+            for name in value.split(","):
+                enable_addon(name)
+        elif arg in ("-E", "--engine"):
+            scene.render.engine = value
+        elif arg in ("-o", "--render-output"):
+            scene.render.filepath = value
+        elif arg in ("-F", "--render-format"):
+            scene.render.image_settings.file_format = value
+        elif arg in ("-x", "--use-extension"):
+            scene.render.use_file_extension = bool(int(value))
+        elif arg in ("-s", "--frame-start"):
+            scene.frame_start = int(value)
+        elif arg in ("-e", "--frame-end"):
+            scene.frame_end = int(value)
+        elif arg in ("-j", "--frame-jump"):
+            scene.frame_step = int(value)
+        elif arg in ("-f", "--render-frame"):
+            render_frames(frame_list(value))
+        elif arg in ("-a", "--render-anim"):
+            i -= 1
+            bpy.ops.render.render(animation=True)
+        elif arg.endswith(".blend") and pathlib.Path(arg).is_file():
+            i -= 1
+            bpy.ops.wm.open_mainfile(filepath=arg)
+        else:
+            raise SystemExit(f"bpy_blender: unsupported argument {arg!r}")
+    sys.stdout.flush()
+    sys.stderr.flush()
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
+    os._exit(0)
