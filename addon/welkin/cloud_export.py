@@ -16,8 +16,12 @@ and the last run of digits in the file name is replaced by n, zero-padded to tha
 width (`cloud.0001.vdb` -> `cloud.0007.vdb`). A file without digits, or no sequence, is
 used as it is at every frame.
 """
+from __future__ import annotations
+
 import os
 import re
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
 
 # The layer fields of the schema, with the core's defaults (procedural_clouds.hpp,
 # CloudLayerParams); planet radius and origin altitude come from the scene.
@@ -35,7 +39,8 @@ class MissingVolume(Exception):
     """A marked volume object whose file for the frame is absent; names object and path."""
 
 
-def sequence_frame(frame, frame_start, frame_offset, frame_duration, mode):
+def sequence_frame(frame: float, frame_start: float, frame_offset: float, frame_duration: float,
+                   mode: str) -> int | None:
     """The file frame number for scene `frame`, or None when the sequence shows nothing
     there (CLIP outside its range, or a duration of 0)."""
     if mode not in SEQUENCE_MODES:
@@ -67,7 +72,7 @@ def sequence_frame(frame, frame_start, frame_offset, frame_duration, mode):
     return n + int(frame_offset)
 
 
-def frame_filepath(filepath, n):
+def frame_filepath(filepath: str, n: int) -> str:
     """`filepath` with the last run of digits in its file name replaced by `n` (zero-padded
     to the run's width); unchanged when the name has no digits."""
     directory, name = os.path.split(filepath)
@@ -79,8 +84,9 @@ def frame_filepath(filepath, n):
     return os.path.join(directory, name[:match.start(1)] + digits + name[match.end(1):])
 
 
-def volume_file(filepath_abs, is_sequence, frame, frame_start=1, frame_offset=0,
-                frame_duration=0, mode="CLIP"):
+def volume_file(filepath_abs: str, is_sequence: bool, frame: float, frame_start: float = 1,
+                frame_offset: float = 0, frame_duration: float = 0,
+                mode: str = "CLIP") -> str | None:
     """The VDB file a volume shows at scene `frame`, or None where its sequence shows
     nothing."""
     if not is_sequence:
@@ -89,15 +95,17 @@ def volume_file(filepath_abs, is_sequence, frame, frame_start=1, frame_offset=0,
     return None if n is None else frame_filepath(filepath_abs, n)
 
 
-def layer_dict(values, seed, wind_offset_m):
+def layer_dict(values: Mapping[str, float], seed: int,
+               wind_offset_m: Sequence[float]) -> dict[str, Any]:
     """One procedural layer: `values` maps LAYER_FIELDS to numbers."""
-    d = {k: float(values[k]) for k in LAYER_FIELDS}
+    d: dict[str, Any] = {k: float(values[k]) for k in LAYER_FIELDS}
     d["wind_offset_m"] = [float(wind_offset_m[0]), float(wind_offset_m[1])]
     d["seed"] = int(seed)
     return d
 
 
-def volume_dict(name, path, grid, matrix_world, density_scale, scale_length=1.0):
+def volume_dict(name: str, path: str, grid: str, matrix_world: Iterable[Iterable[float]],
+                density_scale: float, scale_length: float = 1.0) -> dict[str, Any]:
     """One VDB volume. `matrix_world` by rows in scene units (its translation is scaled to
     metres); raises MissingVolume when the file is absent."""
     if not os.path.isfile(path):
@@ -112,7 +120,8 @@ def volume_dict(name, path, grid, matrix_world, density_scale, scale_length=1.0)
             "density_scale": float(density_scale), "negative": "clamp"}
 
 
-def clouds_dict(layers, volumes, albedo, lighting):
+def clouds_dict(layers: Iterable[Mapping[str, Any]], volumes: Iterable[Mapping[str, Any]],
+                albedo: float, lighting: Mapping[str, float]) -> dict[str, Any] | None:
     """The "clouds" section, or None when there is nothing to render (a clear sky)."""
     if not layers and not volumes:
         return None

@@ -6,17 +6,21 @@ reused (`out`): a fresh 32 MiB array costs its page faults every time. The sun-d
 is zero but for a few pixels: `sparse_to_blender` writes only those into a buffer that is
 otherwise kept zero (alpha 1).
 """
+from __future__ import annotations
+
 import numpy as np
+import numpy.typing as npt
 
 
-def rgba_buffer(width, height):
+def rgba_buffer(width: int, height: int) -> npt.NDArray[np.float32]:
     """A bottom-row-first RGBA buffer, zero with alpha 1, shape (H, W, 4)."""
     out = np.zeros((height, width, 4), dtype=np.float32)
     out[..., 3] = 1.0
     return out
 
 
-def to_blender(image, out=None):
+def to_blender(image: npt.NDArray[np.floating],
+               out: npt.NDArray[np.float32] | None = None) -> npt.NDArray[np.float32]:
     """(H, W, 3) top-row-first -> flat float32 RGBA, bottom row first (alpha 1). Writes
     into `out` ((H, W, 4) float32, alpha already 1) when given."""
     h, w, _ = image.shape
@@ -30,11 +34,13 @@ class SparseImage:
     """A mostly zero (H, W, 3) top-row-first image into a reused RGBA buffer: only the
     non-zero pixels are written, and cleared again before the next image."""
 
-    def __init__(self, width, height):
+    def __init__(self, width: int, height: int) -> None:
         self.buffer = rgba_buffer(width, height)
+        self._rows: npt.NDArray[np.intp]
+        self._cols: npt.NDArray[np.intp]
         self._rows = self._cols = np.empty(0, dtype=np.intp)
 
-    def to_blender(self, image):
+    def to_blender(self, image: npt.NDArray[np.floating]) -> npt.NDArray[np.float32]:
         h = self.buffer.shape[0]
         self.buffer[self._rows, self._cols, :3] = 0.0
         w = image.shape[1]
@@ -46,6 +52,6 @@ class SparseImage:
         return self.buffer.reshape(-1)
 
 
-def from_blender(flat, width, height):
+def from_blender(flat: npt.ArrayLike, width: int, height: int) -> npt.NDArray[np.float32]:
     """Blender's flat RGBA pixels -> (H, W, 3) float32, top row first."""
     return np.asarray(flat, dtype=np.float32).reshape(height, width, 4)[::-1, :, :3].copy()

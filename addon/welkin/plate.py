@@ -7,10 +7,19 @@ sky, sun disc and aerial perspective over the ground, no meshes. The core comput
 (README "Scene JSON") from plain values read off bpy, and reshapes the core's arrays
 (top row first, RGB) into Blender's pass rectangles (bottom row first, RGBA or RGB).
 """
+from __future__ import annotations
+
 import json
 import math
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 from . import scene_export
+
+if TYPE_CHECKING:
+    import numpy
+    import numpy.typing as npt
 
 # Pass name -> (channels, Blender chan_id, the plate array it comes from). A scene without
 # clouds has no "clouds" / "cloud_depth" arrays: Clouds is then transparent black and
@@ -28,12 +37,13 @@ NO_CLOUD_DEPTH = 1e10
 PASS_NAMES = tuple(p[0] for p in PASSES)
 
 
-def camera_dict(matrix_rows, data, scale_length=1.0):
+def camera_dict(matrix_rows: Iterable[Iterable[float]], data: Mapping[str, Any],
+                scale_length: float = 1.0) -> dict[str, Any]:
     """The scene JSON's "camera" from an object's matrix_world (4 rows) and a dict of the
     Camera data's values (type, lens, sensor_*, ortho_scale, shift_*, clip_*, and for
     panoramas panorama_type and the latitude/longitude range in radians); the JSON itself
     is scene_export.camera_dict's."""
-    panorama = None
+    panorama: dict[str, Any] | None = None
     if data["type"] == "PANO":
         panorama = {"panorama_type": data.get("panorama_type", "EQUIRECTANGULAR")}
         for key in ("latitude_min", "latitude_max", "longitude_min", "longitude_max"):
@@ -44,8 +54,9 @@ def camera_dict(matrix_rows, data, scale_length=1.0):
         data["clip_start"], data["clip_end"], scale_length=scale_length, panorama=panorama)
 
 
-def scene_json(atmosphere_json, origin_altitude_m, sun_direction, exposure, method, camera,
-               resolution, clouds=None):
+def scene_json(atmosphere_json: str, origin_altitude_m: float, sun_direction: Iterable[float],
+               exposure: float, method: str, camera: dict[str, Any],
+               resolution: Sequence[int], clouds: dict[str, Any] | None = None) -> str:
     """The scene description's JSON text (scene_export.scene_dict's). `atmosphere_json`:
     Atmosphere.to_json_string() (written in full, so the file reproduces the frame);
     `resolution`: (x, y, percentage)."""
@@ -54,7 +65,8 @@ def scene_json(atmosphere_json, origin_altitude_m, sun_direction, exposure, meth
                                               resolution, clouds=clouds))
 
 
-def pass_rect(np, plate, source, channels, rows=None):
+def pass_rect(np: ModuleType, plate: Mapping[str, Any], source: str, channels: int,
+              rows: Sequence[int] | None = None) -> npt.NDArray[numpy.float32]:
     """One pass as Blender's rect: (n, channels) float32, bottom row first, for the plate's
     rows [r0, r1) counted from the top (`rows`, default all). A `source` the plate lacks
     (the cloud passes of a clear sky): 0 colour and alpha; depth NO_CLOUD_DEPTH."""
@@ -77,7 +89,7 @@ def pass_rect(np, plate, source, channels, rows=None):
     return out
 
 
-def bands(height, band_rows):
+def bands(height: int, band_rows: int) -> Iterator[tuple[tuple[int, int], int, int]]:
     """Row bands [r0, r1) from the bottom of the image up (the order Blender shows them),
     as (rows from the top, Blender's y of the band's bottom row, band height)."""
     y = 0

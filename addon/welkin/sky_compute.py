@@ -12,34 +12,41 @@ direct irradiance of the sun's disc at the observer, welkin.sun(...).direct_irra
 the irradiance divided by that (so the colour stays within [0, 1]); its angle is the sun's
 angular diameter.
 """
+from __future__ import annotations
+
 import dataclasses
 import math
 import time
+from collections.abc import Callable, Sequence
+from types import ModuleType
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from . import sky_request
 
 
 @dataclasses.dataclass
 class LampValues:
-    color: tuple          # linear Rec.709, max channel 1
+    color: tuple[float, ...]  # linear Rec.709, max channel 1
     strength_w_m2: float  # Blender sun strength (irradiance), W m^-2
     angle_rad: float      # angular diameter of the sun's disc
 
 
 @dataclasses.dataclass
 class SkyResult:
-    sky: np.ndarray       # (H, W, 3) float32, top row first, no disc, x exposure
-    disc: np.ndarray      # (H, W, 3) float32, top row first, the disc alone (or zeros)
+    sky: npt.NDArray[np.float32]   # (H, W, 3) float32, top row first, no disc, x exposure
+    disc: npt.NDArray[np.float32]  # (H, W, 3) float32, top row first, the disc alone (or zeros)
     lamp: LampValues
     method: str           # the module method that computed it
     sun_elevation_rad: float
     seconds: float
-    warnings: list
+    warnings: list[str]
 
 
-def lamp_values(native, atm, altitude_m, sun_direction, exposure):
+def lamp_values(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401 (welkin.Atmosphere)
+                sun_direction: Sequence[float], exposure: float) -> LampValues:
     sun = native.sun(atm, altitude_m, sun_direction)
     rgb = np.asarray(sun.direct_irradiance_rgb, dtype=np.float64) * exposure
     strength = float(rgb.max()) if rgb.size else 0.0
@@ -47,19 +54,20 @@ def lamp_values(native, atm, altitude_m, sun_direction, exposure):
     return LampValues(color, strength, 2.0 * float(atm.sun_angular_radius_rad))
 
 
-def lamp_for(native, request):
+def lamp_for(native: ModuleType, request: sky_request.SkyRequest) -> LampValues:
     """The lamp's values alone for `request` (no images): cheap."""
     sky_request.validate(request, native)
     atm = sky_request.build_atmosphere(request, native)
     return lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure)
 
 
-def sun_elevation_rad(sun_direction):
+def sun_elevation_rad(sun_direction: Sequence[float]) -> float:
     x, y, z = (float(c) for c in sun_direction)
     return math.atan2(z, math.hypot(x, y))
 
 
-def _warnings(atm, request):
+def _warnings(atm: Any,  # noqa: ANN401 (welkin.Atmosphere: the compiled module has no stub)
+              request: sky_request.SkyRequest) -> tuple[float, list[str]]:
     elevation = sun_elevation_rad(request.sun_direction)
     if elevation < -float(atm.sun_angular_radius_rad):
         return elevation, [f"the sun is {math.degrees(-elevation):.1f} degrees below the horizon: "
@@ -67,7 +75,9 @@ def _warnings(atm, request):
     return elevation, []
 
 
-def compute(native, request, *, disc=True, scene_json=None, progress=None):
+def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool = True,
+            scene_json: str | None = None,
+            progress: Callable[[float], bool] | None = None) -> SkyResult:
     """SkyResult for `request`; ValueError naming the parameter for bad input.
 
     `scene_json`: the scene description of the sky with its clouds (its origin at the
@@ -101,7 +111,8 @@ def compute(native, request, *, disc=True, scene_json=None, progress=None):
                      warnings)
 
 
-def hdri(native, request, width, *, sun_disc=True):
+def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
+         sun_disc: bool = True) -> npt.NDArray[np.float32]:
     """(H, W, 3) float32, top row first: the whole sky as an HDRI (with the disc unless
     sun_disc is False), for export."""
     sky_request.validate(dataclasses.replace(request, width=sky_request.WIDTHS[0]), native)

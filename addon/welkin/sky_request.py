@@ -10,8 +10,12 @@ Blender's Nishita sky (air, dust, ozone): they scale the preset's Rayleigh scatt
 aerosol (Mie) scattering and extinction, and its ozone absorption. Scaling a coefficient
 is not new physics: the core still computes every number.
 """
+from __future__ import annotations
+
 import dataclasses
 import math
+from types import ModuleType
+from typing import Any
 
 FALLBACK_PRESETS = ("bruneton2017", "clear", "hazy", "polluted", "mars")
 # Methods the add-on offers. "reference" (Monte-Carlo, hours at 2048 wide) is left to the
@@ -28,19 +32,19 @@ class SkyRequest:
     ozone_density: float = 1.0      # x ozone absorption
     ground_albedo: float = -1.0     # < 0: the preset's
     altitude_m: float = 0.0         # observer above the ground, m (>= 0)
-    sun_direction: tuple = (0.0, 0.0, 1.0)  # towards the sun, Z up
+    sun_direction: tuple[float, ...] = (0.0, 0.0, 1.0)  # towards the sun, Z up
     width: int = 1024               # equirect width; height = width / 2
     method: str = "auto"
     exposure: float = 1.0
 
-    def key(self):
+    def key(self) -> str:
         """A string that changes whenever the sky would (sun rounded to 1e-7)."""
         d = dataclasses.asdict(self)
         d["sun_direction"] = tuple(round(float(c), 7) for c in self.sun_direction)
         return repr(sorted(d.items()))
 
 
-def validate(request, native):
+def validate(request: SkyRequest, native: ModuleType) -> None:
     """Raises ValueError naming the parameter and its accepted range."""
     names = native.Atmosphere.preset_names()
     if request.preset not in names:
@@ -65,7 +69,7 @@ def validate(request, native):
     resolve_method(request.method, native)
 
 
-def resolve_method(method, native):
+def resolve_method(method: str, native: ModuleType) -> str:
     """The module's method for `method`: "auto" is the module's own automatic choice
     where it has one, else "lut" (Hillaire 2020, the fast default)."""
     available = list(native.methods())
@@ -77,7 +81,7 @@ def resolve_method(method, native):
     return method
 
 
-def build_atmosphere(request, native):
+def build_atmosphere(request: SkyRequest, native: ModuleType) -> Any:  # noqa: ANN401 (welkin.Atmosphere)
     """The preset with the request's multipliers applied (validated by the core)."""
     atm = native.Atmosphere.preset(request.preset)
     if request.air_density != 1.0:
@@ -93,7 +97,7 @@ def build_atmosphere(request, native):
     return atm
 
 
-def observer_altitude(origin_altitude_m, camera_z_m):
+def observer_altitude(origin_altitude_m: float, camera_z_m: float) -> tuple[float, str | None]:
     """Altitude of the observer (the camera) above the ground: the scene origin's altitude
     plus the camera's height in the scene (Z up, metres). Returns (altitude_m, warning or
     None); an observer below the ground is put on it, with a warning."""

@@ -29,7 +29,11 @@ widened to the region, its frame inside), whose pixels in the frame are the scen
 camera's. Nothing here is physics: the plate comes from the core (welkin.
 CameraPlateRenderer), the add-on only says which camera looks.
 """
+from __future__ import annotations
+
 import math
+from collections.abc import Iterable
+from typing import Any
 
 # Any sensor width gives the same frustum (lens scales with it); Blender's default.
 SENSOR_WIDTH_MM = 36.0
@@ -39,7 +43,7 @@ FIRST_DIVISOR = 8
 BAND_ROWS = 32
 
 
-def _rigid_inverse(m):
+def _rigid_inverse(m: list[list[float]]) -> list[list[float]]:
     """The inverse of a 4 x 4 rigid transform (rows): [R t; 0 1]^-1 = [R^T -R^T t; 0 1]."""
     r = [[float(m[j][i]) for j in range(3)] for i in range(3)]  # R^T
     t = [float(m[i][3]) for i in range(3)]
@@ -47,8 +51,9 @@ def _rigid_inverse(m):
     return out + [[0.0, 0.0, 0.0, 1.0]]
 
 
-def camera_from_view(view_matrix, window_matrix, is_perspective, width, height,
-                     scale_length=1.0):
+def camera_from_view(view_matrix: Iterable[Iterable[float]],
+                     window_matrix: Iterable[Iterable[float]], is_perspective: bool,
+                     width: int, height: int, scale_length: float = 1.0) -> dict[str, Any]:
     """The scene JSON's "camera" (README "Scene JSON") that sees what a viewport region of
     width x height pixels sees, from its view_matrix and window_matrix (4 rows each, in
     scene units; see the module's docstring). ValueError naming the matrix when it is not
@@ -68,8 +73,9 @@ def camera_from_view(view_matrix, window_matrix, is_perspective, width, height,
     if is_perspective:
         n = p[2][3] / (p[2][2] - 1.0)
         f = p[2][3] / (p[2][2] + 1.0)
-        cam = {"type": "PERSP", "lens_mm": p[0][0] * SENSOR_WIDTH_MM / 2.0,
-               "ortho_scale": 1.0, "shift_x": p[0][2] / 2.0, "shift_y": p[1][2] * aspect / 2.0}
+        cam: dict[str, Any] = {
+            "type": "PERSP", "lens_mm": p[0][0] * SENSOR_WIDTH_MM / 2.0,
+            "ortho_scale": 1.0, "shift_x": p[0][2] / 2.0, "shift_y": p[1][2] * aspect / 2.0}
     else:
         # Blender's viewport clips orthographic views from -clip_end / 2 (behind the eye):
         # the rays start on the view's plane (camera.hpp), so only a valid range is kept.
@@ -88,10 +94,11 @@ def camera_from_view(view_matrix, window_matrix, is_perspective, width, height,
     return cam
 
 
-def levels(width, height, first_divisor=FIRST_DIVISOR):
+def levels(width: int, height: int, first_divisor: int = FIRST_DIVISOR) -> list[tuple[int, int]]:
     """The preview's resolutions for a region of width x height: 1/first_divisor of it,
     then each twice the last, up to the region's own (ceil, at least 1 x 1)."""
-    out, d = [], first_divisor
+    out: list[tuple[int, int]] = []
+    d = first_divisor
     while True:
         size = (max(1, -(-width // d)), max(1, -(-height // d)))
         if not out or size != out[-1]:
@@ -101,7 +108,7 @@ def levels(width, height, first_divisor=FIRST_DIVISOR):
         d = max(1, d // 2)
 
 
-def drawn_size(region_width, level_width, level_height):
+def drawn_size(region_width: int, level_width: int, level_height: int) -> tuple[int, float]:
     """The size a level's image is drawn at over its region: its width is the region's and
     its height keeps the level's aspect (the camera is fitted to the width), so a level
     whose rounded height differs from the region's by a fraction of its pixel is not
