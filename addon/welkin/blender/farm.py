@@ -57,8 +57,8 @@ def fail_frame(scene, reason, *, remove_written=False):
         # renders are cancelled too), and a second event would kill it at once.
         return True
     _state["stopping"] = True
-    print(f"Welkin: error: frame {frame} failed: {reason}; the render stops, frame {frame} "
-          f"is not written and Blender exits with a non-zero status", file=sys.stderr)
+    print(f"Welkin: error: frame {frame} failed: {reason}; the render stops, no file is "
+          f"left for frame {frame}, and Blender exits with a non-zero status", file=sys.stderr)
     sys.stdout.flush()
     sys.stderr.flush()
     signal.raise_signal(signal.SIGINT)
