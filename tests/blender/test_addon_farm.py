@@ -12,6 +12,8 @@ item 3): `blender -b file.blend --addons welkin -a` in a separate Blender, as a 
 (c) The aerial perspective, failing before the frame renders (frame_change_post): the
     missing VDB frame with aerial on and no Welkin sky: frames 1 and 2 written, frame 3
     not; exit non-zero.
+(d) The Welkin render engine with the missing VDB frame: its ERROR report makes Blender
+    cancel the render (no file for frame 3) and exit non-zero.
 Blender stops the way Ctrl-C stops a background render (farm.py).
 """
 import os
@@ -135,5 +137,19 @@ T.check("aerial perspective not written for frame 3" in log and missing.name in 
 T.check(frames_on_disk(out) == ["f_0001.png", "f_0002.png"],
         f"frames on disk: {frames_on_disk(out)}")
 print("(c) a frame whose aerial perspective failed before rendering: not written")
+
+# (d) The Welkin render engine: its error report fails the frame (Blender's own rule).
+scene.welkin_aerial.enabled = False
+scene.render.engine = 'WELKIN'
+out = T.TMP / "d"
+scene.render.filepath = str(out / "f_####")
+bpy.ops.wm.save_as_mainfile(filepath=str(T.TMP / "engine.blend"))
+rc, log = render(T.TMP / "engine.blend", 4)
+T.check(rc != 0, f"the Welkin engine's -a render exited {rc} with frame 3 failing:\n"
+                 f"{log[-3000:]}")
+T.check(missing.name in log, f"the log does not say why frame 3 failed:\n{log[-3000:]}")
+T.check(frames_on_disk(out) == ["f_0001.png", "f_0002.png"],
+        f"frames on disk: {frames_on_disk(out)}")
+print("(d) the Welkin engine's failed frame: not written, exit non-zero")
 
 T.done("test_addon_farm")

@@ -180,6 +180,13 @@ from welkin.blender import handlers  # noqa: E402
 T.check(linked.welkin.active and linked.welkin.auto_update, "the library's sky is not live")
 T.check(handlers._run(scene, None, pack=False) is not None, "the handler updated a linked world")
 scene.frame_set(2)  # frame_change_post runs; it must not raise
+from welkin.blender import background  # noqa: E402
+from welkin.blender.scene_sun import UserError  # noqa: E402
+try:
+    background.start(scene)  # the UI's cloudy-sky job refuses it as well
+    raise AssertionError("background.start accepted a linked world")
+except UserError as error:
+    T.check("Library World" in str(error), f"background.start: {error}")
 np.testing.assert_array_equal(T.world_pixels(linked.welkin.sky_image), lib_sky,
                               err_msg="the linked world's sky changed")
 bpy.ops.wm.save_as_mainfile(filepath=str(T.TMP / "user.blend"))

@@ -43,7 +43,7 @@ def not_editable(world):
     return None
 
 
-def _refuse_if_not_editable(world):
+def refuse_if_not_editable(world):
     reason = not_editable(world)
     if reason is not None:
         raise UserError(reason)
@@ -161,7 +161,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
             except ValueError as error:
                 raise UserError(str(error)) from None
         return outcome
-    _refuse_if_not_editable(world)  # before anything is changed
+    refuse_if_not_editable(world)  # before anything is changed
     if clouds and live and not force:
         # The UI's timer computes a cloudy sky beside the interface instead (background.py).
         settings.status = ("the sky has clouds: press Update Sky to recompute it (seconds); "
@@ -212,7 +212,7 @@ def remove_sky(scene):
     world = scene.world
     if world is None or not world.welkin.active:
         raise UserError("no Welkin sky in this scene's world to remove")
-    _refuse_if_not_editable(world)
+    refuse_if_not_editable(world)
     settings = world.welkin
     world_nodes.remove(world, settings)
     images.remove(settings)
