@@ -8,7 +8,8 @@
     frame handler with a printed message; nothing changes: no image is made, and after
     saving and reopening there is no orphan image and the world is still the library's.
 (9) remove_sky gives the sun lamp back the colour, strength and angle Sync Lamp changed,
-    exactly (bit for bit), also after several updates that moved the sun.
+    exactly (bit for bit), also after several updates that moved the sun; a lamp the
+    user changed after turning Sync Lamp off keeps the user's values.
 """
 import os
 import sys
@@ -55,6 +56,16 @@ bpy.ops.welkin.update_sky()
 T.check((tuple(sun.data.color), sun.data.energy, sun.data.angle) == before,
         "Sync Lamp off changed the lamp")
 bpy.ops.welkin.remove_sky()
+# The user takes the lamp over (Sync Lamp off, a new strength): remove_sky keeps theirs.
+scene.world.welkin.sync_lamp = True
+bpy.ops.welkin.update_sky()
+scene.world.welkin.sync_lamp = False
+sun.data.energy = 7.5
+bpy.ops.welkin.remove_sky()
+T.check(sun.data.energy == 7.5, f"remove_sky undid the user's own lamp strength: "
+                                f"{sun.data.energy}")
+T.check(not any(k.startswith("welkin_lamp") for k in sun.data.keys()),
+        f"kept lamp values stayed on the Light: {list(sun.data.keys())}")
 scene.world.welkin.sync_lamp = True
 print("(9) remove_sky restores the lamp's colour, strength and angle exactly")
 

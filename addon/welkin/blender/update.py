@@ -17,6 +17,11 @@ from .scene_sun import UserError
 
 WORLD_NAME = "Welkin World"
 LAMP_KEY = "welkin_lamp_original"  # on a Light: [r, g, b, energy, angle] before Sync Lamp
+SYNCED_KEY = "welkin_lamp_synced"  # on a Light: the values Sync Lamp last gave it
+
+
+def _lamp_values(data):
+    return [*data.color, data.energy, getattr(data, "angle", 0.0)]
 
 
 def not_editable(world):
@@ -85,10 +90,12 @@ def _sync_lamp(lamp, values, depsgraph):
         data = lamp.evaluated_get(depsgraph).data
     elif LAMP_KEY not in data:
         # The lamp's own values, kept the first time Sync Lamp changes them (remove_sky).
-        data[LAMP_KEY] = [*data.color, data.energy, data.angle]
+        data[LAMP_KEY] = _lamp_values(data)
     data.color = values.color
     data.energy = values.strength_w_m2
     data.angle = values.angle_rad
+    if data == lamp.data:
+        data[SYNCED_KEY] = _lamp_values(data)  # as stored (float32), for remove_sky
 
 
 def clouds_of(scene, depsgraph=None):
@@ -228,14 +235,20 @@ def remove_sky(scene):
 
 def restore_lamps(scene):
     """Gives the scene's sun lamps back the colour, strength and angle they had before
-    Sync Lamp first changed them (exactly: the values were kept as they were read)."""
+    Sync Lamp first changed them (exactly: the values were kept as they were read),
+    unless the user changed the lamp since Sync Lamp last did (Sync Lamp off): then the
+    user's values stay."""
     for obj in scene.objects:
         data = obj.data if obj.type == 'LIGHT' else None
         if data is None or LAMP_KEY not in data or data.library is not None:
             continue
-        r, g, b, energy, angle = data[LAMP_KEY]
-        data.color = (r, g, b)
-        data.energy = energy
-        if hasattr(data, "angle"):
-            data.angle = angle
-        del data[LAMP_KEY]
+        synced = data.get(SYNCED_KEY)
+        if synced is None or list(synced) == _lamp_values(data):
+            r, g, b, energy, angle = data[LAMP_KEY]
+            data.color = (r, g, b)
+            data.energy = energy
+            if hasattr(data, "angle"):
+                data.angle = angle
+        for key in (LAMP_KEY, SYNCED_KEY):
+            if key in data:
+                del data[key]
