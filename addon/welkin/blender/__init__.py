@@ -12,6 +12,7 @@
   aerial.py      aerial perspective per render (Scene.welkin_aerial), compositor.py its nodes
   handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
   background.py  a cloudy sky for the live UI, computed on a thread beside the interface
+  farm.py        a frame the add-on could not prepare fails a command-line render (-a, -f)
   render_engine.py  the render engine "WELKIN": the camera's plate with Welkin's passes
   viewport_preview.py  its viewport preview (Rendered shading), in a background thread
   cloud_properties.py  World.welkin_clouds (layers, lighting), Object.welkin_cloud

@@ -13,7 +13,9 @@ the Image and Z pass the File Output node just wrote, and writes beside the rend
                               Image, before the user's compositing)
 A file that exists and was not written by the add-on is never replaced: the frame is
 reported instead. Problems (no camera, a fisheye camera, no sun lamp, no Z pass) are
-printed and shown in the panel's status line; a handler never raises.
+printed and shown in the panel's status line; a handler never raises. In a command-line
+render (`blender -b file.blend -a`) such a frame fails (farm.py): Blender stops, the frame's
+file is not left on disk, and the exit status is non-zero.
 """
 import json
 import os
@@ -22,7 +24,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .. import native, scene_export, sky_request
-from . import cloud_scene, compositor, scene_sun
+from . import cloud_scene, compositor, farm, scene_sun
 from .scene_sun import UserError
 
 
@@ -225,6 +227,10 @@ def on_frame_change_post(scene, depsgraph=None):
     except Exception as error:
         text = UserError(f"unexpected {type(error).__name__}: {error}")
     _at_frame[scene.name] = {scene.frame_current: text}
+    if isinstance(text, UserError) and depsgraph.mode == 'RENDER':
+        # Known before the frame renders: fail it now, before anything is written.
+        farm.fail_frame(scene, f"aerial perspective not written for frame "
+                               f"{scene.frame_current}: {text}")
 
 
 def _sync_output_path(scene):
@@ -254,6 +260,7 @@ def on_load_post(*_args):
 
 @persistent
 def on_render_pre(scene, *_args):
+    farm.frame_started(scene)
     s = scene.welkin_aerial
     if not s.enabled:
         return
@@ -280,11 +287,16 @@ def on_render_post(scene, *_args):
     try:
         paths = write_frame(scene, frame)
         _log(scene, f"aerial perspective of frame {frame}: {paths['aerial']}")
+        return
     except UserError as error:
-        _log(scene, f"aerial perspective not written for frame {frame}: {error}")
+        text = f"aerial perspective not written for frame {frame}: {error}"
     except Exception as error:  # a handler must never break Blender's render loop
-        _log(scene, f"aerial perspective not written for frame {frame}: unexpected "
-                    f"{type(error).__name__}: {error}")
+        text = (f"aerial perspective not written for frame {frame}: unexpected "
+                f"{type(error).__name__}: {error}")
+    _log(scene, text)
+    # The frame's image is already saved (render_post follows the save): a command-line
+    # render takes it away and stops, so the farm sees no file and a non-zero exit.
+    farm.fail_frame(scene, text, remove_written=True)
 
 
 class RENDER_PT_welkin_aerial(bpy.types.Panel):

@@ -83,8 +83,10 @@ def start(scene):
     request, _lamp, _warnings = scene_sun.request_for(scene, settings, None)
     clouds = update.clouds_of(scene, None)
     key = update.sky_key(settings, request, clouds)
-    if key == pending_key() or (key == settings.last_key and settings.sky_image is not None):
+    if key == pending_key() or (key == settings.last_key and settings.sky_image is not None
+                                and update.images.owned(settings)):
         return False
+    update.refuse_if_not_editable(scene.world)  # a linked world: UserError, nothing changed
     cancel()
     scene_json = (update.cloudy_scene_json(scene, settings, request, clouds, module, None)
                   if clouds else None)

@@ -13,9 +13,11 @@
     frame_change_pre only drops a pending UI timer and cancels a background sky (the
     frame's own update follows).
   * save_pre packs images that changed since they were last packed, so the saved file
-    carries the sky it shows.
+    carries the sky it shows (the add-on's images of local worlds only).
 All are @persistent (they stay across file loads) and need no UI. Failures are printed and
-kept in the panel's status line; a handler never raises.
+kept in the panel's status line (a linked world's status cannot be written: printed only);
+a handler never raises. In a command-line render (`blender -b file.blend -a`), a frame
+whose sky could not be updated fails (farm.py): not written, non-zero exit.
 """
 import threading
 import time
@@ -23,7 +25,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, cloud_scene, scene_sun, update
+from . import background, cloud_scene, farm, scene_sun, update
 from .scene_sun import UserError
 
 DEBOUNCE_S = 0.15
@@ -38,7 +40,7 @@ def _headless():
 
 def _log(settings, text):
     print(f"Welkin: {text}")
-    if settings is not None:
+    if settings is not None and update.not_editable(settings.id_data) is None:
         settings.status = text
 
 
@@ -49,13 +51,17 @@ def _live(scene):
 
 def _guarded(scene, action):
     """Runs action(); a failure goes to the status line, since a handler or a timer must
-    never break Blender's loop."""
+    never break Blender's loop. Returns the failure's text, or None."""
     try:
         action()
     except UserError as error:
-        _log(scene.world.welkin, f"sky not updated: {error}")
+        text = f"sky not updated: {error}"
     except Exception as error:
-        _log(scene.world.welkin, f"sky not updated: unexpected {type(error).__name__}: {error}")
+        text = f"sky not updated: unexpected {type(error).__name__}: {error}"
+    else:
+        return None
+    _log(scene.world.welkin, text)
+    return text
 
 
 def _run(scene, depsgraph, *, pack, live=False):
@@ -63,7 +69,7 @@ def _run(scene, depsgraph, *, pack, live=False):
         outcome = update.update_sky(scene, depsgraph, pack=pack, live=live)
         for warning in outcome.warnings if outcome.updated else ():
             print(f"Welkin: warning: {warning}")
-    _guarded(scene, update_now)
+    return _guarded(scene, update_now)
 
 
 def _tick():
@@ -149,15 +155,21 @@ def on_frame_change_post(scene, depsgraph=None):
         _log(scene.world.welkin, "sky not updated for this frame: the render runs beside "
              "the interface; enable Render > Lock Interface so renders follow the sun lamp")
         return
-    _run(scene, depsgraph, pack=False)
+    failure = _run(scene, depsgraph, pack=False)
+    if failure is not None and depsgraph is not None and depsgraph.mode == 'RENDER':
+        # This frame would render with the previous frame's sky: fail it (farm.py).
+        farm.fail_frame(scene, failure)
 
 
 @persistent
 def on_save_pre(*_args):
     for world in bpy.data.worlds:
+        if update.not_editable(world) is not None:
+            continue  # a linked world's images live in its library
         settings = world.welkin
         for image in (settings.sky_image, settings.disc_image):
-            if image is not None and (image.is_dirty or image.packed_file is None):
+            if image is not None and image.library is None \
+                    and (image.is_dirty or image.packed_file is None):
                 update.images.pack(image)
 
 

@@ -1,12 +1,20 @@
 """The world's float images: created by the add-on, filled from the core's top-row-first
 arrays (flipped once, in pixels.py), packed into the .blend so they survive saving and
 farm rendering. Packing a float image stores it as OpenEXR (full float), so the radiance
-reloads unchanged."""
+reloads unchanged.
+
+Each world owns its images: the image's OWNER_KEY names the world (name_full) that made or
+last claimed it. World.copy() copies the world's pointers to them, so a copy given to
+another scene would rewrite the original's pixels; ensure() sees that another world that
+shows the image is its owner, leaves that image alone and gives the copy its own. An
+image whose owner shows it no more (the world renamed, a file from before the key) is
+claimed by the world that updates it."""
 import bpy
 
 from .. import pixels
 
 ROLE_KEY = "welkin_role"  # custom property marking the add-on's own images
+OWNER_KEY = "welkin_world"  # the name_full of the world the image belongs to
 NAMES = {"sky": "Welkin Sky", "disc": "Welkin Sun Disc"}
 
 
@@ -23,12 +31,32 @@ def _linear(image):
             return
 
 
+def _owned_elsewhere(image, world):
+    """True when `image` belongs to another world that shows it (`world` is a copy)."""
+    owner = image.get(OWNER_KEY)
+    if owner == world.name_full:
+        return False
+    return any(other != world and other.name_full == owner
+               and image in (other.welkin.sky_image, other.welkin.disc_image)
+               for other in bpy.data.worlds)
+
+
+def owned(settings):
+    """True when the world's images are its own to write (none is another world's)."""
+    world = settings.id_data
+    return all(image is None or (image.get(ROLE_KEY) and not _owned_elsewhere(image, world))
+               for image in (settings.sky_image, settings.disc_image))
+
+
 def ensure(settings, role, width, height):
-    """The add-on's image for `role` ("sky" or "disc") at width x height."""
+    """The add-on's image for `role` ("sky" or "disc") at width x height, the world's own."""
     attr = "sky_image" if role == "sky" else "disc_image"
+    world = settings.id_data
     image = getattr(settings, attr)
     if image is not None and image.get(ROLE_KEY) != role:
         image = None  # never write into an image the add-on did not make
+    if image is not None and _owned_elsewhere(image, world):
+        image = None  # another world's (this one is its copy): a new image of its own
     if image is not None and tuple(image.size) != (width, height):
         if image.packed_file is not None:
             image.unpack(method='REMOVE')
@@ -37,6 +65,8 @@ def ensure(settings, role, width, height):
         image = bpy.data.images.new(NAMES[role], width, height, alpha=False, float_buffer=True)
         image[ROLE_KEY] = role
         setattr(settings, attr, image)
+    if image.get(OWNER_KEY) != world.name_full:
+        image[OWNER_KEY] = world.name_full
     _linear(image)
     return image
 

@@ -3,7 +3,10 @@ module -> the world's images and nodes, and the sun lamp.
 
 Problems the user can fix raise scene_sun.UserError (nothing is changed then); warnings
 (several sun lamps, sun below the horizon, camera below the ground) come back to be
-reported. The world's user nodes are never touched (world_nodes.py)."""
+reported. The world's user nodes are never touched (world_nodes.py); a world linked from a
+library (or a library override of one) is refused before anything changes (not_editable);
+the lamp's own colour, strength and angle are kept on its Light when Sync Lamp first
+changes them, and remove_sky puts them back."""
 import json
 
 import bpy
@@ -13,6 +16,42 @@ from . import cloud_scene, images, scene_sun, world_nodes
 from .scene_sun import UserError
 
 WORLD_NAME = "Welkin World"
+LAMP_KEY = "welkin_lamp_original"  # on a Light: [r, g, b, energy, angle] before Sync Lamp
+SYNCED_KEY = "welkin_lamp_synced"  # on a Light: the values Sync Lamp last gave it
+
+
+def _lamp_values(data):
+    return [*data.color, data.energy, getattr(data, "angle", 0.0)]
+
+
+def not_editable(world):
+    """Why the add-on cannot change `world` (a message naming it and its library), or None.
+    A world linked from a library is read-only: what the add-on would write (settings,
+    nodes, images) is not saved with this file, and comes back from the library on reload.
+    A library override keeps only the overridden properties, not the node tree or images."""
+    if world is None:
+        return None
+    if world.library is not None:
+        return (f"world '{world.name}' is linked from the library "
+                f"'{world.library.filepath}' and cannot be changed here: make it local "
+                f"(Outliner > right-click the world > Make Local) or update the sky in that "
+                f"file; nothing was changed")
+    override = getattr(world, "override_library", None)
+    if override is not None:
+        reference = override.reference
+        library = reference.library.filepath if reference is not None and \
+            reference.library is not None else "its library"
+        return (f"world '{world.name}' is a library override of a world from "
+                f"'{library}': its nodes and images cannot be saved with this file; make it "
+                f"local (Outliner > right-click the world > Make Local) first; nothing was "
+                f"changed")
+    return None
+
+
+def refuse_if_not_editable(world):
+    reason = not_editable(world)
+    if reason is not None:
+        raise UserError(reason)
 
 
 class Outcome:
@@ -49,9 +88,14 @@ def _sync_lamp(lamp, values, depsgraph):
         # from the old direction (seen: frame 10 lit from frame 1). The images need no
         # such care: Cycles reads the original image's pixels.
         data = lamp.evaluated_get(depsgraph).data
+    elif LAMP_KEY not in data:
+        # The lamp's own values, kept the first time Sync Lamp changes them (remove_sky).
+        data[LAMP_KEY] = _lamp_values(data)
     data.color = values.color
     data.energy = values.strength_w_m2
     data.angle = values.angle_rad
+    if data == lamp.data:
+        data[SYNCED_KEY] = _lamp_values(data)  # as stored (float32), for remove_sky
 
 
 def clouds_of(scene, depsgraph=None):
@@ -115,7 +159,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     key = sky_key(settings, request, clouds)
     render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
     if (not force and settings.active and settings.last_key == key
-            and settings.sky_image is not None):
+            and settings.sky_image is not None and images.owned(settings)):
         if render_graph and settings.sync_lamp:
             # The sky is current, but this render's evaluated lamp may be a fresh copy of
             # the original (see _sync_lamp): give it its values again (no images).
@@ -124,6 +168,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
             except ValueError as error:
                 raise UserError(str(error)) from None
         return outcome
+    refuse_if_not_editable(world)  # before anything is changed
     if clouds and live and not force:
         # The UI's timer computes a cloudy sky beside the interface instead (background.py).
         settings.status = ("the sky has clouds: press Update Sky to recompute it (seconds); "
@@ -174,9 +219,11 @@ def remove_sky(scene):
     world = scene.world
     if world is None or not world.welkin.active:
         raise UserError("no Welkin sky in this scene's world to remove")
+    refuse_if_not_editable(world)
     settings = world.welkin
     world_nodes.remove(world, settings)
     images.remove(settings)
+    restore_lamps(scene)
     settings.active = False
     settings.last_key = ""
     settings.status = ""
@@ -184,3 +231,24 @@ def remove_sky(scene):
         scene.world = None
         if world.users == 0:
             bpy.data.worlds.remove(world)
+
+
+def restore_lamps(scene):
+    """Gives the scene's sun lamps back the colour, strength and angle they had before
+    Sync Lamp first changed them (exactly: the values were kept as they were read),
+    unless the user changed the lamp since Sync Lamp last did (Sync Lamp off): then the
+    user's values stay."""
+    for obj in scene.objects:
+        data = obj.data if obj.type == 'LIGHT' else None
+        if data is None or LAMP_KEY not in data or data.library is not None:
+            continue
+        synced = data.get(SYNCED_KEY)
+        if synced is None or list(synced) == _lamp_values(data):
+            r, g, b, energy, angle = data[LAMP_KEY]
+            data.color = (r, g, b)
+            data.energy = energy
+            if hasattr(data, "angle"):
+                data.angle = angle
+        for key in (LAMP_KEY, SYNCED_KEY):
+            if key in data:
+                del data[key]
