@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages Welkin needs to build, test and render (xvfb: the
-# viewport preview's windowed Blender test, tests/blender/test_viewport_window.py).
+# viewport preview's windowed Blender test, tests/blender/test_viewport_window.py; clang
+# and its runtime: the fuzz targets, scripts/fuzz.sh).
 # Idempotent and quick when everything is there: it asks dpkg first, and runs
 # apt-get (update + install, non-interactively) only for what is missing.
 set -euo pipefail
@@ -8,6 +9,7 @@ set -euo pipefail
 packages=(
   cmake g++ make pkg-config ccache clang-format
   libglm-dev libtbb-dev libopenexr-dev libopenvdb-dev libboost-iostreams-dev
+  clang libclang-rt-14-dev
   pybind11-dev nlohmann-json3-dev libcli11-dev libfmt-dev libspdlog-dev libgtest-dev
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-openvdb python3-skimage
   blender

@@ -247,7 +247,7 @@ void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixe
     // In double: 65536^2 pixels at 32767 % overflow any integer.
     const double needed = double(width) * double(height) * double(sizeof(float) * 7 + extra_bytes_per_pixel);
     if (physical > 0.0 && needed > 0.5 * physical)
-        throw InvalidArgument("resolution",
+        throw MemoryLimit("resolution",
                               fmt::format("a {} x {} render needs {:.1f} GiB for its depth and "
                                           "aerial passes (float), more than half of this "
                                           "machine's {:.1f} GiB of memory; lower "

@@ -77,6 +77,9 @@ void DensityProfile::validate(const std::string& parameter) const {
     if (layers_.empty())
         throw InvalidArgument(parameter, "needs at least one layer (use a zero layer to switch "
                                          "a constituent off)");
+    if (layers_.size() > kMaxLayers)
+        throw InvalidArgument(parameter + ".layers", fmt::format("must have between 1 and {} layers, got {}",
+                                                                 kMaxLayers, layers_.size()));
     for (std::size_t i = 0; i < layers_.size(); ++i) {
         const DensityLayer& l = layers_[i];
         const std::string p = fmt::format("{}.layers[{}]", parameter, i);

@@ -18,26 +18,18 @@
 // {"layers": [{"width_m", "exp_term", "exp_scale_per_m", "linear_per_m", "constant"}, ..]}.
 // to_json writes the explicit form (layers and arrays), so a file reproduces the
 // atmosphere exactly.
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/io/json.hpp"
 
 namespace welkin {
 namespace {
 
 using nlohmann::json;
 
-double number(const json& j, const std::string& parameter) {
-    if (!j.is_number())
-        throw InvalidArgument(parameter, fmt::format("must be a number, got {}", j.dump()));
-    return j.get<double>();
-}
 
 std::vector<double> spectrum(const json& j, const std::string& parameter, std::size_t channels) {
     if (j.is_number()) return std::vector<double>(channels, j.get<double>());
@@ -46,7 +38,7 @@ std::vector<double> spectrum(const json& j, const std::string& parameter, std::s
                               fmt::format("must be a number or an array of {} numbers", channels));
     std::vector<double> v;
     for (std::size_t i = 0; i < j.size(); ++i)
-        v.push_back(number(j[i], fmt::format("{}[{}]", parameter, i)));
+        v.push_back(json_number(j[i], fmt::format("{}[{}]", parameter, i)));
     return v;
 }
 
@@ -57,15 +49,15 @@ DensityProfile profile(const json& j, const std::string& parameter) {
                                          "'tent_m' or 'layers', or the string \"zero\"");
     if (j.contains("exponential_scale_height_m"))
         return DensityProfile::exponential(
-            number(j["exponential_scale_height_m"], parameter + ".exponential_scale_height_m"));
+            json_number(j["exponential_scale_height_m"], parameter + ".exponential_scale_height_m"));
     if (j.contains("tent_m")) {
         const json& t = j["tent_m"];
         if (!t.is_array() || t.size() != 3)
             throw InvalidArgument(parameter + ".tent_m",
                                   "must be [bottom, peak, top] in metres");
-        return DensityProfile::tent(number(t[0], parameter + ".tent_m[0]"),
-                                    number(t[1], parameter + ".tent_m[1]"),
-                                    number(t[2], parameter + ".tent_m[2]"));
+        return DensityProfile::tent(json_number(t[0], parameter + ".tent_m[0]"),
+                                    json_number(t[1], parameter + ".tent_m[1]"),
+                                    json_number(t[2], parameter + ".tent_m[2]"));
     }
     if (j.contains("layers") && j["layers"].is_array()) {
         std::vector<DensityLayer> layers;
@@ -74,7 +66,7 @@ DensityProfile profile(const json& j, const std::string& parameter) {
             const std::string p = fmt::format("{}.layers[{}]", parameter, i);
             if (!l.is_object()) throw InvalidArgument(p, "must be an object");
             auto get = [&](const char* key) {
-                return l.contains(key) ? number(l[key], p + "." + key) : 0.0;
+                return l.contains(key) ? json_number(l[key], p + "." + key) : 0.0;
             };
             layers.push_back({get("width_m"), get("exp_term"), get("exp_scale_per_m"),
                               get("linear_per_m"), get("constant")});
@@ -95,19 +87,10 @@ json profile_json(const DensityProfile& p) {
     return {{"layers", layers}};
 }
 
-void check_keys(const json& j, const std::string& where, std::initializer_list<const char*> known) {
-    for (const auto& [key, _] : j.items()) {
-        bool ok = false;
-        for (const char* k : known) ok = ok || key == k;
-        if (!ok)
-            throw InvalidArgument(where.empty() ? key : where + "." + key,
-                                  "unknown key (a typo?)");
-    }
-}
 
 Atmosphere parse(const json& j) {
     if (!j.is_object()) throw InvalidArgument("atmosphere", "JSON must be an object");
-    check_keys(j, "", {"preset", "name", "wavelengths_nm", "solar_irradiance",
+    json_check_keys(j, "", {"preset", "name", "wavelengths_nm", "solar_irradiance",
                        "sun_angular_radius_rad", "bottom_radius_m", "top_radius_m", "rayleigh",
                        "mie", "absorption", "ground_albedo", "$schema", "comment"});
     std::vector<double> wavelengths;
@@ -129,14 +112,14 @@ Atmosphere parse(const json& j) {
     if (j.contains("solar_irradiance"))
         a.solar_irradiance = spectrum(j["solar_irradiance"], "solar_irradiance", n);
     if (j.contains("sun_angular_radius_rad"))
-        a.sun_angular_radius_rad = number(j["sun_angular_radius_rad"], "sun_angular_radius_rad");
+        a.sun_angular_radius_rad = json_number(j["sun_angular_radius_rad"], "sun_angular_radius_rad");
     if (j.contains("bottom_radius_m"))
-        a.bottom_radius_m = number(j["bottom_radius_m"], "bottom_radius_m");
-    if (j.contains("top_radius_m")) a.top_radius_m = number(j["top_radius_m"], "top_radius_m");
+        a.bottom_radius_m = json_number(j["bottom_radius_m"], "bottom_radius_m");
+    if (j.contains("top_radius_m")) a.top_radius_m = json_number(j["top_radius_m"], "top_radius_m");
     if (j.contains("rayleigh")) {
         const json& r = j["rayleigh"];
         if (!r.is_object()) throw InvalidArgument("rayleigh", "must be an object");
-        check_keys(r, "rayleigh", {"scattering", "density"});
+        json_check_keys(r, "rayleigh", {"scattering", "density"});
         if (r.contains("scattering"))
             a.rayleigh_scattering = spectrum(r["scattering"], "rayleigh.scattering", n);
         if (r.contains("density")) a.rayleigh_density = profile(r["density"], "rayleigh.density");
@@ -144,10 +127,10 @@ Atmosphere parse(const json& j) {
     if (j.contains("mie")) {
         const json& m = j["mie"];
         if (!m.is_object()) throw InvalidArgument("mie", "must be an object");
-        check_keys(m, "mie", {"scattering", "extinction", "phase", "g", "density"});
+        json_check_keys(m, "mie", {"scattering", "extinction", "phase", "g", "density"});
         if (m.contains("scattering")) a.mie_scattering = spectrum(m["scattering"], "mie.scattering", n);
         if (m.contains("extinction")) a.mie_extinction = spectrum(m["extinction"], "mie.extinction", n);
-        if (m.contains("g")) a.mie_g = number(m["g"], "mie.g");
+        if (m.contains("g")) a.mie_g = json_number(m["g"], "mie.g");
         if (m.contains("phase")) {
             const std::string ph = m["phase"].is_string() ? m["phase"].get<std::string>() : "";
             if (ph == "cornette_shanks") a.mie_phase = MiePhaseModel::CornetteShanks;
@@ -162,7 +145,7 @@ Atmosphere parse(const json& j) {
     if (j.contains("absorption")) {
         const json& o = j["absorption"];
         if (!o.is_object()) throw InvalidArgument("absorption", "must be an object");
-        check_keys(o, "absorption", {"extinction", "density"});
+        json_check_keys(o, "absorption", {"extinction", "density"});
         if (o.contains("extinction"))
             a.absorption_extinction = spectrum(o["extinction"], "absorption.extinction", n);
         if (o.contains("density"))
@@ -182,27 +165,12 @@ Atmosphere parse(const json& j) {
 }  // namespace
 
 Atmosphere Atmosphere::from_json_string(const std::string& text) {
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw InvalidArgument("atmosphere JSON",
-                              fmt::format("malformed at byte {}: {}", e.byte, e.what()));
-    }
-    return parse(j);
+    return parse(parse_json(text, "atmosphere JSON"));
 }
 
 Atmosphere Atmosphere::from_json_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in)
-        throw InvalidArgument("atmosphere file", fmt::format("cannot read '{}'", path));
-    std::stringstream ss;
-    ss << in.rdbuf();
-    try {
-        return from_json_string(ss.str());
-    } catch (const InvalidArgument& e) {
-        throw InvalidArgument(e.parameter(), fmt::format("{} (in '{}')", e.what(), path));
-    }
+    const json j = read_json_file(path, "atmosphere");
+    return with_json_source(path, [&] { return parse(j); });
 }
 
 std::string Atmosphere::to_json_string() const {
@@ -229,24 +197,7 @@ std::string Atmosphere::to_json_string() const {
 }
 
 void Atmosphere::to_json_file(const std::string& path, bool overwrite) const {
-    namespace fs = std::filesystem;
-    if (!overwrite && fs::exists(path))
-        throw IoError(fmt::format("'{}' exists; refusing to overwrite it (pass overwrite)", path));
-    const std::string text = to_json_string();
-    // Write beside the target, then rename: never a half-written file.
-    const std::string tmp = path + ".welkin-tmp";
-    {
-        std::ofstream out(tmp);
-        if (!out) throw IoError(fmt::format("cannot write '{}'", path));
-        out << text << '\n';
-        if (!out) throw IoError(fmt::format("cannot write '{}'", path));
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw IoError(fmt::format("cannot write '{}'", path));
-    }
+    write_json_file(path, to_json_string(), overwrite);
 }
 
 }  // namespace welkin

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <charconv>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -53,6 +54,22 @@ struct SkySettings {
     int air_steps = AerialOptions{}.raymarch_steps;  // the air in front of the clouds
     std::size_t cloud_layers = 0, cloud_volumes = 0;
 };
+
+// --seed: digits only, within an unsigned 64-bit integer (CLI11 would otherwise take -1 or
+// 1e23 and saturate them silently).
+CLI::Validator seed_validator() {
+    return CLI::Validator(
+        [](std::string& value) -> std::string {
+            const std::string range = "an integer in [0, 18446744073709551615]";
+            std::uint64_t v = 0;
+            const char* end = value.data() + value.size();
+            const auto [ptr, ec] = std::from_chars(value.data(), end, v);
+            if (value.empty() || value[0] == '-' || value[0] == '+' || ec != std::errc() || ptr != end)
+                return fmt::format("must be {}, got '{}'", range, value);
+            return {};
+        },
+        "UINT64");
+}
 
 SkySettings settings_from(const SkyArgs& args) {
     if (args.scene.empty()) {
@@ -239,8 +256,9 @@ Command add_sky_command(CLI::App& app) {
         ->type_name("N")
         ->check(CLI::Range(1, 1 << 26))
         ->capture_default_str();
-    sub->add_option("--seed", args->seed, "reference method: random seed")
+    sub->add_option("--seed", args->seed, "reference method: random seed, an integer in [0, 2^64 - 1]")
         ->type_name("N")
+        ->check(seed_validator())
         ->capture_default_str();
     auto* scene = sub->add_option("--scene", args->scene,
                                   "Take the atmosphere, the sun, the observer altitude (the scene "

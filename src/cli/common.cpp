@@ -18,6 +18,8 @@
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/io/file.hpp"
+#include "terminal_progress.hpp"
 
 namespace welkin::cli {
 
@@ -47,6 +49,8 @@ Atmosphere load_atmosphere(const AtmosphereArgs& args) {
                                   "preset)");
         try {
             return Atmosphere::from_json_file(args.file);
+        } catch (const IoError& e) {
+            throw InvalidArgument("--atmosphere", e.what());
         } catch (const InvalidArgument& e) {
             // The core may name the parameter twice ("p: p: message"): say it once.
             std::string what = e.what();
@@ -101,18 +105,23 @@ Observer make_observer(const ObserverArgs& args) {
 
 void check_output_path(const std::string& path, bool overwrite) {
     namespace fs = std::filesystem;
-    std::error_code ec;
-    const fs::path target = fs::absolute(fs::path(path), ec);
     if (path.empty()) throw InvalidArgument("--output", "must not be empty");
-    if (fs::is_directory(target, ec))
-        throw IoError(fmt::format("cannot write '{}': it is a directory", path));
-    if (!overwrite && fs::exists(target, ec))
-        throw IoError(fmt::format("'{}' exists; pass --overwrite to replace it", path));
+    // Symlinks followed; a directory, device, FIFO or socket refused (even with --overwrite).
+    fs::path target;
+    try {
+        target = resolve_output_path(path, overwrite);
+    } catch (const NotRegularFile& e) {
+        throw InvalidArgument("--output", e.what());
+    } catch (const IoError& e) {
+        std::string what = e.what();
+        const std::string tail = "(pass overwrite)";
+        if (what.size() > tail.size() && what.compare(what.size() - tail.size(), tail.size(), tail) == 0)
+            what = what.substr(0, what.size() - tail.size()) + "(pass --overwrite to replace it)";
+        throw IoError(what);
+    }
     const fs::path dir = target.parent_path();
-    if (!fs::is_directory(dir, ec))
-        throw IoError(fmt::format("cannot write '{}': directory '{}' does not exist", path,
-                                  dir.string()));
     // access() says yes to root everywhere: create (and remove) a probe file instead.
+    std::error_code ec;
     const fs::path probe = dir / fmt::format(".welkin-probe-{}", static_cast<long>(::getpid()));
     const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
     if (fd < 0)
@@ -225,6 +234,7 @@ ExrWriteOptions exr_write_options(bool overwrite, bool half) {
     write.overwrite = overwrite;
     write.pixel_type = half ? ExrPixelType::Half : ExrPixelType::Float;
     write.attributes = {{"software", fmt::format("welkin {}", kVersion)}};
+    write.cancelled = [] { return interrupted(); };  // Ctrl-C during the write
     return write;
 }
 

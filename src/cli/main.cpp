@@ -6,7 +6,9 @@
 // and its accepted range; 1 when the work itself fails (a file that cannot be written or
 // read, a method that cannot run); 130 when interrupted (Ctrl-C). Nothing is ever written
 // on failure, and no existing file is replaced without --overwrite.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <map>
 #include <string>
@@ -63,6 +65,21 @@ int run_guarded(const std::function<int()>& run) {
     }
 }
 
+// What was printed must have reached standard output (a full disk, a closed pipe,
+// /dev/full): flush and close it, and fail with a message if either fails.
+int finish_stdout(int status) {
+    errno = 0;
+    const bool failed = std::fflush(stdout) != 0 || std::ferror(stdout) != 0;
+    const int err = errno;
+    const bool close_failed = std::fclose(stdout) != 0;
+    if (failed || close_failed) {
+        fmt::print(stderr, "welkin: error: cannot write to standard output: {}\n",
+                   std::strerror(err ? err : errno ? errno : EIO));
+        return status == 0 ? 1 : status;
+    }
+    return status;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -93,6 +110,6 @@ int main(int argc, char** argv) {
         return 2;
     }
     for (const Command& c : commands)
-        if (c.app->parsed()) return run_guarded(c.run);
+        if (c.app->parsed()) return finish_stdout(run_guarded(c.run));
     return 2;  // unreachable: require_subcommand(1)
 }

@@ -9,12 +9,25 @@
 
 #include <fmt/format.h>
 
+#include "welkin/io/file.hpp"
+
 namespace welkin::cli {
 namespace {
 
 volatile std::sig_atomic_t g_interrupted = 0;
 
-extern "C" void on_interrupt(int) { g_interrupted = 1; }
+// The first signal asks for a cancellation (the work unwinds and removes its temporary
+// files); a second one ends the process at once, after removing any temporary file a
+// writer holds (remove_temporaries_signal_safe is async-signal-safe).
+extern "C" void on_interrupt(int sig) {
+    if (!g_interrupted) {
+        g_interrupted = 1;
+        return;
+    }
+    welkin::remove_temporaries_signal_safe();
+    ::signal(sig, SIG_DFL);
+    ::raise(sig);
+}
 
 }  // namespace
 
@@ -22,7 +35,7 @@ void install_interrupt_handler() {
     struct sigaction action {};
     action.sa_handler = on_interrupt;
     sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESETHAND;  // a second Ctrl-C ends the process at once
+    action.sa_flags = 0;  // the handler ends the process on a second Ctrl-C
     ::sigaction(SIGINT, &action, nullptr);
     ::sigaction(SIGTERM, &action, nullptr);
 }

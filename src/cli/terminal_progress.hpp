@@ -3,9 +3,10 @@
 // TerminalProgress implements welkin::Progress for the CLI: it draws a bar on stderr once
 // an operation has run for a second (only when stderr is a terminal: pipes and log files
 // get no control characters), and turns an interrupt into a cancellation: the signal
-// handler only sets a flag; the next report() returns false, the core unwinds with
-// welkin::Cancelled, and the command exits without writing anything. A second Ctrl-C
-// terminates at once (the handler restores the default action after the first).
+// handler only sets a flag; the next report() returns false (and the EXR writer asks
+// interrupted() between bands of rows), the core unwinds with welkin::Cancelled, and the
+// command exits without writing anything. A second Ctrl-C terminates at once, after
+// removing any temporary output file (welkin::remove_temporaries_signal_safe).
 #pragma once
 
 #include <chrono>

@@ -6,10 +6,14 @@
 
 #include "welkin/base/error.hpp"
 
+#include <fmt/format.h>
+
 namespace welkin {
 
 CloudUnion::CloudUnion(std::vector<std::shared_ptr<const CloudDensity>> sources) : sources_(std::move(sources)) {
-    if (sources_.empty()) throw InvalidArgument("sources", "a cloud union needs at least one density source");
+    if (sources_.empty() || sources_.size() > kMaxSources)
+        throw InvalidArgument("sources", fmt::format("a cloud union needs between 1 and {} density sources, got {}",
+                                                     kMaxSources, sources_.size()));
     feature_size_ = std::numeric_limits<double>::infinity();
     for (const auto& s : sources_) {
         if (!s) throw InvalidArgument("sources", "a cloud density source is null");

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <mutex>
 #include <vector>
@@ -51,9 +53,180 @@ std::uint64_t metadata_u64(const openvdb::GridBase& meta, const char* name) {
     return 0;
 }
 
+// OpenVDB allocates what a length field in the file declares before it reads the bytes (a
+// string of 2^32 - 1 bytes, 2^32 metadata entries): a few flipped bytes cost gigabytes and
+// seconds before its error. This walks the file's own structure first, as OpenVDB's
+// reader will (io/Archive.cc: header; File::open: the file's metadata and the grid
+// descriptors; Archive::readGrid: each grid's compression flags and metadata), and checks
+// that every count and length fits in what is left of the file. IoError naming the file.
+class VdbStructureCheck {
+public:
+    VdbStructureCheck(const std::string& path, const std::string& grid) : path_(path), grid_(grid), in_(path, std::ios::binary) {
+        in_.seekg(0, std::ios::end);
+        size_ = std::uint64_t(std::max<std::streamoff>(0, in_.tellg()));
+        in_.seekg(0);
+    }
+
+    void run() {
+        if (u32() != std::uint32_t(openvdb::OPENVDB_MAGIC) || u32() != 0) fail("it does not start with the OpenVDB magic number");
+        const std::uint32_t version = u32();
+        // OpenVDB only warns about a version newer than its own, then misreads the rest.
+        if (version > std::uint32_t(openvdb::OPENVDB_FILE_VERSION))
+            fail(fmt::format("file format version {} is newer than this OpenVDB's ({})", version,
+                             openvdb::OPENVDB_FILE_VERSION));
+        if (version < 222) return;  // older layouts: left to OpenVDB
+        skip(8);                    // library version
+        const bool offsets = bytes(1)[0] != 0;
+        skip(36);  // uuid
+        meta_map();
+        // Without grid offsets OpenVDB reads every grid's tree while opening the file, before
+        // any check of ours; every OpenVDB since file version 212 writes them.
+        if (!offsets) fail("it has no grid offsets (written by an OpenVDB older than 2.0?)");
+        const std::uint32_t grids = u32();
+        need(std::uint64_t(grids) * 32, "grid count");
+        struct Grid {
+            std::uint64_t pos, block;
+            bool float_tree, instance;
+        };
+        std::vector<Grid> positions;
+        for (std::uint32_t g = 0; g < grids; ++g) {
+            string();                              // unique name
+            const std::string type = string();     // tree type
+            const bool instance = !string().empty();  // instance parent (version >= 216)
+            const std::uint64_t grid_pos = u64(), block_pos = u64(), end_pos = u64();
+            if (!(grid_pos <= block_pos && block_pos <= end_pos && end_pos <= size_))
+                fail(fmt::format("grid {} has offsets [{}, {}, {}] outside the file ({} bytes)", g, grid_pos, block_pos,
+                                 end_pos, size_));
+            positions.push_back({grid_pos, block_pos, type == "Tree_float_5_4_3", instance});
+            seek(end_pos);
+        }
+        for (const Grid& g : positions) {
+            seek(g.pos);
+            skip(4);  // compression flags (version >= 222)
+            meta_map();
+            if (!g.float_tree || g.instance) continue;
+            // Grid::readTransform: the map's type name, then its fixed-size data.
+            const std::string map = string();
+            static const std::pair<const char*, int> kMapBytes[] = {
+                {"AffineMap", 128}, {"UnitaryMap", 128}, {"ScaleMap", 120}, {"UniformScaleMap", 120},
+                {"TranslationMap", 24}, {"ScaleTranslateMap", 144}, {"UniformScaleTranslateMap", 144}};
+            int bytes = -1;
+            for (const auto& [name, n] : kMapBytes)
+                if (map == name) bytes = n;
+            if (bytes < 0) return;  // a frustum (refused later) or an unknown map (OpenVDB's error)
+            skip(std::uint64_t(bytes));
+            // Tree::readTopology: a buffer count; RootNode::readTopology: the background,
+            // then the numbers of tiles (17 bytes each) and of children (12 bytes of origin and
+            // at least two 4096-byte node masks each), all before the tree's buffers.
+            skip(4);
+            skip(4);
+            const std::uint64_t tiles = u32(), children = u32();
+            const std::uint64_t room = g.block > pos_ ? g.block - pos_ : 0;
+            if (tiles * 17 + children * (12 + 2 * 4096) > room)
+                fail(fmt::format("the grid's root node declares {} tiles and {} child nodes, more than its {} bytes "
+                                 "of topology can hold",
+                                 tiles, children, room));
+        }
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& why) const {
+        throw IoError(fmt::format("VDB file '{}' (grid '{}'): corrupt: {}", path_, grid_, why));
+    }
+    void need(std::uint64_t n, const char* what) const {
+        if (n > size_ - pos_)
+            fail(fmt::format("{} at byte {} declares {} bytes, but only {} remain in the file", what, pos_, n, size_ - pos_));
+    }
+    std::string bytes(std::uint64_t n) {
+        need(n, "a field");
+        std::string b(n, '\0');
+        in_.read(b.data(), std::streamsize(n));
+        if (!in_) fail(fmt::format("cannot read {} bytes at byte {}", n, pos_));
+        pos_ += n;
+        return b;
+    }
+    void skip(std::uint64_t n) {
+        need(n, "a field");
+        seek(pos_ + n);
+    }
+    void seek(std::uint64_t p) {
+        if (p > size_) fail(fmt::format("an offset ({}) lies beyond the end of the file ({} bytes)", p, size_));
+        in_.seekg(std::streamoff(p));
+        pos_ = p;
+    }
+    std::uint32_t u32() {
+        std::uint32_t v;
+        std::memcpy(&v, bytes(4).data(), 4);
+        return v;
+    }
+    std::uint64_t u64() {
+        std::uint64_t v;
+        std::memcpy(&v, bytes(8).data(), 8);
+        return v;
+    }
+    std::string string() {
+        const std::uint32_t n = u32();
+        need(n, "a string");
+        if (n > 256) {
+            skip(n);
+            return std::string(256, '?');
+        }
+        return bytes(n);
+    }
+    // MetaMap::readMeta: a count, then (name, type name, byte count + value) per entry.
+    void meta_map() {
+        const std::uint32_t count = u32();
+        need(std::uint64_t(count) * 12, "a metadata count");
+        // TypedMetadata<T>::readValue reads sizeof(T) bytes whatever the byte count says:
+        // follow it, or the walk would part from OpenVDB's own.
+        static const std::pair<const char*, int> kFixed[] = {
+            {"bool", 1},   {"float", 4},  {"double", 8}, {"int32", 4}, {"int64", 8},  {"vec2i", 8},
+            {"vec2s", 8},  {"vec2d", 16}, {"vec3i", 12}, {"vec3s", 12}, {"vec3d", 24}, {"vec4i", 16},
+            {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64}, {"mat4d", 128}};
+        for (std::uint32_t i = 0; i < count; ++i) {
+            string();
+            const std::string type = string();
+            const std::uint32_t n = u32();
+            std::uint64_t size = n;
+            for (const auto& [name, bytes] : kFixed)
+                if (type == name) size = std::uint64_t(bytes);
+            need(size, "a metadata value");
+            skip(size);
+        }
+    }
+
+    std::string path_, grid_;
+    std::ifstream in_;
+    std::uint64_t size_ = 0, pos_ = 0;
+};
+
+// The active bounding box within the documented limits (docs/limits.md), or an
+// InvalidArgument naming the grid.
+void check_extent(const openvdb::Coord& lo, const openvdb::Coord& hi, const std::string& where) {
+    for (int a = 0; a < 3; ++a) {
+        const std::int64_t l = lo[a], h = hi[a];
+        if (l < -kMaxVdbCoordinate || h > kMaxVdbCoordinate || l > h || h - l + 1 > kMaxVdbExtent)
+            throw InvalidArgument("grid", fmt::format("{} has active voxels from {} to {}: coordinates must lie in "
+                                                      "[-{}, {}] and span at most {} voxels along each axis",
+                                                      where, lo.asVec3i().str(), hi.asVec3i().str(), kMaxVdbCoordinate,
+                                                      kMaxVdbCoordinate, kMaxVdbExtent));
+    }
+}
+
 }  // namespace
 
 VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : impl_(std::make_unique<Impl>()) {
+    try {
+        load(path, options);
+    } catch (const std::bad_alloc& e) {
+        if (dynamic_cast<const OutOfMemory*>(&e)) throw;
+        throw OutOfMemory(fmt::format("VDB file '{}' (grid '{}'): out of memory while reading it (a corrupt or "
+                                      "very large grid?); the limit is max_memory_bytes",
+                                      path, options.grid));
+    }
+}
+
+void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
     Impl& m = *impl_;
     m.path = path;
     m.grid_name = options.grid;
@@ -68,6 +241,8 @@ VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : 
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
         throw IoError(fmt::format("VDB file '{}' (grid '{}'): no such file", path, options.grid));
+
+    VdbStructureCheck(path, options.grid).run();
 
     openvdb::io::File file(path);
     openvdb::GridBase::Ptr meta;
@@ -84,6 +259,8 @@ VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : 
         meta = file.readGridMetadata(options.grid);
     } catch (const InvalidArgument&) {
         throw;
+    } catch (const std::bad_alloc&) {
+        throw;
     } catch (const std::exception& e) {
         throw IoError(fmt::format("VDB file '{}' (grid '{}'): cannot be read as OpenVDB: {}", path, options.grid, e.what()));
     }
@@ -93,7 +270,13 @@ VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : 
     // The memory estimate comes from the file's metadata, before any voxel is read.
     const std::uint64_t mem = metadata_u64(*meta, openvdb::GridBase::META_FILE_MEM_BYTES);
     const std::uint64_t voxels = metadata_u64(*meta, openvdb::GridBase::META_FILE_VOXEL_COUNT);
-    const std::uint64_t estimate = std::max(mem, voxels * sizeof(float));
+    const std::uint64_t estimate = std::max(mem, voxels > (std::uint64_t(1) << 60) ? ~std::uint64_t(0) : voxels * sizeof(float));
+    // The extent, from the file's metadata (OpenVDB writes it with every grid), before the
+    // tree is read: a corrupt or hostile bounding box stops here.
+    const auto bmin = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN);
+    const auto bmax = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
+    if (bmin && bmax && voxels > 0)
+        check_extent(openvdb::Coord(bmin->value()), openvdb::Coord(bmax->value()), m.where());
     if (estimate > options.max_memory_bytes)
         throw InvalidArgument("max_memory_bytes",
                               fmt::format("{} needs about {:.1f} MiB ({} active voxels), more than the limit of {:.1f} MiB",
@@ -101,6 +284,8 @@ VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : 
     try {
         m.grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(options.grid));
         file.close();
+    } catch (const std::bad_alloc&) {
+        throw;
     } catch (const std::exception& e) {
         throw IoError(fmt::format("{}: cannot be read (corrupt data?): {}", m.where(), e.what()));
     }
@@ -112,6 +297,10 @@ VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : 
                                                               options.max_memory_bytes / 1048576.0));
     if (m.grid->activeVoxelCount() == 0)
         throw InvalidArgument("grid", fmt::format("{} is empty (no active voxels)", m.where()));
+    {
+        const openvdb::CoordBBox active = m.grid->evalActiveVoxelBoundingBox();
+        check_extent(active.min(), active.max(), m.where());
+    }
     const float background = m.grid->background();
     if (background != 0.0f)
         throw InvalidArgument("grid", fmt::format("{} has background value {}; a density grid must have background 0 "

@@ -24,6 +24,7 @@
 #include <Iex.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/io/file.hpp"
 
 namespace welkin {
 namespace {
@@ -54,14 +55,6 @@ void check_image(const ExrImage& image) {
                                           expected, image.pixels.size()));
 }
 
-// A name beside the target that no other writer (this process or another) will pick.
-fs::path temporary_path(const fs::path& target) {
-    static std::atomic<unsigned> counter{0};
-    const std::string name = fmt::format(".{}.welkin-tmp-{}-{}", target.filename().string(),
-                                         static_cast<long>(::getpid()), counter++);
-    return target.parent_path() / name;
-}
-
 }  // namespace
 
 int ExrImage::channel_index(const std::string& name) const {
@@ -72,19 +65,10 @@ int ExrImage::channel_index(const std::string& name) const {
 ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
                          const ExrWriteOptions& options) {
     check_image(image);
-    const fs::path target = fs::absolute(fs::path(path));
-    std::error_code ec;
-    if (fs::is_directory(target, ec))
-        throw IoError(fmt::format("cannot write '{}': it is a directory", path));
-    if (!options.overwrite && fs::exists(target, ec))
-        throw IoError(fmt::format("'{}' exists; refusing to overwrite it", path));
-    const fs::path dir = target.parent_path();
-    if (!fs::is_directory(dir, ec))
-        throw IoError(fmt::format("cannot write '{}': directory '{}' does not exist", path,
-                                  dir.string()));
-    if (::access(dir.c_str(), W_OK) != 0)
-        throw IoError(fmt::format("cannot write '{}': directory '{}' is not writable", path,
-                                  dir.string()));
+    // Symlinks followed; a directory, device, FIFO or socket refused; an existing file
+    // refused unless overwrite.
+    const fs::path target = resolve_output_path(path, options.overwrite);
+    if (options.cancelled && options.cancelled()) throw Cancelled();
 
     // Half files: clamp what half cannot hold (finite values beyond +-65504 would become
     // infinities), then round to half (OpenEXR's writer wants the buffer in the file's
@@ -108,7 +92,8 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
     const std::size_t value_size = half ? sizeof(Imath::half) : sizeof(float);
     const Imf::PixelType type = half ? Imf::HALF : Imf::FLOAT;
     const std::size_t nc = image.channels();
-    const fs::path tmp = temporary_path(target);
+    TemporaryFile tmp(target, path);
+    tmp.close_fd();  // OpenEXR opens it by name
     try {
         Imf::Header header(image.width, image.height);
         header.compression() = Imf::ZIP_COMPRESSION;
@@ -122,42 +107,26 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
                       Imf::Slice(type, const_cast<char*>(data + value_size * c), value_size * nc,
                                  value_size * nc * std::size_t(image.width)));
         }
-        Imf::OutputFile file(tmp.c_str(), header);
+        Imf::OutputFile file(tmp.path().c_str(), header);
         file.setFrameBuffer(fb);
-        file.writePixels(image.height);
+        // In bands, so that a cancellation (Ctrl-C at the CLI) is seen during a long write.
+        constexpr int kBand = 64;
+        for (int y = 0; y < image.height; y += kBand) {
+            if (options.cancelled && options.cancelled()) throw Cancelled();
+            file.writePixels(std::min(kBand, image.height - y));
+        }
+    } catch (const Cancelled&) {
+        tmp.discard();
+        throw;
+    } catch (const std::bad_alloc&) {
+        tmp.discard();
+        throw OutOfMemory(fmt::format("cannot write '{}': out of memory", path));
     } catch (const std::exception& e) {
-        fs::remove(tmp, ec);
+        tmp.discard();
         throw IoError(fmt::format("cannot write '{}': {}", path, e.what()));
     }
-
-    // Move into place. Without overwrite, a hard link refuses atomically to replace a
-    // file that appeared meanwhile; where hard links are unsupported, fall back to rename.
-    if (options.overwrite) {
-        fs::rename(tmp, target, ec);
-    } else {
-        fs::create_hard_link(tmp, target, ec);
-        if (ec == std::errc::file_exists) {
-            fs::remove(tmp, ec);
-            throw IoError(fmt::format("'{}' exists; refusing to overwrite it", path));
-        }
-        if (ec) {
-            ec.clear();
-            if (fs::exists(target, ec)) {
-                fs::remove(tmp, ec);
-                throw IoError(fmt::format("'{}' exists; refusing to overwrite it", path));
-            }
-            fs::rename(tmp, target, ec);
-        } else {
-            fs::remove(tmp, ec);  // the link holds the data now
-            ec.clear();
-        }
-    }
-    if (ec) {
-        const std::string reason = ec.message();
-        std::error_code ignored;
-        fs::remove(tmp, ignored);
-        throw IoError(fmt::format("cannot write '{}': {}", path, reason));
-    }
+    if (options.cancelled && options.cancelled()) throw Cancelled();  // ~TemporaryFile removes it
+    tmp.commit(options.overwrite);
     return report;
 }
 

@@ -153,8 +153,10 @@ Raises ValueError for an unknown name or a wavelength out of range.
                     },
                     py::arg("path"), R"doc(
 Reads an atmosphere from a JSON file (schema in README.md; {"preset": name}
-plus any fields to override). Raises ValueError naming the field for malformed
-JSON, unknown keys or invalid values, and for a file it cannot read.
+plus any fields to override). Raises ValueError naming the field (its key path)
+and the file for malformed JSON, a number out of range, unknown keys or invalid
+values; OSError naming the file for one it cannot read (missing, a directory or
+device, larger than 64 MiB; docs/limits.md), as SceneDescription.from_json does.
 )doc")
         .def_static("from_json_string", &Atmosphere::from_json_string, py::arg("text"),
                     "Like from_json, from a JSON string.")
@@ -166,7 +168,8 @@ JSON, unknown keys or invalid values, and for a file it cannot read.
             py::arg("path"), py::arg("overwrite") = false, R"doc(
 Writes the atmosphere as JSON in its explicit form (every field; reading it back
 gives the same atmosphere exactly). Refuses to replace an existing file unless
-overwrite=True (OSError); OSError too if the path cannot be written. Validates
+overwrite=True (OSError); OSError too if the path cannot be written, or names a
+directory or special file (a symlink is written through). Validates
 first (ValueError).
 )doc")
         .def("to_json_string", &Atmosphere::to_json_string, "The JSON text to_json writes.")

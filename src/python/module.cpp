@@ -94,11 +94,19 @@ void throw_bad_shape(const std::string& parameter, const std::string& expected,
 
 namespace {
 
-// The one place where core errors become Python exceptions. pybind11's own translation
-// handles the rest: std::bad_alloc -> MemoryError, other std::exception -> RuntimeError.
+// The one place where core errors become Python exceptions: running out of memory
+// (std::bad_alloc, OutOfMemory, or a MemoryLimit found before allocating) is MemoryError;
+// pybind11's own translation handles the rest (other std::exception -> RuntimeError).
 void translate_errors(std::exception_ptr error) {
     try {
         if (error) std::rethrow_exception(error);
+    } catch (const MemoryLimit& e) {
+        PyErr_SetString(PyExc_MemoryError, e.what());
+    } catch (const std::bad_alloc& e) {
+        // OutOfMemory names what needed the memory; a bare bad_alloc says only that.
+        PyErr_SetString(PyExc_MemoryError, dynamic_cast<const OutOfMemory*>(&e)
+                                               ? e.what()
+                                               : "welkin: out of memory (std::bad_alloc)");
     } catch (const InvalidArgument& e) {
         PyErr_SetString(PyExc_ValueError, e.what());
     } catch (const IoError& e) {
@@ -128,7 +136,8 @@ Conventions (the same in the core, the CLI and the Blender add-on):
     (CIE 1931 weighted, without the 683 lm/W factor).
 
 Errors: bad input raises ValueError naming the parameter; file errors raise
-OSError; a cancelled computation (Ctrl-C, or a progress callback returning
+OSError; running out of memory (or a request larger than this machine's memory)
+raises MemoryError; a cancelled computation (Ctrl-C, or a progress callback returning
 False) raises KeyboardInterrupt.
 
 Quick start:

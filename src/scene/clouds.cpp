@@ -55,6 +55,11 @@ CloudLayerParams scene_cloud_layer(const CloudLayerParams& layer, double planet_
 }
 
 void SceneClouds::validate(double planet_radius_m, double origin_altitude_m) const {
+    if (layers.size() > kMaxLayers)
+        throw InvalidArgument("clouds.layers", fmt::format("must have at most {} layers, got {}", kMaxLayers, layers.size()));
+    if (volumes.size() > kMaxVolumes)
+        throw InvalidArgument("clouds.volumes",
+                              fmt::format("must have at most {} volumes, got {}", kMaxVolumes, volumes.size()));
     for (std::size_t i = 0; i < layers.size(); ++i)
         prefixed(fmt::format("clouds.layers[{}].", i),
                  [&] { scene_cloud_layer(layers[i], planet_radius_m, origin_altitude_m).validate(); });

@@ -27,14 +27,13 @@
 // path ("camera.lens_mm").
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/io/json.hpp"
 #include "welkin/scene/scene.hpp"
 
 namespace welkin {
@@ -43,21 +42,7 @@ namespace {
 using nlohmann::json;
 using ordered_json = nlohmann::ordered_json;
 
-void check_keys(const json& j, const std::string& where, std::initializer_list<const char*> known) {
-    if (!j.is_object()) throw InvalidArgument(where.empty() ? "scene" : where, "must be a JSON object");
-    for (const auto& [key, _] : j.items()) {
-        bool ok = false;
-        for (const char* k : known) ok = ok || key == k;
-        if (!ok)
-            throw InvalidArgument(where.empty() ? key : where + "." + key, "unknown key (a typo?)");
-    }
-}
 
-double number(const json& j, const std::string& parameter) {
-    if (!j.is_number())
-        throw InvalidArgument(parameter, fmt::format("must be a number, got {}", j.dump()));
-    return j.get<double>();
-}
 
 int integer(const json& j, const std::string& parameter) {
     if (!j.is_number_integer())
@@ -77,8 +62,8 @@ std::string string(const json& j, const std::string& parameter) {
 glm::dvec3 vec3(const json& j, const std::string& parameter) {
     if (!j.is_array() || j.size() != 3)
         throw InvalidArgument(parameter, "must be an array of 3 numbers [x, y, z] (Z up)");
-    return {number(j[0], parameter + "[0]"), number(j[1], parameter + "[1]"),
-            number(j[2], parameter + "[2]")};
+    return {json_number(j[0], parameter + "[0]"), json_number(j[1], parameter + "[1]"),
+            json_number(j[2], parameter + "[2]")};
 }
 
 // Blender's Object.matrix_world by rows ([list(row) for row in m]) into glm's m[col][row].
@@ -91,7 +76,7 @@ glm::dmat4 matrix_rows(const json& m, const std::string& parameter) {
         const std::string pr = fmt::format("{}[{}]", parameter, r);
         if (!m[r].is_array() || m[r].size() != 4)
             throw InvalidArgument(pr, "must be a row of 4 numbers");
-        for (int col = 0; col < 4; ++col) out[col][r] = number(m[r][col], fmt::format("{}[{}]", pr, col));
+        for (int col = 0; col < 4; ++col) out[col][r] = json_number(m[r][col], fmt::format("{}[{}]", pr, col));
     }
     return out;
 }
@@ -115,7 +100,7 @@ bool boolean(const json& j, const std::string& parameter) {
 // "clouds" (README "Scene JSON"). Relative VDB paths are taken
 // relative to `base` (the scene file's folder).
 SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
-    check_keys(j, "clouds", {"layers", "volumes", "scattering", "lighting"});
+    json_check_keys(j, "clouds", {"layers", "volumes", "scattering", "lighting"});
     SceneClouds out;
     const auto array = [&](const char* key) -> const json& {
         const json& a = j[key];
@@ -127,12 +112,12 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         for (std::size_t i = 0; i < layers.size(); ++i) {
             const json& l = layers[i];
             const std::string p = fmt::format("clouds.layers[{}]", i);
-            check_keys(l, p, {"bottom_altitude_m", "top_altitude_m", "coverage", "cloud_type", "density_per_m",
+            json_check_keys(l, p, {"bottom_altitude_m", "top_altitude_m", "coverage", "cloud_type", "density_per_m",
                               "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
                               "weather_variation", "type_variation", "wind_offset_m", "seed"});
             CloudLayerParams c;
             const auto get = [&](const char* key, double& v) {
-                if (l.contains(key)) v = number(l[key], p + "." + key);
+                if (l.contains(key)) v = json_number(l[key], p + "." + key);
             };
             get("bottom_altitude_m", c.bottom_altitude_m);
             get("top_altitude_m", c.top_altitude_m);
@@ -149,7 +134,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
                 const json& w = l["wind_offset_m"];
                 if (!w.is_array() || w.size() != 2)
                     throw InvalidArgument(p + ".wind_offset_m", "must be an array of 2 numbers [x, y] (m)");
-                c.wind_offset_m = {number(w[0], p + ".wind_offset_m[0]"), number(w[1], p + ".wind_offset_m[1]")};
+                c.wind_offset_m = {json_number(w[0], p + ".wind_offset_m[0]"), json_number(w[1], p + ".wind_offset_m[1]")};
             }
             if (l.contains("seed")) c.seed = unsigned_integer(l["seed"], p + ".seed");
             out.layers.push_back(c);
@@ -160,7 +145,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         for (std::size_t i = 0; i < volumes.size(); ++i) {
             const json& v = volumes[i];
             const std::string p = fmt::format("clouds.volumes[{}]", i);
-            check_keys(v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative", "placement"});
+            json_check_keys(v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative", "placement"});
             SceneCloudVolume vol;
             if (v.contains("name")) vol.name = string(v["name"], p + ".name");
             if (!v.contains("file"))
@@ -171,7 +156,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
             vol.file = fp.is_absolute() || base.empty() ? file : (base / fp).lexically_normal().string();
             if (v.contains("grid")) vol.options.grid = string(v["grid"], p + ".grid");
             if (v.contains("matrix_world")) vol.options.matrix_world = matrix_rows(v["matrix_world"], p + ".matrix_world");
-            if (v.contains("density_scale")) vol.options.density_scale = number(v["density_scale"], p + ".density_scale");
+            if (v.contains("density_scale")) vol.options.density_scale = json_number(v["density_scale"], p + ".density_scale");
             if (v.contains("negative"))
                 vol.options.negative = vdb_negative_from_name(string(v["negative"], p + ".negative"), p + ".negative");
             if (v.contains("placement"))
@@ -182,17 +167,17 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
     }
     if (j.contains("scattering")) {
         const json& sc = j["scattering"];
-        check_keys(sc, "clouds.scattering", {"albedo", "g_forward", "g_back", "w_forward"});
+        json_check_keys(sc, "clouds.scattering", {"albedo", "g_forward", "g_back", "w_forward"});
         CloudScattering& c = out.lighting.scattering;
-        if (sc.contains("albedo")) c.albedo = number(sc["albedo"], "clouds.scattering.albedo");
-        if (sc.contains("g_forward")) c.phase.g_forward = number(sc["g_forward"], "clouds.scattering.g_forward");
-        if (sc.contains("g_back")) c.phase.g_back = number(sc["g_back"], "clouds.scattering.g_back");
-        if (sc.contains("w_forward")) c.phase.w_forward = number(sc["w_forward"], "clouds.scattering.w_forward");
+        if (sc.contains("albedo")) c.albedo = json_number(sc["albedo"], "clouds.scattering.albedo");
+        if (sc.contains("g_forward")) c.phase.g_forward = json_number(sc["g_forward"], "clouds.scattering.g_forward");
+        if (sc.contains("g_back")) c.phase.g_back = json_number(sc["g_back"], "clouds.scattering.g_back");
+        if (sc.contains("w_forward")) c.phase.w_forward = json_number(sc["w_forward"], "clouds.scattering.w_forward");
     }
     if (j.contains("lighting")) {
         const json& li = j["lighting"];
         const std::string p = "clouds.lighting.";
-        check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m",
+        json_check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m",
                                            "multiple_scattering", "octaves",
                                            "octave_extinction", "octave_contribution", "octave_eccentricity",
                                            "min_transmittance", "seed", "jitter", "max_distance_m"});
@@ -201,7 +186,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
             if (li.contains(key)) v = integer(li[key], p + key);
         };
         const auto getd = [&](const char* key, double& v) {
-            if (li.contains(key)) v = number(li[key], p + key);
+            if (li.contains(key)) v = json_number(li[key], p + key);
         };
         geti("max_steps", o.max_steps);
         geti("light_steps", o.light_steps);
@@ -293,7 +278,7 @@ auto prefixed(const std::string& prefix, F&& f) {
 }
 
 Camera parse_camera(const json& j) {
-    check_keys(j, "camera", {"matrix_world", "type", "lens_mm", "sensor_width_mm",
+    json_check_keys(j, "camera", {"matrix_world", "type", "lens_mm", "sensor_width_mm",
                              "sensor_height_mm", "sensor_fit", "fov_deg", "ortho_scale",
                              "panorama_type", "latitude_min_deg", "latitude_max_deg",
                              "longitude_min_deg", "longitude_max_deg", "shift_x", "shift_y",
@@ -308,17 +293,17 @@ Camera parse_camera(const json& j) {
     c.type = camera_type_from_name(string(j["type"], "camera.type"), "camera.type");
     if (j.contains("fov_deg") && j.contains("lens_mm"))
         throw InvalidArgument("camera.fov_deg", "give either lens_mm or fov_deg, not both");
-    if (j.contains("lens_mm")) c.lens_mm = number(j["lens_mm"], "camera.lens_mm");
+    if (j.contains("lens_mm")) c.lens_mm = json_number(j["lens_mm"], "camera.lens_mm");
     if (j.contains("fov_deg")) {
-        c.fov_rad = number(j["fov_deg"], "camera.fov_deg") * kDegree;
+        c.fov_rad = json_number(j["fov_deg"], "camera.fov_deg") * kDegree;
         if (!(c.fov_rad > 0.0))
             throw InvalidArgument("camera.fov_deg", "must be in (0, 179.9] degrees");
     }
-    if (j.contains("sensor_width_mm")) c.sensor_width_mm = number(j["sensor_width_mm"], "camera.sensor_width_mm");
-    if (j.contains("sensor_height_mm")) c.sensor_height_mm = number(j["sensor_height_mm"], "camera.sensor_height_mm");
+    if (j.contains("sensor_width_mm")) c.sensor_width_mm = json_number(j["sensor_width_mm"], "camera.sensor_width_mm");
+    if (j.contains("sensor_height_mm")) c.sensor_height_mm = json_number(j["sensor_height_mm"], "camera.sensor_height_mm");
     if (j.contains("sensor_fit"))
         c.sensor_fit = sensor_fit_from_name(string(j["sensor_fit"], "camera.sensor_fit"), "camera.sensor_fit");
-    if (j.contains("ortho_scale")) c.ortho_scale = number(j["ortho_scale"], "camera.ortho_scale");
+    if (j.contains("ortho_scale")) c.ortho_scale = json_number(j["ortho_scale"], "camera.ortho_scale");
     if (j.contains("panorama_type")) {
         const std::string t = string(j["panorama_type"], "camera.panorama_type");
         if (t != "EQUIRECTANGULAR")
@@ -330,7 +315,7 @@ Camera parse_camera(const json& j) {
     // Values within 1e-3 degrees beyond the range are taken as its end.
     const auto angle = [&](const char* key, double limit_deg, double& out) {
         if (!j.contains(key)) return;
-        double deg = number(j[key], std::string("camera.") + key);
+        double deg = json_number(j[key], std::string("camera.") + key);
         if (std::abs(deg) > limit_deg && std::abs(deg) < limit_deg + 1e-3) deg = std::copysign(limit_deg, deg);
         out = deg * kDegree;
     };
@@ -338,16 +323,17 @@ Camera parse_camera(const json& j) {
     angle("latitude_max_deg", 90.0, c.latitude_max_rad);
     angle("longitude_min_deg", 180.0, c.longitude_min_rad);
     angle("longitude_max_deg", 180.0, c.longitude_max_rad);
-    if (j.contains("shift_x")) c.shift_x = number(j["shift_x"], "camera.shift_x");
-    if (j.contains("shift_y")) c.shift_y = number(j["shift_y"], "camera.shift_y");
-    if (j.contains("clip_start_m")) c.clip_start_m = number(j["clip_start_m"], "camera.clip_start_m");
-    if (j.contains("clip_end_m")) c.clip_end_m = number(j["clip_end_m"], "camera.clip_end_m");
+    if (j.contains("shift_x")) c.shift_x = json_number(j["shift_x"], "camera.shift_x");
+    if (j.contains("shift_y")) c.shift_y = json_number(j["shift_y"], "camera.shift_y");
+    if (j.contains("clip_start_m")) c.clip_start_m = json_number(j["clip_start_m"], "camera.clip_start_m");
+    if (j.contains("clip_end_m")) c.clip_end_m = json_number(j["clip_end_m"], "camera.clip_end_m");
     c.validate("camera");
     return c;
 }
 
 SceneDescription parse(const json& j, const std::filesystem::path& base) {
-    check_keys(j, "", {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "method",
+    if (!j.is_object()) throw InvalidArgument("scene", "must be a JSON object");
+    json_check_keys(j, "", {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "method",
                        "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
     SceneDescription s;
     if (!j.contains("version"))
@@ -368,10 +354,10 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
             throw InvalidArgument("atmosphere", "must be a preset name or an atmosphere object");
     }
     if (j.contains("origin_altitude_m"))
-        s.origin_altitude_m = number(j["origin_altitude_m"], "origin_altitude_m");
+        s.origin_altitude_m = json_number(j["origin_altitude_m"], "origin_altitude_m");
     if (j.contains("sun")) {
         const json& sun = j["sun"];
-        check_keys(sun, "sun", {"direction", "elevation_deg", "azimuth_deg"});
+        json_check_keys(sun, "sun", {"direction", "elevation_deg", "azimuth_deg"});
         const bool by_angles = sun.contains("elevation_deg") || sun.contains("azimuth_deg");
         if (sun.contains("direction") == by_angles)
             throw InvalidArgument("sun", "give either \"direction\" [x, y, z] or "
@@ -379,25 +365,25 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
         if (by_angles) {
             if (!sun.contains("elevation_deg") || !sun.contains("azimuth_deg"))
                 throw InvalidArgument("sun", "needs both \"elevation_deg\" and \"azimuth_deg\"");
-            s.sun_direction = sun_direction_from_angles_deg(number(sun["elevation_deg"], "sun.elevation_deg"),
-                                                            number(sun["azimuth_deg"], "sun.azimuth_deg"));
+            s.sun_direction = sun_direction_from_angles_deg(json_number(sun["elevation_deg"], "sun.elevation_deg"),
+                                                            json_number(sun["azimuth_deg"], "sun.azimuth_deg"));
         } else {
             s.sun_direction = vec3(sun["direction"], "sun.direction");
         }
     }
-    if (j.contains("exposure")) s.exposure = number(j["exposure"], "exposure");
+    if (j.contains("exposure")) s.exposure = json_number(j["exposure"], "exposure");
     if (j.contains("method")) s.method = string(j["method"], "method");
     if (j.contains("camera") && !j["camera"].is_null()) s.camera = parse_camera(j["camera"]);
     if (j.contains("resolution")) {
         const json& r = j["resolution"];
-        check_keys(r, "resolution", {"x", "y", "percentage"});
+        json_check_keys(r, "resolution", {"x", "y", "percentage"});
         if (r.contains("x")) s.resolution.x = integer(r["x"], "resolution.x");
         if (r.contains("y")) s.resolution.y = integer(r["y"], "resolution.y");
         if (r.contains("percentage")) s.resolution.percentage = integer(r["percentage"], "resolution.percentage");
     }
     if (j.contains("aerial")) {
         const json& a = j["aerial"];
-        check_keys(a, "aerial", {"method", "froxels", "max_depth_m", "steps_per_slice",
+        json_check_keys(a, "aerial", {"method", "froxels", "max_depth_m", "steps_per_slice",
                                  "raymarch_steps", "sky_depth_m"});
         AerialOptions& o = s.aerial;
         if (a.contains("method")) o.method = aerial_method_from_name(string(a["method"], "aerial.method"));
@@ -409,14 +395,14 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
             o.froxel_height = integer(f[1], "aerial.froxels[1]");
             o.froxel_slices = integer(f[2], "aerial.froxels[2]");
         }
-        if (a.contains("max_depth_m")) o.max_depth_m = number(a["max_depth_m"], "aerial.max_depth_m");
+        if (a.contains("max_depth_m")) o.max_depth_m = json_number(a["max_depth_m"], "aerial.max_depth_m");
         if (a.contains("steps_per_slice")) o.steps_per_slice = integer(a["steps_per_slice"], "aerial.steps_per_slice");
         if (a.contains("raymarch_steps")) o.raymarch_steps = integer(a["raymarch_steps"], "aerial.raymarch_steps");
-        if (a.contains("sky_depth_m")) o.sky_depth_m = number(a["sky_depth_m"], "aerial.sky_depth_m");
+        if (a.contains("sky_depth_m")) o.sky_depth_m = json_number(a["sky_depth_m"], "aerial.sky_depth_m");
     }
     if (j.contains("sky_options")) {
         const json& o = j["sky_options"];
-        check_keys(o, "sky_options", {"transmittance_width", "transmittance_height",
+        json_check_keys(o, "sky_options", {"transmittance_width", "transmittance_height",
                                       "multiscattering_size", "skyview_width", "skyview_height",
                                       "raymarch_steps", "raymarch_sun_steps", "reference_paths",
                                       "seed"});
@@ -446,24 +432,16 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
 }  // namespace
 
 SceneDescription SceneDescription::from_json_string(const std::string& text, const std::string& base_directory) {
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw InvalidArgument("scene JSON", fmt::format("malformed at byte {}: {}", e.byte, e.what()));
-    }
+    const json j = parse_json(text, "scene JSON");
     return parse(j, base_directory.empty() ? std::filesystem::path()
                                            : std::filesystem::absolute(std::filesystem::path(base_directory)));
 }
 
 SceneDescription SceneDescription::from_json_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw IoError(fmt::format("cannot read scene file '{}'", path));
-    std::stringstream ss;
-    ss << in.rdbuf();
+    const json j = read_json_file(path, "scene");
     std::error_code ec;
     const std::filesystem::path dir = std::filesystem::absolute(std::filesystem::path(path), ec).parent_path();
-    return from_json_string(ss.str(), dir.string());
+    return parse(j, dir);
 }
 
 std::string SceneDescription::to_json_string() const {
@@ -521,30 +499,7 @@ std::string SceneDescription::to_json_string() const {
 }
 
 void SceneDescription::to_json_file(const std::string& path, bool overwrite) const {
-    namespace fs = std::filesystem;
-    const std::string text = to_json_string() + "\n";
-    const fs::path target = fs::absolute(fs::path(path));
-    std::error_code ec;
-    if (!overwrite && fs::exists(target, ec))
-        throw IoError(fmt::format("'{}' exists; refusing to overwrite it", path));
-    // Written beside the target and moved into place: never a half-written file.
-    const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".welkin-tmp");
-    {
-        std::ofstream out(tmp);
-        if (!out) throw IoError(fmt::format("cannot write '{}'", path));
-        out << text;
-        if (!out.flush()) {
-            out.close();
-            fs::remove(tmp, ec);
-            throw IoError(fmt::format("cannot write '{}'", path));
-        }
-    }
-    fs::rename(tmp, target, ec);
-    if (ec) {
-        std::error_code ignored;
-        fs::remove(tmp, ignored);
-        throw IoError(fmt::format("cannot write '{}': {}", path, ec.message()));
-    }
+    write_json_file(path, to_json_string(), overwrite);
 }
 
 }  // namespace welkin

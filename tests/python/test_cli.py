@@ -191,7 +191,8 @@ def test_unwritable_output_is_refused_before_rendering(tmp_path, target):
     r = welkin("sky", "--method", "raymarch", "--width", 1024, "-o", target, cwd=tmp_path)
     assert time.monotonic() - t0 < 5.0
     assert_one_line_error(r, target)
-    assert r.returncode == 1
+    # A directory (like a device or FIFO) is refused as bad input, naming --output.
+    assert r.returncode == (2 if target == "adir" else 1)
     assert files(tmp_path) == before
     assert not os.path.exists("/proc/welkin_cli_test.exr")
 
@@ -288,3 +289,150 @@ def test_render_variants(tmp_path):
 def test_ctrl_c_cancels_cleanly_and_writes_nothing(tmp_path):
     # raymarch at 1024 x 512 runs for many seconds on two cores; interrupt it midway.
     assert_ctrl_c_cancels(["sky", "--method", "raymarch", "--width", "1024", "-o", "c.exr"], tmp_path)
+
+
+# --- hostile input and careful output (issue 18, items 4-8) ---------------------------------
+
+
+def test_overwrite_writes_through_a_symlink_and_keeps_it(tmp_path):
+    (tmp_path / "real").mkdir()
+    (tmp_path / "real" / "sky.exr").write_bytes(b"old")
+    (tmp_path / "real" / "atm.json").write_text("old")
+    os.symlink("real/sky.exr", tmp_path / "sky.exr")
+    os.symlink("real/atm.json", tmp_path / "atm.json")
+    r = welkin("sky", "--width", 16, "-o", "sky.exr", "--overwrite", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    r = welkin("atmosphere", "--preset", "clear", "-o", "atm.json", "--overwrite", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert os.path.islink(tmp_path / "sky.exr") and os.path.islink(tmp_path / "atm.json")
+    assert exr_info(tmp_path / "real" / "sky.exr")["width"] == 16
+    assert json.loads((tmp_path / "real" / "atm.json").read_text())["name"]
+    assert files(tmp_path / "real") == ["atm.json", "sky.exr"]
+
+
+@pytest.mark.parametrize("kind", ["fifo", "dir", "device", "link_to_fifo"])
+@pytest.mark.parametrize("command", [["sky", "--width", 16], ["atmosphere", "--preset", "clear"]])
+def test_overwrite_refuses_a_device_fifo_or_directory(tmp_path, kind, command):
+    if kind in ("fifo", "link_to_fifo"):
+        os.mkfifo(tmp_path / "fifo")
+        target = str(tmp_path / "fifo")
+        if kind == "link_to_fifo":
+            os.symlink(target, tmp_path / "link")
+            target = str(tmp_path / "link")
+    elif kind == "dir":
+        (tmp_path / "adir").mkdir()
+        target = str(tmp_path / "adir")
+    else:
+        target = "/dev/null"
+    before = files(tmp_path)
+    r = welkin(*command, "-o", target, "--overwrite", cwd=tmp_path, timeout=30)
+    assert_one_line_error(r, "--output", target)
+    assert r.returncode == 2
+    assert files(tmp_path) == before
+    assert not os.path.isfile("/dev/null")  # still the device
+
+
+@pytest.mark.parametrize("command", [["sky", "--width", 16], ["sun"]])
+def test_atmosphere_from_a_device_fifo_or_directory_is_refused_at_once(tmp_path, command):
+    os.mkfifo(tmp_path / "fifo")
+    (tmp_path / "adir").mkdir()
+    for source, needle in [("/dev/zero", "character device"), (tmp_path / "fifo", "FIFO"),
+                           (tmp_path / "adir", "is a directory")]:
+        t0 = time.monotonic()
+        r = welkin(*command, "--atmosphere", source, cwd=tmp_path, timeout=30)
+        assert time.monotonic() - t0 < 5.0
+        assert_one_line_error(r, "--atmosphere", str(source), needle)
+        assert r.returncode == 2
+
+
+def test_json_number_overflow_names_the_file_and_the_key(tmp_path):
+    (tmp_path / "atm.json").write_text('{"preset": "clear", "mie": {"g": 1e999}}')
+    r = welkin("sun", "--atmosphere", tmp_path / "atm.json")
+    assert_one_line_error(r, "--atmosphere", "mie.g", "number out of range", str(tmp_path / "atm.json"))
+    assert r.returncode == 2
+    (tmp_path / "scene.json").write_text('{"version": 1, "sun": {"direction": [0, 0, -1e400]}}')
+    r = welkin("sky", "--width", 16, "--scene", tmp_path / "scene.json", "-o", tmp_path / "x.exr")
+    assert_one_line_error(r, "sun.direction[2]", "number out of range")
+    assert r.returncode == 2
+
+
+def test_too_many_density_or_cloud_layers_are_refused_at_validation(tmp_path):
+    layer = {"width_m": 1000, "constant": 1}
+    (tmp_path / "atm.json").write_text(json.dumps(
+        {"preset": "clear", "rayleigh": {"density": {"layers": [layer] * 100000}}}))
+    t0 = time.monotonic()
+    r = welkin("sun", "--atmosphere", tmp_path / "atm.json")
+    assert_one_line_error(r, "rayleigh.density.layers", "32")
+    assert r.returncode == 2
+    (tmp_path / "scene.json").write_text(json.dumps({"version": 1, "clouds": {"layers": [{}] * 1000}}))
+    r = welkin("sky", "--width", 16, "--scene", tmp_path / "scene.json", "-o", tmp_path / "x.exr")
+    assert_one_line_error(r, "clouds.layers", "32")
+    assert r.returncode == 2
+    assert time.monotonic() - t0 < 10.0
+
+
+@pytest.mark.parametrize("seed", ["-1", "1e23", "18446744073709551616", "1.5", "x"])
+def test_seed_out_of_range_is_refused_with_the_range(tmp_path, seed):
+    r = welkin("sky", "--width", 16, "--seed", seed, "-o", "x.exr", cwd=tmp_path)
+    assert_one_line_error(r, "--seed", "18446744073709551615", seed)
+    assert r.returncode == 2
+    assert files(tmp_path) == []
+
+
+def test_largest_seed_is_accepted(tmp_path):
+    r = welkin("sky", "--width", 16, "--seed", "18446744073709551615", "-o", "x.exr", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize("command", [["atmosphere", "--preset", "clear"], ["sun"], ["presets"]])
+def test_a_full_standard_output_is_an_error(command):
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([CLI, *command], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
+    assert r.returncode != 0
+    assert "standard output" in r.stderr and "No space left" in r.stderr
+
+
+def test_concurrent_json_writers_to_one_path_all_succeed(tmp_path):
+    procs = [subprocess.Popen([CLI, "atmosphere", "--preset", "clear", "-o", "atm.json", "--overwrite"],
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for _ in range(8)]
+    for p in procs:
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == 0, err
+    assert files(tmp_path) == ["atm.json"]
+    json.loads((tmp_path / "atm.json").read_text())
+
+
+def _interrupt_during_write(tmp_path, signals):
+    """Starts a big EXR write, waits for its temporary file, then sends SIGINT `signals`
+    times. Returns the process's exit status; skips if no write was caught."""
+    import signal
+    p = subprocess.Popen([CLI, "sky", "--method", "lut", "--width", "8192", "--threads", "1",
+                          "-o", "big.exr"], cwd=tmp_path, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and p.poll() is None:
+        if any(".welkin-" in f for f in files(tmp_path)):
+            break
+        time.sleep(0.02)
+    else:
+        p.kill()
+        p.communicate()
+        pytest.skip("the write was not caught in progress")
+    for _ in range(signals):  # back to back: the second arrives while the first unwinds
+        p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    return p.returncode, err
+
+
+def test_ctrl_c_during_the_exr_write_cancels_it_and_removes_the_temporary(tmp_path):
+    rc, err = _interrupt_during_write(tmp_path, 1)
+    assert rc == 130, err
+    assert "cancelled" in err
+    assert files(tmp_path) == []
+
+
+def test_second_ctrl_c_during_the_exr_write_leaves_no_temporary(tmp_path):
+    rc, err = _interrupt_during_write(tmp_path, 2)
+    assert rc in (130, -2), err  # cancelled after the first, or ended by the second
+    assert files(tmp_path) == []

@@ -593,3 +593,29 @@ def test_version_and_docstrings():
                 welkin.equirect_to_direction, welkin.spectral_wavelengths_nm,
                 welkin.DensityProfile):
         assert obj.__doc__ and len(obj.__doc__.strip()) > 20, obj
+
+
+# --- hostile input (issue 18, items 5 and 6) ------------------------------------------------
+
+
+def test_json_from_a_device_or_a_directory_is_an_os_error_saying_so(tmp_path):
+    _raises_naming(OSError, "character device", welkin.Atmosphere.from_json, "/dev/zero")
+    _raises_naming(OSError, "is a directory", welkin.SceneDescription.from_json, str(tmp_path))
+
+
+def test_json_number_overflow_names_the_key_path_and_the_file(tmp_path):
+    path = tmp_path / "atm.json"
+    path.write_text('{"preset": "clear", "mie": {"g": 1e999}}')
+    e = _raises_naming(ValueError, "mie.g", welkin.Atmosphere.from_json, path)
+    assert "number out of range" in str(e) and str(path) in str(e)
+
+
+def test_a_render_larger_than_memory_is_a_memory_error_not_a_value_error():
+    scene = welkin.SceneDescription.from_json_string(json.dumps({
+        "version": 1,
+        "camera": {"matrix_world": [[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 2], [0, 0, 0, 1]],
+                   "type": "PERSP", "lens_mm": 50},
+        "resolution": {"x": 65536, "y": 65536, "percentage": 100}}))
+    depth = np.zeros((1, 1), np.float32)
+    with pytest.raises(MemoryError, match="resolution"):
+        welkin.aerial_perspective(scene, depth)

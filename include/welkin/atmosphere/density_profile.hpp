@@ -31,6 +31,10 @@ struct DensityLayer {
 
 class DensityProfile {
 public:
+    // The most layers a profile may have (docs/limits.md): the quadratures split their
+    // intervals at every layer boundary, so the cost grows with the count.
+    static constexpr std::size_t kMaxLayers = 32;
+
     DensityProfile() = default;
     explicit DensityProfile(std::vector<DensityLayer> layers);
 
@@ -51,7 +55,8 @@ public:
     std::optional<double> exponential_scale_height_m() const;
 
     const std::vector<DensityLayer>& layers() const { return layers_; }
-    // Throws InvalidArgument naming `parameter` on non-finite terms or bad widths.
+    // Throws InvalidArgument naming `parameter` on non-finite terms, bad widths, or more
+    // than kMaxLayers layers.
     void validate(const std::string& parameter) const;
 
     bool operator==(const DensityProfile&) const = default;

@@ -6,6 +6,7 @@
 // exit with the message on stderr.
 #pragma once
 
+#include <new>
 #include <stdexcept>
 #include <string>
 
@@ -29,6 +30,25 @@ public:
 class IoError : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
+};
+
+// Memory ran out, with a message naming what needed it (a file, a parameter). A
+// std::bad_alloc, so that hosts treat it as one: Python's MemoryError, not ValueError.
+class OutOfMemory : public std::bad_alloc {
+public:
+    explicit OutOfMemory(std::string what) : what_(std::move(what)) {}
+    const char* what() const noexcept override { return what_.c_str(); }
+
+private:
+    std::string what_;
+};
+
+// A request that needs more memory than this machine has (checked before allocating):
+// bad input, so an InvalidArgument naming the parameter (exit code 2 at the CLI), but
+// Python raises MemoryError for it, as for OutOfMemory.
+class MemoryLimit : public InvalidArgument {
+public:
+    using InvalidArgument::InvalidArgument;
 };
 
 // Throws InvalidArgument unless lo <= value <= hi (and value is finite).

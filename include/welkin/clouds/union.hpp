@@ -29,7 +29,10 @@ namespace welkin {
 
 class CloudUnion final : public CloudDensity {
 public:
-    // At least one source, none null (InvalidArgument naming "sources" otherwise).
+    // The most sources a union may have (docs/limits.md): each is visited at every step.
+    static constexpr std::size_t kMaxSources = 96;
+    // At least one source and at most kMaxSources, none null (InvalidArgument naming
+    // "sources" otherwise).
     explicit CloudUnion(std::vector<std::shared_ptr<const CloudDensity>> sources);
 
     double sigma_t(const glm::dvec3& p) const override;

@@ -40,8 +40,13 @@
 //     FloatGrid, an empty grid (no active voxels), a non-zero background (fog volumes
 //     have background 0; anything else would fill all of space), non-finite values,
 //     a non-affine (frustum) transform, a singular matrix_world, a grid whose memory
-//     (from the file's metadata, before any voxel is read) exceeds max_memory_bytes
-//                                                        -> welkin::InvalidArgument;
+//     (from the file's metadata, before any voxel is read) exceeds max_memory_bytes,
+//     a grid whose active voxels reach beyond kMaxVdbCoordinate of the origin or span more
+//     than kMaxVdbExtent voxels along an axis (checked on the file's metadata before the
+//     tree is read, and again on the tree)            -> welkin::InvalidArgument;
+//   * memory running out while the grid is read (a corrupt tree) -> welkin::OutOfMemory
+//     (a std::bad_alloc naming the file).
+// The limits are documented in docs/limits.md.
 //   * negative values (densities cannot be negative): with Negative::Clamp (the default)
 //     they are set to 0 and counted (negative_voxel_count(), warning()); with
 //     Negative::Reject they are an InvalidArgument.
@@ -60,6 +65,11 @@
 #include "welkin/clouds/density.hpp"
 
 namespace welkin {
+
+// Index coordinates of active voxels lie within [-kMaxVdbCoordinate, kMaxVdbCoordinate],
+// and their bounding box spans at most kMaxVdbExtent voxels along each axis.
+inline constexpr int kMaxVdbCoordinate = 1 << 24;
+inline constexpr int kMaxVdbExtent = 1 << 20;
 
 struct VdbCloudOptions {
     std::string grid = "density";
@@ -95,6 +105,7 @@ public:
     glm::dvec3 world_bounds_max() const;
 
 private:
+    void load(const std::string& path, const VdbCloudOptions& options);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

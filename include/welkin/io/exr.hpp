@@ -3,7 +3,8 @@
 // The writer is atomic and careful with the user's files: it writes a temporary file in
 // the target's directory and moves it into place only once it is complete, so a failed or
 // cancelled write never leaves a partial image; it refuses to replace an existing file
-// unless asked to. Failures raise IoError naming the path.
+// unless asked to. A symlink is written through; a directory, device, FIFO or socket is
+// refused (io/file.hpp). Failures raise IoError naming the path.
 //
 // Channels are named as OpenEXR names them. A plain RGB image uses "R", "G", "B" (and
 // "A"); a multilayer file, as Blender writes and reads them, names each channel
@@ -18,6 +19,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -44,6 +46,9 @@ struct ExrWriteOptions {
     bool overwrite = false;
     // Extra string attributes for the header (e.g. "software", "comments").
     std::vector<std::pair<std::string, std::string>> attributes;
+    // Asked between bands of rows while the file is written: true cancels the write (the
+    // temporary file is removed, nothing is written) with welkin::Cancelled.
+    std::function<bool()> cancelled;
 };
 
 struct ExrWriteReport {

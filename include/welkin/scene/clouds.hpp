@@ -32,6 +32,10 @@ struct SceneCloudVolume {
 };
 
 struct SceneClouds {
+    // The most layers and volumes a scene may have (docs/limits.md): every cloud march
+    // visits each of them at every step.
+    static constexpr std::size_t kMaxLayers = 32;
+    static constexpr std::size_t kMaxVolumes = 64;
     // planet_radius_m and origin_altitude_m of each layer are ignored: the scene's are used.
     std::vector<CloudLayerParams> layers;
     std::vector<SceneCloudVolume> volumes;
@@ -40,7 +44,8 @@ struct SceneClouds {
     bool empty() const { return layers.empty() && volumes.empty(); }
 
     // Throws InvalidArgument naming the key as in the JSON ("clouds.layers[0].coverage",
-    // "clouds.lighting.max_steps", "clouds.volumes[1].file"). Opens no file.
+    // "clouds.lighting.max_steps", "clouds.volumes[1].file"), or "clouds.layers" /
+    // "clouds.volumes" for more than kMaxLayers / kMaxVolumes. Opens no file.
     void validate(double planet_radius_m, double origin_altitude_m) const;
 };
 

@@ -1,0 +1,65 @@
+// libFuzzer target: the VDB reader (clouds/vdb) on arbitrary bytes, written to a file as
+// a user's .vdb would be. Any outcome but a valid grid or a welkin error (IoError,
+// InvalidArgument, OutOfMemory naming the file) is a bug. The memory limit is small, so a
+// corrupt grid must be refused by the checks before its tree is read, not by running out.
+// Built and run by scripts/fuzz.sh; the seed corpus is tests/fuzz/corpus/vdb/.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <new>
+#include <string>
+
+#include "welkin/base/error.hpp"
+#include "welkin/clouds/vdb.hpp"
+
+// OpenVDB sizes buffers from lengths inside the grid's tree (a corrupt blosc chunk declares
+// 2^56 bytes). Outside the fuzzer such a request fails with std::bad_alloc, which Welkin
+// reports as OutOfMemory naming the file; AddressSanitizer's own operator new would abort
+// instead. These replacements keep the program's behaviour (a request beyond 1 GiB
+// throws, as a failed allocation does) while malloc and free stay ASan's.
+namespace {
+void* allocate(std::size_t n) {
+    if (n > (std::size_t(1) << 30)) throw std::bad_alloc();
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+}  // namespace
+void* operator new(std::size_t n) { return allocate(n); }
+void* operator new[](std::size_t n) { return allocate(n); }
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+    try {
+        return allocate(n);
+    } catch (...) {
+        return nullptr;
+    }
+}
+void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    static const std::string path = "/tmp/welkin_fuzz_vdb_" + std::to_string(::getpid()) + ".vdb";
+    if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
+        std::fwrite(data, 1, size, f);
+        std::fclose(f);
+    } else {
+        return 0;
+    }
+    welkin::VdbCloudOptions options;
+    options.max_memory_bytes = std::uint64_t(64) << 20;
+    try {
+        welkin::VdbClouds clouds(path, options);
+        (void)clouds.sigma_t({0.0, 0.0, 0.0});
+    } catch (const welkin::IoError&) {
+    } catch (const welkin::InvalidArgument&) {
+    } catch (const welkin::OutOfMemory&) {
+    }
+    return 0;
+}
