@@ -99,7 +99,11 @@ def main(argv):
         elif arg in ("-o", "--render-output"):
             scene.render.filepath = value
         elif arg in ("-F", "--render-format"):
-            scene.render.image_settings.file_format = value
+            settings = scene.render.image_settings
+            if hasattr(settings, "media_type"):  # 5.0: the media type first, as -F does
+                settings.media_type = {'OPEN_EXR_MULTILAYER': 'MULTI_LAYER_IMAGE',
+                                       'FFMPEG': 'VIDEO'}.get(value, 'IMAGE')
+            settings.file_format = value
         elif arg in ("-x", "--use-extension"):
             scene.render.use_file_extension = bool(int(value))
         elif arg in ("-s", "--frame-start"):

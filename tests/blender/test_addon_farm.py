@@ -36,7 +36,7 @@ def render(blend, last_frame):
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
     env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-    command = [bpy.app.binary_path, "-b", "--factory-startup", str(blend), "--addons",
+    command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons",
                "welkin", "-s", "1", "-e", str(last_frame), "-a"]
     print("running:", " ".join(command))
     run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=400)
