@@ -8,7 +8,8 @@
 #        tests/blender/bpy_blender.py (Blender's command line over the bpy module); both
 #        install the Extension (scripts/build_extension.sh), which carries the compiled core
 #        as the repaired wheel (scripts/build_wheel.sh), from its zip.
-# The packages are built once, into build/blender_dist/. Every test runs on every version
+# The packages are built once, into build/blender_dist/; the wheel is checked outside
+# Blender too (scripts/check_wheel.sh). Every test runs on every version
 # even when one fails; a test that cannot run on a version prints "SKIPPED ... : reason".
 # Prints each suite's time; the exit status is non-zero if any test failed.
 #
@@ -57,6 +58,9 @@ if ((need_extension)); then
   if WELKIN_WHEEL_PYTHON=$wheel_python bash scripts/build_wheel.sh "$dist" &&
      WELKIN_WHEEL=$(ls "$dist"/welkin-*manylinux*.whl) bash scripts/build_extension.sh "$dist"; then
     export WELKIN_EXTENSION_ZIP=$dist/welkin-$version-linux_x64.zip
+    echo "--- the wheel outside Blender (scripts/check_wheel.sh)"
+    WELKIN_CHECK_PYTHON=$wheel_python bash scripts/check_wheel.sh "$dist"/welkin-*manylinux*.whl ||
+      failed+=(check_wheel)
   else
     failed+=(build_extension)
   fi

@@ -71,8 +71,9 @@ def find(directory=NATIVE_DIR):
             return path, None
         candidates = [pathlib.Path(n) for n in _installed_elsewhere()]
     if not candidates:
-        return None, (f"Welkin's compiled module is missing (nothing in {directory}); "
-                      + BUILD_HINT)
+        where = (f"nothing in {directory}, nor the Extension's wheel on sys.path"
+                 if directory == NATIVE_DIR else f"nothing in {directory}")
+        return None, f"Welkin's compiled module is missing ({where}); " + BUILD_HINT
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
         for path in candidates:
             if path.name == "welkin" + suffix:
