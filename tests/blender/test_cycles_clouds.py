@@ -40,7 +40,13 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))
+sys.path.insert(0, str(ROOT / "tests" / "blender"))
+import addon_testing as T  # noqa: E402
 import cycles_volume as cv  # noqa: E402
+
+# `import welkin` (cycles_volume.py) is the installed add-on, which serves the compiled
+# module's names (the legacy zip's module, or the Extension's wheel on 4.2+).
+T.install_addon()
 
 SIZE, SAMPLES, PATHS = 48, 48, 48
 

@@ -36,7 +36,7 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 
 env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
 env.pop("PYTHONPATH", None)
-run = subprocess.run(["blender", "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
+run = subprocess.run([*t.blender_command(), "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
                       str(t.TMP / "anim_####"), "-F", "OPEN_EXR_MULTILAYER", "-a"],
                      env=env, capture_output=True, text=True, timeout=600)
 print(run.stdout[-1000:], run.stderr[-500:])

@@ -54,7 +54,7 @@ def is_welkin_render(names):
 def render_headless(blend, out_stem, *, addon_enabled=True, engine_flag=True, expect_rc=0):
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
     env.pop("PYTHONPATH", None)
-    cmd = ["blender", "-b", str(blend)]
+    cmd = [*t.blender_command(), "-b", str(blend)]
     if addon_enabled:
         cmd += ["--addons", "welkin"]
     if engine_flag:

@@ -19,10 +19,13 @@ import sys
 import bpy
 from mathutils import Euler, Vector
 
-import welkin
-
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import addon_testing as T  # noqa: E402
 from camera_testing import camera_json  # noqa: E402
+
+# The compiled module as the installed add-on carries it (the legacy zip's, or the
+# Extension's wheel on 4.2+).
+_addon, welkin = T.install_addon()
 
 
 def scene_json(ob, scene, sun_ob):
