@@ -23,6 +23,12 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import addon_testing as T  # noqa: E402
+
+if T.is_module_bpy():
+    T.skip("test_addon_farm", "a failed frame stops a command-line render through the Blender "
+           "binary's own SIGINT handler (creator_signals), which Blender as a Python module "
+           "(PyPI's bpy) does not install: there Python owns SIGINT and farm.py raises nothing")
+
 import cloud_testing as C  # noqa: E402
 
 import bpy  # noqa: E402
