@@ -127,3 +127,11 @@ def compositor_output(tree):
     outputs = [n for n in tree.nodes if n.bl_idname == 'NodeGroupOutput']
     active = [n for n in outputs if getattr(n, "is_active_output", False)]
     return (active or outputs or [None])[0]
+
+
+def cycles_vdb_placement():
+    """Where Cycles puts a VDB grid's voxel ijk, as Welkin's VdbClouds placement names it:
+    3.4-4.5 "blender" (the value at index ijk + 1/2, half a voxel off OpenVDB's
+    convention), 5.0 "openvdb" (at index ijk, OpenVDB's own): measured against Cycles by
+    tests/blender/test_cycles_clouds.py on each version."""
+    return "openvdb" if at_least(5, 0) else "blender"
