@@ -23,9 +23,11 @@ same run, from the two seeds of each renderer:
   cloud (alpha > 0.01) within 1.5 x the RMS that noise alone gives (seed differences);
   measured 0.0243 vs noise 0.0223 with the default placement.
 
-So this validates Welkin's default voxel placement ("blender") against Cycles. That it can
-tell the placements apart is checked too: the same reference renders with
-placement="openvdb" must FAIL the per-pixel opacity test (measured RMS 0.150 vs noise
+So this validates, against Cycles, the voxel placement the add-on uses on this Blender
+(compat.cycles_vdb_placement: "blender" in 3.4-4.5; "openvdb" in 5.0, whose Cycles places
+voxels half a voxel away from 4.5's). That it can tell the placements apart is checked
+too: the same reference renders with the other placement must FAIL the per-pixel opacity
+test (3.4, placement="openvdb": measured RMS 0.150 vs noise
 0.023, 6.4 x; its radiance median, 0.104 vs noise 0.077, passes 1.5 x, so it is not used).
 
 Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
