@@ -193,13 +193,11 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     outcome.warnings += result.warnings
     height = request.width // 2
     sky = images.ensure(settings, "sky", request.width, height)
-    disc = images.ensure(settings, "disc", request.width, height)
     images.write(sky, result.sky)
-    images.write(disc, result.disc, sparse=True)
     if pack:
         images.pack(sky)
-        images.pack(disc)
-    world_nodes.install(scene.world, settings, sky, disc)
+    images.drop_disc_image(settings)  # files from before the disc was drawn by nodes
+    world_nodes.install(scene.world, settings, sky, result.disc)
     if settings.sync_lamp:
         _sync_lamp(lamp, result.lamp, depsgraph)
     settings.active = True

@@ -1,0 +1,140 @@
+"""The world's sun disc, drawn by shader nodes from the view direction: a 1000 mm lens aimed
+at the sun, with the world image at 256 x 128 (one texel is 3 times the disc's diameter),
+renders (Cycles, 160 x 160, 16 samples) a round disc of the sun's angular size,
+limb-darkened by the core's law, whose integrated energy is the direct irradiance
+`welkin.sun` gives the lamp; and EEVEE renders the disc too. No disc image in the file.
+
+Measured on the Cycles render, with the pixel solid angle of a perspective camera
+(dOmega = p^2 f / (f^2 + x^2 + y^2)^(3/2), p the pixel pitch on the sensor):
+  - energy: sum of (L - sky) dOmega over the pixels within 1.5 disc radii, per channel,
+    against direct_irradiance_rgb: within 1 % (the pixel filter moves light between pixels
+    but keeps its sum; Monte-Carlo noise of 16 samples over ~900 pixels is far smaller);
+  - size: the disc's solid angle, each pixel counted by its coverage (its radiance over the
+    profile's radiance at its angle, at most 1), against 2 pi (1 - cos alpha): within 3 %
+    (the image of the disc is 33 pixels across); its centroid within 0.05 alpha of the sun's
+    direction; round: the second moments along the image's two axes within 3 %;
+  - limb darkening: the mean radiance within 0.3 alpha over the mean at 0.8-0.9 alpha,
+    against the same ratio of the profile averaged over the same pixels: within 3 %.
+"""
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import addon_testing as T  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+from mathutils import Vector  # noqa: E402
+
+addon, welkin = T.install_addon()
+from welkin import sky_compute  # noqa: E402
+from welkin.blender import compat  # noqa: E402
+
+ELEVATION, AZIMUTH = 30.0, 60.0
+N = 160  # pixels across
+LENS_MM, SENSOR_MM = 1000.0, 36.0
+scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution='256')
+T.panoramic_camera(scene, N, N, samples=16)  # the render settings; the camera follows
+cam = scene.camera
+cam.data.type = 'PERSP'
+cam.data.lens = LENS_MM
+cam.data.sensor_width = SENSOR_MM
+cam.data.sensor_fit = 'HORIZONTAL'
+cam.data.clip_end = 1e6
+s = np.array(T.sun_direction(ELEVATION, AZIMUTH))
+cam.rotation_mode = 'QUATERNION'
+cam.rotation_quaternion = Vector((0.0, 0.0, -1.0)).rotation_difference(Vector(s))
+scene.cycles.filter_width = 1.5  # a normal pixel filter: it keeps the energy's sum
+bpy.context.view_layer.update()
+bpy.ops.welkin.update_sky()
+settings = scene.world.welkin
+
+T.check(settings.disc_image is None and not any(i.get("welkin_role") == "disc"
+                                                for i in bpy.data.images),
+        "a sun-disc image is still in the file")
+T.check(not any(n.bl_idname == 'ShaderNodeTexEnvironment' and n.get("welkin_role") != "sky_texture"
+                for n in scene.world.node_tree.nodes), "a second environment texture")
+
+atm = welkin.Atmosphere.preset("bruneton2017")
+model = sky_compute.disc_model(welkin, atm, 0.0, s, 1.0)
+E = np.asarray(welkin.sun(atm, 0.0, s).direct_irradiance_rgb)
+alpha = float(atm.sun_angular_radius_rad)
+
+# Every pixel's direction and solid angle (top row first, as the EXR is read).
+R = np.array(cam.matrix_world.to_3x3())
+pitch = SENSOR_MM / N
+jj, ii = np.mgrid[0:N, 0:N]
+x = (ii + 0.5 - N / 2) * pitch
+y = (N / 2 - jj - 0.5) * pitch
+d = np.stack([x, y, np.full_like(x, -LENS_MM)], axis=-1) @ R.T
+d /= np.linalg.norm(d, axis=-1, keepdims=True)
+omega = pitch ** 2 * LENS_MM / (LENS_MM ** 2 + x ** 2 + y ** 2) ** 1.5
+rho = np.arcsin(np.clip(np.linalg.norm(np.cross(d, s), axis=-1), 0.0, 1.0))
+
+
+def profile(rho_rad):
+    """The disc's radiance (N, 3) at angle rho from the DiscModel the nodes draw."""
+    t = np.minimum(np.sin(rho_rad) / math.sin(model.radius_rad), 1.0)
+    mu = np.sqrt(1.0 - t * t)
+    return np.polynomial.polynomial.polyval(mu, model.coefficients).T
+
+
+def measure(img, name):
+    disc_zone = rho < 1.5 * alpha
+    sky = np.median(img[(rho > 2.0 * alpha)], axis=0)
+    light = img - sky
+    energy = (light[disc_zone] * omega[disc_zone, None]).sum(axis=0)
+    return energy, light, disc_zone, sky
+
+
+path = T.TMP / "disc_cycles.exr"
+T.render_still(scene, path)
+img = T.read_rgb_exr(welkin, path)
+T.check(np.isfinite(img).all(), "Cycles: non-finite pixels")
+energy, light, zone, sky = measure(img, "Cycles")
+err = energy / E - 1.0
+print(f"Cycles: disc energy {energy} W m^-2, welkin.sun direct irradiance {E}, "
+      f"error {np.round(100 * err, 3)} %  (sky beside the disc {sky})")
+T.check(np.all(np.abs(err) < 0.01), f"disc energy off by {err}")
+
+g = light[..., 1]
+ref = profile(np.minimum(rho, alpha))[..., 1].reshape(rho.shape)
+coverage = np.clip(g / ref, 0.0, 1.0) * zone
+area = float((coverage * omega).sum())
+area_ref = 2.0 * math.pi * (1.0 - math.cos(alpha))
+print(f"Cycles: disc solid angle {area:.4e} sr, the sun's {area_ref:.4e} sr, "
+      f"ratio {area / area_ref:.4f}")
+T.check(abs(area / area_ref - 1.0) < 0.03, f"disc solid angle ratio {area / area_ref:.4f}")
+w = g * zone * omega
+centroid = (d * w[..., None]).sum(axis=(0, 1)) / w.sum()
+off = math.acos(min(1.0, float(np.dot(centroid / np.linalg.norm(centroid), s))))
+mx = (w * x ** 2).sum() / w.sum() - ((w * x).sum() / w.sum()) ** 2
+my = (w * y ** 2).sum() / w.sum() - ((w * y).sum() / w.sum()) ** 2
+print(f"Cycles: centroid {off / alpha:.4f} alpha from the sun; second moments x/y {mx / my:.4f}")
+T.check(off < 0.05 * alpha, f"disc centre {off / alpha:.3f} alpha off the sun's direction")
+T.check(abs(mx / my - 1.0) < 0.03, f"disc not round: second moments x/y {mx / my:.4f}")
+
+centre, ring = rho < 0.3 * alpha, (rho > 0.8 * alpha) & (rho < 0.9 * alpha)
+measured = light[centre].mean(axis=0) / light[ring].mean(axis=0)
+expected = profile(rho[centre]).mean(axis=0) / profile(rho[ring]).mean(axis=0)
+print(f"Cycles: limb darkening centre / 0.8-0.9 alpha: rendered {measured}, model {expected}")
+T.check(np.all(np.abs(measured / expected - 1.0) < 0.03),
+        f"limb darkening {measured} against the model's {expected}")
+
+# EEVEE: the same view shows the disc (a world shader evaluated per pixel).
+scene.render.engine = compat.eevee_engine()
+if hasattr(scene.eevee, "taa_render_samples"):
+    scene.eevee.taa_render_samples = 16
+path = T.TMP / "disc_eevee.exr"
+T.render_still(scene, path)
+img = T.read_rgb_exr(welkin, path)
+energy_e, light_e, _zone, sky_e = measure(img, "EEVEE")
+err_e = energy_e / E - 1.0
+peak = float(light_e[..., 1].max())
+print(f"EEVEE ({scene.render.engine}): disc energy {energy_e} W m^-2, error "
+      f"{np.round(100 * err_e, 3)} %, peak {peak:.4g}, finite {np.isfinite(img).all()}")
+T.check(np.isfinite(img).all(), "EEVEE: non-finite pixels")
+T.check(peak > 1000.0 * float(sky_e[1]) and np.all(np.abs(err_e) < 0.05),
+        f"EEVEE does not show the disc: energy error {err_e}, peak {peak}, sky {sky_e}")
+T.done("test_addon_sun_disc")
