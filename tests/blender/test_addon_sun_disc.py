@@ -2,7 +2,9 @@
 at the sun, with the world image at 256 x 128 (one texel is 3 times the disc's diameter),
 renders (Cycles, 160 x 160, 16 samples) a round disc of the sun's angular size,
 limb-darkened by the core's law, whose integrated energy is the direct irradiance
-`welkin.sun` gives the lamp; and EEVEE renders the disc too. No disc image in the file.
+`welkin.sun` gives the lamp; and EEVEE renders the disc too, of the same size (its energy
+checked where EEVEE's buffers hold it: 3.x; EEVEE Next clips at the half-float 65504). No
+disc image in the file.
 
 Measured on the Cycles render, with the pixel solid angle of a perspective camera
 (dOmega = p^2 f / (f^2 + x^2 + y^2)^(3/2), p the pixel pitch on the sensor):
@@ -130,11 +132,18 @@ path = T.TMP / "disc_eevee.exr"
 T.render_still(scene, path)
 img = T.read_rgb_exr(welkin, path)
 energy_e, light_e, _zone, sky_e = measure(img, "EEVEE")
-err_e = energy_e / E - 1.0
-peak = float(light_e[..., 1].max())
-print(f"EEVEE ({scene.render.engine}): disc energy {energy_e} W m^-2, error "
-      f"{np.round(100 * err_e, 3)} %, peak {peak:.4g}, finite {np.isfinite(img).all()}")
 T.check(np.isfinite(img).all(), "EEVEE: non-finite pixels")
-T.check(peak > 1000.0 * float(sky_e[1]) and np.all(np.abs(err_e) < 0.05),
-        f"EEVEE does not show the disc: energy error {err_e}, peak {peak}, sky {sky_e}")
+# EEVEE Next (4.2+) renders into half floats: the disc's radiance (~1e7 W m^-2 sr^-1 at
+# exposure 1) is clipped at 65504 there, so its shape is measured with that ceiling and its
+# energy only where it is not clipped (EEVEE of 3.x).
+HALF_MAX = 65504.0
+clipped = abs(float(img[..., 1].max()) / HALF_MAX - 1.0) < 0.01
+ceiling = np.minimum(ref, 0.99 * HALF_MAX) if clipped else ref
+area_e = float((np.clip(light_e[..., 1] / ceiling, 0.0, 1.0) * zone * omega).sum())
+err_e = energy_e / E - 1.0
+print(f"EEVEE ({scene.render.engine}): disc solid angle ratio {area_e / area_ref:.4f}, "
+      f"energy {energy_e} W m^-2 ({'clipped at 65504' if clipped else 'error'} "
+      f"{np.round(100 * err_e, 3)} %)")
+T.check(abs(area_e / area_ref - 1.0) < 0.05, f"EEVEE: disc solid angle ratio {area_e / area_ref}")
+T.check(clipped or np.all(np.abs(err_e) < 0.01), f"EEVEE: disc energy off by {err_e}")
 T.done("test_addon_sun_disc")
