@@ -11,7 +11,7 @@ this script runs itself in that Python (--blender5 DIR) to render that column. E
 is a Cycles render through the same equirectangular panoramic camera: 120 degrees of
 azimuth centred on the sun, elevation -10 to +70 degrees; the Blender skies with their
 default air, dust and ozone and their sun disc. Exposure: per row, one factor for all three
-columns (0.18 over Welkin's mean luminance in that row's tile, shown as EV); tone curve
+columns (0.18 over Welkin's median sky luminance in that row's tile, shown as EV); tone curve
 x / (1 + x) per channel, then sRGB. The add-on is installed from its zip as in the tests
 (a temporary scripts directory; the machine's Blender configuration is untouched).
 """
@@ -68,8 +68,9 @@ def blender_sky_world(sky_type):
     node = tree.nodes.new('ShaderNodeTexSky')
     node.sky_type = sky_type
     node.sun_disc = True
-    # Blender's sky puts the sun at azimuth sun_rotation + 90 degrees from +X.
-    node.sun_rotation = math.radians(AZIMUTH - 90.0)
+    # Blender's sky puts the sun at azimuth 90 degrees - sun_rotation from +X
+    # (counter-clockwise; its rotation is kept within [0, 360) degrees).
+    node.sun_rotation = math.radians((90.0 - AZIMUTH) % 360.0)
     background = next(n for n in tree.nodes if n.bl_idname == 'ShaderNodeBackground')
     tree.links.new(node.outputs['Color'], background.inputs['Color'])
     return world, node
@@ -143,10 +144,11 @@ def main(out_png):
     luminance = np.array([0.2126, 0.7152, 0.0722])
     for r, e in enumerate(ELEVATIONS):
         tiles = [read_exr(tmp / f"{key}_{e:+05.1f}.exr") for key, _title in columns]
-        # Welkin's mean luminance over the sky (above the horizon row), the row's exposure.
+        # The row's exposure: Welkin's median sky luminance (above the horizon row; the
+        # median leaves the sun's disc out) to 0.18.
         horizon_row = int(TILE_H * LAT_MAX / (LAT_MAX - LAT_MIN))
-        mean = float((tiles[0][:horizon_row] @ luminance).mean())
-        k = 0.18 / max(mean, 1e-12)
+        median = float(np.median(tiles[0][:horizon_row] @ luminance))
+        k = 0.18 / max(median, 1e-12)
         for c, tile in enumerate(tiles):
             x = np.clip(np.nan_to_num(tile * k), 0.0, None)
             x = x / (1.0 + x)
