@@ -88,18 +88,13 @@ def disc_model(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401
     sun = native.sun(atm, altitude_m, direction)
     if not float(sun.visible_fraction) > 0.0:
         return None
-    alpha = float(atm.sun_angular_radius_rad)
-    if hasattr(sun, "limb_coefficients_rgb"):
-        # The core's disc (sun_disc.hpp): L_j(mu) = centre_radiance_rgb[j] sum_k b[j, k] mu^k.
-        centre = np.asarray(sun.centre_radiance_rgb, dtype=np.float64) * exposure
-        coefficients = (np.asarray(sun.limb_coefficients_rgb, dtype=np.float64)
-                        * centre[:, None]).T.copy()
-    else:
-        # A core without the disc model: a uniform disc of the direct irradiance.
-        irradiance = np.asarray(sun.direct_irradiance_rgb, dtype=np.float64) * exposure
-        solid_angle = 2.0 * math.pi * (1.0 - math.cos(alpha)) * float(sun.visible_fraction)
-        coefficients = np.zeros((DiscModel.DEGREE + 1, 3))
-        coefficients[0] = irradiance / solid_angle
+    alpha = float(sun.angular_radius_rad)
+    # The core's disc (sun_disc.hpp): L_j(mu) = centre_radiance_rgb[j] sum_k b[j, k] mu^k,
+    # limb-darkened by Neckel & Labs 1994, its integral over the visible disc the direct
+    # irradiance.
+    centre = np.asarray(sun.centre_radiance_rgb, dtype=np.float64) * exposure
+    coefficients = (np.asarray(sun.limb_coefficients_rgb, dtype=np.float64)
+                    * centre[:, None]).T.copy()
     return DiscModel(direction, alpha, horizon_z(atm, altitude_m), coefficients)
 
 
