@@ -51,6 +51,15 @@ bpy.context.view_layer.update()
 bpy.ops.welkin.update_sky()
 settings = scene.world.welkin
 
+# A file saved by a version that drew the disc from an image: its image and node go.
+old_image = bpy.data.images.new("Welkin Sun Disc", 8, 4, float_buffer=True)
+old_image["welkin_role"] = "disc"
+settings.disc_image = old_image
+old_node = scene.world.node_tree.nodes.new('ShaderNodeTexEnvironment')
+old_node["welkin_role"] = "disc_texture"
+old_node.image = old_image
+settings.last_key = ""
+bpy.ops.welkin.update_sky()
 T.check(settings.disc_image is None and not any(i.get("welkin_role") == "disc"
                                                 for i in bpy.data.images),
         "a sun-disc image is still in the file")

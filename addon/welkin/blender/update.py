@@ -106,7 +106,9 @@ def clouds_of(scene, depsgraph=None):
 def sky_key(settings, request, clouds):
     """Changes whenever the world's images would: the request, the disc and lamp switches,
     and the clouds (their layers, and each volume's file for the frame and placement)."""
-    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp))
+    # "disc nodes": a file saved while the disc was an image gets its nodes at the first
+    # update.
+    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp, "disc nodes"))
     if clouds:
         key += json.dumps(clouds, sort_keys=True)
     return key
