@@ -198,8 +198,8 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     images.write(sky, result.sky)
     if pack:
         images.pack(sky)
-    images.drop_disc_image(settings)  # files from before the disc was drawn by nodes
     world_nodes.install(scene.world, settings, sky, result.disc)
+    images.drop_disc_image(settings)  # files from before the disc was drawn by nodes
     if settings.sync_lamp:
         _sync_lamp(lamp, result.lamp, depsgraph)
     settings.active = True
