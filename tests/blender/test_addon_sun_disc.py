@@ -4,7 +4,8 @@ renders (Cycles, 160 x 160, 16 samples) a round disc of the sun's angular size,
 limb-darkened by the core's law, whose integrated energy is the direct irradiance
 `welkin.sun` gives the lamp; and EEVEE renders the disc too, of the same size (its energy
 checked where EEVEE's buffers hold it: 3.x; EEVEE Next clips at the half-float 65504). No
-disc image in the file.
+disc image in the file (an older file's is dropped). In an `-a` render of an animated sun,
+each frame's disc is where that frame's lamp points.
 
 Measured on the Cycles render, with the pixel solid angle of a perspective camera
 (dOmega = p^2 f / (f^2 + x^2 + y^2)^(3/2), p the pixel pitch on the sensor):
@@ -20,6 +21,7 @@ Measured on the Cycles render, with the pixel solid angle of a perspective camer
 """
 import math
 import os
+import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -157,4 +159,46 @@ print(f"EEVEE ({scene.render.engine}): disc solid angle ratio {area_e / area_ref
       f"{np.round(100 * err_e, 3)} %)")
 T.check(abs(area_e / area_ref - 1.0) < 0.05, f"EEVEE: disc solid angle ratio {area_e / area_ref}")
 T.check(clipped or np.all(np.abs(err_e) < 0.01), f"EEVEE: disc energy off by {err_e}")
+
+# An animated sun in a separate `blender -b file.blend -a`: each frame's disc is where that
+# frame's lamp points (the frame handler writes the disc's numbers into the nodes), within
+# 0.1 alpha. A 200 mm lens (10 degrees) at 96 x 96 sees the sun at 30 and then 32 degrees.
+scene.render.engine = 'CYCLES'
+cam.data.lens = 200.0
+N = 96
+scene.render.resolution_x = scene.render.resolution_y = N
+scene.cycles.samples = 4
+mid = np.array(T.sun_direction(31.0, AZIMUTH))
+cam.rotation_quaternion = Vector((0.0, 0.0, -1.0)).rotation_difference(Vector(mid))
+scene.frame_start, scene.frame_end = 1, 2
+for f, e in ((1, 30.0), (2, 32.0)):
+    T.aim_sun(sun, e, AZIMUTH)
+    sun.keyframe_insert("rotation_quaternion", frame=f)
+scene.frame_set(1)
+bpy.ops.welkin.update_sky()
+scene.render.filepath = str(T.TMP / "anim" / "f_####")
+blend = T.TMP / "disc_animated.blend"
+bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
+env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
+run = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", str(blend), "--addons",
+                      "welkin", "-a"], env=env, capture_output=True, text=True, timeout=300)
+T.check(run.returncode == 0 and "Traceback" not in run.stdout + run.stderr,
+        f"-a render failed:\n{(run.stdout + run.stderr)[-3000:]}")
+R = np.array(cam.matrix_world.to_3x3())
+pitch = SENSOR_MM / N
+jj, ii = np.mgrid[0:N, 0:N]
+d = np.stack([(ii + 0.5 - N / 2) * pitch, (N / 2 - jj - 0.5) * pitch,
+              np.full((N, N), -200.0)], axis=-1) @ R.T
+d /= np.linalg.norm(d, axis=-1, keepdims=True)
+for f, e in ((1, 30.0), (2, 32.0)):
+    img = T.read_rgb_exr(welkin, T.TMP / "anim" / f"f_{f:04d}.exr")[..., 1]
+    w = np.clip(img - np.median(img), 0.0, None)
+    w = w * (w > 0.01 * w.max())
+    c = (d * w[..., None]).sum(axis=(0, 1))
+    want = np.array(T.sun_direction(e, AZIMUTH))
+    off = math.acos(min(1.0, float(np.dot(c / np.linalg.norm(c), want))))
+    print(f"-a frame {f}: disc centroid {off / alpha:.3f} alpha from that frame's sun ({e} deg)")
+    T.check(off < 0.1 * alpha, f"frame {f}: the disc is {off / alpha:.2f} alpha off its sun")
 T.done("test_addon_sun_disc")
