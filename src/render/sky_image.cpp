@@ -332,8 +332,9 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         std::vector<float> cloud_rgb;  // RGB output: L_c in Rec.709
         if (options.clouds) {
             const std::span<const glm::dvec3> dirs(directions.get(), n);
-            clouds = render_clouds(*options.clouds, *cloud_light, glm::dvec3(0.0), dirs, options.cloud_lighting,
-                                   progress ? &sub : nullptr);
+            clouds = render_clouds_grid(*options.clouds, *cloud_light, glm::dvec3(0.0), dirs, W, options.cloud_lighting,
+                                        options.cloud_upsampling, progress ? &sub : nullptr,
+                                        std::uint64_t(row0) * std::uint64_t(W));
             std::copy(clouds.transmittance.begin(), clouds.transmittance.end(),
                       cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
             std::vector<double> cloud_d(n, 0.0);  // 0: no cloud, not marched
