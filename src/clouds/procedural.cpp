@@ -89,7 +89,7 @@ const TypeShape& shape_of(CloudType t) {
     static const TypeShape shapes[] = {
         {{0.0, 0.04, 0.45, 1.0}, 0.6, 0.12, 1.0, 0.3},   // cumulus
         {{0.0, 0.12, 0.5, 0.95}, 0.25, 0.05, 1.6, 0.3},  // stratocumulus
-        {{0.0, 0.25, 0.55, 0.95}, 0.2, 0.0, 1.3, 0.4},   // altocumulus
+        {{0.0, 0.25, 0.55, 0.95}, 0.2, 0.0, 1.0, 0.4},   // altocumulus
         {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 2.5, 0.2},     // stratus
         {{0.0, 0.3, 0.45, 1.0}, 0.3, 0.0, 8.0, 0.8},     // cirrus
     };
@@ -140,7 +140,7 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
         break;
     case CloudType::altocumulus:
         p.bottom_altitude_m = 4000.0, p.top_altitude_m = 4500.0, p.coverage = 0.5, p.density_per_m = 0.02;
-        p.base_scale_m = 1200.0, p.detail_scale_m = 250.0, p.weather_scale_m = 20000.0;
+        p.base_scale_m = 1500.0, p.detail_scale_m = 300.0, p.weather_scale_m = 10000.0;
         p.detail_strength = 0.5, p.weather_variation = 0.5;
         break;
     case CloudType::stratus:

@@ -182,7 +182,8 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         json_check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m",
                                            "multiple_scattering", "octaves",
                                            "octave_extinction", "octave_contribution", "octave_eccentricity",
-                                           "min_transmittance", "seed", "jitter", "max_distance_m"});
+                                           "min_transmittance", "seed", "jitter", "max_distance_m",
+                                           "shadow_grid_spacing_m"});
         CloudLightingOptions& o = out.lighting;
         const auto geti = [&](const char* key, int& v) {
             if (li.contains(key)) v = integer(li[key], p + key);
@@ -212,6 +213,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         if (li.contains("seed")) o.seed = unsigned_integer(li["seed"], p + "seed");
         if (li.contains("jitter")) o.jitter = boolean(li["jitter"], p + "jitter");
         getd("max_distance_m", o.max_distance_m);
+        getd("shadow_grid_spacing_m", o.shadow_grid_spacing_m);
     }
     return out;
 }
@@ -262,7 +264,8 @@ ordered_json clouds_json(const SceneClouds& c) {
                      {"min_transmittance", o.min_transmittance},
                      {"seed", o.seed},
                      {"jitter", o.jitter},
-                     {"max_distance_m", o.max_distance_m}};
+                     {"max_distance_m", o.max_distance_m},
+                     {"shadow_grid_spacing_m", o.shadow_grid_spacing_m}};
     return j;
 }
 

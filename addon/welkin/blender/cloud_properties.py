@@ -90,9 +90,14 @@ class WelkinCloudSettings(bpy.types.PropertyGroup):
     ambient_steps: bpy.props.IntProperty(
         name="Ambient Steps", default=4, min=0, max=256, soft_max=32, update=_changed,
         description="Samples towards the zenith for the sky light's decay (0: none)")
+    # The core's default multiple scattering is the delta-Eddington diffusion term, for
+    # which only "one order or all" means anything: 1 single scattering, 2 all orders
+    # (any count above 1 gives the same image; the count only matters to the core's
+    # "octaves" mode, which the panel does not offer).
     octaves: bpy.props.IntProperty(
-        name="Octaves", default=4, min=1, max=16, update=_changed,
-        description="Wrenninge's multiple-scattering octaves")
+        name="Scattering Orders", default=2, min=1, max=2, update=_changed,
+        description="1: single scattering only (faster, darker); 2: all orders of "
+                    "scattering (the delta-Eddington diffusion term)")
 
 
 class WelkinObjectCloud(bpy.types.PropertyGroup):

@@ -176,9 +176,9 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 // largest of the four) and marched itself elsewhere. stride 1 marches every ray.
 // Deterministic: a ray's value is its own march or a fixed combination of marched rays.
 struct CloudUpsampling {
-    int stride = 2;                        // [1, 16]
-    double transmittance_tolerance = 0.02; // [0, 1]
-    double radiance_tolerance = 0.05;      // [0, 1], relative
+    int stride = 4;                        // [1, 16]
+    double transmittance_tolerance = 0.1;  // [0, 1]
+    double radiance_tolerance = 0.3;       // [0, 1], relative
     void validate() const;
 };
 
