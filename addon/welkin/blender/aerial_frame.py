@@ -14,7 +14,7 @@ remove() exactly:
     that a pixel no material writes, the sky, means T = 1);
   * those two AOVs on every view layer (Blender turns '.' in AOV names into '_');
   * in the compositor, for each Render Layers node of the scene, the node group "Welkin
-    Aerial Perspective" fed by its Image and the two AOVs, computing
+    Aerial Haze" fed by its Image and the two AOVs, computing
     Image x T + Inscatter; every link that left the Render Layers' Image now leaves the
     group's Image (so the Composite / Group Output node, File Output nodes and the user's
     own nodes see the hazed frame), and the group's outputs Welkin.AerialInscatter and
@@ -31,8 +31,8 @@ from . import compat
 IMAGE = "Welkin Aerial Table"
 SHADER_GROUP = "Welkin Aerial"
 SHADER_NODE = "Welkin Aerial"
-COMP_GROUP = "Welkin Aerial Perspective"
-COMP_NODE = "Welkin Aerial Perspective"
+COMP_GROUP = "Welkin Aerial Haze"
+COMP_NODE = "Welkin Aerial Haze"
 CREATED_TREE = "Welkin Compositing"
 AOV_INSCATTER = "Welkin_AerialInscatter"
 AOV_OPACITY = "Welkin_AerialOpacity"
@@ -272,7 +272,7 @@ def remove_aovs(scene, added):
             continue
         for index, aov in enumerate(layer.aovs):
             if aov.name == name:
-                layer.aovs.active_index = index
+                layer.active_aov_index = index
                 with_context_remove_aov(scene, layer)
                 break
 
