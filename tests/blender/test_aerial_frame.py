@@ -134,6 +134,20 @@ def far_mask(z):
     return ok
 
 
+def blocks(scene, frame, z):
+    """Pixels of the blocks, not of the ground plane: nearer than where the pixel's ray
+    meets the plane z = 0 (or whose ray does not meet it)."""
+    scene.frame_set(frame)
+    desc = module.SceneDescription.from_json_string(aerial.scene_json(scene, module))
+    out = np.zeros(z.shape, bool)
+    for j in range(H):
+        for i in range(W):
+            o, v, per = desc.camera_ray((i + 0.5) / W, (j + 0.5) / H)
+            ground = o[2] / -v[2] / per if v[2] < 0 else np.inf
+            out[j, i] = z[j, i] < 0.99 * ground
+    return out
+
+
 def expected(scene, frame, image, z, method=None):
     scene.frame_set(frame)
     text = aerial.scene_json(scene, module)
@@ -152,10 +166,31 @@ def compare(name, got, want, off, mask):
     if os.environ.get("WELKIN_DEBUG"):
         for j, i in list(zip(*np.nonzero(mask)))[::max(1, mask.sum() // 8)]:
             print(f"  pixel ({i}, {j}): got {got[j, i]} want {want[j, i]} off {off[j, i]}")
-    at.check(mask.sum() >= 20, f"{name}: only {mask.sum()} far pixels")
+    at.check(mask.sum() >= 15, f"{name}: only {mask.sum()} far pixels")
     at.check(rel.max() < TOL, f"{name}: the frame is {rel.max():.4f} from Image x T + Inscatter")
     at.check(change > 0.10, f"{name}: the hazed frame is hardly different ({change:.3f})")
     return rel
+
+
+_depth = {}
+
+
+def cycles_depth(scene, tmp):
+    """Frames 1 and 2's Z pass from Cycles: EEVEE's Z pass comes from its depth buffer,
+    whose precision over clip 0.1 m .. 1000 km is far too coarse at kilometres (and it
+    writes no 1e10 for the sky), so both engines are checked against the geometry's true
+    depth."""
+    if not _depth:
+        engine, samples = scene.render.engine, scene.cycles.samples
+        scene.render.engine = 'CYCLES'
+        scene.cycles.samples = 1
+        scene.render.filepath = str(tmp / "depth_")
+        bpy.ops.render.render(animation=True)
+        for f in (1, 2):
+            pixels, names = module.read_exr(scene.render.frame_path(frame=f))
+            _depth[f] = pixels[..., names.index("ViewLayer.Depth.Z")]
+        scene.render.engine, scene.cycles.samples = engine, samples
+    return _depth
 
 
 def run_engine(scene, engine, tmp):
@@ -171,10 +206,7 @@ def run_engine(scene, engine, tmp):
     scene.render.filepath = str(tmp / "off_")
     bpy.ops.render.render(animation=True)
     off = {f: read(scene.render.frame_path(frame=f), "ViewLayer.Combined.")[0] for f in (1, 2)}
-    depth = {}
-    for f in (1, 2):
-        pixels, names = module.read_exr(scene.render.frame_path(frame=f))
-        depth[f] = pixels[..., names.index("ViewLayer.Depth.Z")]
+    depth = cycles_depth(scene, tmp)
     before = snapshot(scene)
     want = {f: expected(scene, f, off[f], depth[f]) for f in (1, 2)}
     if os.environ.get("WELKIN_DEBUG"):
@@ -200,11 +232,11 @@ def run_engine(scene, engine, tmp):
     at.check(not (tmp / "nowhere").exists(), "the render wrote to the saved output path, not -o")
     for f in (1, 2):
         got, _ = read(elsewhere / f"f_{f:04d}.exr")
-        mask = far_mask(depth[f])
+        mask = far_mask(depth[f]) & blocks(scene, f, depth[f])
         compare(f"{engine} -a frame {f} (fresh process, -o elsewhere)", got, want[f], off[f], mask)
     # Frame 2 against frame 1's camera and sun: clearly worse (no frame of delay).
     got2, _ = read(elsewhere / "f_0002.exr")
-    mask = far_mask(depth[2])
+    mask = far_mask(depth[2]) & blocks(scene, 2, depth[2])
     scene.frame_set(1)
     text1 = aerial.scene_json(scene, module)
     import json
@@ -220,7 +252,7 @@ def run_engine(scene, engine, tmp):
     scene.render.filepath = str(tmp / "f12.exr")
     bpy.ops.render.render(write_still=True)
     got, _ = read(tmp / "f12.exr")
-    compare(f"{engine} F12 frame 1", got, want[1], off[1], far_mask(depth[1]))
+    compare(f"{engine} F12 frame 1", got, want[1], off[1], far_mask(depth[1]) & blocks(scene, 1, depth[1]))
     # Removable exactly.
     scene.welkin_aerial.enabled = False
     after = snapshot(scene)

@@ -121,12 +121,12 @@ def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
 def shader_group():
     """The node group of aerial_table.lookup() in nodes, with its two AOV outputs."""
     group = bpy.data.node_groups.get(SHADER_GROUP)
-    if group is not None and group.get(MARK) == tab.HEIGHT + 1:
+    if group is not None and group.get(MARK) == tab.HEIGHT + 2:
         return group
     if group is None:
         group = bpy.data.node_groups.new(SHADER_GROUP, 'ShaderNodeTree')
     group.nodes.clear()
-    group[MARK] = tab.HEIGHT + 1  # the layout's version
+    group[MARK] = tab.HEIGHT + 2  # the layout's version
     E, S, Hh = tab.ELEVATIONS, tab.SLICES, float(tab.HEIGHT)
     geo = group.nodes.new('ShaderNodeNewGeometry')
     geo.location = (-1400, 200)
@@ -174,28 +174,53 @@ def shader_group():
     # v of the nearer slice's L texel; the others are + E / H (farther slice), + 1/2 (tau).
     v0 = _math(group, 'DIVIDE', _math(group, 'MULTIPLY_ADD', k0, float(E), row, x=600, y=0),
                Hh, x=800, y=0)
-    samples = {}
-    for n, offset in enumerate((0.0, E / Hh, 0.5, 0.5 + E / Hh)):
-        vv = _math(group, 'ADD', v0, offset, x=1000, y=300 - 250 * n) if offset else v0
+    # Bilinear filtering done here, from four texel fetches ('Closest'): EEVEE filters a
+    # 'Linear' image with mipmaps chosen from screen-space derivatives, and v jumps by a
+    # whole tile where the distance slice changes, which would blur the table there.
+    Ww = float(tab.WIDTH)
+    fx = _math(group, 'MULTIPLY_ADD', u, Ww, -0.5, x=900, y=600)
+    x0 = _math(group, 'FLOOR', fx, x=1000, y=600)
+    ax = _math(group, 'SUBTRACT', fx, x0, x=1100, y=600)
+    ua = _math(group, 'DIVIDE', _math(group, 'ADD', x0, 0.5, x=1100, y=700), Ww, x=1200, y=700)
+    ub = _math(group, 'ADD', ua, 1.0 / Ww, x=1300, y=700)
+    fy = _math(group, 'MULTIPLY_ADD', v0, Hh, -0.5, x=900, y=100)
+    y0 = _math(group, 'FLOOR', fy, x=1000, y=100)
+    ay = _math(group, 'SUBTRACT', fy, y0, x=1100, y=100)
+    va = _math(group, 'DIVIDE', _math(group, 'ADD', y0, 0.5, x=1100, y=0), Hh, x=1200, y=0)
+
+    def fetch(uu, vv, x, y):
         uv = group.nodes.new('ShaderNodeCombineXYZ')
-        uv.location = (1200, 300 - 250 * n)
-        group.links.new(u, uv.inputs[0])
+        uv.location = (x, y)
+        group.links.new(uu, uv.inputs[0])
         group.links.new(vv, uv.inputs[1])
         tex = group.nodes.new('ShaderNodeTexImage')
-        tex.location = (1400, 300 - 250 * n)
+        tex.location = (x + 150, y)
         tex.image = table_image()
-        tex.interpolation = 'Linear'
+        tex.interpolation = 'Closest'
         tex.extension = 'REPEAT'
         group.links.new(uv.outputs[0], tex.inputs["Vector"])
-        samples[n] = tex.outputs["Color"]
+        return tex.outputs["Color"]
+
+    def lerp(p, q, t, x, y):  # p + (q - p) t
+        return _vmath(group, 'ADD', p, _vmath(group, 'SCALE', _vmath(group, 'SUBTRACT', q, p, x=x, y=y),
+                                              scale=t, x=x + 100, y=y), x=x + 200, y=y)
+
+    samples = {}
+    for n, offset in enumerate((0.0, E / Hh, 0.5, 0.5 + E / Hh)):
+        y = 300 - 700 * n
+        v_lo = _math(group, 'ADD', va, offset, x=1300, y=y)
+        v_hi = _math(group, 'ADD', v_lo, 1.0 / Hh, x=1400, y=y)
+        lo = lerp(fetch(ua, v_lo, 1500, y), fetch(ub, v_lo, 1500, y - 150), ax, 1800, y)
+        hi = lerp(fetch(ua, v_hi, 1500, y - 300), fetch(ub, v_hi, 1500, y - 450), ax, 1800, y - 300)
+        samples[n] = lerp(lo, hi, ay, 2100, y - 150)
 
     def mix(near, far, x, y):  # near + (far - near) w
         return _vmath(group, 'ADD', near, _vmath(group, 'SCALE', _vmath(group, 'SUBTRACT', far, near,
                                                                         x=x, y=y), scale=w, x=x + 200, y=y),
                       x=x + 400, y=y)
 
-    L = mix(samples[0], samples[1], 1700, 300)
-    tau = mix(samples[2], samples[3], 1700, -200)
+    L = mix(samples[0], samples[1], 2500, 300)
+    tau = mix(samples[2], samples[3], 2500, -200)
     # 1 - T = 1 - exp(-tau), per channel.
     parts = group.nodes.new('ShaderNodeSeparateXYZ')
     parts.location = (2300, -200)
