@@ -134,7 +134,7 @@ py::dict aerial_table_py(const py::handle& scene_in, int azimuths, int elevation
 void register_aerial(py::module_& m) {
     py::class_<SceneDescription>(m, "SceneDescription", R"doc(
 A frame's scene description: atmosphere, sun, scene origin altitude, exposure, sky
-method, Blender camera, render resolution and aerial options (README "Scene JSON").
+method, Blender camera, render resolution and aerial options (docs/pipelines.md "Scene JSON").
 Plain data: build it from JSON, write it back; to_json_string() reproduces the
 frame exactly (the atmosphere is written in full).
 )doc")
