@@ -80,7 +80,7 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
 void register_aerial(py::module_& m) {
     py::class_<SceneDescription>(m, "SceneDescription", R"doc(
 A frame's scene description: atmosphere, sun, scene origin altitude, exposure, sky
-method, Blender camera, render resolution and aerial options (README "Scene JSON").
+method, Blender camera, render resolution and aerial options (docs/pipelines.md "Scene JSON").
 Plain data: build it from JSON, write it back; to_json_string() reproduces the
 frame exactly (the atmosphere is written in full).
 )doc")

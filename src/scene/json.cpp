@@ -1,8 +1,8 @@
-// JSON form of a SceneDescription (schema in README.md, "Scene JSON").
+// JSON form of a SceneDescription (schema in docs/pipelines.md, "Scene JSON").
 //
 //   {
 //     "version": 1,
-//     "atmosphere": "hazy" | {atmosphere JSON, README "Atmosphere JSON"},
+//     "atmosphere": "hazy" | {atmosphere JSON, docs/pipelines.md "Atmosphere JSON"},
 //     "origin_altitude_m": 0,
 //     "sun": {"direction": [x, y, z]} | {"elevation_deg": 30, "azimuth_deg": 90},
 //     "exposure": 1, "method": "auto",
@@ -17,7 +17,7 @@
 //     "sky_options": {"transmittance_width": 256, ...},
 //     "clouds": {"layers": [...], "volumes": [...], "scattering": {...}, "lighting": {...}}
 //   }
-// "clouds" (scene_clouds.hpp; README "Scene JSON"), the schema the add-on writes:
+// "clouds" (scene_clouds.hpp; docs/pipelines.md "Scene JSON"), the schema the add-on writes:
 // layers are CloudLayerParams without planet_radius_m / origin_altitude_m (the scene's),
 // volumes {name, file, grid, matrix_world (by rows), density_scale, negative, placement}, scattering
 // {albedo, g_forward, g_back, w_forward}, lighting CloudLightingOptions' other fields.
@@ -97,7 +97,7 @@ bool boolean(const json& j, const std::string& parameter) {
     return j.get<bool>();
 }
 
-// "clouds" (README "Scene JSON"). Relative VDB paths are taken
+// "clouds" (docs/pipelines.md "Scene JSON"). Relative VDB paths are taken
 // relative to `base` (the scene file's folder).
 SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
     json_check_keys(j, "clouds", {"layers", "volumes", "scattering", "lighting"});
