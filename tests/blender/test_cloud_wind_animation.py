@@ -63,9 +63,7 @@ env.pop("PYTHONPATH", None)
 
 
 def render_anim(stem, extra):
-    cmd = t.blender_command() + ["-b", str(blend)]
-    if not t.EXTENSION:
-        cmd += ["--addons", "welkin"]
+    cmd = t.blender_command() + ["-b", str(blend), "--addons", "welkin"]
     run = subprocess.run(cmd + extra + ["-o", str(t.TMP / f"{stem}_####"), "-a"],
                          env=env, capture_output=True, text=True, timeout=600)
     print(run.stdout[-800:], run.stderr[-400:])

@@ -97,7 +97,9 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
     bl_use_postprocess = True
     bl_use_preview = False
 
-    def __init__(self):
+    def __init__(self, *args, **kwargs):
+        # Blender 4.x and later pass the engine's arguments on to RenderEngine.
+        super().__init__(*args, **kwargs)
         self.preview = None
 
     def __del__(self):
