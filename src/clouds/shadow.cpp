@@ -35,7 +35,8 @@ std::vector<float> cloud_transmittance(const CloudDensity& density, std::span<co
         std::vector<MajorantSegment> segs;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const CloudRay ray{points[i], w};
-            out[i] = float(std::exp(-march_optical_depth(density, ray, options.max_distance_m, options.steps, segs)));
+            out[i] = float(
+                std::exp(-march_optical_depth(density, ray, options.max_distance_m, options.steps, segs)));
         }
         tracker.advance(range.size());
     });

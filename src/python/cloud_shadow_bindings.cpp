@@ -2,6 +2,7 @@
 // towards a distant light from many points (clouds/shadow.hpp). Thin: converts, releases
 // the GIL, calls the core.
 #include "bindings.hpp"
+
 #include "welkin/clouds/shadow.hpp"
 #include "welkin/scene/scene.hpp"
 

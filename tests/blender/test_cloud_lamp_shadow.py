@@ -19,7 +19,6 @@ One cloud layer over a sun 40 degrees up; Update Sky each time:
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_lamp_shadow.py
 """
-import math
 import pathlib
 import sys
 

@@ -1,11 +1,11 @@
 // The clouds' transmittance towards a distant light (clouds/shadow.hpp).
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <limits>
 #include <vector>
 
 #include "cloud_test_util.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/base/error.hpp"
 #include "welkin/clouds/shadow.hpp"
 
@@ -57,8 +57,11 @@ TEST(CloudShadow, BadInputNamesTheParameter) {
     names([&] { cloud_transmittance(kSlab, p, {0, 0, 0}); }, "direction");
     names([&] { cloud_transmittance(kSlab, nan, {0, 0, 1}); }, "points");
     names([&] { cloud_transmittance(kSlab, p, {0, 0, 1}, {.steps = 0}); }, "steps");
-    names([&] { cloud_transmittance(kSlab, p, {0, 0, 1}, {.steps = 8, .max_distance_m = -1}); },
-          "max_distance_m");
+    names(
+        [&] {
+            cloud_transmittance(kSlab, p, {0, 0, 1}, {.steps = 8, .max_distance_m = -1});
+        },
+        "max_distance_m");
 }
 
 }  // namespace

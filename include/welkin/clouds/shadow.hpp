@@ -25,9 +25,9 @@
 namespace welkin {
 
 struct CloudShadowOptions {
-    int steps = 64;                  // march steps per ray, [1, 65536]
-    double max_distance_m = 1.0e6;   // how far along the ray clouds count, > 0
-    void validate() const;           // InvalidArgument naming "steps" / "max_distance_m"
+    int steps = 64;                 // march steps per ray, [1, 65536]
+    double max_distance_m = 1.0e6;  // how far along the ray clouds count, > 0
+    void validate() const;          // InvalidArgument naming "steps" / "max_distance_m"
 };
 
 // T(p) for each point (world frame, metres), towards `direction` (normalised here; a zero
