@@ -60,6 +60,8 @@ class SkyResult:
     sun_elevation_rad: float
     seconds: float
     warnings: list[str]
+    lamp_transmittance: float = 1.0  # the clouds' towards the sun at the scene origin
+    shadow_map: npt.NDArray[np.float32] | None = None  # (n, n) T, rows bottom first
 
 
 def lamp_values(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401 (welkin.Atmosphere)
@@ -98,6 +100,25 @@ def disc_model(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401
     return DiscModel(direction, alpha, horizon_z(atm, altitude_m), coefficients)
 
 
+def shaded_lamp(lamp: LampValues, transmittance: float) -> LampValues:
+    """The lamp under clouds of transmittance T towards the sun (Beer-Lambert along the
+    direct beam, clouds/shadow.hpp): its strength times T. Cloud droplets' extinction is
+    grey (Mie, droplets ~10 um, density.hpp), so the beam's colour is the clear sun's; the
+    light the clouds scatter instead reaches the scene from the world's cloudy sky, which
+    is what softens the shadows under an overcast."""
+    t = min(max(float(transmittance), 0.0), 1.0)
+    return dataclasses.replace(lamp, strength_w_m2=lamp.strength_w_m2 * t)
+
+
+def lamp_transmittance(native: ModuleType, shadow_json: str,
+                       progress: Callable[[float], bool] | None = None) -> float:
+    """The clouds' transmittance towards the sun at the origin of `shadow_json` (a scene
+    description whose origin is the scene's: update.shadow_scene_json)."""
+    t = native.cloud_transmittance(native.SceneDescription.from_json_string(shadow_json),
+                                   np.zeros((1, 3)), progress=progress)
+    return float(t[0])
+
+
 def lamp_for(native: ModuleType, request: sky_request.SkyRequest) -> LampValues:
     """The lamp's values alone for `request` (no images): cheap."""
     sky_request.validate(request, native)
@@ -120,7 +141,9 @@ def _warnings(atm: Any,  # noqa: ANN401 (welkin.Atmosphere: the compiled module 
 
 
 def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool = True,
-            scene_json: str | None = None,
+            scene_json: str | None = None, shadow_json: str | None = None,
+            shade_lamp: bool = True,
+            shadow_map: Callable[[str], npt.NDArray[np.float32]] | None = None,
             progress: Callable[[float], bool] | None = None) -> SkyResult:
     """SkyResult for `request`; ValueError naming the parameter for bad input.
 
@@ -129,8 +152,12 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     (welkin.scene_sky_image, as `welkin sky --scene`), lit by the same atmosphere, and the
     disc image is dimmed by the clouds' transmittance of its pixels (the factor the core
     dims a disc in the sky image by; the disc model takes the clouds' transmittance at the
-    sun's centre). `progress`: callable(fraction) -> bool (False
-    cancels: KeyboardInterrupt)."""
+    sun's centre). `shadow_json`: the clouds that shade the sun lamp,
+    in a scene description centred on the scene origin (update.shadow_scene_json): the
+    lamp's strength is then times their transmittance towards the sun there (shaded_lamp),
+    unless shade_lamp is False; `shadow_map`: callable(shadow_json) -> the ground shadows'
+    map (cloud_shadows.shadow_map), kept in the result.
+    `progress`: callable(fraction) -> bool (False cancels: KeyboardInterrupt)."""
     start = time.perf_counter()
     sky_request.validate(request, native)
     method = sky_request.resolve_method(request.method, native)
@@ -151,8 +178,14 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
         if model is not None and transmittance is not None:
             model.coefficients *= _pixel_at(native, transmittance, model.direction)
     lamp = lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure)
+    shade, ground = 1.0, None
+    if shadow_json is not None and shade_lamp:
+        shade = lamp_transmittance(native, shadow_json)
+        lamp = shaded_lamp(lamp, shade)
+    if shadow_json is not None and shadow_map is not None:
+        ground = shadow_map(shadow_json)
     return SkyResult(sky, model, lamp, method, elevation, time.perf_counter() - start,
-                     warnings)
+                     warnings, shade, ground)
 
 
 def _pixel_at(native: ModuleType, image: npt.NDArray[np.float32],
@@ -164,10 +197,19 @@ def _pixel_at(native: ModuleType, image: npt.NDArray[np.float32],
 
 
 def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
-         sun_disc: bool = True) -> npt.NDArray[np.float32]:
+         sun_disc: bool = True, scene_json: str | None = None,
+         progress: Callable[[float], bool] | None = None) -> npt.NDArray[np.float32]:
     """(H, W, 3) float32, top row first: the whole sky as an HDRI (with the disc unless
-    sun_disc is False), for export."""
+    sun_disc is False), for export. `scene_json`: the cloudy sky's scene description (as
+    for compute): the HDRI is then the world's cloudy sky, the clouds composited over it
+    and the disc dimmed by their transmittance (welkin.scene_sky_image), the sky the world
+    shows; `progress` as for compute."""
     sky_request.validate(dataclasses.replace(request, width=sky_request.WIDTHS[0]), native)
+    if scene_json is not None:
+        image: npt.NDArray[np.float32] = native.scene_sky_image(
+            native.SceneDescription.from_json_string(scene_json), width, sun_disc=sun_disc,
+            progress=progress)
+        return image
     method = sky_request.resolve_method(request.method, native)
     atm = sky_request.build_atmosphere(request, native)
     return native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,

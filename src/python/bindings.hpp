@@ -35,6 +35,7 @@ void register_clouds(py::module_& m);
 void register_plate(py::module_& m);
 void register_scene_sky(py::module_& m);
 void register_cloud_passes(py::module_& m);
+void register_cloud_shadow(py::module_& m);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
 // is not one.

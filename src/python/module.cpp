@@ -8,6 +8,7 @@
 //   exr_bindings.cpp         write_exr, read_exr
 //   aerial_bindings.cpp      welkin.SceneDescription, aerial_perspective
 //   cloud_bindings.cpp       welkin.CloudLayer, VdbClouds, cloud_radiance
+//   cloud_shadow_bindings.cpp cloud_transmittance (towards the sun, many points)
 //   plate_bindings.cpp       camera_plate, CameraPlateRenderer
 //   cancellable.cpp          running the core off the Python thread (Ctrl-C, progress)
 #include <cstdint>
@@ -162,4 +163,5 @@ Quick start:
     register_plate(m);
     register_scene_sky(m);
     register_cloud_passes(m);
+    register_cloud_shadow(m);
 }

@@ -68,6 +68,7 @@ world = scene.world
 world.welkin.method = 'lut'
 c = world.welkin_clouds
 c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 16, 2, 1, 1
+c.volumes_in_world = True  # the world's sky reads the VDB of each frame
 vdb_dir = T.TMP / "vdb"
 paths = C.write_vdb_sequence(vdb_dir, frames=(1, 2, 3, 4), size=8)
 missing = paths[2]

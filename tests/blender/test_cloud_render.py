@@ -42,6 +42,7 @@ def cloud_scene():
     world.welkin.method = 'lut'
     c = world.welkin_clouds
     c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 32, 4, 2, 2
+    c.volumes_in_world = True  # the world texture holds the volume too
     ct.add_layer(world, bottom_altitude_m=900.0, top_altitude_m=1600.0, coverage=0.45,
                  density_per_m=0.02)
     paths = ct.write_vdb_sequence(t.TMP / "vdb", frames=(1, 2, 3), value=1.0)

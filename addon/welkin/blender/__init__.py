@@ -17,6 +17,8 @@
   viewport_preview.py  its viewport preview (Rendered shading), in a background thread
   cloud_properties.py  World.welkin_clouds (layers, lighting), Object.welkin_cloud
   cloud_scene.py     the scene's clouds as the scene JSON's "clouds" section
+  cloud_shadows.py   Ground Shadows: the shadow layer (plane, map, material) above the scene
+  compat.py          differences between Blender versions
   cloud_operators.py, cloud_panel.py  Welkin Clouds: add/remove layers, mark volumes
 """
 import bpy

@@ -13,11 +13,19 @@ long to hold the interface at each nudge of the lamp. So when the debounced UI t
     (update.apply_sky), unless the scene changed meanwhile (its sky key is not the job's
     any more): then the result is dropped and a job for the new state starts.
 
+A quick preview comes first: for a world wider than PREVIEW_WIDTH the job computes the
+same cloudy sky at PREVIEW_WIDTH (1/16 of the pixels at 1024 wide, so about 1/16 of the
+time) before the full one, and poll() shows it as soon as it is there (status "preview
+...; refining"), then replaces it with the full sky. The preview's key is not the full
+sky's, so a preview is never taken for a current sky (a cancelled job leaves the world
+stale, and the next change recomputes it).
+
 A job is cancelled through its progress callback (it returns False and the core stops at
 its next report, within a band of rows): by start() for a newer state, by a frame change
 (the frame's own synchronous update follows), by loading a file and by unregistering.
 Headless sessions run no timers; tests call poll() themselves.
 """
+import dataclasses
 import threading
 
 import bpy
@@ -27,31 +35,48 @@ from . import scene_sun, update
 from .scene_sun import UserError
 
 POLL_S = 0.1
+PREVIEW_WIDTH = 256
+PREVIEW_SUFFIX = "|preview"  # on last_key while the world shows a preview
 
 
 class Job:
     """One cloudy sky in the making. Only its own thread writes result / error."""
 
-    def __init__(self, module, request, scene_json, disc, key):
+    def __init__(self, module, request, scene_json, disc, key, shadow_json=None, shadows=None):
         self.key = key
         self.cloudy = scene_json is not None
         self.fraction = 0.0
         self.cancelled = False
         self.result = None
+        self.preview = None        # the preview's SkyResult, once computed
+        self.preview_shown = False  # poll() applied it
         self.error = None
         self.done = threading.Event()
-        self._args = (module, request, scene_json, disc)
+        self._args = (module, request, scene_json, disc, shadow_json, shadows or {})
         self.thread = threading.Thread(target=self._run, name="welkin-cloudy-sky", daemon=True)
 
     def _progress(self, fraction):
         self.fraction = fraction
         return not self.cancelled
 
+    def preview_request(self):
+        """The request of the preview, or None where the sky is no wider than it."""
+        request = self._args[1]
+        if not self.cloudy or request.width <= PREVIEW_WIDTH:
+            return None
+        return dataclasses.replace(request, width=PREVIEW_WIDTH)
+
     def _run(self):
-        module, request, scene_json, disc = self._args
+        module, request, scene_json, disc, shadow_json, shadows = self._args
         try:
+            preview = self.preview_request()
+            if preview is not None:
+                self.preview = sky_compute.compute(
+                    module, preview, disc=disc, scene_json=scene_json, shadow_json=shadow_json,
+                    progress=lambda f: self._progress(0.0), **shadows)
             self.result = sky_compute.compute(module, request, disc=disc, scene_json=scene_json,
-                                              progress=self._progress)
+                                              shadow_json=shadow_json, progress=self._progress,
+                                              **shadows)
         except KeyboardInterrupt:  # the progress callback said stop
             self.cancelled = True
         except Exception as error:  # reported by poll() on the main thread
@@ -90,7 +115,9 @@ def start(scene):
     cancel()
     scene_json = (update.cloudy_scene_json(scene, settings, request, clouds, module, None)
                   if clouds else None)
-    _job = Job(module, request, scene_json, settings.show_sun_disc, key)
+    shadow_json = update.shadow_scene_json(scene, settings, request, clouds, module)
+    _job = Job(module, request, scene_json, settings.show_sun_disc, key, shadow_json,
+               update.shadow_options(scene, module))
     _job.thread.start()
     settings.status = "computing the cloudy sky beside the interface: 0 %"
     if not bpy.app.timers.is_registered(poll):
@@ -109,7 +136,10 @@ def poll():
     settings = scene.world.welkin if scene is not None and scene.world is not None else None
     if not job.done.is_set():
         if settings is not None and not job.cancelled:
-            settings.status = ("computing the cloudy sky beside the interface: "
+            if job.preview is not None and not job.preview_shown:
+                _show_preview(scene, job)
+            what = "refining" if job.preview_shown else "computing"
+            settings.status = (f"{what} the cloudy sky beside the interface: "
                                f"{100.0 * job.fraction:.0f} %")
             _redraw_properties()
         return POLL_S
@@ -133,6 +163,24 @@ def poll():
         settings.status = f"sky not updated: {error}"
     _redraw_properties()
     return None
+
+
+def _show_preview(scene, job):
+    """Writes the job's preview into the world (main thread), unless the scene moved on;
+    the world's key says preview, so the sky stays stale until the full one is applied."""
+    job.preview_shown = True
+    settings = scene.world.welkin
+    try:
+        request, lamp, warnings = scene_sun.request_for(scene, settings, None)
+        if update.sky_key(settings, request, update.clouds_of(scene, None)) != job.key:
+            return
+        outcome = update.Outcome()
+        outcome.warnings = warnings
+        preview = job.preview_request()
+        update.apply_sky(scene, preview, lamp, job.key + PREVIEW_SUFFIX, job.preview, outcome,
+                         pack=False, cloudy=True)
+    except UserError as error:
+        settings.status = f"sky not updated: {error}"
 
 
 def cancel():

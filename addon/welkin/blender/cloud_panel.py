@@ -60,6 +60,15 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
         sub.prop(s, "ambient_steps")
         col.prop(s, "octaves")
         layout.separator()
+        col = layout.column()
+        col.prop(s, "shadows")
+        col.prop(s, "ground_shadows")
+        sub = col.column(align=True)
+        sub.active = s.ground_shadows
+        sub.prop(s, "shadow_extent_m")
+        sub.prop(s, "shadow_height_m")
+        sub.prop(s, "shadow_resolution")
+        layout.separator()
         layout.label(text="Volume objects marked as clouds:")
         volumes = cloud_scene.marked_volumes(context.scene)
         box = layout.box()
@@ -67,6 +76,7 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
             box.label(text="none (select Volume objects, then Mark)", icon='INFO')
         for ob in volumes:
             box.label(text=f"{ob.name}: grid '{ob.welkin_cloud.grid}'", icon='VOLUME_DATA')
+        layout.prop(s, "volumes_in_world")
         row = layout.row(align=True)
         row.operator("welkin.mark_cloud_volumes", icon='ADD')
         row.operator("welkin.unmark_cloud_volumes", icon='REMOVE')

@@ -98,6 +98,37 @@ class WelkinCloudSettings(bpy.types.PropertyGroup):
         name="Scattering Orders", default=2, min=1, max=2, update=_changed,
         description="1: single scattering only (faster, darker); 2: all orders of "
                     "scattering (the delta-Eddington diffusion term)")
+    shadows: bpy.props.BoolProperty(
+        name="Shade Sun Lamp", default=True, update=_changed,
+        description="The sun lamp's strength follows the clouds' transmittance towards the "
+                    "sun at the scene origin (under an overcast it dims, and the cloudy "
+                    "world's light softens the shadows)")
+    lamp_transmittance: bpy.props.FloatProperty(
+        default=1.0, options={'HIDDEN'},
+        description="The clouds' transmittance towards the sun of the last sky update")
+    ground_shadows: bpy.props.BoolProperty(
+        name="Ground Shadows", default=False, update=_changed,
+        description="The clouds' moving shadows on the scene: a shadow layer (a plane of "
+                    "the add-on's, seen by shadow rays only) above the scene carries the "
+                    "clouds' transmittance towards the sun; removed when switched off")
+    shadow_extent_m: bpy.props.FloatProperty(
+        name="Shadow Extent (m)", default=4000.0, min=10.0, max=1e6, soft_max=50000.0,
+        update=_changed, description="Width of the square shadow layer, centred on the "
+                                     "scene origin, m")
+    shadow_height_m: bpy.props.FloatProperty(
+        name="Shadow Height (m)", default=200.0, min=0.0, max=19999.0, soft_max=5000.0,
+        update=_changed, description="Height of the shadow layer above the scene origin: "
+                                     "above every prop, below the clouds, m")
+    shadow_resolution: bpy.props.IntProperty(
+        name="Shadow Resolution", default=128, min=8, max=2048, soft_max=512,
+        update=_changed, description="Texels along each side of the shadow map")
+    volumes_in_world: bpy.props.BoolProperty(
+        name="Volumes in World Sky", default=False, update=_changed,
+        description="Also render the marked VDB volumes into the world's sky texture (for "
+                    "distant clouds: turn the volume object's camera ray visibility off, or "
+                    "Cycles and EEVEE show it twice). Off: Cycles and EEVEE render the volume "
+                    "object themselves and the world holds the cloud layers only; the Welkin "
+                    "engine and passes always include the volumes")
 
 
 class WelkinObjectCloud(bpy.types.PropertyGroup):

@@ -30,16 +30,42 @@ def volume_path(volume, frame):
                                     volume.sequence_mode)
 
 
-def has_clouds(scene):
+def has_clouds(scene, volumes=True):
+    """True when the scene has an enabled cloud layer, or (`volumes`) a marked volume."""
     world = scene.world
     layers = world is not None and any(l.enabled for l in world.welkin_clouds.layers)
-    return layers or bool(marked_volumes(scene))
+    return layers or (volumes and bool(marked_volumes(scene)))
 
 
-def clouds_section(scene, depsgraph=None, frame=None):
-    """The "clouds" dict for the scene at `frame` (default: the current frame), or None
-    for a clear sky. UserError for a marked volume without a file."""
+def volumes_in_world(scene):
+    """Whether the world's sky texture holds the marked volumes too (WelkinCloudSettings.
+    volumes_in_world; off by default: Cycles and EEVEE render a volume object themselves,
+    and a world that also held it would show it twice)."""
     world = scene.world
+    return world is not None and world.welkin_clouds.volumes_in_world
+
+
+def evaluated(id_, depsgraph):
+    """`id_` as `depsgraph` evaluated it (its animated values at that depsgraph's frame),
+    or `id_` itself without a depsgraph.
+
+    A render's depsgraph (`blender -a`, F12, Ctrl F12) is not the active one: Blender
+    animates its own evaluated copies of the world and the objects and leaves the
+    originals at the values of the frame the interface shows (only the active depsgraph
+    writes animated values back). Reading the original world's cloud layers during such a
+    render gives every frame the clouds of that one frame: the keyed wind offset stands
+    still. So the values come from the evaluated copy whenever a depsgraph is given."""
+    if depsgraph is None or id_ is None:
+        return id_
+    return id_.evaluated_get(depsgraph)
+
+
+def clouds_section(scene, depsgraph=None, frame=None, with_volumes=True):
+    """The "clouds" dict for the scene at `frame` (default: the current frame), or None
+    for a clear sky: the values `depsgraph` evaluated for that frame when given (keyed
+    wind, coverage, density...), else the originals'; `with_volumes`: with the marked volumes.
+    UserError for a marked volume without a file."""
+    world = evaluated(scene.world, depsgraph)
     frame = scene.frame_current if frame is None else frame
     settings = world.welkin_clouds if world is not None else None
     layers = []
@@ -49,9 +75,9 @@ def clouds_section(scene, depsgraph=None, frame=None):
                 values = {k: getattr(layer, k) for k in cloud_export.LAYER_FIELDS}
                 layers.append(cloud_export.layer_dict(values, layer.seed, layer.wind_offset_m))
     volumes = []
-    for ob in marked_volumes(scene):
-        evaluated = ob.evaluated_get(depsgraph) if depsgraph is not None else ob
-        if evaluated.hide_render:
+    for ob in marked_volumes(scene) if with_volumes else ():
+        ob_eval = evaluated(ob, depsgraph)
+        if ob_eval.hide_render:
             continue
         volume = ob.data
         if not volume.filepath:
@@ -62,8 +88,8 @@ def clouds_section(scene, depsgraph=None, frame=None):
             continue
         try:
             volumes.append(cloud_export.volume_dict(
-                ob.name, path, ob.welkin_cloud.grid or "density",
-                [list(r) for r in evaluated.matrix_world], ob.welkin_cloud.density_scale,
+                ob.name, path, ob_eval.welkin_cloud.grid or "density",
+                [list(r) for r in ob_eval.matrix_world], ob_eval.welkin_cloud.density_scale,
                 scene.unit_settings.scale_length, compat.cycles_vdb_placement()))
         except cloud_export.MissingVolume as error:
             raise UserError(str(error)) from None
@@ -74,3 +100,41 @@ def clouds_section(scene, depsgraph=None, frame=None):
         albedo = settings.albedo
         lighting = {k: getattr(settings, k) for k in cloud_export.LIGHTING_FIELDS}
     return cloud_export.clouds_dict(layers, volumes, albedo, lighting)
+
+
+# The clouds of the frame being rendered, read at frame_change_post: (scene name, frame,
+# the render depsgraph's address) -> the "clouds" dict, one entry at most.
+_captured = {}
+
+
+def _capture_key(scene, depsgraph):
+    return (scene.name, scene.frame_current, depsgraph.as_pointer())
+
+
+def capture(scene, depsgraph):
+    """frame_change_post of a render: keeps this frame's clouds for the render engine.
+
+    Blender evaluates a render's depsgraph again after frame_change_post when a handler
+    changed data (the sky update writes the world's images and state); that second pass
+    copies the world from the original without animating it again, so by the time the
+    engine's render() runs, the evaluated world holds the original's (the interface's
+    frame's) values: a keyed wind offset would stand still. Read here, before anything
+    is written, the values are this frame's."""
+    _captured.clear()
+    if depsgraph is None or depsgraph.mode != 'RENDER':
+        return
+    try:
+        _captured[_capture_key(scene, depsgraph)] = clouds_section(scene, depsgraph)
+    except UserError:
+        pass  # the engine reads them itself, and reports the problem
+
+
+def frame_clouds(scene, depsgraph):
+    """The clouds of the frame `depsgraph` renders: those capture() kept for it, else read
+    now (clouds_section)."""
+    if depsgraph is not None and depsgraph.mode == 'RENDER':
+        key = _capture_key(scene, depsgraph)
+        if key in _captured:
+            return _captured[key]
+    return clouds_section(scene, depsgraph)
+

@@ -25,7 +25,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, cloud_scene, farm, scene_sun, update
+from . import background, cloud_scene, cloud_shadows, farm, scene_sun, update
 from .scene_sun import UserError
 
 DEBOUNCE_S = 0.15
@@ -79,7 +79,7 @@ def _tick():
     _state["armed"] = False
     scene = bpy.context.scene
     if scene is not None and _live(scene):
-        if cloud_scene.has_clouds(scene):
+        if cloud_scene.has_clouds(scene, volumes=cloud_scene.volumes_in_world(scene)):
             _guarded(scene, lambda: background.start(scene))
         else:
             background.cancel()  # the clouds were switched off while a cloudy sky computed
@@ -145,6 +145,7 @@ def on_frame_change_pre(scene, depsgraph=None):
 
 @persistent
 def on_frame_change_post(scene, depsgraph=None):
+    cloud_scene.capture(scene, depsgraph)  # before anything is written (cloud_scene.py)
     if not _live(scene):
         return
     # UI renders (F12, Ctrl F12) call frame handlers on the render thread while the
@@ -167,7 +168,9 @@ def on_save_pre(*_args):
         if update.not_editable(world) is not None:
             continue  # a linked world's images live in its library
         settings = world.welkin
-        for image in (settings.sky_image,):
+        shadow_maps = [i for i in bpy.data.images
+                       if i.get(cloud_shadows.SHADOW_KEY) == world.name_full]
+        for image in (settings.sky_image, *shadow_maps):
             if image is not None and image.library is None \
                     and (image.is_dirty or image.packed_file is None):
                 update.images.pack(image)

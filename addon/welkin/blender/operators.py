@@ -72,7 +72,8 @@ class WELKIN_OT_remove_sky(bpy.types.Operator):
 
 
 class WELKIN_OT_export_hdri(bpy.types.Operator, ExportHelper):
-    """Write the sky (with the sun's disc) as an equirectangular OpenEXR HDRI"""
+    """Write the sky the world shows (its clouds included, the sun's disc optional) as an
+    equirectangular OpenEXR HDRI"""
     bl_idname = "welkin.export_hdri"
     bl_label = "Export HDRI"
     bl_options = {'REGISTER'}
@@ -103,12 +104,24 @@ class WELKIN_OT_export_hdri(bpy.types.Operator, ExportHelper):
             world = scene.world
             if world is None:
                 raise UserError("the scene has no world: add one, or run Update Sky first")
-            request, _lamp, warnings = scene_sun.request_for(
-                scene, world.welkin, context.evaluated_depsgraph_get())
+            depsgraph = context.evaluated_depsgraph_get()
+            request, _lamp, warnings = scene_sun.request_for(scene, world.welkin, depsgraph)
             width = self.width or request.width
             if width < 4 or width % 2:
                 raise UserError(f"width: must be even and in [4, 16384] (or 0), got {width}")
-            pixels = sky_compute.hdri(module, request, width, sun_disc=self.sun_disc)
+            # The clouds the world shows (its layers and the volumes it holds), seen from
+            # where the world's sky is seen from.
+            clouds = update.clouds_of(scene, depsgraph)
+            scene_json = (update.cloudy_scene_json(scene, world.welkin, request, clouds, module,
+                                                   depsgraph) if clouds else None)
+            wm = context.window_manager
+            wm.progress_begin(0.0, 1.0)
+            try:
+                pixels = sky_compute.hdri(module, request, width, sun_disc=self.sun_disc,
+                                          scene_json=scene_json,
+                                          progress=lambda f: wm.progress_update(f) or True)
+            finally:
+                wm.progress_end()
             clamped = module.write_exr(
                 path, pixels, half=self.half, overwrite=self.overwrite,
                 attributes=[("software", f"welkin {module.__version__} (Blender add-on)"),
@@ -117,6 +130,8 @@ class WELKIN_OT_export_hdri(bpy.types.Operator, ExportHelper):
             return _fail(self, error)
         except (ValueError, OSError) as error:
             return _fail(self, error)
+        except KeyboardInterrupt:
+            return _fail(self, "cancelled: no file was written")
         _report_warnings(self, warnings)
         if clamped:
             _report_warnings(self, [f"{clamped} values above 65504 (the sun's disc) were "

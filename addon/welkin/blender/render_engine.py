@@ -55,7 +55,7 @@ def scene_world(scene, depsgraph, native):
     atm = sky_request.build_atmosphere(request, native)
     # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
     # a UserError naming the object and the path: no frame is written).
-    clouds = cloud_scene.clouds_section(scene, depsgraph)
+    clouds = cloud_scene.frame_clouds(scene, depsgraph)
     return {"atmosphere_json": atm.to_json_string(), "origin_altitude_m": settings.altitude_m,
             "sun_direction": tuple(request.sun_direction), "exposure": request.exposure,
             "method": sky_request.resolve_method(request.method, native), "clouds": clouds}

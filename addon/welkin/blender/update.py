@@ -12,7 +12,7 @@ import json
 import bpy
 
 from .. import native, scene_export, sky_compute, sky_request
-from . import cloud_scene, images, scene_sun, world_nodes
+from . import cloud_scene, cloud_shadows, images, scene_sun, world_nodes
 from .scene_sun import UserError
 
 WORLD_NAME = "Welkin World"
@@ -99,8 +99,13 @@ def _sync_lamp(lamp, values, depsgraph):
 
 
 def clouds_of(scene, depsgraph=None):
-    """The scene's "clouds" section at the current frame, or None (clear sky)."""
-    return cloud_scene.clouds_section(scene, depsgraph) if cloud_scene.has_clouds(scene) else None
+    """The "clouds" section of the world's sky at the current frame, or None (clear sky):
+    the enabled layers, and the marked volumes only with Volumes in World Sky (Cycles and
+    EEVEE render a volume object themselves; cloud_scene.volumes_in_world)."""
+    volumes = cloud_scene.volumes_in_world(scene)
+    if not cloud_scene.has_clouds(scene, volumes=volumes):
+        return None
+    return cloud_scene.clouds_section(scene, depsgraph, with_volumes=volumes)
 
 
 def sky_key(settings, request, clouds):
@@ -108,7 +113,10 @@ def sky_key(settings, request, clouds):
     and the clouds (their layers, and each volume's file for the frame and placement)."""
     # "disc nodes": a file saved while the disc was an image gets its nodes at the first
     # update.
-    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp, "disc nodes"))
+    c = settings.id_data.welkin_clouds
+    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp, "disc nodes", c.shadows,
+                                c.ground_shadows and (c.shadow_extent_m, c.shadow_height_m,
+                                                      c.shadow_resolution)))
     if clouds:
         key += json.dumps(clouds, sort_keys=True)
     return key
@@ -145,6 +153,43 @@ def cloudy_scene_json(scene, settings, request, clouds, module, depsgraph=None):
     return json.dumps(d)
 
 
+def shadow_scene_json(scene, settings, request, clouds, module):
+    """The scene description of the clouds that shade the sun lamp (the world's clouds,
+    `clouds`), centred on the scene origin (origin_altitude_m: the world's Altitude), or
+    None when there are none or neither Shade Sun Lamp nor Ground Shadows is on. Its sun
+    is the request's."""
+    c = scene.world.welkin_clouds
+    if not clouds or not (c.shadows or c.ground_shadows):
+        return None
+    atmosphere = json.loads(sky_request.build_atmosphere(request, module).to_json_string())
+    r = scene.render
+    d = scene_export.scene_dict(
+        atmosphere, settings.altitude_m, request.sun_direction, request.exposure,
+        sky_request.resolve_method(request.method, module), None,
+        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=clouds)
+    del d["camera"]
+    return json.dumps(d)
+
+
+def shadow_options(scene, module):
+    """The keyword arguments of sky_compute.compute for the world's cloud shadows
+    (shade_lamp, shadow_map)."""
+    c = scene.world.welkin_clouds
+    if not c.ground_shadows:
+        return {"shade_lamp": c.shadows, "shadow_map": None}
+    extent, height, n = c.shadow_extent_m, c.shadow_height_m, c.shadow_resolution
+    return {"shade_lamp": c.shadows, "shadow_map": lambda text: cloud_shadows.shadow_map(
+        module, text, extent, height, n)}
+
+
+def current_lamp(module, request, settings):
+    """The lamp's values for `request` under the clouds of the last sky update (the
+    transmittance it kept), without recomputing anything: cheap."""
+    lamp = sky_compute.lamp_for(module, request)
+    clouds = settings.id_data.welkin_clouds
+    return sky_compute.shaded_lamp(lamp, clouds.lamp_transmittance) if clouds.shadows else lamp
+
+
 def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, live=False):
     """Brings the world's sky up to date with the scene. Returns an Outcome. `progress`:
     callable(fraction) -> bool for a cloudy sky (seconds); `live`: a cloudy sky is not
@@ -166,7 +211,7 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
             # The sky is current, but this render's evaluated lamp may be a fresh copy of
             # the original (see _sync_lamp): give it its values again (no images).
             try:
-                _sync_lamp(lamp, sky_compute.lamp_for(module, request), depsgraph)
+                _sync_lamp(lamp, current_lamp(module, request, settings), depsgraph)
             except ValueError as error:
                 raise UserError(str(error)) from None
         return outcome
@@ -179,8 +224,10 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     try:
         scene_json = (cloudy_scene_json(scene, settings, request, clouds, module, depsgraph)
                       if clouds else None)
-        result = sky_compute.compute(module, request, disc=settings.show_sun_disc,
-                                     scene_json=scene_json, progress=progress)
+        result = sky_compute.compute(
+            module, request, disc=settings.show_sun_disc, scene_json=scene_json,
+            shadow_json=shadow_scene_json(scene, settings, request, clouds, module),
+            progress=progress, **shadow_options(scene, module))
     except (ValueError, OSError) as error:
         raise UserError(str(error)) from None
     apply_sky(scene, request, lamp, key, result, outcome, pack=pack, depsgraph=depsgraph,
@@ -200,6 +247,17 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
         images.pack(sky)
     world_nodes.install(scene.world, settings, sky, result.disc)
     images.drop_disc_image(settings)  # files from before the disc was drawn by nodes
+    clouds = scene.world.welkin_clouds
+    clouds.lamp_transmittance = result.lamp_transmittance
+    render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
+    if result.shadow_map is not None:
+        if not cloud_shadows.install(scene, result.shadow_map, request.sun_direction,
+                                     clouds.shadow_extent_m, clouds.shadow_height_m,
+                                     create=not render_graph):
+            outcome.warnings.append("Ground Shadows: the shadow layer is made by Update Sky "
+                                    "(not during a render): press Update Sky, then render")
+    elif not render_graph:
+        cloud_shadows.remove(scene.world)
     if settings.sync_lamp:
         _sync_lamp(lamp, result.lamp, depsgraph)
     settings.active = True
@@ -211,6 +269,8 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     settings.status = (f"sky {request.width}x{height}{' with clouds' if cloudy else ''} by "
                        f"{result.method} in "
                        f"{result.seconds:.2f} s from '{lamp.name}'"
+                       + (f"; sun lamp x {result.lamp_transmittance:.3g} under the clouds"
+                          if result.lamp_transmittance < 1.0 else "")
                        + (f"; {len(outcome.warnings)} warning(s)" if outcome.warnings else ""))
 
 
@@ -223,6 +283,7 @@ def remove_sky(scene):
     settings = world.welkin
     world_nodes.remove(world, settings)
     images.remove(settings)
+    cloud_shadows.remove(world)
     restore_lamps(scene)
     settings.active = False
     settings.last_key = ""
