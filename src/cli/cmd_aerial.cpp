@@ -122,7 +122,7 @@ Command add_aerial_command(CLI::App& app) {
         "aerial", "Aerial-perspective passes (in-scattering and transmittance) for a rendered "
                   "frame, from its scene JSON and its depth (Z pass), as a multilayer OpenEXR");
     add_scene_output_options(sub, *args,
-                             "Scene description JSON (the schema the Blender add-on writes; see README "
+                             "Scene description JSON (the schema the Blender add-on writes; see docs/pipelines.md "
                              "\"Scene JSON\"): atmosphere, sun, camera, render resolution");
     sub->add_option("--depth", args->depth,
                     "OpenEXR holding the frame's depth: Blender's Z pass, metres along the "

@@ -29,7 +29,7 @@ int run_clouds(const CloudsArgs& args) {
     const SceneDescription scene = load_camera_scene(args.scene);
     if (!scene.has_clouds())
         throw InvalidArgument("--scene", fmt::format("clouds: '{}' has no cloud layers or volumes (add a "
-                                                     "\"clouds\" key: README \"Scene JSON\")",
+                                                     "\"clouds\" key: docs/pipelines.md \"Scene JSON\")",
                                                      args.scene));
     const int width = scene.resolution.width(), height = scene.resolution.height();
     DepthImage depth;
@@ -84,7 +84,7 @@ Command add_clouds_command(CLI::App& app) {
         "clouds", "The scene camera's cloud passes (Welkin.Clouds, Welkin.CloudDepth) from a scene "
                   "JSON with \"clouds\", as a multilayer OpenEXR");
     add_scene_output_options(sub, *args,
-                             "Scene description JSON with a camera and \"clouds\" (README \"Scene JSON\")");
+                             "Scene description JSON with a camera and \"clouds\" (docs/pipelines.md \"Scene JSON\")");
     sub->add_option("--depth", args->depth,
                     "OpenEXR holding the render's depth (Blender's Z pass); rays end at the "
                     "geometry, so that it hides the clouds behind it (default: no geometry)")

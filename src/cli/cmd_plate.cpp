@@ -85,7 +85,7 @@ Command add_plate_command(CLI::App& app) {
     CLI::App* sub = app.add_subcommand(
         "plate", "The scene camera's plate: sky, sun disc and aerial perspective over the "
                  "ground (no meshes), as the Blender render engine \"Welkin\" renders it");
-    add_scene_output_options(sub, *args, "Scene description JSON with a camera (README \"Scene JSON\")");
+    add_scene_output_options(sub, *args, "Scene description JSON with a camera (docs/pipelines.md \"Scene JSON\")");
     sub->footer("Channels: R, G, B (Combined), Welkin.Sky.{R,G,B}, Welkin.AerialInscatter.{R,G,B}, "
                 "Welkin.AerialTransmittance.{R,G,B}, Welkin.Clouds.{R,G,B,A} (premultiplied; alpha "
                 "0 without \"clouds\" in the scene), Welkin.CloudDepth.Z (1e10 where no cloud), Z. "

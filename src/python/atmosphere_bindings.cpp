@@ -152,7 +152,7 @@ Raises ValueError for an unknown name or a wavelength out of range.
                         return Atmosphere::from_json_file(path.string());
                     },
                     py::arg("path"), R"doc(
-Reads an atmosphere from a JSON file (schema in README.md; {"preset": name}
+Reads an atmosphere from a JSON file (schema in docs/pipelines.md, "Atmosphere JSON"; {"preset": name}
 plus any fields to override). Raises ValueError naming the field (its key path)
 and the file for malformed JSON, a number out of range, unknown keys or invalid
 values; OSError naming the file for one it cannot read (missing, a directory or

@@ -70,7 +70,7 @@ struct Atmosphere {
                              const std::vector<double>& wavelengths_nm = {});
     static std::vector<std::string> preset_names();
 
-    // JSON (the schema is documented in README.md and written by to_json).
+    // JSON (the schema is documented in docs/pipelines.md, "Atmosphere JSON", and written by to_json).
     static Atmosphere from_json_string(const std::string& text);
     static Atmosphere from_json_file(const std::string& path);
     std::string to_json_string() const;

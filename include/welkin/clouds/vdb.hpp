@@ -15,11 +15,8 @@
 // point ijk (offset 0: VoxelPlacement::OpenVdb). Blender 3.4 / Cycles render it half a voxel
 // further along every index axis, at index point ijk + (1/2, 1/2, 1/2) (offset 1/2:
 // VoxelPlacement::Blender, the default, so that a Welkin cloud sits where Blender shows the
-// volume object). Measured (README "Clouds" > "Against Cycles", bench/cycles_volume.py): the
-// same .vdb rendered by Cycles and by Welkin, Cycles' opacity differs from Welkin's by up to
-// 0.22 at the cloud's edges with offset 0, 0.35 with offset -1/2 and 0.09 (the noise) with
-// offset +1/2; the radiance bias of tests/blender/test_cycles_clouds.py is -0.2 % (se 0.4 %)
-// with +1/2 and -2.9 % (se 0.4 %) with 0. The offset is applied once, to the index -> world
+// volume object). The offsets measured against Cycles are in docs/validation.md
+// ("Clouds against Cycles", bench/cycles_volume.py). The offset is applied once, to the index -> world
 // map (index_to_world = matrix_world * grid_transform * translate(offset)), so sigma_t, the
 // majorant DDA and world_bounds_* all move together and empty-space skipping stays
 // conservative. For a grid transform of scale s (and no rotation) this is the world

@@ -1,6 +1,6 @@
 // Camera cloud passes: what the scene camera sees of the scene's clouds, in front of the
-// scene's geometry, with the air between the camera and the cloud (DESIGN.md pass names;
-// README "Clouds in scenes" gives the same definition).
+// scene's geometry, with the air between the camera and the cloud (docs/design.md pass names;
+// docs/pipelines.md "Clouds in a scene" gives the same definition).
 //
 // For every pixel of the scene's render (scene.resolution, camera.hpp's rays: perspective,
 // orthographic and equirectangular panoramas) the pixel's centre ray is marched through

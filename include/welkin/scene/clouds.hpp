@@ -1,5 +1,5 @@
 // The clouds of a scene, as plain data: procedural layers, OpenVDB volumes and how they are
-// lit. Part of the SceneDescription (scene.hpp, key "clouds" of the scene JSON, README
+// lit. Part of the SceneDescription (scene.hpp, key "clouds" of the scene JSON, docs/pipelines.md
 // "Scene JSON", the schema the Blender add-on writes).
 //
 // A scene's clouds are the union of all its layers and volumes: one density,

@@ -5,7 +5,7 @@
 // (a few lines: the camera's matrix_world and its Camera data, the sun lamp's direction,
 // the render resolution) beside each frame's passes, and `welkin aerial --scene` or
 // `welkin sky --scene` reproduces the frame from the JSON alone. The schema is documented
-// in README.md ("Scene JSON"); scene_json.cpp reads and writes it. to_json writes the
+// in docs/pipelines.md ("Scene JSON"); scene_json.cpp reads and writes it. to_json writes the
 // atmosphere in full (not by preset name), so a file stays valid when a preset changes.
 //
 // Frame: Blender's world frame, Z up, metres. The scene origin (0, 0, 0) sits
