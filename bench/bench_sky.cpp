@@ -29,6 +29,7 @@
 #include "welkin/atmosphere/lut_cache.hpp"
 #include "welkin/sky/lut.hpp"
 #include "welkin/atmosphere/skyview_lut.hpp"
+#include "welkin/render/sky_image.hpp"
 #include "welkin/sky/method.hpp"
 
 using namespace welkin;
@@ -59,7 +60,7 @@ int main(int argc, char** argv) {
     };
 
     // LUT builds, one at a time.
-    const AtmosphereBatch medium(atm, 0, 3);
+    const AtmosphereBatch medium(atm, 0, atm.channels());
     report(fmt::format("transmittance LUT {}x{}", options.transmittance_width, options.transmittance_height),
            median_ms(repeats, [&] { TransmittanceLut t(medium, options.transmittance_width, options.transmittance_height); }));
     const TransmittanceLut tlut(medium, options.transmittance_width, options.transmittance_height);
@@ -69,7 +70,7 @@ int main(int argc, char** argv) {
     report(fmt::format("sky-view LUT {}x{}", options.skyview_width, options.skyview_height),
            median_ms(repeats, [&] { SkyViewLut s(medium, tlut, mslut, r, observer.sun_direction.z, options.skyview_width, options.skyview_height); }));
     report("full LUT rebuild (atmosphere change: all three)", median_ms(repeats, [&] {
-               AtmosphereBatch m(atm, 0, 3);
+               AtmosphereBatch m(atm, 0, atm.channels());
                TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
                MultiScatteringLut ms(m, t, options.multiscattering_size);
                SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
@@ -77,11 +78,53 @@ int main(int argc, char** argv) {
     // From the ground itself the sky-view rows below the horizon are rays of no length
     // (no steps); 1 km up they cross air too, so this is the rebuild of an elevated camera.
     report("full LUT rebuild, observer 1 km up", median_ms(repeats, [&] {
-               AtmosphereBatch m(atm, 0, 3);
+               AtmosphereBatch m(atm, 0, atm.channels());
                TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
                MultiScatteringLut ms(m, t, options.multiscattering_size);
                SkyViewLut s(m, t, ms, r + 1000.0, observer.sun_direction.z, options.skyview_width, options.skyview_height);
            }));
+
+    // Colour: the default four wavelengths (620/560/480/440 nm, fitted conversion) beside
+    // the three of Bruneton 2017 (680/550/440 nm) they replaced, side by side: the full LUT
+    // rebuild and a 2048 x 1024 RGB sky image (render_equirect_sky with the lut method, all
+    // LUTs built in the call, the disc included).
+    {
+        const Atmosphere three = Atmosphere::preset("bruneton2017", {680.0, 550.0, 440.0});
+        auto rebuild = [&](const Atmosphere& a) {
+            return median_ms(repeats, [&] {
+                AtmosphereBatch m(a, 0, a.channels());
+                TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
+                MultiScatteringLut ms(m, t, options.multiscattering_size);
+                SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+            });
+        };
+        const LutSky uncached(options, nullptr);
+        auto image = [&](const Atmosphere& a) {
+            return median_ms(std::max(3, repeats / 4), [&] { render_equirect_sky(uncached, a, observer, width); });
+        };
+        const Atmosphere eight = Atmosphere::preset("bruneton2017", {680.0, 640.0, 600.0, 560.0, 520.0, 480.0, 440.0, 400.0});
+        const double r3 = rebuild(three), r4 = rebuild(atm);
+        double r8 = 0.0;
+        {
+            r8 = median_ms(repeats, [&] {
+                for (std::size_t first = 0; first < 8; first += 4) {
+                    AtmosphereBatch m(eight, first, 4);
+                    TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
+                    MultiScatteringLut ms(m, t, options.multiscattering_size);
+                    SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+                }
+            });
+        }
+        report("full LUT rebuild, 3 wavelengths (680/550/440)", r3);
+        report("full LUT rebuild, default 4 wavelengths", r4);
+        report("full LUT rebuild, 8 wavelengths (two batches)", r8);
+        const double i3 = image(three), i4 = image(atm), i8 = image(eight);
+        report(fmt::format("{}x{} RGB sky image, 3 wavelengths", width, width / 2), i3);
+        report(fmt::format("{}x{} RGB sky image, default 4 wavelengths", width, width / 2), i4);
+        report(fmt::format("{}x{} RGB sky image, 8 wavelengths", width, width / 2), i8);
+        fmt::print("  colour: 4 / 3 wavelengths: LUT rebuild {:.2f}x, image {:.2f}x\n", r4 / r3, i4 / i3);
+        fmt::print("  colour: 8 / 3 wavelengths: LUT rebuild {:.2f}x, image {:.2f}x\n", r8 / r3, i8 / i3);
+    }
 
     // Whole-image skies through the SkyMethod interface.
     const int height = width / 2;

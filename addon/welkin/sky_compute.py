@@ -167,10 +167,11 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     if scene_json is not None:
         sky, transmittance = native.scene_sky_image(
             native.SceneDescription.from_json_string(scene_json), request.width, sun_disc=False,
-            return_transmittance=True, progress=progress)
+            return_transmittance=True, progress=progress, ground=request.ground)
     else:
         sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
-                               method, "rgb", sun_disc=False, exposure=request.exposure)
+                               method, "rgb", sun_disc=False, exposure=request.exposure,
+                               ground=request.ground)
     model = None
     if disc:
         model = disc_model(native, atm, request.altitude_m, request.sun_direction,
@@ -213,4 +214,5 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
     method = sky_request.resolve_method(request.method, native)
     atm = sky_request.build_atmosphere(request, native)
     return native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,
-                            "rgb", sun_disc=sun_disc, exposure=request.exposure)
+                            "rgb", sun_disc=sun_disc, exposure=request.exposure,
+                            ground=request.ground)

@@ -36,6 +36,7 @@ class SkyRequest:
     width: int = 1024               # equirect width; height = width / 2
     method: str = "auto"
     exposure: float = 1.0
+    ground: bool = True             # the lit ground below the horizon (False: black)
 
     def key(self) -> str:
         """A string that changes whenever the sky would (sun rounded to 1e-7)."""

@@ -9,7 +9,7 @@
 namespace welkin {
 
 const std::vector<double>& default_wavelengths_nm() {
-    static const std::vector<double> w{680.0, 550.0, 440.0};
+    static const std::vector<double> w{620.0, 560.0, 480.0, 440.0};
     return w;
 }
 

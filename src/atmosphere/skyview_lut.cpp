@@ -65,13 +65,15 @@ WELKIN_ALWAYS_INLINE double zenith_angle_of(double mu) {
     return mu < 0.0 ? kPi - acos_a : acos_a;
 }
 
-// Hillaire's latitude mapping (above), computed both ways and one selected.
+// Hillaire's latitude mapping (above), computed both ways and one selected. The exact
+// horizon, theta = theta_h, is sky: a ray tangent to the ground does not hit it (mu = 0 from
+// the ground; geometry.hpp's ray_hits_ground), as every other method sees it.
 WELKIN_ALWAYS_INLINE float v_of_zenith_angle(double theta, double theta_h, double beta, int h) {
     const float above = min_value(float(0.5 * (1.0 - std::sqrt(max_value(1.0 - theta / theta_h, 0.0)))),
                                   (float(h / 2) - 0.5f) / float(h));  // stay above the horizon
     const float below = max_value(float(0.5 * (1.0 + std::sqrt(max_value((theta - theta_h) / beta, 0.0)))),
                                   (float(h / 2) + 0.5f) / float(h));  // stay below it
-    return theta < theta_h ? above : below;
+    return theta <= theta_h ? above : below;
 }
 
 // (u, v) as the texel coordinates of a bilinear lookup, as Texture2D::sample takes them:

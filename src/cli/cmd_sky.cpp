@@ -31,6 +31,8 @@ struct SkyArgs {
     double exposure = 1.0;
     bool half = false, full_float = false;
     bool no_sun_disc = false;
+    bool ground = true;
+    std::optional<double> ground_albedo;
     bool multilayer = false;
     bool spectral_channels = false;
     bool overwrite = false;
@@ -50,6 +52,8 @@ struct SkySettings {
     std::string method;
     double exposure;
     std::shared_ptr<const CloudDensity> clouds;  // the scene's (none without --scene)
+    bool ground = true;                          // the scene's ground (--no-ground wins)
+    std::optional<double> ground_albedo;         // the scene's (--ground-albedo wins)
     CloudLightingOptions cloud_lighting;
     int air_steps = AerialOptions{}.raymarch_steps;  // the air in front of the clouds
     std::size_t cloud_layers = 0, cloud_volumes = 0;
@@ -84,6 +88,8 @@ SkySettings settings_from(const SkyArgs& args) {
         SkySettings out{scene.atmosphere, scene.origin_observer(), scene.sky_options, scene.method, scene.exposure};
         // The scene's clouds (VDBs opened now, before the render), seen from the scene origin.
         out.clouds = scene.cloud_density();
+        out.ground = scene.ground;
+        out.ground_albedo = scene.ground_albedo;
         if (scene.clouds) {
             out.cloud_lighting = scene.clouds->lighting;
             out.air_steps = scene.aerial.raymarch_steps;
@@ -120,6 +126,8 @@ int run_sky(const SkyArgs& args) {
     const std::unique_ptr<SkyMethod> method = make_sky_method(method_name, options);
     SkyImageOptions image_options;
     image_options.sun_disc = !args.no_sun_disc;
+    image_options.ground = args.ground && sky.ground;
+    image_options.ground_albedo = args.ground_albedo ? args.ground_albedo : sky.ground_albedo;
     image_options.exposure = sky.exposure;
     image_options.output = args.spectral_channels ? SkyImageOptions::Output::Spectral
                                                   : SkyImageOptions::Output::Rgb;
@@ -163,6 +171,8 @@ int run_sky(const SkyArgs& args) {
         {"tolerance", args.tolerance},
         {"exposure", sky.exposure},
         {"sun_disc", !args.no_sun_disc},
+        {"ground", args.ground},
+        {"ground_albedo", args.ground_albedo ? nlohmann::json(*args.ground_albedo) : nlohmann::json("atmosphere")},
         {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
         {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
                                          : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
@@ -237,6 +247,13 @@ Command add_sky_command(CLI::App& app) {
     sub->add_flag("--no-sun-disc", args->no_sun_disc,
                   "Leave the sun's disc out (when a sun lamp lights the scene, so that its "
                   "energy is not counted twice)");
+    sub->add_flag("--ground,!--no-ground", args->ground,
+                  "Show the planet's surface below the horizon, lit by the sun and the sky and "
+                  "seen through the air (the default), or leave it black (--no-ground)");
+    sub->add_option("--ground-albedo", args->ground_albedo,
+                    "The ground's albedo in [0, 1] at every wavelength (default: the "
+                    "atmosphere's ground_albedo)")
+        ->type_name("A");
     sub->add_flag("--multilayer", args->multilayer,
                   "Name the channels Welkin.Sky.R/G/B (a Blender multilayer EXR) instead of "
                   "R/G/B");

@@ -36,8 +36,8 @@ void add_atmosphere_options(CLI::App* app, AtmosphereArgs& args) {
     file->excludes(preset);
     app->add_flag("--spectral", args.spectral,
                   "Compute at 48 wavelengths (360-830 nm, 10 nm apart) and convert through "
-                  "the CIE 1931 functions, instead of 3 (680, 550, 440 nm) and Bruneton's "
-                  "approximate conversion; about 16x slower. With --preset only");
+                  "the CIE 1931 functions, instead of 4 (620, 560, 480, 440 nm) and a "
+                  "conversion fitted to the 48-wavelength path; about 12x slower. With --preset only");
 }
 
 Atmosphere load_atmosphere(const AtmosphereArgs& args) {

@@ -124,7 +124,7 @@ Rayleigh scattering, Mie scattering and extinction, and an absorbing layer
 (ozone), each with its own DensityProfile, over a Lambertian ground. SI units:
 lengths in m, coefficients in m^-1 where the relative density is 1, solar
 irradiance in W m^-2 nm^-1. Spectral attributes hold one value per wavelength
-of wavelengths_nm (default 680, 550, 440 nm).
+of wavelengths_nm (default 620, 560, 480, 440 nm).
 
 Make one with Atmosphere.preset(name) or Atmosphere.from_json(path). Attributes
 are read-write; spectra read back as read-only numpy copies (assign a whole new
@@ -141,7 +141,7 @@ editing (every computation validates too, raising ValueError naming the field).
 A built-in atmosphere: one of Atmosphere.preset_names() ("bruneton2017",
 "clear", "hazy", "polluted", "mars"; sources in src/presets.cpp).
 
-wavelengths_nm: None for the default 680, 550, 440 nm, or any sequence of
+wavelengths_nm: None for the default 620, 560, 480, 440 nm, or any sequence of
 wavelengths in [360, 830] nm (e.g. welkin.spectral_wavelengths_nm()) at which
 the preset's spectral models are evaluated.
 Raises ValueError for an unknown name or a wavelength out of range.

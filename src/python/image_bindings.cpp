@@ -46,10 +46,13 @@ py::array_t<float> sky_image(Atmosphere atmosphere, double altitude_m,
                              bool sun_disc, double exposure, int steps, int sun_steps,
                              int paths, std::uint64_t seed,
                              std::shared_ptr<const CloudDensity> clouds,
-                             const py::object& progress) {
+                             const py::object& progress, bool ground,
+                             std::optional<double> ground_albedo) {
     SkyImageOptions options;
     options.clouds = std::move(clouds);
     options.sun_disc = sun_disc;
+    options.ground = ground;
+    options.ground_albedo = ground_albedo;
     options.exposure = exposure;
     options.output = parse_output(output);
     SkyOptions sky_options;
@@ -79,6 +82,7 @@ py::array_t<float> sun_disc_image(Atmosphere atmosphere, double altitude_m,
                                   const std::string& output, double exposure) {
     SkyImageOptions options;
     options.sun_disc = true;
+    options.ground = false;
     options.exposure = exposure;
     options.output = parse_output(output);
     return render(NoSky(), atmosphere, altitude_m, sun_direction, width, options, py::none());
@@ -94,7 +98,8 @@ void register_image(py::module_& m) {
           py::arg("exposure") = 1.0, py::arg("steps") = defaults.raymarch_steps,
           py::arg("sun_steps") = defaults.raymarch_sun_steps,
           py::arg("paths") = defaults.reference_paths, py::arg("seed") = defaults.seed,
-          py::arg("clouds") = py::none(), py::arg("progress") = py::none(), R"doc(
+          py::arg("clouds") = py::none(), py::arg("progress") = py::none(),
+          py::arg("ground") = true, py::arg("ground_albedo") = py::none(), R"doc(
 An equirectangular sky image (HDRI) of the whole sphere, as the CLI renders it.
 
     img = welkin.sky_image(atm, altitude_m, sun_direction, width, method="lut",
@@ -110,7 +115,9 @@ darkened and scaled so that the image delivers exactly welkin.sun()'s direct
 irradiance; leave it out when a sun lamp lights the scene. steps, sun_steps,
 paths, seed: as in sky_radiance. clouds: None, a welkin.CloudLayer or a
 welkin.VdbClouds, composited over the sky (lit by the same atmosphere; the sun's
-disc dimmed behind them). The GIL is released; Ctrl-C or a progress
+disc dimmed behind them). ground: the planet's surface below the horizon, lit
+by the sun and the sky and seen through the air (False: black there);
+ground_albedo: its albedo in [0, 1] (None: atm.ground_albedo). The GIL is released; Ctrl-C or a progress
 callback returning False cancels (KeyboardInterrupt). ValueError names the
 parameter for bad input.
 )doc");

@@ -133,7 +133,7 @@ Conventions (the same in the core, the CLI and the Blender add-on):
     altitude_m above a spherical ground; the planet centre is straight below.
   * sun_direction: the unit vector towards the sun.
   * Spectral radiance in W m^-2 sr^-1 nm^-1 at Atmosphere.wavelengths_nm
-    (default 680, 550, 440 nm); RGB is linear Rec.709 in W m^-2 sr^-1
+    (default 620, 560, 480, 440 nm); RGB is linear Rec.709 in W m^-2 sr^-1
     (CIE 1931 weighted, without the 683 lm/W factor).
 
 Errors: bad input raises ValueError naming the parameter; file errors raise

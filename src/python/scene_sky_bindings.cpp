@@ -28,15 +28,19 @@ clouds.lighting and clouds.scattering. Layout and units as sky_image: (width / 2
 per pixel, (width / 2, width) (ones without clouds), the factor sky_image dims the sun's
 disc by (for a disc kept in an image of its own). ValueError names the parameter or the
 scene's key (clouds.volumes[i].file for a bad VDB). Cancellable (progress, Ctrl-C).
+ground: the lit ground below the horizon with the atmosphere's ground_albedo, as
+in sky_image (False: black there).
 )doc";
 
 py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
                            const std::string& output, bool return_transmittance,
-                           const py::object& progress) {
+                           const py::object& progress, bool ground) {
     SceneDescription scene = to_scene(scene_in);
     require_progress_callback(progress);
     SkyImageOptions options;
     options.sun_disc = sun_disc;
+    options.ground = ground && scene.ground;
+    options.ground_albedo = scene.ground_albedo;
     options.exposure = scene.exposure;
     options.output = parse_output(output);
     SkyImage image;
@@ -67,7 +71,8 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
 void register_scene_sky(py::module_& m) {
     m.def("scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"),
           py::kw_only(), py::arg("sun_disc") = true, py::arg("output") = "rgb",
-          py::arg("return_transmittance") = false, py::arg("progress") = py::none());
+          py::arg("return_transmittance") = false, py::arg("progress") = py::none(),
+          py::arg("ground") = true);
 }
 
 }  // namespace welkin::python

@@ -18,6 +18,7 @@
 #include "welkin/color/color.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
+#include "welkin/atmosphere/ground.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/sky/method.hpp"
 #include "welkin/atmosphere/sun_disc.hpp"
@@ -89,6 +90,16 @@ struct CameraPlateRenderer::Impl {
         // The sun's disc (sun_disc.hpp), on the samples of the disc above the horizon.
         sun = std::make_unique<SunDisc>(atm, observer);
 
+        // The lit ground (ground.hpp): its irradiance tables, when the frame sees it.
+        bool sees_ground = false;
+        for (const float z : depth) sees_ground = sees_ground || (std::isfinite(z) && z > 0.0f);
+        if (scene.ground && sees_ground) {
+            ground = std::make_unique<GroundIllumination>(atm);
+            for (std::size_t c = 0; c < atm.channels(); ++c)
+                ground_albedo_over_pi.push_back(
+                    (scene.ground_albedo ? *scene.ground_albedo : atm.ground_albedo[c]) / kPi);
+        }
+
         // The aerial perspective, fitted to the whole frame's depth.
         aerial = std::make_unique<AerialFrame>(scene.aerial_view(), depth, w, h);
     }
@@ -112,6 +123,8 @@ struct CameraPlateRenderer::Impl {
     std::unique_ptr<SkyMethod> method;
     std::string method_name;
     std::unique_ptr<SunDisc> sun;
+    std::unique_ptr<GroundIllumination> ground;  // null: no ground in view, or switched off
+    std::vector<double> ground_albedo_over_pi;
     std::unique_ptr<AerialFrame> aerial;
 };
 
@@ -226,6 +239,27 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
     check(progress, 1.0);
     plate.combined.resize(nb * 3);
     for (std::size_t k = 0; k < nb * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
+    // The lit ground seen through the air (camera_plate.hpp): + T x albedo / pi x E(p).
+    if (f.ground) {
+        tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const auto& rows) {
+            std::vector<double> e(nc);
+            std::vector<float> surface(nc);
+            for (int j = rows.begin(); j != rows.end(); ++j)
+                for (int i = 0; i < w; ++i) {
+                    const std::size_t q = std::size_t(j - band.begin) * std::size_t(w) + std::size_t(i);
+                    const float z = plate.depth[q];
+                    if (!std::isfinite(z) || !(z > 0.0f)) continue;
+                    const CameraRays::Ray ray = rays.at_pixel(i, j);
+                    const glm::dvec3 p = ray.origin + double(z) * ray.distance_per_depth * ray.direction - f.centre;
+                    f.ground->irradiance(glm::dot(glm::normalize(p), s), e);
+                    for (std::size_t c = 0; c < nc; ++c) surface[c] = float(f.ground_albedo_over_pi[c] * e[c]);
+                    const std::array<double, 3> rgb = sun_to_rgb.convert(surface);
+                    for (int k = 0; k < 3; ++k)
+                        plate.combined[q * 3 + k] +=
+                            plate.transmittance[q * 3 + k] * float(rgb[k] * scene.exposure);
+                }
+        });
+    }
 
     // Clouds over the sky and the hazed ground (cloud_passes.hpp): the band's clouds, ending
     // at the whole frame's ground depth, so the ground (depth) hides what is below it, and

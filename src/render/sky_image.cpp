@@ -25,6 +25,7 @@
 #include "welkin/base/equirect.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
+#include "welkin/atmosphere/ground.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/atmosphere/sun_disc.hpp"
 
@@ -260,7 +261,62 @@ private:
     std::vector<double> cos_phi_, sin_phi_, cos_e_, sin_e_;
 };
 
-// 3. The clouds of one band of rows: the march through the density, and the air between
+// 3. The lit ground (header, "The ground") on the views of a band that meet it, added to
+// the method's path radiance `sky` (n x nc) of those views.
+class GroundShading {
+public:
+    GroundShading(const Atmosphere& atm, const Observer& obs, const std::optional<double>& albedo, int height)
+        : light_(atm), nc_(atm.channels()), r_(atm.bottom_radius_m + obs.altitude_m),
+          sun_(obs.sun_direction), rows_(height) {
+        for (std::size_t c = 0; c < nc_; ++c)
+            albedo_over_pi_.push_back((albedo ? *albedo : atm.ground_albedo[c]) / kPi);
+        const double R = atm.bottom_radius_m;
+        const int W = 2 * height;
+        // Per row: whether its views meet the ground, the distance, the transmittance.
+        for (int j = 0; j < height; ++j) {
+            const double mu = equirect_pixel_direction(0, j, W, height).z;
+            Row& row = rows_[std::size_t(j)];
+            if (!ray_hits_ground(r_, mu, R)) continue;
+            row.distance = distance_to_bottom(r_, mu, R);
+            row.transmittance = transmittance_along(atm, r_, mu, row.distance);
+            row.hits = true;
+        }
+    }
+
+    void add(int row0, int rows, int width, const glm::dvec3* dirs, float* sky) const {
+        tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& range) {
+            std::vector<double> e(nc_);
+            for (int jj = range.begin(); jj != range.end(); ++jj) {
+                const Row& row = rows_[std::size_t(row0 + jj)];
+                if (!row.hits) continue;
+                for (int i = 0; i < width; ++i) {
+                    const std::size_t q = std::size_t(jj) * std::size_t(width) + std::size_t(i);
+                    // The ground point p = x + d v, x = (0, 0, r); mu_s = (p / |p|) . s.
+                    const glm::dvec3 p = glm::dvec3(0.0, 0.0, r_) + row.distance * dirs[q];
+                    light_.irradiance(glm::dot(p, sun_) / glm::length(p), e);
+                    float* L = sky + q * nc_;
+                    for (std::size_t c = 0; c < nc_; ++c)
+                        L[c] += float(row.transmittance[c] * albedo_over_pi_[c] * e[c]);
+                }
+            }
+        });
+    }
+
+private:
+    struct Row {
+        bool hits = false;
+        double distance = 0.0;
+        std::vector<double> transmittance;
+    };
+    GroundIllumination light_;
+    std::size_t nc_;
+    double r_;
+    glm::dvec3 sun_;
+    std::vector<double> albedo_over_pi_;
+    std::vector<Row> rows_;
+};
+
+// 4. The clouds of one band of rows: the march through the density, and the air between
 // the observer and each cloud (header, "Clouds").
 struct BandClouds {
     CloudResult march;
@@ -290,7 +346,7 @@ BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIll
     return b;
 }
 
-// 4. One band's output pixels from its sky radiance `sky` (n x nc): the clouds composited
+// 5. One band's output pixels from its sky radiance `sky` (n x nc): the clouds composited
 // over it (header), then, for RGB output, the conversion into `dst` (n x 3; `dst` may be
 // `sky` itself when nc == 3: each pixel is read before it is written). Returns the index
 // of the first pixel with a non-finite radiance, or npos.
@@ -355,7 +411,7 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
     return bad.load();
 }
 
-// 5. The sun's disc (sun_disc.hpp, splat_sun_disc), dimmed by the clouds' transmittance of
+// 6. The sun's disc (sun_disc.hpp, splat_sun_disc), dimmed by the clouds' transmittance of
 // its pixels when there are clouds.
 void add_sun_disc(SkyImage& image, const Atmosphere& atm, const Observer& obs,
                   const SpectrumToRgb* sun_to_rgb, const std::vector<float>& cloud_transmittance) {
@@ -377,7 +433,7 @@ void add_sun_disc(SkyImage& image, const Atmosphere& atm, const Observer& obs,
     }
 }
 
-// 6. The exposure, once, at the end.
+// 7. The exposure, once, at the end.
 void apply_exposure(std::vector<float>& pixels, double exposure) {
     if (exposure == 1.0) return;
     const float e = float(exposure);
@@ -393,6 +449,7 @@ void SkyImageOptions::validate() const {
         throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
     if (clouds) cloud_lighting.validate();
     require_in_range("air_steps", air_steps, 1, 4096);
+    if (ground_albedo) require_in_range("ground_albedo", *ground_albedo, 0.0, 1.0);
 }
 
 std::string spectral_channel_name(double wavelength_nm) {
@@ -439,6 +496,8 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
     const std::size_t band_pixels = std::size_t(band_rows) * std::size_t(W);
     const auto directions = huge_buffer<glm::dvec3>(band_pixels);
     const auto scratch = huge_buffer<float>(in_place ? 0 : band_pixels * nc);
+    std::optional<GroundShading> ground;
+    if (options.ground) ground.emplace(atm, obs, options.ground_albedo, H);
     // Clouds: the illumination is built once; the cloud transmittance of every pixel is
     // kept for the sun's disc.
     std::unique_ptr<AtmosphereIllumination> cloud_light;
@@ -458,6 +517,7 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         float* dst = image.pixels.data() + std::size_t(row0) * std::size_t(W) * out_nc;
         float* sky = in_place ? dst : scratch.get();
         method.radiance(atm, obs, dirs, std::span<float>(sky, n * nc), {}, band_progress);
+        if (ground) ground->add(row0, rows, W, directions.get(), sky);
         std::optional<BandClouds> clouds;
         if (options.clouds) {
             clouds = march_band_clouds(options, *cloud_light, atm, obs, dirs, W,

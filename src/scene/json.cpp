@@ -6,6 +6,7 @@
 //     "origin_altitude_m": 0,
 //     "sun": {"direction": [x, y, z]} | {"elevation_deg": 30, "azimuth_deg": 90},
 //     "exposure": 1, "method": "auto",
+//     "ground": {"enabled": true, "albedo": null},   // null: the atmosphere's ground_albedo
 //     "camera": {"matrix_world": [[4 numbers] x 4 rows], "type": "PERSP" | "ORTHO" | "PANO",
 //                "lens_mm", "sensor_width_mm", "sensor_height_mm", "sensor_fit", "fov_deg",
 //                "ortho_scale", "panorama_type", "latitude_min_deg", "latitude_max_deg",
@@ -338,7 +339,7 @@ Camera parse_camera(const json& j) {
 SceneDescription parse(const json& j, const std::filesystem::path& base) {
     if (!j.is_object()) throw InvalidArgument("scene", "must be a JSON object");
     json_check_keys(j, "", {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "method",
-                       "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
+                       "ground", "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
     SceneDescription s;
     if (!j.contains("version"))
         throw InvalidArgument("version", fmt::format("is required (this Welkin writes version {})",
@@ -377,6 +378,12 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
     }
     if (j.contains("exposure")) s.exposure = json_number(j["exposure"], "exposure");
     if (j.contains("method")) s.method = string(j["method"], "method");
+    if (j.contains("ground")) {
+        const json& g = j["ground"];
+        json_check_keys(g, "ground", {"enabled", "albedo"});
+        if (g.contains("enabled")) s.ground = boolean(g["enabled"], "ground.enabled");
+        if (g.contains("albedo") && !g["albedo"].is_null()) s.ground_albedo = json_number(g["albedo"], "ground.albedo");
+    }
     if (j.contains("camera") && !j["camera"].is_null()) s.camera = parse_camera(j["camera"]);
     if (j.contains("resolution")) {
         const json& r = j["resolution"];
@@ -457,6 +464,7 @@ std::string SceneDescription::to_json_string() const {
     j["sun"] = {{"direction", {sun_direction.x, sun_direction.y, sun_direction.z}}};
     j["exposure"] = exposure;
     j["method"] = method;
+    j["ground"] = {{"enabled", ground}, {"albedo", ground_albedo ? ordered_json(*ground_albedo) : ordered_json(nullptr)}};
     if (camera) {
         const Camera& c = *camera;
         ordered_json cj;

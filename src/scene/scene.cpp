@@ -14,6 +14,7 @@ namespace welkin {
 
 
 void SceneDescription::validate() const {
+    if (ground_albedo) require_in_range("ground.albedo", *ground_albedo, 0.0, 1.0);
     if (version < 1 || version > kVersion)
         throw InvalidArgument("version", fmt::format("must be in [1, {}] (this Welkin reads scene "
                                                      "descriptions up to version {}), got {}",

@@ -16,6 +16,10 @@
 
 namespace welkin::test {
 
+// The peer's wavelengths (Bruneton 2017's demo, 680/550/440 nm), which tests compare at
+// per channel; the library's default is four others (atmosphere.hpp).
+inline const std::vector<double> kPeerWavelengthsNm{680.0, 550.0, 440.0};
+
 struct PeerRow {
     std::map<std::string, double> v;
     double operator[](const std::string& column) const { return v.at(column); }

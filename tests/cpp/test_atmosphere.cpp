@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "peer_table.hpp"
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
 
@@ -10,7 +11,7 @@ using namespace welkin;
 
 TEST(Atmosphere, Bruneton2017PresetMatchesPeerParameters) {
     // tests/data/README.md: the peer's coefficients at 680/550/440 nm.
-    const Atmosphere a = Atmosphere::preset("bruneton2017");
+    const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     ASSERT_EQ(a.channels(), 3u);
     const double rayleigh[] = {5.802e-6, 13.558e-6, 33.1e-6};
     const double ozone[] = {0.650e-6, 1.881e-6, 0.085e-6};
@@ -61,7 +62,7 @@ TEST(Atmosphere, ValidationNamesTheParameterAndRange) {
             EXPECT_EQ(e.parameter(), param) << e.what();
         }
     };
-    Atmosphere a = Atmosphere::preset("bruneton2017");
+    Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     Atmosphere b = a;
     b.bottom_radius_m = -5.0;
     expect_param(b, "bottom_radius_m");

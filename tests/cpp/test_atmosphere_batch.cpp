@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "peer_table.hpp"
 #include "welkin/atmosphere/batch.hpp"
 #include "welkin/atmosphere/inscattering.hpp"
 #include "welkin/atmosphere/skyview_lut.hpp"
@@ -85,7 +86,7 @@ TEST(AtmosphereBatch, CompactExtinctionTableMatchesTheFullOneOnTheSquaredRadiusA
 // Looking below the horizon from the ground itself, a ray crosses no air: it gets no
 // steps (not steps of weight zero), and the sky-view texels there are exactly zero.
 TEST(AtmosphereBatch, RaysOfNoLengthFromTheGroundHaveNoStepsAndNoRadiance) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const AtmosphereBatch batch(atm, 0, 3);
     const double R = atm.bottom_radius_m;
     RaySamples ray;

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "peer_table.hpp"
 #include "welkin/sky/auto.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
@@ -54,7 +55,7 @@ Observer scene(double altitude_m, double sun_elevation_deg) {
 }
 
 const Atmosphere& earth() {
-    static const Atmosphere a = Atmosphere::preset("bruneton2017");
+    static const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     return a;
 }
 

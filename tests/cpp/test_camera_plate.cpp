@@ -41,6 +41,7 @@ SceneDescription plate_scene(int w, int h) {
     s.sun_direction = sun_direction_from_angles_deg(8.0, 0.0);
     s.camera = camera_looking({1.0, 0.0, 0.0}, 100.0, 60.0);
     s.resolution = {w, h, 100};
+    s.ground = false;  // the passes' algebra over a black ground; the lit ground below
     return s;
 }
 
@@ -179,4 +180,30 @@ TEST(CameraPlate, CloudyBandsHaveTheWholePlatesValues) {
         for (int k = 0; k < 4; ++k) EXPECT_EQ(band.clouds[q * 4 + k], whole.clouds[(q0 + q) * 4 + k]);
         for (int k = 0; k < 3; ++k) EXPECT_EQ(band.combined[q * 3 + k], whole.combined[(q0 + q) * 3 + k]);
     }
+}
+
+// The lit ground (camera_plate.hpp): combined = sky + inscatter + T x L_ground, with
+// L_ground > 0 on every ground pixel and the sky pixels unchanged; off, the black ground.
+TEST(CameraPlate, LitGroundIsAddedThroughTheAir) {
+    SceneDescription s = plate_scene(32, 16);
+    const CameraPlate off = render_camera_plate(s);
+    s.ground = true;
+    s.ground_albedo = 0.3;
+    const CameraPlate on = render_camera_plate(s);
+    int ground = 0;
+    for (std::size_t q = 0; q < on.depth.size(); ++q) {
+        const bool sky = std::isinf(on.depth[q]);
+        ground += sky ? 0 : 1;
+        for (int c = 0; c < 3; ++c) {
+            const std::size_t k = q * 3 + c;
+            EXPECT_EQ(off.combined[k], off.sky[k] + off.inscatter[k]);
+            if (sky) {
+                EXPECT_EQ(on.combined[k], off.combined[k]);
+            } else {
+                EXPECT_GT(on.combined[k], off.combined[k]);
+                EXPECT_GT(on.transmittance[k], 0.0f);
+            }
+        }
+    }
+    EXPECT_GT(ground, 0);
 }

@@ -13,6 +13,7 @@
 #include <glm/geometric.hpp>
 
 #include "cloud_test_util.hpp"
+#include "peer_table.hpp"
 #include "welkin/scene/scene.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/render/cloud_passes.hpp"
@@ -55,6 +56,7 @@ TEST(CloudSkyImage, IsThePanoramasCloudPassesOverTheClearSky) {
 
     const auto lut = make_sky_method("lut");
     SkyImageOptions clear;
+    clear.ground = false;  // the clouds' algebra over the sky alone
     clear.sun_disc = false;
     const SkyImage sky = render_equirect_sky(*lut, s.atmosphere, s.origin_observer(), W, clear);
     SkyImageOptions cloudy = clear;
@@ -106,6 +108,7 @@ TEST(CloudSkyImage, AirlessIsThePlainOver) {
     obs.sun_direction = glm::normalize(glm::dvec3(0.6, 0.2, 0.5));
     const auto lut = make_sky_method("lut");
     SkyImageOptions clear;
+    clear.ground = false;  // the clouds' algebra over the sky alone
     clear.sun_disc = false;
     clear.output = SkyImageOptions::Output::Spectral;
     const int W = 64, H = 32;
@@ -143,11 +146,12 @@ TEST(CloudSkyImage, AirlessIsThePlainOver) {
 
 // With air, a layer with no coverage still leaves the image bit for bit unchanged.
 TEST(CloudSkyImage, NoCoverageLeavesTheSkyUnchanged) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     Observer obs;
     obs.sun_direction = glm::normalize(glm::dvec3(0.6, 0.2, 0.5));
     const auto lut = make_sky_method("lut");
     SkyImageOptions clear;
+    clear.ground = false;  // the clouds' algebra over the sky alone
     const SkyImage sky = render_equirect_sky(*lut, atm, obs, 64, clear);
     CloudLayerParams p;
     p.coverage = 0.0;

@@ -153,7 +153,7 @@ TEST(Color, ThreeSampleConversionIsExactForItsOwnSpectrumModel) {
     // is only quadrature: the spectral path integrates the linear interpolant of the
     // 48 samples (10 nm), the three-sample path E's 10 nm table times the exact power
     // law at 1 nm. Measured difference < 0.1 %; asserted 0.3 %.
-    const std::vector<double> w3 = default_wavelengths_nm();
+    const std::vector<double> w3 = test::kPeerWavelengthsNm;
     const std::vector<double> w48 = spectral_wavelengths_nm();
     for (double p : {-4.0, -3.0, 0.0}) {
         auto spectrum = [p](double nm) {
@@ -203,7 +203,7 @@ TEST(Color, RejectsBadWavelengths) {
     EXPECT_THROW(SpectrumToRgb{unsorted}, InvalidArgument);
     EXPECT_THROW(SpectrumToRgb{repeated}, InvalidArgument);
     const SpectrumToRgb ok(default_wavelengths_nm());
-    const std::vector<float> wrong(4, 1.0f);
+    const std::vector<float> wrong(default_wavelengths_nm().size() + 1, 1.0f);
     EXPECT_THROW(ok.convert(wrong), InvalidArgument);
 }
 
@@ -233,7 +233,7 @@ TEST(Color, ThreeSampleConversionAgainstPeerSpectralRgb) {
     for (const test::PeerRow& row : test::read_peer_table()) rows.push_back(row.v);
     ASSERT_GT(rows.size(), 100u);
 
-    const std::vector<double> w3 = default_wavelengths_nm();
+    const std::vector<double> w3 = test::kPeerWavelengthsNm;
     const SpectrumToRgb sky(w3, -3.0), sun(w3, 0.0);
     // The same conversion with the CIE table in place of the fit (to split the error).
     std::array<double, 3> k_table{};

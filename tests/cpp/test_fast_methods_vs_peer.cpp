@@ -43,7 +43,7 @@ struct Errors {
 
 // `single_only`: compare with the converged single scattering instead of all orders.
 Errors relative_errors(const std::string& method, bool single_only = false) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const auto sky = make_sky_method(method);
     Errors e;
     for (double sun_zenith : {0.0, 30.0, 60.0}) {

@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/global_control.h>
 
+#include "peer_table.hpp"
 #include "welkin/base/equirect.hpp"
 #include "welkin/atmosphere/lut_cache.hpp"
 #include "welkin/sky/lut.hpp"
@@ -41,7 +42,7 @@ std::vector<float> render(const LutSky& sky, const Atmosphere& atm, const Observ
 }  // namespace
 
 TEST(LutCache, SunChangeReusesTheTablesAndMatchesAFreshBuildExactly) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     AtmosphereLutCache cache;
     const LutSky cached({}, &cache), fresh({}, nullptr);
     for (const Observer& obs : {sun(0.5, 0.3), sun(0.05, 2.0), sun(-0.02, 1.0), sun(1.2, -0.7, 1500.0)})
@@ -50,7 +51,7 @@ TEST(LutCache, SunChangeReusesTheTablesAndMatchesAFreshBuildExactly) {
 }
 
 TEST(LutCache, AnyChangeOfTheAtmosphereOrOfTheLutSizesRebuilds) {
-    const Atmosphere base = Atmosphere::preset("bruneton2017");
+    const Atmosphere base = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     std::vector<Atmosphere> changed(6, base);
     changed[0].mie_g = std::nextafter(base.mie_g, 1.0);  // one ulp
     changed[1].ground_albedo[2] = 0.3;
@@ -80,7 +81,7 @@ TEST(LutCache, AnyChangeOfTheAtmosphereOrOfTheLutSizesRebuilds) {
 }
 
 TEST(LutCache, KeepsTheMostRecentlyUsedEntries) {
-    const Atmosphere a = Atmosphere::preset("bruneton2017"), b = Atmosphere::preset("hazy"),
+    const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm), b = Atmosphere::preset("hazy"),
                      c = Atmosphere::preset("mars");
     AtmosphereLutCache cache(2);
     const LutResolution o;
@@ -98,7 +99,7 @@ TEST(LutCache, KeepsTheMostRecentlyUsedEntries) {
 }
 
 TEST(LutCache, ConcurrentCallersGetTheRightTables) {
-    const Atmosphere a = Atmosphere::preset("bruneton2017"), b = Atmosphere::preset("polluted");
+    const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm), b = Atmosphere::preset("polluted");
     AtmosphereLutCache cache(1);  // the two atmospheres keep evicting each other
     const LutSky cached({}, &cache), fresh({}, nullptr);
     const Observer obs = sun(0.4, 1.0);
@@ -119,7 +120,7 @@ TEST(LutCache, ConcurrentCallersGetTheRightTables) {
 }
 
 TEST(LutThreads, OutputDoesNotDependOnTheThreadCount) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const LutSky sky({}, nullptr);
     const Observer obs = sun(0.2, 0.5, 0.5);
     const std::vector<float> many = render(sky, atm, obs);

@@ -71,7 +71,7 @@ Spectrum4 multiple_scattering_term(const AtmosphereLuts::Batch& b, double r, con
 }  // namespace
 
 TEST(MultipleScatteringVsReference, TermAndLutAgainstTheReferenceByOrder) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     SkyOptions options;
     options.reference_paths = 16384;
     options.seed = 17;

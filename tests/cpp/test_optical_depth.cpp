@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "peer_table.hpp"
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
@@ -80,7 +81,7 @@ TEST(OpticalDepth, TentLayerMatchesClosedFormAndBruteForce) {
 }
 
 TEST(OpticalDepth, TransmittanceIsInUnitIntervalAndDecreasesWithPathLength) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     for (auto [h, mu] : {std::pair{0.0, 1.0}, std::pair{0.0, 0.01}, std::pair{10e3, -0.1},
                          std::pair{59e3, 0.0}}) {
         const double r = atm.bottom_radius_m + h;
@@ -149,7 +150,7 @@ TEST(ColumnTable, MatchesExactOpticalDepthOnRandomRays) {
 TEST(ColumnTable, PiecewiseLinearLayersAreExact) {
     // A constant layer: the column is the path length inside it; the tent: 15 km
     // vertically. Both are integrated in closed form, so they match to rounding.
-    Atmosphere atm = Atmosphere::preset("bruneton2017");
+    Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     atm.rayleigh_density = DensityProfile({DensityLayer{0.0, 0.0, 0.0, 0.0, 1.0}});
     const ColumnTable table(atm);
     const double R = atm.bottom_radius_m, top = atm.top_radius_m;

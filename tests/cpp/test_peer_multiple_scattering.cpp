@@ -152,7 +152,7 @@ private:
 
 const std::vector<Row>& rows() {
     static const std::vector<Row> out = [] {
-        const Atmosphere atm = Atmosphere::preset("bruneton2017");
+        const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
         const welkin::test::PeerGroundTexture texture(atm);
         std::vector<Row> r;
         OrdersTwoToFour ms, second(2);
@@ -349,7 +349,7 @@ TEST(PeerMultipleScattering, TextureLookupExplainsThePeerLikeForLike) {
 // Runtime about 12 s on two loaded cores.
 TEST(PeerMultipleScattering, PeerQuadraturesDoNotMakeTheAzimuthalStructure) {
     using welkin::test::SecondOrderRules;
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const welkin::test::SecondOrder second(atm);
     const SecondOrderRules converged{0, 24, 0, false}, peer_rules = SecondOrderRules::peer();
     std::vector<const PeerRow*> views;
@@ -405,7 +405,7 @@ TEST(PeerMultipleScattering, PeerQuadraturesDoNotMakeTheAzimuthalStructure) {
 // zenith cosines offset from its nodes: transmittances within 1e-3 (measured 5.9e-4 at
 // worst, near the horizon).
 TEST(PeerMultipleScattering, SecondOrderSunTable) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const welkin::test::SecondOrder second(atm);
     double worst = 0;
     for (int i = 0; i <= 300; ++i)

@@ -22,7 +22,7 @@
 using namespace welkin;
 
 TEST(PeerQuadrature, FiftyIntervalTrapezoidReproducesThePeersSingleScattering) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const char* columns[] = {"L1d_680nm", "L1d_550nm", "L1d_440nm"};
     std::vector<double> err_trap[3], bias[3];
     for (const auto& row : welkin::test::read_peer_table()) {

@@ -144,7 +144,7 @@ std::vector<double> trapezoid_single_scattering(const Atmosphere& atm, const Col
 TEST(ReferenceSkyPeer, SingleScatteringReproducesPeerQuadratureAndItsLimit) {
     const std::vector<PeerRow> rows = load_peer();
     ASSERT_EQ(rows.size(), 135u);
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const ColumnTable table(atm);
     const ReferenceSky single(paths(1), 1);
     std::vector<double> replica_err[3], limit_err[3], peer_quadrature_err[3];
@@ -226,7 +226,7 @@ std::vector<PeerGeometry> peer_geometries(const std::vector<PeerRow>& rows) {
 //    ~2 % at 440 nm.
 TEST(ReferenceSkyPeer, AllOrdersAgainstThePeer) {
     constexpr int kPaths = 32768;
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const ColumnTable table(atm);
     const ReferenceSky single(paths(1), 1);
     const std::vector<PeerRow> rows = load_peer();
@@ -293,7 +293,7 @@ TEST(ReferenceSkyPeer, AllOrdersAgainstThePeer) {
 // wavelengths.
 TEST(ReferenceSkyPeer, StandardErrorMatchesTheSpreadBetweenSeeds) {
     constexpr int kPaths = 4096;
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     std::vector<double> z;
     for (const PeerGeometry& geo : peer_geometries(load_peer())) {
         const SkyRun a = run(ReferenceSky(paths(kPaths, 21)), atm, sun_at(geo.sun_zenith), geo.dirs);
@@ -433,7 +433,7 @@ std::vector<double> plane_parallel_second_order(const Atmosphere& atm, const glm
 }  // namespace
 
 TEST(ReferenceSkyIndependent, SecondOrderMatchesPlaneParallelQuadrature) {
-    Atmosphere atm = Atmosphere::preset("bruneton2017");
+    Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     atm.bottom_radius_m = 1e9;
     atm.top_radius_m = 1e9 + 60e3;
     atm.absorption_density = DensityProfile::zero();
@@ -474,7 +474,7 @@ namespace {
 // A homogeneous layer of thickness Z: constant densities, Rayleigh, HG Mie and absorption.
 Atmosphere homogeneous_layer(double Z, std::vector<double> rayleigh, double mie_scattering,
                              double mie_extinction, double absorption, double albedo) {
-    Atmosphere atm = Atmosphere::preset("bruneton2017");
+    Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     atm.name = "homogeneous";
     atm.bottom_radius_m = 1e9;
     atm.top_radius_m = 1e9 + Z;
@@ -621,7 +621,7 @@ TEST(ReferenceSkyClosedForm, ConservativeLayerConservesEnergy) {
 // ---------------------------------------------------------------------------------------
 // Determinism: the same seed gives bit-identical output, whatever the thread count.
 TEST(ReferenceSkyDeterminism, SameSeedSameOutputForAnyThreadCount) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const std::vector<glm::dvec3> dirs = {view_direction(0, 0), view_direction(60, 45),
                                           view_direction(85, 180), view_direction(95, 90)};
     const Observer obs = sun_at(50.0, 1500.0);
@@ -645,7 +645,7 @@ TEST(ReferenceSkyDeterminism, SameSeedSameOutputForAnyThreadCount) {
 // ground, the sun below the horizon, many wavelengths, other presets, bad arguments,
 // progress and cancellation.
 TEST(ReferenceSkyEdges, ObserverAboveTheAtmosphere) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const ReferenceSky sky(paths(1024));
     // 100 km up (the top is at 60 km): up and at the horizon the ray misses the air; down
     // it enters it, and 9.5 deg below the horizon it crosses the limb, grazing 11 km
@@ -674,7 +674,7 @@ TEST(ReferenceSkyEdges, ObserverAboveTheAtmosphere) {
 }
 
 TEST(ReferenceSkyEdges, GroundHittingRaysTwilightAndNight) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const ReferenceSky sky(paths(1024));
     const std::vector<glm::dvec3> dirs = {view_direction(0, 0), view_direction(80, 0),
                                           view_direction(120, 0), view_direction(180, 0)};
@@ -703,7 +703,7 @@ TEST(ReferenceSkyEdges, SpectralModeAgreesWithThreeChannels) {
     // 440 nm match the three-channel run within their standard errors.
     const std::vector<double> w = spectral_wavelengths_nm();
     const Atmosphere spectral = Atmosphere::preset("bruneton2017", w);
-    const Atmosphere rgb = Atmosphere::preset("bruneton2017");
+    const Atmosphere rgb = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const std::vector<glm::dvec3> dirs = {view_direction(0, 0), view_direction(70, 90),
                                           view_direction(88, 0)};
     const int n = 8192;
@@ -740,7 +740,7 @@ TEST(ReferenceSkyEdges, EveryPresetGivesFinitePositiveSkies) {
 }
 
 TEST(ReferenceSkyEdges, BadArgumentsNameTheParameter) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const ReferenceSky sky(paths(16));
     const std::vector<glm::dvec3> dirs = {view_direction(0, 0), glm::dvec3(0.0)};
     std::vector<float> out(6), se(6), short_out(5);
@@ -771,7 +771,7 @@ TEST(ReferenceSkyEdges, ReportsProgressAndCancels) {
             return cancel_after < 0 || int(seen.size()) <= cancel_after;
         }
     };
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     std::vector<glm::dvec3> dirs;
     for (int i = 0; i < 40; ++i) dirs.push_back(view_direction(2.0 * i, 10.0 * i));
     std::vector<float> out(dirs.size() * 3);
@@ -790,7 +790,7 @@ TEST(ReferenceSkyEdges, TwilightSingleScatteringMatchesBruteForce) {
     // Sun below the horizon: the view ray enters and leaves the Earth's shadow; the
     // method cuts its quadrature there. A 200000-step trapezoid agrees (the integrand
     // fades to ~0 at the shadow's edge, where the sun grazes the whole atmosphere).
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const ColumnTable table(atm);
     const ReferenceSky single(paths(1), 1);
     for (double sz : {93.0, 97.0})

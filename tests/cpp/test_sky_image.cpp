@@ -11,6 +11,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "peer_table.hpp"
 #include "welkin/color/color.hpp"
 #include "welkin/base/equirect.hpp"
 #include "welkin/base/error.hpp"
@@ -88,9 +89,10 @@ public:
 }  // namespace
 
 TEST(SkyImage, LayoutAndOneCallWithEveryPixel) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky sky(FakeSky::Zenith);
     SkyImageOptions opt;
+    opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
     opt.sun_disc = false;
     opt.output = SkyImageOptions::Output::Spectral;
     const SkyImage im = render_equirect_sky(sky, atm, sun_at(30), 64, opt);
@@ -113,9 +115,10 @@ TEST(SkyImage, LayoutAndOneCallWithEveryPixel) {
 }
 
 TEST(SkyImage, SkyIsConvertedWithTheSkyLambdaPower) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky sky(FakeSky::Constant);
     SkyImageOptions opt;
+    opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
     opt.sun_disc = false;
     const SkyImage im = render_equirect_sky(sky, atm, sun_at(30), 16, opt);
     ASSERT_EQ(im.channel_names, (std::vector<std::string>{"R", "G", "B"}));
@@ -131,7 +134,7 @@ TEST(SkyImage, SunDiscCarriesTheDirectIrradianceAtEveryResolution) {
     // disc smaller than a pixel (64 wide: 0.098 rad pixels vs 0.0047 rad radius) or a few
     // pixels across (2048), at the zenith (a pole of the mapping), high, low, cut by the
     // horizon, and from 20 km up.
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky zero(FakeSky::Zero);
     const SpectrumToRgb sun_rgb(atm.wavelengths_nm, 0.0);
     struct Case {
@@ -146,6 +149,7 @@ TEST(SkyImage, SunDiscCarriesTheDirectIrradianceAtEveryResolution) {
         ASSERT_GT(sun.visible_fraction, 0.0);
         for (int width : {64, 512, 2048}) {
             SkyImageOptions opt;
+            opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
             opt.output = SkyImageOptions::Output::Spectral;
             const SkyImage im = render_equirect_sky(zero, atm, obs, width, opt);
             const std::vector<double> e = integral(im);
@@ -168,7 +172,7 @@ TEST(SkyImage, SunDiscIsALimbDarkenedDiscWhenResolved) {
     // A large sun (0.05 rad) on a 1024-wide image: 8 pixels of radius. The pixel at the
     // disc centre holds E T / Omega_sun times the limb darkening near the centre; pixels
     // well outside hold nothing; the disc is brighter in the middle than near the limb.
-    Atmosphere atm = Atmosphere::preset("bruneton2017");
+    Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     atm.sun_angular_radius_rad = 0.05;
     const FakeSky zero(FakeSky::Zero);
     const int W = 1024, H = 512;
@@ -177,6 +181,7 @@ TEST(SkyImage, SunDiscIsALimbDarkenedDiscWhenResolved) {
     Observer obs;
     obs.sun_direction = s;
     SkyImageOptions opt;
+    opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
     opt.output = SkyImageOptions::Output::Spectral;
     const SkyImage im = render_equirect_sky(zero, atm, obs, W, opt);
     const SunRadiometry sun = sun_radiometry(atm, obs);
@@ -199,9 +204,10 @@ TEST(SkyImage, SunDiscIsALimbDarkenedDiscWhenResolved) {
 }
 
 TEST(SkyImage, ExposureScalesEverythingAndDiscCanBeLeftOut) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky sky(FakeSky::Constant);
     SkyImageOptions one, two, none;
+    one.ground = two.ground = none.ground = false;
     two.exposure = 2.0;
     none.sun_disc = false;
     const SkyImage a = render_equirect_sky(sky, atm, sun_at(40), 128, one);
@@ -226,6 +232,7 @@ TEST(SkyImage, NeverNaNAndNonFiniteMethodOutputIsAnError) {
                   sun_at(10, 0, 1e8), sun_at(45, 180, 5e4)}) {
                 for (int width : {4, 6, 256}) {
                     SkyImageOptions opt;
+                    opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
                     opt.exposure = 1e6;
                     const SkyImage im = render_equirect_sky(constant, atm, obs, width, opt);
                     EXPECT_TRUE(all_finite(im)) << preset << " width " << width;
@@ -233,25 +240,26 @@ TEST(SkyImage, NeverNaNAndNonFiniteMethodOutputIsAnError) {
             }
         }
     }
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky nan_sky(FakeSky::NaNAtOne);
     EXPECT_THROW(render_equirect_sky(nan_sky, atm, sun_at(30), 16), std::runtime_error);
 }
 
 TEST(SkyImage, CancellationPropagates) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky sky(FakeSky::Cancelling);
     CancelAt cancel;
     EXPECT_THROW(render_equirect_sky(sky, atm, sun_at(30), 16, {}, &cancel), Cancelled);
 }
 
 TEST(SkyImage, RejectsBadInput) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky sky(FakeSky::Zero);
     EXPECT_THROW(render_equirect_sky(sky, atm, sun_at(30), 7), InvalidArgument);
     EXPECT_THROW(render_equirect_sky(sky, atm, sun_at(30), 2), InvalidArgument);
     EXPECT_THROW(render_equirect_sky(sky, atm, sun_at(30), 20000), InvalidArgument);
     SkyImageOptions opt;
+    opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
     for (double e : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
         opt.exposure = e;
         EXPECT_THROW(render_equirect_sky(sky, atm, sun_at(30), 16, opt), InvalidArgument) << e;
@@ -267,11 +275,12 @@ TEST(SkyImage, RejectsBadInput) {
 TEST(SkyImage, SubPixelDiscLandsInItsPixel) {
     // 64 wide: pixels of 0.098 rad, 20 sun radii. A sun at a pixel centre puts all its
     // energy into that pixel.
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const FakeSky zero(FakeSky::Zero);
     Observer obs;
     obs.sun_direction = equirect_pixel_direction(40, 9, 64, 32);
     SkyImageOptions opt;
+    opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
     opt.output = SkyImageOptions::Output::Spectral;
     const SkyImage im = render_equirect_sky(zero, atm, obs, 64, opt);
     const SunRadiometry sun = sun_radiometry(atm, obs);
@@ -288,7 +297,7 @@ TEST(SkyImage, SubPixelDiscLandsInItsPixel) {
 TEST(SkyImage, LutHdriAt2048IsFiniteAndKeepsTheDiscEnergy) {
     // The real path: the lut method, every pixel in one call, RGB with the disc. (Its speed
     // is measured in bench/bench_sky.cpp, not here.)
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const std::unique_ptr<SkyMethod> lut = make_sky_method("lut");
     const Observer obs = sun_at(20, 45);
     const SkyImage im = render_equirect_sky(*lut, atm, obs, 2048);

@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "peer_table.hpp"
 #include "welkin/atmosphere/skyview_lut.hpp"
 
 using namespace welkin;
@@ -34,7 +35,7 @@ TEST(SkyViewLut, ZenithAngleIsWithinItsBoundOfAcos) {
 // Callers reject zero and non-finite directions (LutSky validates them); the block lookup
 // still stays inside its texture for them.
 TEST(SkyViewLut, BlockLookupStaysInsideTheTextureForDirectionsCallersReject) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const AtmosphereBatch batch(atm, 0, 3);
     const TransmittanceLut t(batch, 256, 64);
     const MultiScatteringLut ms(batch, t, 32);
@@ -47,7 +48,7 @@ TEST(SkyViewLut, BlockLookupStaysInsideTheTextureForDirectionsCallersReject) {
 }
 
 TEST(SkyViewLut, BlockLookupEqualsOneLookupPerView) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const AtmosphereBatch batch(atm, 0, 3);
     const TransmittanceLut t(batch, 256, 64);
     const MultiScatteringLut ms(batch, t, 32);

@@ -89,7 +89,7 @@ TEST(Sun, LimbDarkeningShape) {
 }
 
 TEST(Sun, VisibleFractionIsTheCircularSegmentAboveTheHorizon) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const double a = atm.sun_angular_radius_rad;
     auto frac = [&](double e, double alt = 0.0) {
         return sun_radiometry(atm, sun_at(e, alt)).visible_fraction;
@@ -108,7 +108,7 @@ TEST(Sun, VisibleFractionIsTheCircularSegmentAboveTheHorizon) {
 }
 
 TEST(Sun, DirectIrradianceIsSolarTimesTransmittanceTimesFraction) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const double r = atm.bottom_radius_m;
     for (double e_deg : {90.0, 30.0, 5.0}) {
         const SunRadiometry s = sun_radiometry(atm, sun_at(e_deg * kDegree));
@@ -129,7 +129,7 @@ TEST(Sun, DirectIrradianceIsSolarTimesTransmittanceTimesFraction) {
 }
 
 TEST(Sun, TransmittanceIsContinuousWhereTheHorizonStartsToCutTheDisc) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const double a = atm.sun_angular_radius_rad;
     const SunRadiometry above = sun_radiometry(atm, sun_at(a * (1 + 1e-7)));
     const SunRadiometry below = sun_radiometry(atm, sun_at(a * (1 - 1e-7)));
@@ -138,7 +138,7 @@ TEST(Sun, TransmittanceIsContinuousWhereTheHorizonStartsToCutTheDisc) {
 }
 
 TEST(Sun, BelowTheHorizonAndFromSpace) {
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const SunRadiometry night = sun_radiometry(atm, sun_at(-0.2));
     EXPECT_EQ(night.visible_fraction, 0.0);
     for (int c = 0; c < 3; ++c) {
@@ -162,7 +162,7 @@ TEST(Sun, BelowTheHorizonAndFromSpace) {
 TEST(Sun, TransmittanceAgreesWithThePeer) {
     // tests/data: T_sun at the ground for sun zenith 0, 30, 60 degrees (the
     // peer's transmittance texture); ours is exact quadrature. Measured: worst 0.001 %.
-    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     int checked = 0;
     double worst = 0.0;
     for (const test::PeerRow& row : test::read_peer_table()) {

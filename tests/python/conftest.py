@@ -33,8 +33,10 @@ if "welkin_addon" not in sys.modules:
 
 @pytest.fixture
 def atm():
-    """A fresh default atmosphere (Bruneton 2017's demo Earth, 680/550/440 nm)."""
-    return welkin.Atmosphere.preset("bruneton2017")
+    """A fresh Bruneton 2017 demo Earth at its own 680/550/440 nm (the tests' per-channel
+    expectations; the library's default is 620/560/480/440 nm, tested in
+    test_default_wavelengths.py and tests/cpp/test_default_colour.cpp)."""
+    return welkin.Atmosphere.preset("bruneton2017", [680.0, 550.0, 440.0])
 
 
 @pytest.fixture

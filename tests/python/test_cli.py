@@ -79,7 +79,7 @@ def test_atmosphere_writes_json_that_round_trips(tmp_path):
     assert r.returncode == 0, r.stderr
     assert str(out) in r.stdout
     atm = json.loads(out.read_text())
-    assert atm["wavelengths_nm"] == [680.0, 550.0, 440.0]
+    assert atm["wavelengths_nm"] == [620.0, 560.0, 480.0, 440.0]  # the default four
     # Refuses to overwrite, then does with --overwrite.
     before = out.read_text()
     r = welkin("atmosphere", "--preset", "bruneton2017", "-o", out)

@@ -435,7 +435,7 @@ def test_json_preset_with_overrides(tmp_path):
     a = welkin.Atmosphere.from_json(path)
     hazy = welkin.Atmosphere.preset("hazy")
     assert a.mie_g == 0.75
-    np.testing.assert_array_equal(a.ground_albedo, [0.3, 0.3, 0.3])
+    np.testing.assert_array_equal(a.ground_albedo, [0.3] * a.channels)
     np.testing.assert_array_equal(a.mie_scattering, hazy.mie_scattering)
 
 

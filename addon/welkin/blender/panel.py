@@ -46,6 +46,7 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         col.prop(s, "sun_object")
         col.prop(s, "sync_lamp")
         col.prop(s, "show_sun_disc")
+        col.prop(s, "show_ground")
         col.separator()
         col.prop(s, "exposure")
         col.prop(s, "resolution")

@@ -69,6 +69,10 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
     show_sun_disc: bpy.props.BoolProperty(
         name="Sun Disc for Camera", default=True, update=_changed,
         description="Show the sun's disc to camera rays (the lamp does the lighting)")
+    show_ground: bpy.props.BoolProperty(
+        name="Ground Below Horizon", default=True, update=_changed,
+        description="Show the planet's surface below the horizon, lit by the sun and the "
+                    "sky with the ground albedo, seen through the air (off: black)")
     exposure: bpy.props.FloatProperty(
         name="Exposure", default=1.0, min=1e-6, max=1e6, soft_max=10.0, update=_changed,
         description="Multiplies sky, disc and lamp alike (1: physical W m^-2 sr^-1, the "

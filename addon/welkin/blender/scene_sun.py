@@ -73,5 +73,6 @@ def request_for(scene, settings, depsgraph=None):
         width=int(settings.resolution),
         method=settings.method,
         exposure=settings.exposure,
+        ground=settings.show_ground,
     )
     return request, lamp, warnings

@@ -3,7 +3,10 @@
 // All quantities are SI: lengths in metres, scattering and extinction coefficients in
 // m^-1 (at relative density 1, see DensityProfile), irradiance in W m^-2 nm^-1. Spectral
 // quantities are sampled at `wavelengths_nm`, one value per wavelength; the default is
-// three samples, 680, 550 and 440 nm, as in Bruneton 2017 and Hillaire 2020.
+// four samples, 620, 560, 480 and 440 nm (one SIMD batch of the fast methods, batch.hpp),
+// converted to RGB by matrices fitted to the 48-wavelength path (color.cpp): within
+// 0.0073 in CIE xy of it from day through twilight (docs/validation.md). Bruneton 2017
+// and Hillaire 2020 use three, 680, 550 and 440 nm, which turn twilight magenta.
 //
 // The model is Bruneton 2017's (atmosphere/definitions.glsl, AtmosphereParameters):
 // Rayleigh scattering (no absorption), Mie scattering and extinction, and an absorbing
@@ -60,7 +63,7 @@ struct Atmosphere {
     double scattering(std::size_t c, double altitude_m) const;
 
     // Built-in presets (see src/presets.cpp for each one's sources). `wavelengths_nm`
-    // empty means the default three (680, 550, 440 nm); any list of wavelengths in
+    // empty means the default four (620, 560, 480, 440 nm); any list of wavelengths in
     // [360, 830] nm resamples the preset's spectral models, which is how the spectral
     // mode gets many wavelengths.
     static Atmosphere preset(const std::string& name,
@@ -79,7 +82,7 @@ struct Atmosphere {
     bool operator==(const Atmosphere&) const = default;
 };
 
-// The default channels: 680, 550 and 440 nm (Bruneton 2017, Hillaire 2020).
+// The default channels: 620, 560, 480 and 440 nm (above).
 const std::vector<double>& default_wavelengths_nm();
 // Evenly spaced wavelengths for the spectral mode: 360..830 nm (48 samples at 10 nm,
 // the range of the CIE 1931 functions and of the solar and ozone tables we carry).

@@ -6,11 +6,14 @@
 //     centred below the scene origin: scene.hpp) sees the sky: the sky method's path
 //     radiance for its direction (sky_method.hpp, one call for all sky pixels, the observer
 //     at the camera's altitude), plus the sun's disc.
-//   * A ray that hits it sees a black ground through the air: its depth (Blender's Z
+//   * A ray that hits it sees the ground through the air: its depth (Blender's Z
 //     convention, camera.hpp) goes to aerial_perspective() and the pixel is
-//     T x 0 + L_in = L_in (the compositor's Image x T + Inscatter with Image = 0).
+//     T x L_ground + L_in (the compositor's Image x T + Inscatter), with L_ground the lit
+//     ground of ground.hpp, albedo / pi x E(p) at the hit point p (scene.ground; the
+//     atmosphere's ground_albedo unless scene.ground_albedo is set; converted to RGB as
+//     sunlight), or 0 when scene.ground is off (a black ground).
 // Passes (linear Rec.709, W m^-2 sr^-1, times the scene's exposure; top row first):
-//   combined       = sky (sky pixels) + inscatter (ground pixels)
+//   combined       = sky (sky pixels), transmittance x L_ground + inscatter (ground pixels)
 //   sky            = sky radiance with the disc on sky pixels, 0 on ground pixels
 //   inscatter      = Welkin.AerialInscatter (0 on sky pixels)
 //   transmittance  = Welkin.AerialTransmittance (1 on sky pixels)

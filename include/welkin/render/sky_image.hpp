@@ -50,10 +50,18 @@
 // origin_altitude_m equal to the observer's altitude (the density source does not know
 // the observer, so this is not checked).
 //
+// The ground. Views that meet the planet's surface (below the horizon) get, on top of the
+// method's path radiance to the ground, T(x -> p) albedo / pi E(p) (ground.hpp: sun and
+// sky irradiance of the ground point p, tabulated over the sun's zenith cosine there;
+// T by quadrature per image row, which fixes the view's elevation and so the segment).
+// From the ground the horizon is where the ground begins, with no gap; from higher up the
+// ground near the horizon is seen through the long path that also lights the sky there.
+//
 // No NaN or infinity reaches the image: a method returning one is an error.
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,6 +72,13 @@ namespace welkin {
 
 struct SkyImageOptions {
     bool sun_disc = true;
+    // The lit ground below the horizon (ground.hpp): the method's path radiance to the
+    // ground plus the ground's own light through the air. Off: the path radiance alone
+    // (a black ground).
+    bool ground = true;
+    // The ground's Lambertian albedo in [0, 1] at every wavelength; unset: the
+    // atmosphere's ground_albedo.
+    std::optional<double> ground_albedo;
     double exposure = 1.0;  // multiplies every output value; (0, 1e6]
     enum class Output { Rgb, Spectral };
     Output output = Output::Rgb;

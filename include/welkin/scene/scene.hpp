@@ -39,6 +39,10 @@ struct SceneDescription {
     glm::dvec3 sun_direction{0.0, 0.5, 0.8660254037844386};  // towards the sun; normalised
     double exposure = 1.0;                   // multiplies radiance once, at the output
     std::string method = "auto";             // sky method (sky_method.hpp); auto by default
+    // The lit ground below the horizon (ground.hpp) in the sky image and the camera plate;
+    // its albedo in [0, 1] (unset: the atmosphere's ground_albedo).
+    bool ground = true;
+    std::optional<double> ground_albedo;
     std::optional<Camera> camera;            // absent: no camera passes can be made
     RenderResolution resolution;
     AerialOptions aerial;
