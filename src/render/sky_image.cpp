@@ -269,10 +269,13 @@ struct BandClouds {
 };
 BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIllumination& light,
                              const Atmosphere& atm, const Observer& obs,
-                             std::span<const glm::dvec3> dirs, const SpectrumToRgb* sky_to_rgb,
-                             Progress* progress) {
+                             std::span<const glm::dvec3> dirs, int width, std::uint64_t first_pixel,
+                             const SpectrumToRgb* sky_to_rgb, Progress* progress) {
     BandClouds b;
-    b.march = render_clouds(*options.clouds, light, glm::dvec3(0.0), dirs, options.cloud_lighting, progress);
+    // The band's rows are whole image rows (`width` pixels each): the cloud pass is marched
+    // on a coarser grid and upsampled where smooth (render_clouds_grid).
+    b.march = render_clouds_grid(*options.clouds, light, glm::dvec3(0.0), dirs, width, options.cloud_lighting,
+                                 options.cloud_upsampling, progress, first_pixel);
     std::vector<double> cloud_d(dirs.size(), 0.0);  // 0: no cloud, not marched
     for (std::size_t q = 0; q < dirs.size(); ++q)
         if (b.march.transmittance[q] < 1.0f) cloud_d[q] = double(b.march.depth_m[q]);
@@ -457,8 +460,9 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         method.radiance(atm, obs, dirs, std::span<float>(sky, n * nc), {}, band_progress);
         std::optional<BandClouds> clouds;
         if (options.clouds) {
-            clouds = march_band_clouds(options, *cloud_light, atm, obs, dirs,
-                                       rgb ? &*sky_to_rgb : nullptr, band_progress);
+            clouds = march_band_clouds(options, *cloud_light, atm, obs, dirs, W,
+                                       std::uint64_t(row0) * std::uint64_t(W), rgb ? &*sky_to_rgb : nullptr,
+                                       band_progress);
             std::copy(clouds->march.transmittance.begin(), clouds->march.transmittance.end(),
                       cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
         }

@@ -42,6 +42,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
+from welkin.blender import compat  # noqa: E402
 W, H = 256, 128
 ELEVATION, AZIMUTH = 20.0, 60.0
 scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution=str(W))
@@ -84,10 +85,9 @@ for name, wrong in (("upside down", hdri[::-1]), ("mirrored", hdri[:, ::-1]),
 
 # (e) Nishita beside it, same sun elevation, its default air/dust/ozone, no disc.
 world = bpy.data.worlds.new("Nishita")
-world.use_nodes = True
-tree = world.node_tree
+tree = compat.world_node_tree(world)
 sky_node = tree.nodes.new('ShaderNodeTexSky')
-sky_node.sky_type = 'NISHITA'
+sky_node.sky_type = compat.sky_type_nishita()  # 5.0: SINGLE_SCATTERING
 sky_node.sun_elevation = math.radians(ELEVATION)
 sky_node.sun_disc = False
 tree.links.new(sky_node.outputs['Color'], tree.nodes['Background'].inputs['Color'])

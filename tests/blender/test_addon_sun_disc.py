@@ -140,7 +140,7 @@ T.check(np.all(np.abs(measured / expected - 1.0) < 0.03) and np.all(expected > 1
         f"limb darkening {measured} against the model's {expected}")
 
 # EEVEE: the same view shows the disc (a world shader evaluated per pixel).
-scene.render.engine = compat.eevee_engine()
+scene.render.engine = compat.eevee_engine_id()
 if hasattr(scene.eevee, "taa_render_samples"):
     scene.eevee.taa_render_samples = 16
 path = T.TMP / "disc_eevee.exr"

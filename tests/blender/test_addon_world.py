@@ -19,6 +19,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
+from welkin.blender import compat  # noqa: E402
 T.check(T.installed_in_temp(addon),
         "the add-on went into the machine's Blender configuration")
 
@@ -186,12 +187,22 @@ T.check((world.cycles.sampling_method, world.cycles.sample_map_resolution) == ('
 T.check(set(bpy.data.images.keys()) == images_before, "remove_sky left images behind")
 T.check(not any(n.get("welkin_role") for n in tree.nodes), "Welkin nodes left after remove")
 
-# A world that did not use nodes gets use_nodes back.
-world.use_nodes = False
-bpy.ops.welkin.update_sky()
-T.check(world.use_nodes, "update_sky did not switch the world to nodes")
-bpy.ops.welkin.remove_sky()
-T.check(not world.use_nodes, "remove_sky did not restore use_nodes = False")
+# A world that did not use nodes gets use_nodes back (3.4-4.5; from 5.0 every world
+# uses its nodes and use_nodes is a deprecated no-op).
+if not compat.at_least(5, 0):
+    world.use_nodes = False
+    bpy.ops.welkin.update_sky()
+    T.check(world.use_nodes, "update_sky did not switch the world to nodes")
+    bpy.ops.welkin.remove_sky()
+    T.check(not world.use_nodes, "remove_sky did not restore use_nodes = False")
+# EEVEE Next (4.2+) extracts no sun of its own from the sky while the add-on's nodes are
+# in (the lamp is the sun), and gets the user's threshold back afterwards.
+if compat.world_sun_threshold(world) is not None:
+    world.sun_threshold = 7.5
+    bpy.ops.welkin.update_sky()
+    T.check(world.sun_threshold == 0.0, f"sun threshold {world.sun_threshold} with the sky in")
+    bpy.ops.welkin.remove_sky()
+    T.check(world.sun_threshold == 7.5, f"sun threshold {world.sun_threshold} after remove_sky")
 print("user nodes survive update and remove")
 
 # A new resolution rescales the add-on's images (packed ones included).

@@ -92,6 +92,8 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
     previous_output: bpy.props.StringProperty(options={'HIDDEN'})
     previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
     previous_sampling: bpy.props.StringProperty(options={'HIDDEN'})  # "METHOD:resolution"
+    # World.sun_threshold before the add-on set it (EEVEE Next, 4.2+); -1: not set.
+    previous_sun_threshold: bpy.props.FloatProperty(default=-1.0, options={'HIDDEN'})
     last_key: bpy.props.StringProperty(options={'HIDDEN'})
     status: bpy.props.StringProperty(options={'HIDDEN'})
     warnings: bpy.props.StringProperty(options={'HIDDEN'})  # of the last update, one a line

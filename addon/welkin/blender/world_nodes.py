@@ -32,6 +32,8 @@ setting back.
 """
 import math
 
+from . import compat
+
 MAP_RESOLUTION = 1024
 ROLE_KEY = "welkin_role"
 # Roles of nodes older versions of the add-on made, deleted when the nodes are refreshed.
@@ -143,15 +145,20 @@ def install(world, settings, sky_image, disc):
     """Adds (or refreshes) the add-on's nodes and makes its output active. `disc`: the
     sun's sky_compute.DiscModel, or None (no disc)."""
     if not settings.active:
-        settings.previous_use_nodes = world.use_nodes
-    world.use_nodes = True
-    tree = world.node_tree
+        settings.previous_use_nodes = compat.world_uses_nodes(world)
+    tree = compat.world_node_tree(world)
     cycles = getattr(world, "cycles", None)  # absent when Cycles is disabled
     if not _ours(tree):
         # The user's active outputs (one per render engine target at most).
         settings.previous_output = "\n".join(n.name for n in _active_outputs(tree))
         if cycles is not None:
             settings.previous_sampling = f"{cycles.sampling_method}:{cycles.sample_map_resolution}"
+    # EEVEE Next (4.2+) would turn the sky's brightest texels into a sun light of its own,
+    # beside the synced lamp: its extraction is turned off while the add-on's nodes are in.
+    threshold = compat.world_sun_threshold(world)
+    if threshold is not None and settings.previous_sun_threshold < 0.0:
+        settings.previous_sun_threshold = threshold
+    compat.set_world_sun_threshold(world, 0.0)
     if cycles is not None:
         cycles.sampling_method = 'MANUAL'
         cycles.sample_map_resolution = min(MAP_RESOLUTION, sky_image.size[0])
@@ -209,4 +216,7 @@ def remove(world, settings):
         cycles.sampling_method = method
         cycles.sample_map_resolution = int(resolution)
         settings.previous_sampling = ""
-    world.use_nodes = settings.previous_use_nodes
+    if settings.previous_sun_threshold >= 0.0:
+        compat.set_world_sun_threshold(world, settings.previous_sun_threshold)
+        settings.previous_sun_threshold = -1.0
+    compat.set_world_uses_nodes(world, settings.previous_use_nodes)
