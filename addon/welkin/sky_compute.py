@@ -127,10 +127,9 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     `scene_json`: the scene description of the sky with its clouds (its origin at the
     observer, update.cloudy_scene_json); the core then renders the sky with them
     (welkin.scene_sky_image, as `welkin sky --scene`), lit by the same atmosphere, and the
-    disc image is dimmed by the clouds' transmittance of its pixels (the factor the core
-    dims a disc in the sky image by; the disc model takes the clouds' transmittance at the
-    sun's centre). `progress`: callable(fraction) -> bool (False
-    cancels: KeyboardInterrupt)."""
+    disc is dimmed by the clouds' transmittance towards the sun's centre (the core dims an
+    HDRI's disc pixel by pixel). `progress`: callable(fraction) -> bool (False cancels:
+    KeyboardInterrupt)."""
     start = time.perf_counter()
     sky_request.validate(request, native)
     method = sky_request.resolve_method(request.method, native)
