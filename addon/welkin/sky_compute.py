@@ -150,9 +150,8 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     `scene_json`: the scene description of the sky with its clouds (its origin at the
     observer, update.cloudy_scene_json); the core then renders the sky with them
     (welkin.scene_sky_image, as `welkin sky --scene`), lit by the same atmosphere, and the
-    disc image is dimmed by the clouds' transmittance of its pixels (the factor the core
-    dims a disc in the sky image by; the disc model takes the clouds' transmittance at the
-    sun's centre). `shadow_json`: the clouds that shade the sun lamp,
+    disc is dimmed by the clouds' transmittance towards the sun's centre (the core dims an
+    HDRI's disc pixel by pixel). `shadow_json`: the clouds that shade the sun lamp,
     in a scene description centred on the scene origin (update.shadow_scene_json): the
     lamp's strength is then times their transmittance towards the sun there (shaded_lamp),
     unless shade_lamp is False; `shadow_map`: callable(shadow_json) -> the ground shadows'

@@ -5,7 +5,9 @@ limb-darkened by the core's law, whose integrated energy is the direct irradianc
 `welkin.sun` gives the lamp; and EEVEE renders the disc too, of the same size (its energy
 checked where EEVEE's buffers hold it: 3.x; EEVEE Next clips at the half-float 65504). No
 disc image in the file (an older file's is dropped). In an `-a` render of an animated sun,
-each frame's disc is where that frame's lamp points.
+each frame's disc is where that frame's lamp points. In EEVEE the disc lights nothing (a
+grey plane renders the same with it shown or hidden; without its Is Camera Ray gate it would
+light the plane).
 
 Measured on the Cycles render, with the pixel solid angle of a perspective camera
 (dOmega = p^2 f / (f^2 + x^2 + y^2)^(3/2), p the pixel pitch on the sensor):
@@ -160,6 +162,39 @@ print(f"EEVEE ({scene.render.engine}): disc solid angle ratio {area_e / area_ref
 T.check(abs(area_e / area_ref - 1.0) < 0.05, f"EEVEE: disc solid angle ratio {area_e / area_ref}")
 T.check(clipped or np.all(np.abs(err_e) < 0.01), f"EEVEE: disc energy off by {err_e}")
 
+# The disc lights nothing in EEVEE (the lamp does; EEVEE Next would otherwise fold a bright
+# world texel into a sun light, World.sun_threshold): a grey plane seen from above, the lamp
+# off, renders the same with the disc shown and hidden; the same disc with its Is Camera
+# Ray gate removed lights it (the control that the check can fail).
+settings.sync_lamp = False
+sun.data.energy = 0.0
+bpy.ops.mesh.primitive_plane_add(size=50.0, location=(0.0, 0.0, -1.0))
+cam.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)  # looking down
+cam.data.lens = 50.0
+
+
+def plane_radiance(show, gated=True):
+    settings.show_sun_disc = show
+    bpy.ops.welkin.update_sky()
+    if not gated:
+        tree = scene.world.node_tree
+        bg = next(n for n in tree.nodes if n.get("welkin_role") == "disc_background")
+        for link in list(bg.inputs['Strength'].links):
+            tree.links.remove(link)
+        bg.inputs['Strength'].default_value = 1.0
+    path = T.TMP / f"plane_{show}_{gated}.exr"
+    T.render_still(scene, path)
+    return float(T.read_rgb_exr(welkin, path)[..., 1].mean())
+
+
+shown, hidden, ungated = plane_radiance(True), plane_radiance(False), plane_radiance(True, False)
+print(f"EEVEE plane: disc shown {shown:.6g}, hidden {hidden:.6g}, un-gated {ungated:.6g}")
+T.check(abs(shown - hidden) <= 1e-4 * hidden, f"the disc lights the plane: {shown} vs {hidden}")
+T.check(ungated - hidden > 0.02 * hidden, f"the control failed: un-gated {ungated} vs {hidden}")
+bpy.data.objects.remove(bpy.context.active_object)
+settings.show_sun_disc = True
+settings.sync_lamp = True
+
 # An animated sun in a separate `blender -b file.blend -a`: each frame's disc is where that
 # frame's lamp points (the frame handler writes the disc's numbers into the nodes), within
 # 0.1 alpha. A 200 mm lens (10 degrees) at 96 x 96 sees the sun at 30 and then 32 degrees.
@@ -182,8 +217,9 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-run = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", str(blend), "--addons",
-                      "welkin", "-a"], env=env, capture_output=True, text=True, timeout=300)
+run = subprocess.run(T.blender_command() + ["-b", "--factory-startup", str(blend), "--addons",
+                                             "welkin", "-a"],
+                     env=env, capture_output=True, text=True, timeout=300)
 T.check(run.returncode == 0 and "Traceback" not in run.stdout + run.stderr,
         f"-a render failed:\n{(run.stdout + run.stderr)[-3000:]}")
 R = np.array(cam.matrix_world.to_3x3())
