@@ -108,6 +108,7 @@ bpy.data.objects.remove(volume)
 scene.render.use_placeholder = False
 out = T.TMP / "b"
 scene.render.filepath = str(out / "f_####")
+scene.welkin_aerial.side_files = True  # the pass files beside the render
 scene.welkin_aerial.enabled = True
 base = aerial.base_of(scene)
 foreign = pathlib.Path(scene_export.frame_path(base, "aerial", 2))

@@ -107,6 +107,7 @@ user.name = "User Gamma"
 tree.links.new(rl.outputs["Image"], user.inputs["Image"])
 tree.links.new(user.outputs["Image"], comp.inputs["Image"])
 names_before = {n.name for n in tree.nodes}
+scene.welkin_aerial.side_files = True  # the pass files beside the render
 scene.welkin_aerial.enabled = True
 check(names_before <= {n.name for n in tree.nodes}, "enable removed a user node")
 group = tree.nodes[compositor.GROUP_NODE]

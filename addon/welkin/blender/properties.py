@@ -86,6 +86,8 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
     # State kept by the add-on (not shown as parameters).
     active: bpy.props.BoolProperty(default=False, options={'HIDDEN'})
     sky_image: bpy.props.PointerProperty(type=bpy.types.Image, options={'HIDDEN'})
+    # The sun-disc image of files saved before the world's nodes drew the disc; the next
+    # update removes it (images.drop_disc_image).
     disc_image: bpy.props.PointerProperty(type=bpy.types.Image, options={'HIDDEN'})
     previous_output: bpy.props.StringProperty(options={'HIDDEN'})
     previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
