@@ -182,7 +182,7 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-run = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", str(blend), "--addons",
+run = subprocess.run([*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons",
                       "welkin", "-a"], env=env, capture_output=True, text=True, timeout=300)
 T.check(run.returncode == 0 and "Traceback" not in run.stdout + run.stderr,
         f"-a render failed:\n{(run.stdout + run.stderr)[-3000:]}")
