@@ -7,9 +7,9 @@
 #     the module built by scripts/build.sh (/usr/bin/python3, PYTHONPATH=build), and the
 #     module's public names are the same;
 #   * `ldd` of the installed module resolves every library, and each one is either inside
-#     the wheel (welkin.libs/) or one the manylinux policy lets a wheel take from the system
-#     (glibc's libraries, libstdc++, libgcc_s): nothing from Debian's OpenVDB, TBB,
-#     OpenEXR, Imath, blosc, boost, fmt...
+#     the wheel (welkin.libs/) or on the list its manylinux tag lets a wheel take from the
+#     system (auditwheel's policy: glibc's libraries, libstdc++, libgcc_s, libz...): nothing
+#     from Debian's OpenVDB, TBB, OpenEXR, Imath, blosc, boost, fmt...
 #
 #   bash scripts/check_wheel.sh WHEEL    ($WELKIN_CHECK_PYTHON: the venv's Python 3.11)
 set -euo pipefail
@@ -38,10 +38,19 @@ venv_python=$(pwd)/$venv/bin/python
 wheel_out=$(cd /tmp && env -u PYTHONPATH "$venv_python" -c "$probe")
 build_out=$(PYTHONPATH="$(pwd)/build" /usr/bin/python3 -c "$probe")
 
-/usr/bin/python3 - "$wheel_out" "$build_out" "$(pwd)/$venv" <<'PY'
+# The libraries the wheel's manylinux tag lets it take from the system: auditwheel's own
+# policy (build/venv-wheel-tools, scripts/build_wheel.sh).
+tag=$(basename "$wheel" | sed -n 's/.*-\(manylinux_[0-9]*_[0-9]*\)_x86_64\.whl$/\1/p')
+allowed=$(build/venv-wheel-tools/bin/python -c "
+import json, pathlib, auditwheel
+policy = next(pathlib.Path(auditwheel.__file__).parent.rglob('manylinux-policy.json'))
+print(' '.join(next(p for p in json.loads(policy.read_text()) if p['name'] == '$tag')['lib_whitelist']))")
+
+/usr/bin/python3 - "$wheel_out" "$build_out" "$(pwd)/$venv" "$tag" "$allowed" <<'PY'
 import json, subprocess, sys
 import numpy as np
 wheel, build, venv = json.loads(sys.argv[1]), json.loads(sys.argv[2]), sys.argv[3]
+tag, allowed = sys.argv[4], tuple(sys.argv[5].split())
 assert wheel["file"].startswith(venv), f"`import welkin` found {wheel['file']}, not the venv's"
 assert wheel["names"] == build["names"], (
     f"the wheel's API differs: {set(wheel['names']) ^ set(build['names'])}")
@@ -51,9 +60,7 @@ assert np.allclose(a, b, rtol=1e-5, atol=0), f"wheel {a} vs build {b}"
 print(f"check_wheel: {wheel['file']}: welkin.sky_radiance matches build/'s module "
       f"(max rel diff {np.max(np.abs(a - b) / b):.1e}); {len(wheel['names'])} public names, same")
 
-# manylinux: the libraries a wheel may take from the system (glibc's, libstdc++, libgcc_s).
-allowed = ("linux-vdso.so", "ld-linux-x86-64.so", "libc.so", "libm.so", "libpthread.so",
-           "libdl.so", "librt.so", "libstdc++.so", "libgcc_s.so", "libutil.so")
+assert allowed, f"no auditwheel policy for {tag!r}"
 out = subprocess.run(["ldd", wheel["file"]], capture_output=True, text=True, check=True).stdout
 bad, bundled = [], 0
 for line in out.splitlines():
@@ -63,10 +70,10 @@ for line in out.splitlines():
         bad.append(line)
     elif "=>" in line and "/welkin.libs/" in line.split("=>")[1]:
         bundled += 1
-    elif not name.startswith(allowed) and not name.startswith("/lib64/ld-linux"):
+    elif name not in allowed and not name.startswith(("linux-vdso.so", "/lib64/ld-linux")):
         bad.append(line)
 assert not bad, "libraries from outside the wheel:\n" + "\n".join(bad)
-print(f"check_wheel: ldd: {bundled} libraries from the wheel's welkin.libs/, the rest glibc's "
-      "and the C++ runtime's")
+print(f"check_wheel: ldd: {bundled} libraries from the wheel's welkin.libs/, the rest on "
+      f"{tag}'s list of system libraries")
 PY
 rm -rf "$venv"

@@ -217,9 +217,8 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-run = subprocess.run(T.blender_command() + ["-b", "--factory-startup", str(blend), "--addons",
-                                             "welkin", "-a"],
-                     env=env, capture_output=True, text=True, timeout=300)
+run = subprocess.run([*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons",
+                      "welkin", "-a"], env=env, capture_output=True, text=True, timeout=300)
 T.check(run.returncode == 0 and "Traceback" not in run.stdout + run.stderr,
         f"-a render failed:\n{(run.stdout + run.stderr)[-3000:]}")
 R = np.array(cam.matrix_world.to_3x3())
