@@ -201,7 +201,7 @@ def run_engine(scene, engine, tmp):
     scene.welkin_aerial.enabled = False
     for layer in scene.view_layers:
         layer.use_pass_z = True
-    scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+    compat.set_exr(scene.render.image_settings, multilayer=True)
     scene.render.image_settings.color_depth = '32'
     scene.render.filepath = str(tmp / "off_")
     bpy.ops.render.render(animation=True)
@@ -217,7 +217,7 @@ def run_engine(scene, engine, tmp):
         print("depth at (72, 17):", depth[1][17, 71:74], "raymarch", rm[17, 72], "froxel", want[1][17, 72])
     # With haze: saved, rendered in a fresh process with -o elsewhere and -a.
     scene.welkin_aerial.enabled = True
-    scene.render.image_settings.file_format = 'OPEN_EXR'
+    compat.set_exr(scene.render.image_settings, multilayer=False)
     scene.render.filepath = str(tmp / "nowhere" / "frame_")
     blend = tmp / f"aerial_{engine}.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)

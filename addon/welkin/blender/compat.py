@@ -93,3 +93,13 @@ def compositor_mix(tree, blend_type):
 def eevee_engine():
     """The identifier of EEVEE: BLENDER_EEVEE_NEXT in 4.2-4.5, BLENDER_EEVEE otherwise."""
     return 'BLENDER_EEVEE_NEXT' if at_least(4, 2) and not at_least(5, 0) else 'BLENDER_EEVEE'
+
+
+def set_exr(image_settings, multilayer):
+    """OpenEXR output, multilayer or not: file_format OPEN_EXR_MULTILAYER before 5.0; in 5.0+
+    file_format OPEN_EXR with media_type MULTI_LAYER_IMAGE or IMAGE."""
+    if hasattr(image_settings, "media_type"):
+        image_settings.media_type = 'MULTI_LAYER_IMAGE' if multilayer else 'IMAGE'
+        image_settings.file_format = 'OPEN_EXR'
+    else:
+        image_settings.file_format = 'OPEN_EXR_MULTILAYER' if multilayer else 'OPEN_EXR'
