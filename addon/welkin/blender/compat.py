@@ -96,10 +96,8 @@ def eevee_engine():
 
 
 def set_exr(image_settings, multilayer):
-    """OpenEXR output, multilayer or not: file_format OPEN_EXR_MULTILAYER before 5.0; in 5.0+
-    file_format OPEN_EXR with media_type MULTI_LAYER_IMAGE or IMAGE."""
+    """OpenEXR output, multilayer or not: file_format OPEN_EXR_MULTILAYER or OPEN_EXR; in 5.0+
+    the media type (MULTI_LAYER_IMAGE or IMAGE) is chosen first and limits the formats."""
     if hasattr(image_settings, "media_type"):
         image_settings.media_type = 'MULTI_LAYER_IMAGE' if multilayer else 'IMAGE'
-        image_settings.file_format = 'OPEN_EXR'
-    else:
-        image_settings.file_format = 'OPEN_EXR_MULTILAYER' if multilayer else 'OPEN_EXR'
+    image_settings.file_format = 'OPEN_EXR_MULTILAYER' if multilayer else 'OPEN_EXR'
