@@ -83,16 +83,16 @@ def build_scene():
     scene.cycles.samples = 4
     scene.cycles.use_denoising = False
     scene.frame_start, scene.frame_end = 1, 2
-    # The user's compositor: a node after the Render Layers that changes nothing (Gamma 1).
+    # The user's compositor: a node after the Render Layers that changes nothing (a reroute,
+    # which every Blender's compositor has).
     tree, _undo = compat.ensure_scene_compositor(scene, "User Compositing")
     rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
-    gamma = tree.nodes.new('CompositorNodeGamma')
-    gamma.name = "User Gamma"
-    gamma.inputs[1].default_value = 1.0
+    user = tree.nodes.new('NodeReroute')
+    user.name = "User Reroute"
     link = next(l for l in tree.links if l.from_node == rl and l.from_socket.name == "Image")
     target = link.to_socket
-    tree.links.new(rl.outputs["Image"], gamma.inputs[0])
-    tree.links.new(gamma.outputs[0], target)
+    tree.links.new(rl.outputs["Image"], user.inputs[0])
+    tree.links.new(user.outputs[0], target)
     return scene
 
 
@@ -201,7 +201,7 @@ def run_engine(scene, engine, tmp):
     scene.welkin_aerial.enabled = False
     for layer in scene.view_layers:
         layer.use_pass_z = True
-    scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+    compat.set_exr(scene.render.image_settings, multilayer=True)
     scene.render.image_settings.color_depth = '32'
     scene.render.filepath = str(tmp / "off_")
     bpy.ops.render.render(animation=True)
@@ -217,7 +217,7 @@ def run_engine(scene, engine, tmp):
         print("depth at (72, 17):", depth[1][17, 71:74], "raymarch", rm[17, 72], "froxel", want[1][17, 72])
     # With haze: saved, rendered in a fresh process with -o elsewhere and -a.
     scene.welkin_aerial.enabled = True
-    scene.render.image_settings.file_format = 'OPEN_EXR'
+    compat.set_exr(scene.render.image_settings, multilayer=False)
     scene.render.filepath = str(tmp / "nowhere" / "frame_")
     blend = tmp / f"aerial_{engine}.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)

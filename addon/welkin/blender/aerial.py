@@ -133,6 +133,8 @@ def enable_side_files(scene):
 def disable_side_files(scene):
     s = scene.welkin_aerial
     was = s.nodes_installed
+    if not was:
+        return
     compositor.remove(scene, s)
     if was and not s.previous_use_pass_z:
         for layer in scene.view_layers:

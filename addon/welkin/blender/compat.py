@@ -240,3 +240,8 @@ def set_non_color(image):
         if name in names:
             image.colorspace_settings.name = name
             return
+
+
+def set_exr(image_settings, multilayer):
+    """OpenEXR output, multilayer or not (set_file_format says how 5.0 differs)."""
+    set_file_format(image_settings, 'OPEN_EXR_MULTILAYER' if multilayer else 'OPEN_EXR')

@@ -156,7 +156,7 @@ def _install_group(scene, tree, rl, settings):
 
 def remove(scene, settings):
     """Takes our nodes out and relinks what fed the Composite node before."""
-    tree = scene.node_tree
+    tree = getattr(scene, "node_tree", None)  # (the pass files' nodes: before Blender 5.0)
     if tree is not None:
         group = tree.nodes.get(GROUP_NODE)
         comp = _composite(tree)
