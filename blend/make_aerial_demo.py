@@ -54,6 +54,9 @@ ds.cycles(scene, args.samples, args.size)
 scene.render.image_settings.file_format = 'OPEN_EXR'
 scene.render.filepath = os.path.join(args.out, "frame_")
 scene.frame_set(1)
+# The frame itself is hazed; the pass files (the render's Image and Z pass, the passes, the
+# hazed composite) are written too, for --sheet and for bench/cycles_aerial.py.
+scene.welkin_aerial.side_files = True
 scene.welkin_aerial.enabled = True
 bpy.ops.wm.save_as_mainfile(filepath=os.path.join(args.out, "welkin_aerial_demo.blend"))
 bpy.ops.render.render(write_still=True)

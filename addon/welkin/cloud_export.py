@@ -109,9 +109,11 @@ def layer_dict(values: Mapping[str, Any], seed: int,
 
 
 def volume_dict(name: str, path: str, grid: str, matrix_world: Iterable[Iterable[float]],
-                density_scale: float, scale_length: float = 1.0) -> dict[str, Any]:
+                density_scale: float, scale_length: float = 1.0,
+                placement: str = "blender") -> dict[str, Any]:
     """One VDB volume. `matrix_world` by rows in scene units (its translation is scaled to
-    metres); raises MissingVolume when the file is absent."""
+    metres); `placement`: where the Blender that shows it puts voxel ijk ("blender",
+    "openvdb": VdbClouds); raises MissingVolume when the file is absent."""
     if not os.path.isfile(path):
         raise MissingVolume(f"volume object '{name}': its VDB file for this frame is missing: "
                             f"{path}")
@@ -121,7 +123,7 @@ def volume_dict(name: str, path: str, grid: str, matrix_world: Iterable[Iterable
         for c in range(4):
             m[r][c] *= s  # the whole placement (voxel size too) from scene units to metres
     return {"name": name, "file": path, "grid": grid, "matrix_world": m,
-            "density_scale": float(density_scale), "negative": "clamp"}
+            "density_scale": float(density_scale), "negative": "clamp", "placement": placement}
 
 
 def clouds_dict(layers: Iterable[Mapping[str, Any]], volumes: Iterable[Mapping[str, Any]],

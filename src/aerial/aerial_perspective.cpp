@@ -15,6 +15,7 @@
 // at every point (the sun is at infinity), so its zenith cosine at x is dot(x, s) / |x|;
 // T_sun (with the planet's shadow) and Psi_ms are lookups in the atmosphere's LUTs.
 #include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/aerial/aerial_table.hpp"
 
 #include <unistd.h>
 
@@ -548,7 +549,7 @@ void AerialOptions::validate(const std::string& p) const {
     if (double(froxel_width) * froxel_height * froxel_slices > double(1 << 26))
         throw InvalidArgument(p + ".froxels", "more than 2^26 froxels");
     require_in_range(p + ".max_depth_m", max_depth_m, 0.0, 1e12, "m (0: fitted to the depth)");
-    require_in_range(p + ".steps_per_slice", steps_per_slice, 1, 256);
+    require_in_range(p + "steps_per_slice", steps_per_slice, 1, 256);
     require_in_range(p + ".raymarch_steps", raymarch_steps, 1, 4096);
     require_in_range(p + ".sky_depth_m", sky_depth_m, 1.0, 1e30, "m");
 }
@@ -562,6 +563,104 @@ void AerialView::validate() const {
     require_in_range("height", height, 1, std::numeric_limits<int>::max(), "pixels");
     require_in_range("exposure", exposure, 1e-12, 1e6);  // as SceneDescription's
     options.validate();
+}
+
+// The direction table (aerial_table.hpp): the mapping, then one march per direction.
+void AerialTableLayout::validate(const std::string& parameter) const {
+    const std::string p = parameter.empty() ? parameter : parameter + ".";
+    require_in_range(p + "azimuths", azimuths, 4, 4096);
+    require_in_range(p + "elevations", elevations, 3, 4096);
+    require_in_range(p + "slices", slices, 2, 1024);
+    require_in_range(p + "steps_per_slice", steps_per_slice, 1, 256);
+    require_in_range(p + "linear_distance_m", linear_distance_m, 1e-3, 1e9, "m");
+    require_in_range(p + "max_distance_m", max_distance_m, 2.0 * linear_distance_m, 1e9, "m");
+    if (double(azimuths) * elevations * slices > 64.0 * 1024 * 1024)
+        throw InvalidArgument(parameter.empty() ? "slices" : parameter, fmt::format("{} x {} x {} entries: at most 64 Mi", azimuths,
+                                             elevations, slices));
+}
+
+double AerialTableLayout::azimuth_coordinate(const glm::dvec3& v) {
+    return std::atan2(v.y, v.x) / kTwoPi + 0.5;
+}
+
+double AerialTableLayout::elevation_coordinate(const glm::dvec3& v) {
+    const double theta = std::asin(clamp_cosine(v.z / glm::length(v)));
+    const double a = std::sqrt(std::abs(theta) / (0.5 * kPi));
+    return 0.5 + 0.5 * (theta < 0.0 ? -a : a);
+}
+
+glm::dvec3 AerialTableLayout::direction(int i, int j) const {
+    const double phi = kTwoPi * ((double(i) + 0.5) / double(azimuths) - 0.5);
+    const double e = 2.0 * double(j) / double(elevations - 1) - 1.0;  // in [-1, 1]
+    const double theta = (e < 0.0 ? -1.0 : 1.0) * e * e * 0.5 * kPi;
+    return {std::cos(theta) * std::cos(phi), std::cos(theta) * std::sin(phi), std::sin(theta)};
+}
+
+double AerialTableLayout::slice_exponent() const {
+    return std::log1p(max_distance_m / linear_distance_m) / double(slices - 1);
+}
+
+double AerialTableLayout::slice_distance(int k) const {
+    return linear_distance_m * std::expm1(double(k) * slice_exponent());
+}
+
+AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
+                         const glm::dvec3& planet_centre, const glm::dvec3& camera_position,
+                         const glm::dvec3& sun_direction, double exposure,
+                         const AerialTableLayout& layout, Progress* progress) {
+    layout.validate();
+    for (int c = 0; c < 3; ++c) {
+        require_finite("camera_position", camera_position[c]);
+        require_finite("sun_direction", sun_direction[c]);
+    }
+    require_in_range("exposure", exposure, 1e-12, 1e6);
+    if (!(glm::length(sun_direction) > 0.5))
+        throw InvalidArgument("sun_direction", "must be a unit vector");
+    const glm::dvec3 sun = glm::normalize(sun_direction);
+    const PassColour colour(atmosphere, exposure);
+    const std::size_t C = colour.channels();
+    const int na = layout.azimuths, ne = layout.elevations, nk = layout.slices;
+    AerialTable table{layout, {}, {}};
+    table.inscatter.assign(std::size_t(na) * ne * nk * 3, 0.0f);
+    table.optical_depth.assign(table.inscatter.size(), 0.0f);
+    const auto at = [&](int i, int j, int k) {
+        return ((std::size_t(k) * std::size_t(ne) + std::size_t(j)) * std::size_t(na) + std::size_t(i)) * 3;
+    };
+    ProgressTracker tracker(progress, std::size_t(na) * std::size_t(ne));
+    tbb::parallel_for(tbb::blocked_range<int>(0, na * ne), [&](const tbb::blocked_range<int>& range) {
+        std::vector<float> L(std::size_t(nk) * C), T(std::size_t(nk) * C), scratch(C);
+        for (int direction = range.begin(); direction != range.end(); ++direction) {
+            const int i = direction % na, j = direction / na;
+            const AirRay ray{camera_position - planet_centre, layout.direction(i, j), sun};
+            const float nu = float(clamp_cosine(glm::dot(ray.d, sun)));
+            for (const auto& b : luts.batches()) {
+                const float rp = b->medium.rayleigh_phase(nu), mp = b->medium.mie_phase(nu);
+                Spectrum4 Ls(0.0f), Ts(1.0f);
+                double t_prev = 0.0;
+                for (int k = 1; k < nk; ++k) {  // slice 0: d = 0, L = 0, T = 1
+                    const double t = layout.slice_distance(k);
+                    march_segment(*b, ray, rp, mp, t_prev, t, layout.steps_per_slice, Ls, Ts);
+                    t_prev = t;
+                    store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(),
+                                   &L[std::size_t(k) * C + b->medium.first_channel()]);
+                    store_channels(Ts, b->medium.channel_count(), &T[std::size_t(k) * C + b->medium.first_channel()]);
+                }
+            }
+            for (int k = 1; k < nk; ++k) {
+                float L3[3], T3[3];
+                colour.convert({&L[std::size_t(k) * C], C}, {&T[std::size_t(k) * C], C}, scratch, L3, T3);
+                const std::size_t o = at(i, j, k);
+                for (int c = 0; c < 3; ++c) {
+                    table.inscatter[o + c] = L3[c];
+                    table.optical_depth[o + c] =
+                        T3[c] > 0.0f ? std::min(-std::log(T3[c]), kMaxOpticalDepth) : kMaxOpticalDepth;
+                }
+            }
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+    return table;
 }
 
 }  // namespace welkin

@@ -8,6 +8,8 @@
 
 #include "bindings.hpp"
 #include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/aerial/aerial_table.hpp"
+#include "welkin/atmosphere/lut_cache.hpp"
 #include "welkin/base/camera.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/scene/scene.hpp"
@@ -75,6 +77,58 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
     return py::make_tuple(L, T);
 }
 
+const char* const kAerialTableDoc = R"doc(
+Aerial perspective from the scene camera's position as a table of view direction and
+distance (include/welkin/aerial/aerial_table.hpp): what a shader samples per shading
+point to haze a render in the render itself.
+
+scene : SceneDescription or its JSON text (atmosphere, origin altitude, sun, exposure and
+    the camera, whose position is the viewpoint)
+azimuths, elevations, slices : the table's size (azimuth over the full circle, elevation
+    from nadir to zenith crowded at the horizon, distance slices
+    d_k = linear_distance_m (exp(k c) - 1), c = ln(1 + max_distance_m / linear_distance_m)
+    / (slices - 1), slice 0 at d = 0)
+max_distance_m : the last slice's distance, m (at least 2 linear_distance_m)
+linear_distance_m : below it the slices are about evenly spaced, beyond it geometric, m
+steps_per_slice : march steps per slice
+
+Returns {"inscatter", "optical_depth"}: float32 arrays (slices, elevations, azimuths, 3);
+inscatter in the passes' units (linear Rec.709 W m^-2 sr^-1 times the exposure), optical
+depth -ln T of the passes' transmittance. ValueError names a bad parameter.
+)doc";
+
+py::dict aerial_table_py(const py::handle& scene_in, int azimuths, int elevations, int slices,
+                         double max_distance_m, double linear_distance_m, int steps_per_slice,
+                         const py::object& progress) {
+    const SceneDescription scene = to_scene(scene_in);
+    require_progress_callback(progress);
+    const AerialView view = scene.aerial_view();
+    AerialTableLayout layout;
+    layout.azimuths = azimuths;
+    layout.elevations = elevations;
+    layout.slices = slices;
+    layout.max_distance_m = max_distance_m;
+    layout.linear_distance_m = linear_distance_m;
+    layout.steps_per_slice = steps_per_slice;
+    layout.validate("");
+    AerialTable table;
+    run_cancellable(
+        [&](Progress* p) {
+            const auto luts = AtmosphereLutCache::shared().get(view.atmosphere, view.luts);
+            table = aerial_table(view.atmosphere, *luts, view.planet_centre(), CameraRays(view.camera, view.width, view.height).position(),
+                                 view.origin.sun_direction, view.exposure, layout, p);
+        },
+        progress);
+    const std::vector<py::ssize_t> shape{slices, elevations, azimuths, 3};
+    py::array_t<float> L(shape), tau(shape);
+    std::copy(table.inscatter.begin(), table.inscatter.end(), L.mutable_data());
+    std::copy(table.optical_depth.begin(), table.optical_depth.end(), tau.mutable_data());
+    py::dict out;
+    out["inscatter"] = L;
+    out["optical_depth"] = tau;
+    return out;
+}
+
 }  // namespace
 
 void register_aerial(py::module_& m) {
@@ -123,6 +177,10 @@ depth z lies z * distance_per_depth along the ray. ValueError without a camera.
 
     m.def("aerial_perspective", &aerial_perspective_py, kAerialDoc, py::arg("scene"),
           py::arg("depth"), py::arg("method") = py::none(), py::kw_only(),
+          py::arg("progress") = py::none());
+    m.def("aerial_table", &aerial_table_py, kAerialTableDoc, py::arg("scene"), py::kw_only(),
+          py::arg("azimuths") = 128, py::arg("elevations") = 64, py::arg("slices") = 48,
+          py::arg("max_distance_m"), py::arg("linear_distance_m") = 100.0, py::arg("steps_per_slice") = 4,
           py::arg("progress") = py::none());
 }
 

@@ -83,6 +83,7 @@ def main():
     comp = add_user_nodes(scene)
     names_before = {n.name for n in scene.node_tree.nodes}
 
+    scene.welkin_aerial.side_files = True  # the pass files beside the render
     scene.welkin_aerial.enabled = True
     tree = scene.node_tree
     at.check(names_before <= {n.name for n in tree.nodes}, "enable removed a user node")

@@ -1,16 +1,23 @@
 """Aerial perspective for camera renders (Scene.welkin_aerial, Properties > Render >
-Welkin Aerial Perspective). Off by default: enabling it turns on the Z pass and adds the
-add-on's compositor nodes (compositor.py); disabling takes them out again.
+Welkin Aerial Perspective). Off by default.
 
-For every rendered frame (F12, or `blender -b file.blend -f N / -a`), render_post reads
-the Image and Z pass the File Output node just wrote, and writes beside the render
-(scene_export.frame_path, from scene.render.filepath and the frame number):
+On, it hazes the frame Blender renders itself, in Cycles and EEVEE (F12, `-f`, `-a`, any
+`-o`, the Composite / Group Output node and File Output nodes): aerial_frame.py adds a node
+group to every material that samples the frame's aerial-perspective table and writes two
+shader AOVs, and a compositor group that applies Image x T + Inscatter after the Render
+Layers node. The table is baked for each frame's camera, sun and atmosphere in
+frame_change_post, with the render's own depsgraph, before the frame renders (no frame of
+delay). Disabling takes everything out again.
+
+"Write pass files" (off by default) adds, as before, files beside each render from the
+render's Z pass (scene_export.frame_path, from scene.render.filepath and the frame):
   welkin_scene_NNNN.json      the frame's SceneDescription (reproduces it with
                               `welkin aerial --scene ... --depth welkin_render_NNNN.exr
                               --depth-channel Depth.V`)
   welkin_aerial_NNNN.exr      Welkin.AerialInscatter.RGB, Welkin.AerialTransmittance.RGB
-  welkin_composite_NNNN.exr   R G B: Image x Transmittance + Inscatter (the render layer's
-                              Image, before the user's compositing)
+                              (and the cloud passes, clouds marched up to the geometry)
+  welkin_composite_NNNN.exr   R G B: Image x Transmittance + Inscatter (and the clouds over
+                              it; the render layer's Image, before the user's compositing)
 A file that exists and was not written by the add-on is never replaced: the frame is
 reported instead. Problems (no camera, a fisheye camera, no sun lamp, no Z pass) are
 printed and shown in the panel's status line; a handler never raises. In a command-line
@@ -24,13 +31,14 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .. import native, scene_export, sky_request
-from . import cloud_scene, compositor, farm, scene_sun
+from .. import aerial_table
+from . import aerial_frame, cloud_scene, compositor, farm, scene_sun
 from .scene_sun import UserError
 
 
 def _toggled(settings, context):
     scene = settings.id_data  # the Scene that owns these settings
-    if settings.enabled:
+    if settings.enabled:  # (Write Pass Files alone, with aerial perspective off, does nothing)
         enable(scene)
     else:
         disable(scene)
@@ -39,8 +47,13 @@ def _toggled(settings, context):
 class WelkinAerialSettings(bpy.types.PropertyGroup):
     enabled: bpy.props.BoolProperty(
         name="Aerial Perspective", default=False, update=_toggled,
-        description="Write Welkin's aerial-perspective passes, the frame's scene JSON and "
-                    "the hazed frame beside every render (turns on the Z pass)")
+        description="Haze the rendered frame with Welkin's aerial perspective (adds a node "
+                    "group to the materials, two shader AOVs and a compositor group)")
+    side_files: bpy.props.BoolProperty(
+        name="Write Pass Files", default=False, update=_toggled,
+        description="Also write the passes (and the clouds marched up to the geometry), the "
+                    "frame's scene JSON and the hazed frame beside every render, from the Z "
+                    "pass (turns the Z pass on)")
     method: bpy.props.EnumProperty(
         name="Method", default='froxel',
         items=(('froxel', "Froxels", "Hillaire 2020 camera volume (fast)"),
@@ -50,6 +63,8 @@ class WelkinAerialSettings(bpy.types.PropertyGroup):
     previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
     previous_use_pass_z: bpy.props.BoolProperty(options={'HIDDEN'})
     previous_source: bpy.props.StringProperty(options={'HIDDEN'})
+    compositor_undo: bpy.props.StringProperty(options={'HIDDEN'})
+    added_aovs: bpy.props.StringProperty(options={'HIDDEN'})
 
 
 def _log(scene, text):
@@ -63,6 +78,50 @@ def base_of(scene):
 
 def enable(scene):
     s = scene.welkin_aerial
+    for warning in aerial_frame.install(scene, s):
+        _log(scene, warning)
+    try:
+        bake(scene)
+    except UserError as error:
+        _log(scene, f"aerial perspective: {error}")
+    if s.side_files:
+        enable_side_files(scene)
+    else:
+        disable_side_files(scene)
+
+
+def disable(scene):
+    disable_side_files(scene)
+    aerial_frame.remove(scene, scene.welkin_aerial)
+    _baked.clear()
+
+
+def bake(scene, depsgraph=None, text=None):
+    """Bakes the frame's table (aerial_frame.bake) for the camera and sun as evaluated in
+    `depsgraph` (or as they are now); raises UserError."""
+    module = native.module()
+    if module is None:
+        raise UserError(native.message())
+    if text is None:
+        text = scene_json(scene, module, depsgraph)
+    d = json.loads(text)
+    camera = d["camera"]
+    scale = scene.unit_settings.scale_length
+    d_max = aerial_table.max_distance_m(camera.get("clip_end_m", 1e6), d["atmosphere"]["bottom_radius_m"],
+                                        d["atmosphere"]["top_radius_m"])
+    try:
+        aerial_frame.bake(scene, module, text, d_max / scale, scale, _baked)
+    except (ValueError, OSError) as error:
+        raise UserError(str(error)) from None
+
+
+# image name -> the key of what it holds (kept in Python, not in the file: a file loads with
+# the image's pixels blank)
+_baked = {}
+
+
+def enable_side_files(scene):
+    s = scene.welkin_aerial
     if not s.nodes_installed:
         s.previous_use_pass_z = all(layer.use_pass_z for layer in scene.view_layers)
     for layer in scene.view_layers:
@@ -71,7 +130,7 @@ def enable(scene):
         _log(scene, warning)
 
 
-def disable(scene):
+def disable_side_files(scene):
     s = scene.welkin_aerial
     was = s.nodes_installed
     compositor.remove(scene, s)
@@ -221,7 +280,9 @@ def on_frame_change_post(scene, depsgraph=None):
     if module is None:
         return
     try:
+        aerial_frame.install_materials()
         text = scene_json(scene, module, depsgraph)
+        bake(scene, depsgraph, text)
     except UserError as error:
         text = error
     except Exception as error:
@@ -247,14 +308,15 @@ def _sync_output_path(scene):
 
 @persistent
 def on_depsgraph_update(scene, *_args):
-    if scene.welkin_aerial.enabled:
+    if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
         _sync_output_path(scene)
 
 
 @persistent
 def on_load_post(*_args):
+    _baked.clear()
     for scene in bpy.data.scenes:
-        if scene.welkin_aerial.enabled:
+        if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
             _sync_output_path(scene)
 
 
@@ -265,6 +327,10 @@ def on_render_pre(scene, *_args):
     if not s.enabled:
         return
     try:
+        for warning in aerial_frame.install(scene, s):
+            _log(scene, warning)
+        if not s.side_files:
+            return
         z_on = all(layer.use_pass_z for layer in scene.view_layers)
         if not z_on:
             _log(scene, "the Z pass was off: turned on (takes effect from the next render)")
@@ -274,14 +340,14 @@ def on_render_pre(scene, *_args):
         # Touch the scene only when needed: UI renders call this beside the interface.
         if not z_on or node is None or node.base_path != wanted \
                 or tree.nodes.get(compositor.GROUP_NODE) is None:
-            enable(scene)  # the File Output node follows the output path
+            enable_side_files(scene)  # the File Output node follows the output path
     except Exception as error:
         _log(scene, f"aerial perspective: unexpected {type(error).__name__}: {error}")
 
 
 @persistent
 def on_render_post(scene, *_args):
-    if not scene.welkin_aerial.enabled:
+    if not (scene.welkin_aerial.enabled and scene.welkin_aerial.side_files):
         return
     frame = scene.frame_current
     try:
@@ -310,8 +376,11 @@ class RENDER_PT_welkin_aerial(bpy.types.Panel):
         layout = self.layout
         layout.use_property_split = True
         layout.prop(s, "enabled")
-        row = layout.row()
-        row.active = s.enabled
+        col = layout.column()
+        col.active = s.enabled
+        col.prop(s, "side_files")
+        row = col.row()
+        row.active = s.side_files
         row.prop(s, "method")
         if s.status:
             layout.label(text=s.status, icon='INFO')

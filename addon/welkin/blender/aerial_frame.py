@@ -1,0 +1,437 @@
+"""Aerial perspective in the rendered frame itself (Cycles and EEVEE; F12, -f, -a, any -o).
+
+What the add-on adds while Scene.welkin_aerial is on, each found by name and taken out by
+remove() exactly:
+  * the image "Welkin Aerial Table": the frame's aerial-perspective table
+    (welkin.aerial_table for the frame's camera position, sun and atmosphere), packed as
+    an atlas (aerial_table.py), baked again whenever the frame's camera, sun or atmosphere
+    change (frame_change_post, with the render's own depsgraph, so each frame of -a is
+    hazed for its own state);
+  * the shader node group "Welkin Aerial" and one node of it in every material that uses
+    nodes ("Welkin Aerial" node, unlinked): it reads the view direction (Geometry >
+    Incoming) and the distance (Camera Data > View Distance), samples the table and
+    writes two shader AOVs, Welkin_AerialInscatter (L) and Welkin_AerialOpacity (1 - T, so
+    that a pixel no material writes, the sky, means T = 1);
+  * those two AOVs on every view layer (Blender turns '.' in AOV names into '_');
+  * in the compositor, for each Render Layers node of the scene, the node group "Welkin
+    Aerial Haze" fed by its Image and the two AOVs, computing
+    Image x T + Inscatter; every link that left the Render Layers' Image now leaves the
+    group's Image (so the Composite / Group Output node, File Output nodes and the user's
+    own nodes see the hazed frame), and the group's outputs Welkin.AerialInscatter and
+    Welkin.AerialTransmittance are the passes.
+The materials' shading and the user's nodes are not touched otherwise.
+"""
+import math
+
+import bpy
+
+from .. import aerial_table as tab
+from . import compat
+
+IMAGE = "Welkin Aerial Table"
+SHADER_GROUP = "Welkin Aerial"
+SHADER_NODE = "Welkin Aerial"
+COMP_GROUP = "Welkin Aerial Haze"
+COMP_NODE = "Welkin Aerial Haze"
+CREATED_TREE = "Welkin Compositing"
+AOV_INSCATTER = "Welkin_AerialInscatter"
+AOV_OPACITY = "Welkin_AerialOpacity"
+AOVS = (AOV_INSCATTER, AOV_OPACITY)
+MARK = "welkin_aerial"  # custom property on our nodes: what they belong to
+MAX_DISTANCE_NODE = "Max Distance"
+LINEAR_DISTANCE_NODE = "Linear Distance"
+# Nodes that keep the render layer's own Image: the pass files' depth/image writer.
+KEEP_UNHAZED = ("Welkin Aerial Depth",)
+
+
+# --- the table image ---------------------------------------------------------------------
+
+def table_image():
+    image = bpy.data.images.get(IMAGE)
+    if image is not None and tuple(image.size) != (tab.WIDTH, tab.HEIGHT):
+        bpy.data.images.remove(image)
+        image = None
+    if image is None:
+        image = bpy.data.images.new(IMAGE, tab.WIDTH, tab.HEIGHT, alpha=True, float_buffer=True)
+        image.colorspace_settings.name = 'Non-Color'
+        image[MARK] = True
+    return image
+
+
+def bake(scene, module, scene_text, max_distance_bu, scale_length, baked):
+    """Bakes the table of the frame described by `scene_text` into the image and sets the
+    node group's distance range; the image is left alone when `baked` (image name -> key of
+    what it holds) says it holds this frame's table already."""
+    key = f"{scene_text}|{max_distance_bu!r}|{scale_length!r}"
+    image = table_image()
+    group = shader_group()
+    for name, value in ((MAX_DISTANCE_NODE, max_distance_bu),
+                        (LINEAR_DISTANCE_NODE, tab.LINEAR_DISTANCE_M / scale_length)):
+        node = group.nodes.get(name)
+        if abs(node.outputs[0].default_value - value) > 1e-6 * value:
+            node.outputs[0].default_value = value
+    if baked.get(image.name) == key:
+        return
+    t = module.aerial_table(scene_text, azimuths=tab.AZIMUTHS, elevations=tab.ELEVATIONS,
+                            slices=tab.SLICES, max_distance_m=max_distance_bu * scale_length,
+                            linear_distance_m=tab.LINEAR_DISTANCE_M,
+                            steps_per_slice=tab.STEPS_PER_SLICE)
+    pixels = tab.atlas_pixels(t["inscatter"], t["optical_depth"])
+    image.pixels.foreach_set(pixels.ravel())
+    image.update()
+    baked[image.name] = key
+
+
+# --- the material node group -------------------------------------------------------------
+
+def _math(group, op, a=None, b=None, c=None, x=0, y=0, clamp=False):
+    node = group.nodes.new('ShaderNodeMath')
+    node.operation = op
+    node.use_clamp = clamp
+    node.location = (x, y)
+    for k, v in enumerate((a, b, c)):
+        if v is None:
+            continue
+        if isinstance(v, (int, float)):
+            node.inputs[k].default_value = float(v)
+        else:
+            group.links.new(v, node.inputs[k])
+    return node.outputs[0]
+
+
+def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
+    node = group.nodes.new('ShaderNodeVectorMath')
+    node.operation = op
+    node.location = (x, y)
+    for k, v in enumerate((a, b)):
+        if v is None:
+            continue
+        if isinstance(v, tuple):
+            node.inputs[k].default_value = v
+        else:
+            group.links.new(v, node.inputs[k])
+    if scale is not None:
+        if isinstance(scale, (int, float)):
+            node.inputs["Scale"].default_value = float(scale)
+        else:
+            group.links.new(scale, node.inputs["Scale"])
+    return node.outputs["Vector"]
+
+
+def shader_group():
+    """The node group of aerial_table.lookup() in nodes, with its two AOV outputs."""
+    group = bpy.data.node_groups.get(SHADER_GROUP)
+    if group is not None and group.get(MARK) == tab.HEIGHT + 2:
+        return group
+    if group is None:
+        group = bpy.data.node_groups.new(SHADER_GROUP, 'ShaderNodeTree')
+    group.nodes.clear()
+    group[MARK] = tab.HEIGHT + 2  # the layout's version
+    E, S, Hh = tab.ELEVATIONS, tab.SLICES, float(tab.HEIGHT)
+    geo = group.nodes.new('ShaderNodeNewGeometry')
+    geo.location = (-1400, 200)
+    cam = group.nodes.new('ShaderNodeCameraData')
+    cam.location = (-1400, -300)
+    dmax = group.nodes.new('ShaderNodeValue')
+    dmax.name = dmax.label = MAX_DISTANCE_NODE
+    dmax.location = (-1400, -500)
+    dmax.outputs[0].default_value = 1e6
+    d0 = group.nodes.new('ShaderNodeValue')
+    d0.name = d0.label = LINEAR_DISTANCE_NODE
+    d0.location = (-1400, -650)
+    d0.outputs[0].default_value = tab.LINEAR_DISTANCE_M
+    # Direction from the camera: -Incoming.
+    v = _vmath(group, 'SCALE', geo.outputs["Incoming"], scale=-1.0, x=-1200, y=200)
+    sep = group.nodes.new('ShaderNodeSeparateXYZ')
+    sep.location = (-1000, 200)
+    group.links.new(v, sep.inputs[0])
+    # u = atan2(y, x) / 2 pi + 1/2
+    u = _math(group, 'MULTIPLY_ADD', _math(group, 'ARCTAN2', sep.outputs["Y"], sep.outputs["X"],
+                                           x=-800, y=400), 1.0 / (2.0 * math.pi), 0.5, x=-600, y=400)
+    # e = sign(theta) sqrt(|theta| 2 / pi) / 2 + 1/2, theta = asin(z); row = e (E - 1) + 1/2
+    theta = _math(group, 'ARCSINE', sep.outputs["Z"], x=-800, y=200)
+    a = _math(group, 'SQRT', _math(group, 'MULTIPLY', _math(group, 'ABSOLUTE', theta, x=-600, y=200),
+                                   2.0 / math.pi, x=-400, y=200), x=-200, y=200)
+    e = _math(group, 'MULTIPLY_ADD', _math(group, 'MULTIPLY', _math(group, 'SIGN', theta, x=-400, y=100),
+                                           a, x=0, y=200), 0.5, 0.5, x=200, y=200)
+    row = _math(group, 'MULTIPLY_ADD', e, float(E - 1), 0.5, x=400, y=200)
+    # x = 1 + d / d_0; c = ln(1 + d_max / d_0) / (S - 1); s = min(ln x / c, S - 1);
+    # k0 = min(floor(s), S - 2); w = (x e^(-c k0) - 1) / (e^c - 1), clamped to [0, 1].
+    x = _math(group, 'ADD', _math(group, 'DIVIDE', cam.outputs["View Distance"], d0.outputs[0],
+                                  x=-1000, y=-300), 1.0, x=-800, y=-300)
+    c = _math(group, 'DIVIDE', _math(group, 'LOGARITHM', _math(
+        group, 'ADD', _math(group, 'DIVIDE', dmax.outputs[0], d0.outputs[0], x=-1200, y=-600),
+        1.0, x=-1000, y=-600), math.e, x=-800, y=-600), float(S - 1), x=-600, y=-600)
+    s = _math(group, 'MINIMUM', _math(group, 'DIVIDE', _math(group, 'LOGARITHM', x, math.e,
+                                                             x=-600, y=-300), c, x=-400, y=-300),
+              float(S - 1), x=-200, y=-300)
+    k0 = _math(group, 'MINIMUM', _math(group, 'FLOOR', s, x=0, y=-300), float(S - 2), x=200, y=-300)
+    step = _math(group, 'SUBTRACT', _math(group, 'EXPONENT', c, x=-400, y=-700), 1.0, x=-200, y=-700)
+    decay = _math(group, 'EXPONENT', _math(group, 'MULTIPLY', _math(group, 'MULTIPLY', k0, c, x=400, y=-500),
+                                           -1.0, x=500, y=-500), x=600, y=-500)
+    w = _math(group, 'DIVIDE', _math(group, 'SUBTRACT', _math(group, 'MULTIPLY', x, decay, x=700, y=-400),
+                                     1.0, x=800, y=-400), step, x=900, y=-400, clamp=True)
+    # v of the nearer slice's L texel; the others are + E / H (farther slice), + 1/2 (tau).
+    v0 = _math(group, 'DIVIDE', _math(group, 'MULTIPLY_ADD', k0, float(E), row, x=600, y=0),
+               Hh, x=800, y=0)
+    # Bilinear filtering done here, from four texel fetches ('Closest'): EEVEE filters a
+    # 'Linear' image with mipmaps chosen from screen-space derivatives, and v jumps by a
+    # whole tile where the distance slice changes, which would blur the table there.
+    Ww = float(tab.WIDTH)
+    fx = _math(group, 'MULTIPLY_ADD', u, Ww, -0.5, x=900, y=600)
+    x0 = _math(group, 'FLOOR', fx, x=1000, y=600)
+    ax = _math(group, 'SUBTRACT', fx, x0, x=1100, y=600)
+    ua = _math(group, 'DIVIDE', _math(group, 'ADD', x0, 0.5, x=1100, y=700), Ww, x=1200, y=700)
+    ub = _math(group, 'ADD', ua, 1.0 / Ww, x=1300, y=700)
+    fy = _math(group, 'MULTIPLY_ADD', v0, Hh, -0.5, x=900, y=100)
+    y0 = _math(group, 'FLOOR', fy, x=1000, y=100)
+    ay = _math(group, 'SUBTRACT', fy, y0, x=1100, y=100)
+    va = _math(group, 'DIVIDE', _math(group, 'ADD', y0, 0.5, x=1100, y=0), Hh, x=1200, y=0)
+
+    def fetch(uu, vv, x, y):
+        uv = group.nodes.new('ShaderNodeCombineXYZ')
+        uv.location = (x, y)
+        group.links.new(uu, uv.inputs[0])
+        group.links.new(vv, uv.inputs[1])
+        tex = group.nodes.new('ShaderNodeTexImage')
+        tex.location = (x + 150, y)
+        tex.image = table_image()
+        tex.interpolation = 'Closest'
+        tex.extension = 'REPEAT'
+        group.links.new(uv.outputs[0], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+
+    def lerp(p, q, t, x, y):  # p + (q - p) t
+        return _vmath(group, 'ADD', p, _vmath(group, 'SCALE', _vmath(group, 'SUBTRACT', q, p, x=x, y=y),
+                                              scale=t, x=x + 100, y=y), x=x + 200, y=y)
+
+    samples = {}
+    for n, offset in enumerate((0.0, E / Hh, 0.5, 0.5 + E / Hh)):
+        y = 300 - 700 * n
+        v_lo = _math(group, 'ADD', va, offset, x=1300, y=y)
+        v_hi = _math(group, 'ADD', v_lo, 1.0 / Hh, x=1400, y=y)
+        lo = lerp(fetch(ua, v_lo, 1500, y), fetch(ub, v_lo, 1500, y - 150), ax, 1800, y)
+        hi = lerp(fetch(ua, v_hi, 1500, y - 300), fetch(ub, v_hi, 1500, y - 450), ax, 1800, y - 300)
+        samples[n] = lerp(lo, hi, ay, 2100, y - 150)
+
+    def mix(near, far, x, y):  # near + (far - near) w
+        return _vmath(group, 'ADD', near, _vmath(group, 'SCALE', _vmath(group, 'SUBTRACT', far, near,
+                                                                        x=x, y=y), scale=w, x=x + 200, y=y),
+                      x=x + 400, y=y)
+
+    L = mix(samples[0], samples[1], 2500, 300)
+    tau = mix(samples[2], samples[3], 2500, -200)
+    # 1 - T = 1 - exp(-tau), per channel.
+    parts = group.nodes.new('ShaderNodeSeparateXYZ')
+    parts.location = (2300, -200)
+    group.links.new(_vmath(group, 'SCALE', tau, scale=-1.0, x=2100, y=-200), parts.inputs[0])
+    transmit = group.nodes.new('ShaderNodeCombineXYZ')
+    transmit.location = (2700, -200)
+    for c in range(3):
+        group.links.new(_math(group, 'EXPONENT', parts.outputs[c], x=2500, y=-100 - 150 * c),
+                        transmit.inputs[c])
+    opacity = _vmath(group, 'SUBTRACT', (1.0, 1.0, 1.0), transmit.outputs[0], x=2900, y=-200)
+    for name, socket, y in ((AOV_INSCATTER, L, 300), (AOV_OPACITY, opacity, -200)):
+        aov = group.nodes.new('ShaderNodeOutputAOV')
+        compat.set_aov_name(aov, name)
+        aov.location = (3100, y)
+        group.links.new(socket, aov.inputs["Color"])
+    return group
+
+
+def _materials():
+    return [m for m in bpy.data.materials
+            if m.library is None and m.node_tree is not None and getattr(m, "use_nodes", True)]
+
+
+def install_materials():
+    """Our node in every local material with nodes that lacks it; returns how many."""
+    group = shader_group()
+    added = 0
+    for material in _materials():
+        nodes = material.node_tree.nodes
+        node = nodes.get(SHADER_NODE)
+        if node is not None and node.get(MARK):
+            continue
+        node = nodes.new('ShaderNodeGroup')
+        node.node_tree = group
+        node.name = node.label = SHADER_NODE
+        node[MARK] = True
+        xs = [n.location.x for n in nodes if n is not node]
+        node.location = (min(xs, default=0.0), max((n.location.y for n in nodes if n is not node),
+                                                   default=0.0) + 250.0)
+        added += 1
+    return added
+
+
+def remove_materials():
+    for material in bpy.data.materials:
+        if material.node_tree is None:
+            continue
+        for node in [n for n in material.node_tree.nodes if n.get(MARK) and n.name.startswith(SHADER_NODE)]:
+            material.node_tree.nodes.remove(node)
+
+
+# --- view layer AOVs ---------------------------------------------------------------------
+
+def install_aovs(scene):
+    """Adds our AOVs to every view layer; returns the names of the layers we added them to
+    (as "layer\\tAOV" lines, for remove)."""
+    added = []
+    for layer in scene.view_layers:
+        for name in AOVS:
+            if any(a.name == name for a in layer.aovs):
+                continue
+            aov = layer.aovs.add()
+            aov.name = name
+            aov.type = 'COLOR'
+            added.append(f"{layer.name}\t{name}")
+    return added
+
+
+def remove_aovs(scene, added):
+    for line in added:
+        layer_name, name = line.split("\t")
+        layer = scene.view_layers.get(layer_name)
+        if layer is None:
+            continue
+        for index, aov in enumerate(layer.aovs):
+            if aov.name == name:
+                layer.active_aov_index = index
+                with_context_remove_aov(scene, layer)
+                break
+
+
+def with_context_remove_aov(scene, layer):
+    """ViewLayer AOVs have no remove() in the API: the operator removes the active one."""
+    window = bpy.context.window
+    override = {"scene": scene, "view_layer": layer}
+    if window is not None:
+        override["window"] = window
+    if hasattr(bpy.context, "temp_override"):
+        with bpy.context.temp_override(**override):
+            bpy.ops.scene.view_layer_remove_aov()
+    else:
+        bpy.ops.scene.view_layer_remove_aov(override)
+
+
+# --- the compositor ----------------------------------------------------------------------
+
+def comp_group():
+    group = bpy.data.node_groups.get(COMP_GROUP)
+    if group is not None and group.get(MARK) == 2:
+        return group
+    if group is None:
+        group = bpy.data.node_groups.new(COMP_GROUP, 'CompositorNodeTree')
+    else:  # an earlier version's group: rebuilt in place (its users keep their links)
+        group.nodes.clear()
+        if hasattr(group, "interface"):
+            group.interface.clear()
+        else:
+            group.inputs.clear()
+            group.outputs.clear()
+    group[MARK] = 2
+    for name in ("Image", "Inscatter", "Opacity"):
+        compat.new_group_socket(group, name, 'INPUT', 'NodeSocketColor')
+    for name in ("Image", "Welkin.AerialInscatter", "Welkin.AerialTransmittance"):
+        compat.new_group_socket(group, name, 'OUTPUT', 'NodeSocketColor')
+    gin = group.nodes.new('NodeGroupInput')
+    gin.location = (-500, 0)
+    gout = group.nodes.new('NodeGroupOutput')
+    gout.location = (500, 0)
+    one_minus, white, opacity, t = compat.compositor_mix(group, 'SUBTRACT')
+    one_minus.location = (-250, -200)
+    white.default_value = (1.0, 1.0, 1.0, 1.0)
+    group.links.new(gin.outputs["Opacity"], opacity)
+    mul, image, trans, dimmed = compat.compositor_mix(group, 'MULTIPLY')
+    mul.location = (0, 100)
+    group.links.new(gin.outputs["Image"], image)
+    group.links.new(t, trans)
+    add, base, light, hazed = compat.compositor_mix(group, 'ADD')
+    add.location = (250, 100)
+    group.links.new(dimmed, base)
+    group.links.new(gin.outputs["Inscatter"], light)
+    group.links.new(hazed, gout.inputs["Image"])
+    group.links.new(gin.outputs["Inscatter"], gout.inputs["Welkin.AerialInscatter"])
+    group.links.new(t, gout.inputs["Welkin.AerialTransmittance"])
+    return group
+
+
+def _render_layer_nodes(tree, scene):
+    return [n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers'
+            and n.scene in (None, scene)]
+
+
+def install_compositor(scene, settings):
+    """Our group after every Render Layers node of the scene; returns warnings."""
+    warnings = []
+    tree = compat.scene_compositor(scene)
+    if tree is None or not settings.compositor_undo:
+        tree, (kind, value) = compat.ensure_scene_compositor(scene, CREATED_TREE)
+        if not settings.compositor_undo:
+            settings.compositor_undo = f"{kind}\t{value!r}"
+    group = comp_group()
+    for rl in _render_layer_nodes(tree, scene):
+        if any(n.get(MARK) == rl.name for n in tree.nodes if n.bl_idname == 'CompositorNodeGroup'):
+            continue
+        missing = [a for a in AOVS if a not in rl.outputs]
+        if missing:
+            warnings.append(f"the Render Layers node '{rl.name}' has no output {missing[0]}")
+            continue
+        node = tree.nodes.new('CompositorNodeGroup')
+        node.node_tree = group
+        node.name = node.label = COMP_NODE
+        node[MARK] = rl.name
+        node.location = (rl.location.x + 250, rl.location.y + 150)
+        targets = [link.to_socket for link in tree.links
+                   if link.from_socket == rl.outputs["Image"] and not link.to_node.get(MARK)
+                   and link.to_node.name not in KEEP_UNHAZED]
+        tree.links.new(rl.outputs["Image"], node.inputs["Image"])
+        tree.links.new(rl.outputs[AOV_INSCATTER], node.inputs["Inscatter"])
+        tree.links.new(rl.outputs[AOV_OPACITY], node.inputs["Opacity"])
+        for socket in targets:
+            tree.links.new(node.outputs["Image"], socket)
+    return warnings
+
+
+def remove_compositor(scene, settings):
+    tree = compat.scene_compositor(scene)
+    if tree is None and hasattr(scene, "node_tree"):
+        tree = scene.node_tree
+    if tree is not None:
+        for node in [n for n in tree.nodes if n.bl_idname == 'CompositorNodeGroup' and n.get(MARK)]:
+            rl = tree.nodes.get(node[MARK])
+            targets = [link.to_socket for link in tree.links if link.from_socket == node.outputs["Image"]]
+            if rl is not None:
+                for socket in targets:
+                    tree.links.new(rl.outputs["Image"], socket)
+            tree.nodes.remove(node)
+    if settings.compositor_undo:
+        kind, value = settings.compositor_undo.split("\t")
+        compat.restore_scene_compositor(scene, kind, value == "True", CREATED_TREE)
+        settings.compositor_undo = ""
+
+
+# --- all of it ---------------------------------------------------------------------------
+
+def install(scene, settings):
+    aovs = install_aovs(scene)
+    if aovs:
+        settings.added_aovs = "\n".join(filter(None, [settings.added_aovs, *aovs]))
+    install_materials()
+    return install_compositor(scene, settings)
+
+
+def remove(scene, settings):
+    remove_compositor(scene, settings)
+    remove_aovs(scene, [line for line in settings.added_aovs.split("\n") if line])
+    settings.added_aovs = ""
+    if not any(s.welkin_aerial.enabled for s in bpy.data.scenes if s != scene):
+        remove_materials()
+        for name in (SHADER_GROUP, COMP_GROUP):
+            group = bpy.data.node_groups.get(name)
+            if group is not None and group.get(MARK) and group.users == 0:
+                bpy.data.node_groups.remove(group)
+        image = bpy.data.images.get(IMAGE)
+        if image is not None and image.get(MARK):
+            bpy.data.images.remove(image)

@@ -1,0 +1,65 @@
+"""What aerial perspective in the frame costs a Cycles render of the aerial demo: the same
+frame rendered with Scene.welkin_aerial off and on, alternately, in one Blender process.
+
+    BLENDER_USER_SCRIPTS=$(mktemp -d) PYTHONPATH=build blender -b --factory-startup \
+        --python-use-system-env --python bench/cycles_aerial_frame.py -- \
+        [--size 480] [--samples 16] [--repeats 3] [--csv bench/results/cycles_aerial_frame.csv]
+
+blend/make_aerial_demo.py builds the demo (ground and blocks to 40 km, `hazy`, the Welkin
+world) at --size; then each repeat renders frame 1 (bpy.ops.render.render, the render call
+with scene sync) without and with aerial perspective. "On" includes everything the
+feature adds to a frame: the table's bake (forced every time: the add-on's cache of it is
+cleared before each render), the material node group's evaluation at the camera hits, the
+AOVs and the compositor group; "on, cached" renders again with the table already baked, and
+the bake is also timed alone. The figure is the ratio of the medians (target: <= 1.10).
+"""
+import argparse
+import os
+import runpy
+import statistics
+import sys
+import tempfile
+import time
+
+import bpy
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+p = argparse.ArgumentParser()
+p.add_argument("--size", type=int, default=480)
+p.add_argument("--samples", type=int, default=16)
+p.add_argument("--repeats", type=int, default=3)
+p.add_argument("--csv")
+args = p.parse_args(argv)
+
+out = tempfile.mkdtemp(prefix="welkin_bench_aerial_frame_")
+sys.argv = [sys.argv[0], "--", "--out", out, "--size", str(args.size), "--samples", str(args.samples)]
+runpy.run_path(os.path.join(ROOT, "blend", "make_aerial_demo.py"), run_name="__main__")
+scene = bpy.context.scene
+aerial = sys.modules[next(m for m in sys.modules if m.endswith("welkin.blender.aerial"))]
+scene.render.filepath = os.path.join(out, "bench.exr")
+scene.welkin_aerial.side_files = False  # the frame alone: no Z pass, no pass files
+
+times = {"off": [], "on": [], "on_cached": [], "bake": []}
+for _ in range(args.repeats):
+    for state in ("off", "on", "on_cached"):
+        scene.welkin_aerial.enabled = state != "off"
+        if state == "on":
+            aerial._baked.clear()
+        t0 = time.perf_counter()
+        bpy.ops.render.render(write_still=True)
+        times[state].append(time.perf_counter() - t0)
+    aerial._baked.clear()
+    t0 = time.perf_counter()
+    aerial.bake(scene)
+    times["bake"].append(time.perf_counter() - t0)
+m = {k: statistics.median(v) for k, v in times.items()}
+print(f"cycles_aerial_frame: {args.size} px wide, {args.samples} samples, {args.repeats} repeats "
+      f"(medians): off {m['off']:.2f} s, on {m['on']:.2f} s (ratio {m['on'] / m['off']:.3f}, "
+      f"target <= 1.10), on with the table already baked {m['on_cached']:.2f} s (ratio "
+      f"{m['on_cached'] / m['off']:.3f}); the bake alone {m['bake']:.2f} s")
+if args.csv:
+    with open(args.csv, "w") as f:
+        f.write("size,samples,repeats,off_s,on_s,on_cached_s,bake_s,ratio\n")
+        f.write(f"{args.size},{args.samples},{args.repeats},{m['off']:.3f},{m['on']:.3f},"
+                f"{m['on_cached']:.3f},{m['bake']:.3f},{m['on'] / m['off']:.4f}\n")

@@ -1,0 +1,94 @@
+// Aerial perspective from one viewpoint as a table of view direction and distance, for
+// renderers that apply it per shading point (the Blender add-on's material node group).
+//
+// Derivation. The air between a camera at a fixed point c and a surface point p depends
+// only on the ray from c towards p and on the distance |p - c|: with the sun at infinity,
+// the integrand of aerial_perspective.hpp,
+//     L_in(d) = integral_0^d T(t) E_sun [T_sun(x(t)) (sigma_R P_R(nu) + sigma_M P_M(nu))
+//                                       + (sigma_R + sigma_M) Psi_ms(x(t))] dt,
+//     T(d)    = exp(-integral_0^d sigma_t(x(t)) dt),       x(t) = c + t v,
+// is a function of the unit direction v and of d alone once c, the sun and the atmosphere
+// are fixed (nu = v . s). So for one frame (one camera position, one sun) the passes of
+// every pixel of any camera at c, perspective or panoramic, are lookups in a 3-D table
+// of (direction, distance), whatever the geometry: Hillaire 2020's froxel volume with the
+// screen replaced by the sphere of directions, so that it needs no depth buffer.
+//
+// Layout (what a shader samples; all coordinates in [0, 1]):
+//  * azimuth phi = atan2(v_y, v_x) in Blender's world frame: u = phi / (2 pi) + 1/2; texel i
+//    (0..azimuths-1) holds u_i = (i + 1/2) / azimuths, so linear filtering with a
+//    repeating texture wraps around exactly;
+//  * elevation theta = asin(v_z): e = 1/2 + 1/2 sign(theta) sqrt(|theta| / (pi/2)) (Hillaire
+//    2020 sec. 5.3's sky-view mapping: rows crowd at the horizon, where the path through the
+//    low, dense air changes fastest with elevation); row j (0..elevations-1) holds
+//    e_j = j / (elevations - 1), so the nadir and the zenith are rows;
+//  * distance: slice k (0..slices-1) at d_k = d_0 (exp(k c) - 1), c = ln(1 + d_max / d_0) /
+//    (slices - 1), with d_0 = linear_distance_m and d_max = max_distance_m: evenly spaced
+//    (about d_0 c apart) well inside d_0, growing geometrically (by the factor e^c) beyond
+//    it, so that the relative spacing is bounded at every distance from metres to the
+//    atmosphere's width (a quadratic spacing fitted to the whole atmosphere would leave the
+//    first kilometres in one slice). Slice 0 is d = 0: L = 0, T = 1. A distance d between
+//    d_k and d_k+1 is read linearly in d between them, with the weight
+//    w = ((1 + d / d_0) e^(-k c) - 1) / (e^c - 1); beyond max_distance_m the last slice
+//    holds. The error of reading in-scattering L(d) = A (1 - e^(-sigma d)) linearly
+//    between slices is at most (e^c - 1)^2 / 8 of it relative (the second derivative
+//    over the spacing), 0.6 % for 48 slices over 100 m .. 2000 km.
+// Each entry holds the passes' RGB (aerial_perspective.hpp: L_in times the exposure, and
+// the sunlit-surface transmittance) with T stored as optical depth, -ln T, so that linear
+// interpolation between deep slices does not band (as the froxel volume does).
+//
+// How it is computed: each direction's ray is marched once through the slices
+// (steps_per_slice energy-conserving steps per slice, aerial_perspective.cpp), so the table
+// of a frame costs directions x slices x steps samples. Rays below the horizon go on under
+// the ground sphere with the ground's air, as aerial_perspective() treats such points.
+//
+// Limits: one viewpoint per table, so an orthographic camera (whose rays start across its
+// film) is approximated by its centre; surfaces beyond max_distance_m read the last slice.
+// Threads: TBB; results do not depend on the thread count.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/atmosphere/luts.hpp"
+#include "welkin/base/progress.hpp"
+
+namespace welkin {
+
+struct AerialTableLayout {
+    int azimuths = 128, elevations = 64, slices = 48;
+    double max_distance_m = 0.0;      // > linear_distance_m
+    double linear_distance_m = 100.0;  // > 0
+    int steps_per_slice = 4;
+
+    // Throws InvalidArgument naming `parameter`.<field> and its range.
+    void validate(const std::string& parameter = "table") const;
+
+    // The texel coordinates of a unit direction (u: azimuth, e: elevation), as above.
+    static double azimuth_coordinate(const glm::dvec3& v);
+    static double elevation_coordinate(const glm::dvec3& v);
+    // The unit direction of texel (i, j).
+    glm::dvec3 direction(int i, int j) const;
+    // The distance of slice k, m, and the growth exponent c.
+    double slice_distance(int k) const;
+    double slice_exponent() const;
+};
+
+struct AerialTable {
+    AerialTableLayout layout;
+    // (slices, elevations, azimuths, 3), slice 0 first, row j = e_j: in-scattering (RGB,
+    // times the exposure) and optical depth -ln T (RGB, >= 0, at most 80).
+    std::vector<float> inscatter, optical_depth;
+};
+
+// The table for a viewpoint `camera_position` (world frame, m; the planet centre at
+// `planet_centre`) and the unit `sun_direction`, in `atmosphere` (whose LUTs `luts` are).
+// Throws InvalidArgument for a bad layout or a non-finite position.
+AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
+                         const glm::dvec3& planet_centre, const glm::dvec3& camera_position,
+                         const glm::dvec3& sun_direction, double exposure,
+                         const AerialTableLayout& layout, Progress* progress = nullptr);
+
+}  // namespace welkin
