@@ -36,7 +36,6 @@ def main():
     for s, x, y in zip(label, t, mean):
         ax.annotate("exact" if s.startswith("stride1_") else s, (x, y), textcoords="offset points",
                     xytext=(4, 6), fontsize=7)
-    ax.axvline(2.0, color="grey", lw=0.8, ls=":")
     ax.set_xlabel("time of the cloudy sky, s (2 cores)")
     ax.set_ylabel("error against the exact image, %")
     ax.set_title("Cloudy sky: upsampled cloud pass, speed against error")
