@@ -8,12 +8,12 @@ The add-on is installed from its zip as in the tests (tests/blender/addon_testin
 temporary scripts directory, the machine's Blender configuration untouched). Measured,
 medians of --repeats, each with a new sun elevation:
   * welkin update: what the handlers' timer runs after a lamp rotation (update.update_sky
-    without packing: request, module, pixels into the two Blender images, nodes, lamp),
-    and within it the module's share (sky image + disc image + sun radiometry);
+    without packing: request, module, pixels into the Blender image, nodes, lamp),
+    and within it the module's share (sky image + sun radiometry and disc model);
   * render preparation: a Cycles render of 8 x 4 pixels, 1 sample, through a panoramic
     camera, with (a) a constant-colour world, (b) Blender's Nishita sky after a change of
     its sun elevation (Cycles recomputes its 512 x 128 Nishita texture), (c) the Welkin
-    world after an update (Cycles loads the two 2048 x 1024 float images); the
+    world after an update (Cycles loads the 2048 x 1024 float image); the
     preparation cost is (b) - (a) and (c) - (a).
 """
 import argparse
@@ -90,11 +90,11 @@ c = med(constant)
 rows = [
     (f"welkin: lamp rotation -> new world image {args.width}x{args.width // 2} ({method})",
      med(total)),
-    ("  of which the module (sky + disc + sun)", med(module_share)),
-    ("  of which Blender (pixels into images, nodes, lamp)", med(total) - med(module_share)),
+    ("  of which the module (sky + sun and disc model)", med(module_share)),
+    ("  of which Blender (pixels into the image, nodes, lamp)", med(total) - med(module_share)),
     ("Cycles 8x4 render, constant world (baseline)", c),
     ("Cycles: Nishita sky preparation (512x128 texture), render - baseline", med(nishita) - c),
-    (f"Cycles: Welkin world preparation (2 images {args.width}x{args.width // 2}), "
+    (f"Cycles: Welkin world preparation (image {args.width}x{args.width // 2}), "
      f"render - baseline", med(welkin_render) - c),
 ]
 print(f"\nbench/addon_sky_update.py: medians of {args.repeats}, Blender {bpy.app.version_string}, "

@@ -3,7 +3,7 @@
 Used inside Blender (bench/cycles_clouds.py, tests/blender/test_cycles_clouds.py). What is
 matched, and why it is the same problem for both renderers:
 
-* Density: the .vdb is written here with pyopenvdb (a FloatGrid `density`, values in [0, 1],
+* Density: the .vdb is written here with pyopenvdb (vdb_dense.py; a FloatGrid `density`, values in [0, 1],
   compact support so that Cycles' clipping of near-zero voxels cuts nothing); both read the
   same file with its own transform and an identity matrix_world (Blender unit scale 1, so a
   Blender unit is a metre). sigma_t = density_scale x value, m^-1, in both: in Cycles the
@@ -37,6 +37,7 @@ matched, and why it is the same problem for both renderers:
 """
 import math
 import os
+import sys
 
 import bpy
 import numpy as np
@@ -53,8 +54,6 @@ def write_cumulus(path, voxel_m=6.0, radius_m=220.0, seed=3):
     Each ball contributes (1 - (r/R)^2)^2 inside R (compact support, smooth to first order),
     the union's value is the sum clipped to 1, below the base plane z < base it is faded out
     over 30 m (a flat cloud base). About radius_m across, centre at the origin."""
-    import pyopenvdb as vdb
-
     rng = np.random.default_rng(seed)
     balls = [((0.0, 0.0, 0.0), 0.55 * radius_m)]
     for _ in range(9):
@@ -72,30 +71,26 @@ def write_cumulus(path, voxel_m=6.0, radius_m=220.0, seed=3):
         d += np.where(q < 1.0, (1.0 - q) ** 2, 0.0)
     d = np.minimum(d * 1.5, 1.0)
     d *= np.clip((z - base) / 30.0, 0.0, 1.0)
-    _write_dense(vdb, path, d.astype(np.float32), n, voxel_m)
+    _write_dense(path, d.astype(np.float32), n, voxel_m)
     return voxel_m
 
 
 def write_ball(path, voxel_m=10.0, radius_m=100.0):
     """A ball of constant density 1 (the test's case: no ray-marching error in Cycles
     beyond the boundary voxels)."""
-    import pyopenvdb as vdb
-
     n = int(math.ceil(radius_m / voxel_m)) + 1
     ax = np.arange(-n, n + 1) * voxel_m
     x, y, z = np.meshgrid(ax, ax, ax, indexing="ij")
     d = (x * x + y * y + z * z <= radius_m * radius_m).astype(np.float32)
-    _write_dense(vdb, path, d, n, voxel_m)
+    _write_dense(path, d, n, voxel_m)
     return voxel_m
 
 
-def _write_dense(vdb, path, d, n, voxel_m):
-    grid = vdb.FloatGrid()
-    grid.name = "density"
-    grid.transform = vdb.createLinearTransform(voxelSize=voxel_m)
-    grid.copyFromArray(d, ijk=(-n, -n, -n), tolerance=0.0)
-    grid.prune()
-    vdb.write(str(path), grids=[grid])
+def _write_dense(path, d, n, voxel_m):
+    # pyopenvdb, in this Python or in Debian's (vdb_dense.py).
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from vdb_dense import write_density
+    write_density(path, d, (-n, -n, -n), voxel_m, tolerance=0.0, prune=True)
 
 
 def look_at(obj, target):

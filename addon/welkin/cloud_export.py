@@ -25,9 +25,11 @@ from typing import Any
 
 # The layer fields of the schema, with the core's defaults (procedural_clouds.hpp,
 # CloudLayerParams); planet radius and origin altitude come from the scene.
-LAYER_FIELDS = ("bottom_altitude_m", "top_altitude_m", "coverage", "cloud_type",
+# cloud_type is a preset name (CLOUD_TYPES); the others are numbers.
+CLOUD_TYPES = ("cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus")
+LAYER_FIELDS = ("cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage",
                 "density_per_m", "base_scale_m", "detail_scale_m", "weather_scale_m",
-                "detail_strength", "weather_variation", "type_variation")
+                "detail_strength", "weather_variation")
 # The lighting fields the panel offers (cloud_lighting.hpp, CloudLightingOptions).
 LIGHTING_FIELDS = ("max_steps", "light_steps", "ambient_steps", "octaves")
 
@@ -95,19 +97,23 @@ def volume_file(filepath_abs: str, is_sequence: bool, frame: float, frame_start:
     return None if n is None else frame_filepath(filepath_abs, n)
 
 
-def layer_dict(values: Mapping[str, float], seed: int,
+def layer_dict(values: Mapping[str, Any], seed: int,
                wind_offset_m: Sequence[float]) -> dict[str, Any]:
-    """One procedural layer: `values` maps LAYER_FIELDS to numbers."""
-    d: dict[str, Any] = {k: float(values[k]) for k in LAYER_FIELDS}
+    """One procedural layer: `values` maps LAYER_FIELDS to numbers (cloud_type to one of
+    CLOUD_TYPES, any case)."""
+    d: dict[str, Any] = {k: float(values[k]) for k in LAYER_FIELDS if k != "cloud_type"}
+    d["cloud_type"] = str(values["cloud_type"]).lower()
     d["wind_offset_m"] = [float(wind_offset_m[0]), float(wind_offset_m[1])]
     d["seed"] = int(seed)
     return d
 
 
 def volume_dict(name: str, path: str, grid: str, matrix_world: Iterable[Iterable[float]],
-                density_scale: float, scale_length: float = 1.0) -> dict[str, Any]:
+                density_scale: float, scale_length: float = 1.0,
+                placement: str = "blender") -> dict[str, Any]:
     """One VDB volume. `matrix_world` by rows in scene units (its translation is scaled to
-    metres); raises MissingVolume when the file is absent."""
+    metres); `placement`: where the Blender that shows it puts voxel ijk ("blender",
+    "openvdb": VdbClouds); raises MissingVolume when the file is absent."""
     if not os.path.isfile(path):
         raise MissingVolume(f"volume object '{name}': its VDB file for this frame is missing: "
                             f"{path}")
@@ -117,7 +123,7 @@ def volume_dict(name: str, path: str, grid: str, matrix_world: Iterable[Iterable
         for c in range(4):
             m[r][c] *= s  # the whole placement (voxel size too) from scene units to metres
     return {"name": name, "file": path, "grid": grid, "matrix_world": m,
-            "density_scale": float(density_scale), "negative": "clamp"}
+            "density_scale": float(density_scale), "negative": "clamp", "placement": placement}
 
 
 def clouds_dict(layers: Iterable[Mapping[str, Any]], volumes: Iterable[Mapping[str, Any]],

@@ -25,6 +25,7 @@ import importlib.machinery
 import importlib.util
 import pathlib
 import sys
+import types
 
 NATIVE_DIR = pathlib.Path(__file__).resolve().parent / "_native"
 BUILD_HINT = ("Welkin needs Blender 3.4 or later with Python 3.11 on x86-64 Linux: for "
@@ -32,14 +33,14 @@ BUILD_HINT = ("Welkin needs Blender 3.4 or later with Python 3.11 on x86-64 Linu
               "scripts/build_extension.sh), for 3.4-4.1 the add-on zip "
               "(scripts/build_addon.sh)")
 
-_cache = {}
+_cache: dict[str, tuple[types.ModuleType | None, str | None]] = {}
 
 
-def _python_tag():
+def _python_tag() -> str:
     return f"Python {sys.version_info.major}.{sys.version_info.minor}"
 
 
-def installed():
+def installed() -> pathlib.Path | None:
     """The module file of an installed welkin wheel on sys.path for this Python, or None."""
     for entry in sys.path:
         for suffix in importlib.machinery.EXTENSION_SUFFIXES:
@@ -49,9 +50,9 @@ def installed():
     return None
 
 
-def _installed_elsewhere():
+def _installed_elsewhere() -> list[str]:
     """Names of welkin module files on sys.path built for another Python."""
-    names = set()
+    names: set[str] = set()
     for entry in sys.path:
         try:
             names.update(p.name for p in pathlib.Path(entry or ".").glob("welkin.*")
@@ -61,7 +62,7 @@ def _installed_elsewhere():
     return sorted(names)
 
 
-def find(directory=NATIVE_DIR):
+def find(directory: str | pathlib.Path = NATIVE_DIR) -> tuple[pathlib.Path | None, str | None]:
     """(path of a loadable module file or None, message or None)."""
     directory = pathlib.Path(directory)
     candidates = sorted(p for p in directory.glob("welkin*") if p.suffix in (".so", ".pyd"))
@@ -71,8 +72,9 @@ def find(directory=NATIVE_DIR):
             return path, None
         candidates = [pathlib.Path(n) for n in _installed_elsewhere()]
     if not candidates:
-        return None, (f"Welkin's compiled module is missing (nothing in {directory}); "
-                      + BUILD_HINT)
+        where = (f"nothing in {directory}, nor the Extension's wheel on sys.path"
+                 if directory == NATIVE_DIR else f"nothing in {directory}")
+        return None, f"Welkin's compiled module is missing ({where}); " + BUILD_HINT
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
         for path in candidates:
             if path.name == "welkin" + suffix:
@@ -83,7 +85,8 @@ def find(directory=NATIVE_DIR):
                   f"{importlib.machinery.EXTENSION_SUFFIXES[0]}; " + BUILD_HINT)
 
 
-def load(directory=NATIVE_DIR, package=None):
+def load(directory: str | pathlib.Path = NATIVE_DIR,
+         package: str | None = None) -> tuple[types.ModuleType | None, str | None]:
     """(module or None, message or None). Cached per directory."""
     directory = pathlib.Path(directory)
     key = str(directory)
@@ -101,6 +104,8 @@ def load(directory=NATIVE_DIR, package=None):
             module = sys.modules.get(name)
             if module is None:
                 spec = importlib.util.spec_from_file_location(name, path)
+                if spec is None or spec.loader is None:
+                    raise ImportError(f"no loader for {path}")
                 module = importlib.util.module_from_spec(spec)
                 spec.loader.exec_module(module)
                 sys.modules[name] = module
@@ -112,11 +117,11 @@ def load(directory=NATIVE_DIR, package=None):
     return module, message
 
 
-def module():
+def module() -> types.ModuleType | None:
     """The compiled module shipped with this add-on, or None (see message())."""
     return load()[0]
 
 
-def message():
+def message() -> str | None:
     """Why the compiled module is unavailable, or None when it loaded."""
     return load()[1]

@@ -2,9 +2,7 @@
 zenith); Blender's Image.pixels are bottom row first, RGBA. The flip happens here, once.
 
 Live updates at 2048 x 1024 move 8 M floats per image, so the RGBA buffers can be kept and
-reused (`out`): a fresh 32 MiB array costs its page faults every time. The sun-disc image
-is zero but for a few pixels: `sparse_to_blender` writes only those into a buffer that is
-otherwise kept zero (alpha 1).
+reused (`out`): a fresh 32 MiB array costs its page faults every time.
 """
 from __future__ import annotations
 
@@ -28,28 +26,6 @@ def to_blender(image: npt.NDArray[np.floating],
         out = rgba_buffer(w, h)
     out[..., :3] = image[::-1, :, :3]
     return out.reshape(-1)
-
-
-class SparseImage:
-    """A mostly zero (H, W, 3) top-row-first image into a reused RGBA buffer: only the
-    non-zero pixels are written, and cleared again before the next image."""
-
-    def __init__(self, width: int, height: int) -> None:
-        self.buffer = rgba_buffer(width, height)
-        self._rows: npt.NDArray[np.intp]
-        self._cols: npt.NDArray[np.intp]
-        self._rows = self._cols = np.empty(0, dtype=np.intp)
-
-    def to_blender(self, image: npt.NDArray[np.floating]) -> npt.NDArray[np.float32]:
-        h = self.buffer.shape[0]
-        self.buffer[self._rows, self._cols, :3] = 0.0
-        w = image.shape[1]
-        flat = np.ascontiguousarray(image[..., :3]).reshape(-1)
-        pixel = np.unique(np.flatnonzero(flat) // 3)  # a linear scan, then a few indices
-        rows, cols = pixel // w, pixel % w
-        self._rows, self._cols = h - 1 - rows, cols
-        self.buffer[self._rows, self._cols, :3] = image[rows, cols, :3]
-        return self.buffer.reshape(-1)
 
 
 def from_blender(flat: npt.ArrayLike, width: int, height: int) -> npt.NDArray[np.float32]:

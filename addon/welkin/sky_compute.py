@@ -2,8 +2,10 @@
 compiled module (never by computing physics here).
 
 Energy appears once (DESIGN.md): the sky image carries no sun disc, because the sun lamp
-lights the scene; the disc comes as a second image of its own (welkin.sun_disc_image, the
-same energy-exact splat the core adds to HDRIs), which the world shows to camera rays only.
+lights the scene; the world draws the disc with shader nodes from the view direction
+(world_nodes.py), shown to camera rays only, from the numbers of a DiscModel: the disc's
+centre, angular radius and horizon, and its radiance profile as a polynomial in mu (below).
+The exported HDRI keeps the core's own energy-exact disc (welkin.sky_image).
 
 Sun lamp sync (Blender's sun strength is an irradiance in W m^-2; with colour c the lamp
 delivers strength x c per channel at normal incidence): the lamp takes the transmitted
@@ -35,9 +37,24 @@ class LampValues:
 
 
 @dataclasses.dataclass
+class DiscModel:
+    """The sun's disc as the world's nodes draw it. A view direction at angle rho from
+    `direction` sees, when rho < radius_rad and its z is above horizon_z, the radiance
+        L_c(rho) = sum_k coefficients[k, c] mu^k,   mu = sqrt(1 - (sin rho / sin radius)^2)
+    (mu: the cosine of the heliocentric angle, sun.hpp), linear Rec.709 W m^-2 sr^-1 times
+    the exposure; its integral over the visible disc is the lamp's direct irradiance."""
+    direction: tuple[float, float, float]  # unit vector towards the disc's centre
+    radius_rad: float                       # angular radius of the disc
+    horizon_z: float                        # z of the horizon's direction (0 on the ground)
+    coefficients: npt.NDArray[np.float64]   # (DEGREE + 1, 3)
+
+    DEGREE = 5
+
+
+@dataclasses.dataclass
 class SkyResult:
     sky: npt.NDArray[np.float32]   # (H, W, 3) float32, top row first, no disc, x exposure
-    disc: npt.NDArray[np.float32]  # (H, W, 3) float32, top row first, the disc alone (or zeros)
+    disc: DiscModel | None         # None: no disc shown (or the sun below the horizon)
     lamp: LampValues
     method: str           # the module method that computed it
     sun_elevation_rad: float
@@ -52,6 +69,33 @@ def lamp_values(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401
     strength = float(rgb.max()) if rgb.size else 0.0
     color = tuple(float(c) for c in rgb / strength) if strength > 0.0 else (1.0, 1.0, 1.0)
     return LampValues(color, strength, 2.0 * float(atm.sun_angular_radius_rad))
+
+
+def horizon_z(atm: Any, altitude_m: float) -> float:  # noqa: ANN401 (welkin.Atmosphere)
+    """z of the direction of the horizon of a spherical ground of radius R seen from
+    r = R + altitude (the tangent ray): sin(elevation) = -sqrt(r^2 - R^2) / r."""
+    radius = float(atm.bottom_radius_m)
+    r = radius + altitude_m
+    return -math.sqrt(max(0.0, (r - radius) * (r + radius))) / r
+
+
+def disc_model(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401
+               sun_direction: Sequence[float], exposure: float) -> DiscModel | None:
+    """The disc for the world's nodes, or None when none of it is above the horizon."""
+    x, y, z = (float(c) for c in sun_direction)
+    norm = math.sqrt(x * x + y * y + z * z)
+    direction = (x / norm, y / norm, z / norm)
+    sun = native.sun(atm, altitude_m, direction)
+    if not float(sun.visible_fraction) > 0.0:
+        return None
+    alpha = float(sun.angular_radius_rad)
+    # The core's disc (sun_disc.hpp): L_j(mu) = centre_radiance_rgb[j] sum_k b[j, k] mu^k,
+    # limb-darkened by Neckel & Labs 1994, its integral over the visible disc the direct
+    # irradiance.
+    centre = np.asarray(sun.centre_radiance_rgb, dtype=np.float64) * exposure
+    coefficients = (np.asarray(sun.limb_coefficients_rgb, dtype=np.float64)
+                    * centre[:, None]).T.copy()
+    return DiscModel(direction, alpha, horizon_z(atm, altitude_m), coefficients)
 
 
 def lamp_for(native: ModuleType, request: sky_request.SkyRequest) -> LampValues:
@@ -84,7 +128,8 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     observer, update.cloudy_scene_json); the core then renders the sky with them
     (welkin.scene_sky_image, as `welkin sky --scene`), lit by the same atmosphere, and the
     disc image is dimmed by the clouds' transmittance of its pixels (the factor the core
-    dims a disc in the sky image by). `progress`: callable(fraction) -> bool (False
+    dims a disc in the sky image by; the disc model takes the clouds' transmittance at the
+    sun's centre). `progress`: callable(fraction) -> bool (False
     cancels: KeyboardInterrupt)."""
     start = time.perf_counter()
     sky_request.validate(request, native)
@@ -99,16 +144,23 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     else:
         sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
                                method, "rgb", sun_disc=False, exposure=request.exposure)
+    model = None
     if disc:
-        disc_image = native.sun_disc_image(atm, request.altitude_m, request.sun_direction,
-                                           request.width, "rgb", exposure=request.exposure)
-        if transmittance is not None:
-            disc_image *= transmittance[..., None]
-    else:
-        disc_image = np.zeros_like(sky)
+        model = disc_model(native, atm, request.altitude_m, request.sun_direction,
+                           request.exposure)
+        if model is not None and transmittance is not None:
+            model.coefficients *= _pixel_at(native, transmittance, model.direction)
     lamp = lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure)
-    return SkyResult(sky, disc_image, lamp, method, elevation, time.perf_counter() - start,
+    return SkyResult(sky, model, lamp, method, elevation, time.perf_counter() - start,
                      warnings)
+
+
+def _pixel_at(native: ModuleType, image: npt.NDArray[np.float32],
+              direction: Sequence[float]) -> float:
+    """The value of an (H, W) top-row-first equirectangular image at `direction`."""
+    h, w = image.shape[:2]
+    u, v = native.direction_to_equirect(np.asarray(direction, dtype=np.float64))
+    return float(image[min(h - 1, int((1.0 - v) * h)), min(w - 1, int(u * w) % w)])
 
 
 def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,

@@ -61,7 +61,9 @@ constexpr std::array<LimbRow, 30> kNeckelLabs1994 = {{
     {1098.95, {0.51149, 1.19354, -2.00174, 2.66936, -1.94981, 0.57715}},
 }};
 
-std::array<double, 6> limb_coefficients(double wavelength_nm) {
+}  // namespace
+
+std::array<double, 6> limb_darkening_coefficients(double wavelength_nm) {
     const auto& t = kNeckelLabs1994;
     if (!(wavelength_nm > t.front().wavelength_nm)) return t.front().a;
     if (wavelength_nm >= t.back().wavelength_nm) return t.back().a;
@@ -73,6 +75,8 @@ std::array<double, 6> limb_coefficients(double wavelength_nm) {
     for (int k = 0; k < 6; ++k) a[k] = t[i].a[k] * (1.0 - f) + t[i + 1].a[k] * f;
     return a;
 }
+
+namespace {
 
 double polynomial(const double* a, double mu) {
     return a[0] + mu * (a[1] + mu * (a[2] + mu * (a[3] + mu * (a[4] + mu * a[5]))));
@@ -112,7 +116,7 @@ LimbDarkening::LimbDarkening(double radius_rad, double wavelength_nm)
     : radius_rad_(radius_rad), sin_radius_(std::sin(radius_rad)) {
     require_in_range("sun_angular_radius_rad", radius_rad, 1e-6, 0.5 * kPi, "rad");
     require_in_range("wavelength_nm", wavelength_nm, 1.0, 1e5, "nm");
-    const std::array<double, 6> a = limb_coefficients(wavelength_nm);
+    const std::array<double, 6> a = limb_darkening_coefficients(wavelength_nm);
     std::copy(a.begin(), a.end(), a_);
     coefficients_sum_ = polynomial(a_, 1.0);
     const double s2 = sin_radius_ * sin_radius_;

@@ -50,10 +50,14 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
     return render_clouds(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options, progress);
 }
 
-CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
-                          std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
-                          std::span<const double> max_distances, const CloudLightingOptions& options,
-                          Progress* progress, std::uint64_t first_ray_index) {
+namespace {
+
+// The march of every ray (grid_width == 0), or of a grid of rays (rows of grid_width) with
+// upsampling (the header's render_clouds_grid).
+CloudResult march(const CloudDensity& density, const CloudIllumination& light, std::span<const glm::dvec3> origins,
+                  std::span<const glm::dvec3> directions, std::span<const double> max_distances,
+                  const CloudLightingOptions& options, Progress* progress, std::uint64_t first_ray_index,
+                  int grid_width, const CloudUpsampling& up) {
     options.validate();
     validate_directions(directions);
     const std::size_t n = directions.size(), nc = light.channels();
@@ -114,13 +118,17 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                 options.ambient_steps);
     }
 
-    ProgressTracker tracker(progress, n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const auto& range) {
+    struct Scratch {
         std::vector<MajorantSegment> segs, light_segs;
-        std::vector<float> sun(nc), sky(nc);
-        std::vector<double> acc(nc);
+        std::vector<float> sun, sky;
+        std::vector<double> acc;
         OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor;
-        for (std::size_t r = range.begin(); r != range.end(); ++r) {
+    };
+    // Marches ray r into the result.
+    const auto march_ray = [&](std::size_t r, Scratch& scratch) {
+        auto& [segs, light_segs, sun, sky, acc, sun_cursor, sky_cursor, anti_cursor] = scratch;
+        sun.resize(nc), sky.resize(nc), acc.resize(nc);
+        {
             const glm::dvec3 d = glm::normalize(directions[r]);
             const CloudRay ray{origins[origins.size() == 1 ? 0 : r], d};
             const double t_end =
@@ -128,10 +136,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
             density.segments(ray, t_end, segs);
             double total = 0.0;
             for (const auto& g : segs) total += g.t1 - g.t0;
-            if (!(total > 0.0)) {
-                tracker.advance();
-                continue;
-            }
+            if (!(total > 0.0)) return;
             const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
             const int sun_level = sun_grid ? sun_grid->level_for(dt_target) : 0;
             PathRng rng(options.seed, first_ray_index + r, 0, 0x636c6f7564ULL);
@@ -149,17 +154,29 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                 if (done) break;
                 const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
                 const double dt = (g.t1 - g.t0) / steps;
-                for (int k = 0, span = 1; k < steps; k += span) {
+                for (int k = 0, span = 1, empty = 0; k < steps; k += span) {
                     // The dim tail: below tail_transmittance a step spans up to 8 base steps,
                     // about tail_transmittance / T of them (whole steps, the same jitter u).
-                    span = T < options.tail_transmittance
-                               ? std::min({steps - k, 8, std::max(1, int(options.tail_transmittance / T))})
-                               : 1;
+                    // Empty space (Schneider 2015's adaptive march): after two empty
+                    // samples a step spans two base steps; where such a step finds cloud
+                    // it is taken again at the base length.
+                    const bool dim = T < options.tail_transmittance;
+                    span = dim ? std::min({steps - k, 8, std::max(1, int(options.tail_transmittance / T))})
+                               : empty >= 2 ? std::min(2, steps - k) : 1;
                     const double h = span * dt;
                     const double t = g.t0 + k * dt + u * h;
                     const glm::dvec3 x = ray.at(t);
                     const double sigma_t = density.sigma_t(x);
-                    if (!(sigma_t > 0.0)) continue;
+                    if (!(sigma_t > 0.0)) {
+                        ++empty;
+                        continue;
+                    }
+                    if (!dim && span > 1) {
+                        empty = 0;
+                        span = 0;  // the same place again, at the base step
+                        continue;
+                    }
+                    empty = 0;
                     const double tau_sun =
                         sun_grid ? sun_grid->tau(x, sun_level, sun_cursor)
                                  : march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps,
@@ -208,11 +225,131 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
             for (std::size_t c = 0; c < nc; ++c) result.radiance[r * nc + c] = float(acc[c]);
             result.transmittance[r] = float(T);
             result.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
-            tracker.advance();
+        }
+    };
+    // Marches the rays `which` (all when null).
+    const auto march_rays = [&](const std::vector<std::size_t>* which, ProgressTracker& tracker) {
+        const std::size_t count = which ? which->size() : n;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
+            Scratch scratch;
+            for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                march_ray(which ? (*which)[k] : k, scratch);
+                tracker.advance();
+            }
+        });
+    };
+    if (grid_width <= 0 || up.stride <= 1) {
+        ProgressTracker tracker(progress, n);
+        march_rays(nullptr, tracker);
+        tracker.finish();
+        return result;
+    }
+
+    // The grid: march every stride-th ray of every stride-th row (and the last row and
+    // column), then each other ray either by bilinear interpolation of the four marched
+    // rays around it, where they agree (transmittances within up.transmittance_tolerance,
+    // radiances within up.radiance_tolerance of the largest), or by its own march.
+    const std::size_t W = std::size_t(grid_width), H = n / W;
+    const std::size_t S = std::size_t(up.stride);
+    std::vector<std::size_t> xs, ys;  // the marched columns and rows
+    for (std::size_t i = 0; i < W; i += S) xs.push_back(i);
+    if (xs.back() != W - 1) xs.push_back(W - 1);
+    for (std::size_t j = 0; j < H; j += S) ys.push_back(j);
+    if (ys.back() != H - 1) ys.push_back(H - 1);
+    std::vector<std::size_t> coarse;
+    coarse.reserve(xs.size() * ys.size());
+    for (std::size_t j : ys)
+        for (std::size_t i : xs) coarse.push_back(j * W + i);
+    ProgressTracker tracker(progress, n);
+    march_rays(&coarse, tracker);
+    // Per pixel: interpolate (weights in `interp`) or mark for marching.
+    std::vector<unsigned char> refine(n, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, H), [&](const auto& range) {
+        for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            const std::size_t bj = std::min(j / S, ys.size() - 2);
+            const std::size_t j0 = ys[bj], j1 = ys[bj + 1];
+            for (std::size_t i = 0; i < W; ++i) {
+                if (i % S == 0 && j % S == 0) continue;
+                if ((i == W - 1 || i % S == 0) && (j == H - 1 || j % S == 0)) continue;  // marched
+                const std::size_t bi = std::min(i / S, xs.size() - 2);
+                const std::size_t i0 = xs[bi], i1 = xs[bi + 1];
+                const std::size_t q[4] = {j0 * W + i0, j0 * W + i1, j1 * W + i0, j1 * W + i1};
+                float tmin = 2.0f, tmax = -1.0f;
+                for (std::size_t a : q) {
+                    tmin = std::min(tmin, result.transmittance[a]);
+                    tmax = std::max(tmax, result.transmittance[a]);
+                }
+                bool smooth = tmax - tmin <= up.transmittance_tolerance;
+                for (std::size_t c = 0; c < nc && smooth; ++c) {
+                    float lmin = 1e30f, lmax = 0.0f;
+                    for (std::size_t a : q) {
+                        lmin = std::min(lmin, result.radiance[a * nc + c]);
+                        lmax = std::max(lmax, result.radiance[a * nc + c]);
+                    }
+                    smooth = lmax - lmin <= up.radiance_tolerance * lmax;
+                }
+                const std::size_t p = j * W + i;
+                if (!smooth) {
+                    refine[p] = 1;
+                    continue;
+                }
+                const double u = double(i - i0) / double(i1 - i0), v = double(j - j0) / double(j1 - j0);
+                const double w[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
+                double T = 0.0, dsum = 0.0, dw = 0.0;
+                for (int a = 0; a < 4; ++a) {
+                    T += w[a] * result.transmittance[q[a]];
+                    // Depth: weighted by opacity, where there is cloud.
+                    const double o = w[a] * (1.0 - result.transmittance[q[a]]);
+                    dsum += o * result.depth_m[q[a]];
+                    dw += o;
+                }
+                result.transmittance[p] = float(T);
+                result.depth_m[p] = dw > 0.0 ? float(dsum / dw) : 0.0f;
+                for (std::size_t c = 0; c < nc; ++c) {
+                    double L = 0.0;
+                    for (int a = 0; a < 4; ++a) L += w[a] * result.radiance[q[a] * nc + c];
+                    result.radiance[p * nc + c] = float(L);
+                }
+            }
         }
     });
+    std::vector<std::size_t> fine;
+    for (std::size_t p = 0; p < n; ++p)
+        if (refine[p]) fine.push_back(p);
+    march_rays(&fine, tracker);
+    tracker.advance(n - coarse.size() - fine.size());
     tracker.finish();
     return result;
+}
+
+}  // namespace
+
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
+                          std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                          std::span<const double> max_distances, const CloudLightingOptions& options,
+                          Progress* progress, std::uint64_t first_ray_index) {
+    return march(density, light, origins, directions, max_distances, options, progress, first_ray_index, 0, {});
+}
+
+CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
+                               std::span<const glm::dvec3> directions, int width, const CloudLightingOptions& options,
+                               const CloudUpsampling& upsampling, Progress* progress, std::uint64_t first_ray_index) {
+    for (int a = 0; a < 3; ++a) require_finite(fmt::format("origin[{}]", a), origin[a]);
+    upsampling.validate();
+    if (width < 1 || directions.size() % std::size_t(width) != 0)
+        throw InvalidArgument("width", fmt::format("must divide the number of directions ({}), got {}",
+                                                   directions.size(), width));
+    const int stride = directions.size() / std::size_t(width) < 2 || width < 2 ? 1 : upsampling.stride;
+    CloudUpsampling up = upsampling;
+    up.stride = stride;
+    return march(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options, progress,
+                 first_ray_index, width, up);
+}
+
+void CloudUpsampling::validate() const {
+    require_in_range("stride", stride, 1, 16);
+    require_in_range("transmittance_tolerance", transmittance_tolerance, 0.0, 1.0);
+    require_in_range("radiance_tolerance", radiance_tolerance, 0.0, 1.0);
 }
 
 }  // namespace welkin

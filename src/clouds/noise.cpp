@@ -94,10 +94,12 @@ glm::vec4 TileableTexture3D::sample(double x, double y, double z) const {
     return glm::mix(lo, layer(k1), wz);
 }
 
-CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, int detail_size, int weather_size) {
+CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, int detail_size, int weather_size,
+                                            int curl_size) {
     CloudNoiseTextures t{TileableTexture3D(base_size, base_size, base_size),
                          TileableTexture3D(detail_size, detail_size, detail_size),
-                         TileableTexture3D(weather_size, weather_size, 1)};
+                         TileableTexture3D(weather_size, weather_size, 1),
+                         TileableTexture3D(curl_size, curl_size, 1)};
     // Perlin fBm: octaves of doubling frequency and halving amplitude (4, 8, 16 cells),
     // mapped from ~[-1, 1] to [0, 1].
     const auto perlin_fbm = [&](double x, double y, double z, int f0, std::uint64_t s) {
@@ -144,8 +146,26 @@ CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, i
             for (int i = 0; i < nw; ++i) {
                 const double x = (i + 0.5) / nw, y = (j + 0.5) / nw;
                 const glm::vec4 v(float(perlin_fbm(x, y, 0.5 / nw, 2, seed * 16 + 20)),
-                                  float(perlin_fbm(x, y, 0.5 / nw, 2, seed * 16 + 24)), 0.0f, 0.0f);
+                                  float(perlin_fbm(x, y, 0.5 / nw, 2, seed * 16 + 24)),
+                                  float(perlin_fbm(x, y, 0.5 / nw, 4, seed * 16 + 28)),
+                                  float(perlin_fbm(x, y, 0.5 / nw, 4, seed * 16 + 32)));
                 t.weather.at(i, j, 0) = v;
+            }
+    });
+    // Curl noise: psi a Perlin fBm at 4 cells per period, differentiated by central
+    // differences of half a texel; scaled so that |curl| is about 1 at its largest.
+    const int nc = curl_size;
+    const double hd = 0.5 / nc;
+    tbb::parallel_for(tbb::blocked_range<int>(0, nc), [&](const auto& r) {
+        for (int j = r.begin(); j != r.end(); ++j)
+            for (int i = 0; i < nc; ++i) {
+                const double x = (i + 0.5) / nc, y = (j + 0.5) / nc;
+                const auto psi = [&](double u, double v) { return perlin_fbm(u, v, 0.25, 4, seed * 16 + 36); };
+                const double dx = (psi(x + hd, y) - psi(x - hd, y)) / (2.0 * hd);
+                const double dy = (psi(x, y + hd) - psi(x, y - hd)) / (2.0 * hd);
+                // psi's slope is of order (cells per period) x (amplitude): 4 x 0.7 / 2.
+                constexpr double kScale = 1.0 / 1.4 / 4.0;
+                t.curl.at(i, j, 0) = glm::vec4(float(dy * kScale), float(-dx * kScale), 0.0f, 0.0f);
             }
     });
     return t;

@@ -1,11 +1,16 @@
-// A procedural cloud layer; see procedural_clouds.hpp.
+// A procedural cloud layer; see procedural.hpp.
 #include "welkin/clouds/procedural.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 #include <vector>
+#include <map>
 #include <mutex>
+#include <tuple>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -59,23 +64,114 @@ bool sphere_interval(const CloudRay& ray, const glm::dvec3& c, double r, double&
     return true;
 }
 
+
+// The shape of each type (header): its height gradient's corners, how much of the layer
+// the towers leave out where the weather map's g is low, the height fraction below which
+// erosion fades (a flat base), the stretch of the noise along its streak direction, and
+// the curl distortion of the erosion (in detail tiles).
+struct Trapezoid {
+    double a0, a1, a2, a3;
+    double operator()(double x) const {
+        return clamp01d(remap(x, a0, a1, 0.0, 1.0)) * clamp01d(remap(x, a2, a3, 1.0, 0.0));
+    }
+};
+struct TypeShape {
+    Trapezoid gradient;
+    double towers, base_erosion, stretch, curl;
+};
+const TypeShape& shape_of(CloudType t) {
+    // cumulus: a flat base (steep rise, no erosion at the bottom), towers over half the
+    //   layer where the weather map says so, rounded tops;
+    // stratocumulus: a lumpy layer of rolls, somewhat stretched;
+    // altocumulus: a thin mid-level sheet of small rounded cells;
+    // stratus: a low, uniform grey sheet with faint, stretched undulations;
+    // cirrus: thin high streaks, strongly stretched, fibrous (strong curl).
+    static const TypeShape shapes[] = {
+        {{0.0, 0.04, 0.45, 1.0}, 0.6, 0.12, 1.0, 0.3},   // cumulus
+        {{0.0, 0.12, 0.5, 0.95}, 0.25, 0.05, 1.6, 0.3},  // stratocumulus
+        {{0.0, 0.25, 0.55, 0.95}, 0.2, 0.0, 1.0, 0.4},   // altocumulus
+        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 2.5, 0.2},     // stratus
+        {{0.0, 0.3, 0.45, 1.0}, 0.3, 0.0, 8.0, 0.8},     // cirrus
+    };
+    return shapes[static_cast<int>(t)];
+}
+
+// The streaks' direction: 30 degrees off the x axis (cos, sin), so that no structure runs
+// along the world's axes.
+constexpr double kStreakCos = 0.8660254037844386, kStreakSin = 0.5;
+// Internal coverage at which a layer is overcast (clamp(k (1 - weather_variation)) = 1
+// for weather_variation <= 0.75).
+constexpr double kMaxInternalCoverage = 4.0;
+
+// The calibration's cache: the internal coverage of every layer built so far, keyed by
+// everything that shapes the field but the wind (a shift does not change the share).
+std::mutex calibration_mutex;
+std::map<std::tuple<int, double, double, double, double, double, double, double, double, double, std::uint64_t,
+                    double, double>,
+         double>
+    calibration_cache;
+
 }  // namespace
 
+std::string_view cloud_type_name(CloudType type) { return kCloudTypeNames[static_cast<int>(type)]; }
+
+CloudType cloud_type_from_name(std::string_view name, const std::string& parameter) {
+    for (std::size_t i = 0; i < kCloudTypeNames.size(); ++i)
+        if (kCloudTypeNames[i] == name) return static_cast<CloudType>(i);
+    std::string list;
+    for (const auto n : kCloudTypeNames) list += fmt::format("{}\"{}\"", list.empty() ? "" : ", ", n);
+    throw InvalidArgument(parameter, fmt::format("must be one of {}, got \"{}\"", list, name));
+}
+
+// Altitudes, thicknesses and scales typical of each genus (WMO International Cloud Atlas:
+// cumulus bases 0.5-2 km with towers to a few km; stratocumulus a low layer of rolls a few
+// hundred metres thick; altocumulus 2-6 km, cells 0.2-1 km; stratus below 1 km, a sheet
+// that hides the sun; cirrus 6-12 km, thin ice streaks of optical depth ~ 0.1-1).
+CloudLayerParams CloudLayerParams::preset(CloudType type) {
+    CloudLayerParams p;
+    p.cloud_type = type;
+    switch (type) {
+    case CloudType::cumulus:
+        break;  // the struct's defaults
+    case CloudType::stratocumulus:
+        p.bottom_altitude_m = 1000.0, p.top_altitude_m = 1800.0, p.coverage = 0.7, p.density_per_m = 0.03;
+        p.base_scale_m = 2500.0, p.detail_scale_m = 500.0, p.weather_scale_m = 25000.0;
+        p.detail_strength = 0.45, p.weather_variation = 0.4;
+        break;
+    case CloudType::altocumulus:
+        p.bottom_altitude_m = 4000.0, p.top_altitude_m = 4500.0, p.coverage = 0.5, p.density_per_m = 0.02;
+        p.base_scale_m = 1500.0, p.detail_scale_m = 300.0, p.weather_scale_m = 10000.0;
+        p.detail_strength = 0.5, p.weather_variation = 0.5;
+        break;
+    case CloudType::stratus:
+        p.bottom_altitude_m = 400.0, p.top_altitude_m = 900.0, p.coverage = 0.9, p.density_per_m = 0.04;
+        p.base_scale_m = 15000.0, p.detail_scale_m = 2000.0, p.weather_scale_m = 60000.0;
+        p.detail_strength = 0.2, p.weather_variation = 0.3;
+        break;
+    case CloudType::cirrus:
+        p.bottom_altitude_m = 8000.0, p.top_altitude_m = 9500.0, p.coverage = 0.3, p.density_per_m = 0.0025;
+        p.base_scale_m = 8000.0, p.detail_scale_m = 600.0, p.weather_scale_m = 60000.0;
+        p.detail_strength = 0.6, p.weather_variation = 0.6;
+        break;
+    }
+    return p;
+}
+
 void CloudLayerParams::validate() const {
+    if (static_cast<int>(cloud_type) < 0 || static_cast<int>(cloud_type) >= int(kCloudTypeNames.size()))
+        throw InvalidArgument("cloud_type", "must be one of the CloudType values");
     require_in_range("bottom_altitude_m", bottom_altitude_m, 0.0, 20000.0, "m");
     require_in_range("top_altitude_m", top_altitude_m, 0.0, 20000.0, "m");
     if (!(top_altitude_m > bottom_altitude_m))
         throw InvalidArgument("top_altitude_m", fmt::format("must be above bottom_altitude_m ({} m), got {} m",
                                                             bottom_altitude_m, top_altitude_m));
     require_in_range("coverage", coverage, 0.0, 1.0);
-    require_in_range("cloud_type", cloud_type, 0.0, 1.0);
     require_in_range("density_per_m", density_per_m, 0.0, 10.0, "m^-1");
     require_in_range("base_scale_m", base_scale_m, 10.0, 1e6, "m");
     require_in_range("detail_scale_m", detail_scale_m, 1.0, 1e6, "m");
     require_in_range("weather_scale_m", weather_scale_m, 10.0, 1e7, "m");
     require_in_range("detail_strength", detail_strength, 0.0, 1.0);
     require_in_range("weather_variation", weather_variation, 0.0, 1.0);
-    require_in_range("type_variation", type_variation, 0.0, 1.0);
     require_finite("wind_offset_m[0]", wind_offset_m.x);
     require_finite("wind_offset_m[1]", wind_offset_m.y);
     require_in_range("planet_radius_m", planet_radius_m, 1e3, 1e8, "m");
@@ -108,75 +204,151 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
             }
     const auto& nw = noise_->weather;
     const int q = nw.size();
-    weather_ = PeriodicTexture<2>(q, q, 1);
+    weather_ = PeriodicTexture<4>(q, q, 1);
     for (int j = 0; j < q; ++j)
-        for (int i = 0; i < q; ++i) {
-            weather_.at(i, j, 0)[0] = nw.at(i, j, 0).r;
-            weather_.at(i, j, 0)[1] = nw.at(i, j, 0).g;
-        }
+        for (int i = 0; i < q; ++i)
+            for (int c = 0; c < 4; ++c) weather_.at(i, j, 0)[c] = nw.at(i, j, 0)[c];
+    const auto& nc = noise_->curl;
+    const int qc = nc.size();
+    curl_ = PeriodicTexture<2>(qc, qc, 1);
+    for (int j = 0; j < qc; ++j)
+        for (int i = 0; i < qc; ++i)
+            for (int c = 0; c < 2; ++c) curl_.at(i, j, 0)[c] = nc.at(i, j, 0)[c];
     inv_weather_ = 1.0 / p_.weather_scale_m;
     inv_base_ = 1.0 / p_.base_scale_m;
     inv_detail_ = 1.0 / p_.detail_scale_m;
+
+    // The internal coverage k whose share of cloudy columns is `coverage` (header).
+    if (p_.coverage <= 0.0 || p_.density_per_m <= 0.0) {
+        k_ = 0.0;
+        return;
+    }
+    if (p_.coverage >= 1.0) {
+        k_ = kMaxInternalCoverage;
+        return;
+    }
+    const auto key = std::make_tuple(static_cast<int>(p_.cloud_type), p_.bottom_altitude_m, p_.top_altitude_m,
+                                     p_.coverage, p_.density_per_m, p_.base_scale_m, p_.detail_scale_m,
+                                     p_.weather_scale_m, p_.detail_strength, p_.weather_variation, p_.seed,
+                                     p_.planet_radius_m, p_.origin_altitude_m);
+    {
+        std::lock_guard<std::mutex> lock(calibration_mutex);
+        if (const auto it = calibration_cache.find(key); it != calibration_cache.end()) {
+            k_ = it->second;
+            return;
+        }
+    }
+    double lo = 0.0, hi = kMaxInternalCoverage;
+    for (int it = 0; it < 14; ++it) {  // k to 4 / 2^14
+        const double mid = 0.5 * (lo + hi);
+        (fraction(mid, kCoverageColumns) < p_.coverage ? lo : hi) = mid;
+    }
+    k_ = 0.5 * (lo + hi);
+    std::lock_guard<std::mutex> lock(calibration_mutex);
+    if (calibration_cache.size() > 256) calibration_cache.clear();
+    calibration_cache[key] = k_;
 }
 
-// Trapezoids (a0, a1, a2, a3): 0 below a0, rising to 1 at a1, 1 to a2, falling to 0 at a3.
-double ProceduralClouds::height_gradient(double type, double f) {
+double ProceduralClouds::height_gradient(CloudType type, double f) {
     if (!(f >= 0.0 && f <= 1.0)) return 0.0;
-    struct Trapezoid {
-        double a0, a1, a2, a3;
-        double operator()(double x) const {
-            return clamp01d(remap(x, a0, a1, 0.0, 1.0)) * clamp01d(remap(x, a2, a3, 1.0, 0.0));
-        }
-    };
-    constexpr Trapezoid stratus{0.0, 0.08, 0.15, 0.3};
-    constexpr Trapezoid stratocumulus{0.0, 0.15, 0.35, 0.6};
-    constexpr Trapezoid cumulus{0.0, 0.1, 0.65, 1.0};
-    const double t = clamp01d(type);
-    if (t <= 0.5) {
-        const double w = t / 0.5;
-        return (1.0 - w) * stratus(f) + w * stratocumulus(f);
+    return shape_of(type).gradient(f);
+}
+
+// Vertical optical depth of the column above (x, y) (world, before the wind shift) through
+// the layer, midpoint rule in 32 steps, stopped once it reaches the coverage threshold.
+double ProceduralClouds::column_depth(double x, double y, double k) const {
+    constexpr int kSteps = 32;
+    const double dh = (p_.top_altitude_m - p_.bottom_altitude_m) / kSteps;
+    double tau = 0.0;
+    for (int i = 0; i < kSteps && tau < kCoverageOpticalDepth; ++i) {
+        const double h = p_.bottom_altitude_m + (i + 0.5) * dh;
+        tau += p_.density_per_m * density({x, y, 0.0}, h, k) * dh;
     }
-    const double w = (t - 0.5) / 0.5;
-    return (1.0 - w) * stratocumulus(f) + w * cumulus(f);
+    return tau;
+}
+
+double ProceduralClouds::fraction(double k, int columns) const {
+    // R2 low-discrepancy points (Roberts 2018, the plastic number's powers) over a square of
+    // two weather tiles.
+    constexpr double a1 = 0.7548776662466927, a2 = 0.5698402909980532;
+    const double side = 2.0 * p_.weather_scale_m;
+    const int cloudy = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, columns, 64), 0,
+        [&](const tbb::blocked_range<int>& r, int acc) {
+            for (int i = r.begin(); i != r.end(); ++i) {
+                const double u = std::fmod(0.5 + a1 * (i + 1), 1.0), v = std::fmod(0.5 + a2 * (i + 1), 1.0);
+                acc += column_depth(side * u, side * v, k) >= kCoverageOpticalDepth;
+            }
+            return acc;
+        },
+        [](int a, int b) { return a + b; });
+    return double(cloudy) / columns;
+}
+
+double ProceduralClouds::covered_fraction(int columns) const {
+    if (columns < 1) throw InvalidArgument("columns", fmt::format("must be >= 1, got {}", columns));
+    return fraction(k_, columns);
 }
 
 double ProceduralClouds::sigma_t(const glm::dvec3& p) const {
+    if (!(k_ > 0.0) || !(p_.density_per_m > 0.0)) return 0.0;
     const double h = glm::length(p - centre_) - p_.planet_radius_m;
+    return p_.density_per_m * density(p, h, k_);
+}
+
+// The normalised density (header) at p, altitude h, internal coverage k.
+double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const {
     const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
     const double f = (h - p_.bottom_altitude_m) / thickness;
-    if (!(f > 0.0 && f < 1.0) || p_.coverage <= 0.0 || p_.density_per_m <= 0.0) return 0.0;
+    if (!(f > 0.0 && f < 1.0)) return 0.0;
+    const TypeShape& shape = shape_of(p_.cloud_type);
     const double x = p.x - p_.wind_offset_m.x, y = p.y - p_.wind_offset_m.y;
 
-    float w[2];
+    float w[4];
     weather_.sample(x * inv_weather_, y * inv_weather_, 0.0, w);
-    const double c = p_.coverage * clamp01d(1.0 + p_.weather_variation * (2.0 * w[0] - 1.0));
-    const double t = clamp01d(p_.cloud_type + p_.type_variation * (2.0 * w[1] - 1.0));
-    const double g = height_gradient(t, f);
-    if (c <= 0.0 || g <= 0.0) return 0.0;
+    const double c = clamp01d(k * (1.0 + p_.weather_variation * (2.0 * w[0] - 1.0)));
+    if (c <= 0.0) return 0.0;
+    // Towers: the local top, lower where the weather map's g is low.
+    const double tower = clamp01d((w[1] - 0.3) / 0.4);
+    const double f_top = 1.0 - shape.towers * (1.0 - tower);
+    const double g = shape.gradient(f / f_top);
+    if (g <= 0.0) return 0.0;
 
+    // The base shape: domain-warped (half a tile at most), rotated and stretched.
+    const double warp = 1.2 * p_.base_scale_m;
+    const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
+    const double sq = std::sqrt(shape.stretch);
+    const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
     const double zb = (h - p_.bottom_altitude_m) * inv_base_;
     float b[2];  // the Perlin-Worley channel and fbm_w = 0.625 g + 0.25 b + 0.125 a
-    base_.sample(x * inv_base_, y * inv_base_, zb, b);
+    base_.sample(along * inv_base_ / sq, across * inv_base_ * sq, zb, b);
     const double fbm_w = b[1];
-    const double base = remap(b[0], -(1.0 - fbm_w), 1.0, 0.0, 1.0) * g;
-    const double covered = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0)) * c;
+    const double base = clamp01d(remap(b[0], -(1.0 - fbm_w), 1.0, 0.0, 1.0)) * g;
+    const double covered = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
     if (covered <= 0.0) return 0.0;  // erosion only removes: skip the detail lookup
+    if (p_.detail_strength <= 0.0) return covered;
 
+    // Erosion: the detail noise, its lookup displaced by the curl noise (stronger low down).
+    float cu[2];
+    curl_.sample(x * inv_detail_ * 0.25, y * inv_detail_ * 0.25, 0.0, cu);
+    const double amp = shape.curl * (1.0 - f);
+    const double ax = kStreakCos * x + kStreakSin * y, ay = -kStreakSin * x + kStreakCos * y;
     const double zd = (h - p_.bottom_altitude_m) * inv_detail_;
     float fbm_d_f;  // 0.625 r + 0.25 g + 0.125 b of the detail texture
-    detail_.sample(x * inv_detail_, y * inv_detail_, zd, &fbm_d_f);
+    detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1], zd, &fbm_d_f);
     const double fbm_d = fbm_d_f;
     const double modifier = fbm_d + (1.0 - 2.0 * fbm_d) * clamp01d(10.0 * f);  // mix(fbm, 1 - fbm, .)
-    const double density = remap(covered, p_.detail_strength * modifier, 1.0, 0.0, 1.0);
-    return p_.density_per_m * clamp01d(density);
+    const double fade = shape.base_erosion > 0.0 ? clamp01d(f / shape.base_erosion) : 1.0;
+    const double e = kMaxErosion * p_.detail_strength * (1.0 - covered) * modifier * fade;
+    return clamp01d(remap(covered, e, 1.0, 0.0, 1.0));
 }
 
 // The shell between the bottom and top spheres, the ray stopped by the ground: the part of
 // [0, t_max] inside the top sphere, minus the part inside the bottom sphere.
 void ProceduralClouds::segments(const CloudRay& ray, double t_max, std::vector<MajorantSegment>& out) const {
     out.clear();
-    const double majorant = p_.density_per_m * p_.coverage;
-    if (!(majorant > 0.0)) return;
+    const double majorant = p_.density_per_m;
+    if (!(majorant > 0.0) || !(k_ > 0.0)) return;
     double g0, g1;
     if (sphere_interval(ray, centre_, p_.planet_radius_m, g0, g1) && g1 > 0.0) t_max = std::min(t_max, std::max(g0, 0.0));
     double a0, a1;

@@ -1,7 +1,12 @@
 // Clouds from an OpenVDB file; see vdb_clouds.hpp.
 #include "welkin/clouds/vdb.hpp"
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -202,6 +207,49 @@ private:
 
 // The active bounding box within the documented limits (docs/limits.md), or an
 // InvalidArgument naming the grid.
+// Reads the grid's tree once in a child process before the host reads it. OpenVDB 10
+// trusts the lengths inside a grid's tree: io::bloscFromStream reads a chunk of the length
+// the file declares into the node's buffer before it compares that length with the
+// buffer's size (io/Compression.h), so a corrupt or hostile tree overwrites the heap of
+// the process that reads it (tests/fuzz/openvdb_findings/). Everything up to the tree is
+// bounded by VdbStructureCheck; the tree itself cannot be checked without reading it. The
+// child reads it with the same code; if that kills the child, the file is refused and the
+// host never reads it. The price is a second read of the file (the child's copy of the
+// host's memory is copy-on-write). A child that outlives kChildSeconds is stopped, so a
+// hostile file cannot hang the host either.
+void read_tree_in_child(const std::string& path, const std::string& grid, const std::string& where) {
+    constexpr unsigned kChildSeconds = 600;
+    constexpr int kExceptionExit = 17;  // the child caught an exception: the host reports it
+    const pid_t pid = ::fork();
+    if (pid < 0) throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
+    if (pid == 0) {
+        // Only async-signal-safe calls are certain after fork in a threaded host; OpenVDB's
+        // reader is serial and the allocator is fork-aware, which is what this relies on.
+        for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGILL, SIGFPE, SIGALRM}) ::signal(sig, SIG_DFL);
+        ::alarm(kChildSeconds);
+        int code = 0;
+        try {
+            openvdb::io::File file(path);
+            file.open(/*delayLoad=*/false);
+            (void)file.readGrid(grid);
+            file.close();
+        } catch (...) {
+            code = kExceptionExit;
+        }
+        ::_exit(code);
+    }
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0) {
+        if (errno != EINTR) throw IoError(fmt::format("{}: lost the reader process: {}", where, std::strerror(errno)));
+    }
+    if (WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == kExceptionExit)) return;
+    if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM)
+        throw IoError(fmt::format("{}: reading its tree took longer than {} s; refused", where, kChildSeconds));
+    throw IoError(fmt::format("{}: corrupt data: reading its tree ended the reader process ({}); refused", where,
+                              WIFSIGNALED(status) ? ::strsignal(WTERMSIG(status))
+                                                  : fmt::format("exit code {}", WEXITSTATUS(status)).c_str()));
+}
+
 void check_extent(const openvdb::Coord& lo, const openvdb::Coord& hi, const std::string& where) {
     for (int a = 0; a < 3; ++a) {
         const std::int64_t l = lo[a], h = hi[a];
@@ -281,6 +329,7 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
         throw InvalidArgument("max_memory_bytes",
                               fmt::format("{} needs about {:.1f} MiB ({} active voxels), more than the limit of {:.1f} MiB",
                                           m.where(), estimate / 1048576.0, voxels, options.max_memory_bytes / 1048576.0));
+    read_tree_in_child(path, options.grid, m.where());
     try {
         m.grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(options.grid));
         file.close();

@@ -141,30 +141,40 @@ A cloud density source (base class of CloudLayer and VdbClouds).
             },
             py::arg("points"), "Extinction coefficient (m^-1) at world points, (N, 3) -> (N,).");
 
-    const CloudLayerParams d;
     py::class_<ProceduralClouds, CloudDensity, std::shared_ptr<ProceduralClouds>>(m, "CloudLayer", R"doc(
 A procedural cloud layer on the curved planet (Schneider's Nubis: weather map,
-Perlin-Worley base shape, Worley erosion, height gradients per cloud type, wind).
-Altitudes in metres above the ground; cloud_type 0 stratus, 0.5 stratocumulus,
-1 cumulus; density_per_m the extinction of the densest cloud (m^-1); origin_altitude_m
-the world origin's (observer's) altitude. ValueError names a bad parameter.
+Perlin-Worley base shape, Worley erosion with curl distortion, a height gradient per
+cloud type, wind). cloud_type is a preset name: "cumulus" (the default), "stratocumulus",
+"altocumulus", "stratus" or "cirrus"; every other parameter left as None takes the
+preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
+the ground; coverage the share of the ground's area under cloud (a column is cloudy when
+its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
+cloud (m^-1); origin_altitude_m the world origin's (observer's) altitude. ValueError
+names a bad parameter.
 )doc")
-        .def(py::init([](double bottom, double top, double coverage, double type, double density, double base_scale,
-                         double detail_scale, double weather_scale, double detail_strength, double weather_variation,
-                         double type_variation, const py::object& wind, std::uint64_t seed, double planet_radius,
-                         double origin_altitude) {
-                 CloudLayerParams p;
-                 p.bottom_altitude_m = bottom;
-                 p.top_altitude_m = top;
-                 p.coverage = coverage;
-                 p.cloud_type = type;
-                 p.density_per_m = density;
-                 p.base_scale_m = base_scale;
-                 p.detail_scale_m = detail_scale;
-                 p.weather_scale_m = weather_scale;
-                 p.detail_strength = detail_strength;
-                 p.weather_variation = weather_variation;
-                 p.type_variation = type_variation;
+        .def(py::init([](const std::string& type, const py::object& bottom, const py::object& top,
+                         const py::object& coverage, const py::object& density, const py::object& base_scale,
+                         const py::object& detail_scale, const py::object& weather_scale,
+                         const py::object& detail_strength, const py::object& weather_variation,
+                         const py::object& wind, std::uint64_t seed, double planet_radius, double origin_altitude) {
+                 CloudLayerParams p = CloudLayerParams::preset(cloud_type_from_name(type, "cloud_type"));
+                 const auto set = [](const py::object& o, const char* name, double& v) {
+                     if (o.is_none()) return;
+                     try {
+                         v = o.cast<double>();
+                     } catch (const py::cast_error&) {
+                         throw InvalidArgument(name, "must be a number");
+                     }
+                 };
+                 set(bottom, "bottom_altitude_m", p.bottom_altitude_m);
+                 set(top, "top_altitude_m", p.top_altitude_m);
+                 set(coverage, "coverage", p.coverage);
+                 set(density, "density_per_m", p.density_per_m);
+                 set(base_scale, "base_scale_m", p.base_scale_m);
+                 set(detail_scale, "detail_scale_m", p.detail_scale_m);
+                 set(weather_scale, "weather_scale_m", p.weather_scale_m);
+                 set(detail_strength, "detail_strength", p.detail_strength);
+                 set(weather_variation, "weather_variation", p.weather_variation);
                  const c_array<double> w = to_c_array<double>(wind, "wind_offset_m", 2, 1, 1, "two numbers (x, y) in m");
                  p.wind_offset_m = {w.data()[0], w.data()[1]};
                  p.seed = seed;
@@ -173,18 +183,43 @@ the world origin's (observer's) altitude. ValueError names a bad parameter.
                  py::gil_scoped_release release;  // the noise is baked here (seconds, once per seed)
                  return std::make_shared<ProceduralClouds>(p);
              }),
-             py::kw_only(), py::arg("bottom_altitude_m") = d.bottom_altitude_m,
-             py::arg("top_altitude_m") = d.top_altitude_m, py::arg("coverage") = d.coverage,
-             py::arg("cloud_type") = d.cloud_type, py::arg("density_per_m") = d.density_per_m,
-             py::arg("base_scale_m") = d.base_scale_m, py::arg("detail_scale_m") = d.detail_scale_m,
-             py::arg("weather_scale_m") = d.weather_scale_m, py::arg("detail_strength") = d.detail_strength,
-             py::arg("weather_variation") = d.weather_variation, py::arg("type_variation") = d.type_variation,
-             py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0), py::arg("seed") = d.seed,
-             py::arg("planet_radius_m") = d.planet_radius_m, py::arg("origin_altitude_m") = d.origin_altitude_m)
+             py::kw_only(), py::arg("cloud_type") = "cumulus", py::arg("bottom_altitude_m") = py::none(),
+             py::arg("top_altitude_m") = py::none(), py::arg("coverage") = py::none(),
+             py::arg("density_per_m") = py::none(), py::arg("base_scale_m") = py::none(),
+             py::arg("detail_scale_m") = py::none(), py::arg("weather_scale_m") = py::none(),
+             py::arg("detail_strength") = py::none(), py::arg("weather_variation") = py::none(),
+             py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0), py::arg("seed") = CloudLayerParams{}.seed,
+             py::arg("planet_radius_m") = CloudLayerParams{}.planet_radius_m,
+             py::arg("origin_altitude_m") = CloudLayerParams{}.origin_altitude_m)
+        .def_property_readonly("cloud_type",
+                               [](const ProceduralClouds& c) { return std::string(cloud_type_name(c.params().cloud_type)); })
+        .def("covered_fraction", &ProceduralClouds::covered_fraction,
+             py::arg("columns") = ProceduralClouds::kCoverageColumns,
+             "The measured coverage: the share of columns whose vertical optical depth reaches 0.3.")
         .def_property_readonly("bottom_altitude_m", [](const ProceduralClouds& c) { return c.params().bottom_altitude_m; })
         .def_property_readonly("top_altitude_m", [](const ProceduralClouds& c) { return c.params().top_altitude_m; })
         .def_property_readonly("coverage", [](const ProceduralClouds& c) { return c.params().coverage; })
         .def_property_readonly("seed", [](const ProceduralClouds& c) { return c.params().seed; });
+
+    m.def(
+        "cloud_type_preset",
+        [](const std::string& name) {
+            const CloudLayerParams p = CloudLayerParams::preset(cloud_type_from_name(name, "cloud_type"));
+            py::dict d;
+            d["cloud_type"] = std::string(cloud_type_name(p.cloud_type));
+            d["bottom_altitude_m"] = p.bottom_altitude_m;
+            d["top_altitude_m"] = p.top_altitude_m;
+            d["coverage"] = p.coverage;
+            d["density_per_m"] = p.density_per_m;
+            d["base_scale_m"] = p.base_scale_m;
+            d["detail_scale_m"] = p.detail_scale_m;
+            d["weather_scale_m"] = p.weather_scale_m;
+            d["detail_strength"] = p.detail_strength;
+            d["weather_variation"] = p.weather_variation;
+            return d;
+        },
+        py::arg("name"), "The layer parameters of a cloud type's preset, as a dict; ValueError lists the names.");
+    m.attr("CLOUD_TYPES") = py::cast(std::vector<std::string>(kCloudTypeNames.begin(), kCloudTypeNames.end()));
 
     py::class_<VdbClouds, CloudDensity, std::shared_ptr<VdbClouds>>(m, "VdbClouds", R"doc(
 Clouds from an OpenVDB file: the FloatGrid `grid` (default "density"), placed by

@@ -1,10 +1,12 @@
 // welkin.sun: the sun as seen from the observer (include/welkin/sun.hpp), so that a sun
 // lamp and the sky agree.
+#include <memory>
+
 #include <fmt/format.h>
 
 #include "bindings.hpp"
 #include "welkin/color/color.hpp"
-#include "welkin/atmosphere/sun.hpp"
+#include "welkin/atmosphere/sun_disc.hpp"
 
 namespace welkin::python {
 namespace {
@@ -13,7 +15,22 @@ namespace {
 struct Sun {
     SunRadiometry radiometry;
     std::vector<double> wavelengths_nm;
+    std::shared_ptr<const SunDisc> disc;  // the disc model (sun_disc.hpp)
 };
+
+// (rows, 6) read-only float64 array.
+py::array_t<double> coefficient_rows(const std::vector<std::array<double, 6>>& rows) {
+    py::array_t<double> a({py::ssize_t(rows.size()), py::ssize_t(6)});
+    auto v = a.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < rows.size(); ++i)
+        for (int k = 0; k < 6; ++k) v(py::ssize_t(i), k) = rows[i][std::size_t(k)];
+    a.attr("flags").attr("writeable") = false;
+    return a;
+}
+
+SunDisc::Rgb disc_rgb(const Sun& sun) {
+    return sun.disc->rgb(SpectrumToRgb(sun.wavelengths_nm, 0.0).matrix());
+}
 
 // Sunlight in linear Rec.709: the three-sample conversion with lambda power 0 (the
 // sun's own spectrum between the samples), see color.hpp.
@@ -42,6 +59,20 @@ Attributes (per wavelength of wavelengths_nm unless noted)
                          (CIE 1931, no 683 lm/W factor; lambda power 0 between
                          three samples) -- a Blender sun lamp's strength/colour
   wavelengths_nm         the wavelengths, nm
+
+The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
+  angular_radius_rad     the disc's angular radius alpha, rad
+  solid_angle_sr         2 pi (1 - cos alpha)
+  mean_radiance          direct_irradiance / (visible_fraction x solid_angle_sr),
+                         W m^-2 sr^-1 nm^-1: its integral over the visible disc
+                         is direct_irradiance
+  centre_radiance        radiance at the disc centre (limb-darkened peak)
+  limb_coefficients      (C, 6): Neckel & Labs 1994 a_0..a_5, radiance at angle
+                         rho from the centre = centre_radiance x sum_k a_k mu^k,
+                         mu = sqrt(1 - (sin rho / sin alpha)^2)
+  centre_radiance_rgb    (3,) the same in linear Rec.709, W m^-2 sr^-1
+  limb_coefficients_rgb  (3, 6) so that the RGB disc is exactly
+                         centre_radiance_rgb[j] x sum_k b[j, k] mu^k
 )doc")
         .def_property_readonly("transmittance",
                                [](const Sun& s) { return to_readonly_array(s.radiometry.transmittance); })
@@ -53,6 +84,24 @@ Attributes (per wavelength of wavelengths_nm unless noted)
         .def_property_readonly("direct_irradiance_rgb", &direct_irradiance_rgb)
         .def_property_readonly("wavelengths_nm",
                                [](const Sun& s) { return to_readonly_array(s.wavelengths_nm); })
+        .def_property_readonly("angular_radius_rad", [](const Sun& s) { return s.disc->angular_radius_rad(); })
+        .def_property_readonly("solid_angle_sr", [](const Sun& s) { return s.disc->solid_angle_sr(); })
+        .def_property_readonly("mean_radiance",
+                               [](const Sun& s) { return to_readonly_array(s.disc->mean_radiance()); })
+        .def_property_readonly("centre_radiance",
+                               [](const Sun& s) { return to_readonly_array(s.disc->centre_radiance()); })
+        .def_property_readonly("limb_coefficients",
+                               [](const Sun& s) { return coefficient_rows(s.disc->limb_coefficients()); })
+        .def_property_readonly("centre_radiance_rgb",
+                               [](const Sun& s) {
+                                   const auto c = disc_rgb(s).centre_radiance;
+                                   return to_readonly_array({c.begin(), c.end()});
+                               })
+        .def_property_readonly("limb_coefficients_rgb",
+                               [](const Sun& s) {
+                                   const auto b = disc_rgb(s).limb_coefficients;
+                                   return coefficient_rows({b.begin(), b.end()});
+                               })
         .def("__repr__", [](const Sun& s) {
             return fmt::format("<welkin.SunRadiometry transmittance=[{:.6g}] "
                                "direct_irradiance=[{:.6g}] W m^-2 nm^-1 visible_fraction={:.6g}>",
@@ -68,7 +117,8 @@ Attributes (per wavelength of wavelengths_nm unless noted)
             Sun sun;
             {
                 py::gil_scoped_release release;
-                sun.radiometry = sun_radiometry(atmosphere, observer);
+                sun.disc = std::make_shared<const SunDisc>(atmosphere, observer);
+                sun.radiometry = sun.disc->radiometry();
             }
             sun.wavelengths_nm = atmosphere.wavelengths_nm;
             return sun;

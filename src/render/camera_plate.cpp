@@ -20,7 +20,7 @@
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/sky/method.hpp"
-#include "welkin/atmosphere/sun.hpp"
+#include "welkin/atmosphere/sun_disc.hpp"
 
 namespace welkin {
 namespace {
@@ -86,16 +86,8 @@ struct CameraPlateRenderer::Impl {
         }
         method_name = method->name();
 
-        // The sun's disc (camera_plate.hpp): mean disc radiance E_sun T / Omega_sun, shaped
-        // by the limb darkening, on the samples of the disc above the horizon.
-        sun = sun_radiometry(atm, observer);
-        const double alpha = atm.sun_angular_radius_rad;
-        const double omega_sun = kTwoPi * (1.0 - std::cos(alpha));
-        for (double wl : atm.wavelengths_nm) ld.emplace_back(alpha, wl);
-        mean_radiance.assign(atm.channels(), 0.0);
-        if (sun.visible_fraction > 0.0)
-            for (std::size_t c = 0; c < atm.channels(); ++c)
-                mean_radiance[c] = sun.direct_irradiance[c] / sun.visible_fraction / omega_sun;
+        // The sun's disc (sun_disc.hpp), on the samples of the disc above the horizon.
+        sun = std::make_unique<SunDisc>(atm, observer);
 
         // The aerial perspective, fitted to the whole frame's depth.
         aerial = std::make_unique<AerialFrame>(scene.aerial_view(), depth, w, h);
@@ -119,9 +111,7 @@ struct CameraPlateRenderer::Impl {
     std::vector<float> depth;  // (h, w), the whole frame's
     std::unique_ptr<SkyMethod> method;
     std::string method_name;
-    SunRadiometry sun;
-    std::vector<LimbDarkening> ld;
-    std::vector<double> mean_radiance;
+    std::unique_ptr<SunDisc> sun;
     std::unique_ptr<AerialFrame> aerial;
 };
 
@@ -182,16 +172,18 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
 
     // The sun's disc on the band's sky pixels (Impl: its mean radiance and limb darkening).
     const std::size_t nc = atm.channels();
-    const double alpha = atm.sun_angular_radius_rad;
-    const glm::dvec3 s = f.observer.sun_direction;
+    const SunDisc& disc = *f.sun;
+    const double alpha = disc.angular_radius_rad();
+    const glm::dvec3 s = disc.direction();
     const CameraRays& rays = f.rays;
     const double R = f.R;
     tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const auto& rows) {
+        std::vector<double> spectrum_d(nc);
         std::vector<float> spectrum(nc);
         for (int j = rows.begin(); j != rows.end(); ++j)
             for (int i = 0; i < w; ++i) {
                 const std::size_t q = std::size_t(j - band.begin) * std::size_t(w) + std::size_t(i);
-                if (!std::isinf(plate.depth[q]) || f.sun.visible_fraction <= 0.0) continue;
+                if (!std::isinf(plate.depth[q]) || disc.radiometry().visible_fraction <= 0.0) continue;
                 const glm::dvec3 dir = rays.at_pixel(i, j).direction;
                 const double sx = (i + 0.5) / w, sy = (j + 0.5) / h;
                 // The pixel's footprint: the widest angle from its centre ray to a corner's.
@@ -203,7 +195,7 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
                                                                       .direction));
                 if (angle_between(dir, s) > alpha + 2.0 * foot) continue;
                 const int S = std::clamp(int(std::ceil(8.0 * 2.0 * foot / alpha)), 2, 64);
-                std::fill(spectrum.begin(), spectrum.end(), 0.0f);
+                std::fill(spectrum_d.begin(), spectrum_d.end(), 0.0);
                 bool any = false;
                 for (int b = 0; b < S; ++b)
                     for (int a = 0; a < S; ++a) {
@@ -214,11 +206,10 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
                         const glm::dvec3 rel = ray.origin - f.centre;
                         const double r = glm::length(rel);
                         if (ray_hits_ground(r, glm::dot(rel, ray.direction) / r, R)) continue;
-                        any = true;
-                        for (std::size_t c = 0; c < nc; ++c)
-                            spectrum[c] += float(f.mean_radiance[c] * f.ld[c](rho) / (S * S));
+                        any = disc.add_radiance(rho, 1.0 / (S * S), spectrum_d) || any;
                     }
                 if (!any) continue;
+                for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(spectrum_d[c]);
                 const std::array<double, 3> add = sun_to_rgb.convert(spectrum);
                 for (int c = 0; c < 3; ++c) plate.sky[q * 3 + c] += float(add[c] * scene.exposure);
             }

@@ -26,7 +26,7 @@
 #include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/base/math.hpp"
-#include "welkin/atmosphere/sun.hpp"
+#include "welkin/atmosphere/sun_disc.hpp"
 
 namespace welkin {
 namespace {
@@ -71,19 +71,6 @@ void advise_huge_pages(std::vector<float>& v, std::size_t n) {
 #endif
 }
 
-// Maps a sub-task's [0, 1] onto [lo, hi] of the host's progress.
-class SubProgress final : public Progress {
-public:
-    SubProgress(Progress* host, double lo, double hi) : host_(host), lo_(lo), hi_(hi) {}
-    bool report(double fraction) override {
-        return !host_ || host_->report(lo_ + (hi_ - lo_) * clamp01(fraction));
-    }
-
-private:
-    Progress* host_;
-    double lo_, hi_;
-};
-
 // Adds the sun's disc to `pixels` (height x width x channels, top row first): spectral
 // radiance per atmosphere wavelength in `disc` (the caller converts it), keyed by pixel.
 struct DiscSplat {
@@ -93,11 +80,12 @@ struct DiscSplat {
 
 // The disc, supersampled. For every pixel that the disc's cap can touch, a regular grid
 // of samples over the part of the pixel inside the cap's bounding box (u, v); a sample at
-// elevation e stands for the solid angle cos(e) dphi de of its cell. With rho the
-// sample's angle from the disc centre, the pixel gathers
-//     S(p, c) = sum over samples above the horizon of LD_c(rho) dOmega,
-// an estimate of the integral of the limb-darkening factor over the visible part of the
-// disc inside p. With V_c = sum_p S(p, c), the pixel's added radiance is
+// elevation e stands for the solid angle cos(e) dphi de of its cell. With L_c(rho) the
+// disc's radiance (sun_disc.hpp) at the sample's angle rho from the disc centre, the
+// pixel gathers
+//     S(p, c) = sum over samples above the horizon of L_c(rho) dOmega,
+// an estimate of the disc's irradiance from the visible part of the disc inside p. With
+// V_c = sum_p S(p, c), the pixel's added radiance is
 //     L(p, c) = direct_irradiance_c * S(p, c) / V_c / Omega_p,
 // so that sum_p L(p, c) Omega_p = direct_irradiance_c exactly, whatever the sampling
 // error of each S: the sampling only decides how that energy is shared between pixels,
@@ -105,10 +93,11 @@ struct DiscSplat {
 // at most alpha / 8, so the disc is resolved at any image size. If no sample lands on the
 // visible disc (a sliver at the horizon), its energy goes to the pixel of its centre.
 DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, int height,
-                         const SunRadiometry& sun) {
+                         const SunDisc& disc) {
     const std::size_t nc = atm.channels();
-    const double alpha = atm.sun_angular_radius_rad;
-    const glm::dvec3 s = obs.sun_direction;
+    const SunRadiometry& sun = disc.radiometry();
+    const double alpha = disc.angular_radius_rad();
+    const glm::dvec3 s = disc.direction();
     const double r = atm.bottom_radius_m + obs.altitude_m;
     const double e_s = std::asin(clamp_cosine(s.z));
     const double dv_angle = kPi / height;
@@ -136,9 +125,6 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
         }
     }
     const int nrows = j1 - j0 + 1;
-
-    std::vector<LimbDarkening> ld;
-    for (double w : atm.wavelengths_nm) ld.emplace_back(alpha, w);
 
     // Each pixel samples only its intersection with the box, on a grid of spacing at most
     // alpha / 8 in elevation and in azimuth (at the latitude where the intersection is
@@ -171,11 +157,7 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
                 for (int a = 0; a < ku; ++a) {
                     const double phi = kPi - kTwoPi * (u0 + (u1 - u0) * (a + 0.5) / ku);
                     const glm::dvec3 d{ce * std::cos(phi), ce * std::sin(phi), se};
-                    const double rho =
-                        std::atan2(glm::length(glm::cross(d, s)), glm::dot(d, s));
-                    if (rho > alpha) continue;
-                    const double w = ce * cell;
-                    for (std::size_t c = 0; c < nc; ++c) vis[c] += ld[c](rho) * w;
+                    disc.add_radiance(disc.angle_to(d), ce * cell, std::span<double>(vis, nc));
                 }
             }
         }
@@ -224,6 +206,186 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
     return out;
 }
 
+// The steps of render_equirect_sky, in order.
+
+// 1. The image: its size, channel names and zeroed pixels.
+SkyImage make_image(const Atmosphere& atm, int width, bool rgb) {
+    SkyImage image;
+    image.width = width;
+    image.height = width / 2;
+    if (rgb) {
+        image.channel_names = {"R", "G", "B"};
+    } else {
+        image.wavelengths_nm = atm.wavelengths_nm;
+        for (double w : atm.wavelengths_nm) image.channel_names.push_back(spectral_channel_name(w));
+    }
+    const std::size_t n = std::size_t(image.width) * std::size_t(image.height) * image.channels();
+    advise_huge_pages(image.pixels, n);
+    image.pixels.resize(n, 0.0f);
+    return image;
+}
+
+// 2. The pixel-centre directions, from per-column and per-row factors (equirect.cpp):
+// direction = (cos e cos phi, cos e sin phi, sin e).
+class PixelDirections {
+public:
+    PixelDirections(int width, int height)
+        : width_(width), cos_phi_(width), sin_phi_(width), cos_e_(height), sin_e_(height) {
+        for (int i = 0; i < width; ++i) {
+            const glm::dvec3 d = equirect_pixel_direction(i, height / 2, width, height);
+            const double l = std::hypot(d.x, d.y);
+            cos_phi_[i] = d.x / l;
+            sin_phi_[i] = d.y / l;
+        }
+        for (int j = 0; j < height; ++j) {
+            const glm::dvec3 d = equirect_pixel_direction(0, j, width, height);
+            sin_e_[j] = d.z;
+            cos_e_[j] = std::hypot(d.x, d.y);
+        }
+    }
+    // Rows [row0, row0 + rows) into out (rows x width), in parallel (first touch).
+    void fill(int row0, int rows, glm::dvec3* out) const {
+        tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& range) {
+            for (int jj = range.begin(); jj != range.end(); ++jj) {
+                const int j = row0 + jj;
+                glm::dvec3* row = out + std::size_t(jj) * std::size_t(width_);
+                for (int i = 0; i < width_; ++i)
+                    row[i] = {cos_e_[j] * cos_phi_[i], cos_e_[j] * sin_phi_[i], sin_e_[j]};
+            }
+        });
+    }
+
+private:
+    int width_;
+    std::vector<double> cos_phi_, sin_phi_, cos_e_, sin_e_;
+};
+
+// 3. The clouds of one band of rows: the march through the density, and the air between
+// the observer and each cloud (header, "Clouds").
+struct BandClouds {
+    CloudResult march;
+    AirAlongRays air;              // in front of the clouds
+    std::vector<float> radiance_rgb;  // RGB output: L_c in Rec.709
+};
+BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIllumination& light,
+                             const Atmosphere& atm, const Observer& obs,
+                             std::span<const glm::dvec3> dirs, int width, std::uint64_t first_pixel,
+                             const SpectrumToRgb* sky_to_rgb, Progress* progress) {
+    BandClouds b;
+    // The band's rows are whole image rows (`width` pixels each): the cloud pass is marched
+    // on a coarser grid and upsampled where smooth (render_clouds_grid).
+    b.march = render_clouds_grid(*options.clouds, light, glm::dvec3(0.0), dirs, width, options.cloud_lighting,
+                                 options.cloud_upsampling, progress, first_pixel);
+    std::vector<double> cloud_d(dirs.size(), 0.0);  // 0: no cloud, not marched
+    for (std::size_t q = 0; q < dirs.size(); ++q)
+        if (b.march.transmittance[q] < 1.0f) cloud_d[q] = double(b.march.depth_m[q]);
+    const glm::dvec3 origin(0.0);
+    b.air = aerial_along_rays(atm, light.luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},
+                              obs.sun_direction, std::span<const glm::dvec3>(&origin, 1), dirs, cloud_d,
+                              options.air_steps, 1.0, sky_to_rgb == nullptr);
+    if (sky_to_rgb) {
+        b.radiance_rgb.resize(dirs.size() * 3);
+        sky_to_rgb->convert(b.march.radiance, b.radiance_rgb);
+    }
+    return b;
+}
+
+// 4. One band's output pixels from its sky radiance `sky` (n x nc): the clouds composited
+// over it (header), then, for RGB output, the conversion into `dst` (n x 3; `dst` may be
+// `sky` itself when nc == 3: each pixel is read before it is written). Returns the index
+// of the first pixel with a non-finite radiance, or npos.
+constexpr std::size_t kNone = std::size_t(-1);
+std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::size_t nc,
+                                  const SpectrumToRgb* to_rgb, const BandClouds* clouds) {
+    const bool rgb = to_rgb != nullptr;
+    const std::vector<double> m = rgb ? to_rgb->matrix() : std::vector<double>{};
+    // RGB output: the passes' Welkin.Clouds.rgb, T(0, d_c) L_c + (1 - T_c) S(0, d_c) in
+    // Rec.709 (cloud_passes.cpp), added to the converted T_c L_sky.
+    const auto add_cloud_rgb = [&](std::size_t i, float T, float* d) {
+        const AirAlongRays& air = clouds->air;
+        for (int k = 0; k < 3; ++k)
+            d[k] += air.transmittance[i * 3 + k] * clouds->radiance_rgb[i * 3 + k] +
+                    (1.0f - T) * air.inscatter[i * 3 + k];
+    };
+    std::atomic<std::size_t> bad{kNone};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& range) {
+        std::array<double, 9> m3{};  // local copy: no reloads through possible aliases
+        if (rgb && nc == 3) std::copy(m.begin(), m.end(), m3.begin());
+        std::size_t first = kNone;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            float* s = &sky[i * nc];
+            // The sky behind the cloud: T_c L_sky; with spectral output also the cloud's
+            // own light through the air and the air in front of it (header).
+            const float T = clouds ? clouds->march.transmittance[i] : 1.0f;
+            if (clouds) {
+                if (rgb) {
+                    for (std::size_t c = 0; c < nc; ++c) s[c] *= T;
+                } else {
+                    const float* Ta = &clouds->air.transmittance_spectral[i * nc];
+                    const float* Sa = &clouds->air.inscatter_spectral[i * nc];
+                    const float* Lc = &clouds->march.radiance[i * nc];
+                    for (std::size_t c = 0; c < nc; ++c) s[c] = s[c] * T + Ta[c] * Lc[c] + (1.0f - T) * Sa[c];
+                }
+            }
+            bool finite = true;
+            for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(s[c]);
+            if (!finite && first == kNone) first = i;
+            if (!rgb) continue;
+            float* d = &dst[3 * i];
+            if (nc == 3) {  // possibly in place
+                const float a = s[0], b = s[1], c = s[2];
+                d[0] = float(m3[0] * a + m3[1] * b + m3[2] * c);
+                d[1] = float(m3[3] * a + m3[4] * b + m3[5] * c);
+                d[2] = float(m3[6] * a + m3[7] * b + m3[8] * c);
+            } else {
+                double r = 0.0, g = 0.0, b = 0.0;
+                for (std::size_t c = 0; c < nc; ++c) {
+                    r += m[c] * s[c];
+                    g += m[nc + c] * s[c];
+                    b += m[2 * nc + c] * s[c];
+                }
+                d[0] = float(r), d[1] = float(g), d[2] = float(b);
+            }
+            if (clouds) add_cloud_rgb(i, T, d);
+        }
+        std::size_t cur = bad.load();
+        while (first < cur && !bad.compare_exchange_weak(cur, first)) {
+        }
+    });
+    return bad.load();
+}
+
+// 5. The sun's disc (sun_disc.hpp, splat_sun_disc), dimmed by the clouds' transmittance of
+// its pixels when there are clouds.
+void add_sun_disc(SkyImage& image, const Atmosphere& atm, const Observer& obs,
+                  const SpectrumToRgb* sun_to_rgb, const std::vector<float>& cloud_transmittance) {
+    const SunDisc sun(atm, obs);
+    if (!(sun.radiometry().visible_fraction > 0.0)) return;
+    const std::size_t nc = atm.channels(), out_nc = image.channels();
+    const DiscSplat disc = splat_sun_disc(atm, obs, image.width, image.height, sun);
+    std::vector<float> spectrum(nc);
+    for (std::size_t k = 0; k < disc.pixel.size(); ++k) {
+        float* dst = image.pixels.data() + disc.pixel[k] * out_nc;
+        const float T = cloud_transmittance.empty() ? 1.0f : cloud_transmittance[disc.pixel[k]];
+        for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(disc.radiance[k * nc + c]) * T;
+        if (sun_to_rgb) {
+            const std::array<double, 3> add = sun_to_rgb->convert(spectrum);
+            for (int c = 0; c < 3; ++c) dst[c] = float(double(dst[c]) + add[c]);
+        } else {
+            for (std::size_t c = 0; c < nc; ++c) dst[c] += spectrum[c];
+        }
+    }
+}
+
+// 6. The exposure, once, at the end.
+void apply_exposure(std::vector<float>& pixels, double exposure) {
+    if (exposure == 1.0) return;
+    const float e = float(exposure);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pixels.size(), 1 << 16), [&](const auto& range) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) pixels[k] *= e;
+    });
+}
+
 }  // namespace
 
 void SkyImageOptions::validate() const {
@@ -258,34 +420,10 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         sun_to_rgb.emplace(atm.wavelengths_nm, 0.0);
     }
 
-    SkyImage image;
-    image.width = width;
-    image.height = width / 2;
+    SkyImage image = make_image(atm, width, rgb);
     const int W = image.width, H = image.height;
-    if (rgb) {
-        image.channel_names = {"R", "G", "B"};
-    } else {
-        image.wavelengths_nm = atm.wavelengths_nm;
-        for (double w : atm.wavelengths_nm) image.channel_names.push_back(spectral_channel_name(w));
-    }
     const std::size_t out_nc = image.channels();
-    advise_huge_pages(image.pixels, std::size_t(W) * std::size_t(H) * out_nc);
-    image.pixels.resize(std::size_t(W) * std::size_t(H) * out_nc, 0.0f);
-
-    // Per-column and per-row factors of the pixel-centre directions (equirect.cpp):
-    // direction = (cos e cos phi, cos e sin phi, sin e).
-    std::vector<double> cos_phi(W), sin_phi(W), cos_e(H), sin_e(H);
-    for (int i = 0; i < W; ++i) {
-        const glm::dvec3 d = equirect_pixel_direction(i, H / 2, W, H);
-        const double l = std::hypot(d.x, d.y);
-        cos_phi[i] = d.x / l;
-        sin_phi[i] = d.y / l;
-    }
-    for (int j = 0; j < H; ++j) {
-        const glm::dvec3 d = equirect_pixel_direction(0, j, W, H);
-        sin_e[j] = d.z;
-        cos_e[j] = std::hypot(d.x, d.y);
-    }
+    const PixelDirections pixel_directions(W, H);
 
     // Sky radiance, in bands of rows (one band for all but very large images). Where the
     // method's output has the image's layout (spectral output, or three wavelengths to
@@ -301,7 +439,6 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
     const std::size_t band_pixels = std::size_t(band_rows) * std::size_t(W);
     const auto directions = huge_buffer<glm::dvec3>(band_pixels);
     const auto scratch = huge_buffer<float>(in_place ? 0 : band_pixels * nc);
-    const std::vector<double>& m = rgb ? sky_to_rgb->matrix() : std::vector<double>{};
     // Clouds: the illumination is built once; the cloud transmittance of every pixel is
     // kept for the sun's disc.
     std::unique_ptr<AtmosphereIllumination> cloud_light;
@@ -314,98 +451,25 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         const int row0 = band * band_rows;
         const int rows = std::min(band_rows, H - row0);
         const std::size_t n = std::size_t(rows) * std::size_t(W);
-        tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& range) {
-            for (int jj = range.begin(); jj != range.end(); ++jj) {
-                const int j = row0 + jj;
-                glm::dvec3* row = &directions[std::size_t(jj) * std::size_t(W)];
-                for (int i = 0; i < W; ++i)
-                    row[i] = {cos_e[j] * cos_phi[i], cos_e[j] * sin_phi[i], sin_e[j]};
-            }
-        });
-        SubProgress sub(progress, double(band) / bands, double(band + 1) / bands);
+        pixel_directions.fill(row0, rows, directions.get());
+        const std::span<const glm::dvec3> dirs(directions.get(), n);
+        ProgressStage stage(progress, double(band) / bands, double(band + 1) / bands);
+        Progress* band_progress = progress ? &stage : nullptr;
         float* dst = image.pixels.data() + std::size_t(row0) * std::size_t(W) * out_nc;
-        const std::span<float> out(in_place ? dst : scratch.get(), n * nc);
-        method.radiance(atm, obs, std::span<const glm::dvec3>(directions.get(), n), out, {},
-                        progress ? &sub : nullptr);
-        CloudResult clouds;
-        AirAlongRays air;          // in front of the clouds (header)
-        std::vector<float> cloud_rgb;  // RGB output: L_c in Rec.709
+        float* sky = in_place ? dst : scratch.get();
+        method.radiance(atm, obs, dirs, std::span<float>(sky, n * nc), {}, band_progress);
+        std::optional<BandClouds> clouds;
         if (options.clouds) {
-            const std::span<const glm::dvec3> dirs(directions.get(), n);
-            clouds = render_clouds(*options.clouds, *cloud_light, glm::dvec3(0.0), dirs, options.cloud_lighting,
-                                   progress ? &sub : nullptr);
-            std::copy(clouds.transmittance.begin(), clouds.transmittance.end(),
+            clouds = march_band_clouds(options, *cloud_light, atm, obs, dirs, W,
+                                       std::uint64_t(row0) * std::uint64_t(W), rgb ? &*sky_to_rgb : nullptr,
+                                       band_progress);
+            std::copy(clouds->march.transmittance.begin(), clouds->march.transmittance.end(),
                       cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
-            std::vector<double> cloud_d(n, 0.0);  // 0: no cloud, not marched
-            for (std::size_t q = 0; q < n; ++q)
-                if (clouds.transmittance[q] < 1.0f) cloud_d[q] = double(clouds.depth_m[q]);
-            const glm::dvec3 origin(0.0);
-            air = aerial_along_rays(atm, cloud_light->luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},
-                                    obs.sun_direction, std::span<const glm::dvec3>(&origin, 1), dirs, cloud_d,
-                                    options.air_steps, 1.0, !rgb);
-            if (rgb) {
-                cloud_rgb.resize(n * 3);
-                sky_to_rgb->convert(clouds.radiance, cloud_rgb);
-            }
         }
-        const bool with_clouds = bool(options.clouds);
-
-        // RGB output: the passes' Welkin.Clouds.rgb, T(0, d_c) L_c + (1 - T_c) S(0, d_c)
-        // in Rec.709 (cloud_passes.cpp), added to the converted T_c L_sky.
-        const auto add_cloud_rgb = [&](std::size_t i, float T, float* d) {
-            for (int k = 0; k < 3; ++k)
-                d[k] += air.transmittance[i * 3 + k] * cloud_rgb[i * 3 + k] + (1.0f - T) * air.inscatter[i * 3 + k];
-        };
-        // One pass: find the first non-finite value, and convert to RGB.
-        std::atomic<std::size_t> bad{std::size_t(-1)};
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& range) {
-            std::array<double, 9> m3{};  // local copy: no reloads through possible aliases
-            if (rgb && nc == 3) std::copy(m.begin(), m.end(), m3.begin());
-            std::size_t first = std::size_t(-1);
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                float* s = &out[i * nc];
-                // The sky behind the cloud: T_c L_sky; with spectral output also the cloud's
-                // own light through the air and the air in front of it (header).
-                const float T = with_clouds ? clouds.transmittance[i] : 1.0f;
-                if (with_clouds) {
-                    if (rgb) {
-                        for (std::size_t c = 0; c < nc; ++c) s[c] *= T;
-                    } else {
-                        const float* Ta = &air.transmittance_spectral[i * nc];
-                        const float* Sa = &air.inscatter_spectral[i * nc];
-                        for (std::size_t c = 0; c < nc; ++c)
-                            s[c] = s[c] * T + Ta[c] * clouds.radiance[i * nc + c] + (1.0f - T) * Sa[c];
-                    }
-                }
-                bool finite = true;
-                for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(s[c]);
-                if (!finite && first == std::size_t(-1)) first = i;
-                if (!rgb) continue;
-                if (nc == 3) {  // in place
-                    const float a = s[0], b = s[1], c = s[2];
-                    float* d = &dst[3 * i];
-                    d[0] = float(m3[0] * a + m3[1] * b + m3[2] * c);
-                    d[1] = float(m3[3] * a + m3[4] * b + m3[5] * c);
-                    d[2] = float(m3[6] * a + m3[7] * b + m3[8] * c);
-                    if (with_clouds) add_cloud_rgb(i, T, d);
-                } else {
-                    double r = 0.0, g = 0.0, b = 0.0;
-                    for (std::size_t c = 0; c < nc; ++c) {
-                        r += m[c] * s[c];
-                        g += m[nc + c] * s[c];
-                        b += m[2 * nc + c] * s[c];
-                    }
-                    float* d = &dst[3 * i];
-                    d[0] = float(r), d[1] = float(g), d[2] = float(b);
-                    if (with_clouds) add_cloud_rgb(i, T, d);
-                }
-            }
-            std::size_t cur = bad.load();
-            while (first < cur && !bad.compare_exchange_weak(cur, first)) {
-            }
-        });
-        if (bad.load() != std::size_t(-1)) {
-            const glm::dvec3 d = directions[bad.load()];
+        const std::size_t bad = composite_and_convert(sky, dst, n, nc, rgb ? &*sky_to_rgb : nullptr,
+                                                      clouds ? &*clouds : nullptr);
+        if (bad != kNone) {
+            const glm::dvec3 d = directions[bad];
             throw std::runtime_error(fmt::format(
                 "sky method '{}' returned a non-finite radiance for direction "
                 "({:.6f}, {:.6f}, {:.6f})",
@@ -413,34 +477,9 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
         }
     }
 
-    if (options.sun_disc) {
-        const SunRadiometry sun = sun_radiometry(atm, obs);
-        if (sun.visible_fraction > 0.0) {
-            const DiscSplat disc = splat_sun_disc(atm, obs, W, H, sun);
-            std::vector<float> spectrum(nc);
-            for (std::size_t k = 0; k < disc.pixel.size(); ++k) {
-                float* dst = image.pixels.data() + disc.pixel[k] * out_nc;
-                const float T = cloud_transmittance.empty() ? 1.0f : cloud_transmittance[disc.pixel[k]];
-                for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(disc.radiance[k * nc + c]) * T;
-                if (rgb) {
-                    const std::array<double, 3> add = sun_to_rgb->convert(spectrum);
-                    for (int c = 0; c < 3; ++c) dst[c] = float(double(dst[c]) + add[c]);
-                } else {
-                    for (std::size_t c = 0; c < nc; ++c) dst[c] += spectrum[c];
-                }
-            }
-        }
-    }
-
+    if (options.sun_disc) add_sun_disc(image, atm, obs, rgb ? &*sun_to_rgb : nullptr, cloud_transmittance);
     image.cloud_transmittance = std::move(cloud_transmittance);
-    if (options.exposure != 1.0) {
-        const float e = float(options.exposure);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.pixels.size(), 1 << 16),
-                          [&](const auto& range) {
-                              for (std::size_t k = range.begin(); k != range.end(); ++k)
-                                  image.pixels[k] *= e;
-                          });
-    }
+    apply_exposure(image.pixels, options.exposure);
     if (progress) progress->report(1.0);
     return image;
 }

@@ -112,24 +112,26 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         for (std::size_t i = 0; i < layers.size(); ++i) {
             const json& l = layers[i];
             const std::string p = fmt::format("clouds.layers[{}]", i);
-            json_check_keys(l, p, {"bottom_altitude_m", "top_altitude_m", "coverage", "cloud_type", "density_per_m",
+            json_check_keys(l, p, {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "density_per_m",
                               "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
-                              "weather_variation", "type_variation", "wind_offset_m", "seed"});
+                              "weather_variation", "wind_offset_m", "seed"});
+            // The type's preset first (procedural.hpp), then the keys given override it.
             CloudLayerParams c;
+            if (l.contains("cloud_type"))
+                c = CloudLayerParams::preset(cloud_type_from_name(string(l["cloud_type"], p + ".cloud_type"),
+                                                                  p + ".cloud_type"));
             const auto get = [&](const char* key, double& v) {
                 if (l.contains(key)) v = json_number(l[key], p + "." + key);
             };
             get("bottom_altitude_m", c.bottom_altitude_m);
             get("top_altitude_m", c.top_altitude_m);
             get("coverage", c.coverage);
-            get("cloud_type", c.cloud_type);
             get("density_per_m", c.density_per_m);
             get("base_scale_m", c.base_scale_m);
             get("detail_scale_m", c.detail_scale_m);
             get("weather_scale_m", c.weather_scale_m);
             get("detail_strength", c.detail_strength);
             get("weather_variation", c.weather_variation);
-            get("type_variation", c.type_variation);
             if (l.contains("wind_offset_m")) {
                 const json& w = l["wind_offset_m"];
                 if (!w.is_array() || w.size() != 2)
@@ -180,7 +182,8 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         json_check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m",
                                            "multiple_scattering", "octaves",
                                            "octave_extinction", "octave_contribution", "octave_eccentricity",
-                                           "min_transmittance", "seed", "jitter", "max_distance_m"});
+                                           "min_transmittance", "seed", "jitter", "max_distance_m",
+                                           "shadow_grid_spacing_m"});
         CloudLightingOptions& o = out.lighting;
         const auto geti = [&](const char* key, int& v) {
             if (li.contains(key)) v = integer(li[key], p + key);
@@ -210,6 +213,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         if (li.contains("seed")) o.seed = unsigned_integer(li["seed"], p + "seed");
         if (li.contains("jitter")) o.jitter = boolean(li["jitter"], p + "jitter");
         getd("max_distance_m", o.max_distance_m);
+        getd("shadow_grid_spacing_m", o.shadow_grid_spacing_m);
     }
     return out;
 }
@@ -218,17 +222,16 @@ ordered_json clouds_json(const SceneClouds& c) {
     ordered_json j;
     ordered_json layers = ordered_json::array();
     for (const CloudLayerParams& l : c.layers)
-        layers.push_back({{"bottom_altitude_m", l.bottom_altitude_m},
+        layers.push_back({{"cloud_type", std::string(cloud_type_name(l.cloud_type))},
+                          {"bottom_altitude_m", l.bottom_altitude_m},
                           {"top_altitude_m", l.top_altitude_m},
                           {"coverage", l.coverage},
-                          {"cloud_type", l.cloud_type},
                           {"density_per_m", l.density_per_m},
                           {"base_scale_m", l.base_scale_m},
                           {"detail_scale_m", l.detail_scale_m},
                           {"weather_scale_m", l.weather_scale_m},
                           {"detail_strength", l.detail_strength},
                           {"weather_variation", l.weather_variation},
-                          {"type_variation", l.type_variation},
                           {"wind_offset_m", {l.wind_offset_m.x, l.wind_offset_m.y}},
                           {"seed", l.seed}});
     j["layers"] = layers;
@@ -261,7 +264,8 @@ ordered_json clouds_json(const SceneClouds& c) {
                      {"min_transmittance", o.min_transmittance},
                      {"seed", o.seed},
                      {"jitter", o.jitter},
-                     {"max_distance_m", o.max_distance_m}};
+                     {"max_distance_m", o.max_distance_m},
+                     {"shadow_grid_spacing_m", o.shadow_grid_spacing_m}};
     return j;
 }
 

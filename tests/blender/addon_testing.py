@@ -89,6 +89,12 @@ class _AliasFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         pass
 
 
+def user_repo_index():
+    """The index of the "user_default" extension repository in the preferences."""
+    repos = bpy.context.preferences.extensions.repos
+    return next(i for i, r in enumerate(repos) if r.module == "user_default")
+
+
 def _install_extension():
     prefs = bpy.context.preferences
     prefs.use_preferences_save = False

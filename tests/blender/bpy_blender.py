@@ -6,7 +6,7 @@ scripts/test.sh runs each headless test under a bpy venv as
 and the tests' own `blender -b scene.blend --addons welkin -E WELKIN -o ... -f 1` calls go
 through addon_testing.blender_command(), which names this script there. The arguments are
 taken in order as Blender takes them: a .blend file opens, -E/-o/-F/-x/-s/-e/-j set the
-scene, -f renders frames (write_still), -a the animation, --addons enables add-ons (a name
+scene, -f renders frames (each as a one-frame animation, as Blender does), -a the animation, --addons enables add-ons (a name
 that is not a legacy add-on is looked up among the installed extensions, bl_ext.<repo>.),
 --python runs a script (its exceptions exit with --python-exit-code). Enough for the
 project's tests, not a full emulation: unknown options fail loudly.
@@ -47,10 +47,18 @@ def enable_addon(name):
 
 
 def render_frames(frames):
+    """-f: Blender renders each frame as an animation of that one frame (RE_RenderAnim from
+    the frame to itself): the output path's #### becomes the frame and the animation
+    handlers run. Here the scene's frame range is set to the frame for the render and put
+    back after it."""
     scene = bpy.context.scene
-    for frame in frames:
-        scene.frame_set(frame)
-        bpy.ops.render.render(write_still=True)
+    start, end = scene.frame_start, scene.frame_end
+    try:
+        for frame in frames:
+            scene.frame_start = scene.frame_end = frame
+            bpy.ops.render.render(animation=True)
+    finally:
+        scene.frame_start, scene.frame_end = start, end
 
 
 def frame_list(text):
@@ -99,7 +107,11 @@ def main(argv):
         elif arg in ("-o", "--render-output"):
             scene.render.filepath = value
         elif arg in ("-F", "--render-format"):
-            scene.render.image_settings.file_format = value
+            settings = scene.render.image_settings
+            if hasattr(settings, "media_type"):  # 5.0: the media type first, as -F does
+                settings.media_type = {'OPEN_EXR_MULTILAYER': 'MULTI_LAYER_IMAGE',
+                                       'FFMPEG': 'VIDEO'}.get(value, 'IMAGE')
+            settings.file_format = value
         elif arg in ("-x", "--use-extension"):
             scene.render.use_file_extension = bool(int(value))
         elif arg in ("-s", "--frame-start"):

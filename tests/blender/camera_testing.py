@@ -12,7 +12,9 @@ def camera_json(ob):
          "ortho_scale": cam.ortho_scale, "shift_x": cam.shift_x, "shift_y": cam.shift_y,
          "clip_start_m": cam.clip_start, "clip_end_m": cam.clip_end}
     if cam.type == "PANO":
-        c = cam.cycles
+        # On the camera from 4.0, on Cycles' camera settings in 3.x (as compat.camera_panorama;
+        # not imported here, so that tests without the add-on can use this).
+        c = cam if hasattr(cam, "panorama_type") else cam.cycles
         d.update(panorama_type=c.panorama_type,
                  latitude_min_deg=math.degrees(c.latitude_min),
                  latitude_max_deg=math.degrees(c.latitude_max),

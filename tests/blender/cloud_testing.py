@@ -1,10 +1,15 @@
 """Cloud scenes for the headless Blender tests: a VDB sequence written with pyopenvdb
-(python3-openvdb, importable in Blender's system Python), a Volume object showing it, and
-a small procedural layer."""
+(python3-openvdb: in Blender 3.4's system Python, or Debian's python3 in a subprocess for
+PyPI's bpy, bench/vdb_dense.py), a Volume object showing it, and a small procedural
+layer."""
 import pathlib
+import sys
 
 import bpy
 import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "bench"))
+from vdb_dense import write_density  # noqa: E402
 
 
 def write_vdb_sequence(directory, stem="cloud", frames=(1, 2, 3), size=16, voxel_m=50.0,
@@ -12,7 +17,6 @@ def write_vdb_sequence(directory, stem="cloud", frames=(1, 2, 3), size=16, voxel
     """Writes <stem>.NNNN.vdb for each frame: a ball of density (FloatGrid "density") of
     `size` voxels of `voxel_m` metres, centred on the grid's origin, its value growing with
     the frame (frame f: f x value, default 1), so frames differ. Returns the paths."""
-    import pyopenvdb as vdb
     directory = pathlib.Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     i = np.arange(size, dtype=np.float64) - (size - 1) / 2.0
@@ -20,13 +24,9 @@ def write_vdb_sequence(directory, stem="cloud", frames=(1, 2, 3), size=16, voxel
     ball = np.clip(1.0 - np.sqrt(x * x + y * y + z * z) / (size / 2.0), 0.0, 1.0)
     paths = []
     for f in frames:
-        g = vdb.FloatGrid()
-        g.name = "density"
-        g.copyFromArray((ball * f * (value or 1.0)).astype(np.float32),
-                        ijk=(-(size // 2),) * 3)
-        g.transform = vdb.createLinearTransform(voxelSize=voxel_m)
         path = directory / f"{stem}.{f:04d}.vdb"
-        vdb.write(str(path), grids=[g])
+        write_density(path, (ball * f * (value or 1.0)).astype(np.float32),
+                      (-(size // 2),) * 3, voxel_m)
         paths.append(path)
     return paths
 

@@ -69,7 +69,7 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-command = [bpy.app.binary_path, "-b", "--factory-startup", str(blend), "--addons", "welkin",
+command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin",
            "-s", "1", "-e", "19", "-j", "9", "-a"]
 print("running:", " ".join(command))
 run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)

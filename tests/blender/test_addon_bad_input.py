@@ -3,6 +3,7 @@ several sun lamps, the sun below the horizon, the camera below the ground. Each 
 clear message (an operator report, which bpy.ops raises as RuntimeError in scripts; a
 warning where the sky can still be made), never a traceback from the add-on, and no user
 data is lost."""
+import importlib
 import math
 import os
 import sys
@@ -42,6 +43,34 @@ def broken_zip(name, rename_module_to=None):
     return path
 
 
+def broken_extension(name, python_tag=None):
+    """The Extension zip without its wheel (python_tag None), or with the wheel relabelled
+    as built for another Python (its file name, tags and module file)."""
+    good = T.extension_zip()
+    path = T.TMP / name
+    with zipfile.ZipFile(good) as src, zipfile.ZipFile(path, "w") as dst:
+        wheel_name = next(i.filename for i in src.infolist() if i.filename.endswith(".whl"))
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == wheel_name:
+                if python_tag is None:
+                    continue
+                renamed = wheel_name.replace("cp311-cp311", f"{python_tag}-{python_tag}")
+                dst.writestr(renamed, data)
+            elif item.filename.endswith("blender_manifest.toml"):
+                text = data.decode()
+                lines = text.splitlines(keepends=True)
+                if python_tag is None:
+                    lines = [line for line in lines if not line.startswith("wheels")]
+                else:
+                    lines = [line.replace("cp311-cp311", f"{python_tag}-{python_tag}")
+                             for line in lines]
+                dst.writestr(item, "".join(lines))
+            else:
+                dst.writestr(item, data)
+    return path
+
+
 def install(zip_path):
     bpy.ops.preferences.addon_install(filepath=str(zip_path), target='PREFS', overwrite=True)
     bpy.ops.preferences.addon_enable(module="welkin")
@@ -53,33 +82,66 @@ def uninstall():
         del sys.modules[name]
 
 
-# --- the module missing, then built for another Python: the add-on registers, says why.
-T._drop_compiled_module_from_path()
-prefs = bpy.context.preferences
-prefs.use_preferences_save = False
-(T.scripts_dir() / "addons").mkdir(parents=True, exist_ok=True)
-prefs.filepaths.script_directory = str(T.scripts_dir())
-bpy.utils.refresh_script_paths()
-for zip_name, rename, fragment in (
-        ("no_module.zip", None, "compiled module is missing"),
-        ("other_python.zip", "welkin.cpython-310-x86_64-linux-gnu.so", "built for another Python")):
-    install(broken_zip(zip_name, rename))
-    T.check(addon_utils.check("welkin")[1], f"{zip_name}: the add-on did not register")
-    T.check(hasattr(bpy.types, "WORLD_PT_welkin_sky"), f"{zip_name}: no panel registered")
-    from welkin import native
+def check_registered_without_module(label, fragment, hint):
+    T.check(hasattr(bpy.types, "WORLD_PT_welkin_sky"), f"{label}: no panel registered")
+    native = importlib.import_module(package + ".native")
     T.check(native.module() is None and fragment in native.message(),
-            f"{zip_name}: message {native.message()!r} lacks {fragment!r}")
-    T.check("build_addon.sh" in native.message(), "the message does not say how to fix it")
+            f"{label}: message {native.message()!r} lacks {fragment!r}")
+    T.check(hint in native.message() and "Python 3.11" in native.message(),
+            f"{label}: the message does not say which Blender, Python and file to use")
     scene, _sun = T.new_scene()
     shown = T.draw_panel(scene)
     shown_text = " ".join(text for kind, text in shown if kind == "label")
-    T.check(fragment in shown_text and "build_addon.sh" in shown_text,
-            f"{zip_name}: the panel does not show the message: {shown}")
+    T.check(fragment in shown_text and hint in shown_text,
+            f"{label}: the panel does not show the message: {shown}")
     T.check(not any(kind == "operator" for kind, _ in shown), "operators offered without module")
     nodes_before = len(scene.world.node_tree.nodes)
     expect_error(bpy.ops.welkin.update_sky, fragment)
     T.check(len(scene.world.node_tree.nodes) == nodes_before, "world changed without module")
-    uninstall()
+
+
+# --- the module missing, then built for another Python: the add-on registers, says why.
+T._drop_compiled_module_from_path()
+prefs = bpy.context.preferences
+prefs.use_preferences_save = False
+if not T.EXTENSION:
+    package = "welkin"
+    (T.scripts_dir() / "addons").mkdir(parents=True, exist_ok=True)
+    prefs.filepaths.script_directory = str(T.scripts_dir())
+    bpy.utils.refresh_script_paths()
+    for zip_name, rename, fragment in (
+            ("no_module.zip", None, "compiled module is missing"),
+            ("other_python.zip", "welkin.cpython-310-x86_64-linux-gnu.so",
+             "built for another Python")):
+        install(broken_zip(zip_name, rename))
+        T.check(addon_utils.check("welkin")[1], f"{zip_name}: the add-on did not register")
+        check_registered_without_module(zip_name, fragment, "build_addon.sh")
+        uninstall()
+else:
+    # Blender 4.2+: the Extension without its wheel registers and says why; one whose
+    # wheel is for another Python is refused by Blender's installer, naming the versions.
+    package = T.EXTENSION_PACKAGE
+    result = bpy.ops.extensions.package_install_files(
+        filepath=str(broken_extension("no_wheel.zip")), repo="user_default",
+        enable_on_install=True)
+    T.check(result == {'FINISHED'}, f"the Extension without its wheel: {result}")
+    T.check(addon_utils.check(package)[1], "the Extension without its wheel did not register")
+    check_registered_without_module("no wheel", "compiled module is missing",
+                                    "build_extension.sh")
+    bpy.ops.extensions.package_uninstall(repo_index=T.user_repo_index(), pkg_id="welkin")
+    for name in [n for n in sys.modules if n == package or n.startswith(package + ".")]:
+        del sys.modules[name]
+    try:
+        result = bpy.ops.extensions.package_install_files(
+            filepath=str(broken_extension("cp310.zip", "cp310")), repo="user_default",
+            enable_on_install=True)
+        refusal = None if result == {'FINISHED'} else str(result)
+    except RuntimeError as error:
+        refusal = str(error)
+    T.check(refusal is not None and "Python" in refusal and "3.10" in refusal,
+            f"a wheel for Python 3.10 was not refused with a message: {refusal!r}")
+    T.check(not addon_utils.check(package)[1], "the cp310 Extension was enabled")
+    print(f"refused by Blender: {refusal.strip()}")
 
 # --- the real add-on.
 addon, welkin = T.install_addon()
@@ -155,5 +217,29 @@ bpy.data.objects.remove(sun)
 scene.frame_set(2)
 T.check("no sun lamp" in settings.status, f"handler status: {settings.status!r}")
 print("handler with no sun lamp: logged, no exception")
+
+# An unsupported Blender (older than 3.4): register() prints one line saying which Blender
+# Welkin needs and registers nothing (no traceback). bpy.app is swapped for the call.
+import contextlib  # noqa: E402
+import io  # noqa: E402
+import types  # noqa: E402
+
+real_app = bpy.app
+printed = io.StringIO()
+addon.unregister()
+T.check(not hasattr(bpy.types, "WORLD_PT_welkin_sky"), "unregister left the panel")
+try:
+    bpy.app = types.SimpleNamespace(version=(3, 3, 0), version_string="3.3.0")
+    with contextlib.redirect_stdout(printed):
+        addon.register()
+finally:
+    bpy.app = real_app
+lines = printed.getvalue().strip().splitlines()
+T.check(len(lines) == 1 and "3.3.0" in lines[0] and "3.4" in lines[0]
+        and "not supported" in lines[0], f"unsupported Blender: printed {lines!r}")
+T.check(not hasattr(bpy.types, "WORLD_PT_welkin_sky"), "registered on an unsupported Blender")
+print(f"unsupported Blender: {lines[0]}")
+addon.register()
+T.check(hasattr(bpy.types, "WORLD_PT_welkin_sky"), "the add-on did not register again")
 
 T.done("test_addon_bad_input")

@@ -23,6 +23,12 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import addon_testing as T  # noqa: E402
+
+if T.is_module_bpy():
+    T.skip("test_addon_farm", "a failed frame stops a command-line render through the Blender "
+           "binary's own SIGINT handler (creator_signals), which Blender as a Python module "
+           "(PyPI's bpy) does not install: there Python owns SIGINT and farm.py raises nothing")
+
 import cloud_testing as C  # noqa: E402
 
 import bpy  # noqa: E402
@@ -36,7 +42,7 @@ def render(blend, last_frame):
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
     env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-    command = [bpy.app.binary_path, "-b", "--factory-startup", str(blend), "--addons",
+    command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons",
                "welkin", "-s", "1", "-e", str(last_frame), "-a"]
     print("running:", " ".join(command))
     run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=400)

@@ -85,7 +85,6 @@ scene_b.world = world_b
 T.check(world_b.welkin.sky_image == world_a.welkin.sky_image,
         "World.copy() no longer shares the image pointers: this test tests nothing")
 pixels_a = T.world_pixels(world_a.welkin.sky_image).copy()
-disc_a = T.world_pixels(world_a.welkin.disc_image).copy()
 def update_scene(s):
     # Scripts run here without a window: update_sky takes the scene from the context.
     from welkin.blender import update
@@ -95,13 +94,10 @@ def update_scene(s):
 
 
 update_scene(scene_b)
-T.check(world_b.welkin.sky_image != world_a.welkin.sky_image
-        and world_b.welkin.disc_image != world_a.welkin.disc_image,
-        "the copy still shows the original's images")
+T.check(world_b.welkin.sky_image != world_a.welkin.sky_image,
+        "the copy still shows the original's image")
 np.testing.assert_array_equal(T.world_pixels(world_a.welkin.sky_image), pixels_a,
                               err_msg="the copy's update rewrote the original's sky")
-np.testing.assert_array_equal(T.world_pixels(world_a.welkin.disc_image), disc_a,
-                              err_msg="the copy's update rewrote the original's disc")
 s_b = tuple(sun_b.matrix_world.col[2][:3])
 ref_b = welkin.sky_image(atm, 0.0, s_b, 256, "auto", sun_disc=False)
 np.testing.assert_allclose(T.world_pixels(world_b.welkin.sky_image), ref_b, rtol=1e-6,
@@ -153,7 +149,7 @@ print("(1) a copied world gets its own images; neither world rewrites the other'
 for s in (scene_b, scene_c):
     bpy.data.scenes.remove(s)
 for w in (world_b, world_c):  # the copies and their images go (not this item's business)
-    doomed = [i for i in (w.welkin.sky_image, w.welkin.disc_image) if i is not None]
+    doomed = [i for i in (w.welkin.sky_image,) if i is not None]
     bpy.data.worlds.remove(w)
     for i in doomed:
         bpy.data.images.remove(i)
@@ -164,7 +160,7 @@ lib_world.use_fake_user = True
 scene.world = lib_world
 bpy.ops.welkin.update_sky()  # a library world that has a Welkin sky of its own
 lib_sky = T.world_pixels(lib_world.welkin.sky_image).copy()
-lib_images = [lib_world.welkin.sky_image, lib_world.welkin.disc_image]
+lib_images = [lib_world.welkin.sky_image]
 scene.world = world_a
 bpy.data.libraries.write(str(lib_path), {lib_world}, fake_user=True)
 bpy.data.worlds.remove(lib_world)
@@ -207,7 +203,7 @@ T.check(scene.world.library is not None and scene.world.name == "Library World",
         "the saved file does not link the library's world")
 orphans = [i.name for i in bpy.data.images if i.users == 0 or
            (i.library is None and i.get("welkin_role") and
-            not any(i in (w.welkin.sky_image, w.welkin.disc_image) for w in bpy.data.worlds))]
+            not any(i == w.welkin.sky_image for w in bpy.data.worlds))]
 T.check(not orphans, f"orphan images after save and reopen: {orphans}")
 np.testing.assert_array_equal(T.world_pixels(scene.world.welkin.sky_image), lib_sky,
                               err_msg="the linked world's sky is gone after reopening")

@@ -13,8 +13,9 @@
     off-centre (seen: 2.8 % at one horizon pixel next to the black ground, 16 samples) and
     the pole rows blend across the image edge (Blender's repeat extension), hence a
     percentile for the worst. A flipped, mirrored or rotated world misses both by far
-    more, which the test checks too, so it can fail for the right reason. The sun's
-    neighbourhood holds the disc's energy within 2 %.
+    more, which the test checks too, so it can fail for the right reason. (The disc,
+    drawn by the world's nodes, is measured through a 1000 mm lens by
+    test_addon_sun_disc.py: a panorama's pixel is 3 times its diameter.)
 (e) Beside Blender's Nishita sky at the same sun elevation (20 degrees; its default air,
     dust and ozone, no disc): the same radiance scale, linear Rec.709 W m^-2 sr^-1. The
     atmospheres differ: Nishita (as Blender implements it) is single scattering through
@@ -41,6 +42,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
+from welkin.blender import compat  # noqa: E402
 W, H = 256, 128
 ELEVATION, AZIMUTH = 20.0, 60.0
 scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution=str(W))
@@ -81,20 +83,11 @@ for name, wrong in (("upside down", hdri[::-1]), ("mirrored", hdri[:, ::-1]),
     m, p, _ = errors(render, wrong)
     T.check(m > 0.01 and p > 0.1, f"the test cannot tell a {name} world ({m:.2%}, {p:.2%})")
 
-# The disc, visible to camera rays: its energy (radiance x pixel solid angle) in the sun's
-# neighbourhood, render against HDRI.
-omega = (2 * math.pi / W) * (math.pi / H) * np.cos(math.pi * (0.5 - (np.arange(H) + 0.5) / H))
-energy = lambda img: float((img[..., 1] * omega[:, None])[near_sun].sum())  # noqa: E731
-e_render, e_hdri = energy(render), energy(hdri)
-print(f"(b) sun neighbourhood, green: render {e_render:.5g}, HDRI {e_hdri:.5g} W/m^2")
-T.check(abs(e_render / e_hdri - 1.0) < 0.02, "the sun's disc does not reach camera rays")
-
 # (e) Nishita beside it, same sun elevation, its default air/dust/ozone, no disc.
 world = bpy.data.worlds.new("Nishita")
-world.use_nodes = True
-tree = world.node_tree
+tree = compat.world_node_tree(world)
 sky_node = tree.nodes.new('ShaderNodeTexSky')
-sky_node.sky_type = 'NISHITA'
+sky_node.sky_type = compat.sky_type_nishita()  # 5.0: SINGLE_SCATTERING
 sky_node.sun_elevation = math.radians(ELEVATION)
 sky_node.sun_disc = False
 tree.links.new(sky_node.outputs['Color'], tree.nodes['Background'].inputs['Color'])
@@ -106,6 +99,7 @@ nishita = T.read_rgb_exr(welkin, nishita_path)
 scene.world = welkin_world
 
 upper = (jj < H // 2) & ~near_sun
+omega = (2 * math.pi / W) * (math.pi / H) * np.cos(math.pi * (0.5 - (np.arange(H) + 0.5) / H))
 cos_e = omega[:, None] * np.ones((1, W))
 
 

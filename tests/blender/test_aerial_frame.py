@@ -268,7 +268,7 @@ def main():
     for engine in engines:
         tmp = at.TMP / engine
         tmp.mkdir(parents=True, exist_ok=True)
-        run_engine(scene, compat.eevee_engine() if engine == "EEVEE" else engine, tmp)
+        run_engine(scene, compat.eevee_engine_id() if engine == "EEVEE" else engine, tmp)
     at.done("test_aerial_frame")
 
 

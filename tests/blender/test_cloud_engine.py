@@ -24,7 +24,7 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import render_engine  # noqa: E402
+from welkin.blender import compat, render_engine  # noqa: E402
 
 check = t.check
 CLI = t.ROOT / "build" / "welkin"
@@ -33,7 +33,7 @@ CLI = t.ROOT / "build" / "welkin"
 def render(blend, out_stem, frames):
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
     env.pop("PYTHONPATH", None)
-    cmd = ["blender", "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
+    cmd = [*t.blender_command(), "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
            str(out_stem) + "_####", "-F", "OPEN_EXR_MULTILAYER"] + frames
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     print(run.stdout[-1200:], run.stderr[-600:])
@@ -65,7 +65,7 @@ scene.render.engine = 'WELKIN'
 # 72 rows: the cloudy plate is computed in two tiles (64 + 8 rows, render_engine.BAND_ROWS).
 scene.render.resolution_x, scene.render.resolution_y = 48, 72
 scene.render.resolution_percentage = 100
-scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+compat.set_file_format(scene.render.image_settings, 'OPEN_EXR_MULTILAYER')
 scene.render.image_settings.color_depth = '32'
 scene.frame_start, scene.frame_end = 1, 3
 scene.frame_set(1)

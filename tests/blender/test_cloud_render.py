@@ -28,7 +28,7 @@ import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
 from welkin import scene_export  # noqa: E402
-from welkin.blender import aerial, compositor, handlers, update  # noqa: E402
+from welkin.blender import aerial, compat, compositor, handlers, update  # noqa: E402
 
 check = t.check
 
@@ -99,10 +99,9 @@ scene.render.resolution_x, scene.render.resolution_y = 64, 32
 scene.render.resolution_percentage = 100
 scene.render.image_settings.file_format = 'OPEN_EXR'
 scene.render.filepath = str(t.TMP / "out" / "frame_")
-scene.use_nodes = True
-tree = scene.node_tree
+tree = compat.scene_compositor_tree(scene)
 rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
-comp = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeComposite')
+comp = compat.compositor_output(tree)  # 5.0: the tree's Group Output
 user = tree.nodes.new('CompositorNodeGamma')
 user.name = "User Gamma"
 tree.links.new(rl.outputs["Image"], user.inputs["Image"])

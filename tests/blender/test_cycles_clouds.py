@@ -23,9 +23,11 @@ same run, from the two seeds of each renderer:
   cloud (alpha > 0.01) within 1.5 x the RMS that noise alone gives (seed differences);
   measured 0.0243 vs noise 0.0223 with the default placement.
 
-So this validates Welkin's default voxel placement ("blender") against Cycles. That it can
-tell the placements apart is checked too: the same reference renders with
-placement="openvdb" must FAIL the per-pixel opacity test (measured RMS 0.150 vs noise
+So this validates, against Cycles, the voxel placement the add-on uses on this Blender
+(compat.cycles_vdb_placement: "blender" in 3.4-4.5; "openvdb" in 5.0, whose Cycles places
+voxels half a voxel away from 4.5's). That it can tell the placements apart is checked
+too: the same reference renders with the other placement must FAIL the per-pixel opacity
+test (3.4, placement="openvdb": measured RMS 0.150 vs noise
 0.023, 6.4 x; its radiance median, 0.104 vs noise 0.077, passes 1.5 x, so it is not used).
 
 Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
@@ -40,7 +42,18 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))
+sys.path.insert(0, str(ROOT / "tests" / "blender"))
+import addon_testing as T  # noqa: E402
 import cycles_volume as cv  # noqa: E402
+
+# `import welkin` (cycles_volume.py) is the installed add-on, which serves the compiled
+# module's names (the legacy zip's module, or the Extension's wheel on 4.2+).
+T.install_addon()
+from welkin.blender import compat  # noqa: E402
+
+# Cycles' voxel placement on this Blender, and the other one, which must fail.
+PLACEMENT = compat.cycles_vdb_placement()
+OTHER = "openvdb" if PLACEMENT == "blender" else "blender"
 
 SIZE, SAMPLES, PATHS = 48, 48, 48
 
@@ -55,8 +68,9 @@ def main():
         scene = cv.build_scene(vdb, camera_location=(0.0, -450.0, 0.0), camera_target=(0.0, 0.0, 0.0), width=SIZE,
                                height=SIZE, samples=SAMPLES, seed=seed, **light)
         cyc.append(cv.render(scene, os.path.join(tmp, f"cycles_{seed}.exr")))
-        ref.append(cv.welkin_render(scene, vdb, method="reference", paths=PATHS, seed=seed, **light))
-        off.append(cv.welkin_render(scene, vdb, method="reference", paths=PATHS, seed=seed, placement="openvdb",
+        ref.append(cv.welkin_render(scene, vdb, method="reference", paths=PATHS, seed=seed, placement=PLACEMENT,
+                                    **light))
+        off.append(cv.welkin_render(scene, vdb, method="reference", paths=PATHS, seed=seed, placement=OTHER,
                                     **light))
     c1, c2 = cyc[0][..., 0], cyc[1][..., 0]
     r1, r2 = ref[0][0], ref[1][0]
@@ -83,7 +97,7 @@ def main():
     ca = 0.5 * (cyc[0][..., 3] + cyc[1][..., 3])
     nc = 0.5 * (cyc[0][..., 3] - cyc[1][..., 3])
     alphas = {}
-    for name, renders in (("blender", ref), ("openvdb", off)):
+    for name, renders in ((PLACEMENT, ref), (OTHER, off)):
         a = 1.0 - 0.5 * (renders[0][1] + renders[1][1])
         n = nc - 0.5 * (renders[1][1] - renders[0][1])
         alphas[name] = a
@@ -91,16 +105,16 @@ def main():
         rms, rms_noise = np.sqrt(((ca - a)[edge] ** 2).mean()), np.sqrt((n[edge] ** 2).mean())
         print(f"test_cycles_clouds: placement {name}: alpha RMS difference {rms:.4f}, from noise alone "
               f"{rms_noise:.4f} ({edge.sum()} pixels)")
-        if name == "blender":
+        if name == PLACEMENT:
             assert rms < 1.5 * rms_noise, f"Cycles alpha vs 1 - T per pixel: RMS {rms:.4f} vs noise {rms_noise:.4f}"
         else:
-            assert rms > 1.5 * rms_noise, (f"placement='openvdb' passes the per-pixel alpha test (RMS {rms:.4f}, "
+            assert rms > 1.5 * rms_noise, (f"placement={OTHER!r} passes the per-pixel alpha test (RMS {rms:.4f}, "
                                            f"noise {rms_noise:.4f}): the test cannot see a half-voxel shift")
     o1, o2 = off[0][0], off[1][0]
     om = 0.5 * (o1 + o2)
     mo = mask & (om > 0.0)
     bias_o = (cm - om)[mo].sum() / om[mo].sum()
-    print(f"test_cycles_clouds: placement openvdb: radiance bias {bias_o:+.4f} (not asserted)")
+    print(f"test_cycles_clouds: placement {OTHER}: radiance bias {bias_o:+.4f} (not asserted)")
 
     a1, a2 = cyc[0][..., 3], cyc[1][..., 3]
     da = (0.5 * (a1 + a2) - alpha_ref)[mask].mean()

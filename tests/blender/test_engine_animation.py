@@ -15,7 +15,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import addon_testing as t  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import render_engine  # noqa: E402
+from welkin.blender import compat, render_engine  # noqa: E402
 
 check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=10.0, sun_azimuth_deg=0.0, camera_z=30.0)
@@ -27,7 +27,7 @@ for frame, elevation in ((1, 10.0), (2, 20.0), (3, 30.0)):
 scene.render.engine = 'WELKIN'
 scene.render.resolution_x, scene.render.resolution_y = 48, 32
 scene.render.resolution_percentage = 100
-scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+compat.set_file_format(scene.render.image_settings, 'OPEN_EXR_MULTILAYER')
 scene.render.image_settings.color_depth = '32'
 scene.world.welkin.method = 'lut'
 scene.frame_start, scene.frame_end = 1, 3
@@ -36,7 +36,7 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 
 env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
 env.pop("PYTHONPATH", None)
-run = subprocess.run(["blender", "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
+run = subprocess.run([*t.blender_command(), "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
                       str(t.TMP / "anim_####"), "-F", "OPEN_EXR_MULTILAYER", "-a"],
                      env=env, capture_output=True, text=True, timeout=600)
 print(run.stdout[-1000:], run.stderr[-500:])

@@ -18,7 +18,7 @@ check = t.check
 def render_headless(blend, out_stem):
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
     env.pop("PYTHONPATH", None)
-    cmd = ["blender", "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
+    cmd = [*t.blender_command(), "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
            str(out_stem) + "_####", "-F", "OPEN_EXR_MULTILAYER", "-f", "1"]
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     print(run.stdout[-1200:], run.stderr[-800:])

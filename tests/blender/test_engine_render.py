@@ -26,7 +26,7 @@ import addon_testing as t  # noqa: E402
 
 addon, native = t.install_addon()
 from welkin import plate  # noqa: E402
-from welkin.blender import render_engine  # noqa: E402
+from welkin.blender import compat, render_engine  # noqa: E402
 
 check = t.check
 CLI = t.ROOT / "build" / "welkin"
@@ -54,7 +54,7 @@ def is_welkin_render(names):
 def render_headless(blend, out_stem, *, addon_enabled=True, engine_flag=True, expect_rc=0):
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
     env.pop("PYTHONPATH", None)
-    cmd = ["blender", "-b", str(blend)]
+    cmd = [*t.blender_command(), "-b", str(blend)]
     if addon_enabled:
         cmd += ["--addons", "welkin"]
     if engine_flag:
@@ -86,7 +86,7 @@ def setup(scene):
     scene.render.resolution_x, scene.render.resolution_y = 96, 64
     scene.render.resolution_percentage = 100
     settings = scene.render.image_settings
-    settings.file_format = 'OPEN_EXR_MULTILAYER'
+    compat.set_file_format(settings, 'OPEN_EXR_MULTILAYER')
     settings.color_depth = '32'
     scene.world.welkin.method = 'lut'
 

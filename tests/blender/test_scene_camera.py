@@ -19,10 +19,14 @@ import sys
 import bpy
 from mathutils import Euler, Vector
 
-import welkin
-
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import addon_testing as T  # noqa: E402
 from camera_testing import camera_json  # noqa: E402
+
+# The compiled module as the installed add-on carries it (the legacy zip's, or the
+# Extension's wheel on 4.2+).
+_addon, welkin = T.install_addon()
+from welkin.blender import compat  # noqa: E402
 
 
 def scene_json(ob, scene, sun_ob):
@@ -106,7 +110,7 @@ def main():
     # Equirectangular panorama pointed along +X (rotation 90, 0, -90): the pixel at
     # (u, 1 - v) looks along Blender's Environment Texture direction of (u, v).
     cam_data.type = "PANO"
-    cam_data.cycles.panorama_type = "EQUIRECTANGULAR"
+    compat.camera_panorama(cam_data).panorama_type = "EQUIRECTANGULAR"
     ob.rotation_euler = Euler((math.radians(90), 0, math.radians(-90)))
     scene.render.resolution_x, scene.render.resolution_y = 200, 100
     bpy.context.view_layer.update()

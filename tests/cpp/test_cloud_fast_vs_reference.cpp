@@ -101,7 +101,7 @@ TEST(CloudFastVsReference, ThinWispyLayer) {
     p.bottom_altitude_m = 1500.0;
     p.top_altitude_m = 2300.0;
     p.coverage = 0.55;
-    p.cloud_type = 0.5;
+    p.cloud_type = CloudType::stratocumulus;
     p.density_per_m = 0.004;
     p.detail_strength = 0.6;
     const ProceduralClouds layer(p);
@@ -124,7 +124,7 @@ TEST(CloudFastVsReference, DenseCumulus) {
     p.bottom_altitude_m = 1500.0;
     p.top_altitude_m = 2700.0;
     p.coverage = 0.75;
-    p.cloud_type = 1.0;
+    p.cloud_type = CloudType::cumulus;
     p.density_per_m = 0.03;
     const ProceduralClouds layer(p);
     const Comparison c = compare("dense cumulus", layer, test_daylight(), {0, 0, 0}, view_grid({0.3, 0.4, 1.0}, 0.5, 4), 256);

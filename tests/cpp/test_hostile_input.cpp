@@ -332,6 +332,20 @@ TEST_F(Hostile, VdbWhoseTreeDeclaresAHugeBufferIsOutOfMemoryNamingTheFile) {
     }
 }
 
+// A VDB whose tree makes OpenVDB 10 write past a node's buffer (io::bloscFromStream, found
+// by tests/fuzz/fuzz_vdb.cpp): the tree is read first in a child process, which dies; the
+// host refuses the file with an error naming it and keeps running.
+TEST_F(Hostile, VdbThatOverwritesOpenVdbsHeapIsRefusedAndTheHostLives) {
+    const std::string file = std::string(WELKIN_TEST_DATA_DIR) + "/../fuzz/corpus/vdb/blosc_heap_buffer_overflow.vdb";
+    ASSERT_TRUE(fs::exists(file));
+    for (int attempt = 0; attempt < 3; ++attempt) {  // the host's heap stays sound: again and again
+        const std::string message = error_of([&] { VdbClouds clouds(file, {}); });
+        EXPECT_TRUE(contains(message, file)) << message;
+        EXPECT_TRUE(contains(message, "corrupt data")) << message;
+        EXPECT_TRUE(contains(message, "reader process")) << message;
+    }
+}
+
 // Every input of the VDB fuzz corpus (the seeds and the fuzzer's findings: a 2^56-byte
 // blosc chunk, root node counts of 2.6e9, a fixed-size metadata value whose byte count
 // lies) ends at once in a valid grid or a welkin error naming the file, in little memory.

@@ -68,10 +68,10 @@ TEST(SceneClouds, AbsentMeansClearSky) {
 
 TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     const std::string text = scene_with_clouds(R"({
-      "layers": [{"bottom_altitude_m": 1200, "top_altitude_m": 2800, "coverage": 0.7, "cloud_type": 0.4,
+      "layers": [{"bottom_altitude_m": 1200, "top_altitude_m": 2800, "coverage": 0.7, "cloud_type": "altocumulus",
                   "density_per_m": 0.05, "base_scale_m": 5000, "detail_scale_m": 700,
                   "weather_scale_m": 30000, "detail_strength": 0.25, "weather_variation": 0.3,
-                  "type_variation": 0.2, "wind_offset_m": [10, -20], "seed": 7}],
+                  "wind_offset_m": [10, -20], "seed": 7}],
       "volumes": [{"name": "Cloud", "file": "/abs/cloud.0007.vdb", "grid": "dens",
                    "matrix_world": [[2,0,0,5],[0,2,0,6],[0,0,2,7],[0,0,0,1]],
                    "density_scale": 0.5, "negative": "reject", "placement": "openvdb"}],
@@ -88,14 +88,13 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     EXPECT_EQ(l.bottom_altitude_m, 1200);
     EXPECT_EQ(l.top_altitude_m, 2800);
     EXPECT_EQ(l.coverage, 0.7);
-    EXPECT_EQ(l.cloud_type, 0.4);
+    EXPECT_EQ(l.cloud_type, CloudType::altocumulus);
     EXPECT_EQ(l.density_per_m, 0.05);
     EXPECT_EQ(l.base_scale_m, 5000);
     EXPECT_EQ(l.detail_scale_m, 700);
     EXPECT_EQ(l.weather_scale_m, 30000);
     EXPECT_EQ(l.detail_strength, 0.25);
     EXPECT_EQ(l.weather_variation, 0.3);
-    EXPECT_EQ(l.type_variation, 0.2);
     EXPECT_EQ(l.wind_offset_m.x, 10);
     EXPECT_EQ(l.wind_offset_m.y, -20);
     EXPECT_EQ(l.seed, 7u);

@@ -15,6 +15,8 @@
 #include "welkin/base/math.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/atmosphere/sun.hpp"
+#include "welkin/atmosphere/sun_disc.hpp"
+#include "welkin/color/color.hpp"
 
 using namespace welkin;
 
@@ -177,4 +179,49 @@ TEST(Sun, TransmittanceAgreesWithThePeer) {
     }
     std::printf("sun transmittance vs peer over %d rows: worst %.4f %%\n", checked, 100 * worst);
     EXPECT_GT(checked, 100);
+}
+
+// The disc model (sun_disc.hpp): its radiance integrated over the visible disc is the
+// direct irradiance, and the RGB polynomial form is the RGB of the spectral disc.
+TEST(SunDisc, IntegralOverTheDiscIsTheDirectIrradiance) {
+    for (const char* preset : {"clear", "hazy"}) {
+        const Atmosphere atm = Atmosphere::preset(preset, {440.0, 550.0, 680.0});
+        for (double elev_deg : {60.0, 5.0}) {
+            const SunDisc disc(atm, sun_at(elev_deg * kPi / 180.0));
+            const double alpha = disc.angular_radius_rad();
+            for (std::size_t c = 0; c < atm.channels(); ++c) {
+                const int n = 100000;
+                const double h = alpha / n;
+                double sum = 0.0;
+                for (int i = 0; i < n; ++i) {
+                    const double rho = (i + 0.5) * h;
+                    sum += std::sin(rho) * disc.radiance(c, rho);
+                }
+                const double e = disc.radiometry().direct_irradiance[c];
+                EXPECT_NEAR(kTwoPi * sum * h, e, 1e-6 * e) << preset << " " << elev_deg << " " << c;
+            }
+            EXPECT_EQ(disc.radiance(0, alpha * 1.001), 0.0);
+        }
+    }
+}
+
+TEST(SunDisc, RgbPolynomialIsTheRgbOfTheSpectralDisc) {
+    const Atmosphere atm = Atmosphere::preset("clear", spectral_wavelengths_nm(40.0));
+    const SunDisc disc(atm, sun_at(0.2));
+    const SpectrumToRgb to_rgb(atm.wavelengths_nm, 0.0);
+    const SunDisc::Rgb rgb = disc.rgb(to_rgb.matrix());
+    const double alpha = disc.angular_radius_rad();
+    for (double f : {0.0, 0.3, 0.7, 0.95, 0.999}) {
+        const double rho = f * alpha;
+        std::vector<float> spectrum(atm.channels());
+        for (std::size_t c = 0; c < atm.channels(); ++c) spectrum[c] = float(disc.radiance(c, rho));
+        const std::array<double, 3> want = to_rgb.convert(spectrum);
+        const double s = std::sin(rho) / std::sin(alpha);
+        const double mu = std::sqrt(1.0 - s * s);
+        for (int j = 0; j < 3; ++j) {
+            double p = 0.0;
+            for (int k = 5; k >= 0; --k) p = p * mu + rgb.limb_coefficients[j][k];
+            EXPECT_NEAR(rgb.centre_radiance[j] * p, want[j], 1e-5 * want[j]) << f << " " << j;
+        }
+    }
 }

@@ -3,6 +3,7 @@
 The CLI is build/welkin unless WELKIN_CLI names another (an installed one)."""
 import os
 import pathlib
+import resource
 import signal
 import subprocess
 import time
@@ -15,6 +16,13 @@ CLI = os.environ.get("WELKIN_CLI", str(pathlib.Path(__file__).resolve().parents[
 def files(path):
     """Every entry of a directory, hidden ones (temporary files) included."""
     return sorted(p.name for p in pathlib.Path(path).iterdir())
+
+
+def children_cpu_seconds():
+    """CPU time (user + system) of the child processes waited for so far: a bound on work
+    that does not move with the machine's load, as wall-clock time does."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def assert_ctrl_c_cancels(args, cwd, after_s=1.5):

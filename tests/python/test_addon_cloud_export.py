@@ -45,6 +45,9 @@ def test_volume_dict(tmp_path):
     assert d["matrix_world"][0] == pytest.approx([0.02, 0, 0, 0.1])
     assert d["matrix_world"][3] == [0, 0, 0, 1]
     assert d["file"] == str(f) and d["negative"] == "clamp" and d["density_scale"] == 0.5
+    assert d["placement"] == "blender"  # the core's default, Cycles 3.4-4.5's placement
+    d = cloud_export.volume_dict("Cloud", str(f), "density", m, 0.5, placement="openvdb")
+    assert d["placement"] == "openvdb"
     with pytest.raises(cloud_export.MissingVolume, match="'Cloud'.*gone.vdb"):
         cloud_export.volume_dict("Cloud", str(tmp_path / "gone.vdb"), "density", m, 1.0)
     assert cloud_export.clouds_dict([], [], 1.0, {}) is None

@@ -66,6 +66,30 @@ def test_vdb_errors_name_file_and_grid(tmp_path):
         welkin.VdbClouds(str(path), grid="smoke", placement="cycles")
 
 
+def test_cloud_types_are_presets_and_bad_names_list_them():
+    assert welkin.CLOUD_TYPES == ["cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus"]
+    for name in welkin.CLOUD_TYPES:
+        preset = welkin.cloud_type_preset(name)
+        layer = welkin.CloudLayer(cloud_type=name)
+        assert layer.cloud_type == name
+        assert layer.bottom_altitude_m == preset["bottom_altitude_m"]
+        assert layer.coverage == preset["coverage"]
+    # A value given overrides the preset's.
+    assert welkin.CloudLayer(cloud_type="cirrus", coverage=0.2).coverage == 0.2
+    assert welkin.cloud_type_preset("cirrus")["bottom_altitude_m"] > 6000.0
+    with pytest.raises(ValueError, match="cloud_type.*cumulus.*stratocumulus.*altocumulus.*stratus.*cirrus"):
+        welkin.CloudLayer(cloud_type="nimbostratus")
+    with pytest.raises(ValueError, match="cloud_type"):
+        welkin.cloud_type_preset("Cumulus ")
+    with pytest.raises(ValueError, match="coverage"):
+        welkin.CloudLayer(cloud_type="stratus", coverage=-0.1)
+
+
+def test_cloud_layer_coverage_is_measured():
+    layer = welkin.CloudLayer(coverage=0.3)
+    assert abs(layer.covered_fraction() - 0.3) < 0.02
+
+
 def test_cloud_layer_and_cloudy_sky_image():
     with pytest.raises(ValueError, match="coverage"):
         welkin.CloudLayer(coverage=2.0)

@@ -37,11 +37,11 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
             layer = s.layers[s.active_layer]
             col = layout.column()
             col.active = layer.enabled
+            col.prop(layer, "cloud_type")
             sub = col.column(align=True)
             sub.prop(layer, "bottom_altitude_m")
             sub.prop(layer, "top_altitude_m")
             col.prop(layer, "coverage")
-            col.prop(layer, "cloud_type")
             col.prop(layer, "density_per_m")
             sub = col.column(align=True)
             sub.prop(layer, "base_scale_m")
@@ -49,7 +49,6 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
             sub.prop(layer, "weather_scale_m")
             col.prop(layer, "detail_strength")
             col.prop(layer, "weather_variation")
-            col.prop(layer, "type_variation")
             col.prop(layer, "wind_offset_m")
             col.prop(layer, "seed")
         layout.separator()

@@ -15,43 +15,59 @@ def _changed(_self, context):
         handlers.settings_changed(world.welkin, context)
 
 
+def _type_changed(self, context):
+    # A new type loads its preset (the core's welkin.cloud_type_preset) into the layer.
+    from .. import native
+    try:
+        preset = native.module().cloud_type_preset(self.cloud_type)
+    except Exception:  # the core not loadable: keep the values, the render reports it
+        preset = {}
+    for key, value in preset.items():
+        if key != "cloud_type" and hasattr(self, key):
+            setattr(self, key, value)
+    _changed(self, context)
+
+
 class WelkinCloudLayer(bpy.types.PropertyGroup):
     name: bpy.props.StringProperty(name="Name", default="Cloud Layer")
     enabled: bpy.props.BoolProperty(name="Enabled", default=True, update=_changed)
     bottom_altitude_m: bpy.props.FloatProperty(
-        name="Bottom (m)", default=1500.0, min=0.0, max=19999.0, soft_max=12000.0,
+        name="Bottom (m)", default=1200.0, min=0.0, max=19999.0, soft_max=12000.0,
         update=_changed, description="Altitude of the layer's base above the ground, m")
     top_altitude_m: bpy.props.FloatProperty(
-        name="Top (m)", default=3000.0, min=1.0, max=20000.0, soft_max=15000.0,
+        name="Top (m)", default=3200.0, min=1.0, max=20000.0, soft_max=15000.0,
         update=_changed, description="Altitude of the layer's top above the ground, m "
                                      "(above the bottom)")
     coverage: bpy.props.FloatProperty(
-        name="Coverage", default=0.5, min=0.0, max=1.0, update=_changed,
-        description="Fraction of the sky the weather map covers")
-    cloud_type: bpy.props.FloatProperty(
-        name="Type", default=1.0, min=0.0, max=1.0, update=_changed,
-        description="0 stratus, 0.5 stratocumulus, 1 cumulus (height gradient)")
+        name="Coverage", default=0.4, min=0.0, max=1.0, update=_changed,
+        description="Share of the ground's area under cloud (a column is cloudy when its "
+                    "vertical optical depth reaches 0.3)")
+    cloud_type: bpy.props.EnumProperty(
+        name="Type", default="cumulus", update=_type_changed,
+        items=[("cumulus", "Cumulus", "Fair-weather heaps with flat bases and towers"),
+               ("stratocumulus", "Stratocumulus", "A low lumpy layer of rolls"),
+               ("altocumulus", "Altocumulus", "A thin mid-level sheet of small cells"),
+               ("stratus", "Stratus", "A low grey sheet that hides the sun"),
+               ("cirrus", "Cirrus", "Thin high ice streaks")],
+        description="Cloud type: choosing one sets the layer's values to its preset")
     density_per_m: bpy.props.FloatProperty(
-        name="Density (1/m)", default=0.03, min=0.0, max=10.0, soft_max=0.2, precision=4,
+        name="Density (1/m)", default=0.04, min=0.0, max=10.0, soft_max=0.2, precision=4,
         update=_changed, description="Extinction of the densest cloud, m^-1")
     base_scale_m: bpy.props.FloatProperty(
-        name="Base Scale (m)", default=6000.0, min=10.0, max=1e6, soft_max=50000.0,
+        name="Base Scale (m)", default=5000.0, min=10.0, max=1e6, soft_max=50000.0,
         update=_changed, description="Tile size of the base shape noise, m")
     detail_scale_m: bpy.props.FloatProperty(
-        name="Detail Scale (m)", default=800.0, min=1.0, max=1e6, soft_max=10000.0,
+        name="Detail Scale (m)", default=700.0, min=1.0, max=1e6, soft_max=10000.0,
         update=_changed, description="Tile size of the erosion noise, m")
     weather_scale_m: bpy.props.FloatProperty(
-        name="Weather Scale (m)", default=40000.0, min=10.0, max=1e7, soft_max=500000.0,
+        name="Weather Scale (m)", default=30000.0, min=10.0, max=1e7, soft_max=500000.0,
         update=_changed, description="Tile size of the weather map, m")
     detail_strength: bpy.props.FloatProperty(
-        name="Detail", default=0.35, min=0.0, max=1.0, update=_changed,
+        name="Detail", default=0.5, min=0.0, max=1.0, update=_changed,
         description="How much the detail noise erodes the base shape")
     weather_variation: bpy.props.FloatProperty(
-        name="Weather Variation", default=0.5, min=0.0, max=1.0, update=_changed,
+        name="Weather Variation", default=0.6, min=0.0, max=1.0, update=_changed,
         description="How much the coverage varies across the weather map")
-    type_variation: bpy.props.FloatProperty(
-        name="Type Variation", default=0.0, min=0.0, max=1.0, update=_changed,
-        description="How much the cloud type varies across the weather map")
     wind_offset_m: bpy.props.FloatVectorProperty(
         name="Wind Offset (m)", size=2, default=(0.0, 0.0), soft_min=-1e6, soft_max=1e6,
         update=_changed, description="Horizontal offset of the layer (animate it for wind), m")
@@ -74,9 +90,14 @@ class WelkinCloudSettings(bpy.types.PropertyGroup):
     ambient_steps: bpy.props.IntProperty(
         name="Ambient Steps", default=4, min=0, max=256, soft_max=32, update=_changed,
         description="Samples towards the zenith for the sky light's decay (0: none)")
+    # The core's default multiple scattering is the delta-Eddington diffusion term, for
+    # which only "one order or all" means anything: 1 single scattering, 2 all orders
+    # (any count above 1 gives the same image; the count only matters to the core's
+    # "octaves" mode, which the panel does not offer).
     octaves: bpy.props.IntProperty(
-        name="Octaves", default=4, min=1, max=16, update=_changed,
-        description="Wrenninge's multiple-scattering octaves")
+        name="Scattering Orders", default=2, min=1, max=2, update=_changed,
+        description="1: single scattering only (faster, darker); 2: all orders of "
+                    "scattering (the delta-Eddington diffusion term)")
 
 
 class WelkinObjectCloud(bpy.types.PropertyGroup):

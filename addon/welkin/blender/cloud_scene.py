@@ -11,6 +11,7 @@ out of its own render.
 import bpy
 
 from .. import cloud_export
+from . import compat
 from .scene_sun import UserError
 
 
@@ -63,7 +64,7 @@ def clouds_section(scene, depsgraph=None, frame=None):
             volumes.append(cloud_export.volume_dict(
                 ob.name, path, ob.welkin_cloud.grid or "density",
                 [list(r) for r in evaluated.matrix_world], ob.welkin_cloud.density_scale,
-                scene.unit_settings.scale_length))
+                scene.unit_settings.scale_length, compat.cycles_vdb_placement()))
         except cloud_export.MissingVolume as error:
             raise UserError(str(error)) from None
     if settings is None:

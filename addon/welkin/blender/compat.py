@@ -1,13 +1,140 @@
 """Differences between the Blender versions Welkin supports (3.4, 4.2 LTS, 4.5 LTS, 5.0),
 in one place. The rest of the add-on calls these functions and never tests
-bpy.app.version itself, so a new Blender is one edit here.
+bpy.app.version itself, so a new Blender is one edit here. Each function says which
+versions differ and how (checked against the real 3.4, 4.5 and 5.0 by tests/blender/).
 """
+import warnings
+
 import bpy
 
 
 def at_least(major, minor=0, patch=0):
     """True when the running Blender is this version or newer."""
     return bpy.app.version >= (major, minor, patch)
+
+
+def eevee_engine_id():
+    """The render engine id of EEVEE: 'BLENDER_EEVEE' in 3.x-4.1 (legacy EEVEE) and again
+    from 5.0, 'BLENDER_EEVEE_NEXT' in 4.2-4.5 (EEVEE Next)."""
+    return 'BLENDER_EEVEE_NEXT' if at_least(4, 2) and not at_least(5, 0) else 'BLENDER_EEVEE'
+
+
+def eevee_engine_ids():
+    """Every id EEVEE has had (for COMPAT_ENGINES look-ups that must work everywhere)."""
+    return ('BLENDER_EEVEE', 'BLENDER_EEVEE_NEXT')
+
+
+def world_node_tree(world):
+    """The world's shader node tree, made to drive the world. 3.4-4.5: a world draws its
+    nodes only with use_nodes on (switching it on creates the tree). 5.0: use_nodes is
+    deprecated (a warning, removed in 6.0), every world has its tree and uses it."""
+    if not at_least(5, 0):
+        world.use_nodes = True
+    elif world.node_tree is None:  # not seen in 5.0, where new worlds carry a tree
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            world.use_nodes = True
+    return world.node_tree
+
+
+def world_uses_nodes(world):
+    """world.use_nodes where it means something (3.4-4.5); True from 5.0 on, where every
+    world uses its node tree (reading use_nodes there warns)."""
+    if at_least(5, 0):
+        return True
+    return world.use_nodes
+
+
+def set_world_uses_nodes(world, value):
+    """Puts world.use_nodes back (remove_sky): 3.4-4.5 only; from 5.0 it is a deprecated
+    no-op and is left alone."""
+    if not at_least(5, 0):
+        world.use_nodes = bool(value)
+
+
+def world_sun_threshold(world):
+    """EEVEE Next (4.2+) turns world texels brighter than World.sun_threshold (default 10)
+    into a sun light of its own. None where the setting does not exist (3.4-4.1: legacy
+    EEVEE extracts no sun)."""
+    return getattr(world, "sun_threshold", None)
+
+
+def set_world_sun_threshold(world, value):
+    """Sets World.sun_threshold where it exists (4.2+; 0 turns the extraction off);
+    nothing in 3.4-4.1."""
+    if value is not None and hasattr(world, "sun_threshold"):
+        world.sun_threshold = value
+
+
+def camera_panorama(camera_data):
+    """The struct holding a panoramic camera's panorama_type and latitude/longitude range:
+    the camera itself from 4.0 (Camera.panorama_type), Cycles' camera settings in 3.x
+    (Camera.cycles.panorama_type). None when neither exists (Cycles disabled in 3.x)."""
+    if hasattr(camera_data, "panorama_type"):
+        return camera_data
+    return getattr(camera_data, "cycles", None)
+
+
+def set_file_format(image_settings, file_format):
+    """Sets an output's file format by the 3.x/4.x name. 5.0 splits it: media_type
+    ('IMAGE', 'MULTI_LAYER_IMAGE', 'VIDEO') first, then file_format, and multilayer EXR is
+    media_type 'MULTI_LAYER_IMAGE' (file_format 'OPEN_EXR_MULTILAYER' is not accepted
+    while the media type is 'IMAGE'). 3.4-4.5: file_format alone."""
+    if hasattr(image_settings, "media_type"):
+        if file_format == 'OPEN_EXR_MULTILAYER':
+            image_settings.media_type = 'MULTI_LAYER_IMAGE'
+        elif file_format == 'FFMPEG':
+            image_settings.media_type = 'VIDEO'
+        else:
+            image_settings.media_type = 'IMAGE'
+    image_settings.file_format = file_format
+
+
+def sky_type_nishita():
+    """Blender's physically based Sky Texture model: 'NISHITA' in 2.90-4.5; 5.0 renamed it
+    'SINGLE_SCATTERING' (beside a new 'MULTIPLE_SCATTERING')."""
+    items = bpy.types.ShaderNodeTexSky.bl_rna.properties['sky_type'].enum_items
+    return 'NISHITA' if 'NISHITA' in items else 'SINGLE_SCATTERING'
+
+
+def scene_compositor_tree(scene, create=True):
+    """The scene's compositing node tree. 3.4-4.5: scene.node_tree, made by switching
+    scene.use_nodes on. 5.0: a node group assigned to scene.compositing_node_group (new
+    ones get a Render Layers node and a Group Output, the Composite node's successor);
+    scene.use_nodes is deprecated. None when there is none and create is False."""
+    if hasattr(scene, "compositing_node_group"):
+        tree = scene.compositing_node_group
+        if tree is None and create:
+            tree = bpy.data.node_groups.new(f"{scene.name} Compositing", 'CompositorNodeTree')
+            tree.interface.new_socket("Image", in_out='OUTPUT', socket_type='NodeSocketColor')
+            layers = tree.nodes.new('CompositorNodeRLayers')
+            output = tree.nodes.new('NodeGroupOutput')
+            output.location = (400.0, 0.0)
+            tree.links.new(layers.outputs["Image"], output.inputs[0])
+            scene.compositing_node_group = tree
+        return tree
+    if create:
+        scene.use_nodes = True
+    return scene.node_tree
+
+
+def compositor_output(tree):
+    """The node whose input is the composited frame: the Composite node in 3.4-4.5, the
+    tree's active Group Output in 5.0 (which has no Composite node). None if absent."""
+    for node in tree.nodes:
+        if node.bl_idname == 'CompositorNodeComposite':
+            return node
+    outputs = [n for n in tree.nodes if n.bl_idname == 'NodeGroupOutput']
+    active = [n for n in outputs if getattr(n, "is_active_output", False)]
+    return (active or outputs or [None])[0]
+
+
+def cycles_vdb_placement():
+    """Where Cycles puts a VDB grid's voxel ijk, as Welkin's VdbClouds placement names it:
+    3.4-4.5 "blender" (the value at index ijk + 1/2, half a voxel off OpenVDB's
+    convention), 5.0 "openvdb" (at index ijk, OpenVDB's own): measured against Cycles by
+    tests/blender/test_cycles_clouds.py on each version."""
+    return "openvdb" if at_least(5, 0) else "blender"
 
 
 # --- Node groups, AOVs and the compositor (aerial_frame.py) --------------------------------
@@ -91,8 +218,8 @@ def compositor_mix(tree, blend_type):
 
 
 def eevee_engine():
-    """The identifier of EEVEE: BLENDER_EEVEE_NEXT in 4.2-4.5, BLENDER_EEVEE otherwise."""
-    return 'BLENDER_EEVEE_NEXT' if at_least(4, 2) and not at_least(5, 0) else 'BLENDER_EEVEE'
+    """The identifier of EEVEE (eevee_engine_id)."""
+    return eevee_engine_id()
 
 
 def set_exr(image_settings, multilayer):

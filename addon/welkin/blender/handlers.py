@@ -167,7 +167,7 @@ def on_save_pre(*_args):
         if update.not_editable(world) is not None:
             continue  # a linked world's images live in its library
         settings = world.welkin
-        for image in (settings.sky_image, settings.disc_image):
+        for image in (settings.sky_image,):
             if image is not None and image.library is None \
                     and (image.is_dirty or image.packed_file is None):
                 update.images.pack(image)

@@ -15,7 +15,7 @@ from .. import pixels
 
 ROLE_KEY = "welkin_role"  # custom property marking the add-on's own images
 OWNER_KEY = "welkin_world"  # the name_full of the world the image belongs to
-NAMES = {"sky": "Welkin Sky", "disc": "Welkin Sun Disc"}
+NAMES = {"sky": "Welkin Sky"}
 
 
 def _linear(image):
@@ -37,20 +37,19 @@ def _owned_elsewhere(image, world):
     if owner == world.name_full:
         return False
     return any(other != world and other.name_full == owner
-               and image in (other.welkin.sky_image, other.welkin.disc_image)
-               for other in bpy.data.worlds)
+               and image == other.welkin.sky_image for other in bpy.data.worlds)
 
 
 def owned(settings):
-    """True when the world's images are its own to write (none is another world's)."""
-    world = settings.id_data
-    return all(image is None or (image.get(ROLE_KEY) and not _owned_elsewhere(image, world))
-               for image in (settings.sky_image, settings.disc_image))
+    """True when the world's image is its own to write (not another world's)."""
+    image = settings.sky_image
+    return image is None or bool(image.get(ROLE_KEY)
+                                 and not _owned_elsewhere(image, settings.id_data))
 
 
 def ensure(settings, role, width, height):
-    """The add-on's image for `role` ("sky" or "disc") at width x height, the world's own."""
-    attr = "sky_image" if role == "sky" else "disc_image"
+    """The add-on's image for `role` ("sky") at width x height, the world's own."""
+    attr = "sky_image"
     world = settings.id_data
     image = getattr(settings, attr)
     if image is not None and image.get(ROLE_KEY) != role:
@@ -71,21 +70,19 @@ def ensure(settings, role, width, height):
     return image
 
 
-# RGBA buffers kept between live updates, per (image name, role, size).
+# RGBA buffers kept between live updates, per (image name, size).
 _buffers = {}
 
 
-def write(image, top_first, *, sparse=False):
-    """Fills `image` from an (H, W, 3) top-row-first array (`sparse`: mostly zero, as the
-    sun's disc is)."""
+def write(image, top_first):
+    """Fills `image` from an (H, W, 3) top-row-first array."""
     h, w, _ = top_first.shape
-    key = (image.name, sparse, w, h)
+    key = (image.name, w, h)
     if key not in _buffers:
         if len(_buffers) > 4:
             _buffers.clear()
-        _buffers[key] = pixels.SparseImage(w, h) if sparse else pixels.rgba_buffer(w, h)
-    cached = _buffers[key]
-    flat = cached.to_blender(top_first) if sparse else pixels.to_blender(top_first, cached)
+        _buffers[key] = pixels.rgba_buffer(w, h)
+    flat = pixels.to_blender(top_first, _buffers[key])
     # Setting pixels marks the image dirty and drops its GPU textures; update_tag() tells
     # the depsgraph (and so Cycles' viewport render). Image.update() is not called: it
     # builds the 8-bit display buffer, which nothing here needs and costs ~0.1 s at 2048.
@@ -97,6 +94,16 @@ def pack(image):
     """Packs the image's current pixels into the .blend (as OpenEXR, float)."""
     image.file_format = 'OPEN_EXR'
     image.pack()
+
+
+def drop_disc_image(settings):
+    """Forgets the sun-disc image of a file saved before the world's nodes drew the disc
+    (and deletes it once nothing else uses it)."""
+    image = settings.disc_image
+    if image is not None:
+        settings.disc_image = None
+        if image.get(ROLE_KEY) == "disc" and image.users == 0:
+            bpy.data.images.remove(image)
 
 
 def remove(settings):

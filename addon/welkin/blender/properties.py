@@ -86,10 +86,14 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
     # State kept by the add-on (not shown as parameters).
     active: bpy.props.BoolProperty(default=False, options={'HIDDEN'})
     sky_image: bpy.props.PointerProperty(type=bpy.types.Image, options={'HIDDEN'})
+    # The sun-disc image of files saved before the world's nodes drew the disc; the next
+    # update removes it (images.drop_disc_image).
     disc_image: bpy.props.PointerProperty(type=bpy.types.Image, options={'HIDDEN'})
     previous_output: bpy.props.StringProperty(options={'HIDDEN'})
     previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
     previous_sampling: bpy.props.StringProperty(options={'HIDDEN'})  # "METHOD:resolution"
+    # World.sun_threshold before the add-on set it (EEVEE Next, 4.2+); -1: not set.
+    previous_sun_threshold: bpy.props.FloatProperty(default=-1.0, options={'HIDDEN'})
     last_key: bpy.props.StringProperty(options={'HIDDEN'})
     status: bpy.props.StringProperty(options={'HIDDEN'})
     warnings: bpy.props.StringProperty(options={'HIDDEN'})  # of the last update, one a line

@@ -18,7 +18,7 @@ preview (viewport_preview.py), the same plate for the viewport's view.
 import bpy
 
 from .. import plate, sky_request
-from . import cloud_scene, scene_sun, update, viewport_preview
+from . import cloud_scene, compat, scene_sun, update, viewport_preview
 from .scene_sun import UserError
 
 BAND_ROWS = 64
@@ -29,8 +29,7 @@ def _camera_data(cam):
         "type", "lens", "sensor_width", "sensor_height", "sensor_fit", "ortho_scale",
         "shift_x", "shift_y", "clip_start", "clip_end")}
     if cam.type == "PANO":
-        # Blender 3.4 keeps the panorama settings on Cycles' camera properties.
-        source = cam if hasattr(cam, "panorama_type") else getattr(cam, "cycles", None)
+        source = compat.camera_panorama(cam)
         if source is None:
             raise UserError("panoramic camera: its panorama settings need the Cycles add-on "
                             "(enabled by default)")
@@ -97,7 +96,10 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
     bl_use_postprocess = True
     bl_use_preview = False
 
-    def __init__(self):
+    def __init__(self, *args, **kwargs):
+        # Blender 4.4+ passes arguments that bpy_struct's __init__ must receive; 3.4-4.3
+        # pass none (the same code runs on both).
+        super().__init__(*args, **kwargs)
         self.preview = None
 
     def __del__(self):
@@ -187,7 +189,8 @@ def _panels():
     for name in dir(bpy.types):
         panel = getattr(bpy.types, name)
         engines = getattr(panel, "COMPAT_ENGINES", None)
-        if engines is not None and ("CYCLES" in engines or "BLENDER_EEVEE" in engines) and (
+        if engines is not None and ("CYCLES" in engines or any(
+                e in engines for e in compat.eevee_engine_ids())) and (
                 name.startswith(("RENDER_PT_dimensions", "RENDER_PT_format", "RENDER_PT_output",
                                  "DATA_PT_camera", "DATA_PT_lens", "WORLD_PT"))):
             out.append(panel)

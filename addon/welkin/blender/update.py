@@ -106,7 +106,9 @@ def clouds_of(scene, depsgraph=None):
 def sky_key(settings, request, clouds):
     """Changes whenever the world's images would: the request, the disc and lamp switches,
     and the clouds (their layers, and each volume's file for the frame and placement)."""
-    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp))
+    # "disc nodes": a file saved while the disc was an image gets its nodes at the first
+    # update.
+    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp, "disc nodes"))
     if clouds:
         key += json.dumps(clouds, sort_keys=True)
     return key
@@ -193,13 +195,11 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     outcome.warnings += result.warnings
     height = request.width // 2
     sky = images.ensure(settings, "sky", request.width, height)
-    disc = images.ensure(settings, "disc", request.width, height)
     images.write(sky, result.sky)
-    images.write(disc, result.disc, sparse=True)
     if pack:
         images.pack(sky)
-        images.pack(disc)
-    world_nodes.install(scene.world, settings, sky, disc)
+    world_nodes.install(scene.world, settings, sky, result.disc)
+    images.drop_disc_image(settings)  # files from before the disc was drawn by nodes
     if settings.sync_lamp:
         _sync_lamp(lamp, result.lamp, depsgraph)
     settings.active = True

@@ -7,6 +7,7 @@
 // 12500 A", Solar Physics 153) polynomial in mu = cos(angle from the disc centre).
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "welkin/atmosphere/atmosphere.hpp"
@@ -26,6 +27,11 @@ struct SunRadiometry {
 };
 
 SunRadiometry sun_radiometry(const Atmosphere& atm, const Observer& observer);
+
+// Neckel & Labs 1994's a_0..a_5 at a wavelength (I(mu) / I(1) = sum_k a_k mu^k, summing
+// to 1), interpolated linearly between their 30 continuum windows, the end rows outside
+// [303, 1099] nm.
+std::array<double, 6> limb_darkening_coefficients(double wavelength_nm);
 
 // Limb-darkening factor relative to the disc's mean radiance, for a point at angular
 // distance `angle_rad` from the disc centre of angular radius `radius_rad` (0 outside).

@@ -21,6 +21,10 @@
 //    steps there change the result little (docs/validation.md, "Clouds") and save
 //    samples. The energy-conserving step keeps the opacity of a long step exact for
 //    its sample's sigma_t.
+//  * Empty space inside the segments (Schneider 2015's adaptive march): after two empty
+//    samples in a row a step spans two base steps (the same fraction u); where such a
+//    step finds cloud it is taken again as base steps. A cloud thinner than a base step
+//    between two empty samples can be stepped over, as the base march can miss it too.
 //  * Early termination: once T < min_transmittance the ray stops (what is behind is
 //    dimmed below that fraction; T is left as it is, not rounded to 0).
 //  * Sun light. At each sample x a shadow ray towards the sun is marched through the
@@ -163,5 +167,26 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                           std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
                           std::span<const double> max_distances, const CloudLightingOptions& options = {},
                           Progress* progress = nullptr, std::uint64_t first_ray_index = 0);
+
+// Upsampling of a grid of rays (render_clouds_grid): a cloud sky is mostly smooth (clear
+// sky, cloud interiors) with sharp edges between. One ray in every stride x stride block
+// is marched (and the last row and column); every other ray is interpolated bilinearly
+// from the four marched rays around it where those agree (transmittances within
+// transmittance_tolerance, each channel's radiance within radiance_tolerance of the
+// largest of the four) and marched itself elsewhere. stride 1 marches every ray.
+// Deterministic: a ray's value is its own march or a fixed combination of marched rays.
+struct CloudUpsampling {
+    int stride = 4;                        // [1, 16]
+    double transmittance_tolerance = 0.1;  // [0, 1]
+    double radiance_tolerance = 0.3;       // [0, 1], relative
+    void validate() const;
+};
+
+// render_clouds for the rays of an image (rows of `width` rays, row-major, from `origin`),
+// upsampled as CloudUpsampling says. Ray i is seeded by first_ray_index + i.
+CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
+                               std::span<const glm::dvec3> directions, int width,
+                               const CloudLightingOptions& options = {}, const CloudUpsampling& upsampling = {},
+                               Progress* progress = nullptr, std::uint64_t first_ray_index = 0);
 
 }  // namespace welkin

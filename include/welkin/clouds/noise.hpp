@@ -106,11 +106,16 @@ private:
 struct CloudNoiseTextures {
     // base: r = Perlin-Worley, g, b, a = Worley at 4, 8, 16 cells per period (size^3).
     // detail: r, g, b = Worley at 4, 8, 16 cells per period.
-    // weather: a 2D map stored as an n x n x 1 texture: r = coverage variation, g = type
-    // variation, both Perlin fBm in [0, 1] (n x n x 1).
-    TileableTexture3D base, detail, weather;
+    // weather: a 2D map stored as an n x n x 1 texture: r = coverage variation, g = the
+    // towers' height variation, b, a = a domain warp of the base shape (that breaks the
+    // base texture's repetition), all Perlin fBm in [0, 1] (n x n x 1).
+    // curl: a 2D divergence-free field (r, g in ~[-1, 1]), the curl of a Perlin fBm
+    // potential psi, (d psi / dy, -d psi / dx) (Bridson et al. 2007, "Curl-noise for
+    // procedural fluid flow", SIGGRAPH), that distorts the erosion noise as Schneider's
+    // Nubis does (n x n x 1).
+    TileableTexture3D base, detail, weather, curl;
     static CloudNoiseTextures bake(std::uint64_t seed, int base_size = 64, int detail_size = 32,
-                                   int weather_size = 128);
+                                   int weather_size = 128, int curl_size = 64);
 };
 
 }  // namespace welkin

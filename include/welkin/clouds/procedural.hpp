@@ -1,38 +1,61 @@
 // A procedural cloud layer on the curved planet, after Schneider's Nubis clouds
-// (Schneider 2015, "The real-time volumetric cloudscapes of Horizon Zero Dawn", SIGGRAPH
-// Advances in Real-Time Rendering; Schneider 2017, "Nubis: authoring real-time volumetric
-// cloudscapes with the Decima engine"; GPU Pro 7, ch. 4 "Real-time volumetric cloudscapes").
+// (Schneider & Vos 2015, "The real-time volumetric cloudscapes of Horizon Zero Dawn",
+// SIGGRAPH Advances in Real-Time Rendering; Schneider 2017, "Nubis: authoring real-time
+// volumetric cloudscapes with the Decima engine"; GPU Pro 7, ch. 4 "Real-time volumetric
+// cloudscapes").
 //
 // The layer is the spherical shell between bottom_altitude_m and top_altitude_m above a
 // ground of radius planet_radius_m, whose centre is straight below the world origin
-// (which stands origin_altitude_m above the ground, DESIGN.md). At a point p with
-// altitude h and height fraction f = (h - bottom) / (top - bottom):
-//   weather map (2D, tiling every weather_scale_m):   coverage c and type t at (x, y),
-//       c = coverage * clamp(1 + weather_variation (2 w_r - 1)), t = clamp(cloud_type
-//       + type_variation (2 w_g - 1)), w the weather texture (Perlin fBm);
-//   base shape (3D, tiling every base_scale_m):  base = remap(pw, -(1 - fbm_w), 1, 0, 1),
-//       pw the Perlin-Worley channel, fbm_w = 0.625 g + 0.25 b + 0.125 a its Worley octaves;
-//   height gradient G(t, f): a trapezoid per cloud type, stratus (thin, low), stratocumulus,
-//       cumulus (tall), blended linearly in t (0 stratus, 0.5 stratocumulus, 1 cumulus);
-//   coverage: base' = remap(base G, 1 - c, 1, 0, 1) c  (more coverage: more of the
-//       noise above the threshold, Schneider's "remap by coverage");
-//   detail erosion (3D, tiling every detail_scale_m): the Worley fBm of the detail
-//       texture, inverted towards the top (wispy bottoms, billowy tops), erodes the edges:
-//       density = remap(base', detail_strength * mix(fbm_d, 1 - fbm_d, clamp(10 f)), 1, 0, 1);
-//   sigma_t = density_per_m * clamp(density, 0, 1).
-// Noise coordinates are the world x, y (minus the wind offset) and the altitude, all
-// divided by the tile's scale: the field tiles horizontally and follows the planet's
-// curvature vertically. Every remap keeps values <= its input when the input is <= 1, so
-// density <= c <= coverage: the majorant is density_per_m * coverage on the shell.
-// The gradient trapezoids' corners are Welkin's choice, in the spirit of Schneider's
-// hand-drawn gradients (GPU Pro 7, fig. 4.7): they are parameters of look, not physics.
+// (which stands origin_altitude_m above the ground, DESIGN.md). A layer has one cloud
+// type (CloudType), whose preset (CloudLayerParams::preset) gives altitudes, scales and
+// density typical of it, and whose shape constants (below) give its height profile.
+// At a point p with altitude h and height fraction f = (h - bottom) / (top - bottom):
+//   weather map (2D, tiling every weather_scale_m), w the weather texture (Perlin fBm):
+//       local coverage c = clamp(k (1 + weather_variation (2 w_r - 1)), 0, 1), k the
+//       internal coverage (below); the local top fraction f_top = 1 - towers (1 - w_g)
+//       (cumulus: tall towers where w_g is high, low mounds elsewhere);
+//   height gradient G(f / f_top): the type's trapezoid (0 below a0, up to 1 at a1, 1 to a2,
+//       down to 0 at a3); a steep a0 -> a1 gives a flat base;
+//   base shape (3D, tile base_scale_m, stretched by the type's `stretch` along a direction
+//       30 degrees off the x axis): base = remap(pw, -(1 - fbm_w), 1, 0, 1), pw the
+//       Perlin-Worley channel and fbm_w its Worley octaves, read at a point displaced by a
+//       low-frequency domain warp (the weather map's b, a channels, half a base tile at
+//       most), which breaks the base texture's repetition (seen over tens of tiles towards
+//       the horizon, a periodic texture shows as streaks running to a vanishing point);
+//   coverage: covered = clamp(remap(base G, 1 - c, 1, 0, 1)) c (Schneider's remap by coverage);
+//   erosion (3D, tile detail_scale_m, its lookup displaced by the curl noise, Nubis's
+//       "curl distortion", stronger at the bottom): the detail Worley fBm, inverted towards
+//       the top (billowy tops) and faded out at the base by the type's `base_erosion`
+//       (flat bases for cumulus); at most kMaxErosion of the range is eroded, and only
+//       where the cloud is thin (erosion x (1 - covered)), so that raising the detail
+//       shapes edges and leaves no isolated specks:
+//       density = clamp(remap(covered, e, 1, 0, 1)), e = kMaxErosion detail_strength
+//       (1 - covered) modifier;
+//   sigma_t = density_per_m * density.
+// Every remap keeps values <= its input when the input is <= 1, so density <= 1: the
+// majorant is density_per_m on the shell.
 //
-// Deterministic: the noise is baked from the seed by integer hashing (cloud_noise.hpp),
-// the same on every machine.
+// Coverage means coverage: `coverage` is the share of the ground's area over which the
+// layer's vertical column is cloudy, a column being cloudy when its vertical optical depth
+// is at least kCoverageOpticalDepth (about a quarter of the light stopped). The internal
+// coverage k above is found at construction by bisection so that the share of cloudy
+// columns, over kCoverageColumns columns on a deterministic low-discrepancy set of points
+// (a square of two weather tiles), equals `coverage` (covered_fraction; the share grows
+// with k, so the bisection converges). Coverage 0 is a clear sky and 1 an overcast one.
+//
+// The shape constants are Welkin's choice, in the spirit of Schneider's hand-drawn height
+// gradients (GPU Pro 7, fig. 4.7) and of the WMO International Cloud Atlas's descriptions
+// of each genus: they are parameters of look, not physics.
+//
+// Deterministic: the noise is baked from the seed by integer hashing (noise.hpp), and the
+// calibration's columns are fixed points: the same on every machine.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <string_view>
 
 #include <glm/vec2.hpp>
 
@@ -41,28 +64,43 @@
 
 namespace welkin {
 
+enum class CloudType { cumulus, stratocumulus, altocumulus, stratus, cirrus };
+
+// "cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus".
+constexpr std::array<std::string_view, 5> kCloudTypeNames{"cumulus", "stratocumulus", "altocumulus", "stratus",
+                                                          "cirrus"};
+std::string_view cloud_type_name(CloudType type);
+// InvalidArgument naming `parameter` and listing the accepted names for an unknown one.
+CloudType cloud_type_from_name(std::string_view name, const std::string& parameter = "cloud_type");
+
 struct CloudLayerParams {
-    double bottom_altitude_m = 1500.0;   // [0, 20000), below top
-    double top_altitude_m = 3000.0;      // (bottom, 20000]
-    double coverage = 0.5;               // [0, 1]
-    double cloud_type = 1.0;             // [0, 1]: 0 stratus, 0.5 stratocumulus, 1 cumulus
-    double density_per_m = 0.03;         // sigma_t of the densest cloud, m^-1, [0, 10]
-    double base_scale_m = 6000.0;        // tile of the base shape, [10, 1e6] m
-    double detail_scale_m = 800.0;       // tile of the erosion noise, [1, 1e6] m
-    double weather_scale_m = 40000.0;    // tile of the weather map, [10, 1e7] m
-    double detail_strength = 0.35;       // [0, 1]
-    double weather_variation = 0.5;      // [0, 1]
-    double type_variation = 0.0;         // [0, 1]
+    CloudType cloud_type = CloudType::cumulus;
+    double bottom_altitude_m = 1200.0;   // [0, 20000), below top
+    double top_altitude_m = 3200.0;      // (bottom, 20000]
+    double coverage = 0.4;               // [0, 1]: share of the area under cloud (header)
+    double density_per_m = 0.04;         // sigma_t of the densest cloud, m^-1, [0, 10]
+    double base_scale_m = 5000.0;        // tile of the base shape, [10, 1e6] m
+    double detail_scale_m = 700.0;       // tile of the erosion noise, [1, 1e6] m
+    double weather_scale_m = 30000.0;    // tile of the weather map, [10, 1e7] m
+    double detail_strength = 0.5;        // [0, 1]
+    double weather_variation = 0.6;      // [0, 1]
     glm::dvec2 wind_offset_m{0.0, 0.0};  // shifts the field by this much (finite)
     std::uint64_t seed = 1;
     double planet_radius_m = 6360e3;     // [1e3, 1e8]
     double origin_altitude_m = 0.0;      // of the world origin above the ground, [0, 1e6]
 
+    // The preset of a cloud type (the defaults above are cumulus's).
+    static CloudLayerParams preset(CloudType type);
     void validate() const;  // InvalidArgument naming the field and its range
 };
 
 class ProceduralClouds final : public CloudDensity {
 public:
+    // A column is cloudy when its vertical optical depth reaches this (opacity 26 %).
+    static constexpr double kCoverageOpticalDepth = 0.3;
+    static constexpr int kCoverageColumns = 2048;
+    static constexpr double kMaxErosion = 0.6;
+
     explicit ProceduralClouds(const CloudLayerParams& params);
 
     double sigma_t(const glm::dvec3& p) const override;
@@ -70,16 +108,27 @@ public:
     double feature_size_m() const override;
 
     const CloudLayerParams& params() const { return p_; }
+    // The share of `columns` columns (the header's point set) whose vertical optical depth
+    // reaches kCoverageOpticalDepth: the measured coverage.
+    double covered_fraction(int columns = kCoverageColumns) const;
+    double internal_coverage() const { return k_; }
 
-    // Height gradient G(type, f) of the header, for f in [0, 1] (0 outside).
-    static double height_gradient(double type, double f);
+    // The type's height gradient G(f) for f in [0, 1] of its local height (0 outside).
+    static double height_gradient(CloudType type, double f);
 
 private:
+    double density(const glm::dvec3& p, double h, double k) const;
+    double column_depth(double x, double y, double k) const;
+    double fraction(double k, int columns) const;
+
     CloudLayerParams p_;
+    double k_ = 0.0;
     glm::dvec3 centre_;
     std::shared_ptr<const CloudNoiseTextures> noise_;
-    // The channels sigma_t reads, combined once: base (pw, fbm_w), detail fbm_d, weather (r, g).
-    PeriodicTexture<2> base_, weather_;
+    // The channels sigma_t reads, combined once: base (pw, fbm_w), detail fbm_d, weather
+    // (r, g, b, a), curl (x, y).
+    PeriodicTexture<2> base_, curl_;
+    PeriodicTexture<4> weather_;
     PeriodicTexture<1> detail_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
 };

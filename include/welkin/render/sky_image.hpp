@@ -69,6 +69,8 @@ struct SkyImageOptions {
     Output output = Output::Rgb;
     std::shared_ptr<const CloudDensity> clouds;  // none: a clear sky
     CloudLightingOptions cloud_lighting;
+    // The cloud pass is marched on a coarser grid and upsampled where smooth (lighting.hpp).
+    CloudUpsampling cloud_upsampling;
     // Steps of the air's march from the observer to each cloud (a scene's
     // aerial.raymarch_steps); [1, 4096].
     int air_steps = 64;

@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# Runs the headless Blender tests (tests/blender/test_*.py) on every Blender Welkin
+# supports, each with the add-on installed from its built package, as a user installs it:
+#   3.4  Debian's `blender`, the legacy add-on zip (scripts/build_addon.sh: the module
+#        built by scripts/build.sh for /usr/bin/python3 in welkin/_native/);
+#   4.5  PyPI's bpy 4.5 LTS in build/venv-bpy-4.5, and
+#   5.0  PyPI's bpy 5.0 in build/venv-bpy-5.0 (scripts/install_blender_venvs.sh), through
+#        tests/blender/bpy_blender.py (Blender's command line over the bpy module); both
+#        install the Extension (scripts/build_extension.sh), which carries the compiled core
+#        as the repaired wheel (scripts/build_wheel.sh), from its zip.
+# The packages are built once, into build/blender_dist/; the wheel is checked outside
+# Blender too (scripts/check_wheel.sh). Every test runs on every version
+# even when one fails; a test that cannot run on a version prints "SKIPPED ... : reason".
+# Prints each suite's time; the exit status is non-zero if any test failed.
+#
+#   bash scripts/test_blender.sh [-v 3.4,4.5,5.0] [tests/blender/test_x.py ...]
+set -uo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+versions=3.4,4.5,5.0
+if [[ ${1:-} == -v ]]; then
+  versions=$2
+  shift 2
+fi
+IFS=, read -r -a versions <<<"$versions"
+tests=("$@")
+((${#tests[@]})) || tests=(tests/blender/test_*.py)
+
+dist=build/blender_dist
+mkdir -p "$dist"
+version=$(sed -n 's/^project(welkin VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)
+failed=()
+declare -A seconds
+
+need_extension=0
+for v in "${versions[@]}"; do
+  case $v in
+    3.4) ;;
+    4.5 | 5.0) need_extension=1 ;;
+    *) echo "test_blender: unknown Blender version $v (3.4, 4.5, 5.0)" >&2; exit 2 ;;
+  esac
+done
+
+echo "--- packages (into $dist)"
+if [[ " ${versions[*]} " == *" 3.4 "* ]]; then
+  rm -f "$dist/welkin-$version.zip"
+  if bash scripts/build_addon.sh "$dist"; then
+    export WELKIN_ADDON_ZIP=$dist/welkin-$version.zip
+  else
+    failed+=(build_addon)
+  fi
+fi
+if ((need_extension)); then
+  rm -f "$dist"/welkin-*.whl "$dist"/welkin-*-linux_x64.zip
+  # The wheel for Blender's Python 3.11, built by the 4.5 venv's interpreter's base Python.
+  wheel_python=$(build/venv-bpy-4.5/bin/python -c 'import sys; print(sys._base_executable)' \
+                 2>/dev/null || echo python3)
+  if WELKIN_WHEEL_PYTHON=$wheel_python bash scripts/build_wheel.sh "$dist" &&
+     WELKIN_WHEEL=$(ls "$dist"/welkin-*manylinux*.whl) bash scripts/build_extension.sh "$dist"; then
+    export WELKIN_EXTENSION_ZIP=$dist/welkin-$version-linux_x64.zip
+    echo "--- the wheel outside Blender (scripts/check_wheel.sh)"
+    WELKIN_CHECK_PYTHON=$wheel_python bash scripts/check_wheel.sh "$dist"/welkin-*manylinux*.whl ||
+      failed+=(check_wheel)
+  else
+    failed+=(build_extension)
+  fi
+fi
+ls -l "$dist"
+
+for v in "${versions[@]}"; do
+  echo "=== Blender $v"
+  start=$SECONDS
+  for t in "${tests[@]}"; do
+    echo "--- $t (Blender $v)"
+    if [[ $v == 3.4 ]]; then
+      [[ -n ${WELKIN_ADDON_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
+      PYTHONPATH="$(pwd)/build${PYTHONPATH:+:$PYTHONPATH}" \
+        blender -b --factory-startup --python-use-system-env --python-exit-code 1 \
+        --python "$t" || failed+=("$t@$v")
+    else
+      [[ -n ${WELKIN_EXTENSION_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
+      # No PYTHONPATH: the compiled core comes from the Extension's wheel alone.
+      env -u PYTHONPATH "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py \
+        -b --factory-startup --python-use-system-env --python-exit-code 1 \
+        --python "$t" || failed+=("$t@$v")
+    fi
+  done
+  seconds[$v]=$((SECONDS - start))
+done
+
+for v in "${versions[@]}"; do
+  echo "test_blender: Blender $v: ${seconds[$v]} s"
+done
+if ((${#failed[@]})); then
+  echo "test_blender: FAILED: ${failed[*]}" >&2
+  exit 1
+fi
+echo "test_blender: all passed"
