@@ -124,6 +124,21 @@ PYBIND11_MODULE(welkin, m) {
     namespace py = pybind11;
     using namespace welkin::python;
 
+    // pybind11 before 2.12 reads NumPy 2's array descriptors wrongly (every row of an array
+    // comes out as its first): a module built against such a pybind11 (Debian 12's 2.10,
+    // scripts/build.sh, for /usr/bin/python3 and its NumPy 1.24) refuses a NumPy 2 at import
+    // instead of returning wrong radiance. The wheel is built with a newer pybind11.
+#if PYBIND11_VERSION_MAJOR == 2 && PYBIND11_VERSION_MINOR < 12
+    {
+        const std::string numpy_version = py::str(py::module_::import("numpy").attr("__version__"));
+        if (!numpy_version.empty() && numpy_version[0] != '1' && numpy_version[1] == '.')
+            throw py::import_error("welkin: this build of the module (pybind11 " PYBIND11_TOSTRING(PYBIND11_VERSION_MAJOR) "." PYBIND11_TOSTRING(PYBIND11_VERSION_MINOR) ") reads NumPy 1.x arrays only, and NumPy " +
+                                   numpy_version +
+                                   " is loaded; use the Python it was built for (/usr/bin/python3) or pip install the "
+                                   "wheel (scripts/build_wheel.sh)");
+    }
+#endif
+
     m.doc() = R"doc(Welkin: a physically based sky and atmosphere engine (C++ core).
 
 Conventions (the same in the core, the CLI and the Blender add-on):

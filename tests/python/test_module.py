@@ -13,6 +13,7 @@ Deterministic plumbing tests use method="reference" with few paths and a fixed s
 import _thread
 import copy
 import json
+import pathlib
 import pickle
 import re
 import threading
@@ -619,3 +620,45 @@ def test_a_render_larger_than_memory_is_a_memory_error_not_a_value_error():
     depth = np.zeros((1, 1), np.float32)
     with pytest.raises(MemoryError, match="resolution"):
         welkin.aerial_perspective(scene, depth)
+
+
+def _python_with_numpy_2():
+    """A Python 3.11 on this machine other than the one the module was built for, whose
+    NumPy is 2.x (the pyenv python3 here), or None."""
+    import shutil
+    import subprocess
+    import sys
+    for name in ("python3", "python3.11"):
+        path = shutil.which(name)
+        if path is None or pathlib.Path(path).resolve() == pathlib.Path(sys.executable).resolve():
+            continue
+        r = subprocess.run([path, "-c", "import sys, numpy; print(sys.version_info[:2] == (3, 11)"
+                            " and numpy.__version__.split('.')[0], sys.executable)"],
+                           capture_output=True, text=True)
+        if r.returncode == 0 and r.stdout.split()[0] not in ("False", "1"):
+            return r.stdout.split()[1]
+    return None
+
+
+def test_a_module_that_cannot_read_numpy_2_arrays_refuses_numpy_2_at_import():
+    # Debian's pybind11 2.10 (this build) reads every row of a NumPy 2 array as its first:
+    # the module must refuse to load beside NumPy 2 rather than return wrong radiance.
+    import subprocess
+    python = _python_with_numpy_2()
+    if python is None:
+        pytest.skip("no Python 3.11 with NumPy 2 on this machine besides the module's own")
+    build = pathlib.Path(welkin.__file__).parent
+    r = subprocess.run([python, "-c", "import welkin"], capture_output=True, text=True,
+                       env={"PYTHONPATH": str(build), "PATH": "/usr/bin:/bin"})
+    if "pybind11 2.1" in r.stderr and "reads NumPy 1.x arrays only" in r.stderr:
+        assert r.returncode != 0
+        return
+    # A module built with pybind11 >= 2.12 loads, and reads every row.
+    assert r.returncode == 0, r.stderr
+    probe = ("import numpy as np, welkin; a = welkin.Atmosphere.preset('clear'); "
+             "d = np.array([[0, 0, 1.0], [1, 0, 0.05]]); "
+             "L = welkin.sky_radiance(a, 0.0, np.array([0.5, 0.2, 0.6]), d, output='rgb'); "
+             "assert abs(L[0][2] - L[1][2]) > 1e-3 * abs(L[0][2]), L")
+    r = subprocess.run([python, "-c", probe], capture_output=True, text=True,
+                       env={"PYTHONPATH": str(build), "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 0, r.stderr
