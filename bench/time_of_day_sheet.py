@@ -17,7 +17,6 @@ x / (1 + x) per channel, then sRGB. The add-on is installed from its zip as in t
 """
 import argparse
 import math
-import os
 import pathlib
 import subprocess
 import sys

@@ -12,6 +12,9 @@ bash scripts/build.sh
 
 failed=()
 
+echo "=== Lint (ruff and mypy: scripts/lint.sh --python)"
+bash scripts/lint.sh --python || failed+=(lint)
+
 echo "=== C++ tests (ctest)"
 ctest --test-dir build --output-on-failure -j"$(nproc)" || failed+=(ctest)
 

@@ -44,7 +44,8 @@ def atlas_pixels(inscatter: np.ndarray, optical_depth: np.ndarray) -> np.ndarray
 
 
 def coordinates(direction: np.ndarray, distance: np.ndarray, max_distance: float,
-                linear_distance: float = LINEAR_DISTANCE_M):
+                linear_distance: float = LINEAR_DISTANCE_M
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(u, v of the L texel of the nearer slice, w): the shader's arithmetic, per point.
     direction: (..., 3) unit vectors from the camera; distance: (...) in the same unit as
     max_distance and linear_distance. The other three texels are at v + ELEVATIONS / HEIGHT (the farther
@@ -75,7 +76,7 @@ def _bilinear(atlas: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def lookup(atlas: np.ndarray, direction: np.ndarray, distance: np.ndarray, max_distance: float,
-           linear_distance: float = LINEAR_DISTANCE_M):
+           linear_distance: float = LINEAR_DISTANCE_M) -> tuple[np.ndarray, np.ndarray]:
     """(L, T), (..., 3) each, as the material node group computes them."""
     u, v, w = coordinates(direction, distance, max_distance, linear_distance)
     w = w[..., None]

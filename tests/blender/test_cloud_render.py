@@ -28,7 +28,7 @@ import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
 from welkin import scene_export  # noqa: E402
-from welkin.blender import aerial, compat, compositor, handlers, update  # noqa: E402
+from welkin.blender import compat, compositor, update  # noqa: E402
 
 check = t.check
 

@@ -14,7 +14,7 @@ import welkin
 ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
 
 
-from welkin_addon import native, pixels, sky_compute, sky_request
+from welkin_addon import native, pixels, sky_compute, sky_request  # noqa: E402 (conftest loads it)
 
 
 def test_addon_package_imports_without_bpy():
