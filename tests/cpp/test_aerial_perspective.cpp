@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "aerial_comparison.hpp"
+#include "peer_table.hpp"
 #include "invalid_argument_testing.hpp"
 #include "welkin/scene/scene.hpp"
 #include "welkin/aerial/aerial_perspective.hpp"
@@ -118,6 +119,11 @@ TEST(AerialPerspective, MonotoneInDepth) {
     cam.ortho_scale = 1e-3;
     const int W = 200, H = 2;
     SceneDescription s = scene_for("hazy", cam, W, H, 8.0, 20.0);
+    // At 680/550/440 nm, whose RGB conversion (Bruneton's) keeps each transmittance channel a
+    // non-negative mix of the wavelengths' own; the default four wavelengths' fitted
+    // conversion has negative weights, under which an RGB channel of T may rise by a few
+    // 1e-6 while every wavelength's T falls.
+    s.atmosphere = Atmosphere::preset("hazy", test::kPeerWavelengthsNm);
     std::vector<float> depth(W * H);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) depth[y * W + x] = float(5.0 * std::pow(1.05, x));  // 5 m .. 80 km
