@@ -26,17 +26,10 @@ IFS=, read -r -a versions <<<"$versions"
 tests=("$@")
 ((${#tests[@]})) || tests=(tests/blender/test_*.py)
 
-# Tests that do not pass yet on a version, with the reason: each still runs, its failure
-# is reported as KNOWN and does not fail the run, and its passing fails the run (so that
-# the entry is removed). Keep this list short and true: every entry is open work.
-declare -A known=(
-)
-
 dist=build/blender_dist
 mkdir -p "$dist"
 version=$(sed -n 's/^project(welkin VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)
 failed=()
-knowns=()
 declare -A seconds
 
 need_extension=0
@@ -87,17 +80,9 @@ for v in "${versions[@]}"; do
     else
       [[ -n ${WELKIN_EXTENSION_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
       # No PYTHONPATH: the compiled core comes from the Extension's wheel alone.
-      reason=${known["$(basename "$t" .py)@$v"]:-}
-      if env -u PYTHONPATH "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py \
+      env -u PYTHONPATH "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py \
         -b --factory-startup --python-use-system-env --python-exit-code 1 \
-        --python "$t"; then
-        [[ -z $reason ]] || { echo "test_blender: $t passes on $v: remove it from the known list"; failed+=("$t@$v(known)"); }
-      elif [[ -n $reason ]]; then
-        echo "test_blender: KNOWN FAILURE on Blender $v: $t: $reason"
-        knowns+=("$t@$v")
-      else
-        failed+=("$t@$v")
-      fi
+        --python "$t" || failed+=("$t@$v")
     fi
   done
   seconds[$v]=$((SECONDS - start))
@@ -106,7 +91,6 @@ done
 for v in "${versions[@]}"; do
   echo "test_blender: Blender $v: ${seconds[$v]} s"
 done
-((${#knowns[@]})) && echo "test_blender: known failures (open work): ${knowns[*]}"
 if ((${#failed[@]})); then
   echo "test_blender: FAILED: ${failed[*]}" >&2
   exit 1

@@ -42,7 +42,16 @@ layer = ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1800.0, cov
 bpy.ops.welkin.update_sky()
 check("with clouds" in world.welkin.status, world.welkin.status)
 sky = t.world_pixels(world.welkin.sky_image).copy()
-disc = t.world_pixels(world.welkin.disc_image).copy()
+# The world draws the disc with nodes; the HDRI holds it as pixels: the core's disc image
+# for this sun, dimmed by the clouds' transmittance of each pixel (as the core composites).
+from welkin import sky_request  # noqa: E402
+request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
+text = update.cloudy_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
+_img, T = native.scene_sky_image(native.SceneDescription.from_json_string(text), sky.shape[1],
+                                 sun_disc=False, return_transmittance=True)
+disc = native.sun_disc_image(sky_request.build_atmosphere(request, native), request.altitude_m,
+                             request.sun_direction, sky.shape[1], "rgb",
+                             exposure=request.exposure) * T[..., None]
 
 
 def export(name, **kwargs):
@@ -76,10 +85,6 @@ print(f"HDRI with disc vs the world's sky + disc: total {rel:.2e} relative, away
 check(rel < 1e-3, f"the HDRI's total differs from the world's (sky + disc) by {rel:.3g}")
 
 # The clouds are in it: against the clear sky, where the core sees clouds.
-request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
-text = update.cloudy_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
-_img, T = native.scene_sky_image(native.SceneDescription.from_json_string(text), sky.shape[1],
-                                 sun_disc=False, return_transmittance=True)
 layer.enabled = False
 clear = export("clear_nodisc.exr", sun_disc=False)
 cloud, free = T < 0.9, T >= 1.0 - 1e-7

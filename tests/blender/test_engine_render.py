@@ -122,10 +122,16 @@ sky_rows = np.isinf(native.camera_plate(scene_json(scene))["depth"]).mean()
 check(0.1 < sky_rows < 0.9, f"the view should hold sky and ground, sky fraction {sky_rows}")
 T = layers["Welkin.AerialTransmittance"]
 check(np.all((T >= 0) & (T <= 1)), "transmittance outside [0, 1]")
-# Combined = Sky + Inscatter (a black ground seen through the air).
-check(np.allclose(layers["Combined"][..., :3],
-                  layers["Welkin.Sky"][..., :3] + layers["Welkin.AerialInscatter"], rtol=1e-5,
-                  atol=1e-7), "Combined != Sky + AerialInscatter")
+# Combined = Sky + Inscatter + T x G: on sky pixels Sky alone (T = 1, no inscatter); on the
+# ground, the lit ground G (albedo / pi x irradiance, camera_plate.hpp) seen through the air.
+depth = layers["Depth"][..., 0] if "Depth" in layers else None
+rest = (layers["Combined"][..., :3] - layers["Welkin.Sky"][..., :3]
+        - layers["Welkin.AerialInscatter"])
+ground_px = np.isfinite(depth) & (depth < 1e9) if depth is not None else (T[..., 0] < 1.0)
+check(np.allclose(rest[~ground_px], 0.0, atol=1e-6 * float(np.abs(layers["Combined"]).max())),
+      "Combined != Sky + AerialInscatter on sky pixels")
+check(float((rest[ground_px] / np.maximum(T[ground_px], 1e-12)).min()) > 0.0,
+      "the ground below the horizon is not lit (Combined - Sky - Inscatter <= 0)")
 peak = float(layers["Welkin.Sky"][..., 1].max())
 check(peak > 100 * float(np.median(layers["Welkin.Sky"][..., 1])), "no sun disc in view")
 

@@ -97,7 +97,15 @@ def disc_energy(model):
     return 2.0 * math.pi * sin2 * (weight[:, None] * radiance).sum(axis=0)
 
 
-def test_compute_is_the_modules_sky_disc_and_sun(atm, sun_direction):
+@pytest.fixture
+def addon_atm():
+    """The add-on's atmosphere for the default request: the preset at the library's default
+    wavelengths (not conftest's 680/550/440 nm)."""
+    return welkin.Atmosphere.preset("bruneton2017")
+
+
+def test_compute_is_the_modules_sky_disc_and_sun(addon_atm, sun_direction):
+    atm = addon_atm
     req = sky_request.SkyRequest(sun_direction=tuple(sun_direction), width=256, exposure=0.5,
                                  altitude_m=250.0)
     result = sky_compute.compute(welkin, req)

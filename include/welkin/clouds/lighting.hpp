@@ -175,8 +175,10 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 // transmittance_tolerance, each channel's radiance within radiance_tolerance of the
 // largest of the four) and marched itself elsewhere. stride 1 marches every ray.
 // Deterministic: a ray's value is its own march or a fixed combination of marched rays.
+// The default marches every ray: a cloud smaller than the stride between four clear
+// corner rays is lost by interpolation, so a stride above 1 is a choice for previews.
 struct CloudUpsampling {
-    int stride = 4;                        // [1, 16]
+    int stride = 1;                        // [1, 16]
     double transmittance_tolerance = 0.1;  // [0, 1]
     double radiance_tolerance = 0.3;       // [0, 1], relative
     void validate() const;
