@@ -70,6 +70,7 @@ def test_passes_compose(camera):
     m = json.loads(scene(camera))
     c, s = math.cos(math.radians(2)), math.sin(math.radians(2))
     m["camera"]["matrix_world"] = [[0, s, -c, 0], [-1, 0, 0, 0], [0, c, s, 50], [0, 0, 0, 1]]
+    m["ground"] = {"enabled": False}  # the passes of a black ground (the lit one: tests/cpp/test_ground.cpp)
     plate = welkin.camera_plate(json.dumps(m))
     is_sky = np.isinf(plate["depth"])
     # Parallel orthographic rays 2 degrees down all reach the ground.

@@ -111,7 +111,7 @@ def test_sun_reports_transmittance_and_direct_irradiance():
     assert json.loads(welkin("sun", "--sun-elevation", 0).stdout)["visible_fraction"] == \
         pytest.approx(0.5)
     night = json.loads(welkin("sun", "--sun-elevation", -10).stdout)
-    assert night["direct_irradiance_W_m2_nm"] == [0.0, 0.0, 0.0]
+    assert night["direct_irradiance_W_m2_nm"] == [0.0] * len(night["solar_irradiance_W_m2_nm"])
     assert night["direct_irradiance_rgb_W_m2"] == [0.0, 0.0, 0.0]
     spectral = json.loads(welkin("sun", "--spectral").stdout)
     assert len(spectral["wavelengths_nm"]) == 48

@@ -45,7 +45,7 @@ def test_vdb_clouds_with_blender_matrix(tmp_path):
     atm = welkin.Atmosphere.preset("bruneton2017")
     d = np.array([[0.0, 1000.0, 500.0]]) / math.hypot(1000.0, 500.0)
     L, T, depth = welkin.cloud_radiance(v, atm, 0.0, (0.3, 0.2, 0.9), d)
-    assert L.shape == (1, 3) and T.shape == (1,)
+    assert L.shape == (1, len(atm.wavelengths_nm)) and T.shape == (1,)
     assert 0.0 < T[0] < 1.0 and np.all(L > 0.0)
     assert abs(depth[0] - math.hypot(1000.0, 500.0)) < 80.0
 
@@ -97,9 +97,10 @@ def test_cloud_layer_and_cloudy_sky_image():
     assert layer.coverage == 0.7
     atm = welkin.Atmosphere.preset("bruneton2017")
     sun = (0.6, 0.2, 0.5)
-    clear = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False)
-    cloudy = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False, clouds=layer)
-    assert clear.shape == cloudy.shape == (16, 32, 3)
+    clear = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False, ground=False)
+    cloudy = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False, clouds=layer,
+                             ground=False)
+    assert clear.shape == cloudy.shape == (16, 32, len(atm.wavelengths_nm))
     assert np.all(np.isfinite(cloudy))
     # The lower half looks at the ground below the layer: unchanged; the upper half changes.
     assert np.array_equal(clear[12:], cloudy[12:])

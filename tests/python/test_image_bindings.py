@@ -17,7 +17,7 @@ def solid_angles(width, height):
 
 
 def test_sky_image_is_sky_radiance_over_the_pixel_directions(atm, sun_direction):
-    img = welkin.sky_image(atm, 100.0, sun_direction, 64, sun_disc=False)
+    img = welkin.sky_image(atm, 100.0, sun_direction, 64, sun_disc=False, ground=False)
     assert img.shape == (32, 64, 3) and img.dtype == np.float32
     dirs = welkin.equirect_pixel_directions(64, 32).reshape(-1, 3)
     ref = welkin.sky_radiance(atm, 100.0, sun_direction, dirs, output="rgb").reshape(32, 64, 3)
