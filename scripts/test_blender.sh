@@ -11,7 +11,8 @@
 # The packages are built once, into build/blender_dist/; the wheel is checked outside
 # Blender too (scripts/check_wheel.sh). Every test runs on every version
 # even when one fails; a test that cannot run on a version prints "SKIPPED ... : reason".
-# Prints each suite's time; the exit status is non-zero if any test failed.
+# Prints each suite's time; the exit status is non-zero if any test failed. A test that
+# runs longer than $WELKIN_TEST_TIMEOUT seconds (900) is stopped and fails.
 #
 #   bash scripts/test_blender.sh [-v 3.4,4.5,5.0] [tests/blender/test_x.py ...]
 set -uo pipefail
@@ -84,7 +85,7 @@ for v in "${versions[@]}"; do
       [[ -n ${WELKIN_ADDON_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
       reason=${known["$(basename "$t" .py)@$v"]:-}
       if PYTHONPATH="$(pwd)/build${PYTHONPATH:+:$PYTHONPATH}" \
-        blender -b --factory-startup --python-use-system-env --python-exit-code 1 \
+        timeout -k 10 "${WELKIN_TEST_TIMEOUT:-900}" blender -b --factory-startup --python-use-system-env --python-exit-code 1 \
         --python "$t"; then
         [[ -z $reason ]] || { echo "test_blender: $t now passes on $v: take it off the known list"; failed+=("$t@$v(known)"); }
       elif [[ -n $reason ]]; then
@@ -95,7 +96,8 @@ for v in "${versions[@]}"; do
     else
       [[ -n ${WELKIN_EXTENSION_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
       # No PYTHONPATH: the compiled core comes from the Extension's wheel alone.
-      env -u PYTHONPATH "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py \
+      env -u PYTHONPATH timeout -k 10 "${WELKIN_TEST_TIMEOUT:-900}" \
+        "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py \
         -b --factory-startup --python-use-system-env --python-exit-code 1 \
         --python "$t" || failed+=("$t@$v")
     fi
