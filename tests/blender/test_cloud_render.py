@@ -100,7 +100,7 @@ scene.render.resolution_x, scene.render.resolution_y = 64, 32
 scene.render.resolution_percentage = 100
 scene.render.image_settings.file_format = 'OPEN_EXR'
 scene.render.filepath = str(t.TMP / "out" / "frame_")
-tree = compat.scene_compositor_tree(scene)
+tree, _undo = compat.ensure_scene_compositor(scene, f"{scene.name} Compositing")
 rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
 comp = compat.compositor_output(tree)  # 5.0: the tree's Group Output
 user = tree.nodes.new('CompositorNodeGamma')

@@ -97,27 +97,6 @@ def sky_type_nishita():
     return 'NISHITA' if 'NISHITA' in items else 'SINGLE_SCATTERING'
 
 
-def scene_compositor_tree(scene, create=True):
-    """The scene's compositing node tree. 3.4-4.5: scene.node_tree, made by switching
-    scene.use_nodes on. 5.0: a node group assigned to scene.compositing_node_group (new
-    ones get a Render Layers node and a Group Output, the Composite node's successor);
-    scene.use_nodes is deprecated. None when there is none and create is False."""
-    if hasattr(scene, "compositing_node_group"):
-        tree = scene.compositing_node_group
-        if tree is None and create:
-            tree = bpy.data.node_groups.new(f"{scene.name} Compositing", 'CompositorNodeTree')
-            tree.interface.new_socket("Image", in_out='OUTPUT', socket_type='NodeSocketColor')
-            layers = tree.nodes.new('CompositorNodeRLayers')
-            output = tree.nodes.new('NodeGroupOutput')
-            output.location = (400.0, 0.0)
-            tree.links.new(layers.outputs["Image"], output.inputs[0])
-            scene.compositing_node_group = tree
-        return tree
-    if create:
-        scene.use_nodes = True
-    return scene.node_tree
-
-
 def compositor_output(tree):
     """The node whose input is the composited frame: the Composite node in 3.4-4.5, the
     tree's active Group Output in 5.0 (which has no Composite node). None if absent."""
