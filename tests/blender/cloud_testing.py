@@ -48,6 +48,17 @@ def add_volume(scene, first_file, name="Cloud", location=(0.0, 0.0, 2000.0), seq
     return ob
 
 
+def quick_cloudy_world(world):
+    """The world's sky at the tests' quick settings: lut, 256 wide, a short cloud march
+    (24 steps, 3 light steps, 1 ambient step, all scattering orders). Returns the world's
+    cloud settings."""
+    world.welkin.method = 'lut'
+    world.welkin.resolution = '256'
+    c = world.welkin_clouds
+    c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 24, 3, 1, 2
+    return c
+
+
 def add_layer(world, **values):
     layer = world.welkin_clouds.layers.add()
     layer.name = "Test Layer"

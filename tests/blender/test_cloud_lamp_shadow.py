@@ -35,10 +35,7 @@ from welkin.blender import scene_sun, update  # noqa: E402
 check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=40.0, sun_azimuth_deg=0.0, camera_z=20.0)
 world = scene.world
-world.welkin.method = 'lut'
-world.welkin.resolution = '256'
-c = world.welkin_clouds
-c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 24, 3, 1, 2
+c = ct.quick_cloudy_world(world)
 check(c.shadows, "Shade Sun Lamp must be on by default")
 layer = ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1800.0, coverage=1.0,
                      weather_variation=0.0, density_per_m=0.0004)

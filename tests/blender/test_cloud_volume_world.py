@@ -38,10 +38,7 @@ cam = scene.camera
 cam.rotation_euler = (math.radians(95.0), 0.0, math.radians(-90.0))
 cam.data.clip_end = 1e6
 world = scene.world
-world.welkin.method = 'lut'
-world.welkin.resolution = '256'
-c = world.welkin_clouds
-c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 24, 3, 1, 2
+c = ct.quick_cloudy_world(world)
 paths = ct.write_vdb_sequence(t.TMP / "vdb", frames=(1,), size=16, voxel_m=60.0)
 vol = ct.add_volume(scene, paths[0], location=(2500.0, 0.0, 450.0), sequence=0)
 vol.welkin_cloud.density_scale = 0.02

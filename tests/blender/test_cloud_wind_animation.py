@@ -39,10 +39,7 @@ W, H = 64, 32
 
 scene, sun = t.new_scene(sun_elevation_deg=30.0, sun_azimuth_deg=40.0, camera_z=2.0)
 world = scene.world
-world.welkin.method = 'lut'
-world.welkin.resolution = '256'
-c = world.welkin_clouds
-c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 24, 3, 1, 2
+c = ct.quick_cloudy_world(world)
 layer = ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1800.0, coverage=0.6,
                      density_per_m=0.02, base_scale_m=3000.0, weather_scale_m=12000.0)
 layer.wind_offset_m = (0.0, 0.0)
