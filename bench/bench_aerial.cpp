@@ -21,17 +21,17 @@
 #include <optional>
 #include <vector>
 
+#include "aerial_comparison.hpp"  // tests/cpp: the comparison the tests assert on
+#include "bench_timing.hpp"
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
-#include "aerial_comparison.hpp"  // tests/cpp: the comparison the tests assert on
-#include "bench_timing.hpp"
-#include "welkin/scene/scene.hpp"
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/scene/scene.hpp"
 
 using namespace welkin;
 
@@ -63,7 +63,8 @@ std::vector<float> terrain_depth(const Camera& cam, int W, int H, double height_
                 t = ridge / r.direction.x;
                 if (height_m + t * r.direction.z > ridge_top) t = std::numeric_limits<double>::infinity();
             }
-            if (x < W / 5 && y > 2 * H / 3) t = (30.0 + 30.0 * double(y - 2 * H / 3) / H) * r.distance_per_depth;
+            if (x < W / 5 && y > 2 * H / 3)
+                t = (30.0 + 30.0 * double(y - 2 * H / 3) / H) * r.distance_per_depth;
             depth[std::size_t(y) * W + x] = float(t / r.distance_per_depth);
         }
     return depth;
@@ -96,15 +97,20 @@ int main(int argc, char** argv) {
                tbb::info::default_concurrency(), preset, width, height, z_max / 1e3);
 
     AerialPasses reference;
-    const double t_luts = median_ms(repeats, [&] { AtmosphereLuts luts(scene.atmosphere, scene.sky_options.luts()); });
-    const double t_march = median_ms(1, [&] { reference = aerial_perspective_raymarch(scene.aerial_view(), depth, width, height); });
+    const double t_luts =
+        median_ms(repeats, [&] { AtmosphereLuts luts(scene.atmosphere, scene.sky_options.luts()); });
+    const double t_march = median_ms(
+        1, [&] { reference = aerial_perspective_raymarch(scene.aerial_view(), depth, width, height); });
     fmt::print("  transmittance + multiple-scattering LUTs           {:9.2f} ms\n", t_luts);
     fmt::print("  per-pixel march ({} steps, LUTs included)          {:9.1f} ms\n", steps, t_march);
 
     std::FILE* out = nullptr;
     if (!csv.empty()) {
         out = std::fopen(csv.c_str(), "w");
-        if (out) std::fprintf(out, "froxels,build_ms,apply_ms,total_ms,march_ms,median_rel_L,p99_rel_L,max_rel_L,max_abs_T\n");
+        if (out)
+            std::fprintf(
+                out,
+                "froxels,build_ms,apply_ms,total_ms,march_ms,median_rel_L,p99_rel_L,max_rel_L,max_abs_T\n");
     }
     const AtmosphereLuts luts(scene.atmosphere, scene.sky_options.luts());
     fmt::print("  {:>10} {:>10} {:>10} {:>10} {:>9} {:>11} {:>10} {:>10} {:>9}\n", "froxels", "build ms",
@@ -113,7 +119,8 @@ int main(int argc, char** argv) {
         SceneDescription s = scene;
         s.aerial.froxel_width = s.aerial.froxel_height = s.aerial.froxel_slices = n;
         std::optional<AerialPerspectiveVolume> volume;
-        const double t_build = median_ms(repeats, [&] { volume.emplace(s.aerial_view(), luts, width, height, z_max); });
+        const double t_build =
+            median_ms(repeats, [&] { volume.emplace(s.aerial_view(), luts, width, height, z_max); });
         // The application: one volume lookup per pixel (the loop aerial_perspective_froxel runs).
         AerialPasses passes;
         passes.inscatter.resize(std::size_t(width) * height * 3);
@@ -133,7 +140,8 @@ int main(int argc, char** argv) {
             });
         });
         AerialPasses full;
-        const double t_total = median_ms(repeats, [&] { full = aerial_perspective_froxel(s.aerial_view(), depth, width, height); });
+        const double t_total = median_ms(
+            repeats, [&] { full = aerial_perspective_froxel(s.aerial_view(), depth, width, height); });
         const test::AerialComparison e = test::compare_aerial_passes(full, reference, depth);
         fmt::print("  {:>10} {:10.2f} {:10.2f} {:10.2f} {:8.0f}x {:11.3f} {:10.3f} {:10.3f} {:9.5f}\n",
                    fmt::format("{0}x{0}x{0}", n), t_build, t_apply, t_total, t_march / t_total,
@@ -143,7 +151,8 @@ int main(int argc, char** argv) {
                          t_march, e.median_rel_L, e.p99_rel_L, e.max_rel_L, e.max_abs_T);
     }
     if (out) std::fclose(out);
-    fmt::print("  (total: the whole froxel call, LUTs, volume and application included; errors "
-               "against the per-pixel march)\n");
+    fmt::print(
+        "  (total: the whole froxel call, LUTs, volume and application included; errors "
+        "against the per-pixel march)\n");
     return 0;
 }

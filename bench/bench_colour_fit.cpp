@@ -76,7 +76,8 @@ int main(int argc, char** argv) {
     std::fclose(m);
     // Bruneton 2017's three-sample sky conversion (the default before the fitted four).
     m = std::fopen((dir + "/bruneton3.txt").c_str(), "w");
-    for (double v : SpectrumToRgb(std::vector<double>{680.0, 550.0, 440.0}).matrix()) std::fprintf(m, "%.12g\n", v);
+    for (double v : SpectrumToRgb(std::vector<double>{680.0, 550.0, 440.0}).matrix())
+        std::fprintf(m, "%.12g\n", v);
     std::fclose(m);
     return 0;
 }

@@ -17,19 +17,19 @@
 #include <functional>
 #include <vector>
 
+#include "bench_timing.hpp"
 #include <CLI/CLI.hpp>
-#include <glm/geometric.hpp>
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include "bench_timing.hpp"
-#include "welkin/atmosphere/luts.hpp"
-#include "welkin/base/equirect.hpp"
 #include "welkin/atmosphere/lut_cache.hpp"
-#include "welkin/sky/lut.hpp"
+#include "welkin/atmosphere/luts.hpp"
 #include "welkin/atmosphere/skyview_lut.hpp"
+#include "welkin/base/equirect.hpp"
 #include "welkin/render/sky_image.hpp"
+#include "welkin/sky/lut.hpp"
 #include "welkin/sky/method.hpp"
 
 using namespace welkin;
@@ -50,8 +50,8 @@ int main(int argc, char** argv) {
     const SkyOptions options;
     const Observer observer{0.0, glm::normalize(glm::dvec3(0.5, 0.3, 0.4))};
     const double r = atm.bottom_radius_m + observer.altitude_m;
-    fmt::print("Welkin sky benchmark: {} threads, preset {}, {}x{} sky\n",
-               tbb::info::default_concurrency(), atm.name, width, width / 2);
+    fmt::print("Welkin sky benchmark: {} threads, preset {}, {}x{} sky\n", tbb::info::default_concurrency(),
+               atm.name, width, width / 2);
 
     std::vector<std::pair<std::string, double>> rows;
     auto report = [&](const std::string& what, double ms) {
@@ -62,18 +62,25 @@ int main(int argc, char** argv) {
     // LUT builds, one at a time.
     const AtmosphereBatch medium(atm, 0, atm.channels());
     report(fmt::format("transmittance LUT {}x{}", options.transmittance_width, options.transmittance_height),
-           median_ms(repeats, [&] { TransmittanceLut t(medium, options.transmittance_width, options.transmittance_height); }));
+           median_ms(repeats, [&] {
+               TransmittanceLut t(medium, options.transmittance_width, options.transmittance_height);
+           }));
     const TransmittanceLut tlut(medium, options.transmittance_width, options.transmittance_height);
-    report(fmt::format("multiple-scattering LUT {}x{}", options.multiscattering_size, options.multiscattering_size),
+    report(fmt::format("multiple-scattering LUT {}x{}", options.multiscattering_size,
+                       options.multiscattering_size),
            median_ms(repeats, [&] { MultiScatteringLut m(medium, tlut, options.multiscattering_size); }));
     const MultiScatteringLut mslut(medium, tlut, options.multiscattering_size);
     report(fmt::format("sky-view LUT {}x{}", options.skyview_width, options.skyview_height),
-           median_ms(repeats, [&] { SkyViewLut s(medium, tlut, mslut, r, observer.sun_direction.z, options.skyview_width, options.skyview_height); }));
+           median_ms(repeats, [&] {
+               SkyViewLut s(medium, tlut, mslut, r, observer.sun_direction.z, options.skyview_width,
+                            options.skyview_height);
+           }));
     report("full LUT rebuild (atmosphere change: all three)", median_ms(repeats, [&] {
                AtmosphereBatch m(atm, 0, atm.channels());
                TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
                MultiScatteringLut ms(m, t, options.multiscattering_size);
-               SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+               SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width,
+                            options.skyview_height);
            }));
     // From the ground itself the sky-view rows below the horizon are rays of no length
     // (no steps); 1 km up they cross air too, so this is the rebuild of an elevated camera.
@@ -81,7 +88,8 @@ int main(int argc, char** argv) {
                AtmosphereBatch m(atm, 0, atm.channels());
                TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
                MultiScatteringLut ms(m, t, options.multiscattering_size);
-               SkyViewLut s(m, t, ms, r + 1000.0, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+               SkyViewLut s(m, t, ms, r + 1000.0, observer.sun_direction.z, options.skyview_width,
+                            options.skyview_height);
            }));
 
     // Colour: the default four wavelengths (620/560/480/440 nm, fitted conversion) beside
@@ -95,14 +103,17 @@ int main(int argc, char** argv) {
                 AtmosphereBatch m(a, 0, a.channels());
                 TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
                 MultiScatteringLut ms(m, t, options.multiscattering_size);
-                SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+                SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width,
+                             options.skyview_height);
             });
         };
         const LutSky uncached(options, nullptr);
         auto image = [&](const Atmosphere& a) {
-            return median_ms(std::max(3, repeats / 4), [&] { render_equirect_sky(uncached, a, observer, width); });
+            return median_ms(std::max(3, repeats / 4),
+                             [&] { render_equirect_sky(uncached, a, observer, width); });
         };
-        const Atmosphere eight = Atmosphere::preset("bruneton2017", {680.0, 640.0, 600.0, 560.0, 520.0, 480.0, 440.0, 400.0});
+        const Atmosphere eight =
+            Atmosphere::preset("bruneton2017", {680.0, 640.0, 600.0, 560.0, 520.0, 480.0, 440.0, 400.0});
         const double r3 = rebuild(three), r4 = rebuild(atm);
         double r8 = 0.0;
         {
@@ -111,7 +122,8 @@ int main(int argc, char** argv) {
                     AtmosphereBatch m(eight, first, 4);
                     TransmittanceLut t(m, options.transmittance_width, options.transmittance_height);
                     MultiScatteringLut ms(m, t, options.multiscattering_size);
-                    SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width, options.skyview_height);
+                    SkyViewLut s(m, t, ms, r, observer.sun_direction.z, options.skyview_width,
+                                 options.skyview_height);
                 }
             });
         }
@@ -130,7 +142,8 @@ int main(int argc, char** argv) {
     const int height = width / 2;
     std::vector<glm::dvec3> dirs(std::size_t(width) * height);
     for (int j = 0; j < height; ++j)
-        for (int i = 0; i < width; ++i) dirs[std::size_t(j) * width + i] = equirect_pixel_direction(i, j, width, height);
+        for (int i = 0; i < width; ++i)
+            dirs[std::size_t(j) * width + i] = equirect_pixel_direction(i, j, width, height);
     std::vector<float> out(dirs.size() * atm.channels());
     // The lut method keeps the atmosphere's LUTs between calls (lut_cache.hpp). Timed twice:
     // with every LUT built in the call (no cache), and as a sun change (a warm cache: the
@@ -144,25 +157,31 @@ int main(int argc, char** argv) {
     int turn = 0;
     const double sun_change_ms = median_ms(repeats, [&] {
         const double azimuth = 0.1 * ++turn, elevation = 0.4 + 0.01 * turn;
-        const Observer moved{observer.altitude_m, glm::dvec3(std::cos(elevation) * std::cos(azimuth),
-                                                             std::cos(elevation) * std::sin(azimuth), std::sin(elevation))};
+        const Observer moved{observer.altitude_m,
+                             glm::dvec3(std::cos(elevation) * std::cos(azimuth),
+                                        std::cos(elevation) * std::sin(azimuth), std::sin(elevation))};
         lut_cached.radiance(atm, moved, dirs, out);
     });
     report(fmt::format("sun change: sky-view + {}x{} lookups (cached LUTs)", width, height), sun_change_ms);
     if (cache.builds() != 1) fmt::print("  (the cache rebuilt {} times: unexpected)\n", cache.builds());
     const auto raymarch = make_sky_method("raymarch", options);
-    const double raymarch_ms = median_ms(std::min(repeats, 3), [&] { raymarch->radiance(atm, observer, dirs, out); });
-    report(fmt::format("raymarch {}x{} sky ({} + {} steps)", width, height, options.raymarch_steps, options.raymarch_sun_steps), raymarch_ms);
+    const double raymarch_ms =
+        median_ms(std::min(repeats, 3), [&] { raymarch->radiance(atm, observer, dirs, out); });
+    report(fmt::format("raymarch {}x{} sky ({} + {} steps)", width, height, options.raymarch_steps,
+                       options.raymarch_sun_steps),
+           raymarch_ms);
     std::vector<glm::dvec3> subset;
     for (std::size_t i = 0; i < dirs.size(); i += std::size_t(stride)) subset.push_back(dirs[i]);
     std::vector<float> out_subset(subset.size() * atm.channels());
     fmt::print("  speed-up lut vs raymarch:  {:>8.0f}x\n", raymarch_ms / lut_ms);
     try {
         const auto reference = make_sky_method("reference", options);
-        const double ref_subset_ms = median_ms(1, [&] { reference->radiance(atm, observer, subset, out_subset); });
+        const double ref_subset_ms =
+            median_ms(1, [&] { reference->radiance(atm, observer, subset, out_subset); });
         const double reference_ms = ref_subset_ms * double(dirs.size()) / double(subset.size());
         report(fmt::format("reference {}x{} sky ({} paths; extrapolated from {} px)", width, height,
-                           options.reference_paths, subset.size()), reference_ms);
+                           options.reference_paths, subset.size()),
+               reference_ms);
         fmt::print("  speed-up lut vs reference: {:>8.0f}x\n", reference_ms / lut_ms);
     } catch (const std::exception& e) {
         fmt::print("  reference: not timed ({})\n", e.what());

@@ -4,8 +4,7 @@
 # in a venv of their own (build/venv-lint). Exits non-zero on any finding.
 #   bash scripts/lint.sh          check
 #   bash scripts/lint.sh --fix    apply clang-format and ruff's safe fixes, then check
-#   bash scripts/lint.sh --python ruff and mypy only (what scripts/test.sh runs until the
-#                                 C++ has been through clang-format once)
+#   bash scripts/lint.sh --python ruff and mypy only
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 

@@ -8,12 +8,12 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 bash scripts/install_deps.sh
 bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.5 and 5.0, for the Blender tests
-bash scripts/build.sh
+WELKIN_WERROR=ON bash scripts/build.sh  # warnings are errors in CI
 
 failed=()
 
-echo "=== Lint (ruff and mypy: scripts/lint.sh --python)"
-bash scripts/lint.sh --python || failed+=(lint)
+echo "=== Lint (clang-format, ruff and mypy: scripts/lint.sh)"
+bash scripts/lint.sh || failed+=(lint)
 
 echo "=== C++ tests (ctest)"
 ctest --test-dir build --output-on-failure -j"$(nproc)" || failed+=(ctest)

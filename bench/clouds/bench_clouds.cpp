@@ -21,6 +21,7 @@
 #include <functional>
 #include <vector>
 
+#include "../bench_timing.hpp"
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -30,15 +31,14 @@
 #include <tbb/info.h>
 #include <unistd.h>
 
-#include "../bench_timing.hpp"
+#include "welkin/base/math.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/clouds/lighting.hpp"
 #include "welkin/clouds/noise.hpp"
-#include "welkin/clouds/reference.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/clouds/procedural.hpp"
-#include "welkin/render/sky_image.hpp"
+#include "welkin/clouds/reference.hpp"
 #include "welkin/clouds/vdb.hpp"
+#include "welkin/render/sky_image.hpp"
 
 using namespace welkin;
 using Clock = std::chrono::steady_clock;
@@ -74,7 +74,8 @@ std::string write_ball_vdb() {
                 acc.setValue(openvdb::Coord(i, j, k), float((1.0 - r * r) * (0.3 + 0.7 * w)));
             }
     const std::string path =
-        (std::filesystem::temp_directory_path() / fmt::format("welkin_bench_cloud_{}.vdb", ::getpid())).string();
+        (std::filesystem::temp_directory_path() / fmt::format("welkin_bench_cloud_{}.vdb", ::getpid()))
+            .string();
     openvdb::io::File file(path);
     file.write({grid});
     file.close();
@@ -112,7 +113,8 @@ int main(int argc, char** argv) {
 
     const Atmosphere atm = Atmosphere::preset("bruneton2017");
     const Observer obs{0.0, glm::normalize(glm::dvec3(0.6, 0.2, 0.5))};
-    fmt::print("Welkin cloud benchmark: {} threads, {}x{} sky\n", tbb::info::default_concurrency(), width, width / 2);
+    fmt::print("Welkin cloud benchmark: {} threads, {}x{} sky\n", tbb::info::default_concurrency(), width,
+               width / 2);
 
     // --- the cloudy sky ---------------------------------------------------------------
     // One default layer (the cumulus preset, coverage 0.4), as `welkin sky --scene` renders
@@ -149,7 +151,8 @@ int main(int argc, char** argv) {
             cloudy.cloud_upsampling.transmittance_tolerance = st.dT;
             cloudy.cloud_upsampling.radiance_tolerance = st.dL;
             SkyImage img;
-            const double t = median_s(repeats, [&] { img = render_equirect_sky(*lut, atm, obs, width, cloudy); });
+            const double t =
+                median_s(repeats, [&] { img = render_equirect_sky(*lut, atm, obs, width, cloudy); });
             double err = 0.0, ref = 0.0;
             std::vector<double> rel;
             if (stride == 1) {
@@ -175,12 +178,14 @@ int main(int argc, char** argv) {
             }
             const double mean_err = ref > 0.0 ? err / ref : 0.0;
             const std::string what = stride == 1 ? std::string("exact (every ray marched)")
-                                                 : fmt::format("upsampled, stride {}, tolerances dT {} dL {}", stride,
-                                                               st.dT, st.dL);
-            fmt::print("| lut sky {}x{}, one default cumulus layer, {} | {:.3f} s | {:.2f}x | {:.2f} % | {:.2f} % |\n",
-                       width, width / 2, what, t, t_exact / t, 100.0 * mean_err, 100.0 * p99);
-            rows.push_back(fmt::format("sky,{},cumulus_stride{}_dT{}_dL{},{:.4f},{:.5f},{:.5f},,,", width, stride, st.dT,
-                                       st.dL, t, mean_err, p99));
+                                                 : fmt::format("upsampled, stride {}, tolerances dT {} dL {}",
+                                                               stride, st.dT, st.dL);
+            fmt::print(
+                "| lut sky {}x{}, one default cumulus layer, {} | {:.3f} s | {:.2f}x | {:.2f} % | {:.2f} % "
+                "|\n",
+                width, width / 2, what, t, t_exact / t, 100.0 * mean_err, 100.0 * p99);
+            rows.push_back(fmt::format("sky,{},cumulus_stride{}_dT{}_dL{},{:.4f},{:.5f},{:.5f},,,", width,
+                                       stride, st.dT, st.dL, t, mean_err, p99));
             std::fflush(stdout);
         }
     }
@@ -189,7 +194,8 @@ int main(int argc, char** argv) {
 
     // --- fast vs reference --------------------------------------------------------------
     const double e = 35.0 * kDegree;
-    const ConstantIllumination light({std::cos(e), 0.0, std::sin(e)}, {1.0f, 1.0f, 1.0f}, {0.04f, 0.04f, 0.04f});
+    const ConstantIllumination light({std::cos(e), 0.0, std::sin(e)}, {1.0f, 1.0f, 1.0f},
+                                     {0.04f, 0.04f, 0.04f});
     CloudLayerParams thin;
     thin.bottom_altitude_m = 1500.0;
     thin.top_altitude_m = 2300.0;
@@ -230,10 +236,11 @@ int main(int argc, char** argv) {
         int max_steps, light_steps;
         bool legacy, octaves;
     };
-    std::vector<Setting> settings = {{"24+4", 24, 4, false, false},     {"48+6", 48, 6, false, false},
-                                     {"96+8 (default)", 96, 8, false, false}, {"192+16", 192, 16, false, false},
-                                     {"512+32", 512, 32, false, false}, {"96+8 legacy", 96, 8, true, true},
-                                     {"96+8 octaves", 96, 8, false, true}};
+    std::vector<Setting> settings = {
+        {"24+4", 24, 4, false, false},           {"48+6", 48, 6, false, false},
+        {"96+8 (default)", 96, 8, false, false}, {"192+16", 192, 16, false, false},
+        {"512+32", 512, 32, false, false},       {"96+8 legacy", 96, 8, true, true},
+        {"96+8 octaves", 96, 8, false, true}};
     if (cases_only) settings = {settings[2], settings[6]};
     const auto options_of = [](const Setting& st) {
         CloudLightingOptions o;
@@ -250,8 +257,8 @@ int main(int argc, char** argv) {
     };
     // Error on 6 x 6 views against the reference; time per million rays from a 128 x 128
     // grid of views in the same cone (the grid is shared by many rays, as in an image).
-    const auto errors = [](const std::vector<float>& L, const std::vector<float>& T, const CloudReferenceResult& ref,
-                           std::size_t nv) {
+    const auto errors = [](const std::vector<float>& L, const std::vector<float>& T,
+                           const CloudReferenceResult& ref, std::size_t nv) {
         double sf = 0, sr = 0, sa = 0, var = 0, dT = 0;
         for (std::size_t r = 0; r < nv; ++r) {
             sf += L[r * 3 + 1];
@@ -262,26 +269,30 @@ int main(int argc, char** argv) {
         }
         return std::array<double, 4>{sf / sr - 1.0, sa / sr, dT, std::sqrt(var) / sr};
     };
-    fmt::print("\n| case | method | bias | mean abs err | max dT | time per 1M rays |\n|---|---|---|---|---|---|\n");
+    fmt::print(
+        "\n| case | method | bias | mean abs err | max dT | time per 1M rays |\n|---|---|---|---|---|---|\n");
     for (const Case& c : cases) {
         const auto dirs = view_grid(c.centre, c.half_angle, 6);
         const auto timing_dirs = view_grid(c.centre, c.half_angle, 128);
         CloudReferenceOptions ro;
         ro.paths = c.paths;
         CloudReferenceResult ref;
-        const double t_ref = median_s(1, [&] { ref = render_clouds_reference(c.density, light, {0, 0, 0}, dirs, ro); });
+        const double t_ref = median_s(1, [&] {
+            ref = render_clouds_reference(c.density, light, {0, 0, 0}, dirs, ro);
+        });
         const double ref_se = errors(ref.radiance, ref.transmittance, ref, dirs.size())[3];
         for (const Setting& st : settings) {
             const CloudLightingOptions opt = options_of(st);
             const CloudResult fast = render_clouds(c.density, light, {0, 0, 0}, dirs, opt);
-            const double t_fast =
-                median_s(repeats, [&] { render_clouds(c.density, light, {0, 0, 0}, timing_dirs, opt); });
+            const double t_fast = median_s(repeats, [&] {
+                render_clouds(c.density, light, {0, 0, 0}, timing_dirs, opt);
+            });
             const auto e = errors(fast.radiance, fast.transmittance, ref, dirs.size());
             const double per_m = t_fast / double(timing_dirs.size()) * 1e6;
-            fmt::print("| {} | fast {} | {:+.1f} % | {:.1f} % | {:.3f} | {:.2f} s |\n", c.name, st.label, 100 * e[0],
-                       100 * e[1], e[2], per_m);
-            rows.push_back(fmt::format("case,{},fast {},{:.5f},{:.5f},{:.5f},{:.5f},{:.4f},{}", c.name, st.label,
-                                       per_m, e[0], e[1], e[2], t_ref, c.paths));
+            fmt::print("| {} | fast {} | {:+.1f} % | {:.1f} % | {:.3f} | {:.2f} s |\n", c.name, st.label,
+                       100 * e[0], 100 * e[1], e[2], per_m);
+            rows.push_back(fmt::format("case,{},fast {},{:.5f},{:.5f},{:.5f},{:.5f},{:.4f},{}", c.name,
+                                       st.label, per_m, e[0], e[1], e[2], t_ref, c.paths));
         }
         // The reference itself at fewer paths, against the full one: its noise for its time.
         for (const int div : cases_only ? std::vector<int>{} : std::vector<int>{64, 16, 4}) {
@@ -289,16 +300,19 @@ int main(int argc, char** argv) {
             lo.paths = std::max(1, c.paths / div);
             lo.seed = ro.seed + 1000;  // independent of the full run
             CloudReferenceResult r2;
-            const double t2 = median_s(1, [&] { r2 = render_clouds_reference(c.density, light, {0, 0, 0}, dirs, lo); });
+            const double t2 = median_s(1, [&] {
+                r2 = render_clouds_reference(c.density, light, {0, 0, 0}, dirs, lo);
+            });
             const auto e = errors(r2.radiance, r2.transmittance, ref, dirs.size());
             const double per_m = t2 / double(dirs.size()) * 1e6;
-            fmt::print("| {} | reference {} paths | {:+.1f} % | {:.1f} % | {:.3f} | {:.0f} s |\n", c.name, lo.paths,
-                       100 * e[0], 100 * e[1], e[2], per_m);
-            rows.push_back(fmt::format("reference,{},reference {} paths,{:.5f},{:.5f},{:.5f},{:.5f},{:.4f},{}", c.name,
-                                       lo.paths, per_m, e[0], e[1], e[2], t_ref, c.paths));
+            fmt::print("| {} | reference {} paths | {:+.1f} % | {:.1f} % | {:.3f} | {:.0f} s |\n", c.name,
+                       lo.paths, 100 * e[0], 100 * e[1], e[2], per_m);
+            rows.push_back(
+                fmt::format("reference,{},reference {} paths,{:.5f},{:.5f},{:.5f},{:.5f},{:.4f},{}", c.name,
+                            lo.paths, per_m, e[0], e[1], e[2], t_ref, c.paths));
         }
-        fmt::print("| {} | reference {} paths (truth) | se {:.1f} % | | | {:.0f} s |\n", c.name, c.paths, 100 * ref_se,
-                   t_ref / double(dirs.size()) * 1e6);
+        fmt::print("| {} | reference {} paths (truth) | se {:.1f} % | | | {:.0f} s |\n", c.name, c.paths,
+                   100 * ref_se, t_ref / double(dirs.size()) * 1e6);
         rows.push_back(fmt::format("truth,{},reference {} paths,{:.5f},,{:.5f},,{:.4f},{}", c.name, c.paths,
                                    t_ref / double(dirs.size()) * 1e6, ref_se, t_ref, c.paths));
     }
@@ -352,8 +366,11 @@ int main(int argc, char** argv) {
             sb += b.radiance[i * b.channels + 1];
             sd += std::abs(a.radiance[i * a.channels + 1] - b.radiance[i * b.channels + 1]);
         }
-        fmt::print("\nshadow grid vs a shadow ray per sample, cumulus sky {}x{} upper half: mean {:+.2f} %, mean abs "
-                   "{:.2f} % of the mean radiance\n", w, w / 4, 100 * (sa / sb - 1), 100 * sd / sb);
+        fmt::print(
+            "\nshadow grid vs a shadow ray per sample, cumulus sky {}x{} upper half: mean {:+.2f} %, mean "
+            "abs "
+            "{:.2f} % of the mean radiance\n",
+            w, w / 4, 100 * (sa / sb - 1), 100 * sd / sb);
         rows.push_back(fmt::format("grid_check,sky {}x{},grid vs per-sample,,{:.5f},{:.5f},,,", w, w / 4,
                                    sa / sb - 1, sd / sb));
     }

@@ -15,9 +15,6 @@
 // at every point (the sun is at infinity), so its zenith cosine at x is dot(x, s) / |x|;
 // T_sun (with the planet's shadow) and Psi_ms are lookups in the atmosphere's LUTs.
 #include "welkin/aerial/aerial_perspective.hpp"
-#include "welkin/aerial/aerial_table.hpp"
-
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -28,11 +25,13 @@
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <unistd.h>
 
-#include "welkin/color/color.hpp"
-#include "welkin/base/error.hpp"
+#include "welkin/aerial/aerial_table.hpp"
 #include "welkin/atmosphere/geometry.hpp"
+#include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/color/color.hpp"
 
 namespace welkin {
 namespace {
@@ -48,8 +47,8 @@ struct AirRay {
 };
 
 // Adds [t0, t1] of the ray in n steps to (L, T) of one batch; L per unit sun irradiance.
-void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayleigh_p,
-                   float mie_p, double t0, double t1, int n, Spectrum4& L, Spectrum4& T) {
+void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayleigh_p, float mie_p,
+                   double t0, double t1, int n, Spectrum4& L, Spectrum4& T) {
     if (!(t1 > t0)) return;
     const AtmosphereBatch& medium = b.medium;
     const double R = medium.bottom_radius(), top = medium.top_radius();
@@ -91,8 +90,8 @@ public:
     std::size_t channels() const { return solar_.size(); }
 
     // `scratch` holds channels() floats.
-    void convert(std::span<const float> L, std::span<const float> T, std::span<float> scratch,
-                 float* L3, float* T3) const {
+    void convert(std::span<const float> L, std::span<const float> T, std::span<float> scratch, float* L3,
+                 float* T3) const {
         const std::array<double, 3> l = sky_.convert(L);
         for (std::size_t c = 0; c < solar_.size(); ++c) scratch[c] = solar_[c] * T[c];
         const std::array<double, 3> t = sun_.convert(scratch);
@@ -136,7 +135,8 @@ bool march_ray(const AtmosphereLuts& luts, const AirRay& ray, double top, double
     for (const auto& b : luts.batches()) {
         Spectrum4 Ls(0.0f), Ts(1.0f);
         march_segment(*b, ray, b->medium.rayleigh_phase(nu), b->medium.mie_phase(nu), t0, t1, steps, Ls, Ts);
-        store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(), L + b->medium.first_channel());
+        store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(),
+                       L + b->medium.first_channel());
         store_channels(Ts, b->medium.channel_count(), T + b->medium.first_channel());
     }
     return true;
@@ -145,8 +145,8 @@ bool march_ray(const AtmosphereLuts& luts, const AirRay& ray, double top, double
 void check_call(const AerialView& view, std::span<const float> depth, int width, int height) {
     view.validate();
     if (width != view.width || height != view.height)
-        throw InvalidArgument("depth", fmt::format("is {} x {} pixels but the camera renders {} x {}",
-                                                   width, height, view.width, view.height));
+        throw InvalidArgument("depth", fmt::format("is {} x {} pixels but the camera renders {} x {}", width,
+                                                   height, view.width, view.height));
     check_aerial_memory(width, height);
     validate_depth(depth, width, height);
 }
@@ -221,7 +221,8 @@ double atmosphere_exit_depth(const AerialView& view, int width, int height) {
     double z = 0.0;
     for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) {
-            const CameraRays::Ray cam = rays.at_screen(double(i) / double(nx - 1), double(j) / double(ny - 1));
+            const CameraRays::Ray cam =
+                rays.at_screen(double(i) / double(nx - 1), double(j) / double(ny - 1));
             const AirRay ray = air_ray(view, cam, glm::dvec3(0.0, 0.0, 1.0));
             double t0, t1;
             if (clip_to_atmosphere(ray, top, std::numeric_limits<double>::infinity(), t0, t1))
@@ -249,12 +250,11 @@ void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixe
     const double needed = double(width) * double(height) * double(sizeof(float) * 7 + extra_bytes_per_pixel);
     if (physical > 0.0 && needed > 0.5 * physical)
         throw MemoryLimit("resolution",
-                              fmt::format("a {} x {} render needs {:.1f} GiB for its depth and "
-                                          "aerial passes (float), more than half of this "
-                                          "machine's {:.1f} GiB of memory; lower "
-                                          "resolution.percentage",
-                                          width, height, needed / double(1 << 30),
-                                          physical / double(1 << 30)));
+                          fmt::format("a {} x {} render needs {:.1f} GiB for its depth and "
+                                      "aerial passes (float), more than half of this "
+                                      "machine's {:.1f} GiB of memory; lower "
+                                      "resolution.percentage",
+                                      width, height, needed / double(1 << 30), physical / double(1 << 30)));
 }
 
 void validate_depth(std::span<const float> depth, int width, int height) {
@@ -265,11 +265,10 @@ void validate_depth(std::span<const float> depth, int width, int height) {
         const float z = depth[k];
         if (z >= 0.0f) continue;  // +inf included
         const std::size_t x = k % std::size_t(width), y = k / std::size_t(width);
-        throw InvalidArgument("depth",
-                              fmt::format("pixel (x {}, y {}, row 0 at the top) is {}; depths "
-                                          "must be >= 0 m (+inf or >= aerial.sky_depth_m marks "
-                                          "sky)",
-                                          x, y, std::isnan(z) ? "NaN" : fmt::format("{}", z)));
+        throw InvalidArgument("depth", fmt::format("pixel (x {}, y {}, row 0 at the top) is {}; depths "
+                                                   "must be >= 0 m (+inf or >= aerial.sky_depth_m marks "
+                                                   "sky)",
+                                                   x, y, std::isnan(z) ? "NaN" : fmt::format("{}", z)));
     }
 }
 
@@ -280,9 +279,8 @@ double largest_finite_depth(std::span<const float> depth, double sky_depth_m) {
     return z_max;
 }
 
-AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view,
-                                                 const AtmosphereLuts& luts, int width,
-                                                 int height, double max_depth_m,
+AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view, const AtmosphereLuts& luts,
+                                                 int width, int height, double max_depth_m,
                                                  Progress* progress)
     : nx_(view.options.froxel_width),
       ny_(view.options.froxel_height),
@@ -302,7 +300,8 @@ AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view,
         std::vector<float> L(std::size_t(nz_) * C), T(std::size_t(nz_) * C), scratch(C);
         for (int column = range.begin(); column != range.end(); ++column) {
             const int i = column % nx_, j = column / nx_;
-            const CameraRays::Ray cam = rays.at_screen(double(i) / double(nx_ - 1), double(j) / double(ny_ - 1));
+            const CameraRays::Ray cam =
+                rays.at_screen(double(i) / double(nx_ - 1), double(j) / double(ny_ - 1));
             const AirRay ray = air_ray(view, cam, sun);
             for (const auto& b : luts.batches()) {
                 const float nu = float(clamp_cosine(glm::dot(ray.d, sun)));
@@ -314,8 +313,10 @@ AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view,
                     march_segment(*b, ray, rp, mp, t_prev, t, steps, Ls, Ts);
                     t_prev = t;
                     const Spectrum4 Le = Ls * b->medium.solar_irradiance();
-                    store_channels(Le, b->medium.channel_count(), &L[std::size_t(k - 1) * C + b->medium.first_channel()]);
-                    store_channels(Ts, b->medium.channel_count(), &T[std::size_t(k - 1) * C + b->medium.first_channel()]);
+                    store_channels(Le, b->medium.channel_count(),
+                                   &L[std::size_t(k - 1) * C + b->medium.first_channel()]);
+                    store_channels(Ts, b->medium.channel_count(),
+                                   &T[std::size_t(k - 1) * C + b->medium.first_channel()]);
                 }
             }
             for (int k = 0; k < nz_; ++k) {
@@ -430,30 +431,31 @@ void AerialFrame::render(RowRange rows_in, std::span<float> inscatter, std::span
         return;
     }
     ProgressTracker tracker(progress, std::size_t(band.size()));
-    tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const tbb::blocked_range<int>& rows) {
-        PixelMarcher::Scratch scratch(f.march->channels());
-        for (int y = rows.begin(); y != rows.end(); ++y) {
-            const double sy = (double(y) + 0.5) / double(f.height);
-            for (int x = 0; x < f.width; ++x) {
-                const std::size_t p = std::size_t(y) * w + std::size_t(x);
-                const std::size_t o = (std::size_t(y - band.begin) * w + std::size_t(x)) * 3;
-                const float z = f.depth[p];
-                if (is_sky_depth(z, f.sky)) continue;
-                // "raymarch", and the froxel way's pixels beyond its fitted range.
-                if (!f.volume || (f.fitted && double(z) > f.z_max)) {
-                    (*f.march)(x, y, z, scratch, &inscatter[o], &transmittance[o]);
-                    continue;
+    tbb::parallel_for(
+        tbb::blocked_range<int>(band.begin, band.end), [&](const tbb::blocked_range<int>& rows) {
+            PixelMarcher::Scratch scratch(f.march->channels());
+            for (int y = rows.begin(); y != rows.end(); ++y) {
+                const double sy = (double(y) + 0.5) / double(f.height);
+                for (int x = 0; x < f.width; ++x) {
+                    const std::size_t p = std::size_t(y) * w + std::size_t(x);
+                    const std::size_t o = (std::size_t(y - band.begin) * w + std::size_t(x)) * 3;
+                    const float z = f.depth[p];
+                    if (is_sky_depth(z, f.sky)) continue;
+                    // "raymarch", and the froxel way's pixels beyond its fitted range.
+                    if (!f.volume || (f.fitted && double(z) > f.z_max)) {
+                        (*f.march)(x, y, z, scratch, &inscatter[o], &transmittance[o]);
+                        continue;
+                    }
+                    const AerialPerspectiveVolume::Sample s =
+                        f.volume->sample((double(x) + 0.5) / double(f.width), sy, double(z));
+                    for (int c = 0; c < 3; ++c) {
+                        inscatter[o + c] = s.inscatter[c];
+                        transmittance[o + c] = s.transmittance[c];
+                    }
                 }
-                const AerialPerspectiveVolume::Sample s =
-                    f.volume->sample((double(x) + 0.5) / double(f.width), sy, double(z));
-                for (int c = 0; c < 3; ++c) {
-                    inscatter[o + c] = s.inscatter[c];
-                    transmittance[o + c] = s.transmittance[c];
-                }
+                tracker.advance();
             }
-            tracker.advance();
-        }
-    });
+        });
     tracker.finish();
 }
 
@@ -474,19 +476,18 @@ AerialPasses whole_frame(const AerialView& view, std::span<const float> depth, i
 
 }  // namespace
 
-AerialPasses aerial_perspective_froxel(const AerialView& view, std::span<const float> depth,
-                                       int width, int height, Progress* progress, RowRange rows) {
+AerialPasses aerial_perspective_froxel(const AerialView& view, std::span<const float> depth, int width,
+                                       int height, Progress* progress, RowRange rows) {
     return whole_frame(view, depth, width, height, progress, rows, AerialOptions::Method::Froxel);
 }
 
-AerialPasses aerial_perspective_raymarch(const AerialView& view,
-                                         std::span<const float> depth, int width, int height,
-                                         Progress* progress, RowRange rows) {
+AerialPasses aerial_perspective_raymarch(const AerialView& view, std::span<const float> depth, int width,
+                                         int height, Progress* progress, RowRange rows) {
     return whole_frame(view, depth, width, height, progress, rows, AerialOptions::Method::Raymarch);
 }
 
-AerialPasses aerial_perspective(const AerialView& view, std::span<const float> depth, int width,
-                                int height, Progress* progress, RowRange rows) {
+AerialPasses aerial_perspective(const AerialView& view, std::span<const float> depth, int width, int height,
+                                Progress* progress, RowRange rows) {
     return whole_frame(view, depth, width, height, progress, rows, view.options.method);
 }
 
@@ -496,10 +497,11 @@ AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLut
                                std::span<const double> distances, int steps, double exposure, bool spectral) {
     const std::size_t n = directions.size();
     if (distances.size() != n)
-        throw InvalidArgument("distances", fmt::format("has {} values for {} directions", distances.size(), n));
+        throw InvalidArgument("distances",
+                              fmt::format("has {} values for {} directions", distances.size(), n));
     if (origins.size() != 1 && origins.size() != n)
-        throw InvalidArgument("origins", fmt::format("has {} points for {} directions (1 or one per ray)",
-                                                     origins.size(), n));
+        throw InvalidArgument(
+            "origins", fmt::format("has {} points for {} directions (1 or one per ray)", origins.size(), n));
     require_in_range("steps", steps, 1, 1 << 20, "steps");
     const PassColour colour(atmosphere, exposure);
     const std::size_t C = colour.channels();
@@ -512,21 +514,22 @@ AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLut
         out.inscatter_spectral.assign(n * C, 0.0f);
         out.transmittance_spectral.assign(n * C, 1.0f);
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::vector<float> L(C), T(C), tmp(C);
-        for (std::size_t q = r.begin(); q != r.end(); ++q) {
-            if (!(distances[q] > 0.0)) continue;
-            const AirRay ray{origins[origins.size() == 1 ? 0 : q] - planet_centre, directions[q], sun};
-            std::fill(L.begin(), L.end(), 0.0f);
-            std::fill(T.begin(), T.end(), 1.0f);
-            if (!march_ray(luts, ray, top, distances[q], steps, L.data(), T.data())) continue;
-            colour.convert(L, T, tmp, &out.inscatter[q * 3], &out.transmittance[q * 3]);
-            if (spectral) {
-                std::copy(L.begin(), L.end(), out.inscatter_spectral.begin() + std::ptrdiff_t(q * C));
-                std::copy(T.begin(), T.end(), out.transmittance_spectral.begin() + std::ptrdiff_t(q * C));
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+            std::vector<float> L(C), T(C), tmp(C);
+            for (std::size_t q = r.begin(); q != r.end(); ++q) {
+                if (!(distances[q] > 0.0)) continue;
+                const AirRay ray{origins[origins.size() == 1 ? 0 : q] - planet_centre, directions[q], sun};
+                std::fill(L.begin(), L.end(), 0.0f);
+                std::fill(T.begin(), T.end(), 1.0f);
+                if (!march_ray(luts, ray, top, distances[q], steps, L.data(), T.data())) continue;
+                colour.convert(L, T, tmp, &out.inscatter[q * 3], &out.transmittance[q * 3]);
+                if (spectral) {
+                    std::copy(L.begin(), L.end(), out.inscatter_spectral.begin() + std::ptrdiff_t(q * C));
+                    std::copy(T.begin(), T.end(), out.transmittance_spectral.begin() + std::ptrdiff_t(q * C));
+                }
             }
-        }
-    });
+        });
     return out;
 }
 
@@ -537,9 +540,9 @@ const char* aerial_method_name(AerialOptions::Method method) {
 AerialOptions::Method aerial_method_from_name(const std::string& name, const std::string& parameter) {
     if (name == "froxel") return AerialOptions::Method::Froxel;
     if (name == "raymarch") return AerialOptions::Method::Raymarch;
-    throw InvalidArgument(parameter,
-                          fmt::format("must be \"froxel\" (Hillaire 2020's camera volume) or "
-                                      "\"raymarch\" (every pixel marched), got \"{}\"", name));
+    throw InvalidArgument(parameter, fmt::format("must be \"froxel\" (Hillaire 2020's camera volume) or "
+                                                 "\"raymarch\" (every pixel marched), got \"{}\"",
+                                                 name));
 }
 
 void AerialOptions::validate(const std::string& p) const {
@@ -575,8 +578,9 @@ void AerialTableLayout::validate(const std::string& parameter) const {
     require_in_range(p + "linear_distance_m", linear_distance_m, 1e-3, 1e9, "m");
     require_in_range(p + "max_distance_m", max_distance_m, 2.0 * linear_distance_m, 1e9, "m");
     if (double(azimuths) * elevations * slices > 64.0 * 1024 * 1024)
-        throw InvalidArgument(parameter.empty() ? "slices" : parameter, fmt::format("{} x {} x {} entries: at most 64 Mi", azimuths,
-                                             elevations, slices));
+        throw InvalidArgument(
+            parameter.empty() ? "slices" : parameter,
+            fmt::format("{} x {} x {} entries: at most 64 Mi", azimuths, elevations, slices));
 }
 
 double AerialTableLayout::azimuth_coordinate(const glm::dvec3& v) {
@@ -606,16 +610,15 @@ double AerialTableLayout::slice_distance(int k) const {
 
 AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
                          const glm::dvec3& planet_centre, const glm::dvec3& camera_position,
-                         const glm::dvec3& sun_direction, double exposure,
-                         const AerialTableLayout& layout, Progress* progress) {
+                         const glm::dvec3& sun_direction, double exposure, const AerialTableLayout& layout,
+                         Progress* progress) {
     layout.validate();
     for (int c = 0; c < 3; ++c) {
         require_finite("camera_position", camera_position[c]);
         require_finite("sun_direction", sun_direction[c]);
     }
     require_in_range("exposure", exposure, 1e-12, 1e6);
-    if (!(glm::length(sun_direction) > 0.5))
-        throw InvalidArgument("sun_direction", "must be a unit vector");
+    if (!(glm::length(sun_direction) > 0.5)) throw InvalidArgument("sun_direction", "must be a unit vector");
     const glm::dvec3 sun = glm::normalize(sun_direction);
     const PassColour colour(atmosphere, exposure);
     const std::size_t C = colour.channels();
@@ -643,7 +646,8 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
                     t_prev = t;
                     store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(),
                                    &L[std::size_t(k) * C + b->medium.first_channel()]);
-                    store_channels(Ts, b->medium.channel_count(), &T[std::size_t(k) * C + b->medium.first_channel()]);
+                    store_channels(Ts, b->medium.channel_count(),
+                                   &T[std::size_t(k) * C + b->medium.first_channel()]);
                 }
             }
             for (int k = 1; k < nk; ++k) {

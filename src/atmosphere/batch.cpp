@@ -5,8 +5,8 @@
 
 #include <tbb/parallel_for.h>
 
-#include "welkin/base/error.hpp"
 #include "welkin/atmosphere/phase.hpp"
+#include "welkin/base/error.hpp"
 
 namespace welkin {
 namespace {
@@ -42,23 +42,27 @@ AtmosphereBatch::AtmosphereBatch(const Atmosphere& atm, std::size_t first, std::
     const Spectrum4 mie_t = pack(atm.mie_extinction, first, count);
     const Spectrum4 absorption = pack(atm.absorption_extinction, first, count);
     // Entries are independent: filled in parallel (the same values at any thread count).
-    tbb::parallel_for(tbb::blocked_range<int>(0, kTableSize, 1024), [&](const tbb::blocked_range<int>& range) {
-        for (int i = range.begin(); i != range.end(); ++i) {
-            // r^2 - R^2 = s at entry i, so h = r - R = s / (r + R), without cancellation.
-            const double s = double(i) / inv_table_step_;
-            const double h = i + 1 == kTableSize ? thickness_ : s / (std::sqrt(bottom_radius_ * bottom_radius_ + s) + bottom_radius_);
-            const float rho_r = float(atm.rayleigh_density.density(h));
-            const float rho_m = float(atm.mie_density.density(h));
-            const float rho_a = float(atm.absorption_density.density(h));
-            table_[std::size_t(i)] = {rayleigh * rho_r, mie_s * rho_m,
-                                      rayleigh * rho_r + mie_t * rho_m + absorption * rho_a};
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, kTableSize, 1024), [&](const tbb::blocked_range<int>& range) {
+            for (int i = range.begin(); i != range.end(); ++i) {
+                // r^2 - R^2 = s at entry i, so h = r - R = s / (r + R), without cancellation.
+                const double s = double(i) / inv_table_step_;
+                const double h = i + 1 == kTableSize
+                                     ? thickness_
+                                     : s / (std::sqrt(bottom_radius_ * bottom_radius_ + s) + bottom_radius_);
+                const float rho_r = float(atm.rayleigh_density.density(h));
+                const float rho_m = float(atm.mie_density.density(h));
+                const float rho_a = float(atm.absorption_density.density(h));
+                table_[std::size_t(i)] = {rayleigh * rho_r, mie_s * rho_m,
+                                          rayleigh * rho_r + mie_t * rho_m + absorption * rho_a};
+            }
+        });
     for (const DensityProfile* profile : {&atm.rayleigh_density, &atm.mie_density, &atm.absorption_density})
         for (double h : profile->breakpoints_m())
             if (h > 0.0 && h < thickness_) breakpoint_radii_.push_back(bottom_radius_ + h);
     std::sort(breakpoint_radii_.begin(), breakpoint_radii_.end());
-    breakpoint_radii_.erase(std::unique(breakpoint_radii_.begin(), breakpoint_radii_.end()), breakpoint_radii_.end());
+    breakpoint_radii_.erase(std::unique(breakpoint_radii_.begin(), breakpoint_radii_.end()),
+                            breakpoint_radii_.end());
     for (int i = 0; i < kTableSize; ++i) {
         const Float4 a = to_float4(table_[std::size_t(i)].extinction);
         const Float4 b = i + 1 < kTableSize ? to_float4(table_[std::size_t(i) + 1].extinction) : a;

@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "welkin/atmosphere/geometry.hpp"
-#include "welkin/atmosphere/luts.hpp"
 #include "welkin/atmosphere/lut_cache.hpp"
+#include "welkin/atmosphere/luts.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/atmosphere/skyview_lut.hpp"
 #include "welkin/atmosphere/sun.hpp"
@@ -17,16 +17,17 @@ namespace welkin {
 namespace {
 
 // 8-point Gauss-Legendre on [0, 1] (Abramowitz & Stegun 25.4.30, mapped).
-constexpr std::array<double, 4> kNodes = {0.1834346424956498, 0.5255324099163290,
-                                          0.7966664774136267, 0.9602898564975363};
-constexpr std::array<double, 4> kWeights = {0.3626837833783620, 0.3137066458778873,
-                                            0.2223810344533745, 0.1012285362903763};
+constexpr std::array<double, 4> kNodes = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                          0.9602898564975363};
+constexpr std::array<double, 4> kWeights = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                            0.1012285362903763};
 constexpr int kAzimuths = 16;  // over [0, pi], mirrored
 // A small sky-view LUT per tabulated sun suffices for an integral over the hemisphere.
 constexpr int kSkyViewWidth = 48, kSkyViewHeight = 32;
 
 double mu_s_of(int i) {
-    return GroundIllumination::kMinMuS + (1.0 - GroundIllumination::kMinMuS) * i / (GroundIllumination::kTableSize - 1);
+    return GroundIllumination::kMinMuS +
+           (1.0 - GroundIllumination::kMinMuS) * i / (GroundIllumination::kTableSize - 1);
 }
 
 }  // namespace
@@ -81,7 +82,8 @@ void GroundIllumination::lookup(const std::vector<double>& table, double mu_s, s
     const int i = std::min(int(x), kTableSize - 2);
     const double f = x - i;
     for (std::size_t c = 0; c < channels_; ++c)
-        out[c] = table[std::size_t(i) * channels_ + c] * (1.0 - f) + table[std::size_t(i + 1) * channels_ + c] * f;
+        out[c] =
+            table[std::size_t(i) * channels_ + c] * (1.0 - f) + table[std::size_t(i + 1) * channels_ + c] * f;
 }
 
 void GroundIllumination::sun_irradiance(double mu_s, std::span<double> out) const { lookup(sun_, mu_s, out); }

@@ -8,9 +8,11 @@ namespace {
 // The arithmetic pass of one step: for every view, mu_s(t) = A + B nu, the transmittance
 // lookup's texel and weights, and the multiple-scattering lookup's (ms.texel_x). The
 // arrays do not overlap (__restrict), which lets the compiler vectorise the loop.
-WELKIN_SIMD_CLONES_WIDE void coordinates(const TransmittanceLut::AtRadius& at_in, float A, float B, float ms_scale, int ms_last,
-                 const float* __restrict nu, std::size_t n, int* __restrict i_sun, float* __restrict fx_sun,
-                 float* __restrict fraction, int* __restrict i_ms, float* __restrict fx_ms) {
+WELKIN_SIMD_CLONES_WIDE void coordinates(const TransmittanceLut::AtRadius& at_in, float A, float B,
+                                         float ms_scale, int ms_last, const float* __restrict nu,
+                                         std::size_t n, int* __restrict i_sun, float* __restrict fx_sun,
+                                         float* __restrict fraction, int* __restrict i_ms,
+                                         float* __restrict fx_ms) {
     const TransmittanceLut::AtRadius at = at_in;
     for (std::size_t i = 0; i < n; ++i) {
         const float mu_s_t = clamp_value(A + B * nu[i], -1.0f, 1.0f);
@@ -24,8 +26,8 @@ WELKIN_SIMD_CLONES_WIDE void coordinates(const TransmittanceLut::AtRadius& at_in
 }  // namespace
 
 WELKIN_SIMD_CLONES_WIDE void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
-                   const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,
-                   InscatterRowScratch& scratch) {
+                                           const RaySamples& ray, double mu_s, std::span<const float> nu,
+                                           std::span<Spectrum4> out, InscatterRowScratch& scratch) {
     const std::size_t n = nu.size();
     if (ray.steps.empty()) {  // a ray that crosses no air
         std::fill(out.begin(), out.end(), Spectrum4(0.0f));
@@ -72,7 +74,8 @@ WELKIN_SIMD_CLONES_WIDE void inscatter_row(const AtmosphereBatch& batch, const M
     }
     const Float4 E = to_float4(batch.solar_irradiance());
     for (std::size_t i = 0; i < n; ++i)
-        out[i] = to_vec4((sum_r[i] * batch.rayleigh_phase(nu_p[i]) + sum_m[i] * batch.mie_phase(nu_p[i]) + sum_ms[i]) * E);
+        out[i] = to_vec4(
+            (sum_r[i] * batch.rayleigh_phase(nu_p[i]) + sum_m[i] * batch.mie_phase(nu_p[i]) + sum_ms[i]) * E);
 }
 
 }  // namespace welkin

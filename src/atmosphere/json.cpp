@@ -18,24 +18,23 @@
 // {"layers": [{"width_m", "exp_term", "exp_scale_per_m", "linear_per_m", "constant"}, ..]}.
 // to_json writes the explicit form (layers and arrays), so a file reproduces the
 // atmosphere exactly.
+#include "welkin/io/json.hpp"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
-#include "welkin/io/json.hpp"
 
 namespace welkin {
 namespace {
 
 using nlohmann::json;
 
-
 std::vector<double> spectrum(const json& j, const std::string& parameter, std::size_t channels) {
     if (j.is_number()) return std::vector<double>(channels, j.get<double>());
     if (!j.is_array())
-        throw InvalidArgument(parameter,
-                              fmt::format("must be a number or an array of {} numbers", channels));
+        throw InvalidArgument(parameter, fmt::format("must be a number or an array of {} numbers", channels));
     std::vector<double> v;
     for (std::size_t i = 0; i < j.size(); ++i)
         v.push_back(json_number(j[i], fmt::format("{}[{}]", parameter, i)));
@@ -45,16 +44,16 @@ std::vector<double> spectrum(const json& j, const std::string& parameter, std::s
 DensityProfile profile(const json& j, const std::string& parameter) {
     if (j.is_string() && j.get<std::string>() == "zero") return DensityProfile::zero();
     if (!j.is_object())
-        throw InvalidArgument(parameter, "must be an object with 'exponential_scale_height_m', "
-                                         "'tent_m' or 'layers', or the string \"zero\"");
+        throw InvalidArgument(parameter,
+                              "must be an object with 'exponential_scale_height_m', "
+                              "'tent_m' or 'layers', or the string \"zero\"");
     if (j.contains("exponential_scale_height_m"))
         return DensityProfile::exponential(
             json_number(j["exponential_scale_height_m"], parameter + ".exponential_scale_height_m"));
     if (j.contains("tent_m")) {
         const json& t = j["tent_m"];
         if (!t.is_array() || t.size() != 3)
-            throw InvalidArgument(parameter + ".tent_m",
-                                  "must be [bottom, peak, top] in metres");
+            throw InvalidArgument(parameter + ".tent_m", "must be [bottom, peak, top] in metres");
         return DensityProfile::tent(json_number(t[0], parameter + ".tent_m[0]"),
                                     json_number(t[1], parameter + ".tent_m[1]"),
                                     json_number(t[2], parameter + ".tent_m[2]"));
@@ -68,8 +67,8 @@ DensityProfile profile(const json& j, const std::string& parameter) {
             auto get = [&](const char* key) {
                 return l.contains(key) ? json_number(l[key], p + "." + key) : 0.0;
             };
-            layers.push_back({get("width_m"), get("exp_term"), get("exp_scale_per_m"),
-                              get("linear_per_m"), get("constant")});
+            layers.push_back({get("width_m"), get("exp_term"), get("exp_scale_per_m"), get("linear_per_m"),
+                              get("constant")});
         }
         return DensityProfile(std::move(layers));
     }
@@ -87,15 +86,14 @@ json profile_json(const DensityProfile& p) {
     return {{"layers", layers}};
 }
 
-
 Atmosphere parse(const json& j) {
     if (!j.is_object()) throw InvalidArgument("atmosphere", "JSON must be an object");
-    json_check_keys(j, "", {"preset", "name", "wavelengths_nm", "solar_irradiance",
-                       "sun_angular_radius_rad", "bottom_radius_m", "top_radius_m", "rayleigh",
-                       "mie", "absorption", "ground_albedo", "$schema", "comment"});
+    json_check_keys(
+        j, "",
+        {"preset", "name", "wavelengths_nm", "solar_irradiance", "sun_angular_radius_rad", "bottom_radius_m",
+         "top_radius_m", "rayleigh", "mie", "absorption", "ground_albedo", "$schema", "comment"});
     std::vector<double> wavelengths;
-    if (j.contains("wavelengths_nm"))
-        wavelengths = spectrum(j["wavelengths_nm"], "wavelengths_nm", 0);
+    if (j.contains("wavelengths_nm")) wavelengths = spectrum(j["wavelengths_nm"], "wavelengths_nm", 0);
     Atmosphere a;
     if (j.contains("preset")) {
         if (!j["preset"].is_string()) throw InvalidArgument("preset", "must be a string");
@@ -133,8 +131,10 @@ Atmosphere parse(const json& j) {
         if (m.contains("g")) a.mie_g = json_number(m["g"], "mie.g");
         if (m.contains("phase")) {
             const std::string ph = m["phase"].is_string() ? m["phase"].get<std::string>() : "";
-            if (ph == "cornette_shanks") a.mie_phase = MiePhaseModel::CornetteShanks;
-            else if (ph == "henyey_greenstein") a.mie_phase = MiePhaseModel::HenyeyGreenstein;
+            if (ph == "cornette_shanks")
+                a.mie_phase = MiePhaseModel::CornetteShanks;
+            else if (ph == "henyey_greenstein")
+                a.mie_phase = MiePhaseModel::HenyeyGreenstein;
             else
                 throw InvalidArgument("mie.phase", fmt::format("must be \"cornette_shanks\" or "
                                                                "\"henyey_greenstein\", got {}",
@@ -148,13 +148,12 @@ Atmosphere parse(const json& j) {
         json_check_keys(o, "absorption", {"extinction", "density"});
         if (o.contains("extinction"))
             a.absorption_extinction = spectrum(o["extinction"], "absorption.extinction", n);
-        if (o.contains("density"))
-            a.absorption_density = profile(o["density"], "absorption.density");
+        if (o.contains("density")) a.absorption_density = profile(o["density"], "absorption.density");
     }
     if (j.contains("ground_albedo")) a.ground_albedo = spectrum(j["ground_albedo"], "ground_albedo", n);
     // A spectrum omitted without a preset means "none of it".
-    for (auto* v : {&a.rayleigh_scattering, &a.mie_scattering, &a.mie_extinction,
-                    &a.absorption_extinction, &a.ground_albedo})
+    for (auto* v : {&a.rayleigh_scattering, &a.mie_scattering, &a.mie_extinction, &a.absorption_extinction,
+                    &a.ground_albedo})
         if (v->empty()) v->assign(n, 0.0);
     if (a.solar_irradiance.empty())
         throw InvalidArgument("solar_irradiance", "is required when no preset is given");
@@ -175,24 +174,24 @@ Atmosphere Atmosphere::from_json_file(const std::string& path) {
 
 std::string Atmosphere::to_json_string() const {
     validate();
-    const char* phase = mie_phase == MiePhaseModel::CornetteShanks ? "cornette_shanks"
-                                                                   : "henyey_greenstein";
-    json j = {{"name", name},
-              {"wavelengths_nm", wavelengths_nm},
-              {"solar_irradiance", solar_irradiance},
-              {"sun_angular_radius_rad", sun_angular_radius_rad},
-              {"bottom_radius_m", bottom_radius_m},
-              {"top_radius_m", top_radius_m},
-              {"rayleigh", {{"scattering", rayleigh_scattering}, {"density", profile_json(rayleigh_density)}}},
-              {"mie",
-               {{"scattering", mie_scattering},
-                {"extinction", mie_extinction},
-                {"phase", phase},
-                {"g", mie_g},
-                {"density", profile_json(mie_density)}}},
-              {"absorption",
-               {{"extinction", absorption_extinction}, {"density", profile_json(absorption_density)}}},
-              {"ground_albedo", ground_albedo}};
+    const char* phase = mie_phase == MiePhaseModel::CornetteShanks ? "cornette_shanks" : "henyey_greenstein";
+    json j = {
+        {"name", name},
+        {"wavelengths_nm", wavelengths_nm},
+        {"solar_irradiance", solar_irradiance},
+        {"sun_angular_radius_rad", sun_angular_radius_rad},
+        {"bottom_radius_m", bottom_radius_m},
+        {"top_radius_m", top_radius_m},
+        {"rayleigh", {{"scattering", rayleigh_scattering}, {"density", profile_json(rayleigh_density)}}},
+        {"mie",
+         {{"scattering", mie_scattering},
+          {"extinction", mie_extinction},
+          {"phase", phase},
+          {"g", mie_g},
+          {"density", profile_json(mie_density)}}},
+        {"absorption",
+         {{"extinction", absorption_extinction}, {"density", profile_json(absorption_density)}}},
+        {"ground_albedo", ground_albedo}};
     return j.dump(2);
 }
 

@@ -4,9 +4,11 @@
 
 namespace welkin {
 
-AtmosphereLutCache::AtmosphereLutCache(std::size_t capacity) : capacity_(std::max<std::size_t>(capacity, 1)) {}
+AtmosphereLutCache::AtmosphereLutCache(std::size_t capacity)
+    : capacity_(std::max<std::size_t>(capacity, 1)) {}
 
-AtmosphereLutCache::Key AtmosphereLutCache::key_of(const Atmosphere& atmosphere, const LutResolution& resolution) {
+AtmosphereLutCache::Key AtmosphereLutCache::key_of(const Atmosphere& atmosphere,
+                                                   const LutResolution& resolution) {
     return {atmosphere, resolution};
 }
 
@@ -15,7 +17,8 @@ std::shared_ptr<const AtmosphereLuts> AtmosphereLutCache::get(const Atmosphere& 
     Key key = key_of(atmosphere, resolution);
     {
         const std::lock_guard<std::mutex> lock(mutex_);
-        const auto it = std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.key == key; });
+        const auto it =
+            std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.key == key; });
         if (it != entries_.end()) {
             entries_.splice(entries_.begin(), entries_, it);  // most recently used first
             return entries_.front().luts;
@@ -25,7 +28,8 @@ std::shared_ptr<const AtmosphereLuts> AtmosphereLutCache::get(const Atmosphere& 
     auto luts = std::make_shared<const AtmosphereLuts>(atmosphere, resolution);
     const std::lock_guard<std::mutex> lock(mutex_);
     ++builds_;
-    const auto it = std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.key == key; });
+    const auto it =
+        std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.key == key; });
     if (it != entries_.end()) {
         entries_.splice(entries_.begin(), entries_, it);  // another thread built it meanwhile
         return entries_.front().luts;

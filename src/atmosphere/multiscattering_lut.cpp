@@ -6,10 +6,10 @@
 
 #include <tbb/parallel_for.h>
 
-#include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/inscattering.hpp"
 #include "welkin/atmosphere/phase.hpp"
+#include "welkin/base/error.hpp"
 #include "welkin/base/quadrature.hpp"
 
 namespace welkin {
@@ -21,9 +21,10 @@ namespace {
 // (floor 1), by the cosine of the sun on the ground, max(mu_s, 0), for the ground (floor
 // 0). (A flag and a select there kept GCC from vectorising the loop.) The arrays do not
 // overlap (__restrict), which lets the compiler vectorise it.
-WELKIN_SIMD_CLONES_WIDE void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D, const float* __restrict mu_s,
-                     const float* __restrict sin_cos, std::size_t n, float cosine_floor, int* __restrict texel,
-                     float* __restrict fx, float* __restrict fraction) {
+WELKIN_SIMD_CLONES_WIDE void sun_coordinates(const TransmittanceLut::AtRadius& at_in, float C, float D,
+                                             const float* __restrict mu_s, const float* __restrict sin_cos,
+                                             std::size_t n, float cosine_floor, int* __restrict texel,
+                                             float* __restrict fx, float* __restrict fraction) {
     const TransmittanceLut::AtRadius at = at_in;
     for (std::size_t l = 0; l < n; ++l) {
         const float mu = clamp_value(C * mu_s[l] + D * sin_cos[l], -1.0f, 1.0f);
@@ -36,12 +37,11 @@ WELKIN_SIMD_CLONES_WIDE void sun_coordinates(const TransmittanceLut::AtRadius& a
 
 }  // namespace
 
-// Texel (i, j) holds the moments a_0 = Psi_ms, a_1, a_2 for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on the
-// texel-centre grid of texcoord_from_unit). One row shares its radius, so each of the
-// row's rays (a direction w about the local zenith) is marched once and reused for all 32
-// sun angles: only the sun's transmittance along it and the phase functions depend on
-// mu_s. The transfer f' of a ray does not depend on the sun at all. See the header for the
-// derivation.
+// Texel (i, j) holds the moments a_0 = Psi_ms, a_1, a_2 for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on
+// the texel-centre grid of texcoord_from_unit). One row shares its radius, so each of the row's rays (a
+// direction w about the local zenith) is marched once and reused for all 32 sun angles: only the sun's
+// transmittance along it and the phase functions depend on mu_s. The transfer f' of a ray does not depend on
+// the sun at all. See the header for the derivation.
 //
 // For the ray w = (sin(theta) cos(phi), sin(theta) sin(phi), mu) and the sun at
 // (sin_s, 0, mu_s), nu = mu mu_s + sin(theta) cos(phi) sin_s, and the sun's zenith cosine
@@ -52,8 +52,8 @@ WELKIN_SIMD_CLONES_WIDE void sun_coordinates(const TransmittanceLut::AtRadius& a
 // (arithmetic only: it vectorises) and one that fetches and accumulates, per constituent
 // (the phase functions, which depend on nu = mu mu_s + sin(theta) sin_s cos(phi), multiply
 // each ray's two sums once it is done).
-MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const TransmittanceLut& tlut,
-                                       int size, int directions_sqrt, int steps)
+MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const TransmittanceLut& tlut, int size,
+                                       int directions_sqrt, int steps)
     : bottom_(batch.bottom_radius()),
       top_(batch.top_radius()),
       mie_chi1_(mie_phase_moment(batch.mie_phase_model(), 1, batch.mie_g())),
@@ -79,7 +79,8 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
     for (int b = 0; b < n_phi; ++b) {
         const double cos_phi = std::cos(kPi * (double(b) + 0.5) / double(n_phi));
         for (int i = 0; i < size; ++i) {
-            const double mu_s = clamp_cosine(2.0 * unit_from_texcoord((float(i) + 0.5f) / float(size), size) - 1.0);
+            const double mu_s =
+                clamp_cosine(2.0 * unit_from_texcoord((float(i) + 0.5f) / float(size), size) - 1.0);
             pair_mu_s[std::size_t(b) * size + i] = float(mu_s);
             pair_sin_cos[std::size_t(b) * size + i] = float(safe_sqrt(1.0 - mu_s * mu_s) * cos_phi);
         }
@@ -103,7 +104,8 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
         Float4* const ground = ground_buf.data();
         const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
         for (int j = rows.begin(); j != rows.end(); ++j) {
-            const double r = R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
+            const double r =
+                R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
             for (auto* m : {&m0_buf, &m1_buf, &m2_buf}) std::fill(m->begin(), m->end(), Spectrum4(0.0f));
             Spectrum4 f0(0.0f), f1(0.0f), f2(0.0f);  // <f'>, <f' P_1>, <f' P_2>
             for (int a = 0; a < 2 * n_half; ++a) {
@@ -119,7 +121,8 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                 std::fill(ground_buf.begin(), ground_buf.end(), zero);
                 Spectrum4 f(0.0f);
                 for (const RaySamples::Step& st : ray.steps) {
-                    const Spectrum4 w_r = st.weight * st.rayleigh_scattering, w_m = st.weight * st.mie_scattering;
+                    const Spectrum4 w_r = st.weight * st.rayleigh_scattering,
+                                    w_m = st.weight * st.mie_scattering;
                     f += w_r + w_m;
                     const float C = float((r + st.t * mu) / st.r), D = float(st.t * sin_theta / st.r);
                     const TransmittanceLut::AtRadius& at = st.sun_at;
@@ -156,8 +159,9 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                 // ground; accumulated into the three moments.
                 for (std::size_t l = 0; l < n_pairs; ++l) {
                     const float nu = clamp_value(float(mu) * pm[l] + float(sin_theta) * psc[l], -1.0f, 1.0f);
-                    const Spectrum4 L =
-                        to_vec4((sum_r[l] * batch.rayleigh_phase(nu) + sum_m[l] * batch.mie_phase(nu) + ground[l]) * w_dir);
+                    const Spectrum4 L = to_vec4(
+                        (sum_r[l] * batch.rayleigh_phase(nu) + sum_m[l] * batch.mie_phase(nu) + ground[l]) *
+                        w_dir);
                     m0_buf[l] += L;
                     m1_buf[l] += L * p1;
                     m2_buf[l] += L * p2;

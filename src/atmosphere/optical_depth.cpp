@@ -52,8 +52,8 @@ double graded_integral(F&& f, double a, double b, bool toward_a) {
 
 }  // namespace
 
-double density_integral(const DensityProfile& profile, double bottom_radius_m, double r,
-                        double mu, double length_m) {
+double density_integral(const DensityProfile& profile, double bottom_radius_m, double r, double mu,
+                        double length_m) {
     if (!(length_m > 0.0)) return 0.0;
     std::vector<double> cuts{0.0, length_m};
     const double t_tangent = -r * mu;
@@ -103,8 +103,8 @@ std::vector<double> transmittance_to_boundary(const Atmosphere& atm, double r, d
         return transmittance_to_boundary(atm, r_entry, mu_at(r, mu, entry, r_entry), ground_blocks);
     }
     if (ground_blocks && ray_hits_ground(r, mu, R)) return t;
-    const double length = ray_hits_ground(r, mu, R) ? distance_to_bottom(r, mu, R)
-                                                    : distance_to_top(r, mu, top);
+    const double length =
+        ray_hits_ground(r, mu, R) ? distance_to_bottom(r, mu, R) : distance_to_top(r, mu, top);
     const ColumnDensity col = column_density(atm, r, mu, length);
     for (std::size_t c = 0; c < t.size(); ++c) t[c] = std::exp(-optical_depth(atm, c, col));
     return t;

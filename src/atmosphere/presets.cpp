@@ -40,7 +40,7 @@ double ozone_earth(double lambda_nm, double dobson_units) {
 }
 
 struct Aerosol {
-    double extinction_550;       // m^-1 at the surface
+    double extinction_550;  // m^-1 at the surface
     double angstrom_alpha;
     std::function<double(double)> albedo;  // single-scattering albedo vs wavelength
     double scale_height_m;
@@ -95,35 +95,31 @@ std::function<double(double)> knots(std::vector<std::pair<double, double>> k) {
 // Mie extinction 5.328e-3 / 1200 m at every wavelength, albedo 0.9, g = 0.8
 // Cornette-Shanks, ground albedo 0.1.
 Atmosphere bruneton2017(const std::vector<double>& w) {
-    return earth("bruneton2017", w,
-                 Aerosol{5.328e-3 / 1200.0, 0.0, [](double) { return 0.9; }, 1200.0, 0.8},
+    return earth("bruneton2017", w, Aerosol{5.328e-3 / 1200.0, 0.0, [](double) { return 0.9; }, 1200.0, 0.8},
                  0.1);
 }
 
 // Clear: clean continental aerosol (OPAC), visibility 150 km, alpha 1.1, omega 0.97,
 // g 0.7, scale height 1.2 km; green-vegetation ground albedo 0.15.
 Atmosphere clear(const std::vector<double>& w) {
-    return earth("clear", w,
-                 Aerosol{koschmieder_aerosol_extinction(150e3), 1.1,
-                         [](double) { return 0.97; }, 1200.0, 0.7},
-                 0.15);
+    return earth(
+        "clear", w,
+        Aerosol{koschmieder_aerosol_extinction(150e3), 1.1, [](double) { return 0.97; }, 1200.0, 0.7}, 0.15);
 }
 
 // Hazy: continental average aerosol (OPAC), visibility 20 km, alpha 1.3, omega 0.93,
 // g 0.71, deeper mixing layer (scale height 2 km); ground albedo 0.15.
 Atmosphere hazy(const std::vector<double>& w) {
-    return earth("hazy", w,
-                 Aerosol{koschmieder_aerosol_extinction(20e3), 1.3,
-                         [](double) { return 0.93; }, 2000.0, 0.71},
-                 0.15);
+    return earth(
+        "hazy", w,
+        Aerosol{koschmieder_aerosol_extinction(20e3), 1.3, [](double) { return 0.93; }, 2000.0, 0.71}, 0.15);
 }
 
 // Polluted: urban aerosol (OPAC), visibility 8 km, alpha 1.4, absorbing soot (omega 0.82),
 // g 0.69, shallow boundary layer (scale height 1.2 km); urban ground albedo 0.12.
 Atmosphere polluted(const std::vector<double>& w) {
     return earth("polluted", w,
-                 Aerosol{koschmieder_aerosol_extinction(8e3), 1.4,
-                         [](double) { return 0.82; }, 1200.0, 0.69},
+                 Aerosol{koschmieder_aerosol_extinction(8e3), 1.4, [](double) { return 0.82; }, 1200.0, 0.69},
                  0.12);
 }
 
@@ -169,10 +165,10 @@ Atmosphere mars(const std::vector<double>& w) {
 using PresetFactory = Atmosphere (*)(const std::vector<double>&);
 const std::map<std::string, PresetFactory>& presets() {
     static const std::map<std::string, PresetFactory> p{{"bruneton2017", bruneton2017},
-                                                       {"clear", clear},
-                                                       {"hazy", hazy},
-                                                       {"polluted", polluted},
-                                                       {"mars", mars}};
+                                                        {"clear", clear},
+                                                        {"hazy", hazy},
+                                                        {"polluted", polluted},
+                                                        {"mars", mars}};
     return p;
 }
 

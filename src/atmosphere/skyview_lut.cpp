@@ -9,8 +9,8 @@
 namespace welkin {
 
 SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlut,
-                       const MultiScatteringLut& mslut, double r, double mu_s, int width,
-                       int height, int steps)
+                       const MultiScatteringLut& mslut, double r, double mu_s, int width, int height,
+                       int steps)
     : r_(r), texture_(width, height) {
     const double R = batch.bottom_radius();
     const double rho = safe_sqrt((r - R) * (r + R));
@@ -39,8 +39,8 @@ SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlu
                 const double cos_phi = 1.0 - 2.0 * u * u;
                 nu[std::size_t(i)] = float(clamp_cosine(mu * mu_s + sin_v * sin_s * cos_phi));
             }
-            inscatter_row(batch, mslut, ray, mu_s, nu, std::span<Spectrum4>(&texture_.at(0, j), std::size_t(width)),
-                          scratch);
+            inscatter_row(batch, mslut, ray, mu_s, nu,
+                          std::span<Spectrum4>(&texture_.at(0, j), std::size_t(width)), scratch);
         }
     });
 }
@@ -60,7 +60,9 @@ WELKIN_ALWAYS_INLINE double zenith_angle_of(double mu) {
     const double t = big ? std::sqrt(z) : a;
     const double p =
         ((((4.2163199048e-2 * z + 2.4181311049e-2) * z + 4.5470025998e-2) * z + 7.4953002686e-2) * z +
-         1.6666752422e-1) * z * t + t;
+         1.6666752422e-1) *
+            z * t +
+        t;
     const double acos_a = big ? 2.0 * p : 0.5 * kPi - p;
     return mu < 0.0 ? kPi - acos_a : acos_a;
 }
@@ -80,7 +82,8 @@ WELKIN_ALWAYS_INLINE float v_of_zenith_angle(double theta, double theta_h, doubl
 // the left texel i and weight fx in u, the lower row j and weight fy in v. A NaN (from a
 // zero or non-finite direction, which callers reject) selects texel 0 rather than an
 // index out of the texture.
-WELKIN_ALWAYS_INLINE void texel_of(float u, float v, int width, int height, int& i, float& fx, int& j, float& fy) {
+WELKIN_ALWAYS_INLINE void texel_of(float u, float v, int width, int height, int& i, float& fx, int& j,
+                                   float& fy) {
     const float ux = u * float(width) - 0.5f, vy = v * float(height) - 0.5f;
     const float tx = ux > 0.0f ? min_value(ux, float(width - 1)) : 0.0f;
     const float ty = vy > 0.0f ? min_value(vy, float(height - 1)) : 0.0f;
@@ -115,9 +118,9 @@ namespace {
 // The arithmetic pass of a block of lookups: from each view, mu and u =
 // sqrt((1 - cos_phi) / 2) as view_geometry() and radiance(mu, cos_phi) compute them, then
 // the texel coordinates (texel_of) of u and v = v_of_zenith_angle(zenith_angle_of(mu)).
-WELKIN_SIMD_CLONES_WIDE void lookup_coordinates(const glm::dvec3* __restrict d, std::size_t n, double sx, double sy,
-                                                double hs2, double theta_h, double beta, int width, int height,
-                                                int* __restrict i_out, float* __restrict fx_out,
+WELKIN_SIMD_CLONES_WIDE void lookup_coordinates(const glm::dvec3* __restrict d, std::size_t n, double sx,
+                                                double sy, double hs2, double theta_h, double beta, int width,
+                                                int height, int* __restrict i_out, float* __restrict fx_out,
                                                 int* __restrict j_out, float* __restrict fy_out) {
     for (std::size_t k = 0; k < n; ++k) {
         const double inv = 1.0 / std::sqrt(d[k].x * d[k].x + d[k].y * d[k].y + d[k].z * d[k].z);
@@ -143,8 +146,8 @@ void SkyViewLut::radiance(std::span<const glm::dvec3> directions, const glm::dve
     const int width = texture_.width(), height = texture_.height();
     for (std::size_t first = 0; first < directions.size(); first += kBlock) {
         const std::size_t n = std::min(kBlock, directions.size() - first);
-        lookup_coordinates(directions.data() + first, n, sun.x, sun.y, hs2, theta_h_, beta_, width, height, i_tex, fx,
-                           j_tex, fy);
+        lookup_coordinates(directions.data() + first, n, sun.x, sun.y, hs2, theta_h_, beta_, width, height,
+                           i_tex, fx, j_tex, fy);
         for (std::size_t k = 0; k < n; ++k) {
             const Float4 L = fetch(texture_, i_tex[k], fx[k], j_tex[k], fy[k]);
             float* const o = out + (first + k) * stride;

@@ -5,10 +5,10 @@
 #include <array>
 #include <cmath>
 
-#include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 
 namespace welkin {
 namespace {
@@ -69,8 +69,7 @@ std::array<double, 6> limb_darkening_coefficients(double wavelength_nm) {
     if (wavelength_nm >= t.back().wavelength_nm) return t.back().a;
     std::size_t i = 0;
     while (t[i + 1].wavelength_nm <= wavelength_nm) ++i;
-    const double f =
-        (wavelength_nm - t[i].wavelength_nm) / (t[i + 1].wavelength_nm - t[i].wavelength_nm);
+    const double f = (wavelength_nm - t[i].wavelength_nm) / (t[i + 1].wavelength_nm - t[i].wavelength_nm);
     std::array<double, 6> a;
     for (int k = 0; k < 6; ++k) a[k] = t[i].a[k] * (1.0 - f) + t[i + 1].a[k] * f;
     return a;
@@ -83,10 +82,10 @@ double polynomial(const double* a, double mu) {
 }
 
 // 8-point Gauss-Legendre on [0, 1] (Abramowitz & Stegun 25.4.30, mapped).
-constexpr std::array<double, 4> kNodes = {0.1834346424956498, 0.5255324099163290,
-                                          0.7966664774136267, 0.9602898564975363};
-constexpr std::array<double, 4> kWeights = {0.3626837833783620, 0.3137066458778873,
-                                            0.2223810344533745, 0.1012285362903763};
+constexpr std::array<double, 4> kNodes = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                          0.9602898564975363};
+constexpr std::array<double, 4> kWeights = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                            0.1012285362903763};
 
 // Area of the part of a unit disc above a chord at signed distance x from its centre
 // (x > 0: the centre is above the chord), as a fraction of the disc: the circular
@@ -181,8 +180,7 @@ SunRadiometry sun_radiometry(const Atmosphere& atm, const Observer& observer) {
     const double mu = clamp_cosine(std::sin(e_eval));
     out.transmittance = transmittance_to_boundary(atm, r, mu, /*ground_blocks=*/true);
     for (std::size_t c = 0; c < n; ++c)
-        out.direct_irradiance[c] =
-            atm.solar_irradiance[c] * out.transmittance[c] * out.visible_fraction;
+        out.direct_irradiance[c] = atm.solar_irradiance[c] * out.transmittance[c] * out.visible_fraction;
     return out;
 }
 

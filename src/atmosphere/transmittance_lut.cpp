@@ -51,9 +51,9 @@ namespace {
 // clamped to the table, as an entry and a weight (AtmosphereBatch::extinction_at). The
 // table is uniform in r^2 - R^2 = (t + r mu)^2 + c with c = r^2 (1 - mu^2) - R^2 formed once
 // per ray: a multiply-add per node, no square root.
-WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double c, double inv_step, double origin, double direction,
-                                          double x_max, const double* __restrict s2, std::size_t m,
-                                          int* __restrict entry, float* __restrict fraction) {
+WELKIN_SIMD_CLONES void table_coordinates(double r_mu, double c, double inv_step, double origin,
+                                          double direction, double x_max, const double* __restrict s2,
+                                          std::size_t m, int* __restrict entry, float* __restrict fraction) {
     for (std::size_t l = 0; l < m; ++l) {
         const double t_low = origin + direction * s2[l] + r_mu;  // t + r mu
         const double x = min_value(max_value((t_low * t_low + c) * inv_step, 0.0), x_max);
@@ -174,15 +174,16 @@ Spectrum4 GradedQuadrature::integrate(const AtmosphereBatch& batch, double r, do
     return to_vec4((sum + sum_odd) * float(len));
 }
 
-Spectrum4 GradedQuadrature::optical_depth(const AtmosphereBatch& batch, double r, double mu, double length) const {
+Spectrum4 GradedQuadrature::optical_depth(const AtmosphereBatch& batch, double r, double mu,
+                                          double length) const {
     const double t_low = -r * mu;  // the ray's lowest point, when it lies ahead
     if (t_low <= 0.0) return integrate(batch, r, mu, 0.0, length, true, whole_);
     if (t_low >= length) return integrate(batch, r, mu, 0.0, length, false, whole_);
-    return integrate(batch, r, mu, 0.0, t_low, false, half_) + integrate(batch, r, mu, t_low, length, true, half_);
+    return integrate(batch, r, mu, 0.0, t_low, false, half_) +
+           integrate(batch, r, mu, t_low, length, true, half_);
 }
 
-Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length,
-                              int samples) {
+Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length, int samples) {
     return GradedQuadrature(samples).optical_depth(batch, r, mu, length);
 }
 

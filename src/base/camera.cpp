@@ -19,9 +19,12 @@ namespace welkin {
 
 const char* camera_type_name(CameraType type) {
     switch (type) {
-    case CameraType::Perspective: return "PERSP";
-    case CameraType::Orthographic: return "ORTHO";
-    case CameraType::Panoramic: return "PANO";
+        case CameraType::Perspective:
+            return "PERSP";
+        case CameraType::Orthographic:
+            return "ORTHO";
+        case CameraType::Panoramic:
+            return "PANO";
     }
     return "PERSP";
 }
@@ -31,14 +34,18 @@ CameraType camera_type_from_name(const std::string& name, const std::string& par
     if (name == "ORTHO") return CameraType::Orthographic;
     if (name == "PANO") return CameraType::Panoramic;
     throw InvalidArgument(parameter, fmt::format("must be \"PERSP\", \"ORTHO\" or \"PANO\" "
-                                                 "(Blender's Camera.type), got \"{}\"", name));
+                                                 "(Blender's Camera.type), got \"{}\"",
+                                                 name));
 }
 
 const char* sensor_fit_name(SensorFit fit) {
     switch (fit) {
-    case SensorFit::Auto: return "AUTO";
-    case SensorFit::Horizontal: return "HORIZONTAL";
-    case SensorFit::Vertical: return "VERTICAL";
+        case SensorFit::Auto:
+            return "AUTO";
+        case SensorFit::Horizontal:
+            return "HORIZONTAL";
+        case SensorFit::Vertical:
+            return "VERTICAL";
     }
     return "AUTO";
 }
@@ -49,7 +56,8 @@ SensorFit sensor_fit_from_name(const std::string& name, const std::string& param
     if (name == "VERTICAL") return SensorFit::Vertical;
     throw InvalidArgument(parameter, fmt::format("must be \"AUTO\", \"HORIZONTAL\" or "
                                                  "\"VERTICAL\" (Blender's Camera.sensor_fit), "
-                                                 "got \"{}\"", name));
+                                                 "got \"{}\"",
+                                                 name));
 }
 
 void Camera::validate(const std::string& p) const {
@@ -58,49 +66,48 @@ void Camera::validate(const std::string& p) const {
             require_finite(fmt::format("{}.matrix_world[{}][{}]", p, r, c), matrix_world[c][r]);
     if (matrix_world[0][3] != 0.0 || matrix_world[1][3] != 0.0 || matrix_world[2][3] != 0.0 ||
         matrix_world[3][3] != 1.0)
-        throw InvalidArgument(p + ".matrix_world",
-                              "the last row must be [0, 0, 0, 1] (an affine transform)");
+        throw InvalidArgument(p + ".matrix_world", "the last row must be [0, 0, 0, 1] (an affine transform)");
     for (int c = 0; c < 3; ++c)
         if (glm::length(glm::dvec3(matrix_world[c])) < 1e-12)
             throw InvalidArgument(p + ".matrix_world",
                                   fmt::format("column {} of the rotation is zero (a camera "
-                                              "scaled to nothing)", c));
+                                              "scaled to nothing)",
+                                              c));
     const glm::dvec3 x = glm::normalize(glm::dvec3(matrix_world[0]));
     const glm::dvec3 y = glm::normalize(glm::dvec3(matrix_world[1]));
     const glm::dvec3 z = glm::normalize(glm::dvec3(matrix_world[2]));
     if (std::abs(glm::dot(glm::cross(x, y), z)) < 1e-6)
         throw InvalidArgument(p + ".matrix_world", "the rotation's columns are (nearly) parallel");
     switch (type) {
-    case CameraType::Perspective:
-        if (fov_rad != 0.0)
-            require_in_range(p + ".fov_deg", fov_rad / kDegree, 1e-3, 179.9, "degrees");
-        else
-            require_in_range(p + ".lens_mm", lens_mm, 1e-3, 1e6, "mm");
-        require_in_range(p + ".sensor_width_mm", sensor_width_mm, 1e-3, 1e4, "mm");
-        require_in_range(p + ".sensor_height_mm", sensor_height_mm, 1e-3, 1e4, "mm");
-        break;
-    case CameraType::Orthographic:
-        require_in_range(p + ".ortho_scale", ortho_scale, 1e-9, 1e9, "m");
-        break;
-    case CameraType::Panoramic:
-        require_in_range(p + ".latitude_min_deg", latitude_min_rad / kDegree, -90.0, 90.0, "degrees");
-        require_in_range(p + ".latitude_max_deg", latitude_max_rad / kDegree, -90.0, 90.0, "degrees");
-        require_in_range(p + ".longitude_min_deg", longitude_min_rad / kDegree, -180.0, 180.0, "degrees");
-        require_in_range(p + ".longitude_max_deg", longitude_max_rad / kDegree, -180.0, 180.0, "degrees");
-        if (!(latitude_min_rad < latitude_max_rad))
-            throw InvalidArgument(p + ".latitude_min_deg", "must be below latitude_max_deg");
-        if (!(longitude_min_rad < longitude_max_rad))
-            throw InvalidArgument(p + ".longitude_min_deg", "must be below longitude_max_deg");
-        break;
+        case CameraType::Perspective:
+            if (fov_rad != 0.0)
+                require_in_range(p + ".fov_deg", fov_rad / kDegree, 1e-3, 179.9, "degrees");
+            else
+                require_in_range(p + ".lens_mm", lens_mm, 1e-3, 1e6, "mm");
+            require_in_range(p + ".sensor_width_mm", sensor_width_mm, 1e-3, 1e4, "mm");
+            require_in_range(p + ".sensor_height_mm", sensor_height_mm, 1e-3, 1e4, "mm");
+            break;
+        case CameraType::Orthographic:
+            require_in_range(p + ".ortho_scale", ortho_scale, 1e-9, 1e9, "m");
+            break;
+        case CameraType::Panoramic:
+            require_in_range(p + ".latitude_min_deg", latitude_min_rad / kDegree, -90.0, 90.0, "degrees");
+            require_in_range(p + ".latitude_max_deg", latitude_max_rad / kDegree, -90.0, 90.0, "degrees");
+            require_in_range(p + ".longitude_min_deg", longitude_min_rad / kDegree, -180.0, 180.0, "degrees");
+            require_in_range(p + ".longitude_max_deg", longitude_max_rad / kDegree, -180.0, 180.0, "degrees");
+            if (!(latitude_min_rad < latitude_max_rad))
+                throw InvalidArgument(p + ".latitude_min_deg", "must be below latitude_max_deg");
+            if (!(longitude_min_rad < longitude_max_rad))
+                throw InvalidArgument(p + ".longitude_min_deg", "must be below longitude_max_deg");
+            break;
     }
     require_in_range(p + ".shift_x", shift_x, -100.0, 100.0);
     require_in_range(p + ".shift_y", shift_y, -100.0, 100.0);
     require_in_range(p + ".clip_start_m", clip_start_m, 1e-6, 1e12, "m");
     require_in_range(p + ".clip_end_m", clip_end_m, 1e-6, 1e12, "m");
     if (!(clip_start_m < clip_end_m))
-        throw InvalidArgument(p + ".clip_start_m",
-                              fmt::format("must be below clip_end_m ({} m), got {} m", clip_end_m,
-                                          clip_start_m));
+        throw InvalidArgument(p + ".clip_start_m", fmt::format("must be below clip_end_m ({} m), got {} m",
+                                                               clip_end_m, clip_start_m));
 }
 
 void RenderResolution::validate(const std::string& p) const {
@@ -109,16 +116,15 @@ void RenderResolution::validate(const std::string& p) const {
     require_in_range(p + ".percentage", percentage, 1, 32767, "%");
     if (width() < 1 || height() < 1)
         throw InvalidArgument(p + ".percentage",
-                              fmt::format("{} x {} at {} % is less than one pixel", x, y,
-                                          percentage));
+                              fmt::format("{} x {} at {} % is less than one pixel", x, y, percentage));
 }
 
 CameraRays::CameraRays(const Camera& camera, int width, int height)
     : type_(camera.type), width_(width), height_(height) {
     camera.validate();
     if (width < 1 || height < 1)
-        throw InvalidArgument("resolution", fmt::format("must be at least 1 x 1, got {} x {}",
-                                                        width, height));
+        throw InvalidArgument("resolution",
+                              fmt::format("must be at least 1 x 1, got {} x {}", width, height));
     const glm::dmat4& m = camera.matrix_world;
     position_ = glm::dvec3(m[3]);
     right_ = glm::normalize(glm::dvec3(m[0]));
@@ -145,8 +151,7 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
     else if (camera.fov_rad > 0.0)
         size = 2.0 * std::tan(0.5 * camera.fov_rad);
     else
-        size = (camera.sensor_fit == SensorFit::Vertical ? camera.sensor_height_mm
-                                                         : camera.sensor_width_mm) /
+        size = (camera.sensor_fit == SensorFit::Vertical ? camera.sensor_height_mm : camera.sensor_width_mm) /
                camera.lens_mm;
     const double viewfac = horizontal ? double(width) : double(height);
     const double pixel = size / viewfac;

@@ -15,8 +15,7 @@ void require_in_range(const std::string& parameter, double value, double lo, dou
                       const std::string& unit) {
     if (!std::isfinite(value) || value < lo || value > hi) {
         const std::string u = unit.empty() ? "" : " " + unit;
-        throw InvalidArgument(parameter, fmt::format("must be in [{}, {}]{}, got {}", lo, hi,
-                                                     u, value));
+        throw InvalidArgument(parameter, fmt::format("must be in [{}, {}]{}, got {}", lo, hi, u, value));
     }
 }
 

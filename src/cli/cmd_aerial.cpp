@@ -8,15 +8,15 @@
 #include <optional>
 #include <thread>
 
+#include "common.hpp"
+#include "terminal_progress.hpp"
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "common.hpp"
-#include "terminal_progress.hpp"
 #include "welkin/aerial/aerial_perspective.hpp"
-#include "welkin/render/cloud_passes.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
+#include "welkin/render/cloud_passes.hpp"
 #include "welkin/scene/scene.hpp"
 
 namespace welkin::cli {
@@ -33,8 +33,8 @@ struct AerialArgs : SceneOutputArgs {
 // the core's parameter in the message: "--scene: camera.lens_mm: must be ...".
 [[noreturn]] void rethrow_as(const std::string& option, const InvalidArgument& e,
                              const std::string& where = "") {
-    throw InvalidArgument(option, where.empty() ? std::string(e.what())
-                                                : fmt::format("{} (in '{}')", e.what(), where));
+    throw InvalidArgument(
+        option, where.empty() ? std::string(e.what()) : fmt::format("{} (in '{}')", e.what(), where));
 }
 
 int run_aerial(const AerialArgs& args) {
@@ -62,8 +62,8 @@ int run_aerial(const AerialArgs& args) {
     const auto start = std::chrono::steady_clock::now();
     AerialPasses passes;
     {
-        TerminalProgress progress(fmt::format("aerial {}x{} ({})", width, height,
-                                              aerial_method_name(scene.aerial.method)));
+        TerminalProgress progress(
+            fmt::format("aerial {}x{} ({})", width, height, aerial_method_name(scene.aerial.method)));
         passes = aerial_perspective(scene.aerial_view(), depth, width, height, &progress);
         progress.finish();
     }
@@ -81,8 +81,8 @@ int run_aerial(const AerialArgs& args) {
     ExrImage exr;
     exr.width = width;
     exr.height = height;
-    exr.channel_names = {"Welkin.AerialInscatter.R",    "Welkin.AerialInscatter.G",
-                         "Welkin.AerialInscatter.B",    "Welkin.AerialTransmittance.R",
+    exr.channel_names = {"Welkin.AerialInscatter.R",     "Welkin.AerialInscatter.G",
+                         "Welkin.AerialInscatter.B",     "Welkin.AerialTransmittance.R",
                          "Welkin.AerialTransmittance.G", "Welkin.AerialTransmittance.B"};
     if (clouds)
         for (const std::string& c : cloud_channel_names()) exr.channel_names.push_back(c);
@@ -103,14 +103,16 @@ int run_aerial(const AerialArgs& args) {
     ExrWriteOptions write = exr_write_options(args, scene);
     write.attributes.insert(write.attributes.end(),
                             {{"welkinDepth", fmt::format("{} ({})", args.depth, channel)},
-                        {"welkinUnits", "AerialInscatter, Clouds: linear Rec.709, W m^-2 sr^-1 (times "
-                                        "exposure); AerialTransmittance: dimensionless; CloudDepth: m"}});
+                             {"welkinUnits",
+                              "AerialInscatter, Clouds: linear Rec.709, W m^-2 sr^-1 (times "
+                              "exposure); AerialTransmittance: dimensionless; CloudDepth: m"}});
     write_exr(args.output, exr, write);
-    fmt::print("wrote {} ({} x {}, Welkin.AerialInscatter and Welkin.AerialTransmittance{}, {}, "
-               "method {}, {:.2f} s)\n",
-               std::filesystem::absolute(args.output).string(), width, height,
-               clouds ? ", Welkin.Clouds and Welkin.CloudDepth" : "", args.half ? "half" : "float",
-               aerial_method_name(scene.aerial.method), seconds);
+    fmt::print(
+        "wrote {} ({} x {}, Welkin.AerialInscatter and Welkin.AerialTransmittance{}, {}, "
+        "method {}, {:.2f} s)\n",
+        std::filesystem::absolute(args.output).string(), width, height,
+        clouds ? ", Welkin.Clouds and Welkin.CloudDepth" : "", args.half ? "half" : "float",
+        aerial_method_name(scene.aerial.method), seconds);
     return 0;
 }
 
@@ -118,12 +120,14 @@ int run_aerial(const AerialArgs& args) {
 
 Command add_aerial_command(CLI::App& app) {
     auto args = std::make_shared<AerialArgs>();
-    CLI::App* sub = app.add_subcommand(
-        "aerial", "Aerial-perspective passes (in-scattering and transmittance) for a rendered "
-                  "frame, from its scene JSON and its depth (Z pass), as a multilayer OpenEXR");
-    add_scene_output_options(sub, *args,
-                             "Scene description JSON (the schema the Blender add-on writes; see docs/pipelines.md "
-                             "\"Scene JSON\"): atmosphere, sun, camera, render resolution");
+    CLI::App* sub =
+        app.add_subcommand("aerial",
+                           "Aerial-perspective passes (in-scattering and transmittance) for a rendered "
+                           "frame, from its scene JSON and its depth (Z pass), as a multilayer OpenEXR");
+    add_scene_output_options(
+        sub, *args,
+        "Scene description JSON (the schema the Blender add-on writes; see docs/pipelines.md "
+        "\"Scene JSON\"): atmosphere, sun, camera, render resolution");
     sub->add_option("--depth", args->depth,
                     "OpenEXR holding the frame's depth: Blender's Z pass, metres along the "
                     "view axis (along the ray for panoramic cameras); +inf or >= 1e9 m is sky")
@@ -143,7 +147,8 @@ Command add_aerial_command(CLI::App& app) {
         "scene's exposure) and Welkin.AerialTransmittance (R, G, B), so that Image x "
         "Transmittance + Inscatter is the hazed render. With \"clouds\" in the scene also "
         "Welkin.Clouds (R, G, B, A: premultiplied, the air in front included) and "
-        "Welkin.CloudDepth (Z; 1e10 where no cloud): final = Clouds + (1 - Clouds.A) x hazed. Sky pixels get transmittance 1 and "
+        "Welkin.CloudDepth (Z; 1e10 where no cloud): final = Clouds + (1 - Clouds.A) x hazed. Sky pixels get "
+        "transmittance 1 and "
         "no in-scattering (the rendered sky already holds the atmosphere). Rows top first, "
         "as EXR files are. Ctrl-C cancels cleanly; nothing is written.");
     return {sub, [args] { return run_aerial(*args); }};

@@ -3,10 +3,9 @@
 #include <filesystem>
 #include <memory>
 
+#include "common.hpp"
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-
-#include "common.hpp"
 
 namespace welkin::cli {
 namespace {
@@ -58,16 +57,17 @@ Command add_presets_command(CLI::App& app) {
 
 Command add_atmosphere_command(CLI::App& app) {
     auto args = std::make_shared<AtmosphereCmdArgs>();
-    CLI::App* sub = app.add_subcommand(
-        "atmosphere", "Write an atmosphere as JSON (a preset, or a JSON file in full form)");
+    CLI::App* sub = app.add_subcommand("atmosphere",
+                                       "Write an atmosphere as JSON (a preset, or a JSON file in full form)");
     add_atmosphere_options(sub, args->atmosphere);
     sub->add_option("-o,--output", args->output,
                     "Output JSON file (default: standard output); never replaced unless "
                     "--overwrite")
         ->type_name("FILE.json");
     sub->add_flag("--overwrite", args->overwrite, "Replace the output file if it exists");
-    sub->footer("Edit the file and pass it back with --atmosphere to `welkin sky` or `welkin "
-                "sun`. Units: metres, m^-1, W m^-2 nm^-1.");
+    sub->footer(
+        "Edit the file and pass it back with --atmosphere to `welkin sky` or `welkin "
+        "sun`. Units: metres, m^-1, W m^-2 nm^-1.");
     return {sub, [args] { return run_atmosphere(*args); }};
 }
 

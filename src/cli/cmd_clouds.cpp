@@ -5,13 +5,13 @@
 #include <filesystem>
 #include <memory>
 
-#include <fmt/format.h>
-
 #include "common.hpp"
 #include "terminal_progress.hpp"
-#include "welkin/render/cloud_passes.hpp"
+#include <fmt/format.h>
+
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
+#include "welkin/render/cloud_passes.hpp"
 #include "welkin/scene/scene.hpp"
 
 namespace welkin::cli {
@@ -33,7 +33,8 @@ int run_clouds(const CloudsArgs& args) {
                                                      args.scene));
     const int width = scene.resolution.width(), height = scene.resolution.height();
     DepthImage depth;
-    if (!args.depth.empty()) depth = load_depth(args.depth, args.depth_channel, scene);
+    if (!args.depth.empty())
+        depth = load_depth(args.depth, args.depth_channel, scene);
     else if (!args.depth_channel.empty())
         throw InvalidArgument("--depth-channel", "needs --depth");
     const std::shared_ptr<const CloudDensity> clouds = load_scene_clouds(scene, args.scene);
@@ -64,15 +65,17 @@ int run_clouds(const CloudsArgs& args) {
     }
     ExrWriteOptions write = exr_write_options(args, scene);
     write.attributes.insert(write.attributes.end(),
-                            {{"welkinUnits", "Clouds: linear Rec.709, W m^-2 sr^-1 (times exposure), "
-                                             "premultiplied; CloudDepth: m (Blender's Z), 1e10 where no cloud"}});
+                            {{"welkinUnits",
+                              "Clouds: linear Rec.709, W m^-2 sr^-1 (times exposure), "
+                              "premultiplied; CloudDepth: m (Blender's Z), 1e10 where no cloud"}});
     if (!args.depth.empty())
         write.attributes.push_back({"welkinDepth", fmt::format("{} ({})", args.depth, depth.channel)});
     write_exr(args.output, exr, write);
-    fmt::print("wrote {} ({} x {}, Welkin.Clouds and Welkin.CloudDepth, {}, {:.1f} % of pixels cloudy, "
-               "{:.2f} s)\n",
-               std::filesystem::absolute(args.output).string(), width, height, args.half ? "half" : "float",
-               100.0 * double(cloudy) / double(n), seconds);
+    fmt::print(
+        "wrote {} ({} x {}, Welkin.Clouds and Welkin.CloudDepth, {}, {:.1f} % of pixels cloudy, "
+        "{:.2f} s)\n",
+        std::filesystem::absolute(args.output).string(), width, height, args.half ? "half" : "float",
+        100.0 * double(cloudy) / double(n), seconds);
     return 0;
 }
 
@@ -80,11 +83,12 @@ int run_clouds(const CloudsArgs& args) {
 
 Command add_clouds_command(CLI::App& app) {
     auto args = std::make_shared<CloudsArgs>();
-    CLI::App* sub = app.add_subcommand(
-        "clouds", "The scene camera's cloud passes (Welkin.Clouds, Welkin.CloudDepth) from a scene "
-                  "JSON with \"clouds\", as a multilayer OpenEXR");
-    add_scene_output_options(sub, *args,
-                             "Scene description JSON with a camera and \"clouds\" (docs/pipelines.md \"Scene JSON\")");
+    CLI::App* sub =
+        app.add_subcommand("clouds",
+                           "The scene camera's cloud passes (Welkin.Clouds, Welkin.CloudDepth) from a scene "
+                           "JSON with \"clouds\", as a multilayer OpenEXR");
+    add_scene_output_options(
+        sub, *args, "Scene description JSON with a camera and \"clouds\" (docs/pipelines.md \"Scene JSON\")");
     sub->add_option("--depth", args->depth,
                     "OpenEXR holding the render's depth (Blender's Z pass); rays end at the "
                     "geometry, so that it hides the clouds behind it (default: no geometry)")

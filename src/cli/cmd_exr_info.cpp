@@ -5,10 +5,10 @@
 #include <limits>
 #include <memory>
 
+#include "common.hpp"
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "common.hpp"
 #include "welkin/base/equirect.hpp"
 #include "welkin/io/exr.hpp"
 
@@ -29,8 +29,7 @@ int run_exr_info(const ExrInfoArgs& args) {
         double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0.0, integral = 0.0;
         std::size_t non_finite = 0;
         for (int y = 0; y < im.height; ++y) {
-            const double omega = args.integral ? equirect_pixel_solid_angle(y, im.width, im.height)
-                                               : 0.0;
+            const double omega = args.integral ? equirect_pixel_solid_angle(y, im.width, im.height) : 0.0;
             for (int x = 0; x < im.width; ++x) {
                 const double v = im.at(x, y, c);
                 if (!std::isfinite(v)) {
@@ -51,10 +50,8 @@ int run_exr_info(const ExrInfoArgs& args) {
         if (args.integral) ch["solid_angle_integral"] = integral;
         channels.push_back(ch);
     }
-    const nlohmann::ordered_json j = {{"path", args.path},
-                                      {"width", im.width},
-                                      {"height", im.height},
-                                      {"channels", channels}};
+    const nlohmann::ordered_json j = {
+        {"path", args.path}, {"width", im.width}, {"height", im.height}, {"channels", channels}};
     fmt::print("{}\n", j.dump(2));
     return 0;
 }
@@ -63,8 +60,8 @@ int run_exr_info(const ExrInfoArgs& args) {
 
 Command add_exr_info_command(CLI::App& app) {
     auto args = std::make_shared<ExrInfoArgs>();
-    CLI::App* sub = app.add_subcommand(
-        "exr-info", "Print an EXR file's size and per-channel statistics (JSON)");
+    CLI::App* sub =
+        app.add_subcommand("exr-info", "Print an EXR file's size and per-channel statistics (JSON)");
     sub->add_option("file", args->path, "The EXR file")->required()->type_name("FILE.exr");
     sub->add_flag("--integral", args->integral,
                   "Also integrate each channel over the sphere as an equirectangular image "

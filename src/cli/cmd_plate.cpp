@@ -8,14 +8,14 @@
 #include <memory>
 #include <optional>
 
+#include "common.hpp"
+#include "terminal_progress.hpp"
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "common.hpp"
-#include "terminal_progress.hpp"
-#include "welkin/render/camera_plate.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
+#include "welkin/render/camera_plate.hpp"
 #include "welkin/scene/scene.hpp"
 
 namespace welkin::cli {
@@ -30,8 +30,8 @@ int run_plate(const SceneOutputArgs& args) {
     const auto start = std::chrono::steady_clock::now();
     CameraPlate plate;
     {
-        TerminalProgress progress(fmt::format("plate {}x{}", scene.resolution.width(),
-                                              scene.resolution.height()));
+        TerminalProgress progress(
+            fmt::format("plate {}x{}", scene.resolution.width(), scene.resolution.height()));
         try {
             plate = render_camera_plate(scene, &progress);
         } catch (const InvalidArgument& e) {
@@ -67,13 +67,14 @@ int run_plate(const SceneOutputArgs& args) {
     ExrWriteOptions write = exr_write_options(args, scene);
     write.attributes.insert(write.attributes.end(),
                             {{"welkinMethod", plate.method},
-                        {"welkinUnits", "linear Rec.709, W m^-2 sr^-1 (times exposure); "
-                                        "AerialTransmittance dimensionless; Clouds premultiplied; "
-                                        "Z, CloudDepth metres (1e10: no cloud)"}});
+                             {"welkinUnits",
+                              "linear Rec.709, W m^-2 sr^-1 (times exposure); "
+                              "AerialTransmittance dimensionless; Clouds premultiplied; "
+                              "Z, CloudDepth metres (1e10: no cloud)"}});
     write_exr(args.output, exr, write);
     fmt::print("wrote {} ({} x {}, sky method {}, {:.2f} s)\n",
-               std::filesystem::absolute(args.output).string(), plate.width, plate.height,
-               plate.method, seconds);
+               std::filesystem::absolute(args.output).string(), plate.width, plate.height, plate.method,
+               seconds);
     return 0;
 }
 
@@ -82,16 +83,19 @@ int run_plate(const SceneOutputArgs& args) {
 Command add_plate_command(CLI::App& app) {
     auto args = std::make_shared<SceneOutputArgs>();
     args->output = "welkin_plate.exr";
-    CLI::App* sub = app.add_subcommand(
-        "plate", "The scene camera's plate: sky, sun disc and aerial perspective over the "
-                 "ground (no meshes), as the Blender render engine \"Welkin\" renders it");
-    add_scene_output_options(sub, *args, "Scene description JSON with a camera (docs/pipelines.md \"Scene JSON\")");
-    sub->footer("Channels: R, G, B (Combined), Welkin.Sky.{R,G,B}, Welkin.AerialInscatter.{R,G,B}, "
-                "Welkin.AerialTransmittance.{R,G,B}, Welkin.Clouds.{R,G,B,A} (premultiplied; alpha "
-                "0 without \"clouds\" in the scene), Welkin.CloudDepth.Z (1e10 where no cloud), Z. "
-                "Linear Rec.709, W m^-2 sr^-1, times the scene's exposure; top row first. With "
-                "clouds, Combined = Clouds + (1 - Clouds.A) x the clear plate. Ctrl-C cancels; "
-                "nothing is written.");
+    CLI::App* sub =
+        app.add_subcommand("plate",
+                           "The scene camera's plate: sky, sun disc and aerial perspective over the "
+                           "ground (no meshes), as the Blender render engine \"Welkin\" renders it");
+    add_scene_output_options(sub, *args,
+                             "Scene description JSON with a camera (docs/pipelines.md \"Scene JSON\")");
+    sub->footer(
+        "Channels: R, G, B (Combined), Welkin.Sky.{R,G,B}, Welkin.AerialInscatter.{R,G,B}, "
+        "Welkin.AerialTransmittance.{R,G,B}, Welkin.Clouds.{R,G,B,A} (premultiplied; alpha "
+        "0 without \"clouds\" in the scene), Welkin.CloudDepth.Z (1e10 where no cloud), Z. "
+        "Linear Rec.709, W m^-2 sr^-1, times the scene's exposure; top row first. With "
+        "clouds, Combined = Clouds + (1 - Clouds.A) x the clear plate. Ctrl-C cancels; "
+        "nothing is written.");
     return {sub, [args] { return run_plate(*args); }};
 }
 

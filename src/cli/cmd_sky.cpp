@@ -1,23 +1,23 @@
 // `welkin sky`: render an equirectangular sky HDRI to OpenEXR.
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <filesystem>
-#include <charconv>
 #include <memory>
 #include <optional>
 #include <thread>
 
+#include "common.hpp"
+#include "terminal_progress.hpp"
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
-#include "common.hpp"
-#include "terminal_progress.hpp"
-#include "welkin/sky/auto.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
-#include "welkin/scene/scene.hpp"
 #include "welkin/render/sky_image.hpp"
+#include "welkin/scene/scene.hpp"
+#include "welkin/sky/auto.hpp"
 
 namespace welkin::cli {
 namespace {
@@ -49,12 +49,12 @@ struct SkySettings {
     Atmosphere atmosphere;
     Observer observer;
     SkyOptions options;
-    std::string method;
-    double exposure;
-    std::shared_ptr<const CloudDensity> clouds;  // the scene's (none without --scene)
-    bool ground = true;                          // the scene's ground (--no-ground wins)
-    std::optional<double> ground_albedo;         // the scene's (--ground-albedo wins)
-    CloudLightingOptions cloud_lighting;
+    std::string method{};
+    double exposure = 1.0;
+    std::shared_ptr<const CloudDensity> clouds{};  // the scene's (none without --scene)
+    bool ground = true;                            // the scene's ground (--no-ground wins)
+    std::optional<double> ground_albedo{};         // the scene's (--ground-albedo wins)
+    CloudLightingOptions cloud_lighting{};
     int air_steps = AerialOptions{}.raymarch_steps;  // the air in front of the clouds
     std::size_t cloud_layers = 0, cloud_volumes = 0;
 };
@@ -80,12 +80,16 @@ SkySettings settings_from(const SkyArgs& args) {
         SkyOptions options;
         options.reference_paths = args.reference_paths;
         options.seed = args.seed;
-        return {load_atmosphere(args.atmosphere), make_observer(args.observer), options, args.method,
-                args.exposure};
+        SkySettings out{load_atmosphere(args.atmosphere), make_observer(args.observer), options};
+        out.method = args.method;
+        out.exposure = args.exposure;
+        return out;
     }
     try {
         const SceneDescription scene = SceneDescription::from_json_file(args.scene);
-        SkySettings out{scene.atmosphere, scene.origin_observer(), scene.sky_options, scene.method, scene.exposure};
+        SkySettings out{scene.atmosphere, scene.origin_observer(), scene.sky_options};
+        out.method = scene.method;
+        out.exposure = scene.exposure;
         // The scene's clouds (VDBs opened now, before the render), seen from the scene origin.
         out.clouds = scene.cloud_density();
         out.ground = scene.ground;
@@ -117,8 +121,7 @@ int run_sky(const SkyArgs& args) {
     if (method_name == "auto") {
         // Resolved here, once for the whole image, so that it can be reported (after the
         // render, so that a refusal is the only thing a bad command prints).
-        choice = choose_sky_method(atm, observer,
-                                   std::size_t(args.width) * std::size_t(args.width / 2),
+        choice = choose_sky_method(atm, observer, std::size_t(args.width) * std::size_t(args.width / 2),
                                    args.tolerance, options);
         options = choice->options;
         method_name = choice->method;
@@ -129,8 +132,8 @@ int run_sky(const SkyArgs& args) {
     image_options.ground = args.ground && sky.ground;
     image_options.ground_albedo = args.ground_albedo ? args.ground_albedo : sky.ground_albedo;
     image_options.exposure = sky.exposure;
-    image_options.output = args.spectral_channels ? SkyImageOptions::Output::Spectral
-                                                  : SkyImageOptions::Output::Rgb;
+    image_options.output =
+        args.spectral_channels ? SkyImageOptions::Output::Spectral : SkyImageOptions::Output::Rgb;
     image_options.clouds = sky.clouds;
     image_options.cloud_lighting = sky.cloud_lighting;
     image_options.air_steps = sky.air_steps;
@@ -142,13 +145,11 @@ int run_sky(const SkyArgs& args) {
     const auto start = std::chrono::steady_clock::now();
     SkyImage image;
     {
-        TerminalProgress progress(fmt::format("sky {}x{} ({})", args.width, args.width / 2,
-                                              method_name));
+        TerminalProgress progress(fmt::format("sky {}x{} ({})", args.width, args.width / 2, method_name));
         image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
         progress.finish();
     }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (interrupted()) throw Cancelled();
 
     ExrImage exr;
@@ -160,7 +161,7 @@ int run_sky(const SkyArgs& args) {
     ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
     // Provenance: the settings that reproduce the file.
     nlohmann::ordered_json settings = {
-        {"atmosphere", !args.scene.empty()           ? atm.name
+        {"atmosphere", !args.scene.empty()            ? atm.name
                        : args.atmosphere.file.empty() ? atm.name
                                                       : args.atmosphere.file},
         {"wavelengths_nm", atm.wavelengths_nm},
@@ -172,7 +173,8 @@ int run_sky(const SkyArgs& args) {
         {"exposure", sky.exposure},
         {"sun_disc", !args.no_sun_disc},
         {"ground", args.ground},
-        {"ground_albedo", args.ground_albedo ? nlohmann::json(*args.ground_albedo) : nlohmann::json("atmosphere")},
+        {"ground_albedo",
+         args.ground_albedo ? nlohmann::json(*args.ground_albedo) : nlohmann::json("atmosphere")},
         {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
         {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
                                          : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
@@ -183,13 +185,12 @@ int run_sky(const SkyArgs& args) {
         settings["scene"] = args.scene;
     }
     write.attributes.emplace_back("welkinSettings", settings.dump());
-    if (args.spectral_channels)
-        write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
+    if (args.spectral_channels) write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);
     if (choice) {
         fmt::print("auto: {} (chart: p95 relative luminance error {:.3g} {} tolerance {:g})\n",
-                   choice->setting, choice->predicted_error,
-                   choice->meets_tolerance ? "<=" : "ABOVE", args.tolerance);
+                   choice->setting, choice->predicted_error, choice->meets_tolerance ? "<=" : "ABOVE",
+                   args.tolerance);
         if (!choice->meets_tolerance)
             fmt::print(stderr,
                        "welkin: warning: no fast method meets --tolerance {:g} for this scene; "
@@ -203,8 +204,7 @@ int run_sky(const SkyArgs& args) {
                    report.clamped_values);
     fmt::print("wrote {} ({} x {}, {} {}, method {}, {:.2f} s)\n",
                std::filesystem::absolute(args.output).string(), exr.width, exr.height,
-               fmt::join(exr.channel_names, ","), args.half ? "half" : "float", method_name,
-               seconds);
+               fmt::join(exr.channel_names, ","), args.half ? "half" : "float", method_name, seconds);
     return 0;
 }
 
@@ -261,8 +261,7 @@ Command add_sky_command(CLI::App& app) {
                   "Write one channel per wavelength (W m^-2 sr^-1 nm^-1, named S0.<nm>nm as "
                   "in the spectral OpenEXR layout) instead of RGB");
     sub->add_flag("--overwrite", args->overwrite, "Replace the output file if it exists");
-    sub->add_option("-o,--output", args->output,
-                    "Output EXR file; never replaced unless --overwrite")
+    sub->add_option("-o,--output", args->output, "Output EXR file; never replaced unless --overwrite")
         ->type_name("FILE.exr")
         ->capture_default_str();
     sub->add_option("--threads", args->threads, "Worker threads, in [1, 1024] (default: all cores)")

@@ -2,13 +2,13 @@
 // wavelength and in RGB (what a Blender sun lamp should carry so that sky and sun agree).
 #include <memory>
 
+#include "common.hpp"
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "common.hpp"
-#include "welkin/color/color.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/atmosphere/sun.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/color/color.hpp"
 
 namespace welkin::cli {
 namespace {
@@ -28,8 +28,7 @@ int run_sun(const SunArgs& args) {
         {"altitude_m", observer.altitude_m},
         {"sun_elevation_deg", args.observer.sun_elevation_deg},
         {"sun_azimuth_deg", args.observer.sun_azimuth_deg},
-        {"sun_direction", {observer.sun_direction.x, observer.sun_direction.y,
-                           observer.sun_direction.z}},
+        {"sun_direction", {observer.sun_direction.x, observer.sun_direction.y, observer.sun_direction.z}},
         {"sun_angular_radius_rad", atm.sun_angular_radius_rad},
         {"sun_solid_angle_sr", omega},
         {"visible_fraction", sun.visible_fraction},

@@ -1,25 +1,23 @@
 #include "common.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cerrno>
-#include <cstring>
-
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <thread>
 
+#include "terminal_progress.hpp"
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
+#include <unistd.h>
 
-#include "welkin/scene/scene.hpp"
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/io/file.hpp"
-#include "terminal_progress.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::cli {
 
@@ -66,8 +64,7 @@ Atmosphere load_atmosphere(const AtmosphereArgs& args) {
         // "preset: unknown preset 'x'; choose one of: ..." -> named after the option.
         const std::string what = e.what();
         const std::string prefix = e.parameter() + ": ";
-        throw InvalidArgument("--preset", what.rfind(prefix, 0) == 0 ? what.substr(prefix.size())
-                                                                     : what);
+        throw InvalidArgument("--preset", what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
     }
 }
 
@@ -146,7 +143,7 @@ SceneDescription load_camera_scene(const std::string& path) {
 // The depth channel: --depth-channel, else "Z" (a plain EXR with Blender's Z buffer),
 // "Depth.Z", or the one "<view layer>.Depth.Z" of a multilayer render.
 static std::string find_depth_channel(const std::vector<std::string>& names, const std::string& asked,
-                               const std::string& path) {
+                                      const std::string& path) {
     const auto has = [&](const std::string& n) {
         return std::find(names.begin(), names.end(), n) != names.end();
     };
@@ -163,9 +160,8 @@ static std::string find_depth_channel(const std::vector<std::string>& names, con
         if (n.size() > 8 && n.compare(n.size() - 8, 8, ".Depth.Z") == 0) layered.push_back(n);
     if (layered.size() == 1) return layered.front();
     if (layered.size() > 1)
-        throw InvalidArgument("--depth-channel",
-                              fmt::format("'{}' has several depth channels ({}); name one",
-                                          path, fmt::join(layered, ", ")));
+        throw InvalidArgument("--depth-channel", fmt::format("'{}' has several depth channels ({}); name one",
+                                                             path, fmt::join(layered, ", ")));
     throw InvalidArgument("--depth-channel",
                           fmt::format("'{}' has no depth channel (looked for Z, Depth.Z and "
                                       "<layer>.Depth.Z; its channels: {}); enable the Z pass "
@@ -173,7 +169,8 @@ static std::string find_depth_channel(const std::vector<std::string>& names, con
                                       path, listed));
 }
 
-DepthImage load_depth(const std::string& path, const std::string& asked_channel, const SceneDescription& scene) {
+DepthImage load_depth(const std::string& path, const std::string& asked_channel,
+                      const SceneDescription& scene) {
     const int width = scene.resolution.width(), height = scene.resolution.height();
     ExrHeaderInfo header;
     try {
@@ -184,12 +181,11 @@ DepthImage load_depth(const std::string& path, const std::string& asked_channel,
     DepthImage out;
     out.channel = find_depth_channel(header.channel_names, asked_channel, path);
     if (header.width != width || header.height != height)
-        throw InvalidArgument("--depth",
-                              fmt::format("'{}' is {} x {} pixels but the scene renders {} x {} "
-                                          "(resolution {} x {} at {} %)",
-                                          path, header.width, header.height, width, height,
-                                          scene.resolution.x, scene.resolution.y,
-                                          scene.resolution.percentage));
+        throw InvalidArgument(
+            "--depth", fmt::format("'{}' is {} x {} pixels but the scene renders {} x {} "
+                                   "(resolution {} x {} at {} %)",
+                                   path, header.width, header.height, width, height, scene.resolution.x,
+                                   scene.resolution.y, scene.resolution.percentage));
     ExrImage depth;
     try {
         depth = read_exr_channels(path, {out.channel});
@@ -206,7 +202,8 @@ DepthImage load_depth(const std::string& path, const std::string& asked_channel,
     return out;
 }
 
-std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& scene, const std::string& scene_path) {
+std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& scene,
+                                                      const std::string& scene_path) {
     try {
         const auto clouds = scene.cloud_density();
         // Besides the passes: the cloud march's buffers and the EXR's 5 cloud channels.
@@ -218,7 +215,8 @@ std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& sc
 }
 
 std::vector<std::string> cloud_channel_names() {
-    return {"Welkin.Clouds.R", "Welkin.Clouds.G", "Welkin.Clouds.B", "Welkin.Clouds.A", "Welkin.CloudDepth.Z"};
+    return {"Welkin.Clouds.R", "Welkin.Clouds.G", "Welkin.Clouds.B", "Welkin.Clouds.A",
+            "Welkin.CloudDepth.Z"};
 }
 
 std::unique_ptr<tbb::global_control> limit_threads(int threads) {

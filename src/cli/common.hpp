@@ -11,7 +11,6 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-
 #include <tbb/global_control.h>
 
 #include "welkin/atmosphere/atmosphere.hpp"
@@ -74,7 +73,8 @@ DepthImage load_depth(const std::string& path, const std::string& channel, const
 // The scene's clouds (scene.cloud_density(): the VDB files are opened here, before any
 // work), or nullptr without clouds. InvalidArgument naming --scene with the core's key
 // ("clouds.volumes[0].file: ...") and the scene file.
-std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& scene, const std::string& scene_path);
+std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& scene,
+                                                      const std::string& scene_path);
 
 // The EXR channels of the cloud passes: Welkin.Clouds.{R,G,B,A}, Welkin.CloudDepth.Z (the
 // add-on's pass channels).

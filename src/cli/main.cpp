@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
+#include "common.hpp"
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
-#include "common.hpp"
 #include "welkin/base/error.hpp"
 
 namespace {
@@ -52,10 +52,8 @@ int run_guarded(const std::function<int()>& run) {
         return 130;
     } catch (const welkin::InvalidArgument& e) {
         const std::string what = e.what(), prefix = e.parameter() + ": ";
-        const std::string message =
-            what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
-        fmt::print(stderr, "welkin: error: {}: {}\n", option_name(e.parameter()),
-                   one_line(message));
+        const std::string message = what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
+        fmt::print(stderr, "welkin: error: {}: {}\n", option_name(e.parameter()), one_line(message));
         return 2;
     } catch (const std::exception& e) {
         // IoError names its path; anything else (e.g. a method that cannot run yet) is
@@ -74,7 +72,9 @@ int finish_stdout(int status) {
     const bool close_failed = std::fclose(stdout) != 0;
     if (failed || close_failed) {
         fmt::print(stderr, "welkin: error: cannot write to standard output: {}\n",
-                   std::strerror(err ? err : errno ? errno : EIO));
+                   std::strerror(err     ? err
+                                 : errno ? errno
+                                         : EIO));
         return status == 0 ? 1 : status;
     }
     return status;
@@ -84,16 +84,17 @@ int finish_stdout(int status) {
 
 int main(int argc, char** argv) {
     using namespace welkin::cli;
-    CLI::App app{"welkin: physically based sky and atmosphere (sky HDRIs, sun radiometry, "
-                 "atmospheres). Units: SI; angles in degrees at this edge.",
-                 "welkin"};
+    CLI::App app{
+        "welkin: physically based sky and atmosphere (sky HDRIs, sun radiometry, "
+        "atmospheres). Units: SI; angles in degrees at this edge.",
+        "welkin"};
     app.set_version_flag("--version", fmt::format("welkin {}", kVersion));
     app.require_subcommand(1);
     app.get_formatter()->column_width(34);
-    const std::vector<Command> commands = {add_sky_command(app), add_sun_command(app),
-                                           add_presets_command(app), add_atmosphere_command(app),
+    const std::vector<Command> commands = {add_sky_command(app),      add_sun_command(app),
+                                           add_presets_command(app),  add_atmosphere_command(app),
                                            add_exr_info_command(app), add_aerial_command(app),
-                                           add_plate_command(app), add_clouds_command(app)};
+                                           add_plate_command(app),    add_clouds_command(app)};
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -1,13 +1,12 @@
 #include "terminal_progress.hpp"
 
-#include <signal.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
 
 #include <fmt/format.h>
+#include <signal.h>
+#include <unistd.h>
 
 #include "welkin/io/file.hpp"
 
@@ -56,8 +55,7 @@ bool TerminalProgress::report(double fraction) {
     const auto now = std::chrono::steady_clock::now();
     const double elapsed = std::chrono::duration<double>(now - start_).count();
     // Quick operations draw nothing; then at most ten redraws a second.
-    if (elapsed < 1.0 || (drawn_ && now - last_draw_ < std::chrono::milliseconds(100) &&
-                          fraction < 1.0))
+    if (elapsed < 1.0 || (drawn_ && now - last_draw_ < std::chrono::milliseconds(100) && fraction < 1.0))
         return true;
     last_draw_ = now;
     drawn_ = true;
@@ -68,8 +66,7 @@ bool TerminalProgress::report(double fraction) {
     bar.append(std::size_t(kWidth - filled), '.');
     std::string eta;
     if (f > 0.01) eta = fmt::format(", ~{:.0f} s left", elapsed * (1.0 - f) / f);
-    fmt::print(stderr, "\r{} [{}] {:3.0f} % ({:.1f} s{})\x1b[K", label_, bar, 100.0 * f,
-               elapsed, eta);
+    fmt::print(stderr, "\r{} [{}] {:3.0f} % ({:.1f} s{})\x1b[K", label_, bar, 100.0 * f, elapsed, eta);
     std::fflush(stderr);
     return true;
 }

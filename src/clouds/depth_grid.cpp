@@ -50,8 +50,12 @@ struct OpticalDepthGrid::Map {
 
 OpticalDepthGrid::OpticalDepthGrid(const CloudDensity& density, Direction direction, double base_spacing_m,
                                    double max_distance_m, int steps)
-    : density_(density), direction_(std::move(direction)), h0_(base_spacing_m), max_distance_m_(max_distance_m),
-      steps_(steps), map_(std::make_unique<Map>()) {
+    : density_(density),
+      direction_(std::move(direction)),
+      h0_(base_spacing_m),
+      max_distance_m_(max_distance_m),
+      steps_(steps),
+      map_(std::make_unique<Map>()) {
     if (!(h0_ > 0.0 && std::isfinite(h0_)))
         throw InvalidArgument("base_spacing_m", "must be a finite positive length");
     if (!(max_distance_m_ > 0.0)) throw InvalidArgument("max_distance_m", "must be positive");
@@ -105,14 +109,16 @@ double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) con
         cursor.tile[slot] = t;
     }
     Tile& t = *cursor.tile[slot];
-    const int li = int(base[0] - t.origin[0]), lj = int(base[1] - t.origin[1]), lk = int(base[2] - t.origin[2]);
+    const int li = int(base[0] - t.origin[0]), lj = int(base[1] - t.origin[1]),
+              lk = int(base[2] - t.origin[2]);
     double corner[8];
     for (int c = 0; c < 8; ++c) {
         const int i = li + (c & 1), j = lj + ((c >> 1) & 1), k = lk + ((c >> 2) & 1);
         std::atomic<float>& vertex = t.v[(k * kV + j) * kV + i];
         float v = vertex.load(std::memory_order_relaxed);
         if (std::isnan(v)) {
-            const glm::dvec3 x(double(t.origin[0] + i) * h, double(t.origin[1] + j) * h, double(t.origin[2] + k) * h);
+            const glm::dvec3 x(double(t.origin[0] + i) * h, double(t.origin[1] + j) * h,
+                               double(t.origin[2] + k) * h);
             v = float(march(x, cursor.segs));
             vertex.store(v, std::memory_order_relaxed);
             computed_.fetch_add(1, std::memory_order_relaxed);

@@ -73,8 +73,8 @@ SimilarityScaling::SimilarityScaling(double a, double g) {
     albedo = depth_scale > 0.0 ? (1.0 - forward) * a / depth_scale : 1.0;
 }
 
-double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g, double p,
-                  double p2) {
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g,
+                  double p, double p2) {
     const double single = std::exp(-tau_sun);
     const double ts = sim.depth_scale * tau_sun, T = sim.depth_scale * (tau_sun + tau_anti);
     // The orientation average (see the header): int_0^1 2 mu0 f(mu0) dmu0 = int_0^1 f(sqrt(v)) dv,

@@ -24,8 +24,9 @@ ConstantIllumination::ConstantIllumination(const glm::dvec3& sun_direction, std:
                                            std::vector<float> ambient_radiance)
     : s_(unit_sun(sun_direction)), sun_(std::move(sun_irradiance)), ambient_(std::move(ambient_radiance)) {
     if (sun_.empty() || sun_.size() != ambient_.size())
-        throw InvalidArgument("ambient_radiance", fmt::format("must have as many channels as sun_irradiance ({}), got {}",
-                                                              sun_.size(), ambient_.size()));
+        throw InvalidArgument("ambient_radiance",
+                              fmt::format("must have as many channels as sun_irradiance ({}), got {}",
+                                          sun_.size(), ambient_.size()));
     for (std::size_t c = 0; c < sun_.size(); ++c) {
         require_in_range(fmt::format("sun_irradiance[{}]", c), sun_[c], 0.0, 1e9);
         require_in_range(fmt::format("ambient_radiance[{}]", c), ambient_[c], 0.0, 1e9);
@@ -67,7 +68,8 @@ void AtmosphereIllumination::ambient_radiance(const glm::dvec3& p, float* out) c
     const double mu_s = clamp_cosine(glm::dot(q, s_) / r);
     for (const auto& b : luts_->batches()) {
         const Spectrum4 l = b->medium.solar_irradiance() * b->multiscattering.psi(r, mu_s);
-        store_channels(glm::max(l, Spectrum4(0.0f)), b->medium.channel_count(), out + b->medium.first_channel());
+        store_channels(glm::max(l, Spectrum4(0.0f)), b->medium.channel_count(),
+                       out + b->medium.first_channel());
     }
 }
 

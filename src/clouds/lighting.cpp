@@ -10,11 +10,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "welkin/clouds/depth_grid.hpp"
-#include "welkin/clouds/diffusion.hpp"
+#include "welkin/atmosphere/observer.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/rng.hpp"
-#include "welkin/atmosphere/observer.hpp"
+#include "welkin/clouds/depth_grid.hpp"
+#include "welkin/clouds/diffusion.hpp"
 
 namespace welkin {
 
@@ -29,46 +29,52 @@ void CloudLightingOptions::validate() const {
     require_in_range("light_steps", light_steps, 1, 256);
     require_in_range("ambient_steps", ambient_steps, 0, 256);
     if (!(light_distance_m > 0.0 && light_distance_m <= 1e6))
-        throw InvalidArgument("light_distance_m", fmt::format("must be in (0, 1e6] m, got {}", light_distance_m));
+        throw InvalidArgument("light_distance_m",
+                              fmt::format("must be in (0, 1e6] m, got {}", light_distance_m));
     require_in_range("octaves", octaves, 1, 16);
     for (const auto& [name, v] : {std::pair{"octave_extinction", octave_extinction},
                                   std::pair{"octave_contribution", octave_contribution},
                                   std::pair{"octave_eccentricity", octave_eccentricity}})
         if (!(v > 0.0 && v <= 1.0)) throw InvalidArgument(name, fmt::format("must be in (0, 1], got {}", v));
     if (!(min_transmittance >= 0.0 && min_transmittance < 1.0))
-        throw InvalidArgument("min_transmittance", fmt::format("must be in [0, 1), got {}", min_transmittance));
+        throw InvalidArgument("min_transmittance",
+                              fmt::format("must be in [0, 1), got {}", min_transmittance));
     if (!(max_distance_m > 0.0 && max_distance_m <= 1e8))
         throw InvalidArgument("max_distance_m", fmt::format("must be in (0, 1e8] m, got {}", max_distance_m));
     require_in_range("tail_transmittance", tail_transmittance, 0.0, 1.0);
     require_in_range("shadow_grid_spacing_m", shadow_grid_spacing_m, 0.0, 1e5, "m");
 }
 
-CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
-                          std::span<const glm::dvec3> directions, const CloudLightingOptions& options,
-                          Progress* progress) {
+CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
+                          const glm::dvec3& origin, std::span<const glm::dvec3> directions,
+                          const CloudLightingOptions& options, Progress* progress) {
     for (int a = 0; a < 3; ++a) require_finite(fmt::format("origin[{}]", a), origin[a]);
-    return render_clouds(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options, progress);
+    return render_clouds(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options,
+                         progress);
 }
 
 namespace {
 
 // The march of every ray (grid_width == 0), or of a grid of rays (rows of grid_width) with
 // upsampling (the header's render_clouds_grid).
-CloudResult march(const CloudDensity& density, const CloudIllumination& light, std::span<const glm::dvec3> origins,
-                  std::span<const glm::dvec3> directions, std::span<const double> max_distances,
-                  const CloudLightingOptions& options, Progress* progress, std::uint64_t first_ray_index,
-                  int grid_width, const CloudUpsampling& up) {
+CloudResult march(const CloudDensity& density, const CloudIllumination& light,
+                  std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                  std::span<const double> max_distances, const CloudLightingOptions& options,
+                  Progress* progress, std::uint64_t first_ray_index, int grid_width,
+                  const CloudUpsampling& up) {
     options.validate();
     validate_directions(directions);
     const std::size_t n = directions.size(), nc = light.channels();
     if (origins.size() != 1 && origins.size() != n)
-        throw InvalidArgument("origins", fmt::format("must hold 1 or {} points (one per direction), got {}", n,
-                                                     origins.size()));
+        throw InvalidArgument("origins", fmt::format("must hold 1 or {} points (one per direction), got {}",
+                                                     n, origins.size()));
     for (std::size_t i = 0; i < origins.size(); ++i)
         for (int a = 0; a < 3; ++a) require_finite(fmt::format("origins[{}][{}]", i, a), origins[i][a]);
     if (!max_distances.empty() && max_distances.size() != n)
-        throw InvalidArgument("max_distances", fmt::format("must be empty or hold {} values (one per direction), "
-                                                           "got {}", n, max_distances.size()));
+        throw InvalidArgument("max_distances",
+                              fmt::format("must be empty or hold {} values (one per direction), "
+                                          "got {}",
+                                          n, max_distances.size()));
     for (std::size_t i = 0; i < max_distances.size(); ++i)
         if (!(max_distances[i] >= 0.0))
             throw InvalidArgument(fmt::format("max_distances[{}]", i),
@@ -97,8 +103,8 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light, s
 
     // The optical-depth grids (cloud_depth_grid.hpp) towards the sun and, when the sky
     // light decays (albedo < 1), towards the local zenith; filled lazily by the rays.
-    const double h0 = options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m
-                                                          : 2.0 * density.feature_size_m();
+    const double h0 =
+        options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m : 2.0 * density.feature_size_m();
     const bool ambient_decay = options.ambient_steps > 0 && kappa > 0.0;
     std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid;
     // Orders >= 2: the delta-Eddington slab along the sun line (cloud_diffusion.hpp) or
@@ -111,11 +117,12 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light, s
             density, [s](const glm::dvec3&) { return s; }, h0, options.light_distance_m, options.light_steps);
         if (sized)
             anti_grid = std::make_unique<OpticalDepthGrid>(
-                density, [s](const glm::dvec3&) { return -s; }, h0, options.light_distance_m, options.light_steps);
+                density, [s](const glm::dvec3&) { return -s; }, h0, options.light_distance_m,
+                options.light_steps);
         if (ambient_decay)
             sky_grid = std::make_unique<OpticalDepthGrid>(
-                density, [&light](const glm::dvec3& p) { return light.zenith(p); }, h0, options.light_distance_m,
-                options.ambient_steps);
+                density, [&light](const glm::dvec3& p) { return light.zenith(p); }, h0,
+                options.light_distance_m, options.ambient_steps);
     }
 
     struct Scratch {
@@ -131,8 +138,8 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light, s
         {
             const glm::dvec3 d = glm::normalize(directions[r]);
             const CloudRay ray{origins[origins.size() == 1 ? 0 : r], d};
-            const double t_end =
-                max_distances.empty() ? options.max_distance_m : std::min(max_distances[r], options.max_distance_m);
+            const double t_end = max_distances.empty() ? options.max_distance_m
+                                                       : std::min(max_distances[r], options.max_distance_m);
             density.segments(ray, t_end, segs);
             double total = 0.0;
             for (const auto& g : segs) total += g.t1 - g.t0;
@@ -160,7 +167,8 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light, s
                     // Empty space keeps the base step: a longer step there can pass over a
                     // thin wisp (tests/cpp/test_cloud_fast_vs_reference.cpp measures it).
                     const bool dim = T < options.tail_transmittance;
-                    span = dim ? std::min({steps - k, 8, std::max(1, int(options.tail_transmittance / T))}) : 1;
+                    span =
+                        dim ? std::min({steps - k, 8, std::max(1, int(options.tail_transmittance / T))}) : 1;
                     const double h = span * dt;
                     const double t = g.t0 + k * dt + u * h;
                     const glm::dvec3 x = ray.at(t);
@@ -168,13 +176,13 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light, s
                     if (!(sigma_t > 0.0)) continue;
                     const double tau_sun =
                         sun_grid ? sun_grid->tau(x, sun_level, sun_cursor)
-                                 : march_optical_depth(density, {x, s}, options.light_distance_m, options.light_steps,
-                                                       light_segs);
+                                 : march_optical_depth(density, {x, s}, options.light_distance_m,
+                                                       options.light_steps, light_segs);
                     // The cloud's depth away from the sun along the sun line through x: the
                     // slab's thickness (diffusion), or the octaves' optical size f =
                     // 1 - exp(-tau_line), octave i weighted by f^i (see the header).
                     const double tau_anti =
-                        !sized ? 0.0
+                        !sized      ? 0.0
                         : anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)
                                     : march_optical_depth(density, {x, -s}, options.light_distance_m,
                                                           options.light_steps, light_segs);
@@ -191,9 +199,10 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light, s
                     double sky_w = 1.0;
                     if (ambient_decay) {
                         const double tau_up =
-                            sky_grid ? sky_grid->tau(x, sun_level, sky_cursor)
-                                     : march_optical_depth(density, {x, light.zenith(x)}, options.light_distance_m,
-                                                           options.ambient_steps, light_segs);
+                            sky_grid
+                                ? sky_grid->tau(x, sun_level, sky_cursor)
+                                : march_optical_depth(density, {x, light.zenith(x)}, options.light_distance_m,
+                                                      options.ambient_steps, light_segs);
                         sky_w = std::exp(-kappa * tau_up);
                     }
                     light.sun_irradiance(x, sun.data());
@@ -317,12 +326,14 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                           std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
                           std::span<const double> max_distances, const CloudLightingOptions& options,
                           Progress* progress, std::uint64_t first_ray_index) {
-    return march(density, light, origins, directions, max_distances, options, progress, first_ray_index, 0, {});
+    return march(density, light, origins, directions, max_distances, options, progress, first_ray_index, 0,
+                 {});
 }
 
-CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
-                               std::span<const glm::dvec3> directions, int width, const CloudLightingOptions& options,
-                               const CloudUpsampling& upsampling, Progress* progress, std::uint64_t first_ray_index) {
+CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light,
+                               const glm::dvec3& origin, std::span<const glm::dvec3> directions, int width,
+                               const CloudLightingOptions& options, const CloudUpsampling& upsampling,
+                               Progress* progress, std::uint64_t first_ray_index) {
     for (int a = 0; a < 3; ++a) require_finite(fmt::format("origin[{}]", a), origin[a]);
     upsampling.validate();
     if (width < 1 || directions.size() % std::size_t(width) != 0)

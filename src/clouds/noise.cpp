@@ -20,7 +20,9 @@ std::uint64_t hash_cell(std::uint64_t seed, int i, int j, int k, std::uint64_t s
     return splitmix64_mix(h + (std::uint64_t(std::uint32_t(k)) << 42));
 }
 
-double unit_from_bits(std::uint64_t h, int shift) { return double((h >> shift) & 0xfffff) / double(0x100000); }
+double unit_from_bits(std::uint64_t h, int shift) {
+    return double((h >> shift) & 0xfffff) / double(0x100000);
+}
 
 int wrap(int i, int n) { return ((i % n) + n) % n; }
 
@@ -87,15 +89,16 @@ glm::vec4 TileableTexture3D::sample(double x, double y, double z) const {
     axis(y, ny_, j0, j1, wy);
     if (nz_ > 1) axis(z, nz_, k0, k1, wz);  // a 2D texture (nz = 1): every z reads the one layer
     const auto layer = [&](int k) {
-        return glm::mix(glm::mix(at(i0, j0, k), at(i1, j0, k), wx), glm::mix(at(i0, j1, k), at(i1, j1, k), wx), wy);
+        return glm::mix(glm::mix(at(i0, j0, k), at(i1, j0, k), wx),
+                        glm::mix(at(i0, j1, k), at(i1, j1, k), wx), wy);
     };
     const glm::vec4 lo = layer(k0);
     if (nz_ == 1) return lo;
     return glm::mix(lo, layer(k1), wz);
 }
 
-CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, int detail_size, int weather_size,
-                                            int curl_size) {
+CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, int detail_size,
+                                            int weather_size, int curl_size) {
     CloudNoiseTextures t{TileableTexture3D(base_size, base_size, base_size),
                          TileableTexture3D(detail_size, detail_size, detail_size),
                          TileableTexture3D(weather_size, weather_size, 1),
@@ -160,7 +163,9 @@ CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, i
         for (int j = r.begin(); j != r.end(); ++j)
             for (int i = 0; i < nc; ++i) {
                 const double x = (i + 0.5) / nc, y = (j + 0.5) / nc;
-                const auto psi = [&](double u, double v) { return perlin_fbm(u, v, 0.25, 4, seed * 16 + 36); };
+                const auto psi = [&](double u, double v) {
+                    return perlin_fbm(u, v, 0.25, 4, seed * 16 + 36);
+                };
                 const double dx = (psi(x + hd, y) - psi(x - hd, y)) / (2.0 * hd);
                 const double dy = (psi(x, y + hd) - psi(x, y - hd)) / (2.0 * hd);
                 // psi's slope is of order (cells per period) x (amplitude): 4 x 0.7 / 2.

@@ -3,17 +3,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <utility>
-#include <vector>
 #include <map>
 #include <mutex>
 #include <tuple>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include "welkin/base/error.hpp"
 
@@ -64,7 +63,6 @@ bool sphere_interval(const CloudRay& ray, const glm::dvec3& c, double r, double&
     return true;
 }
 
-
 // The shape of each type (header): its height gradient's corners, how much of the layer
 // the towers leave out where the weather map's g is low, the height fraction below which
 // erosion fades (a flat base), the stretch of the noise along its streak direction, and
@@ -106,8 +104,8 @@ constexpr double kMaxInternalCoverage = 4.0;
 // The calibration's cache: the internal coverage of every layer built so far, keyed by
 // everything that shapes the field but the wind (a shift does not change the share).
 std::mutex calibration_mutex;
-std::map<std::tuple<int, double, double, double, double, double, double, double, double, double, std::uint64_t,
-                    double, double>,
+std::map<std::tuple<int, double, double, double, double, double, double, double, double, double,
+                    std::uint64_t, double, double>,
          double>
     calibration_cache;
 
@@ -131,28 +129,29 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
     CloudLayerParams p;
     p.cloud_type = type;
     switch (type) {
-    case CloudType::cumulus:
-        break;  // the struct's defaults
-    case CloudType::stratocumulus:
-        p.bottom_altitude_m = 1000.0, p.top_altitude_m = 1800.0, p.coverage = 0.7, p.density_per_m = 0.03;
-        p.base_scale_m = 2500.0, p.detail_scale_m = 500.0, p.weather_scale_m = 25000.0;
-        p.detail_strength = 0.45, p.weather_variation = 0.4;
-        break;
-    case CloudType::altocumulus:
-        p.bottom_altitude_m = 4000.0, p.top_altitude_m = 4500.0, p.coverage = 0.5, p.density_per_m = 0.02;
-        p.base_scale_m = 1500.0, p.detail_scale_m = 300.0, p.weather_scale_m = 10000.0;
-        p.detail_strength = 0.5, p.weather_variation = 0.5;
-        break;
-    case CloudType::stratus:
-        p.bottom_altitude_m = 400.0, p.top_altitude_m = 900.0, p.coverage = 0.9, p.density_per_m = 0.04;
-        p.base_scale_m = 15000.0, p.detail_scale_m = 2000.0, p.weather_scale_m = 60000.0;
-        p.detail_strength = 0.2, p.weather_variation = 0.3;
-        break;
-    case CloudType::cirrus:
-        p.bottom_altitude_m = 8000.0, p.top_altitude_m = 9500.0, p.coverage = 0.3, p.density_per_m = 0.0025;
-        p.base_scale_m = 8000.0, p.detail_scale_m = 600.0, p.weather_scale_m = 60000.0;
-        p.detail_strength = 0.6, p.weather_variation = 0.6;
-        break;
+        case CloudType::cumulus:
+            break;  // the struct's defaults
+        case CloudType::stratocumulus:
+            p.bottom_altitude_m = 1000.0, p.top_altitude_m = 1800.0, p.coverage = 0.7, p.density_per_m = 0.03;
+            p.base_scale_m = 2500.0, p.detail_scale_m = 500.0, p.weather_scale_m = 25000.0;
+            p.detail_strength = 0.45, p.weather_variation = 0.4;
+            break;
+        case CloudType::altocumulus:
+            p.bottom_altitude_m = 4000.0, p.top_altitude_m = 4500.0, p.coverage = 0.5, p.density_per_m = 0.02;
+            p.base_scale_m = 1500.0, p.detail_scale_m = 300.0, p.weather_scale_m = 10000.0;
+            p.detail_strength = 0.5, p.weather_variation = 0.5;
+            break;
+        case CloudType::stratus:
+            p.bottom_altitude_m = 400.0, p.top_altitude_m = 900.0, p.coverage = 0.9, p.density_per_m = 0.04;
+            p.base_scale_m = 15000.0, p.detail_scale_m = 2000.0, p.weather_scale_m = 60000.0;
+            p.detail_strength = 0.2, p.weather_variation = 0.3;
+            break;
+        case CloudType::cirrus:
+            p.bottom_altitude_m = 8000.0, p.top_altitude_m = 9500.0, p.coverage = 0.3,
+            p.density_per_m = 0.0025;
+            p.base_scale_m = 8000.0, p.detail_scale_m = 600.0, p.weather_scale_m = 60000.0;
+            p.detail_strength = 0.6, p.weather_variation = 0.6;
+            break;
     }
     return p;
 }
@@ -163,8 +162,9 @@ void CloudLayerParams::validate() const {
     require_in_range("bottom_altitude_m", bottom_altitude_m, 0.0, 20000.0, "m");
     require_in_range("top_altitude_m", top_altitude_m, 0.0, 20000.0, "m");
     if (!(top_altitude_m > bottom_altitude_m))
-        throw InvalidArgument("top_altitude_m", fmt::format("must be above bottom_altitude_m ({} m), got {} m",
-                                                            bottom_altitude_m, top_altitude_m));
+        throw InvalidArgument("top_altitude_m",
+                              fmt::format("must be above bottom_altitude_m ({} m), got {} m",
+                                          bottom_altitude_m, top_altitude_m));
     require_in_range("coverage", coverage, 0.0, 1.0);
     require_in_range("density_per_m", density_per_m, 0.0, 10.0, "m^-1");
     require_in_range("base_scale_m", base_scale_m, 10.0, 1e6, "m");
@@ -350,14 +350,16 @@ void ProceduralClouds::segments(const CloudRay& ray, double t_max, std::vector<M
     const double majorant = p_.density_per_m;
     if (!(majorant > 0.0) || !(k_ > 0.0)) return;
     double g0, g1;
-    if (sphere_interval(ray, centre_, p_.planet_radius_m, g0, g1) && g1 > 0.0) t_max = std::min(t_max, std::max(g0, 0.0));
+    if (sphere_interval(ray, centre_, p_.planet_radius_m, g0, g1) && g1 > 0.0)
+        t_max = std::min(t_max, std::max(g0, 0.0));
     double a0, a1;
     if (!sphere_interval(ray, centre_, p_.planet_radius_m + p_.top_altitude_m, a0, a1)) return;
     a0 = std::max(a0, 0.0);
     a1 = std::min(a1, t_max);
     if (!(a1 > a0)) return;
     double b0, b1;
-    if (!sphere_interval(ray, centre_, p_.planet_radius_m + p_.bottom_altitude_m, b0, b1) || b1 <= a0 || b0 >= a1) {
+    if (!sphere_interval(ray, centre_, p_.planet_radius_m + p_.bottom_altitude_m, b0, b1) || b1 <= a0 ||
+        b0 >= a1) {
         out.push_back({a0, a1, majorant});
         return;
     }

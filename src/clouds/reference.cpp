@@ -10,9 +10,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "welkin/atmosphere/observer.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/rng.hpp"
-#include "welkin/atmosphere/observer.hpp"
 
 namespace welkin {
 
@@ -29,8 +29,8 @@ namespace {
 constexpr double kFarAway = 1e8;  // shadow and scattered rays: to the end of every segment
 
 // Ratio tracking: an unbiased estimate of exp(-integral of sigma_t) along the segments.
-double ratio_tracking(const CloudDensity& density, const CloudRay& ray, const std::vector<MajorantSegment>& segs,
-                      PathRng& rng) {
+double ratio_tracking(const CloudDensity& density, const CloudRay& ray,
+                      const std::vector<MajorantSegment>& segs, PathRng& rng) {
     double T = 1.0;
     for (const auto& g : segs) {
         double t = g.t0;
@@ -46,8 +46,8 @@ double ratio_tracking(const CloudDensity& density, const CloudRay& ray, const st
 
 // Delta tracking: the distance to the first real collision, or a negative value when the
 // ray leaves every segment.
-double delta_tracking(const CloudDensity& density, const CloudRay& ray, const std::vector<MajorantSegment>& segs,
-                      PathRng& rng) {
+double delta_tracking(const CloudDensity& density, const CloudRay& ray,
+                      const std::vector<MajorantSegment>& segs, PathRng& rng) {
     for (const auto& g : segs) {
         double t = g.t0;
         while (true) {

@@ -4,16 +4,18 @@
 #include <algorithm>
 #include <limits>
 
-#include "welkin/base/error.hpp"
-
 #include <fmt/format.h>
+
+#include "welkin/base/error.hpp"
 
 namespace welkin {
 
-CloudUnion::CloudUnion(std::vector<std::shared_ptr<const CloudDensity>> sources) : sources_(std::move(sources)) {
+CloudUnion::CloudUnion(std::vector<std::shared_ptr<const CloudDensity>> sources)
+    : sources_(std::move(sources)) {
     if (sources_.empty() || sources_.size() > kMaxSources)
-        throw InvalidArgument("sources", fmt::format("a cloud union needs between 1 and {} density sources, got {}",
-                                                     kMaxSources, sources_.size()));
+        throw InvalidArgument("sources",
+                              fmt::format("a cloud union needs between 1 and {} density sources, got {}",
+                                          kMaxSources, sources_.size()));
     feature_size_ = std::numeric_limits<double>::infinity();
     for (const auto& s : sources_) {
         if (!s) throw InvalidArgument("sources", "a cloud density source is null");
@@ -36,7 +38,8 @@ void CloudUnion::segments(const CloudRay& ray, double t_max, std::vector<Majoran
     if (lists.size() < sources_.size()) lists.resize(sources_.size());
     for (std::size_t k = 0; k < sources_.size(); ++k) sources_[k]->segments(ray, t_max, lists[k]);
     // Only this union's lists: the thread_local may be longer (a larger union ran here).
-    merge_majorant_segments(std::span<const std::vector<MajorantSegment>>(lists.data(), sources_.size()), out);
+    merge_majorant_segments(std::span<const std::vector<MajorantSegment>>(lists.data(), sources_.size()),
+                            out);
 }
 
 void merge_majorant_segments(std::span<const std::vector<MajorantSegment>> lists,

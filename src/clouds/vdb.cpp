@@ -1,10 +1,6 @@
 // Clouds from an OpenVDB file; see vdb_clouds.hpp.
 #include "welkin/clouds/vdb.hpp"
 
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -17,11 +13,14 @@
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
-#include <glm/matrix.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/matrix.hpp>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "welkin/base/error.hpp"
 
@@ -54,7 +53,8 @@ void initialize_openvdb() {
 }
 
 std::uint64_t metadata_u64(const openvdb::GridBase& meta, const char* name) {
-    if (const auto v = meta.getMetadata<openvdb::Int64Metadata>(name)) return std::uint64_t(std::max<openvdb::Int64>(0, v->value()));
+    if (const auto v = meta.getMetadata<openvdb::Int64Metadata>(name))
+        return std::uint64_t(std::max<openvdb::Int64>(0, v->value()));
     return 0;
 }
 
@@ -66,14 +66,16 @@ std::uint64_t metadata_u64(const openvdb::GridBase& meta, const char* name) {
 // that every count and length fits in what is left of the file. IoError naming the file.
 class VdbStructureCheck {
 public:
-    VdbStructureCheck(const std::string& path, const std::string& grid) : path_(path), grid_(grid), in_(path, std::ios::binary) {
+    VdbStructureCheck(const std::string& path, const std::string& grid)
+        : path_(path), grid_(grid), in_(path, std::ios::binary) {
         in_.seekg(0, std::ios::end);
         size_ = std::uint64_t(std::max<std::streamoff>(0, in_.tellg()));
         in_.seekg(0);
     }
 
     void run() {
-        if (u32() != std::uint32_t(openvdb::OPENVDB_MAGIC) || u32() != 0) fail("it does not start with the OpenVDB magic number");
+        if (u32() != std::uint32_t(openvdb::OPENVDB_MAGIC) || u32() != 0)
+            fail("it does not start with the OpenVDB magic number");
         const std::uint32_t version = u32();
         // OpenVDB only warns about a version newer than its own, then misreads the rest.
         if (version > std::uint32_t(openvdb::OPENVDB_FILE_VERSION))
@@ -95,13 +97,13 @@ public:
         };
         std::vector<Grid> positions;
         for (std::uint32_t g = 0; g < grids; ++g) {
-            string();                              // unique name
-            const std::string type = string();     // tree type
+            string();                                 // unique name
+            const std::string type = string();        // tree type
             const bool instance = !string().empty();  // instance parent (version >= 216)
             const std::uint64_t grid_pos = u64(), block_pos = u64(), end_pos = u64();
             if (!(grid_pos <= block_pos && block_pos <= end_pos && end_pos <= size_))
-                fail(fmt::format("grid {} has offsets [{}, {}, {}] outside the file ({} bytes)", g, grid_pos, block_pos,
-                                 end_pos, size_));
+                fail(fmt::format("grid {} has offsets [{}, {}, {}] outside the file ({} bytes)", g, grid_pos,
+                                 block_pos, end_pos, size_));
             positions.push_back({grid_pos, block_pos, type == "Tree_float_5_4_3", instance});
             seek(end_pos);
         }
@@ -112,9 +114,13 @@ public:
             if (!g.float_tree || g.instance) continue;
             // Grid::readTransform: the map's type name, then its fixed-size data.
             const std::string map = string();
-            static const std::pair<const char*, int> kMapBytes[] = {
-                {"AffineMap", 128}, {"UnitaryMap", 128}, {"ScaleMap", 120}, {"UniformScaleMap", 120},
-                {"TranslationMap", 24}, {"ScaleTranslateMap", 144}, {"UniformScaleTranslateMap", 144}};
+            static const std::pair<const char*, int> kMapBytes[] = {{"AffineMap", 128},
+                                                                    {"UnitaryMap", 128},
+                                                                    {"ScaleMap", 120},
+                                                                    {"UniformScaleMap", 120},
+                                                                    {"TranslationMap", 24},
+                                                                    {"ScaleTranslateMap", 144},
+                                                                    {"UniformScaleTranslateMap", 144}};
             int bytes = -1;
             for (const auto& [name, n] : kMapBytes)
                 if (map == name) bytes = n;
@@ -128,9 +134,10 @@ public:
             const std::uint64_t tiles = u32(), children = u32();
             const std::uint64_t room = g.block > pos_ ? g.block - pos_ : 0;
             if (tiles * 17 + children * (12 + 2 * 4096) > room)
-                fail(fmt::format("the grid's root node declares {} tiles and {} child nodes, more than its {} bytes "
-                                 "of topology can hold",
-                                 tiles, children, room));
+                fail(fmt::format(
+                    "the grid's root node declares {} tiles and {} child nodes, more than its {} bytes "
+                    "of topology can hold",
+                    tiles, children, room));
         }
     }
 
@@ -140,7 +147,8 @@ private:
     }
     void need(std::uint64_t n, const char* what) const {
         if (n > size_ - pos_)
-            fail(fmt::format("{} at byte {} declares {} bytes, but only {} remain in the file", what, pos_, n, size_ - pos_));
+            fail(fmt::format("{} at byte {} declares {} bytes, but only {} remain in the file", what, pos_, n,
+                             size_ - pos_));
     }
     std::string bytes(std::uint64_t n) {
         need(n, "a field");
@@ -155,7 +163,8 @@ private:
         seek(pos_ + n);
     }
     void seek(std::uint64_t p) {
-        if (p > size_) fail(fmt::format("an offset ({}) lies beyond the end of the file ({} bytes)", p, size_));
+        if (p > size_)
+            fail(fmt::format("an offset ({}) lies beyond the end of the file ({} bytes)", p, size_));
         in_.seekg(std::streamoff(p));
         pos_ = p;
     }
@@ -185,7 +194,7 @@ private:
         // TypedMetadata<T>::readValue reads sizeof(T) bytes whatever the byte count says:
         // follow it, or the walk would part from OpenVDB's own.
         static const std::pair<const char*, int> kFixed[] = {
-            {"bool", 1},   {"float", 4},  {"double", 8}, {"int32", 4}, {"int64", 8},  {"vec2i", 8},
+            {"bool", 1},   {"float", 4},  {"double", 8}, {"int32", 4},  {"int64", 8},  {"vec2i", 8},
             {"vec2s", 8},  {"vec2d", 16}, {"vec3i", 12}, {"vec3s", 12}, {"vec3d", 24}, {"vec4i", 16},
             {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64}, {"mat4d", 128}};
         for (std::uint32_t i = 0; i < count; ++i) {
@@ -221,7 +230,8 @@ void read_tree_in_child(const std::string& path, const std::string& grid, const 
     constexpr unsigned kChildSeconds = 600;
     constexpr int kExceptionExit = 17;  // the child caught an exception: the host reports it
     const pid_t pid = ::fork();
-    if (pid < 0) throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
+    if (pid < 0)
+        throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
     if (pid == 0) {
         // Only async-signal-safe calls are certain after fork in a threaded host; OpenVDB's
         // reader is serial and the allocator is fork-aware, which is what this relies on.
@@ -240,37 +250,43 @@ void read_tree_in_child(const std::string& path, const std::string& grid, const 
     }
     int status = 0;
     while (::waitpid(pid, &status, 0) < 0) {
-        if (errno != EINTR) throw IoError(fmt::format("{}: lost the reader process: {}", where, std::strerror(errno)));
+        if (errno != EINTR)
+            throw IoError(fmt::format("{}: lost the reader process: {}", where, std::strerror(errno)));
     }
     if (WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == kExceptionExit)) return;
     if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM)
-        throw IoError(fmt::format("{}: reading its tree took longer than {} s; refused", where, kChildSeconds));
-    throw IoError(fmt::format("{}: corrupt data: reading its tree ended the reader process ({}); refused", where,
-                              WIFSIGNALED(status) ? ::strsignal(WTERMSIG(status))
-                                                  : fmt::format("exit code {}", WEXITSTATUS(status)).c_str()));
+        throw IoError(
+            fmt::format("{}: reading its tree took longer than {} s; refused", where, kChildSeconds));
+    throw IoError(
+        fmt::format("{}: corrupt data: reading its tree ended the reader process ({}); refused", where,
+                    WIFSIGNALED(status) ? ::strsignal(WTERMSIG(status))
+                                        : fmt::format("exit code {}", WEXITSTATUS(status)).c_str()));
 }
 
 void check_extent(const openvdb::Coord& lo, const openvdb::Coord& hi, const std::string& where) {
     for (int a = 0; a < 3; ++a) {
         const std::int64_t l = lo[a], h = hi[a];
         if (l < -kMaxVdbCoordinate || h > kMaxVdbCoordinate || l > h || h - l + 1 > kMaxVdbExtent)
-            throw InvalidArgument("grid", fmt::format("{} has active voxels from {} to {}: coordinates must lie in "
-                                                      "[-{}, {}] and span at most {} voxels along each axis",
-                                                      where, lo.asVec3i().str(), hi.asVec3i().str(), kMaxVdbCoordinate,
-                                                      kMaxVdbCoordinate, kMaxVdbExtent));
+            throw InvalidArgument(
+                "grid", fmt::format("{} has active voxels from {} to {}: coordinates must lie in "
+                                    "[-{}, {}] and span at most {} voxels along each axis",
+                                    where, lo.asVec3i().str(), hi.asVec3i().str(), kMaxVdbCoordinate,
+                                    kMaxVdbCoordinate, kMaxVdbExtent));
     }
 }
 
 }  // namespace
 
-VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options) : impl_(std::make_unique<Impl>()) {
+VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options)
+    : impl_(std::make_unique<Impl>()) {
     try {
         load(path, options);
     } catch (const std::bad_alloc& e) {
         if (dynamic_cast<const OutOfMemory*>(&e)) throw;
-        throw OutOfMemory(fmt::format("VDB file '{}' (grid '{}'): out of memory while reading it (a corrupt or "
-                                      "very large grid?); the limit is max_memory_bytes",
-                                      path, options.grid));
+        throw OutOfMemory(
+            fmt::format("VDB file '{}' (grid '{}'): out of memory while reading it (a corrupt or "
+                        "very large grid?); the limit is max_memory_bytes",
+                        path, options.grid));
     }
 }
 
@@ -280,9 +296,12 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
     m.grid_name = options.grid;
     require_in_range("density_scale", options.density_scale, 0.0, 1e6, "m^-1");
     if (options.max_memory_bytes < 1) throw InvalidArgument("max_memory_bytes", "must be at least 1");
-    if (options.grid.empty()) throw InvalidArgument("grid", fmt::format("must name a grid of VDB file '{}', got an empty name", path));
+    if (options.grid.empty())
+        throw InvalidArgument("grid",
+                              fmt::format("must name a grid of VDB file '{}', got an empty name", path));
     for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) require_finite(fmt::format("matrix_world[{}][{}]", r, c), options.matrix_world[c][r]);
+        for (int r = 0; r < 4; ++r)
+            require_finite(fmt::format("matrix_world[{}][{}]", r, c), options.matrix_world[c][r]);
     m.density_scale = options.density_scale;
     initialize_openvdb();
 
@@ -310,15 +329,18 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
     } catch (const std::bad_alloc&) {
         throw;
     } catch (const std::exception& e) {
-        throw IoError(fmt::format("VDB file '{}' (grid '{}'): cannot be read as OpenVDB: {}", path, options.grid, e.what()));
+        throw IoError(fmt::format("VDB file '{}' (grid '{}'): cannot be read as OpenVDB: {}", path,
+                                  options.grid, e.what()));
     }
     if (!meta->isType<openvdb::FloatGrid>())
-        throw InvalidArgument("grid", fmt::format("{} is of type '{}'; Welkin reads float grids (FloatGrid) only",
-                                                  m.where(), meta->type()));
+        throw InvalidArgument(
+            "grid", fmt::format("{} is of type '{}'; Welkin reads float grids (FloatGrid) only", m.where(),
+                                meta->type()));
     // The memory estimate comes from the file's metadata, before any voxel is read.
     const std::uint64_t mem = metadata_u64(*meta, openvdb::GridBase::META_FILE_MEM_BYTES);
     const std::uint64_t voxels = metadata_u64(*meta, openvdb::GridBase::META_FILE_VOXEL_COUNT);
-    const std::uint64_t estimate = std::max(mem, voxels > (std::uint64_t(1) << 60) ? ~std::uint64_t(0) : voxels * sizeof(float));
+    const std::uint64_t estimate =
+        std::max(mem, voxels > (std::uint64_t(1) << 60) ? ~std::uint64_t(0) : voxels * sizeof(float));
     // The extent, from the file's metadata (OpenVDB writes it with every grid), before the
     // tree is read: a corrupt or hostile bounding box stops here.
     const auto bmin = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN);
@@ -326,9 +348,10 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
     if (bmin && bmax && voxels > 0)
         check_extent(openvdb::Coord(bmin->value()), openvdb::Coord(bmax->value()), m.where());
     if (estimate > options.max_memory_bytes)
-        throw InvalidArgument("max_memory_bytes",
-                              fmt::format("{} needs about {:.1f} MiB ({} active voxels), more than the limit of {:.1f} MiB",
-                                          m.where(), estimate / 1048576.0, voxels, options.max_memory_bytes / 1048576.0));
+        throw InvalidArgument(
+            "max_memory_bytes",
+            fmt::format("{} needs about {:.1f} MiB ({} active voxels), more than the limit of {:.1f} MiB",
+                        m.where(), estimate / 1048576.0, voxels, options.max_memory_bytes / 1048576.0));
     read_tree_in_child(path, options.grid, m.where());
     try {
         m.grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(options.grid));
@@ -341,9 +364,9 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
     if (!m.grid) throw InvalidArgument("grid", fmt::format("{} is not a FloatGrid", m.where()));
     m.memory = m.grid->memUsage();
     if (m.memory > options.max_memory_bytes)
-        throw InvalidArgument("max_memory_bytes", fmt::format("{} takes {:.1f} MiB, more than the limit of {:.1f} MiB",
-                                                              m.where(), m.memory / 1048576.0,
-                                                              options.max_memory_bytes / 1048576.0));
+        throw InvalidArgument("max_memory_bytes",
+                              fmt::format("{} takes {:.1f} MiB, more than the limit of {:.1f} MiB", m.where(),
+                                          m.memory / 1048576.0, options.max_memory_bytes / 1048576.0));
     if (m.grid->activeVoxelCount() == 0)
         throw InvalidArgument("grid", fmt::format("{} is empty (no active voxels)", m.where()));
     {
@@ -352,22 +375,27 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
     }
     const float background = m.grid->background();
     if (background != 0.0f)
-        throw InvalidArgument("grid", fmt::format("{} has background value {}; a density grid must have background 0 "
-                                                  "(a fog volume), or it would fill all of space", m.where(), background));
+        throw InvalidArgument("grid",
+                              fmt::format("{} has background value {}; a density grid must have background 0 "
+                                          "(a fog volume), or it would fill all of space",
+                                          m.where(), background));
     if (!m.grid->transform().isLinear())
-        throw InvalidArgument("grid", fmt::format("{} has a non-affine (frustum) transform, which Welkin does not read",
-                                                  m.where()));
+        throw InvalidArgument(
+            "grid",
+            fmt::format("{} has a non-affine (frustum) transform, which Welkin does not read", m.where()));
 
     // Values: non-finite ones are rejected, negative ones clamped (and counted) or rejected.
     for (auto it = m.grid->beginValueOn(); it; ++it) {
         const float v = *it;
         if (!std::isfinite(v))
-            throw InvalidArgument("grid", fmt::format("{} holds a non-finite value at {}", m.where(), it.getCoord().asVec3i().str()));
+            throw InvalidArgument("grid", fmt::format("{} holds a non-finite value at {}", m.where(),
+                                                      it.getCoord().asVec3i().str()));
         if (v < 0.0f) {
             if (options.negative == VdbCloudOptions::Negative::Reject)
-                throw InvalidArgument("grid", fmt::format("{} holds a negative density {} at {} (densities must be >= 0; "
-                                                          "the Clamp policy sets them to 0)",
-                                                          m.where(), v, it.getCoord().asVec3i().str()));
+                throw InvalidArgument(
+                    "grid", fmt::format("{} holds a negative density {} at {} (densities must be >= 0; "
+                                        "the Clamp policy sets them to 0)",
+                                        m.where(), v, it.getCoord().asVec3i().str()));
             m.negatives += it.isVoxelValue() ? 1 : it.getVoxelCount();
             it.setValue(0.0f);
         } else {
@@ -388,7 +416,8 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
     m.index_to_world = options.matrix_world * index_to_object * placement;
     const double det = glm::determinant(glm::dmat3(m.index_to_world));
     if (!(std::abs(det) > 1e-30) || !std::isfinite(det))
-        throw InvalidArgument("matrix_world", fmt::format("maps {} to a degenerate (singular) volume", m.where()));
+        throw InvalidArgument("matrix_world",
+                              fmt::format("maps {} to a degenerate (singular) volume", m.where()));
     m.world_to_index = glm::inverse(m.index_to_world);
     m.voxel_size_m = std::cbrt(std::abs(det));
 
@@ -422,7 +451,8 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
                     for (int dj = -1; dj <= 1; ++dj)
                         for (int di = -1; di <= 1; ++di) {
                             const int ii = i + di, jj = j + dj, kk = k + dk;
-                            if (ii < 0 || jj < 0 || kk < 0 || ii >= m.n[0] || jj >= m.n[1] || kk >= m.n[2]) continue;
+                            if (ii < 0 || jj < 0 || kk < 0 || ii >= m.n[0] || jj >= m.n[1] || kk >= m.n[2])
+                                continue;
                             v = std::max(v, own[(std::size_t(kk) * m.n[1] + jj) * m.n[0] + ii]);
                         }
                 m.cell_at(i, j, k) = v;
@@ -503,7 +533,8 @@ glm::dvec3 VdbClouds::world_bounds_min() const {
     const Impl& m = *impl_;
     glm::dvec3 lo(std::numeric_limits<double>::infinity());
     for (int c = 0; c < 8; ++c) {
-        const glm::dvec3 ip(m.origin.x() + ((c & 1) ? m.n[0] * m.cell : 0), m.origin.y() + ((c & 2) ? m.n[1] * m.cell : 0),
+        const glm::dvec3 ip(m.origin.x() + ((c & 1) ? m.n[0] * m.cell : 0),
+                            m.origin.y() + ((c & 2) ? m.n[1] * m.cell : 0),
                             m.origin.z() + ((c & 4) ? m.n[2] * m.cell : 0));
         lo = glm::min(lo, glm::dvec3(m.index_to_world * glm::dvec4(ip, 1.0)));
     }
@@ -513,7 +544,8 @@ glm::dvec3 VdbClouds::world_bounds_max() const {
     const Impl& m = *impl_;
     glm::dvec3 hi(-std::numeric_limits<double>::infinity());
     for (int c = 0; c < 8; ++c) {
-        const glm::dvec3 ip(m.origin.x() + ((c & 1) ? m.n[0] * m.cell : 0), m.origin.y() + ((c & 2) ? m.n[1] * m.cell : 0),
+        const glm::dvec3 ip(m.origin.x() + ((c & 1) ? m.n[0] * m.cell : 0),
+                            m.origin.y() + ((c & 2) ? m.n[1] * m.cell : 0),
                             m.origin.z() + ((c & 4) ? m.n[2] * m.cell : 0));
         hi = glm::max(hi, glm::dvec3(m.index_to_world * glm::dvec4(ip, 1.0)));
     }

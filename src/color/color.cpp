@@ -36,8 +36,8 @@ constexpr double kCieMaxNm = 830.0;
 
 // IEC 61966-2-1 XYZ -> linear sRGB (= Rec.709 primaries, D65), the matrix of Bruneton's
 // atmosphere/constants.h (XYZ_TO_SRGB).
-constexpr double kXyzToRec709[9] = {3.2406, -1.5372, -0.4986,   //
-                                    -0.9689, 1.8758, 0.0415,    //
+constexpr double kXyzToRec709[9] = {3.2406,  -1.5372, -0.4986,  //
+                                    -0.9689, 1.8758,  0.0415,   //
                                     0.0557,  -0.2040, 1.0570};
 
 // Rec.709 colour-matching functions: rbar = M xbar (one row of XYZ -> Rec.709 per channel).
@@ -77,32 +77,27 @@ std::array<double, 3> xyz_to_rec709(const Xyz& c) {
 // which also report the errors. Rows: R, G, B (linear Rec.709 = XYZ through the
 // IEC 61966-2-1 matrix); columns: 440, 480, 560, 620 nm.
 constexpr std::array<double, 4> kColourWavelengthsNm = {440.0, 480.0, 560.0, 620.0};
-constexpr double kFittedSkyToRgb[3][4] = {
-    {18.7002311095, -41.6535295794, 8.6970216824, 141.7452626185},
-    {-20.554383239, 44.8184861055, 85.5706609514, -7.6477418972},
-    {76.1007087616, 30.997080444, -9.5550811056, -0.9592096762}};
-constexpr double kFittedSunToRgb[3][4] = {
-    {19.0651092359, -18.9594345412, -26.812652596, 155.2710366614},
-    {-27.0384092063, 49.3062962749, 86.0535912731, -7.3284578089},
-    {73.9384629377, 32.8758997524, -8.142372254, -2.4481847796}};
+constexpr double kFittedSkyToRgb[3][4] = {{18.7002311095, -41.6535295794, 8.6970216824, 141.7452626185},
+                                          {-20.554383239, 44.8184861055, 85.5706609514, -7.6477418972},
+                                          {76.1007087616, 30.997080444, -9.5550811056, -0.9592096762}};
+constexpr double kFittedSunToRgb[3][4] = {{19.0651092359, -18.9594345412, -26.812652596, 155.2710366614},
+                                          {-27.0384092063, 49.3062962749, 86.0535912731, -7.3284578089},
+                                          {73.9384629377, 32.8758997524, -8.142372254, -2.4481847796}};
 
 SpectrumToRgb::SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power)
     : channels_(wavelengths_nm.size()) {
     const std::size_t n = channels_;
     if (n < 3)
         throw InvalidArgument("wavelengths_nm",
-                              fmt::format("conversion to RGB needs at least 3 wavelengths, got {}",
-                                          n));
+                              fmt::format("conversion to RGB needs at least 3 wavelengths, got {}", n));
     for (std::size_t i = 0; i < n; ++i)
-        require_in_range(fmt::format("wavelengths_nm[{}]", i), wavelengths_nm[i], 1.0, 1e5,
-                         "nm");
+        require_in_range(fmt::format("wavelengths_nm[{}]", i), wavelengths_nm[i], 1.0, 1e5, "nm");
     require_in_range("lambda_power", lambda_power, -10.0, 10.0);
     const bool increasing = wavelengths_nm[1] > wavelengths_nm[0];
     for (std::size_t i = 1; i < n; ++i)
         if ((wavelengths_nm[i] > wavelengths_nm[i - 1]) != increasing ||
             wavelengths_nm[i] == wavelengths_nm[i - 1])
-            throw InvalidArgument("wavelengths_nm",
-                                  "must be strictly increasing or strictly decreasing");
+            throw InvalidArgument("wavelengths_nm", "must be strictly increasing or strictly decreasing");
 
     // Work on increasing wavelengths; `order[k]` is the input index of the k-th smallest.
     std::vector<std::size_t> order(n);
@@ -160,8 +155,7 @@ SpectrumToRgb::SpectrumToRgb(std::span<const double> wavelengths_nm, double lamb
         } else if (lambda >= w.back()) {
             tent[n - 1] = 1.0;
         } else {
-            const std::size_t i = std::size_t(std::upper_bound(w.begin(), w.end(), lambda) -
-                                              w.begin()) - 1;
+            const std::size_t i = std::size_t(std::upper_bound(w.begin(), w.end(), lambda) - w.begin()) - 1;
             const double f = (lambda - w[i]) / (w[i + 1] - w[i]);
             tent[i] = 1.0 - f;
             tent[i + 1] = f;
@@ -175,8 +169,7 @@ SpectrumToRgb::SpectrumToRgb(std::span<const double> wavelengths_nm, double lamb
 
 std::array<double, 3> SpectrumToRgb::convert(std::span<const float> spectrum) const {
     if (spectrum.size() != channels_)
-        throw InvalidArgument("spectrum", fmt::format("needs {} values, got {}", channels_,
-                                                      spectrum.size()));
+        throw InvalidArgument("spectrum", fmt::format("needs {} values, got {}", channels_, spectrum.size()));
     std::array<double, 3> rgb{0.0, 0.0, 0.0};
     for (int j = 0; j < 3; ++j)
         for (std::size_t c = 0; c < channels_; ++c)
@@ -188,11 +181,12 @@ void SpectrumToRgb::convert(std::span<const float> spectra, std::span<float> rgb
     const std::size_t n = channels_;
     if (spectra.size() % n != 0)
         throw InvalidArgument("spectra", fmt::format("size {} is not a multiple of the {} "
-                                                     "channels", spectra.size(), n));
+                                                     "channels",
+                                                     spectra.size(), n));
     const std::size_t count = spectra.size() / n;
     if (rgb_out.size() != 3 * count)
-        throw InvalidArgument("rgb_out", fmt::format("needs {} values (3 per spectrum), got {}",
-                                                     3 * count, rgb_out.size()));
+        throw InvalidArgument(
+            "rgb_out", fmt::format("needs {} values (3 per spectrum), got {}", 3 * count, rgb_out.size()));
     const double* m = matrix_.data();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 4096),
                       [&](const tbb::blocked_range<std::size_t>& range) {

@@ -1,8 +1,6 @@
 // OpenEXR reading and atomic writing; see exr_io.hpp.
 #include "welkin/io/exr.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -10,9 +8,8 @@
 #include <set>
 #include <system_error>
 
-#include <fmt/format.h>
+#include <Iex.h>
 #include <ImathBox.h>
-#include <half.h>
 #include <ImfChannelList.h>
 #include <ImfCompression.h>
 #include <ImfFrameBuffer.h>
@@ -21,7 +18,9 @@
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
-#include <Iex.h>
+#include <fmt/format.h>
+#include <half.h>
+#include <unistd.h>
 
 #include "welkin/base/error.hpp"
 #include "welkin/io/file.hpp"
@@ -36,23 +35,21 @@ constexpr float kHalfMax = 65504.0f;
 
 void check_image(const ExrImage& image) {
     if (image.width < 1 || image.height < 1)
-        throw InvalidArgument("image", fmt::format("size must be at least 1 x 1, got {} x {}",
-                                                   image.width, image.height));
+        throw InvalidArgument(
+            "image", fmt::format("size must be at least 1 x 1, got {} x {}", image.width, image.height));
     if (image.channel_names.empty())
         throw InvalidArgument("image.channel_names", "needs at least one channel");
     std::set<std::string> seen;
     for (const std::string& name : image.channel_names) {
         if (name.empty()) throw InvalidArgument("image.channel_names", "empty channel name");
         if (!seen.insert(name).second)
-            throw InvalidArgument("image.channel_names",
-                                  fmt::format("duplicate channel name '{}'", name));
+            throw InvalidArgument("image.channel_names", fmt::format("duplicate channel name '{}'", name));
     }
-    const std::size_t expected =
-        std::size_t(image.width) * std::size_t(image.height) * image.channels();
+    const std::size_t expected = std::size_t(image.width) * std::size_t(image.height) * image.channels();
     if (image.pixels.size() != expected)
         throw InvalidArgument("image.pixels",
-                              fmt::format("needs width * height * channels = {} values, got {}",
-                                          expected, image.pixels.size()));
+                              fmt::format("needs width * height * channels = {} values, got {}", expected,
+                                          image.pixels.size()));
 }
 
 }  // namespace
@@ -62,8 +59,7 @@ int ExrImage::channel_index(const std::string& name) const {
     return it == channel_names.end() ? -1 : int(it - channel_names.begin());
 }
 
-ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
-                         const ExrWriteOptions& options) {
+ExrWriteReport write_exr(const std::string& path, const ExrImage& image, const ExrWriteOptions& options) {
     check_image(image);
     // Symlinks followed; a directory, device, FIFO or socket refused; an existing file
     // refused unless overwrite.
@@ -97,8 +93,7 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
     try {
         Imf::Header header(image.width, image.height);
         header.compression() = Imf::ZIP_COMPRESSION;
-        for (const auto& [key, value] : options.attributes)
-            header.insert(key, Imf::StringAttribute(value));
+        for (const auto& [key, value] : options.attributes) header.insert(key, Imf::StringAttribute(value));
         Imf::FrameBuffer fb;
         for (std::size_t c = 0; c < nc; ++c) {
             header.channels().insert(image.channel_names[c], Imf::Channel(type));
@@ -140,8 +135,7 @@ ExrImage read_exr(const std::string& path) {
         image.height = dw.max.y - dw.min.y + 1;
         for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
             if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
-                throw IoError(fmt::format("cannot read '{}': channel '{}' is subsampled", path,
-                                          it.name()));
+                throw IoError(fmt::format("cannot read '{}': channel '{}' is subsampled", path, it.name()));
             image.channel_names.push_back(it.name());
         }
         const std::size_t nc = image.channels();
@@ -149,8 +143,7 @@ ExrImage read_exr(const std::string& path) {
         Imf::FrameBuffer fb;
         for (std::size_t c = 0; c < nc; ++c)
             fb.insert(image.channel_names[c],
-                      Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, dw,
-                                       sizeof(float) * nc,
+                      Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, dw, sizeof(float) * nc,
                                        sizeof(float) * nc * std::size_t(image.width)));
         file.setFrameBuffer(fb);
         file.readPixels(dw.min.y, dw.max.y);

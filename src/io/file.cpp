@@ -1,17 +1,16 @@
 // Bounded reads and atomic writes; see file.hpp.
 #include "welkin/io/file.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "welkin/base/error.hpp"
 
@@ -80,12 +79,15 @@ std::string read_file_bounded(const std::string& path, std::size_t max_bytes, co
         ~FdCloser() { ::close(fd); }
     } closer{fd};
     struct stat st {};
-    if (::fstat(fd, &st) != 0) throw IoError(fmt::format("cannot read {} '{}': {}", what, path, reason(errno)));
+    if (::fstat(fd, &st) != 0)
+        throw IoError(fmt::format("cannot read {} '{}': {}", what, path, reason(errno)));
     if (!S_ISREG(st.st_mode))
-        throw IoError(fmt::format("cannot read {} '{}': it is {}, not a regular file", what, path, kind_of(st.st_mode)));
+        throw IoError(fmt::format("cannot read {} '{}': it is {}, not a regular file", what, path,
+                                  kind_of(st.st_mode)));
     if (std::uint64_t(st.st_size) > max_bytes)
-        throw IoError(fmt::format("cannot read {} '{}': it is {} bytes, more than the limit of {} bytes ({} MiB)", what,
-                                  path, std::uint64_t(st.st_size), max_bytes, max_bytes >> 20));
+        throw IoError(
+            fmt::format("cannot read {} '{}': it is {} bytes, more than the limit of {} bytes ({} MiB)", what,
+                        path, std::uint64_t(st.st_size), max_bytes, max_bytes >> 20));
     const int flags = ::fcntl(fd, F_GETFL);
     if (flags >= 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
     std::string data;
@@ -106,8 +108,8 @@ std::string read_file_bounded(const std::string& path, std::size_t max_bytes, co
         got += std::size_t(n);
     }
     if (got > max_bytes)
-        throw IoError(fmt::format("cannot read {} '{}': it is larger than the limit of {} bytes ({} MiB)", what, path,
-                                  max_bytes, max_bytes >> 20));
+        throw IoError(fmt::format("cannot read {} '{}': it is larger than the limit of {} bytes ({} MiB)",
+                                  what, path, max_bytes, max_bytes >> 20));
     data.resize(got);
     return data;
 }
@@ -125,16 +127,18 @@ fs::path resolve_output_path(const std::string& path, bool overwrite) {
             break;  // a new file
         }
         if (S_ISLNK(st.st_mode)) {
-            if (hops >= 40) throw IoError(fmt::format("cannot write '{}': too many levels of symbolic links", path));
+            if (hops >= 40)
+                throw IoError(fmt::format("cannot write '{}': too many levels of symbolic links", path));
             const fs::path link = fs::read_symlink(p, ec);
             if (ec) throw IoError(fmt::format("cannot write '{}': {}", path, ec.message()));
             p = (link.is_absolute() ? link : p.parent_path() / link).lexically_normal();
             continue;
         }
         if (!S_ISREG(st.st_mode))
-            throw NotRegularFile(fmt::format("cannot write '{}': it is {}; Welkin writes regular files only", path,
-                                      kind_of(st.st_mode)));
-        if (!overwrite) throw IoError(fmt::format("'{}' exists; refusing to overwrite it (pass overwrite)", path));
+            throw NotRegularFile(fmt::format("cannot write '{}': it is {}; Welkin writes regular files only",
+                                             path, kind_of(st.st_mode)));
+        if (!overwrite)
+            throw IoError(fmt::format("'{}' exists; refusing to overwrite it (pass overwrite)", path));
         break;
     }
     const fs::path dir = p.parent_path();
@@ -158,7 +162,7 @@ TemporaryFile::TemporaryFile(const fs::path& target, const std::string& path) : 
     // The mode a new file would get (or the replaced file's own), not mkstemp's 0600.
     struct stat st {};
     const mode_t mode = ::stat(target.c_str(), &st) == 0 && S_ISREG(st.st_mode) ? (st.st_mode & 07777)
-                                                                               : (0666 & ~process_umask());
+                                                                                : (0666 & ~process_umask());
     ::fchmod(fd_, mode);
 }
 
@@ -204,8 +208,8 @@ void TemporaryFile::commit(bool overwrite) {
     struct stat st {};
     if (::lstat(target_.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
         discard();
-        throw NotRegularFile(fmt::format("cannot write '{}': it is {}; Welkin writes regular files only", name_,
-                                  kind_of(st.st_mode)));
+        throw NotRegularFile(fmt::format("cannot write '{}': it is {}; Welkin writes regular files only",
+                                         name_, kind_of(st.st_mode)));
     }
     if (overwrite) {
         if (::rename(tmp_.c_str(), target_.c_str()) != 0) {

@@ -3,10 +3,10 @@
 // into its aerial-perspective passes (EXR files in and out: exr_bindings.cpp). Thin: the
 // scene travels as its JSON text, the depth as a numpy array, the passes come back as
 // numpy arrays the core wrote into.
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include "bindings.hpp"
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/aerial/aerial_table.hpp"
 #include "welkin/atmosphere/lut_cache.hpp"
@@ -59,17 +59,18 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
     scene.require_camera();
     const int width = scene.resolution.width(), height = scene.resolution.height();
     check_aerial_memory(width, height, 6 * sizeof(float));  // plus the two returned arrays
-    const c_array<float> depth = to_c_array<float>(depth_in, "depth", -1, 2, 2,
-                                                   "a (height, width) array of depths in metres");
+    const c_array<float> depth =
+        to_c_array<float>(depth_in, "depth", -1, 2, 2, "a (height, width) array of depths in metres");
     if (depth.shape(0) != height || depth.shape(1) != width)
-        throw InvalidArgument("depth", fmt::format("has shape ({}, {}) but the scene renders {} x {} "
-                                                   "(shape ({}, {}))",
-                                                   depth.shape(0), depth.shape(1), width, height,
-                                                   height, width));
+        throw InvalidArgument("depth",
+                              fmt::format("has shape ({}, {}) but the scene renders {} x {} "
+                                          "(shape ({}, {}))",
+                                          depth.shape(0), depth.shape(1), width, height, height, width));
     const std::span<const float> z(depth.data(), std::size_t(depth.size()));
     AerialPasses passes;
-    run_cancellable([&](Progress* p) { passes = aerial_perspective(scene.aerial_view(), z, width, height, p); },
-                    progress);
+    run_cancellable(
+        [&](Progress* p) { passes = aerial_perspective(scene.aerial_view(), z, width, height, p); },
+        progress);
     py::array_t<float> L({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
     py::array_t<float> T({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
     std::copy(passes.inscatter.begin(), passes.inscatter.end(), L.mutable_data());
@@ -115,7 +116,8 @@ py::dict aerial_table_py(const py::handle& scene_in, int azimuths, int elevation
     run_cancellable(
         [&](Progress* p) {
             const auto luts = AtmosphereLutCache::shared().get(view.atmosphere, view.luts);
-            table = aerial_table(view.atmosphere, *luts, view.planet_centre(), CameraRays(view.camera, view.width, view.height).position(),
+            table = aerial_table(view.atmosphere, *luts, view.planet_centre(),
+                                 CameraRays(view.camera, view.width, view.height).position(),
                                  view.origin.sun_direction, view.exposure, layout, p);
         },
         progress);
@@ -147,8 +149,9 @@ frame exactly (the atmosphere is written in full).
         .def("to_json_string", &SceneDescription::to_json_string)
         .def("to_json", &SceneDescription::to_json_file, py::arg("path"), py::arg("overwrite") = false,
              "Write atomically; refuses to replace a file unless overwrite=True.")
-        .def_property_readonly("width", [](const SceneDescription& s) { return s.resolution.width(); },
-                               "Rendered width in pixels (resolution x times percentage / 100).")
+        .def_property_readonly(
+            "width", [](const SceneDescription& s) { return s.resolution.width(); },
+            "Rendered width in pixels (resolution x times percentage / 100).")
         .def_property_readonly("height", [](const SceneDescription& s) { return s.resolution.height(); })
         .def_property_readonly("has_camera", [](const SceneDescription& s) { return bool(s.camera); })
         .def_property_readonly("version", [](const SceneDescription& s) { return s.version; })
@@ -175,9 +178,8 @@ depth z lies z * distance_per_depth along the ray. ValueError without a camera.
                                s.camera ? camera_type_name(s.camera->type) : "none");
         });
 
-    m.def("aerial_perspective", &aerial_perspective_py, kAerialDoc, py::arg("scene"),
-          py::arg("depth"), py::arg("method") = py::none(), py::kw_only(),
-          py::arg("progress") = py::none());
+    m.def("aerial_perspective", &aerial_perspective_py, kAerialDoc, py::arg("scene"), py::arg("depth"),
+          py::arg("method") = py::none(), py::kw_only(), py::arg("progress") = py::none());
     m.def("aerial_table", &aerial_table_py, kAerialTableDoc, py::arg("scene"), py::kw_only(),
           py::arg("azimuths") = 128, py::arg("elevations") = 64, py::arg("slices") = 48,
           py::arg("max_distance_m"), py::arg("linear_distance_m") = 100.0, py::arg("steps_per_slice") = 4,

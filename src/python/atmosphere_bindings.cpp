@@ -8,11 +8,11 @@
 // a whole new sequence to change one.
 #include <filesystem>
 
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
-#include "bindings.hpp"
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
 
@@ -32,14 +32,11 @@ MiePhaseModel phase_model(const std::string& name) {
 }
 
 // One read-write spectrum attribute: a read-only numpy copy out, any sequence in.
-void spectrum_property(py::class_<Atmosphere>& cls, const char* name,
-                       std::vector<double> Atmosphere::*field, const char* doc) {
+void spectrum_property(py::class_<Atmosphere>& cls, const char* name, std::vector<double> Atmosphere::*field,
+                       const char* doc) {
     cls.def_property(
         name, [field](const Atmosphere& a) { return to_readonly_array(a.*field); },
-        [field, name](Atmosphere& a, const py::object& values) {
-            a.*field = to_vector(values, name);
-        },
-        doc);
+        [field, name](Atmosphere& a, const py::object& values) { a.*field = to_vector(values, name); }, doc);
 }
 
 // Per-channel values of a core function of (channel, altitude), as a (C,) array.
@@ -52,9 +49,10 @@ py::array_t<double> per_channel(const Atmosphere& a, F f) {
 }
 
 std::string layer_repr(const DensityLayer& l) {
-    return fmt::format("DensityLayer(width_m={}, exp_term={}, exp_scale_per_m={}, "
-                       "linear_per_m={}, constant={})",
-                       l.width_m, l.exp_term, l.exp_scale_per_m, l.linear_per_m, l.constant);
+    return fmt::format(
+        "DensityLayer(width_m={}, exp_term={}, exp_scale_per_m={}, "
+        "linear_per_m={}, constant={})",
+        l.width_m, l.exp_term, l.exp_scale_per_m, l.linear_per_m, l.constant);
 }
 
 }  // namespace
@@ -68,13 +66,12 @@ One layer of a density profile (Bruneton 2017's DensityProfileLayer):
 clamped to [0, 1], for altitudes h (m) in [bottom, bottom + width_m). The last
 layer of a profile extends upwards without limit (its width_m is ignored).
 )doc")
-        .def(py::init([](double width_m, double exp_term, double exp_scale_per_m,
-                         double linear_per_m, double constant) {
+        .def(py::init([](double width_m, double exp_term, double exp_scale_per_m, double linear_per_m,
+                         double constant) {
                  return DensityLayer{width_m, exp_term, exp_scale_per_m, linear_per_m, constant};
              }),
              py::kw_only(), py::arg("width_m") = 0.0, py::arg("exp_term") = 0.0,
-             py::arg("exp_scale_per_m") = 0.0, py::arg("linear_per_m") = 0.0,
-             py::arg("constant") = 0.0)
+             py::arg("exp_scale_per_m") = 0.0, py::arg("linear_per_m") = 0.0, py::arg("constant") = 0.0)
         .def_readwrite("width_m", &DensityLayer::width_m, "Layer thickness, m.")
         .def_readwrite("exp_term", &DensityLayer::exp_term)
         .def_readwrite("exp_scale_per_m", &DensityLayer::exp_scale_per_m, "m^-1.")
@@ -92,14 +89,11 @@ density is 1.
         .def(py::init<std::vector<DensityLayer>>(), py::arg("layers"))
         .def_static("exponential", &DensityProfile::exponential, py::arg("scale_height_m"),
                     "rho(h) = exp(-h / scale_height_m).")
-        .def_static("tent", &DensityProfile::tent, py::arg("bottom_m"), py::arg("peak_m"),
-                    py::arg("top_m"),
+        .def_static("tent", &DensityProfile::tent, py::arg("bottom_m"), py::arg("peak_m"), py::arg("top_m"),
                     "0 at bottom_m rising linearly to 1 at peak_m, back to 0 at top_m (m).")
         .def_static("zero", &DensityProfile::zero, "Density 0 everywhere (constituent off).")
-        .def_property_readonly("layers", &DensityProfile::layers,
-                               "The layers, bottom first (a copy).")
-        .def_property_readonly("exponential_scale_height_m",
-                               &DensityProfile::exponential_scale_height_m,
+        .def_property_readonly("layers", &DensityProfile::layers, "The layers, bottom first (a copy).")
+        .def_property_readonly("exponential_scale_height_m", &DensityProfile::exponential_scale_height_m,
                                "Scale height (m) if this is a single decaying exponential, "
                                "else None.")
         .def(
@@ -107,8 +101,7 @@ density is 1.
             [](const DensityProfile& p, const c_array<double>& altitude_m) {
                 return py::vectorize([&p](double h) { return p.density(h); })(altitude_m);
             },
-            py::arg("altitude_m"),
-             "Relative density (0..1) at altitude_m (m); a scalar or any numpy array.")
+            py::arg("altitude_m"), "Relative density (0..1) at altitude_m (m); a scalar or any numpy array.")
         .def("validate", &DensityProfile::validate, py::arg("parameter") = "density",
              "Raises ValueError naming `parameter` if a layer is not finite.")
         .def("__repr__", [](const DensityProfile& p) {
@@ -133,11 +126,12 @@ editing (every computation validates too, raising ValueError naming the field).
 )doc");
 
     atmosphere
-        .def_static("preset",
-                    [](const std::string& name, const py::object& wavelengths_nm) {
-                        return Atmosphere::preset(name, to_vector(wavelengths_nm, "wavelengths_nm"));
-                    },
-                    py::arg("name"), py::arg("wavelengths_nm") = py::none(), R"doc(
+        .def_static(
+            "preset",
+            [](const std::string& name, const py::object& wavelengths_nm) {
+                return Atmosphere::preset(name, to_vector(wavelengths_nm, "wavelengths_nm"));
+            },
+            py::arg("name"), py::arg("wavelengths_nm") = py::none(), R"doc(
 A built-in atmosphere: one of Atmosphere.preset_names() ("bruneton2017",
 "clear", "hazy", "polluted", "mars"; sources in src/presets.cpp).
 
@@ -147,11 +141,10 @@ the preset's spectral models are evaluated.
 Raises ValueError for an unknown name or a wavelength out of range.
 )doc")
         .def_static("preset_names", &Atmosphere::preset_names, "Names of the built-in presets.")
-        .def_static("from_json",
-                    [](const std::filesystem::path& path) {
-                        return Atmosphere::from_json_file(path.string());
-                    },
-                    py::arg("path"), R"doc(
+        .def_static(
+            "from_json",
+            [](const std::filesystem::path& path) { return Atmosphere::from_json_file(path.string()); },
+            py::arg("path"), R"doc(
 Reads an atmosphere from a JSON file (schema in docs/pipelines.md, "Atmosphere JSON"; {"preset": name}
 plus any fields to override). Raises ValueError naming the field (its key path)
 and the file for malformed JSON, a number out of range, unknown keys or invalid
@@ -198,10 +191,8 @@ first (ValueError).
     atmosphere
         .def_readwrite("sun_angular_radius_rad", &Atmosphere::sun_angular_radius_rad,
                        "Angular radius of the sun's disc, rad.")
-        .def_readwrite("bottom_radius_m", &Atmosphere::bottom_radius_m,
-                       "Planet (ground) radius, m.")
-        .def_readwrite("top_radius_m", &Atmosphere::top_radius_m,
-                       "Radius of the top of the atmosphere, m.")
+        .def_readwrite("bottom_radius_m", &Atmosphere::bottom_radius_m, "Planet (ground) radius, m.")
+        .def_readwrite("top_radius_m", &Atmosphere::top_radius_m, "Radius of the top of the atmosphere, m.")
         .def_readwrite("mie_g", &Atmosphere::mie_g, "Mie phase asymmetry g, in [-0.999, 0.999].")
         .def_property(
             "mie_phase", [](const Atmosphere& a) { return phase_name(a.mie_phase); },
@@ -209,8 +200,7 @@ first (ValueError).
             "Mie phase function: \"cornette_shanks\" or \"henyey_greenstein\".")
         .def_readwrite("rayleigh_density", &Atmosphere::rayleigh_density,
                        "DensityProfile of the Rayleigh scatterers.")
-        .def_readwrite("mie_density", &Atmosphere::mie_density,
-                       "DensityProfile of the aerosols.")
+        .def_readwrite("mie_density", &Atmosphere::mie_density, "DensityProfile of the aerosols.")
         .def_readwrite("absorption_density", &Atmosphere::absorption_density,
                        "DensityProfile of the absorbing layer (ozone).")
         .def_property_readonly("atmosphere_thickness_m", &Atmosphere::atmosphere_thickness_m,
@@ -227,18 +217,20 @@ first (ValueError).
             [](const Atmosphere& a, double altitude_m) {
                 return per_channel(a, [&](std::size_t c) { return a.scattering(c, altitude_m); });
             },
-            py::arg("altitude_m"),
-            "Scattering (Rayleigh + Mie, m^-1) per wavelength at altitude_m (m).")
-        .def("copy", [](const Atmosphere& a) { return Atmosphere(a); }, "An independent copy.")
+            py::arg("altitude_m"), "Scattering (Rayleigh + Mie, m^-1) per wavelength at altitude_m (m).")
+        .def(
+            "copy", [](const Atmosphere& a) { return Atmosphere(a); }, "An independent copy.")
         .def("__copy__", [](const Atmosphere& a) { return Atmosphere(a); })
-        .def("__deepcopy__", [](const Atmosphere& a, const py::dict&) { return Atmosphere(a); },
-             py::arg("memo"))
+        .def(
+            "__deepcopy__", [](const Atmosphere& a, const py::dict&) { return Atmosphere(a); },
+            py::arg("memo"))
         .def(py::pickle([](const Atmosphere& a) { return a.to_json_string(); },
                         [](const std::string& text) { return Atmosphere::from_json_string(text); }))
         .def("__repr__", [](const Atmosphere& a) {
-            return fmt::format("<welkin.Atmosphere '{}': {} wavelengths, ground radius {} m, "
-                               "top {} m>",
-                               a.name, a.channels(), a.bottom_radius_m, a.top_radius_m);
+            return fmt::format(
+                "<welkin.Atmosphere '{}': {} wavelengths, ground radius {} m, "
+                "top {} m>",
+                a.name, a.channels(), a.bottom_radius_m, a.top_radius_m);
         });
 }
 

@@ -17,8 +17,8 @@
 #include <pybind11/pybind11.h>
 
 #include "welkin/base/progress.hpp"
-#include "welkin/scene/scene.hpp"
 #include "welkin/render/sky_image.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::python {
 
@@ -71,12 +71,10 @@ c_array<T> to_c_array(const py::handle& values, const std::string& parameter, py
 
 // The (..., 3) float64 array's buffer as directions, in place (no copy) when it is aligned
 // as numpy's own allocations are; else copied into `storage`.
-std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array,
-                                          std::vector<glm::dvec3>& storage);
+std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array, std::vector<glm::dvec3>& storage);
 
 // A (height, width, channels) float32 array that owns `pixels` (moved, not copied).
-py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height,
-                                  std::size_t channels);
+py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height, std::size_t channels);
 
 // "rgb" | "spectral" -> the sky image's output (InvalidArgument naming "output").
 SkyImageOptions::Output parse_output(const std::string& output);

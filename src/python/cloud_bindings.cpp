@@ -2,19 +2,19 @@
 // density sources (include/welkin/procedural_clouds.hpp, vdb_clouds.hpp), their lighting
 // (cloud_lighting.hpp, cloud_reference.hpp) and the equirect sky with clouds (sky_image.hpp).
 // Thin: converts, releases the GIL, calls the core.
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include "bindings.hpp"
+#include "welkin/base/error.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/clouds/lighting.hpp"
-#include "welkin/clouds/reference.hpp"
-#include "welkin/color/color.hpp"
-#include "welkin/base/error.hpp"
 #include "welkin/clouds/procedural.hpp"
-#include "welkin/scene/clouds.hpp"
-#include "welkin/render/sky_image.hpp"
+#include "welkin/clouds/reference.hpp"
 #include "welkin/clouds/vdb.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/render/sky_image.hpp"
+#include "welkin/scene/clouds.hpp"
 
 namespace welkin::python {
 namespace {
@@ -23,8 +23,10 @@ namespace {
 // [column][row].
 glm::dmat4 to_dmat4(const py::object& m, const std::string& parameter) {
     if (m.is_none()) return glm::dmat4(1.0);
-    const c_array<double> a = to_c_array<double>(m, parameter, 4, 2, 2, "a 4 x 4 matrix (Blender's matrix_world)");
-    if (a.shape(0) != 4) throw_bad_shape(parameter, "a 4 x 4 matrix (Blender's matrix_world)", "shape " + shape_string(a));
+    const c_array<double> a =
+        to_c_array<double>(m, parameter, 4, 2, 2, "a 4 x 4 matrix (Blender's matrix_world)");
+    if (a.shape(0) != 4)
+        throw_bad_shape(parameter, "a 4 x 4 matrix (Blender's matrix_world)", "shape " + shape_string(a));
     glm::dmat4 g;
     for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) g[c][r] = a.data()[r * 4 + c];
@@ -33,14 +35,16 @@ glm::dmat4 to_dmat4(const py::object& m, const std::string& parameter) {
 
 // A light spectrum given from Python: a 1-D array, one value per channel.
 std::vector<float> to_spectrum(const py::object& values, const std::string& parameter) {
-    const c_array<float> a = to_c_array<float>(values, parameter, -1, 1, 1, "a 1-D array, one value per channel");
+    const c_array<float> a =
+        to_c_array<float>(values, parameter, -1, 1, 1, "a 1-D array, one value per channel");
     return std::vector<float>(a.data(), a.data() + a.shape(0));
 }
 
 std::vector<glm::dvec3> to_points(const py::object& values, const std::string& parameter) {
     const c_array<double> a = to_c_array<double>(values, parameter, 3, 2, 2, "an (N, 3) array");
     std::vector<glm::dvec3> out(std::size_t(a.shape(0)));
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = {a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]};
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = {a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]};
     return out;
 }
 
@@ -74,11 +78,12 @@ g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g
 )doc";
 
 py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere atmosphere, double altitude_m,
-                         const py::object& sun_direction, const py::object& view_directions, const py::object& origin,
-                         const std::string& method, int max_steps, int light_steps, int octaves, double albedo,
-                         int paths, std::uint64_t seed, const py::object& progress,
-                         const py::object& sun_irradiance, const py::object& ambient_radiance, double g_forward,
-                         double g_back, double w_forward) {
+                         const py::object& sun_direction, const py::object& view_directions,
+                         const py::object& origin, const std::string& method, int max_steps, int light_steps,
+                         int octaves, double albedo, int paths, std::uint64_t seed,
+                         const py::object& progress, const py::object& sun_irradiance,
+                         const py::object& ambient_radiance, double g_forward, double g_back,
+                         double w_forward) {
     CloudScattering scattering;
     scattering.albedo = albedo;
     scattering.phase = CloudPhase{g_forward, g_back, w_forward};
@@ -156,7 +161,8 @@ names a bad parameter.
                          const py::object& coverage, const py::object& density, const py::object& base_scale,
                          const py::object& detail_scale, const py::object& weather_scale,
                          const py::object& detail_strength, const py::object& weather_variation,
-                         const py::object& wind, std::uint64_t seed, double planet_radius, double origin_altitude) {
+                         const py::object& wind, std::uint64_t seed, double planet_radius,
+                         double origin_altitude) {
                  CloudLayerParams p = CloudLayerParams::preset(cloud_type_from_name(type, "cloud_type"));
                  const auto set = [](const py::object& o, const char* name, double& v) {
                      if (o.is_none()) return;
@@ -175,7 +181,8 @@ names a bad parameter.
                  set(weather_scale, "weather_scale_m", p.weather_scale_m);
                  set(detail_strength, "detail_strength", p.detail_strength);
                  set(weather_variation, "weather_variation", p.weather_variation);
-                 const c_array<double> w = to_c_array<double>(wind, "wind_offset_m", 2, 1, 1, "two numbers (x, y) in m");
+                 const c_array<double> w =
+                     to_c_array<double>(wind, "wind_offset_m", 2, 1, 1, "two numbers (x, y) in m");
                  p.wind_offset_m = {w.data()[0], w.data()[1]};
                  p.seed = seed;
                  p.planet_radius_m = planet_radius;
@@ -191,13 +198,16 @@ names a bad parameter.
              py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0), py::arg("seed") = CloudLayerParams{}.seed,
              py::arg("planet_radius_m") = CloudLayerParams{}.planet_radius_m,
              py::arg("origin_altitude_m") = CloudLayerParams{}.origin_altitude_m)
-        .def_property_readonly("cloud_type",
-                               [](const ProceduralClouds& c) { return std::string(cloud_type_name(c.params().cloud_type)); })
+        .def_property_readonly(
+            "cloud_type",
+            [](const ProceduralClouds& c) { return std::string(cloud_type_name(c.params().cloud_type)); })
         .def("covered_fraction", &ProceduralClouds::covered_fraction,
              py::arg("columns") = ProceduralClouds::kCoverageColumns,
              "The measured coverage: the share of columns whose vertical optical depth reaches 0.3.")
-        .def_property_readonly("bottom_altitude_m", [](const ProceduralClouds& c) { return c.params().bottom_altitude_m; })
-        .def_property_readonly("top_altitude_m", [](const ProceduralClouds& c) { return c.params().top_altitude_m; })
+        .def_property_readonly("bottom_altitude_m",
+                               [](const ProceduralClouds& c) { return c.params().bottom_altitude_m; })
+        .def_property_readonly("top_altitude_m",
+                               [](const ProceduralClouds& c) { return c.params().top_altitude_m; })
         .def_property_readonly("coverage", [](const ProceduralClouds& c) { return c.params().coverage; })
         .def_property_readonly("seed", [](const ProceduralClouds& c) { return c.params().seed; });
 
@@ -218,8 +228,10 @@ names a bad parameter.
             d["weather_variation"] = p.weather_variation;
             return d;
         },
-        py::arg("name"), "The layer parameters of a cloud type's preset, as a dict; ValueError lists the names.");
-    m.attr("CLOUD_TYPES") = py::cast(std::vector<std::string>(kCloudTypeNames.begin(), kCloudTypeNames.end()));
+        py::arg("name"),
+        "The layer parameters of a cloud type's preset, as a dict; ValueError lists the names.");
+    m.attr("CLOUD_TYPES") =
+        py::cast(std::vector<std::string>(kCloudTypeNames.begin(), kCloudTypeNames.end()));
 
     py::class_<VdbClouds, CloudDensity, std::shared_ptr<VdbClouds>>(m, "VdbClouds", R"doc(
 Clouds from an OpenVDB file: the FloatGrid `grid` (default "density"), placed by
@@ -240,16 +252,19 @@ values; every message names the file and the grid.
                  o.matrix_world = to_dmat4(matrix_world, "matrix_world");
                  o.density_scale = density_scale;
                  if (negative != "clamp" && negative != "reject")
-                     throw InvalidArgument("negative", fmt::format("must be \"clamp\" or \"reject\", got \"{}\"", negative));
-                 o.negative = negative == "clamp" ? VdbCloudOptions::Negative::Clamp : VdbCloudOptions::Negative::Reject;
+                     throw InvalidArgument(
+                         "negative", fmt::format("must be \"clamp\" or \"reject\", got \"{}\"", negative));
+                 o.negative = negative == "clamp" ? VdbCloudOptions::Negative::Clamp
+                                                  : VdbCloudOptions::Negative::Reject;
                  o.max_memory_bytes = max_memory_bytes;
                  o.placement = vdb_placement_from_name(placement, "placement");
                  py::gil_scoped_release release;
                  return std::make_shared<VdbClouds>(path, o);
              }),
-             py::arg("path"), py::arg("grid") = "density", py::kw_only(), py::arg("matrix_world") = py::none(),
-             py::arg("density_scale") = 1.0, py::arg("negative") = "clamp",
-             py::arg("max_memory_bytes") = VdbCloudOptions{}.max_memory_bytes, py::arg("placement") = "blender")
+             py::arg("path"), py::arg("grid") = "density", py::kw_only(),
+             py::arg("matrix_world") = py::none(), py::arg("density_scale") = 1.0,
+             py::arg("negative") = "clamp", py::arg("max_memory_bytes") = VdbCloudOptions{}.max_memory_bytes,
+             py::arg("placement") = "blender")
         .def_property_readonly("negative_voxel_count", &VdbClouds::negative_voxel_count)
         .def_property_readonly("active_voxel_count", &VdbClouds::active_voxel_count)
         .def_property_readonly("memory_bytes", &VdbClouds::memory_bytes)

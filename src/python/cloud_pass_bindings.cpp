@@ -4,14 +4,14 @@
 #include <optional>
 #include <utility>
 
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include "bindings.hpp"
-#include "welkin/scene/scene.hpp"
-#include "welkin/render/cloud_passes.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/row_range.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::python {
 namespace {
@@ -48,8 +48,8 @@ py::dict cloud_passes_py(const py::handle& scene_in, const py::object& depth_in,
     const int width = scene.resolution.width(), height = scene.resolution.height();
     std::vector<float> depth;
     if (!depth_in.is_none()) {
-        const c_array<float> d = to_c_array<float>(depth_in, "depth", -1, 2, 2,
-                                                   "a (height, width) array of depths in metres");
+        const c_array<float> d =
+            to_c_array<float>(depth_in, "depth", -1, 2, 2, "a (height, width) array of depths in metres");
         if (d.shape(0) != height || d.shape(1) != width)
             throw InvalidArgument("depth", fmt::format("has shape ({}, {}) but the scene renders {} x {} "
                                                        "(shape ({}, {}))",

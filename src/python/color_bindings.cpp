@@ -1,13 +1,13 @@
 // Conversions at the module's edges: spectra to RGB (color.hpp), the spectral-mode
 // wavelengths (atmosphere.hpp) and Blender's equirectangular mapping (equirect.hpp),
 // vectorised over numpy arrays.
+#include "bindings.hpp"
 #include <fmt/format.h>
 
-#include "bindings.hpp"
 #include "welkin/atmosphere/atmosphere.hpp"
-#include "welkin/color/color.hpp"
 #include "welkin/base/equirect.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/color/color.hpp"
 #include "welkin/sky/method.hpp"
 
 namespace welkin::python {
@@ -25,9 +25,9 @@ py::array_t<float> spectrum_to_rgb(const py::object& spectra, const py::object& 
     const std::vector<double> wavelengths = to_vector(wavelengths_nm, "wavelengths_nm");
     const SpectrumToRgb to_rgb(wavelengths, lambda_power);
     const auto channels = static_cast<py::ssize_t>(wavelengths.size());
-    const c_array<float> in = to_c_array<float>(
-        spectra, "spectra", channels, 1, 2,
-        fmt::format("an (N, C) or (C,) array with C = len(wavelengths_nm) = {}", channels));
+    const c_array<float> in =
+        to_c_array<float>(spectra, "spectra", channels, 1, 2,
+                          fmt::format("an (N, C) or (C,) array with C = len(wavelengths_nm) = {}", channels));
     py::array_t<float> out(with_last_axis(in, 3));
     const std::size_t rows = static_cast<std::size_t>(in.size() / channels);
     {
@@ -38,8 +38,8 @@ py::array_t<float> spectrum_to_rgb(const py::object& spectra, const py::object& 
 }
 
 py::array_t<double> direction_to_equirect(const py::object& view_directions) {
-    const c_array<double> in = to_c_array<double>(view_directions, "view_directions", 3, 1, 2,
-                                                  "an (N, 3) or (3,) array");
+    const c_array<double> in =
+        to_c_array<double>(view_directions, "view_directions", 3, 1, 2, "an (N, 3) or (3,) array");
     std::vector<glm::dvec3> storage;
     // The core's check (finite, non-zero); the mapping itself needs no unit length.
     const std::span<const glm::dvec3> dirs = as_dvec3_span(in, storage);
@@ -107,10 +107,10 @@ sample is extended as the solar spectrum times (lambda / lambda_j)^lambda_power
 This is the conversion sky_radiance(output="rgb") uses.
 )doc");
 
-    m.def("spectral_wavelengths_nm", [](double step_nm) {
-              return to_readonly_array(spectral_wavelengths_nm(step_nm));
-          },
-          py::arg("step_nm") = 10.0, R"doc(
+    m.def(
+        "spectral_wavelengths_nm",
+        [](double step_nm) { return to_readonly_array(spectral_wavelengths_nm(step_nm)); },
+        py::arg("step_nm") = 10.0, R"doc(
 Evenly spaced wavelengths for the spectral mode, 360..830 nm (48 samples at the
 default 10 nm step): pass them to Atmosphere.preset(name, wavelengths_nm=...).
 )doc");
@@ -128,8 +128,7 @@ Inverse of direction_to_equirect: (N, 2) or (2,) texture coordinates (u, v) ->
 unit directions, float64 (N, 3) or (3,), Z up.
 )doc");
 
-    m.def("equirect_pixel_directions", &equirect_pixel_directions, py::arg("width"),
-          py::arg("height"), R"doc(
+    m.def("equirect_pixel_directions", &equirect_pixel_directions, py::arg("width"), py::arg("height"), R"doc(
 Unit directions through the pixel centres of a width x height equirectangular
 image stored top row first (row 0 is the zenith side, as in EXR files):
 float64 array (height, width, 3). Reshape to (-1, 3) for sky_radiance.

@@ -1,40 +1,38 @@
 // welkin.write_exr, welkin.read_exr: the core's OpenEXR files (include/welkin/exr_io.hpp)
 // from and to numpy arrays, top row first. Thin: the core's writer is atomic and never
 // replaces a file unless asked.
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include "bindings.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
 
 namespace welkin::python {
 namespace {
 
-std::size_t write_exr_file(const std::string& path, const py::object& pixels,
-                           const py::object& channel_names, bool half, bool overwrite,
+std::size_t write_exr_file(const std::string& path, const py::object& pixels, const py::object& channel_names,
+                           bool half, bool overwrite,
                            const std::vector<std::pair<std::string, std::string>>& attributes) {
-    const c_array<float> in = to_c_array<float>(pixels, "pixels", -1, 3, 3,
-                                                "a (height, width, channels) array");
+    const c_array<float> in =
+        to_c_array<float>(pixels, "pixels", -1, 3, 3, "a (height, width, channels) array");
     ExrImage image;
     image.height = int(in.shape(0));
     image.width = int(in.shape(1));
     const auto channels = std::size_t(in.shape(2));
     if (channel_names.is_none()) {
         if (channels != 3 && channels != 4)
-            throw InvalidArgument("channel_names",
-                                  fmt::format("must be given for {} channels (the default "
-                                              "names R, G, B[, A] need 3 or 4)",
-                                              channels));
+            throw InvalidArgument("channel_names", fmt::format("must be given for {} channels (the default "
+                                                               "names R, G, B[, A] need 3 or 4)",
+                                                               channels));
         image.channel_names = {"R", "G", "B"};
         if (channels == 4) image.channel_names.push_back("A");
     } else {
         image.channel_names = channel_names.cast<std::vector<std::string>>();
         if (image.channel_names.size() != channels)
-            throw InvalidArgument("channel_names",
-                                  fmt::format("must name each of the {} channels of pixels, "
-                                              "got {} names",
-                                              channels, image.channel_names.size()));
+            throw InvalidArgument("channel_names", fmt::format("must name each of the {} channels of pixels, "
+                                                               "got {} names",
+                                                               channels, image.channel_names.size()));
     }
     image.pixels.assign(in.data(), in.data() + in.size());
     ExrWriteOptions options;
@@ -54,8 +52,8 @@ py::tuple read_exr_file(const std::string& path) {
     const std::size_t channels = image.channels();
     py::list names;
     for (const std::string& name : image.channel_names) names.append(name);
-    return py::make_tuple(
-        to_image_array(std::move(image.pixels), image.width, image.height, channels), names);
+    return py::make_tuple(to_image_array(std::move(image.pixels), image.width, image.height, channels),
+                          names);
 }
 
 }  // namespace

@@ -5,12 +5,12 @@
 // computes, and its pixel buffer becomes the returned array without a copy.
 #include <memory>
 
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include "bindings.hpp"
-#include "welkin/clouds/density.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/clouds/density.hpp"
 #include "welkin/render/sky_image.hpp"
 #include "welkin/sky/method.hpp"
 
@@ -19,35 +19,29 @@ namespace welkin::python {
 SkyImageOptions::Output parse_output(const std::string& output) {
     if (output == "rgb") return SkyImageOptions::Output::Rgb;
     if (output == "spectral") return SkyImageOptions::Output::Spectral;
-    throw InvalidArgument("output", fmt::format("must be \"rgb\" or \"spectral\", got \"{}\"",
-                                                output));
+    throw InvalidArgument("output", fmt::format("must be \"rgb\" or \"spectral\", got \"{}\"", output));
 }
 
 namespace {
 
-py::array_t<float> render(const SkyMethod& method, const Atmosphere& atmosphere,
-                          double altitude_m, const py::object& sun_direction, int width,
-                          const SkyImageOptions& options, const py::object& progress) {
+py::array_t<float> render(const SkyMethod& method, const Atmosphere& atmosphere, double altitude_m,
+                          const py::object& sun_direction, int width, const SkyImageOptions& options,
+                          const py::object& progress) {
     require_progress_callback(progress);
     const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
     SkyImage image;
     run_cancellable(
-        [&](Progress* p) {
-            image = render_equirect_sky(method, atmosphere, observer, width, options, p);
-        },
+        [&](Progress* p) { image = render_equirect_sky(method, atmosphere, observer, width, options, p); },
         progress);
     const std::size_t channels = image.channels();
     return to_image_array(std::move(image.pixels), image.width, image.height, channels);
 }
 
-py::array_t<float> sky_image(Atmosphere atmosphere, double altitude_m,
-                             const py::object& sun_direction, int width,
-                             const std::string& method, const std::string& output,
-                             bool sun_disc, double exposure, int steps, int sun_steps,
-                             int paths, std::uint64_t seed,
-                             std::shared_ptr<const CloudDensity> clouds,
-                             const py::object& progress, bool ground,
-                             std::optional<double> ground_albedo) {
+py::array_t<float> sky_image(Atmosphere atmosphere, double altitude_m, const py::object& sun_direction,
+                             int width, const std::string& method, const std::string& output, bool sun_disc,
+                             double exposure, int steps, int sun_steps, int paths, std::uint64_t seed,
+                             std::shared_ptr<const CloudDensity> clouds, const py::object& progress,
+                             bool ground, std::optional<double> ground_albedo) {
     SkyImageOptions options;
     options.clouds = std::move(clouds);
     options.sun_disc = sun_disc;
@@ -69,17 +63,15 @@ py::array_t<float> sky_image(Atmosphere atmosphere, double altitude_m,
 class NoSky final : public SkyMethod {
 public:
     std::string name() const override { return "none"; }
-    void radiance(const Atmosphere&, const Observer&, std::span<const glm::dvec3>,
-                  std::span<float> out, std::span<float> standard_error,
-                  Progress*) const override {
+    void radiance(const Atmosphere&, const Observer&, std::span<const glm::dvec3>, std::span<float> out,
+                  std::span<float> standard_error, Progress*) const override {
         std::fill(out.begin(), out.end(), 0.0f);
         std::fill(standard_error.begin(), standard_error.end(), 0.0f);
     }
 };
 
-py::array_t<float> sun_disc_image(Atmosphere atmosphere, double altitude_m,
-                                  const py::object& sun_direction, int width,
-                                  const std::string& output, double exposure) {
+py::array_t<float> sun_disc_image(Atmosphere atmosphere, double altitude_m, const py::object& sun_direction,
+                                  int width, const std::string& output, double exposure) {
     SkyImageOptions options;
     options.sun_disc = true;
     options.ground = false;
@@ -92,13 +84,11 @@ py::array_t<float> sun_disc_image(Atmosphere atmosphere, double altitude_m,
 
 void register_image(py::module_& m) {
     const SkyOptions defaults;
-    m.def("sky_image", &sky_image, py::arg("atmosphere"), py::arg("altitude_m"),
-          py::arg("sun_direction"), py::arg("width"), py::arg("method") = "lut",
-          py::arg("output") = "rgb", py::kw_only(), py::arg("sun_disc") = true,
-          py::arg("exposure") = 1.0, py::arg("steps") = defaults.raymarch_steps,
-          py::arg("sun_steps") = defaults.raymarch_sun_steps,
-          py::arg("paths") = defaults.reference_paths, py::arg("seed") = defaults.seed,
-          py::arg("clouds") = py::none(), py::arg("progress") = py::none(),
+    m.def("sky_image", &sky_image, py::arg("atmosphere"), py::arg("altitude_m"), py::arg("sun_direction"),
+          py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb", py::kw_only(),
+          py::arg("sun_disc") = true, py::arg("exposure") = 1.0, py::arg("steps") = defaults.raymarch_steps,
+          py::arg("sun_steps") = defaults.raymarch_sun_steps, py::arg("paths") = defaults.reference_paths,
+          py::arg("seed") = defaults.seed, py::arg("clouds") = py::none(), py::arg("progress") = py::none(),
           py::arg("ground") = true, py::arg("ground_albedo") = py::none(), R"doc(
 An equirectangular sky image (HDRI) of the whole sphere, as the CLI renders it.
 

@@ -15,11 +15,11 @@
 #include <cstring>
 #include <sstream>
 
+#include "bindings.hpp"
 #include <fmt/format.h>
 
-#include "bindings.hpp"
-#include "welkin/scene/scene.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/scene/scene.hpp"
 
 #ifndef WELKIN_VERSION
 #define WELKIN_VERSION "unknown"
@@ -29,8 +29,7 @@ namespace welkin::python {
 
 std::vector<double> to_vector(const py::handle& values, const std::string& parameter) {
     if (values.is_none()) return {};
-    const c_array<double> array =
-        to_c_array<double>(values, parameter, -1, 1, 1, "a sequence of numbers");
+    const c_array<double> array = to_c_array<double>(values, parameter, -1, 1, 1, "a sequence of numbers");
     return std::vector<double>(array.data(), array.data() + array.size());
 }
 
@@ -44,25 +43,22 @@ py::array_t<double> to_readonly_array(const std::vector<double>& values) {
 std::string shape_string(const py::array& array) {
     std::ostringstream s;
     s << '(';
-    for (py::ssize_t i = 0; i < array.ndim(); ++i)
-        s << (i ? ", " : "") << array.shape(i);
+    for (py::ssize_t i = 0; i < array.ndim(); ++i) s << (i ? ", " : "") << array.shape(i);
     s << (array.ndim() == 1 ? ",)" : ")");
     return s.str();
 }
 
-py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height,
-                                  std::size_t channels) {
+py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height, std::size_t channels) {
     auto* owner = new std::vector<float>(std::move(pixels));
     py::capsule free_when_done(owner, [](void* p) { delete static_cast<std::vector<float>*>(p); });
-    return py::array_t<float>({py::ssize_t(height), py::ssize_t(width), py::ssize_t(channels)},
-                              owner->data(), free_when_done);
+    return py::array_t<float>({py::ssize_t(height), py::ssize_t(width), py::ssize_t(channels)}, owner->data(),
+                              free_when_done);
 }
 
 static_assert(sizeof(glm::dvec3) == 3 * sizeof(double),
               "a (..., 3) float64 buffer is read as glm::dvec3 in place");
 
-std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array,
-                                          std::vector<glm::dvec3>& storage) {
+std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array, std::vector<glm::dvec3>& storage) {
     const auto n = static_cast<std::size_t>(array.size() / 3);
     if (reinterpret_cast<std::uintptr_t>(array.data()) % alignof(glm::dvec3) == 0)
         return {reinterpret_cast<const glm::dvec3*>(array.data()), n};
@@ -88,8 +84,7 @@ void require_progress_callback(const py::object& progress) {
         throw py::type_error("progress: must be a callable taking the fraction done, or None");
 }
 
-void throw_bad_shape(const std::string& parameter, const std::string& expected,
-                     const std::string& got) {
+void throw_bad_shape(const std::string& parameter, const std::string& expected, const std::string& got) {
     throw InvalidArgument(parameter, fmt::format("must be {}, got {}", expected, got));
 }
 

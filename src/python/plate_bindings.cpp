@@ -3,14 +3,14 @@
 #include <optional>
 #include <utility>
 
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include "bindings.hpp"
-#include "welkin/scene/scene.hpp"
-#include "welkin/render/camera_plate.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/row_range.hpp"
+#include "welkin/render/camera_plate.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::python {
 namespace {
@@ -112,7 +112,8 @@ py::dict renderer_render(const CameraPlateRenderer& renderer, const std::optiona
 void register_plate(py::module_& m) {
     m.def("camera_plate", &camera_plate_py, kPlateDoc, py::arg("scene"), py::kw_only(),
           py::arg("progress") = py::none(), py::arg("rows") = py::none());
-    py::class_<CameraPlateRenderer, std::shared_ptr<CameraPlateRenderer>>(m, "CameraPlateRenderer", kRendererDoc)
+    py::class_<CameraPlateRenderer, std::shared_ptr<CameraPlateRenderer>>(m, "CameraPlateRenderer",
+                                                                          kRendererDoc)
         .def(py::init(&make_renderer), py::arg("scene"))
         .def("render", &renderer_render, py::kw_only(), py::arg("rows") = py::none(),
              py::arg("progress") = py::none())

@@ -2,12 +2,12 @@
 // included, as `welkin sky --scene` renders it (sky_image.hpp): the scene's atmosphere, sun,
 // observer at the scene origin, sky method and options, exposure, and its clouds (layers and
 // VDB volumes, lit with clouds.lighting). Thin: converts, releases the GIL, calls the core.
+#include "bindings.hpp"
 #include <fmt/format.h>
 
-#include "bindings.hpp"
 #include "welkin/base/error.hpp"
-#include "welkin/scene/scene.hpp"
 #include "welkin/render/sky_image.hpp"
+#include "welkin/scene/scene.hpp"
 
 namespace welkin::python {
 
@@ -32,9 +32,8 @@ ground: the lit ground below the horizon with the atmosphere's ground_albedo, as
 in sky_image (False: black there).
 )doc";
 
-py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
-                           const std::string& output, bool return_transmittance,
-                           const py::object& progress, bool ground) {
+py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc, const std::string& output,
+                           bool return_transmittance, const py::object& progress, bool ground) {
     SceneDescription scene = to_scene(scene_in);
     require_progress_callback(progress);
     SkyImageOptions options;
@@ -52,14 +51,15 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
                 options.air_steps = scene.aerial.raymarch_steps;
             }
             const std::unique_ptr<SkyMethod> method = make_sky_method(scene.method, scene.sky_options);
-            image = render_equirect_sky(*method, scene.atmosphere, scene.origin_observer(), width, options, p);
+            image =
+                render_equirect_sky(*method, scene.atmosphere, scene.origin_observer(), width, options, p);
         },
         progress);
     const int w = image.width, h = image.height;
     std::vector<float> transmittance = std::move(image.cloud_transmittance);
     const std::size_t channels = image.channels();
     py::array_t<float> pixels = to_image_array(std::move(image.pixels), w, h, channels);
-    if (!return_transmittance) return std::move(pixels);
+    if (!return_transmittance) return pixels;
     if (transmittance.empty()) transmittance.assign(std::size_t(w) * std::size_t(h), 1.0f);
     py::array_t<float> t({py::ssize_t(h), py::ssize_t(w)});
     std::copy(transmittance.begin(), transmittance.end(), t.mutable_data());

@@ -6,14 +6,14 @@
 // are converted once, as numpy.ascontiguousarray(dtype=float64) would.
 #include <optional>
 
+#include "bindings.hpp"
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include "bindings.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/color/color.hpp"
 #include "welkin/sky/auto.hpp"
 #include "welkin/sky/auto_table.hpp"
-#include "welkin/color/color.hpp"
-#include "welkin/base/error.hpp"
 #include "welkin/sky/method.hpp"
 
 namespace welkin::python {
@@ -88,21 +88,18 @@ invalid atmosphere or option).
 
 py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::object& sun_direction,
                         const py::object& view_directions, const std::string& method,
-                        const std::string& output, int steps, int sun_steps, int paths,
-                        std::uint64_t seed, int transmittance_width, int transmittance_height,
-                        int multiscattering_size, int skyview_width, int skyview_height,
-                        double tolerance, bool return_standard_error,
+                        const std::string& output, int steps, int sun_steps, int paths, std::uint64_t seed,
+                        int transmittance_width, int transmittance_height, int multiscattering_size,
+                        int skyview_width, int skyview_height, double tolerance, bool return_standard_error,
                         const py::object& progress) {
     // The checks that need no core work come first. `atmosphere` is a copy, so that Python
     // code running while the GIL is released (other threads, the progress callback) cannot
     // change it under the core.
     if (output != "spectral" && output != "rgb")
-        throw InvalidArgument("output", fmt::format("must be \"spectral\" or \"rgb\", got \"{}\"",
-                                                    output));
+        throw InvalidArgument("output", fmt::format("must be \"spectral\" or \"rgb\", got \"{}\"", output));
     const bool rgb = output == "rgb";
     if (rgb && return_standard_error)
-        throw InvalidArgument("return_standard_error",
-                              "is only available with output=\"spectral\"");
+        throw InvalidArgument("return_standard_error", "is only available with output=\"spectral\"");
     require_progress_callback(progress);
 
     SkyOptions options;
@@ -120,8 +117,8 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
 
     const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
 
-    const c_array<double> dirs = to_c_array<double>(
-        view_directions, "view_directions", 3, 2, 2, "an (N, 3) array of unit vectors (Z up)");
+    const c_array<double> dirs = to_c_array<double>(view_directions, "view_directions", 3, 2, 2,
+                                                    "an (N, 3) array of unit vectors (Z up)");
     std::vector<glm::dvec3> storage;
     const std::span<const glm::dvec3> directions = as_dvec3_span(dirs, storage);
     const std::size_t n = directions.size();
@@ -135,8 +132,7 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
     py::array_t<float> result({rows, static_cast<py::ssize_t>(rgb ? 3 : channels)});
     std::vector<float> spectral_buffer(rgb ? n * channels : 0);
     const std::span<float> spectral =
-        rgb ? std::span<float>(spectral_buffer)
-            : std::span<float>(result.mutable_data(), n * channels);
+        rgb ? std::span<float>(spectral_buffer) : std::span<float>(result.mutable_data(), n * channels);
     py::array_t<float> standard_error;
     std::span<float> standard_error_out;
     if (return_standard_error) {
@@ -154,25 +150,22 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
         progress);
 
     if (return_standard_error) return py::make_tuple(result, standard_error);
-    return std::move(result);
+    return result;
 }
 
 }  // namespace
 
 void register_sky(py::module_& m) {
     const SkyOptions defaults;
-    m.def("sky_radiance", &sky_radiance, kSkyRadianceDoc, py::arg("atmosphere"),
-          py::arg("altitude_m"), py::arg("sun_direction"), py::arg("view_directions"),
-          py::arg("method") = "lut", py::arg("output") = "spectral", py::kw_only(),
-          py::arg("steps") = defaults.raymarch_steps,
-          py::arg("sun_steps") = defaults.raymarch_sun_steps,
-          py::arg("paths") = defaults.reference_paths, py::arg("seed") = defaults.seed,
-          py::arg("transmittance_width") = defaults.transmittance_width,
+    m.def("sky_radiance", &sky_radiance, kSkyRadianceDoc, py::arg("atmosphere"), py::arg("altitude_m"),
+          py::arg("sun_direction"), py::arg("view_directions"), py::arg("method") = "lut",
+          py::arg("output") = "spectral", py::kw_only(), py::arg("steps") = defaults.raymarch_steps,
+          py::arg("sun_steps") = defaults.raymarch_sun_steps, py::arg("paths") = defaults.reference_paths,
+          py::arg("seed") = defaults.seed, py::arg("transmittance_width") = defaults.transmittance_width,
           py::arg("transmittance_height") = defaults.transmittance_height,
           py::arg("multiscattering_size") = defaults.multiscattering_size,
           py::arg("skyview_width") = defaults.skyview_width,
-          py::arg("skyview_height") = defaults.skyview_height,
-          py::arg("tolerance") = defaults.tolerance,
+          py::arg("skyview_height") = defaults.skyview_height, py::arg("tolerance") = defaults.tolerance,
           py::arg("return_standard_error") = false, py::arg("progress") = py::none());
 
     m.def(
@@ -180,8 +173,7 @@ void register_sky(py::module_& m) {
         [](const Atmosphere& atmosphere, double altitude_m, const py::object& sun_direction,
            std::size_t n_directions, double tolerance) {
             const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
-            const AutoChoice c =
-                choose_sky_method(atmosphere, observer, n_directions, tolerance);
+            const AutoChoice c = choose_sky_method(atmosphere, observer, n_directions, tolerance);
             py::dict d;
             d["method"] = c.method;
             d["setting"] = c.setting;
@@ -199,8 +191,8 @@ void register_sky(py::module_& m) {
             d["options"] = options;
             return d;
         },
-        py::arg("atmosphere"), py::arg("altitude_m"), py::arg("sun_direction"),
-        py::arg("n_directions"), py::arg("tolerance") = defaults.tolerance, R"doc(
+        py::arg("atmosphere"), py::arg("altitude_m"), py::arg("sun_direction"), py::arg("n_directions"),
+        py::arg("tolerance") = defaults.tolerance, R"doc(
 What method="auto" runs for this scene: a dict with "method", "options" (keyword
 arguments of sky_radiance for that method), "setting" (a label),
 "predicted_error" (the chart's p95 relative luminance error, worst grid corner

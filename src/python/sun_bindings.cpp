@@ -2,11 +2,11 @@
 // lamp and the sky agree.
 #include <memory>
 
+#include "bindings.hpp"
 #include <fmt/format.h>
 
-#include "bindings.hpp"
-#include "welkin/color/color.hpp"
 #include "welkin/atmosphere/sun_disc.hpp"
+#include "welkin/color/color.hpp"
 
 namespace welkin::python {
 namespace {
@@ -76,15 +76,14 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
 )doc")
         .def_property_readonly("transmittance",
                                [](const Sun& s) { return to_readonly_array(s.radiometry.transmittance); })
-        .def_property_readonly(
-            "direct_irradiance",
-            [](const Sun& s) { return to_readonly_array(s.radiometry.direct_irradiance); })
-        .def_property_readonly("visible_fraction",
-                               [](const Sun& s) { return s.radiometry.visible_fraction; })
+        .def_property_readonly("direct_irradiance",
+                               [](const Sun& s) { return to_readonly_array(s.radiometry.direct_irradiance); })
+        .def_property_readonly("visible_fraction", [](const Sun& s) { return s.radiometry.visible_fraction; })
         .def_property_readonly("direct_irradiance_rgb", &direct_irradiance_rgb)
         .def_property_readonly("wavelengths_nm",
                                [](const Sun& s) { return to_readonly_array(s.wavelengths_nm); })
-        .def_property_readonly("angular_radius_rad", [](const Sun& s) { return s.disc->angular_radius_rad(); })
+        .def_property_readonly("angular_radius_rad",
+                               [](const Sun& s) { return s.disc->angular_radius_rad(); })
         .def_property_readonly("solid_angle_sr", [](const Sun& s) { return s.disc->solid_angle_sr(); })
         .def_property_readonly("mean_radiance",
                                [](const Sun& s) { return to_readonly_array(s.disc->mean_radiance()); })
@@ -103,11 +102,11 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
                                    return coefficient_rows({b.begin(), b.end()});
                                })
         .def("__repr__", [](const Sun& s) {
-            return fmt::format("<welkin.SunRadiometry transmittance=[{:.6g}] "
-                               "direct_irradiance=[{:.6g}] W m^-2 nm^-1 visible_fraction={:.6g}>",
-                               fmt::join(s.radiometry.transmittance, ", "),
-                               fmt::join(s.radiometry.direct_irradiance, ", "),
-                               s.radiometry.visible_fraction);
+            return fmt::format(
+                "<welkin.SunRadiometry transmittance=[{:.6g}] "
+                "direct_irradiance=[{:.6g}] W m^-2 nm^-1 visible_fraction={:.6g}>",
+                fmt::join(s.radiometry.transmittance, ", "), fmt::join(s.radiometry.direct_irradiance, ", "),
+                s.radiometry.visible_fraction);
         });
 
     m.def(

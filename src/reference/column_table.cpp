@@ -10,8 +10,8 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
-#include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
+#include "welkin/base/error.hpp"
 
 namespace welkin {
 namespace {
@@ -48,8 +48,8 @@ bool same_profile(const DensityProfile& a, const DensityProfile& b) {
     if (la.size() != lb.size()) return false;
     for (std::size_t i = 0; i < la.size(); ++i)
         if (la[i].width_m != lb[i].width_m || la[i].exp_term != lb[i].exp_term ||
-            la[i].exp_scale_per_m != lb[i].exp_scale_per_m ||
-            la[i].linear_per_m != lb[i].linear_per_m || la[i].constant != lb[i].constant)
+            la[i].exp_scale_per_m != lb[i].exp_scale_per_m || la[i].linear_per_m != lb[i].linear_per_m ||
+            la[i].constant != lb[i].constant)
             return false;
     return true;
 }
@@ -66,8 +66,7 @@ bool same_geometry(const Atmosphere& a, const Atmosphere& b) {
 ColumnTable::ColumnTable(const Atmosphere& atm, int n_r, int n_mu)
     : bottom_(atm.bottom_radius_m),
       top_(atm.top_radius_m),
-      H_(std::sqrt((atm.top_radius_m - atm.bottom_radius_m) *
-                   (atm.top_radius_m + atm.bottom_radius_m))),
+      H_(std::sqrt((atm.top_radius_m - atm.bottom_radius_m) * (atm.top_radius_m + atm.bottom_radius_m))),
       n_r_(n_r),
       n_mu_(n_mu),
       profiles_{atm.rayleigh_density, atm.mie_density, atm.absorption_density} {
@@ -105,8 +104,8 @@ ColumnTable::ColumnTable(const Atmosphere& atm, int n_r, int n_mu)
                 const double d = d_min + (d_max - d_min) * double(j) / double(n_mu - 1);
                 const double mu =
                     d <= 0.0 ? 1.0 : clamp_cosine((H_ * H_ - rho * rho - d * d) / (2.0 * r * d));
-                double* v = &values_[(std::size_t(i) * std::size_t(n_mu) + std::size_t(j)) *
-                                     std::size_t(n_table_)];
+                double* v =
+                    &values_[(std::size_t(i) * std::size_t(n_mu) + std::size_t(j)) * std::size_t(n_table_)];
                 for (int slot = 0; slot < n_table_; ++slot) {
                     const int k = table_slot_[slot];
                     const double c = density_integral(profiles_[std::size_t(k)], bottom_, r, mu, d);
@@ -137,8 +136,7 @@ std::shared_ptr<const ColumnTable> ColumnTable::shared(const Atmosphere& atm) {
 }
 
 template <int N>
-void ColumnTable::interpolate(int i_r, const double* w_r, int i_mu, const double* w_mu,
-                              double* acc) const {
+void ColumnTable::interpolate(int i_r, const double* w_r, int i_mu, const double* w_mu, double* acc) const {
     for (int k = 0; k < N; ++k) acc[k] = 0.0;
     for (int a = 0; a < 4; ++a) {
         const double* row = &values_[(std::size_t(i_r + a) * std::size_t(n_mu_) + std::size_t(i_mu)) * N];
@@ -160,9 +158,15 @@ void ColumnTable::lookup(double r, double mu, double out[3]) const {
     const Stencil sr = stencil(rho / H_, n_r_), sm = stencil(x_mu, n_mu_);
     double acc[3];
     switch (n_table_) {
-        case 1: interpolate<1>(sr.first, sr.w.data(), sm.first, sm.w.data(), acc); break;
-        case 2: interpolate<2>(sr.first, sr.w.data(), sm.first, sm.w.data(), acc); break;
-        default: interpolate<3>(sr.first, sr.w.data(), sm.first, sm.w.data(), acc); break;
+        case 1:
+            interpolate<1>(sr.first, sr.w.data(), sm.first, sm.w.data(), acc);
+            break;
+        case 2:
+            interpolate<2>(sr.first, sr.w.data(), sm.first, sm.w.data(), acc);
+            break;
+        default:
+            interpolate<3>(sr.first, sr.w.data(), sm.first, sm.w.data(), acc);
+            break;
     }
     for (int slot = 0; slot < n_table_; ++slot) {
         const int k = table_slot_[slot];
@@ -253,8 +257,8 @@ ColumnDensity ColumnTable::Ray::upto(double s) const {
         while (i > 0 && pieces_[k][i].start > s) --i;
         const Piece& p = pieces_[k][i];
         const double g = distance_primitive(s + r_ * mu_, q_);
-        c[k] = std::max(0.0, p.cumulative + (p.a - p.b * table_->bottom_) * (s - p.start) +
-                                 p.b * (g - p.g_start));
+        c[k] = std::max(0.0,
+                        p.cumulative + (p.a - p.b * table_->bottom_) * (s - p.start) + p.b * (g - p.g_start));
     }
     return {c[0], c[1], c[2]};
 }

@@ -13,15 +13,15 @@
 #include <tbb/parallel_for.h>
 
 #include "welkin/aerial/aerial_perspective.hpp"
-#include "welkin/sky/auto.hpp"
-#include "welkin/render/cloud_passes.hpp"
-#include "welkin/color/color.hpp"
-#include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/ground.hpp"
-#include "welkin/base/math.hpp"
-#include "welkin/sky/method.hpp"
 #include "welkin/atmosphere/sun_disc.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/sky/auto.hpp"
+#include "welkin/sky/method.hpp"
 
 namespace welkin {
 namespace {
@@ -128,7 +128,8 @@ struct CameraPlateRenderer::Impl {
     std::unique_ptr<AerialFrame> aerial;
 };
 
-CameraPlateRenderer::CameraPlateRenderer(const SceneDescription& scene) : impl_(std::make_unique<Impl>(scene)) {}
+CameraPlateRenderer::CameraPlateRenderer(const SceneDescription& scene)
+    : impl_(std::make_unique<Impl>(scene)) {}
 CameraPlateRenderer::~CameraPlateRenderer() = default;
 int CameraPlateRenderer::width() const { return impl_->w; }
 int CameraPlateRenderer::height() const { return impl_->h; }
@@ -163,7 +164,8 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
     for (std::size_t q = 0; q < nb; ++q)
         if (std::isinf(plate.depth[q])) {
             sky_pixels.push_back(q);
-            sky_dirs.push_back(f.rays.at_pixel(int((q0 + q) % std::size_t(w)), int((q0 + q) / std::size_t(w))).direction);
+            sky_dirs.push_back(
+                f.rays.at_pixel(int((q0 + q) % std::size_t(w)), int((q0 + q) / std::size_t(w))).direction);
         }
     const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0), sun_to_rgb(atm.wavelengths_nm, 0.0);
     plate.sky.assign(nb * 3, 0.0f);
@@ -176,8 +178,8 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
             for (int c = 0; c < 3; ++c) {
                 const float v = rgb[k * 3 + c];
                 if (!std::isfinite(v))
-                    throw std::runtime_error(fmt::format("sky method {} returned a non-finite radiance",
-                                                         plate.method));
+                    throw std::runtime_error(
+                        fmt::format("sky method {} returned a non-finite radiance", plate.method));
                 plate.sky[sky_pixels[k] * 3 + c] = v * float(scene.exposure);
             }
     }
@@ -203,17 +205,17 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
                 double foot = 0.0;
                 for (int cy = 0; cy < 2; ++cy)
                     for (int cx = 0; cx < 2; ++cx)
-                        foot = std::max(foot, angle_between(dir, rays.at_screen(double(i + cx) / w,
-                                                                                double(j + cy) / h)
-                                                                      .direction));
+                        foot = std::max(
+                            foot, angle_between(
+                                      dir, rays.at_screen(double(i + cx) / w, double(j + cy) / h).direction));
                 if (angle_between(dir, s) > alpha + 2.0 * foot) continue;
                 const int S = std::clamp(int(std::ceil(8.0 * 2.0 * foot / alpha)), 2, 64);
                 std::fill(spectrum_d.begin(), spectrum_d.end(), 0.0);
                 bool any = false;
                 for (int b = 0; b < S; ++b)
                     for (int a = 0; a < S; ++a) {
-                        const CameraRays::Ray ray = rays.at_screen(sx + ((a + 0.5) / S - 0.5) / w,
-                                                                   sy + ((b + 0.5) / S - 0.5) / h);
+                        const CameraRays::Ray ray =
+                            rays.at_screen(sx + ((a + 0.5) / S - 0.5) / w, sy + ((b + 0.5) / S - 0.5) / h);
                         const double rho = angle_between(ray.direction, s);
                         if (rho > alpha) continue;
                         const glm::dvec3 rel = ray.origin - f.centre;
@@ -250,9 +252,11 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
                     const float z = plate.depth[q];
                     if (!std::isfinite(z) || !(z > 0.0f)) continue;
                     const CameraRays::Ray ray = rays.at_pixel(i, j);
-                    const glm::dvec3 p = ray.origin + double(z) * ray.distance_per_depth * ray.direction - f.centre;
+                    const glm::dvec3 p =
+                        ray.origin + double(z) * ray.distance_per_depth * ray.direction - f.centre;
                     f.ground->irradiance(glm::dot(glm::normalize(p), s), e);
-                    for (std::size_t c = 0; c < nc; ++c) surface[c] = float(f.ground_albedo_over_pi[c] * e[c]);
+                    for (std::size_t c = 0; c < nc; ++c)
+                        surface[c] = float(f.ground_albedo_over_pi[c] * e[c]);
                     const std::array<double, 3> rgb = sun_to_rgb.convert(surface);
                     for (int k = 0; k < 3; ++k)
                         plate.combined[q * 3 + k] +=
@@ -274,7 +278,8 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
         for (std::size_t q = 0; q < nb; ++q) {
             const float* c = &passes.clouds[q * 4];
             for (int k = 0; k < 3; ++k)
-                plate.combined[q * 3 + k] = composite_clouds(c[k], c[3], plate.combined[q * 3 + k], 1.0f, 0.0f);
+                plate.combined[q * 3 + k] =
+                    composite_clouds(c[k], c[3], plate.combined[q * 3 + k], 1.0f, 0.0f);
         }
         plate.clouds = std::move(passes.clouds);
         plate.cloud_depth = std::move(passes.depth);

@@ -10,10 +10,10 @@
 
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/base/camera.hpp"
+#include "welkin/base/error.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/clouds/lighting.hpp"
 #include "welkin/color/color.hpp"
-#include "welkin/base/error.hpp"
 
 namespace welkin {
 
@@ -47,7 +47,8 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
                 dirs[q] = ray.direction;
                 per_depth[q] = ray.distance_per_depth;
                 const float z = depth.empty() ? std::numeric_limits<float>::infinity() : depth[q0 + q];
-                lengths[q] = is_sky_depth(z, scene.aerial.sky_depth_m) ? kInf : double(z) * ray.distance_per_depth;
+                lengths[q] =
+                    is_sky_depth(z, scene.aerial.sky_depth_m) ? kInf : double(z) * ray.distance_per_depth;
             }
     });
     ProgressStage lut_stage(progress, 0.0, 0.05);
@@ -100,12 +101,13 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
     return out;
 }
 
-CloudPasses render_cloud_passes(const SceneDescription& scene, std::span<const float> depth, Progress* progress,
-                                RowRange rows) {
+CloudPasses render_cloud_passes(const SceneDescription& scene, std::span<const float> depth,
+                                Progress* progress, RowRange rows) {
     scene.validate();
     if (!scene.has_clouds())
-        throw InvalidArgument("clouds", "the scene has no cloud layers or volumes (its \"clouds\" key is "
-                                        "absent or empty)");
+        throw InvalidArgument("clouds",
+                              "the scene has no cloud layers or volumes (its \"clouds\" key is "
+                              "absent or empty)");
     const auto density = scene.cloud_density();
     return render_cloud_passes(scene, *density, depth, progress, rows);
 }

@@ -1,8 +1,6 @@
 // Equirectangular sky images with the sun's disc; see sky_image.hpp.
 #include "welkin/render/sky_image.hpp"
 
-#include <sys/mman.h>
-
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -16,18 +14,19 @@
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
+#include <sys/mman.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "welkin/aerial/aerial_perspective.hpp"
-#include "welkin/clouds/illumination.hpp"
-#include "welkin/color/color.hpp"
-#include "welkin/base/equirect.hpp"
-#include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/ground.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/atmosphere/sun_disc.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/clouds/illumination.hpp"
+#include "welkin/color/color.hpp"
 
 namespace welkin {
 namespace {
@@ -75,8 +74,8 @@ void advise_huge_pages(std::vector<float>& v, std::size_t n) {
 // Adds the sun's disc to `pixels` (height x width x channels, top row first): spectral
 // radiance per atmosphere wavelength in `disc` (the caller converts it), keyed by pixel.
 struct DiscSplat {
-    std::vector<std::size_t> pixel;   // index y * width + x
-    std::vector<double> radiance;     // (pixel.size(), channels), W m^-2 sr^-1 nm^-1
+    std::vector<std::size_t> pixel;  // index y * width + x
+    std::vector<double> radiance;    // (pixel.size(), channels), W m^-2 sr^-1 nm^-1
 };
 
 // The disc, supersampled. For every pixel that the disc's cap can touch, a regular grid
@@ -143,9 +142,8 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
             const double u0 = all_u ? pu0 : std::max(pu0, u_lo);
             const double u1 = all_u ? pu1 : std::min(pu1, u_hi);
             if (!(e_top > e_bot) || !(u1 > u0)) continue;
-            const double cos_max = (e_top >= 0.0 && e_bot <= 0.0)
-                                       ? 1.0
-                                       : std::max(std::cos(e_top), std::cos(e_bot));
+            const double cos_max =
+                (e_top >= 0.0 && e_bot <= 0.0) ? 1.0 : std::max(std::cos(e_top), std::cos(e_bot));
             const double de = e_top - e_bot, dphi = kTwoPi * (u1 - u0);
             const int kv = std::clamp(int(std::ceil(8.0 * de / alpha)), 2, 512);
             const int ku = std::clamp(int(std::ceil(8.0 * cos_max * dphi / alpha)), 2, 512);
@@ -182,8 +180,7 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
         const double omega = equirect_pixel_solid_angle(j, width, height);
         out.pixel.push_back(pixel_of(int(q)));
         for (std::size_t c = 0; c < nc; ++c)
-            out.radiance.push_back(visible_total[c] > 0.0 ? sun.direct_irradiance[c] *
-                                                                s_vis[q * nc + c] /
+            out.radiance.push_back(visible_total[c] > 0.0 ? sun.direct_irradiance[c] * s_vis[q * nc + c] /
                                                                 visible_total[c] / omega
                                                           : 0.0);
     }
@@ -201,8 +198,7 @@ DiscSplat splat_sun_disc(const Atmosphere& atm, const Observer& obs, int width, 
             out.pixel.push_back(p);
             out.radiance.resize(out.radiance.size() + nc, 0.0);
         }
-        out.radiance[k * nc + c] +=
-            sun.direct_irradiance[c] / equirect_pixel_solid_angle(j, width, height);
+        out.radiance[k * nc + c] += sun.direct_irradiance[c] / equirect_pixel_solid_angle(j, width, height);
     }
     return out;
 }
@@ -266,8 +262,11 @@ private:
 class GroundShading {
 public:
     GroundShading(const Atmosphere& atm, const Observer& obs, const std::optional<double>& albedo, int height)
-        : light_(atm), nc_(atm.channels()), r_(atm.bottom_radius_m + obs.altitude_m),
-          sun_(obs.sun_direction), rows_(height) {
+        : light_(atm),
+          nc_(atm.channels()),
+          r_(atm.bottom_radius_m + obs.altitude_m),
+          sun_(obs.sun_direction),
+          rows_(height) {
         for (std::size_t c = 0; c < nc_; ++c)
             albedo_over_pi_.push_back((albedo ? *albedo : atm.ground_albedo[c]) / kPi);
         const double R = atm.bottom_radius_m;
@@ -320,13 +319,13 @@ private:
 // the observer and each cloud (header, "Clouds").
 struct BandClouds {
     CloudResult march;
-    AirAlongRays air;              // in front of the clouds
+    AirAlongRays air;                 // in front of the clouds
     std::vector<float> radiance_rgb;  // RGB output: L_c in Rec.709
 };
 BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIllumination& light,
-                             const Atmosphere& atm, const Observer& obs,
-                             std::span<const glm::dvec3> dirs, int width, std::uint64_t first_pixel,
-                             const SpectrumToRgb* sky_to_rgb, Progress* progress) {
+                             const Atmosphere& atm, const Observer& obs, std::span<const glm::dvec3> dirs,
+                             int width, std::uint64_t first_pixel, const SpectrumToRgb* sky_to_rgb,
+                             Progress* progress) {
     BandClouds b;
     // The band's rows are whole image rows (`width` pixels each): the cloud pass is marched
     // on a coarser grid and upsampled where smooth (render_clouds_grid).
@@ -458,14 +457,12 @@ std::string spectral_channel_name(double wavelength_nm) {
     return "S0." + number + "nm";
 }
 
-SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
-                             const Observer& observer, int width,
-                             const SkyImageOptions& options, Progress* progress) {
+SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm, const Observer& observer,
+                             int width, const SkyImageOptions& options, Progress* progress) {
     options.validate();
     require_in_range("width", width, 4, 16384, "pixels");
     if (width % 2 != 0)
-        throw InvalidArgument("width", fmt::format("must be even (height = width / 2), got {}",
-                                                   width));
+        throw InvalidArgument("width", fmt::format("must be even (height = width / 2), got {}", width));
     atm.validate();
     const Observer obs = observer.validated();
     const bool rgb = options.output == SkyImageOptions::Output::Rgb;
@@ -489,8 +486,7 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
     // parallel loops that fill them: at 2048 x 1024, zeroing them serially cost more than
     // everything else here.
     const std::size_t row_values = std::size_t(W) * nc;
-    const int band_rows = int(std::clamp<std::size_t>(kMaxValuesPerCall / row_values, 1,
-                                                      std::size_t(H)));
+    const int band_rows = int(std::clamp<std::size_t>(kMaxValuesPerCall / row_values, 1, std::size_t(H)));
     const int bands = (H + band_rows - 1) / band_rows;
     const bool in_place = !rgb || nc == 3;
     const std::size_t band_pixels = std::size_t(band_rows) * std::size_t(W);
@@ -526,14 +522,14 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm,
             std::copy(clouds->march.transmittance.begin(), clouds->march.transmittance.end(),
                       cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
         }
-        const std::size_t bad = composite_and_convert(sky, dst, n, nc, rgb ? &*sky_to_rgb : nullptr,
-                                                      clouds ? &*clouds : nullptr);
+        const std::size_t bad =
+            composite_and_convert(sky, dst, n, nc, rgb ? &*sky_to_rgb : nullptr, clouds ? &*clouds : nullptr);
         if (bad != kNone) {
             const glm::dvec3 d = directions[bad];
-            throw std::runtime_error(fmt::format(
-                "sky method '{}' returned a non-finite radiance for direction "
-                "({:.6f}, {:.6f}, {:.6f})",
-                method.name(), d.x, d.y, d.z));
+            throw std::runtime_error(
+                fmt::format("sky method '{}' returned a non-finite radiance for direction "
+                            "({:.6f}, {:.6f}, {:.6f})",
+                            method.name(), d.x, d.y, d.z));
         }
     }
 

@@ -3,8 +3,8 @@
 
 #include <fmt/format.h>
 
-#include "welkin/clouds/union.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/clouds/union.hpp"
 
 namespace welkin {
 namespace {
@@ -40,7 +40,8 @@ const char* vdb_placement_name(VdbCloudOptions::VoxelPlacement placement) {
     return placement == VdbCloudOptions::VoxelPlacement::Blender ? "blender" : "openvdb";
 }
 
-VdbCloudOptions::VoxelPlacement vdb_placement_from_name(const std::string& name, const std::string& parameter) {
+VdbCloudOptions::VoxelPlacement vdb_placement_from_name(const std::string& name,
+                                                        const std::string& parameter) {
     if (name == "blender") return VdbCloudOptions::VoxelPlacement::Blender;
     if (name == "openvdb") return VdbCloudOptions::VoxelPlacement::OpenVdb;
     throw InvalidArgument(parameter, fmt::format("must be \"blender\" or \"openvdb\", got \"{}\"", name));
@@ -56,18 +57,21 @@ CloudLayerParams scene_cloud_layer(const CloudLayerParams& layer, double planet_
 
 void SceneClouds::validate(double planet_radius_m, double origin_altitude_m) const {
     if (layers.size() > kMaxLayers)
-        throw InvalidArgument("clouds.layers", fmt::format("must have at most {} layers, got {}", kMaxLayers, layers.size()));
+        throw InvalidArgument("clouds.layers",
+                              fmt::format("must have at most {} layers, got {}", kMaxLayers, layers.size()));
     if (volumes.size() > kMaxVolumes)
-        throw InvalidArgument("clouds.volumes",
-                              fmt::format("must have at most {} volumes, got {}", kMaxVolumes, volumes.size()));
+        throw InvalidArgument("clouds.volumes", fmt::format("must have at most {} volumes, got {}",
+                                                            kMaxVolumes, volumes.size()));
     for (std::size_t i = 0; i < layers.size(); ++i)
         prefixed(fmt::format("clouds.layers[{}].", i),
                  [&] { scene_cloud_layer(layers[i], planet_radius_m, origin_altitude_m).validate(); });
     for (std::size_t i = 0; i < volumes.size(); ++i) {
         const SceneCloudVolume& v = volumes[i];
         const std::string p = fmt::format("clouds.volumes[{}].", i);
-        if (v.file.empty()) throw InvalidArgument(p + "file", "is required: the volume's .vdb file for this frame");
-        if (v.options.grid.empty()) throw InvalidArgument(p + "grid", "must name a grid (Blender's default: \"density\")");
+        if (v.file.empty())
+            throw InvalidArgument(p + "file", "is required: the volume's .vdb file for this frame");
+        if (v.options.grid.empty())
+            throw InvalidArgument(p + "grid", "must name a grid (Blender's default: \"density\")");
         for (int c = 0; c < 4; ++c)
             for (int r = 0; r < 4; ++r)
                 require_finite(fmt::format("{}matrix_world[{}][{}]", p, r, c), v.options.matrix_world[c][r]);
@@ -79,13 +83,15 @@ void SceneClouds::validate(double planet_radius_m, double origin_altitude_m) con
     prefixed("clouds.lighting.", [&] { rest.validate(); });
 }
 
-std::shared_ptr<const CloudDensity> make_scene_cloud_density(const SceneClouds& clouds, double planet_radius_m,
+std::shared_ptr<const CloudDensity> make_scene_cloud_density(const SceneClouds& clouds,
+                                                             double planet_radius_m,
                                                              double origin_altitude_m) {
     clouds.validate(planet_radius_m, origin_altitude_m);
     if (clouds.empty()) return nullptr;
     std::vector<std::shared_ptr<const CloudDensity>> sources;
     for (const CloudLayerParams& layer : clouds.layers)
-        sources.push_back(std::make_shared<ProceduralClouds>(scene_cloud_layer(layer, planet_radius_m, origin_altitude_m)));
+        sources.push_back(
+            std::make_shared<ProceduralClouds>(scene_cloud_layer(layer, planet_radius_m, origin_altitude_m)));
     for (std::size_t i = 0; i < clouds.volumes.size(); ++i) {
         const SceneCloudVolume& v = clouds.volumes[i];
         const std::string parameter = fmt::format("clouds.volumes[{}].file", i);
@@ -93,7 +99,7 @@ std::shared_ptr<const CloudDensity> make_scene_cloud_density(const SceneClouds& 
         // VdbClouds' messages name the file and the grid; the path is added if one does not.
         const auto message = [&](const std::string& what) {
             return what.find(v.file) == std::string::npos ? fmt::format("'{}'{}: {}", v.file, object, what)
-                                                           : fmt::format("{}{}", what, object);
+                                                          : fmt::format("{}{}", what, object);
         };
         try {
             sources.push_back(std::make_shared<VdbClouds>(v.file, v.options));

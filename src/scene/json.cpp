@@ -26,6 +26,8 @@
 // keys are errors (a typo would otherwise be ignored). matrix_world is written by rows,
 // as Python's [list(row) for row in camera.matrix_world] gives them. Errors name the key
 // path ("camera.lens_mm").
+#include "welkin/io/json.hpp"
+
 #include <cmath>
 #include <filesystem>
 
@@ -34,7 +36,6 @@
 
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
-#include "welkin/io/json.hpp"
 #include "welkin/scene/scene.hpp"
 
 namespace welkin {
@@ -42,8 +43,6 @@ namespace {
 
 using nlohmann::json;
 using ordered_json = nlohmann::ordered_json;
-
-
 
 int integer(const json& j, const std::string& parameter) {
     if (!j.is_number_integer())
@@ -55,8 +54,7 @@ int integer(const json& j, const std::string& parameter) {
 }
 
 std::string string(const json& j, const std::string& parameter) {
-    if (!j.is_string())
-        throw InvalidArgument(parameter, fmt::format("must be a string, got {}", j.dump()));
+    if (!j.is_string()) throw InvalidArgument(parameter, fmt::format("must be a string, got {}", j.dump()));
     return j.get<std::string>();
 }
 
@@ -70,14 +68,15 @@ glm::dvec3 vec3(const json& j, const std::string& parameter) {
 // Blender's Object.matrix_world by rows ([list(row) for row in m]) into glm's m[col][row].
 glm::dmat4 matrix_rows(const json& m, const std::string& parameter) {
     if (!m.is_array() || m.size() != 4)
-        throw InvalidArgument(parameter, "must be 4 rows of 4 numbers (Blender's "
-                                         "Object.matrix_world, by rows)");
+        throw InvalidArgument(parameter,
+                              "must be 4 rows of 4 numbers (Blender's "
+                              "Object.matrix_world, by rows)");
     glm::dmat4 out(1.0);
     for (int r = 0; r < 4; ++r) {
         const std::string pr = fmt::format("{}[{}]", parameter, r);
-        if (!m[r].is_array() || m[r].size() != 4)
-            throw InvalidArgument(pr, "must be a row of 4 numbers");
-        for (int col = 0; col < 4; ++col) out[col][r] = json_number(m[r][col], fmt::format("{}[{}]", pr, col));
+        if (!m[r].is_array() || m[r].size() != 4) throw InvalidArgument(pr, "must be a row of 4 numbers");
+        for (int col = 0; col < 4; ++col)
+            out[col][r] = json_number(m[r][col], fmt::format("{}[{}]", pr, col));
     }
     return out;
 }
@@ -89,12 +88,14 @@ ordered_json matrix_rows_json(const glm::dmat4& m) {
 }
 
 std::uint64_t unsigned_integer(const json& j, const std::string& parameter) {
-    if (!j.is_number_unsigned()) throw InvalidArgument(parameter, fmt::format("must be an integer >= 0, got {}", j.dump()));
+    if (!j.is_number_unsigned())
+        throw InvalidArgument(parameter, fmt::format("must be an integer >= 0, got {}", j.dump()));
     return j.get<std::uint64_t>();
 }
 
 bool boolean(const json& j, const std::string& parameter) {
-    if (!j.is_boolean()) throw InvalidArgument(parameter, fmt::format("must be true or false, got {}", j.dump()));
+    if (!j.is_boolean())
+        throw InvalidArgument(parameter, fmt::format("must be true or false, got {}", j.dump()));
     return j.get<bool>();
 }
 
@@ -113,14 +114,15 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         for (std::size_t i = 0; i < layers.size(); ++i) {
             const json& l = layers[i];
             const std::string p = fmt::format("clouds.layers[{}]", i);
-            json_check_keys(l, p, {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "density_per_m",
-                              "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
-                              "weather_variation", "wind_offset_m", "seed"});
+            json_check_keys(l, p,
+                            {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "density_per_m",
+                             "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
+                             "weather_variation", "wind_offset_m", "seed"});
             // The type's preset first (procedural.hpp), then the keys given override it.
             CloudLayerParams c;
             if (l.contains("cloud_type"))
-                c = CloudLayerParams::preset(cloud_type_from_name(string(l["cloud_type"], p + ".cloud_type"),
-                                                                  p + ".cloud_type"));
+                c = CloudLayerParams::preset(
+                    cloud_type_from_name(string(l["cloud_type"], p + ".cloud_type"), p + ".cloud_type"));
             const auto get = [&](const char* key, double& v) {
                 if (l.contains(key)) v = json_number(l[key], p + "." + key);
             };
@@ -137,7 +139,8 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
                 const json& w = l["wind_offset_m"];
                 if (!w.is_array() || w.size() != 2)
                     throw InvalidArgument(p + ".wind_offset_m", "must be an array of 2 numbers [x, y] (m)");
-                c.wind_offset_m = {json_number(w[0], p + ".wind_offset_m[0]"), json_number(w[1], p + ".wind_offset_m[1]")};
+                c.wind_offset_m = {json_number(w[0], p + ".wind_offset_m[0]"),
+                                   json_number(w[1], p + ".wind_offset_m[1]")};
             }
             if (l.contains("seed")) c.seed = unsigned_integer(l["seed"], p + ".seed");
             out.layers.push_back(c);
@@ -148,7 +151,8 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         for (std::size_t i = 0; i < volumes.size(); ++i) {
             const json& v = volumes[i];
             const std::string p = fmt::format("clouds.volumes[{}]", i);
-            json_check_keys(v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative", "placement"});
+            json_check_keys(
+                v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative", "placement"});
             SceneCloudVolume vol;
             if (v.contains("name")) vol.name = string(v["name"], p + ".name");
             if (!v.contains("file"))
@@ -158,10 +162,13 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
             const std::filesystem::path fp(file);
             vol.file = fp.is_absolute() || base.empty() ? file : (base / fp).lexically_normal().string();
             if (v.contains("grid")) vol.options.grid = string(v["grid"], p + ".grid");
-            if (v.contains("matrix_world")) vol.options.matrix_world = matrix_rows(v["matrix_world"], p + ".matrix_world");
-            if (v.contains("density_scale")) vol.options.density_scale = json_number(v["density_scale"], p + ".density_scale");
+            if (v.contains("matrix_world"))
+                vol.options.matrix_world = matrix_rows(v["matrix_world"], p + ".matrix_world");
+            if (v.contains("density_scale"))
+                vol.options.density_scale = json_number(v["density_scale"], p + ".density_scale");
             if (v.contains("negative"))
-                vol.options.negative = vdb_negative_from_name(string(v["negative"], p + ".negative"), p + ".negative");
+                vol.options.negative =
+                    vdb_negative_from_name(string(v["negative"], p + ".negative"), p + ".negative");
             if (v.contains("placement"))
                 vol.options.placement =
                     vdb_placement_from_name(string(v["placement"], p + ".placement"), p + ".placement");
@@ -173,18 +180,20 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         json_check_keys(sc, "clouds.scattering", {"albedo", "g_forward", "g_back", "w_forward"});
         CloudScattering& c = out.lighting.scattering;
         if (sc.contains("albedo")) c.albedo = json_number(sc["albedo"], "clouds.scattering.albedo");
-        if (sc.contains("g_forward")) c.phase.g_forward = json_number(sc["g_forward"], "clouds.scattering.g_forward");
+        if (sc.contains("g_forward"))
+            c.phase.g_forward = json_number(sc["g_forward"], "clouds.scattering.g_forward");
         if (sc.contains("g_back")) c.phase.g_back = json_number(sc["g_back"], "clouds.scattering.g_back");
-        if (sc.contains("w_forward")) c.phase.w_forward = json_number(sc["w_forward"], "clouds.scattering.w_forward");
+        if (sc.contains("w_forward"))
+            c.phase.w_forward = json_number(sc["w_forward"], "clouds.scattering.w_forward");
     }
     if (j.contains("lighting")) {
         const json& li = j["lighting"];
         const std::string p = "clouds.lighting.";
-        json_check_keys(li, "clouds.lighting", {"max_steps", "light_steps", "ambient_steps", "light_distance_m",
-                                           "multiple_scattering", "octaves",
-                                           "octave_extinction", "octave_contribution", "octave_eccentricity",
-                                           "min_transmittance", "seed", "jitter", "max_distance_m",
-                                           "shadow_grid_spacing_m"});
+        json_check_keys(
+            li, "clouds.lighting",
+            {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "multiple_scattering",
+             "octaves", "octave_extinction", "octave_contribution", "octave_eccentricity",
+             "min_transmittance", "seed", "jitter", "max_distance_m", "shadow_grid_spacing_m"});
         CloudLightingOptions& o = out.lighting;
         const auto geti = [&](const char* key, int& v) {
             if (li.contains(key)) v = integer(li[key], p + key);
@@ -283,11 +292,11 @@ auto prefixed(const std::string& prefix, F&& f) {
 }
 
 Camera parse_camera(const json& j) {
-    json_check_keys(j, "camera", {"matrix_world", "type", "lens_mm", "sensor_width_mm",
-                             "sensor_height_mm", "sensor_fit", "fov_deg", "ortho_scale",
-                             "panorama_type", "latitude_min_deg", "latitude_max_deg",
-                             "longitude_min_deg", "longitude_max_deg", "shift_x", "shift_y",
-                             "clip_start_m", "clip_end_m"});
+    json_check_keys(
+        j, "camera",
+        {"matrix_world", "type", "lens_mm", "sensor_width_mm", "sensor_height_mm", "sensor_fit", "fov_deg",
+         "ortho_scale", "panorama_type", "latitude_min_deg", "latitude_max_deg", "longitude_min_deg",
+         "longitude_max_deg", "shift_x", "shift_y", "clip_start_m", "clip_end_m"});
     Camera c;
     if (!j.contains("matrix_world"))
         throw InvalidArgument("camera.matrix_world",
@@ -301,27 +310,31 @@ Camera parse_camera(const json& j) {
     if (j.contains("lens_mm")) c.lens_mm = json_number(j["lens_mm"], "camera.lens_mm");
     if (j.contains("fov_deg")) {
         c.fov_rad = json_number(j["fov_deg"], "camera.fov_deg") * kDegree;
-        if (!(c.fov_rad > 0.0))
-            throw InvalidArgument("camera.fov_deg", "must be in (0, 179.9] degrees");
+        if (!(c.fov_rad > 0.0)) throw InvalidArgument("camera.fov_deg", "must be in (0, 179.9] degrees");
     }
-    if (j.contains("sensor_width_mm")) c.sensor_width_mm = json_number(j["sensor_width_mm"], "camera.sensor_width_mm");
-    if (j.contains("sensor_height_mm")) c.sensor_height_mm = json_number(j["sensor_height_mm"], "camera.sensor_height_mm");
+    if (j.contains("sensor_width_mm"))
+        c.sensor_width_mm = json_number(j["sensor_width_mm"], "camera.sensor_width_mm");
+    if (j.contains("sensor_height_mm"))
+        c.sensor_height_mm = json_number(j["sensor_height_mm"], "camera.sensor_height_mm");
     if (j.contains("sensor_fit"))
-        c.sensor_fit = sensor_fit_from_name(string(j["sensor_fit"], "camera.sensor_fit"), "camera.sensor_fit");
+        c.sensor_fit =
+            sensor_fit_from_name(string(j["sensor_fit"], "camera.sensor_fit"), "camera.sensor_fit");
     if (j.contains("ortho_scale")) c.ortho_scale = json_number(j["ortho_scale"], "camera.ortho_scale");
     if (j.contains("panorama_type")) {
         const std::string t = string(j["panorama_type"], "camera.panorama_type");
         if (t != "EQUIRECTANGULAR")
             throw InvalidArgument("camera.panorama_type",
                                   fmt::format("only \"EQUIRECTANGULAR\" is supported, got \"{}\" "
-                                              "(fisheye and mirror-ball panoramas are not)", t));
+                                              "(fisheye and mirror-ball panoramas are not)",
+                                              t));
     }
     // Blender keeps these in float32 radians: -pi/2 comes out as -90.0000025 degrees.
     // Values within 1e-3 degrees beyond the range are taken as its end.
     const auto angle = [&](const char* key, double limit_deg, double& out) {
         if (!j.contains(key)) return;
         double deg = json_number(j[key], std::string("camera.") + key);
-        if (std::abs(deg) > limit_deg && std::abs(deg) < limit_deg + 1e-3) deg = std::copysign(limit_deg, deg);
+        if (std::abs(deg) > limit_deg && std::abs(deg) < limit_deg + 1e-3)
+            deg = std::copysign(limit_deg, deg);
         out = deg * kDegree;
     };
     angle("latitude_min_deg", 90.0, c.latitude_min_rad);
@@ -338,8 +351,9 @@ Camera parse_camera(const json& j) {
 
 SceneDescription parse(const json& j, const std::filesystem::path& base) {
     if (!j.is_object()) throw InvalidArgument("scene", "must be a JSON object");
-    json_check_keys(j, "", {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "method",
-                       "ground", "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
+    json_check_keys(j, "",
+                    {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "method", "ground",
+                     "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
     SceneDescription s;
     if (!j.contains("version"))
         throw InvalidArgument("version", fmt::format("is required (this Welkin writes version {})",
@@ -365,13 +379,15 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
         json_check_keys(sun, "sun", {"direction", "elevation_deg", "azimuth_deg"});
         const bool by_angles = sun.contains("elevation_deg") || sun.contains("azimuth_deg");
         if (sun.contains("direction") == by_angles)
-            throw InvalidArgument("sun", "give either \"direction\" [x, y, z] or "
-                                         "\"elevation_deg\" and \"azimuth_deg\"");
+            throw InvalidArgument("sun",
+                                  "give either \"direction\" [x, y, z] or "
+                                  "\"elevation_deg\" and \"azimuth_deg\"");
         if (by_angles) {
             if (!sun.contains("elevation_deg") || !sun.contains("azimuth_deg"))
                 throw InvalidArgument("sun", "needs both \"elevation_deg\" and \"azimuth_deg\"");
-            s.sun_direction = sun_direction_from_angles_deg(json_number(sun["elevation_deg"], "sun.elevation_deg"),
-                                                            json_number(sun["azimuth_deg"], "sun.azimuth_deg"));
+            s.sun_direction =
+                sun_direction_from_angles_deg(json_number(sun["elevation_deg"], "sun.elevation_deg"),
+                                              json_number(sun["azimuth_deg"], "sun.azimuth_deg"));
         } else {
             s.sun_direction = vec3(sun["direction"], "sun.direction");
         }
@@ -382,7 +398,8 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
         const json& g = j["ground"];
         json_check_keys(g, "ground", {"enabled", "albedo"});
         if (g.contains("enabled")) s.ground = boolean(g["enabled"], "ground.enabled");
-        if (g.contains("albedo") && !g["albedo"].is_null()) s.ground_albedo = json_number(g["albedo"], "ground.albedo");
+        if (g.contains("albedo") && !g["albedo"].is_null())
+            s.ground_albedo = json_number(g["albedo"], "ground.albedo");
     }
     if (j.contains("camera") && !j["camera"].is_null()) s.camera = parse_camera(j["camera"]);
     if (j.contains("resolution")) {
@@ -390,12 +407,14 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
         json_check_keys(r, "resolution", {"x", "y", "percentage"});
         if (r.contains("x")) s.resolution.x = integer(r["x"], "resolution.x");
         if (r.contains("y")) s.resolution.y = integer(r["y"], "resolution.y");
-        if (r.contains("percentage")) s.resolution.percentage = integer(r["percentage"], "resolution.percentage");
+        if (r.contains("percentage"))
+            s.resolution.percentage = integer(r["percentage"], "resolution.percentage");
     }
     if (j.contains("aerial")) {
         const json& a = j["aerial"];
-        json_check_keys(a, "aerial", {"method", "froxels", "max_depth_m", "steps_per_slice",
-                                 "raymarch_steps", "sky_depth_m"});
+        json_check_keys(
+            a, "aerial",
+            {"method", "froxels", "max_depth_m", "steps_per_slice", "raymarch_steps", "sky_depth_m"});
         AerialOptions& o = s.aerial;
         if (a.contains("method")) o.method = aerial_method_from_name(string(a["method"], "aerial.method"));
         if (a.contains("froxels")) {
@@ -407,16 +426,18 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
             o.froxel_slices = integer(f[2], "aerial.froxels[2]");
         }
         if (a.contains("max_depth_m")) o.max_depth_m = json_number(a["max_depth_m"], "aerial.max_depth_m");
-        if (a.contains("steps_per_slice")) o.steps_per_slice = integer(a["steps_per_slice"], "aerial.steps_per_slice");
-        if (a.contains("raymarch_steps")) o.raymarch_steps = integer(a["raymarch_steps"], "aerial.raymarch_steps");
+        if (a.contains("steps_per_slice"))
+            o.steps_per_slice = integer(a["steps_per_slice"], "aerial.steps_per_slice");
+        if (a.contains("raymarch_steps"))
+            o.raymarch_steps = integer(a["raymarch_steps"], "aerial.raymarch_steps");
         if (a.contains("sky_depth_m")) o.sky_depth_m = json_number(a["sky_depth_m"], "aerial.sky_depth_m");
     }
     if (j.contains("sky_options")) {
         const json& o = j["sky_options"];
-        json_check_keys(o, "sky_options", {"transmittance_width", "transmittance_height",
-                                      "multiscattering_size", "skyview_width", "skyview_height",
-                                      "raymarch_steps", "raymarch_sun_steps", "reference_paths",
-                                      "seed"});
+        json_check_keys(
+            o, "sky_options",
+            {"transmittance_width", "transmittance_height", "multiscattering_size", "skyview_width",
+             "skyview_height", "raymarch_steps", "raymarch_sun_steps", "reference_paths", "seed"});
         SkyOptions& k = s.sky_options;
         const auto get = [&](const char* key, int& out) {
             if (o.contains(key)) out = integer(o[key], std::string("sky_options.") + key);
@@ -442,16 +463,19 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
 
 }  // namespace
 
-SceneDescription SceneDescription::from_json_string(const std::string& text, const std::string& base_directory) {
+SceneDescription SceneDescription::from_json_string(const std::string& text,
+                                                    const std::string& base_directory) {
     const json j = parse_json(text, "scene JSON");
-    return parse(j, base_directory.empty() ? std::filesystem::path()
-                                           : std::filesystem::absolute(std::filesystem::path(base_directory)));
+    return parse(j, base_directory.empty()
+                        ? std::filesystem::path()
+                        : std::filesystem::absolute(std::filesystem::path(base_directory)));
 }
 
 SceneDescription SceneDescription::from_json_file(const std::string& path) {
     const json j = read_json_file(path, "scene");
     std::error_code ec;
-    const std::filesystem::path dir = std::filesystem::absolute(std::filesystem::path(path), ec).parent_path();
+    const std::filesystem::path dir =
+        std::filesystem::absolute(std::filesystem::path(path), ec).parent_path();
     return parse(j, dir);
 }
 
@@ -464,7 +488,8 @@ std::string SceneDescription::to_json_string() const {
     j["sun"] = {{"direction", {sun_direction.x, sun_direction.y, sun_direction.z}}};
     j["exposure"] = exposure;
     j["method"] = method;
-    j["ground"] = {{"enabled", ground}, {"albedo", ground_albedo ? ordered_json(*ground_albedo) : ordered_json(nullptr)}};
+    j["ground"] = {{"enabled", ground},
+                   {"albedo", ground_albedo ? ordered_json(*ground_albedo) : ordered_json(nullptr)}};
     if (camera) {
         const Camera& c = *camera;
         ordered_json cj;

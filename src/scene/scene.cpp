@@ -12,7 +12,6 @@
 
 namespace welkin {
 
-
 void SceneDescription::validate() const {
     if (ground_albedo) require_in_range("ground.albedo", *ground_albedo, 0.0, 1.0);
     if (version < 1 || version > kVersion)
@@ -48,8 +47,9 @@ std::shared_ptr<const CloudDensity> SceneDescription::cloud_density() const {
 
 const Camera& SceneDescription::require_camera() const {
     if (!camera)
-        throw InvalidArgument("camera", "the scene has no camera (an object \"camera\" with "
-                                        "matrix_world and type is needed for camera passes)");
+        throw InvalidArgument("camera",
+                              "the scene has no camera (an object \"camera\" with "
+                              "matrix_world and type is needed for camera passes)");
     return *camera;
 }
 
@@ -61,8 +61,8 @@ glm::dvec3 sun_direction_from_angles_deg(double elevation_deg, double azimuth_de
 }
 
 AerialView SceneDescription::aerial_view() const {
-    return AerialView{atmosphere, sky_options.luts(), origin_observer(), require_camera(),
-                      resolution.width(), resolution.height(), exposure, aerial};
+    return AerialView{atmosphere,         sky_options.luts(),  origin_observer(), require_camera(),
+                      resolution.width(), resolution.height(), exposure,          aerial};
 }
 
 }  // namespace welkin

@@ -34,12 +34,11 @@
 
 #include <tbb/parallel_for.h>
 
-#include "welkin/base/error.hpp"
-
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/atmosphere/transmittance_lut.hpp"
 #include "welkin/atmosphere/view_geometry.hpp"
+#include "welkin/base/error.hpp"
 
 namespace welkin {
 namespace {
@@ -62,8 +61,8 @@ double chapman(double X, double cos_chi) {
 // One constituent's column model: exponential (Chapman) or thin shell.
 struct Column {
     std::optional<double> scale_height;
-    double shell_radius = 0.0;     // thin shell: mean altitude's radius
-    double vertical_total = 0.0;   // thin shell: ground-to-space vertical column
+    double shell_radius = 0.0;    // thin shell: mean altitude's radius
+    double vertical_total = 0.0;  // thin shell: ground-to-space vertical column
     double R = 0.0;
 
     // Column from radius r along zenith cosine mu to infinity (or 0 beyond the top for
@@ -93,7 +92,8 @@ AnalyticSky::AnalyticSky(const SkyOptions& options) : options_(options) { option
 void AnalyticSky::radiance(const Atmosphere& atm, const Observer& observer_in,
                            std::span<const glm::dvec3> directions_in, std::span<float> out,
                            std::span<float> standard_error, Progress* progress) const {
-    const Observer observer = validate_deterministic_call(atm, observer_in, directions_in, out, standard_error);
+    const Observer observer =
+        validate_deterministic_call(atm, observer_in, directions_in, out, standard_error);
     const std::span<const glm::dvec3> directions = directions_in;
     const std::size_t C = atm.channels();
     const double R = atm.bottom_radius_m, top = atm.top_radius_m;
@@ -121,7 +121,9 @@ void AnalyticSky::radiance(const Atmosphere& atm, const Observer& observer_in,
     const Column mie = make_column(atm.mie_density);
     const Column absorption = make_column(atm.absorption_density);
     // Columns N_k of a segment along (r, mu): to infinity, or to the ground point.
-    struct Columns { double rayleigh, mie, absorption; };
+    struct Columns {
+        double rayleigh, mie, absorption;
+    };
     auto columns = [&](double r, double mu) -> Columns {
         if (!ray_hits_ground(r, mu, R))
             return {rayleigh.to_space(r, mu), mie.to_space(r, mu), absorption.to_space(r, mu)};
@@ -129,9 +131,7 @@ void AnalyticSky::radiance(const Atmosphere& atm, const Observer& observer_in,
         const double mu_g = mu_at(r, mu, d, R);
         // Ground point B looking back up towards the observer, minus the observer looking on
         // past itself: both are upward-going columns.
-        auto seg = [&](const Column& c) {
-            return std::max(0.0, c.to_space(R, -mu_g) - c.to_space(r, -mu));
-        };
+        auto seg = [&](const Column& c) { return std::max(0.0, c.to_space(R, -mu_g) - c.to_space(r, -mu)); };
         return {seg(rayleigh), seg(mie), seg(absorption)};
     };
     auto tau = [&](std::size_t c, const Columns& n) {
@@ -148,56 +148,58 @@ void AnalyticSky::radiance(const Atmosphere& atm, const Observer& observer_in,
 
     double r = R + observer.altitude_m;
     ProgressTracker tracker(progress, directions.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, directions.size(), 1024),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
-            double r0 = r;
-            float* o = &out[i * C];
-            if (r0 > top) {  // enter the atmosphere first
-                const double entry = distance_to_atmosphere_entry(r0, g.mu, top);
-                if (entry < 0.0) {
-                    std::fill(o, o + C, 0.0f);
-                    continue;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, directions.size(), 1024),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
+                double r0 = r;
+                float* o = &out[i * C];
+                if (r0 > top) {  // enter the atmosphere first
+                    const double entry = distance_to_atmosphere_entry(r0, g.mu, top);
+                    if (entry < 0.0) {
+                        std::fill(o, o + C, 0.0f);
+                        continue;
+                    }
+                    const double r_e = std::min(radius_at(r0, g.mu, entry), top);
+                    g.mu_s = clamp_cosine((r0 * g.mu_s + entry * g.nu) / r_e);
+                    g.mu = mu_at(r0, g.mu, entry, r_e);
+                    r0 = r_e;
                 }
-                const double r_e = std::min(radius_at(r0, g.mu, entry), top);
-                g.mu_s = clamp_cosine((r0 * g.mu_s + entry * g.nu) / r_e);
-                g.mu = mu_at(r0, g.mu, entry, r_e);
-                r0 = r_e;
-            }
-            const Columns n = columns(r0, g.mu);
-            const bool ground = ray_hits_ground(r0, g.mu, R);
-            double mu_s_end = 0.0;
-            if (ground) {
-                const double d = distance_to_bottom(r0, g.mu, R);
-                mu_s_end = clamp_cosine((r0 * g.mu_s + d * g.nu) / R);
-            }
-            const double p_r = rayleigh_phase(g.nu);
-            const double p_m = mie_phase(atm.mie_phase, g.nu, atm.mie_g);
-            for (std::size_t c = 0; c < C; ++c) {
-                const double T0 = sun_transmittance(c, r0, g.mu_s);
-                const double T1 = ground ? sun_transmittance(c, R, mu_s_end) : 1.0;
-                const double tau_v = tau(c, n);
-                double factor;  // integral over x of exp(-x) exp(-tau_s(x)) / tau_v
-                if (T0 <= 0.0 && T1 <= 0.0) {
-                    factor = 0.0;
-                } else if (T0 <= 0.0 || T1 <= 0.0) {
-                    // Half the path in the planet's shadow: light the lit half only, with the
-                    // lit end's transmittance.
-                    factor = 0.5 * std::max(T0, T1) * (1.0 - std::exp(-0.5 * tau_v)) / std::max(0.5 * tau_v, 1e-30);
-                } else {
-                    const double D = -std::log(T1) + std::log(T0);  // tau_s1 - tau_s0
-                    const double a = tau_v + D;
-                    factor = T0 * (std::abs(a) > 1e-9 ? (1.0 - std::exp(-a)) / a : 1.0 - 0.5 * a);
+                const Columns n = columns(r0, g.mu);
+                const bool ground = ray_hits_ground(r0, g.mu, R);
+                double mu_s_end = 0.0;
+                if (ground) {
+                    const double d = distance_to_bottom(r0, g.mu, R);
+                    mu_s_end = clamp_cosine((r0 * g.mu_s + d * g.nu) / R);
                 }
-                const double scattered = atm.rayleigh_scattering[c] * n.rayleigh * p_r +
-                                         atm.mie_scattering[c] * n.mie * p_m;
-                const double L = atm.solar_irradiance[c] * scattered * factor;
-                o[c] = std::isfinite(L) ? float(std::max(L, 0.0)) : 0.0f;
+                const double p_r = rayleigh_phase(g.nu);
+                const double p_m = mie_phase(atm.mie_phase, g.nu, atm.mie_g);
+                for (std::size_t c = 0; c < C; ++c) {
+                    const double T0 = sun_transmittance(c, r0, g.mu_s);
+                    const double T1 = ground ? sun_transmittance(c, R, mu_s_end) : 1.0;
+                    const double tau_v = tau(c, n);
+                    double factor;  // integral over x of exp(-x) exp(-tau_s(x)) / tau_v
+                    if (T0 <= 0.0 && T1 <= 0.0) {
+                        factor = 0.0;
+                    } else if (T0 <= 0.0 || T1 <= 0.0) {
+                        // Half the path in the planet's shadow: light the lit half only, with the
+                        // lit end's transmittance.
+                        factor = 0.5 * std::max(T0, T1) * (1.0 - std::exp(-0.5 * tau_v)) /
+                                 std::max(0.5 * tau_v, 1e-30);
+                    } else {
+                        const double D = -std::log(T1) + std::log(T0);  // tau_s1 - tau_s0
+                        const double a = tau_v + D;
+                        factor = T0 * (std::abs(a) > 1e-9 ? (1.0 - std::exp(-a)) / a : 1.0 - 0.5 * a);
+                    }
+                    const double scattered =
+                        atm.rayleigh_scattering[c] * n.rayleigh * p_r + atm.mie_scattering[c] * n.mie * p_m;
+                    const double L = atm.solar_irradiance[c] * scattered * factor;
+                    o[c] = std::isfinite(L) ? float(std::max(L, 0.0)) : 0.0f;
+                }
             }
-        }
-        tracker.advance(range.size());
-    });
+            tracker.advance(range.size());
+        });
     tracker.finish();
 }
 

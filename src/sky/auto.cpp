@@ -9,9 +9,9 @@
 
 #include <fmt/format.h>
 
-#include "welkin/sky/auto_table.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/sky/auto_table.hpp"
 
 namespace welkin {
 namespace {
@@ -36,8 +36,7 @@ std::vector<std::size_t> presets_for(const Atmosphere& atmosphere, const auto_ta
         try {
             // The preset at its own three wavelengths, or resampled at the atmosphere's.
             if (Atmosphere::preset(t.presets[p]).to_json_string() == own ||
-                Atmosphere::preset(t.presets[p], atmosphere.wavelengths_nm).to_json_string() ==
-                    own)
+                Atmosphere::preset(t.presets[p], atmosphere.wavelengths_nm).to_json_string() == own)
                 return {p};
         } catch (const InvalidArgument&) {
             // Wavelengths the preset cannot be resampled at: not this preset.
@@ -60,24 +59,20 @@ std::string setting_label(const auto_table::Setting& s) {
 
 }  // namespace
 
-AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
-                             std::size_t directions, double tolerance, const SkyOptions& options) {
-    return choose_sky_method(atmosphere, observer, directions, tolerance, options,
-                             auto_table::table());
+AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer, std::size_t directions,
+                             double tolerance, const SkyOptions& options) {
+    return choose_sky_method(atmosphere, observer, directions, tolerance, options, auto_table::table());
 }
 
-AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
-                             std::size_t directions, double tolerance, const SkyOptions& options,
-                             const auto_table::Table& t) {
-    require_in_range("tolerance", tolerance, kMinTolerance, kMaxTolerance,
-                     "(relative luminance error)");
+AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer, std::size_t directions,
+                             double tolerance, const SkyOptions& options, const auto_table::Table& t) {
+    require_in_range("tolerance", tolerance, kMinTolerance, kMaxTolerance, "(relative luminance error)");
     atmosphere.validate();
     const Observer obs = observer.validated();
 
     // The scene's place on the chart's grid. Sun elevation: asin of the sun direction's
     // vertical component (the observer's zenith is +Z).
-    const double sun_elevation_deg =
-        std::asin(std::clamp(obs.sun_direction.z, -1.0, 1.0)) * 180.0 / kPi;
+    const double sun_elevation_deg = std::asin(std::clamp(obs.sun_direction.z, -1.0, 1.0)) * 180.0 / kPi;
     const auto [a0, a1] = bracket(t.altitudes_m, obs.altitude_m);
     const auto [s0, s1] = bracket(t.sun_elevations_deg, sun_elevation_deg);
     const std::vector<std::size_t> presets = presets_for(atmosphere, t);
@@ -99,16 +94,16 @@ AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& obser
             for (std::size_t a : {a0, a1})
                 for (std::size_t e : {s0, s1}) error = std::max(error, t.p95_at(p, k, a, e));
         if (!std::isfinite(error)) continue;  // known to fail here
-        candidates.push_back(
-            {&s, error, s.fixed_seconds + s.seconds_per_direction * double(directions)});
+        candidates.push_back({&s, error, s.fixed_seconds + s.seconds_per_direction * double(directions)});
     }
     // The analytic method is finite everywhere the stability sweep looks; the table marks
     // it infinite only if a chart run saw otherwise.
     if (candidates.empty())
-        throw std::runtime_error(fmt::format("auto: every charted method gave non-finite values near "
-                                "altitude {} m, sun elevation {} deg; regenerate the table "
-                                "(bench/chart.py)",
-                                obs.altitude_m, sun_elevation_deg));
+        throw std::runtime_error(
+            fmt::format("auto: every charted method gave non-finite values near "
+                        "altitude {} m, sun elevation {} deg; regenerate the table "
+                        "(bench/chart.py)",
+                        obs.altitude_m, sun_elevation_deg));
 
     // The cheapest that meets the tolerance. If none does, the cheapest of those whose
     // error the chart cannot tell from the smallest: within the reference's own noise
@@ -119,10 +114,9 @@ AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& obser
     for (std::size_t p : presets)
         for (std::size_t a : {a0, a1})
             for (std::size_t e : {s0, s1})
-                noise = std::max(noise,
-                                 t.reference_noise[(p * t.altitudes_m.size() + a) *
-                                                       t.sun_elevations_deg.size() +
-                                                   e]);
+                noise = std::max(
+                    noise,
+                    t.reference_noise[(p * t.altitudes_m.size() + a) * t.sun_elevations_deg.size() + e]);
     const bool meets = min_error <= tolerance;
     const double accept = meets ? tolerance : min_error + noise;
     const Candidate* chosen = nullptr;

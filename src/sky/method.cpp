@@ -6,9 +6,9 @@
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 
+#include "welkin/base/error.hpp"
 #include "welkin/sky/analytic.hpp"
 #include "welkin/sky/auto.hpp"
-#include "welkin/base/error.hpp"
 #include "welkin/sky/lut.hpp"
 #include "welkin/sky/raymarch.hpp"
 #include "welkin/sky/reference.hpp"
@@ -22,8 +22,7 @@ void SkyOptions::validate() const {
     require_in_range("raymarch_steps", raymarch_steps, 1, 100000);
     require_in_range("raymarch_sun_steps", raymarch_sun_steps, 1, 100000);
     require_in_range("reference_paths", reference_paths, 1, 1 << 26);
-    require_in_range("tolerance", tolerance, kMinTolerance, kMaxTolerance,
-                     "(relative luminance error)");
+    require_in_range("tolerance", tolerance, kMinTolerance, kMaxTolerance, "(relative luminance error)");
 }
 
 Observer validate_deterministic_call(const Atmosphere& atmosphere, const Observer& observer,
@@ -40,8 +39,7 @@ Observer validate_deterministic_call(const Atmosphere& atmosphere, const Observe
     return validated;
 }
 
-std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference", "auto"};
-}
+std::vector<std::string> sky_method_names() { return {"analytic", "lut", "raymarch", "reference", "auto"}; }
 
 std::unique_ptr<SkyMethod> make_sky_method(const std::string& name, const SkyOptions& options) {
     options.validate();
@@ -54,9 +52,8 @@ std::unique_ptr<SkyMethod> make_sky_method(const std::string& name, const SkyOpt
                                                 fmt::join(sky_method_names(), ", ")));
 }
 
-SkyResult sky_radiance(const SkyMethod& method, const Atmosphere& atmosphere,
-                       const Observer& observer, std::span<const glm::dvec3> directions,
-                       Progress* progress) {
+SkyResult sky_radiance(const SkyMethod& method, const Atmosphere& atmosphere, const Observer& observer,
+                       std::span<const glm::dvec3> directions, Progress* progress) {
     SkyResult r;
     r.channels = atmosphere.channels();
     r.radiance.resize(directions.size() * r.channels);

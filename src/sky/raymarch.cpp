@@ -8,11 +8,10 @@
 
 #include <tbb/parallel_for.h>
 
-#include "welkin/base/error.hpp"
-
-#include "welkin/atmosphere/luts.hpp"
 #include "welkin/atmosphere/inscattering.hpp"
+#include "welkin/atmosphere/luts.hpp"
 #include "welkin/atmosphere/view_geometry.hpp"
+#include "welkin/base/error.hpp"
 
 namespace welkin {
 
@@ -21,7 +20,8 @@ RaymarchSky::RaymarchSky(const SkyOptions& options) : options_(options) { option
 void RaymarchSky::radiance(const Atmosphere& atm, const Observer& observer_in,
                            std::span<const glm::dvec3> directions_in, std::span<float> out,
                            std::span<float> standard_error, Progress* progress) const {
-    const Observer observer = validate_deterministic_call(atm, observer_in, directions_in, out, standard_error);
+    const Observer observer =
+        validate_deterministic_call(atm, observer_in, directions_in, out, standard_error);
     const std::span<const glm::dvec3> directions = directions_in;
     const std::size_t C = atm.channels();
     const double r = atm.bottom_radius_m + observer.altitude_m;
@@ -36,21 +36,23 @@ void RaymarchSky::radiance(const Atmosphere& atm, const Observer& observer_in,
             const double r_t = st.r;
             const double fraction = sun_visible_fraction(R, r_t, mu_s_t, angular_radius);
             if (fraction <= 0.0) return Spectrum4(0.0f);
-            const Spectrum4 tau = sun_quadrature.optical_depth(medium, r_t, mu_s_t, distance_to_top(r_t, mu_s_t, top));
+            const Spectrum4 tau =
+                sun_quadrature.optical_depth(medium, r_t, mu_s_t, distance_to_top(r_t, mu_s_t, top));
             return glm::exp(-tau) * float(fraction);
         };
         const std::size_t first = medium.first_channel(), count = medium.channel_count();
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, directions.size(), 64),
-                          [&](const tbb::blocked_range<std::size_t>& range) {
-                              RaySamples ray;
-                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                                  const ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
-                                  prepare_ray(medium, r, g.mu, options_.raymarch_steps, ray, nullptr, &b->multiscattering);
-                                  store_channels(inscatter(medium, &b->multiscattering, ray, g.mu_s, g.nu, sun_t),
-                                                 count, &out[i * C + first]);
-                              }
-                              tracker.advance(range.size());
-                          });
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, directions.size(), 64),
+            [&](const tbb::blocked_range<std::size_t>& range) {
+                RaySamples ray;
+                for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                    const ViewGeometry g = view_geometry(directions[i], observer.sun_direction);
+                    prepare_ray(medium, r, g.mu, options_.raymarch_steps, ray, nullptr, &b->multiscattering);
+                    store_channels(inscatter(medium, &b->multiscattering, ray, g.mu_s, g.nu, sun_t), count,
+                                   &out[i * C + first]);
+                }
+                tracker.advance(range.size());
+            });
     }
     tracker.finish();
 }

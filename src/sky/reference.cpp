@@ -110,12 +110,12 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
-#include "welkin/base/error.hpp"
 #include "welkin/atmosphere/geometry.hpp"
-#include "welkin/base/quadrature.hpp"
 #include "welkin/atmosphere/phase.hpp"
-#include "welkin/reference/column_table.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/quadrature.hpp"
 #include "welkin/base/rng.hpp"
+#include "welkin/reference/column_table.hpp"
 #include "welkin/reference/sampling.hpp"
 
 namespace welkin {
@@ -211,14 +211,14 @@ struct ViewRay {
     double r = 0, mu = 0, length = 0;
     std::vector<double> single;  // L1 per channel
     std::vector<Panel> panels;
-    std::vector<double> cdf;  // cumulative panel probabilities, cdf.back() == 1
-    bool scatters = false;    // some channel scatters somewhere along the ray
+    std::vector<double> cdf;   // cumulative panel probabilities, cdf.back() == 1
+    bool scatters = false;     // some channel scatters somewhere along the ray
     ColumnTable::Ray columns;  // of the view ray, from `start`
 };
 
 // The cuts of [0, length] described in the derivation.
-std::vector<double> view_ray_cuts(const Medium& m, const glm::dvec3& p, const glm::dvec3& v,
-                                  double r, double mu, double length) {
+std::vector<double> view_ray_cuts(const Medium& m, const glm::dvec3& p, const glm::dvec3& v, double r,
+                                  double mu, double length) {
     std::vector<double> cuts{0.0, length};
     auto add = [&](double t) {
         if (t > 0.0 && t < length) cuts.push_back(t);
@@ -354,8 +354,8 @@ public:
     // `qmc` supplies the sampling decisions, four dimensions per event (see the
     // derivation), `rng` the roulette; `hero` is the channel whose free-flight
     // distribution samples the distances.
-    void trace(const ViewRay& vr, const glm::dvec3& v, PathRng& rng, QmcSampler& qmc,
-               std::size_t hero, std::vector<double>& sum) {
+    void trace(const ViewRay& vr, const glm::dvec3& v, PathRng& rng, QmcSampler& qmc, std::size_t hero,
+               std::vector<double>& sum) {
         std::fill(contrib_.begin(), contrib_.end(), 0.0);
         trace_path(vr, v, rng, qmc, hero);
         for (std::size_t c = 0; c < m_.C; ++c) sum[c] += contrib_[c];
@@ -379,14 +379,13 @@ private:
 
     // Samples a new direction at a scattering point and multiplies beta by f / pdf.
     // Consumes three sampler dimensions (lobe, cosine, azimuth), or four with `pad`.
-    glm::dvec3 scatter(const glm::dvec3& w, const Medium::Densities& d, QmcSampler& qmc,
-                       bool pad = true) {
+    glm::dvec3 scatter(const glm::dvec3& w, const Medium::Densities& d, QmcSampler& qmc, bool pad = true) {
         const double p_share = rayleigh_share(d);
         const double u_lobe = qmc.next();
         if (pad) qmc.skip(1);
         const double u_cos = qmc.next(), u_phi = qmc.next();
-        const double cos_theta = u_lobe < p_share ? sample_rayleigh_cosine(u_cos)
-                                                  : sample_henyey_greenstein_cosine(u_cos, m_.g);
+        const double cos_theta =
+            u_lobe < p_share ? sample_rayleigh_cosine(u_cos) : sample_henyey_greenstein_cosine(u_cos, m_.g);
         const glm::dvec3 w_new = direction_about(w, cos_theta, u_phi);
         const double nu = clamp_cosine(glm::dot(w, w_new));
         const double p_r = rayleigh_phase(nu), p_m = mie_phase(m_.mie_phase, nu, m_.g);
@@ -399,8 +398,8 @@ private:
     // Sun by next-event estimation at a scattering point z (radius r) reached along w.
     // Sun by next-event estimation at a scattering point z (radius r) reached along w;
     // `weight` multiplies beta (the flight's f / pdf less the transmittance, in tr_).
-    void sun_at_scattering(const glm::dvec3& z, double r, const glm::dvec3& w,
-                           const Medium::Densities& d, double weight) {
+    void sun_at_scattering(const glm::dvec3& z, double r, const glm::dvec3& w, const Medium::Densities& d,
+                           double weight) {
         m_.sun_transmittance(z, r, sun_t_.data());
         const double nu = clamp_cosine(glm::dot(w, m_.s));
         const double p_r = rayleigh_phase(nu), p_m = mie_phase(m_.mie_phase, nu, m_.g);
@@ -439,8 +438,7 @@ private:
         return s;
     }
 
-    void trace_path(const ViewRay& vr, const glm::dvec3& v, PathRng& rng, QmcSampler& qmc,
-                    std::size_t hero) {
+    void trace_path(const ViewRay& vr, const glm::dvec3& v, PathRng& rng, QmcSampler& qmc, std::size_t hero) {
         const double u_start = qmc.next();
         // Event 1: a point on the view ray, from the panel distribution.
         const std::size_t i =
@@ -494,8 +492,7 @@ private:
             if (shadowed) {
                 const ColumnDensity ca = ray.upto(shadow_a), cb = ray.upto(shadow_b);
                 for (std::size_t c = 0; c < m_.C; ++c)
-                    lit_[c] = -std::expm1(-m_.tau(c, ca)) +
-                              (std::exp(-m_.tau(c, cb)) - tr_end_[c]);
+                    lit_[c] = -std::expm1(-m_.tau(c, ca)) + (std::exp(-m_.tau(c, cb)) - tr_end_[c]);
                 before_h = -std::expm1(-m_.tau(hero, ca));
                 after_h = std::exp(-m_.tau(hero, cb));
             } else {
@@ -506,10 +503,10 @@ private:
             if (lit_[hero] > 0.0) {
                 const double before = shadowed ? before_h : lit_[hero];
                 const double mass = u_flight * lit_[hero];
-                const double tau_target =
-                    mass < before ? -std::log1p(-mass)
-                                  // past the shadow: T(tau*) = T_h(b) - (mass - before)
-                                  : -std::log(std::max(after_h - (mass - before), 1e-300));
+                const double tau_target = mass < before
+                                              ? -std::log1p(-mass)
+                                              // past the shadow: T(tau*) = T_h(b) - (mass - before)
+                                              : -std::log(std::max(after_h - (mass - before), 1e-300));
                 s = solve_distance(ray, pos, w, hero, tau_target);
                 z = pos + s * w;
                 r_z_ = std::clamp(glm::length(z), m_.R, m_.top);
@@ -530,8 +527,8 @@ private:
                 if (cos_sun > 0.0) {
                     m_.sun_transmittance(ground * m_.R, m_.R, sun_t_.data());
                     for (std::size_t c = 0; c < m_.C; ++c)
-                        contrib_[c] += beta_[c] * tr_end_[c] * m_.albedo[c] / kPi * m_.sun[c] *
-                                       sun_t_[c] * cos_sun;
+                        contrib_[c] +=
+                            beta_[c] * tr_end_[c] * m_.albedo[c] / kPi * m_.sun[c] * sun_t_[c] * cos_sun;
                 }
             }
             if (max_order_ > 0 && event >= max_order_) return;
@@ -616,9 +613,8 @@ void ReferenceSky::radiance(const Atmosphere& atmosphere, const Observer& observ
                                                  "got {}",
                                                  N * C, out.size()));
     if (!standard_error.empty() && standard_error.size() != N * C)
-        throw InvalidArgument("standard_error",
-                              fmt::format("must be empty or hold {} floats, got {}", N * C,
-                                          standard_error.size()));
+        throw InvalidArgument("standard_error", fmt::format("must be empty or hold {} floats, got {}", N * C,
+                                                            standard_error.size()));
 
     const std::shared_ptr<const ColumnTable> table = ColumnTable::shared(atmosphere);
     Medium m;
@@ -654,32 +650,31 @@ void ReferenceSky::radiance(const Atmosphere& atmosphere, const Observer& observ
     // Batch sums of Lms, [direction][batch][channel].
     std::vector<double> sums(multiple ? N * batches * C : 0, 0.0);
     if (multiple)
-        tbb::parallel_for(
-            tbb::blocked_range<std::size_t>(0, N * batches, 1), [&](const auto& range) {
-                PathTracer tracer(m, max_order_);
-                std::vector<double> sum(C);
-                for (std::size_t item = range.begin(); item != range.end(); ++item) {
-                    const std::size_t i = item / batches, b = item % batches;
-                    const ViewRay& vr = rays[i];
-                    if (vr.inside && vr.scatters) {
-                        std::fill(sum.begin(), sum.end(), 0.0);
-                        const std::size_t first = b * paths / batches;
-                        const std::size_t last = (b + 1) * paths / batches;
-                        // Heroes cycle through the channels from a random offset, so each
-                        // path's hero is uniform and a batch balances them.
-                        PathRng batch_rng(options_.seed, i, b, 1);
-                        const std::size_t offset = std::size_t(batch_rng.next_u64() % C);
-                        const std::uint64_t batch_key = batch_rng.next_u64();
-                        for (std::size_t k = first; k < last; ++k) {
-                            PathRng rng(options_.seed, i, k);
-                            QmcSampler qmc(batch_key, std::uint32_t(k - first), rng);
-                            tracer.trace(vr, dirs[i], rng, qmc, (k - first + offset) % C, sum);
-                        }
-                        std::copy(sum.begin(), sum.end(), sums.begin() + std::ptrdiff_t(item * C));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N * batches, 1), [&](const auto& range) {
+            PathTracer tracer(m, max_order_);
+            std::vector<double> sum(C);
+            for (std::size_t item = range.begin(); item != range.end(); ++item) {
+                const std::size_t i = item / batches, b = item % batches;
+                const ViewRay& vr = rays[i];
+                if (vr.inside && vr.scatters) {
+                    std::fill(sum.begin(), sum.end(), 0.0);
+                    const std::size_t first = b * paths / batches;
+                    const std::size_t last = (b + 1) * paths / batches;
+                    // Heroes cycle through the channels from a random offset, so each
+                    // path's hero is uniform and a batch balances them.
+                    PathRng batch_rng(options_.seed, i, b, 1);
+                    const std::size_t offset = std::size_t(batch_rng.next_u64() % C);
+                    const std::uint64_t batch_key = batch_rng.next_u64();
+                    for (std::size_t k = first; k < last; ++k) {
+                        PathRng rng(options_.seed, i, k);
+                        QmcSampler qmc(batch_key, std::uint32_t(k - first), rng);
+                        tracer.trace(vr, dirs[i], rng, qmc, (k - first + offset) % C, sum);
                     }
-                    tracker.advance();
+                    std::copy(sum.begin(), sum.end(), sums.begin() + std::ptrdiff_t(item * C));
                 }
-            });
+                tracker.advance();
+            }
+        });
     tracker.finish();
 
     for (std::size_t i = 0; i < N; ++i)

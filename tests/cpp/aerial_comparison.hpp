@@ -28,7 +28,8 @@ inline AerialComparison compare_aerial_passes(const AerialPasses& f, const Aeria
         for (int c = 0; c < 3; ++c) {
             const double lr = r.inscatter[p * 3 + c], lf = f.inscatter[p * 3 + c];
             if (lr > 1e-3 * L_max) rel.push_back(std::abs(lf - lr) / lr);
-            max_T = std::max(max_T, double(std::abs(f.transmittance[p * 3 + c] - r.transmittance[p * 3 + c])));
+            max_T =
+                std::max(max_T, double(std::abs(f.transmittance[p * 3 + c] - r.transmittance[p * 3 + c])));
         }
     }
     if (rel.empty()) return {0.0, 0.0, 0.0, max_T};

@@ -47,8 +47,8 @@
 
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/atmosphere/geometry.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/atmosphere/phase.hpp"
+#include "welkin/base/math.hpp"
 #include "welkin/base/quadrature.hpp"
 #include "welkin/reference/column_table.hpp"
 
@@ -86,9 +86,11 @@ public:
                 const double rho = H_ * i / (kNr - 1), r = std::sqrt(rho * rho + R_ * R_);
                 const double d_min = top_ - r, d_max = rho + H_;
                 const double d = d_min + (d_max - d_min) * j / (kNmu - 1);
-                const double mu = d == 0.0 ? 1.0 : clamp_cosine((H_ * H_ - rho * rho - d * d) / (2.0 * r * d));
+                const double mu =
+                    d == 0.0 ? 1.0 : clamp_cosine((H_ * H_ - rho * rho - d * d) / (2.0 * r * d));
                 const ColumnDensity col = table.to_top(r, mu);
-                for (int c = 0; c < 3; ++c) tau_[(std::size_t(i) * kNmu + j) * 3 + c] = optical_depth(atm, c, col);
+                for (int c = 0; c < 3; ++c)
+                    tau_[(std::size_t(i) * kNmu + j) * 3 + c] = optical_depth(atm, c, col);
             }
     }
     // tau of the three channels from radius r (in [R, top]) along zenith cosine mu (above
@@ -301,7 +303,8 @@ private:
         Rgb e{0, 0, 0};
         if (!(mu_s > 0.0)) return e;
         const ColumnDensity col = table_.to_top(R_, mu_s);
-        for (int c = 0; c < 3; ++c) e[c] = atm_.solar_irradiance[c] * std::exp(-optical_depth(atm_, c, col)) * mu_s;
+        for (int c = 0; c < 3; ++c)
+            e[c] = atm_.solar_irradiance[c] * std::exp(-optical_depth(atm_, c, col)) * mu_s;
         return e;
     }
 

@@ -7,6 +7,7 @@
 #include <array>
 
 #include "peer_table.hpp"
+
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
@@ -33,9 +34,9 @@ inline std::array<double, 3> single_scattering(const Atmosphere& atm, const Peer
         const double w = (i == 0 || i == intervals) ? 0.5 : 1.0;
         for (int c = 0; c < 3; ++c) {
             const double T = std::exp(-optical_depth(atm, c, view) - optical_depth(atm, c, sun));
-            const double scattering = atm.rayleigh_scattering[c] * atm.rayleigh_density.density(h) * rayleigh_phase(nu) +
-                                      atm.mie_scattering[c] * atm.mie_density.density(h) *
-                                          mie_phase(atm.mie_phase, nu, atm.mie_g);
+            const double scattering =
+                atm.rayleigh_scattering[c] * atm.rayleigh_density.density(h) * rayleigh_phase(nu) +
+                atm.mie_scattering[c] * atm.mie_density.density(h) * mie_phase(atm.mie_phase, nu, atm.mie_g);
             sum[c] += w * T * scattering * dx * atm.solar_irradiance[c];
         }
     }

@@ -53,7 +53,8 @@ inline std::vector<PeerRow> read_peer_table() {
             continue;
         }
         PeerRow row;
-        for (std::size_t i = 0; i < names.size() && i < cells.size(); ++i) row.v[names[i]] = std::stod(cells[i]);
+        for (std::size_t i = 0; i < names.size() && i < cells.size(); ++i)
+            row.v[names[i]] = std::stod(cells[i]);
         rows.push_back(std::move(row));
     }
     return rows;

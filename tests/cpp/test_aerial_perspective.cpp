@@ -1,25 +1,25 @@
 // Aerial perspective: closed forms (no air, exact optical depth along a horizontal ray),
 // invariants (monotone in depth, sky pixels), bad input, and the froxel volume against the
 // per-pixel ray march with stated tolerances in strong haze out to 80 km.
-#include <gtest/gtest.h>
-
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
-#include <cmath>
 #include <numeric>
 #include <string>
 #include <vector>
 
 #include "aerial_comparison.hpp"
-#include "peer_table.hpp"
 #include "invalid_argument_testing.hpp"
-#include "welkin/scene/scene.hpp"
+#include "peer_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/aerial/aerial_perspective.hpp"
-#include "welkin/color/color.hpp"
+#include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
-#include "welkin/atmosphere/optical_depth.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/scene/scene.hpp"
 
 using namespace welkin;
 using welkin::test::parameter_of;
@@ -178,8 +178,11 @@ TEST(AerialPerspective, BadInputNamesTheParameter) {
     EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), bad, 8, 4); }), "depth");
     bad[9] = -std::numeric_limits<float>::infinity();
     EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), bad, 8, 4); }), "depth");
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), depth, 4, 8); }), "depth");  // wrong size
-    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), std::span<const float>(depth).first(31), 8, 4); }),
+    EXPECT_EQ(parameter_of([&] { aerial_perspective(s.aerial_view(), depth, 4, 8); }),
+              "depth");  // wrong size
+    EXPECT_EQ(parameter_of([&] {
+                  aerial_perspective(s.aerial_view(), std::span<const float>(depth).first(31), 8, 4);
+              }),
               "depth");
     SceneDescription huge = s;
     huge.resolution = {65536, 65536, 32767};
@@ -218,7 +221,8 @@ std::vector<float> terrain_depth(const SceneDescription& s, int W, int H, double
                 t = ridge / r.direction.x;
                 if (height_m + t * r.direction.z > ridge_top) t = std::numeric_limits<double>::infinity();
             }
-            if (x < W / 5 && y > 2 * H / 3) t = (30.0 + 30.0 * double(y - 2 * H / 3) / H) * r.distance_per_depth;
+            if (x < W / 5 && y > 2 * H / 3)
+                t = (30.0 + 30.0 * double(y - 2 * H / 3) / H) * r.distance_per_depth;
             depth[std::size_t(y) * W + x] = float(t / r.distance_per_depth);  // the Z pass: along the axis
         }
     return depth;

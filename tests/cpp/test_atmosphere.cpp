@@ -1,9 +1,9 @@
 // Atmosphere parameters: presets, validation, JSON round trip.
-#include <gtest/gtest.h>
-
 #include <cmath>
 
 #include "peer_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
 

@@ -6,13 +6,13 @@
 // spacing in altitude (at the ground). The tests hold every preset's Rayleigh and Mie
 // coefficients to that bound (plus float rounding) at altitudes between the nodes, and
 // the compact extinction table the graded quadrature reads to the full one.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "peer_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/batch.hpp"
 #include "welkin/atmosphere/inscattering.hpp"
 #include "welkin/atmosphere/skyview_lut.hpp"
@@ -25,7 +25,8 @@ namespace {
 double scale_height(const DensityProfile& p) {
     if (p.layers().size() != 1) return 0.0;
     const DensityLayer& l = p.layers().front();
-    if (l.exp_term == 0.0 || l.exp_scale_per_m >= 0.0 || l.linear_per_m != 0.0 || l.constant != 0.0) return 0.0;
+    if (l.exp_term == 0.0 || l.exp_scale_per_m >= 0.0 || l.linear_per_m != 0.0 || l.constant != 0.0)
+        return 0.0;
     return -1.0 / l.exp_scale_per_m;
 }
 
@@ -43,10 +44,10 @@ TEST(AtmosphereBatch, DensityTableIsWithinItsInterpolationBoundFromTheGroundToTh
             const std::vector<double>& coefficient;
             Spectrum4 MediumSample::*field;
         };
-        for (const Constituent& k : {Constituent{"rayleigh", atm.rayleigh_density, atm.rayleigh_scattering,
-                                                 &MediumSample::rayleigh_scattering},
-                                     Constituent{"mie", atm.mie_density, atm.mie_scattering,
-                                                 &MediumSample::mie_scattering}}) {
+        for (const Constituent& k :
+             {Constituent{"rayleigh", atm.rayleigh_density, atm.rayleigh_scattering,
+                          &MediumSample::rayleigh_scattering},
+              Constituent{"mie", atm.mie_density, atm.mie_scattering, &MediumSample::mie_scattering}}) {
             const double H = scale_height(k.profile);
             if (H == 0.0) continue;  // not a single exponential: no closed-form bound
             const double bound = dh * dh / (8.0 * H * H) * (1.0 + H / R) + 3e-7;  // + float rounding
@@ -61,7 +62,8 @@ TEST(AtmosphereBatch, DensityTableIsWithinItsInterpolationBoundFromTheGroundToTh
                     worst = std::max(worst, std::abs(double((m.*k.field)[c]) - exact) / exact);
                 }
             }
-            std::printf("[ %s %s ] H %.0f m: worst relative error %.2e, bound %.2e\n", name, k.what, H, worst, bound);
+            std::printf("[ %s %s ] H %.0f m: worst relative error %.2e, bound %.2e\n", name, k.what, H, worst,
+                        bound);
             EXPECT_LE(worst, bound) << name << ' ' << k.what;
         }
     }
@@ -74,11 +76,13 @@ TEST(AtmosphereBatch, CompactExtinctionTableMatchesTheFullOneOnTheSquaredRadiusA
         const double R = atm.bottom_radius_m, top = atm.top_radius_m;
         for (double h : {0.0, 0.5, 7.0, 999.9, 10e3, 25e3 + 0.3, 40e3 - 0.3, top - R - 1.0}) {
             const double r = R + h;
-            const double x = std::min((r - R) * (r + R) * batch.inv_table_step(), double(AtmosphereBatch::kTableSize - 1));
+            const double x =
+                std::min((r - R) * (r + R) * batch.inv_table_step(), double(AtmosphereBatch::kTableSize - 1));
             const int i = std::min(int(x), AtmosphereBatch::kTableSize - 2);
             const Float4 compact = batch.extinction_at(i, float(x - double(i)));
             const Spectrum4 full = batch.sample(h).extinction;
-            for (int c = 0; c < 3; ++c) EXPECT_NEAR(compact[c], full[c], 1e-6 * full[c] + 1e-20) << name << " h " << h;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(compact[c], full[c], 1e-6 * full[c] + 1e-20) << name << " h " << h;
         }
     }
 }
@@ -104,8 +108,10 @@ TEST(AtmosphereBatch, RaysOfNoLengthFromTheGroundHaveNoStepsAndNoRadiance) {
             const Spectrum4 L = sky.texture().at(i, j);
             for (int c = 0; c < 3; ++c) {
                 ASSERT_TRUE(std::isfinite(L[c]));
-                if (j >= 54) EXPECT_EQ(L[c], 0.0f) << "row " << j;  // below the horizon
-                else EXPECT_GT(L[c], 0.0f) << "row " << j;
+                if (j >= 54)
+                    EXPECT_EQ(L[c], 0.0f) << "row " << j;  // below the horizon
+                else
+                    EXPECT_GT(L[c], 0.0f) << "row " << j;
             }
         }
 }

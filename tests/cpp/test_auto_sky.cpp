@@ -8,12 +8,12 @@
 #include <cmath>
 #include <vector>
 
+#include "peer_table.hpp"
 #include <gtest/gtest.h>
 
-#include "peer_table.hpp"
-#include "welkin/sky/auto.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/sky/auto.hpp"
 
 namespace welkin {
 namespace {
@@ -66,29 +66,23 @@ TEST(AutoSky, CheapestThatMeetsDependsOnTheNumberOfDirections) {
     EXPECT_EQ(few.method, "raymarch");
     EXPECT_EQ(few.options.raymarch_steps, 16);
     EXPECT_TRUE(few.meets_tolerance);
-    const AutoChoice many =
-        choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.1, {}, t.table());
+    const AutoChoice many = choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.1, {}, t.table());
     EXPECT_EQ(many.method, "lut");
     EXPECT_DOUBLE_EQ(many.predicted_seconds, 0.01);
     // A loose tolerance lets the analytic method in: the cheapest of all.
-    EXPECT_EQ(choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.6, {}, t.table()).method,
-              "analytic");
+    EXPECT_EQ(choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.6, {}, t.table()).method, "analytic");
 }
 
 TEST(AutoSky, OffGridSceneIsJudgedByItsWorstCorner) {
     SyntheticTable t;
     t.at(0, 0, 1, 1) = 0.2;  // lut misses 0.1 at (1 km, 10 deg) only
     // Inside the cell: that corner counts, so lut is out.
-    const AutoChoice inside =
-        choose_sky_method(earth(), scene(500, 5), 2048 * 1024, 0.1, {}, t.table());
+    const AutoChoice inside = choose_sky_method(earth(), scene(500, 5), 2048 * 1024, 0.1, {}, t.table());
     EXPECT_EQ(inside.method, "raymarch");
     // On the grid point (0 m, 0 deg) only that point counts.
-    EXPECT_EQ(choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.1, {}, t.table()).method,
-              "lut");
+    EXPECT_EQ(choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.1, {}, t.table()).method, "lut");
     // Beyond the grid: the nearest edge (1 km, 10 deg) counts.
-    EXPECT_EQ(
-        choose_sky_method(earth(), scene(4e5, 60), 2048 * 1024, 0.1, {}, t.table()).method,
-        "raymarch");
+    EXPECT_EQ(choose_sky_method(earth(), scene(4e5, 60), 2048 * 1024, 0.1, {}, t.table()).method, "raymarch");
 }
 
 TEST(AutoSky, NeverChoosesASettingThatFailedNearTheScene) {
@@ -97,8 +91,7 @@ TEST(AutoSky, NeverChoosesASettingThatFailedNearTheScene) {
     const AutoChoice c = choose_sky_method(earth(), scene(0, 5), 2048 * 1024, 10.0, {}, t.table());
     EXPECT_NE(c.method, "lut");
     // Even when nothing meets the tolerance, the fallback is a finite one.
-    const AutoChoice strict =
-        choose_sky_method(earth(), scene(0, 5), 2048 * 1024, 0.001, {}, t.table());
+    const AutoChoice strict = choose_sky_method(earth(), scene(0, 5), 2048 * 1024, 0.001, {}, t.table());
     EXPECT_NE(strict.method, "lut");
 }
 
@@ -123,12 +116,10 @@ TEST(AutoSky, FallbackTakesTheCheapestWithinTheReferenceNoiseOfTheBest) {
 TEST(AutoSky, AtmosphereNotAChartedPresetIsJudgedByTheWorstPreset) {
     SyntheticTable t;
     t.at(1, 0, 0, 0) = 0.3;  // lut misses 0.1 for "hazy" only
-    EXPECT_EQ(choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.1, {}, t.table()).method,
-              "lut");
+    EXPECT_EQ(choose_sky_method(earth(), scene(0, 0), 2048 * 1024, 0.1, {}, t.table()).method, "lut");
     Atmosphere other = earth();
     other.mie_g = 0.5;  // still named bruneton2017, but not it
-    EXPECT_EQ(choose_sky_method(other, scene(0, 0), 2048 * 1024, 0.1, {}, t.table()).method,
-              "raymarch");
+    EXPECT_EQ(choose_sky_method(other, scene(0, 0), 2048 * 1024, 0.1, {}, t.table()).method, "raymarch");
 }
 
 TEST(AutoSky, BadToleranceNamesTheParameterAndRange) {

@@ -2,19 +2,18 @@
 // the air's in-scattering, and with clouds exactly the cloud passes' composite over it;
 // the ground hides the clouds below the horizon; the sun's disc is dimmed by the cloud's
 // transmittance; a bad cloud volume is refused naming clouds.volumes[0].file.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 
-#include <glm/geometric.hpp>
-
 #include "cloud_test_util.hpp"
-#include "welkin/scene/scene.hpp"
-#include "welkin/render/camera_plate.hpp"
-#include "welkin/render/cloud_passes.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/render/camera_plate.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/scene/scene.hpp"
 
 using namespace welkin;
 
@@ -57,7 +56,8 @@ TEST(CameraPlate, WithoutCloudsCombinedIsSkyPlusInscatter) {
         EXPECT_EQ(p.clouds[q * 4 + 3], 0.0f);
         EXPECT_EQ(p.cloud_depth[q], kNoCloudDepth);
         (std::isinf(p.depth[q]) ? sky : ground)++;
-        for (int k = 0; k < 3; ++k) EXPECT_EQ(p.combined[q * 3 + k], p.sky[q * 3 + k] + p.inscatter[q * 3 + k]);
+        for (int k = 0; k < 3; ++k)
+            EXPECT_EQ(p.combined[q * 3 + k], p.sky[q * 3 + k] + p.inscatter[q * 3 + k]);
     }
     EXPECT_GT(sky, 0);
     EXPECT_GT(ground, 0);
@@ -83,7 +83,8 @@ TEST(CameraPlate, CloudsCompositeOverTheSkyAndTheHazedGround) {
         const double t_box = 2000.0 / r.direction.x;
         const glm::dvec3 at = r.origin + t_box * r.direction;
         const bool in_face = std::abs(at.y) < 300.0 && at.z > 20.0 && at.z < 400.0;
-        const bool ground_first = std::isfinite(clear.depth[q]) && clear.depth[q] * r.distance_per_depth < t_box;
+        const bool ground_first =
+            std::isfinite(clear.depth[q]) && clear.depth[q] * r.distance_per_depth < t_box;
         if (in_face && !ground_first) {
             ++seen;
             EXPECT_GT(passes.clouds[q * 4 + 3], 0.5f) << q;
@@ -126,7 +127,8 @@ TEST(CameraPlate, PlateCloudPassesAreTheSceneCloudPasses) {
         const float a = passes.clouds[q * 4 + 3];
         cloudy_px += a > 0.01f;
         for (int k = 0; k < 3; ++k) {
-            const float expected = passes.clouds[q * 4 + k] + (1.0f - a) * (clear.sky[q * 3 + k] + clear.inscatter[q * 3 + k]);
+            const float expected =
+                passes.clouds[q * 4 + k] + (1.0f - a) * (clear.sky[q * 3 + k] + clear.inscatter[q * 3 + k]);
             EXPECT_FLOAT_EQ(cloudy.combined[q * 3 + k], expected) << q;
         }
     }
@@ -141,8 +143,8 @@ TEST(CameraPlate, PlateCloudPassesAreTheSceneCloudPasses) {
     ASSERT_GT(clear.sky[disc * 3 + 1], 100.0f * green[W * H / 2]);  // the disc is in view
     const float a = passes.clouds[disc * 4 + 3];
     EXPECT_GT(a, 0.0f);
-    EXPECT_NEAR(cloudy.combined[disc * 3 + 1] - passes.clouds[disc * 4 + 1], (1.0f - a) * clear.combined[disc * 3 + 1],
-                1e-5f * clear.combined[disc * 3 + 1]);
+    EXPECT_NEAR(cloudy.combined[disc * 3 + 1] - passes.clouds[disc * 4 + 1],
+                (1.0f - a) * clear.combined[disc * 3 + 1], 1e-5f * clear.combined[disc * 3 + 1]);
 }
 
 TEST(CameraPlate, BadCloudVolumeIsRefusedNamingTheFile) {

@@ -1,18 +1,17 @@
 // Cloud density sources: the procedural layer (determinism, tiling, bounds, majorants) and
 // OpenVDB volumes (sampling, transforms, empty-space skipping, and every bad input).
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <random>
 
+#include "cloud_test_util.hpp"
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
 
-#include "cloud_test_util.hpp"
-#include "welkin/clouds/noise.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/clouds/noise.hpp"
 #include "welkin/clouds/procedural.hpp"
 #include "welkin/clouds/vdb.hpp"
 
@@ -59,8 +58,10 @@ CloudLayerParams tile_params() {
 TEST(CloudNoise, TileableAndDeterministic) {
     for (double x : {0.13, 0.77}) {
         for (int f : {4, 8}) {
-            EXPECT_NEAR(tileable_worley(x, 0.3, 0.9, f, 7), tileable_worley(x + 1.0, 0.3 - 2.0, 0.9 + 3.0, f, 7), 1e-12);
-            EXPECT_NEAR(tileable_perlin(x, 0.3, 0.9, f, 7), tileable_perlin(x + 1.0, 0.3 - 2.0, 0.9 + 3.0, f, 7), 1e-12);
+            EXPECT_NEAR(tileable_worley(x, 0.3, 0.9, f, 7),
+                        tileable_worley(x + 1.0, 0.3 - 2.0, 0.9 + 3.0, f, 7), 1e-12);
+            EXPECT_NEAR(tileable_perlin(x, 0.3, 0.9, f, 7),
+                        tileable_perlin(x + 1.0, 0.3 - 2.0, 0.9 + 3.0, f, 7), 1e-12);
             EXPECT_EQ(tileable_worley(x, 0.3, 0.9, f, 7), tileable_worley(x, 0.3, 0.9, f, 7));
         }
         EXPECT_NE(tileable_worley(x, 0.3, 0.9, 4, 7), tileable_worley(x, 0.3, 0.9, 4, 8));
@@ -113,12 +114,15 @@ TEST(ProceduralClouds, CoverageIsTheShareOfTheAreaUnderCloud) {
                 const glm::dvec3 up = glm::normalize(glm::dvec3(x, y, R));
                 double tau = 0.0;
                 for (int k = 0; k < kSteps; ++k)
-                    tau += layer.sigma_t(glm::dvec3(0.0, 0.0, -R) + (R + p.bottom_altitude_m + (k + 0.5) * dh) * up) * dh;
+                    tau += layer.sigma_t(glm::dvec3(0.0, 0.0, -R) +
+                                         (R + p.bottom_altitude_m + (k + 0.5) * dh) * up) *
+                           dh;
                 cloudy += tau >= ProceduralClouds::kCoverageOpticalDepth;
             }
             const double measured = double(cloudy) / kColumns;
             EXPECT_NEAR(measured, coverage, 0.1) << name << " at coverage " << coverage;
-            std::printf("coverage %-13s setting %.1f measured %.3f\n", std::string(name).c_str(), coverage, measured);
+            std::printf("coverage %-13s setting %.1f measured %.3f\n", std::string(name).c_str(), coverage,
+                        measured);
         }
     }
 }
@@ -130,7 +134,6 @@ TEST(ProceduralClouds, ClearAndOvercastEnds) {
         EXPECT_GT(ProceduralClouds(p).covered_fraction(), 0.95) << name;
     }
 }
-
 
 TEST(ProceduralClouds, WindShiftsTheField) {
     CloudLayerParams p = tile_params();
@@ -180,7 +183,8 @@ TEST(ProceduralClouds, SegmentsCoverTheDensityAndBoundIt) {
     layer.segments({{0, 0, 2000}, glm::normalize(glm::dvec3(1, 0, -0.2))}, 1e6, segs);
     ASSERT_EQ(segs.size(), 1u);
     EXPECT_NEAR(segs[0].t0, 0.0, 1e-9);
-    for (const glm::dvec3 d : {glm::dvec3(1, 0, 0.05), glm::dvec3(0.3, 1, 0.2), glm::dvec3(0, 0, 1), glm::dvec3(1, 1, 0.6)})
+    for (const glm::dvec3 d :
+         {glm::dvec3(1, 0, 0.05), glm::dvec3(0.3, 1, 0.2), glm::dvec3(0, 0, 1), glm::dvec3(1, 1, 0.6)})
         expect_segments_bound(layer, {{0, 0, 0}, glm::normalize(d)}, 40000.0, 4000, gen);
 }
 
@@ -230,10 +234,12 @@ std::string expect_throw_message(const std::function<void()>& f) {
 TEST(VdbClouds, SamplesThroughBothTransforms) {
     TempDir dir;
     const std::string path = dir.file("ball.vdb");
-    test::write_vdb(path, {test::make_float_grid("density", 10.0, 12, [](int i, int j, int k) { return ball(i, j, k, 10); })});
+    test::write_vdb(path, {test::make_float_grid("density", 10.0, 12,
+                                                 [](int i, int j, int k) { return ball(i, j, k, 10); })});
     VdbCloudOptions o;
     // Blender's object matrix: scale 2, then move to (100, 2000, 800).
-    o.matrix_world = glm::translate(glm::dmat4(1.0), glm::dvec3(100, 2000, 800)) * glm::scale(glm::dmat4(1.0), glm::dvec3(2.0));
+    o.matrix_world = glm::translate(glm::dmat4(1.0), glm::dvec3(100, 2000, 800)) *
+                     glm::scale(glm::dmat4(1.0), glm::dvec3(2.0));
     o.density_scale = 0.05;
     // The closed forms below are OpenVDB's convention (value ijk at index ijk), so this test
     // asks for that placement explicitly; BlenderPlacementIsOpenVdbMovedHalfAVoxel relates
@@ -345,7 +351,8 @@ TEST(VdbClouds, CorruptFile) {
     EXPECT_NE(m.find(garbage), std::string::npos) << m;
     // A valid file cut short.
     const std::string good = dir.file("good.vdb"), cut = dir.file("cut.vdb");
-    test::write_vdb(good, {test::make_float_grid("density", 1.0, 12, [](int i, int j, int k) { return ball(i, j, k, 12); })});
+    test::write_vdb(good, {test::make_float_grid("density", 1.0, 12,
+                                                 [](int i, int j, int k) { return ball(i, j, k, 12); })});
     {
         std::ifstream in(good, std::ios::binary);
         std::string bytes((std::istreambuf_iterator<char>(in)), {});
@@ -362,7 +369,8 @@ TEST(VdbClouds, NoSuchGridListsTheGrids) {
     test::write_vdb(path, {test::make_float_grid("smoke", 1.0, 3, [](int, int, int) { return 1.0f; }),
                            test::make_float_grid("temperature", 1.0, 3, [](int, int, int) { return 1.0f; })});
     const std::string m = expect_throw_message<InvalidArgument>([&] { VdbClouds v(path); });
-    for (const char* s : {"'density'", "'smoke'", "'temperature'"}) EXPECT_NE(m.find(s), std::string::npos) << m;
+    for (const char* s : {"'density'", "'smoke'", "'temperature'"})
+        EXPECT_NE(m.find(s), std::string::npos) << m;
     EXPECT_NE(m.find(path), std::string::npos) << m;
     VdbCloudOptions o;
     o.grid = "smoke";
@@ -394,7 +402,8 @@ TEST(VdbClouds, EmptyGrid) {
 TEST(VdbClouds, NegativeDensitiesClampedAndCountedOrRejected) {
     TempDir dir;
     const std::string path = dir.file("negative.vdb");
-    test::write_vdb(path, {test::make_float_grid("density", 1.0, 3, [](int i, int, int) { return i < 0 ? -0.5f : 1.0f; })});
+    test::write_vdb(path, {test::make_float_grid("density", 1.0, 3,
+                                                 [](int i, int, int) { return i < 0 ? -0.5f : 1.0f; })});
     const VdbClouds v(path);
     EXPECT_EQ(v.negative_voxel_count(), 3u * 7u * 7u);
     EXPECT_NE(v.warning().find(path), std::string::npos) << v.warning();
@@ -428,11 +437,14 @@ TEST(VdbClouds, OtherBadInput) {
     g->setName("density");
     g->getAccessor().setValue(openvdb::Coord(0, 0, 0), 1.0f);
     test::write_vdb(bg, {g});
-    EXPECT_NE(expect_throw_message<InvalidArgument>([&] { VdbClouds v(bg); }).find("background"), std::string::npos);
+    EXPECT_NE(expect_throw_message<InvalidArgument>([&] { VdbClouds v(bg); }).find("background"),
+              std::string::npos);
     // A NaN voxel.
     const std::string nan = dir.file("nan.vdb");
-    test::write_vdb(nan, {test::make_float_grid("density", 1.0, 2, [](int i, int, int) { return i == 0 ? NAN : 1.0f; })});
-    EXPECT_NE(expect_throw_message<InvalidArgument>([&] { VdbClouds v(nan); }).find("non-finite"), std::string::npos);
+    test::write_vdb(
+        nan, {test::make_float_grid("density", 1.0, 2, [](int i, int, int) { return i == 0 ? NAN : 1.0f; })});
+    EXPECT_NE(expect_throw_message<InvalidArgument>([&] { VdbClouds v(nan); }).find("non-finite"),
+              std::string::npos);
     // A singular object matrix, a bad density scale.
     const std::string ok = dir.file("ok.vdb");
     test::write_vdb(ok, {test::make_float_grid("density", 1.0, 2, [](int, int, int) { return 1.0f; })});
@@ -459,7 +471,8 @@ TEST(ProceduralClouds, TypeNamesAndErrors) {
         EXPECT_EQ(CloudLayerParams::preset(t).cloud_type, t);
         EXPECT_NO_THROW(CloudLayerParams::preset(t).validate());
     }
-    const std::string m = expect_throw_message<InvalidArgument>([] { cloud_type_from_name("nimbus", "layers[0].cloud_type"); });
+    const std::string m =
+        expect_throw_message<InvalidArgument>([] { cloud_type_from_name("nimbus", "layers[0].cloud_type"); });
     EXPECT_NE(m.find("layers[0].cloud_type"), std::string::npos) << m;
     for (const auto n : kCloudTypeNames) EXPECT_NE(m.find(std::string(n)), std::string::npos) << m;
     EXPECT_NE(m.find("nimbus"), std::string::npos) << m;

@@ -1,18 +1,17 @@
 // The lazily filled optical-depth grid (cloud_depth_grid.hpp) and the march through it.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 
+#include "cloud_test_util.hpp"
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "cloud_test_util.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/base/rng.hpp"
 #include "welkin/clouds/depth_grid.hpp"
 #include "welkin/clouds/lighting.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/clouds/procedural.hpp"
-#include "welkin/base/rng.hpp"
 
 using namespace welkin;
 
@@ -41,7 +40,8 @@ TEST(CloudDepthGrid, HomogeneousBoxWithinOneCell) {
     const double sigma = 0.01;
     const test::HomogeneousBox box(lo, hi, sigma);
     const glm::dvec3 s = glm::normalize(glm::dvec3(0.6, 0.2, 0.5));
-    const OpticalDepthGrid grid(box, [s](const glm::dvec3&) { return s; }, 10.0, 1e5, 4);
+    const OpticalDepthGrid grid(
+        box, [s](const glm::dvec3&) { return s; }, 10.0, 1e5, 4);
     OpticalDepthGrid::Cursor cursor;
     PathRng rng(7, 0, 0);
     for (int level : {0, 2}) {
@@ -54,8 +54,8 @@ TEST(CloudDepthGrid, HomogeneousBoxWithinOneCell) {
             worst = std::max(worst, e);
             mean += e / n;
         }
-        std::printf("level %d (h %.0f m): max |tau error| %.4f, mean %.5f, bound %.4f\n", level, h, worst, mean,
-                    sigma * h * std::sqrt(3.0));
+        std::printf("level %d (h %.0f m): max |tau error| %.4f, mean %.5f, bound %.4f\n", level, h, worst,
+                    mean, sigma * h * std::sqrt(3.0));
         EXPECT_LE(worst, sigma * h * std::sqrt(3.0));
     }
     // At a vertex the grid holds the march itself.
@@ -65,7 +65,9 @@ TEST(CloudDepthGrid, HomogeneousBoxWithinOneCell) {
     EXPECT_NEAR(grid.march(v, segs), box_depth(v, s, lo, hi, sigma), 1e-9);
     EXPECT_EQ(grid.level_for(5.0), 0);
     EXPECT_EQ(grid.level_for(45.0), 2);
-    EXPECT_THROW(OpticalDepthGrid(box, [s](const glm::dvec3&) { return s; }, 0.0, 1e5, 4), InvalidArgument);
+    EXPECT_THROW(OpticalDepthGrid(
+                     box, [s](const glm::dvec3&) { return s; }, 0.0, 1e5, 4),
+                 InvalidArgument);
 }
 
 // The march through the grid gives the same bits for any thread count (a vertex's value
@@ -79,7 +81,8 @@ TEST(CloudDepthGrid, MarchIsThreadIndependentAndMatchesPerSampleShadows) {
     p.density_per_m = 0.02;
     const ProceduralClouds layer(p);
     const double e = 35.0 * kDegree;
-    const ConstantIllumination light({std::cos(e), 0.0, std::sin(e)}, {1.0f, 1.0f, 1.0f}, {0.04f, 0.04f, 0.04f});
+    const ConstantIllumination light({std::cos(e), 0.0, std::sin(e)}, {1.0f, 1.0f, 1.0f},
+                                     {0.04f, 0.04f, 0.04f});
     std::vector<glm::dvec3> dirs;
     for (int j = 0; j < 24; ++j)
         for (int i = 0; i < 24; ++i)

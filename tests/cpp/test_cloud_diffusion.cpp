@@ -1,20 +1,19 @@
 // The delta-Eddington slab of cloud_diffusion.hpp: its closed form against its own
 // equations and energy balance, and the fast march's multiple scattering built on it
 // against the path-tracing reference on a thick conservative slab.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <tuple>
 
-#include <glm/geometric.hpp>
-
 #include "cloud_test_util.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "welkin/base/math.hpp"
 #include "welkin/clouds/diffusion.hpp"
 #include "welkin/clouds/lighting.hpp"
 #include "welkin/clouds/reference.hpp"
-#include "welkin/base/math.hpp"
 
 using namespace welkin;
 using welkin::test::HomogeneousBox;
@@ -27,19 +26,22 @@ TEST(EddingtonSlab, SolvesItsEquationsAndFaceConditions) {
         for (double mu0 : {1.0, 0.7, 0.25})
             for (double Z : {0.05, 2.0, 30.0}) {
                 const double k2 = 3.0 * (1.0 - albedo);
-                const DiffuseField top = eddington_slab(Z, 0.0, albedo, mu0), bot = eddington_slab(Z, Z, albedo, mu0);
+                const DiffuseField top = eddington_slab(Z, 0.0, albedo, mu0),
+                                   bot = eddington_slab(Z, Z, albedo, mu0);
                 const double scale = std::max({std::abs(top.fluence), std::abs(bot.fluence), 1e-3});
                 EXPECT_NEAR(top.fluence, -2.0 * top.flux, 1e-9 * scale) << albedo << " " << mu0 << " " << Z;
                 EXPECT_NEAR(bot.fluence, 2.0 * bot.flux, 1e-9 * scale) << albedo << " " << mu0 << " " << Z;
                 const double h = 1e-4 * std::max(Z, 1.0) * (Z < 1 ? Z : 1.0);
                 for (double f : {0.3, 0.7}) {
                     const double z = f * Z;
-                    const DiffuseField a = eddington_slab(Z, z - h, albedo, mu0), c = eddington_slab(Z, z, albedo, mu0),
+                    const DiffuseField a = eddington_slab(Z, z - h, albedo, mu0),
+                                       c = eddington_slab(Z, z, albedo, mu0),
                                        b = eddington_slab(Z, z + h, albedo, mu0);
                     const double d2 = (a.fluence - 2.0 * c.fluence + b.fluence) / (h * h);
                     const double rhs = k2 * c.fluence - 3.0 * albedo * std::exp(-z / mu0);
                     EXPECT_NEAR(d2, rhs, 2e-4 * (std::abs(rhs) + 1.0)) << albedo << " " << mu0 << " " << Z;
-                    EXPECT_NEAR((b.fluence - a.fluence) / (2.0 * h), -3.0 * c.flux, 1e-5 * (std::abs(c.flux) + 1.0));
+                    EXPECT_NEAR((b.fluence - a.fluence) / (2.0 * h), -3.0 * c.flux,
+                                1e-5 * (std::abs(c.flux) + 1.0));
                 }
             }
 }
@@ -55,11 +57,11 @@ TEST(EddingtonSlab, ConservesEnergyAndIsLinearDeepInside) {
             const DiffuseField top = eddington_slab(Z, 0.0, 1.0, mu0), bot = eddington_slab(Z, Z, 1.0, mu0);
             EXPECT_NEAR(-top.flux + bot.flux + mu0 * std::exp(-Z / mu0), mu0, 1e-12);
             for (double albedo : {0.95, 0.5}) {
-                const DiffuseField t = eddington_slab(Z, 0.0, albedo, mu0), b = eddington_slab(Z, Z, albedo, mu0);
+                const DiffuseField t = eddington_slab(Z, 0.0, albedo, mu0),
+                                   b = eddington_slab(Z, Z, albedo, mu0);
                 double absorbed = 0.0;
                 const int n = 40000;
-                for (int i = 0; i < n; ++i)
-                {
+                for (int i = 0; i < n; ++i) {
                     const double z = (i + 0.5) * Z / n;
                     const double phi = eddington_slab(Z, z, albedo, mu0).fluence;
                     absorbed += (1.0 - albedo) * (phi + std::exp(-z / mu0)) * Z / n;
@@ -75,7 +77,8 @@ TEST(EddingtonSlab, ConservesEnergyAndIsLinearDeepInside) {
     // At normal incidence the transmitted flux is (5/3) / (Z + 4/3) (the header's closed form).
     EXPECT_NEAR(eddington_slab(Z, Z, 1.0, 1.0).flux + std::exp(-Z), (5.0 / 3.0) / (Z + 4.0 / 3.0), 1e-12);
     // Continuous into the conservative branch and across the resonance k mu0 = 1.
-    EXPECT_NEAR(eddington_slab(5.0, 2.0, 1.0 - 1e-11, 1.0).fluence, eddington_slab(5.0, 2.0, 1.0, 1.0).fluence, 1e-6);
+    EXPECT_NEAR(eddington_slab(5.0, 2.0, 1.0 - 1e-11, 1.0).fluence,
+                eddington_slab(5.0, 2.0, 1.0, 1.0).fluence, 1e-6);
     // (phi moves by ~2e-7 relative for 1e-7 in albedo here: the tolerance is 5 times that)
     const double ar = 1.0 - 1.0 / (3.0 * 0.81);  // k^2 mu0^2 = 1 at mu0 = 0.9
     const double at = eddington_slab(5.0, 2.0, ar, 0.9).fluence;
@@ -109,8 +112,8 @@ TEST(CloudDiffusion, ThickConservativeSlabAgainstReference) {
     const HomogeneousBox slab({-1e6, -1e6, 0.0}, {1e6, 1e6, D}, sigma);
     const double sin_e = 2.0 / 3.0, cos_e = std::sqrt(1.0 - sin_e * sin_e);
     const ConstantIllumination light({cos_e, 0.0, sin_e}, {1.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 0.0f});
-    const std::vector<glm::dvec3> up = {{0, 0, 1}, glm::normalize(glm::dvec3(0.5, 0.2, 1.0)),
-                                        glm::normalize(glm::dvec3(-0.6, 0.0, 1.0))};
+    const std::vector<glm::dvec3> up = {
+        {0, 0, 1}, glm::normalize(glm::dvec3(0.5, 0.2, 1.0)), glm::normalize(glm::dvec3(-0.6, 0.0, 1.0))};
     std::vector<glm::dvec3> down;
     for (const auto& d : up) down.push_back({d.x, d.y, -d.z});
     CloudLightingOptions o;
@@ -129,10 +132,13 @@ TEST(CloudDiffusion, ThickConservativeSlabAgainstReference) {
         for (std::size_t r = 0; r < dirs.size(); ++r) {
             const double lf = fast.radiance[r * 3 + 1], lr = ref.radiance[r * 3 + 1];
             const double se = ref.radiance_error[r * 3 + 1];
-            std::printf("slab %s, view %zu: fast %.5g, octaves %.5g, reference %.5g +- %.2g (fast %+.1f %%)\n", name,
-                        r, lf, octaves.radiance[r * 3 + 1], lr, se, 100.0 * (lf / lr - 1.0));
+            std::printf(
+                "slab %s, view %zu: fast %.5g, octaves %.5g, reference %.5g +- %.2g (fast %+.1f %%)\n", name,
+                r, lf, octaves.radiance[r * 3 + 1], lr, se, 100.0 * (lf / lr - 1.0));
             EXPECT_NEAR(lf, lr, 0.30 * lr + 4.0 * se) << name << " view " << r;
-            if (below) EXPECT_LT(octaves.radiance[r * 3 + 1], 0.5 * lr);
+            if (below) {
+                EXPECT_LT(octaves.radiance[r * 3 + 1], 0.5 * lr);
+            }
             sf += lf;
             sr += lr;
             var += se * se;

@@ -8,21 +8,20 @@
 // absolute error per view relative to the mean radiance, and the largest transmittance
 // difference. The tolerances are stated per case from what the approximation does
 // (see the comment of each case), with the reference's own standard error added.
-#include <gtest/gtest.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 
+#include "cloud_test_util.hpp"
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
 
-#include "cloud_test_util.hpp"
+#include "welkin/base/math.hpp"
 #include "welkin/clouds/lighting.hpp"
 #include "welkin/clouds/noise.hpp"
-#include "welkin/clouds/reference.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/clouds/procedural.hpp"
+#include "welkin/clouds/reference.hpp"
 #include "welkin/clouds/vdb.hpp"
 
 using namespace welkin;
@@ -36,7 +35,8 @@ struct Comparison {
 // Views in a cone around `centre` (unit), a k x k grid of half-angle `half_angle`.
 std::vector<glm::dvec3> view_grid(glm::dvec3 centre, double half_angle, int k) {
     centre = glm::normalize(centre);
-    const glm::dvec3 a = glm::normalize(glm::cross(centre, std::abs(centre.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+    const glm::dvec3 a = glm::normalize(
+        glm::cross(centre, std::abs(centre.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
     const glm::dvec3 b = glm::cross(centre, a);
     std::vector<glm::dvec3> dirs;
     for (int j = 0; j < k; ++j)
@@ -48,8 +48,8 @@ std::vector<glm::dvec3> view_grid(glm::dvec3 centre, double half_angle, int k) {
     return dirs;
 }
 
-Comparison compare(const char* name, const CloudDensity& density, const CloudIllumination& light, glm::dvec3 eye,
-                   const std::vector<glm::dvec3>& dirs, int paths) {
+Comparison compare(const char* name, const CloudDensity& density, const CloudIllumination& light,
+                   glm::dvec3 eye, const std::vector<glm::dvec3>& dirs, int paths) {
     const auto t0 = std::chrono::steady_clock::now();
     const CloudResult fast = render_clouds(density, light, eye, dirs);
     const auto t1 = std::chrono::steady_clock::now();
@@ -70,11 +70,12 @@ Comparison compare(const char* name, const CloudDensity& density, const CloudIll
     }
     const double n = double(dirs.size());
     Comparison c{sf / sr - 1.0, sabs / sr, max_dT, std::sqrt(var) / n / (sr / n), max_dT_se};
-    std::printf("%-14s views %3zu  mean L: fast %.4g ref %.4g  bias %+6.1f %%  mean |err| %5.1f %%  max |dT| %.3f  "
-                "ref se %.1f %%  truncated %.2g  time fast %.3f s ref %.2f s\n",
-                name, dirs.size(), sf / n, sr / n, 100.0 * c.bias, 100.0 * c.mean_abs, c.max_dT, 100.0 * c.ref_se,
-                ref.truncated_fraction, std::chrono::duration<double>(t1 - t0).count(),
-                std::chrono::duration<double>(t2 - t1).count());
+    std::printf(
+        "%-14s views %3zu  mean L: fast %.4g ref %.4g  bias %+6.1f %%  mean |err| %5.1f %%  max |dT| %.3f  "
+        "ref se %.1f %%  truncated %.2g  time fast %.3f s ref %.2f s\n",
+        name, dirs.size(), sf / n, sr / n, 100.0 * c.bias, 100.0 * c.mean_abs, c.max_dT, 100.0 * c.ref_se,
+        ref.truncated_fraction, std::chrono::duration<double>(t1 - t0).count(),
+        std::chrono::duration<double>(t2 - t1).count());
     return c;
 }
 
@@ -105,7 +106,8 @@ TEST(CloudFastVsReference, ThinWispyLayer) {
     p.density_per_m = 0.004;
     p.detail_strength = 0.6;
     const ProceduralClouds layer(p);
-    const Comparison c = compare("thin wispy", layer, test_daylight(), {0, 0, 0}, view_grid({0.3, 0.4, 1.0}, 0.5, 5), 4096);
+    const Comparison c =
+        compare("thin wispy", layer, test_daylight(), {0, 0, 0}, view_grid({0.3, 0.4, 1.0}, 0.5, 5), 4096);
     EXPECT_LT(std::abs(c.bias), 0.10 + 3.0 * c.ref_se);
     EXPECT_LT(c.mean_abs, 0.15 + 3.0 * c.ref_se);
     EXPECT_LT(c.max_dT, 0.01 + 4.0 * c.dT_se);
@@ -127,7 +129,8 @@ TEST(CloudFastVsReference, DenseCumulus) {
     p.cloud_type = CloudType::cumulus;
     p.density_per_m = 0.03;
     const ProceduralClouds layer(p);
-    const Comparison c = compare("dense cumulus", layer, test_daylight(), {0, 0, 0}, view_grid({0.3, 0.4, 1.0}, 0.5, 4), 256);
+    const Comparison c =
+        compare("dense cumulus", layer, test_daylight(), {0, 0, 0}, view_grid({0.3, 0.4, 1.0}, 0.5, 4), 256);
     EXPECT_LT(std::abs(c.bias), 0.20 + 3.0 * c.ref_se);
     EXPECT_LT(c.mean_abs, 0.30 + 3.0 * c.ref_se);
     EXPECT_LT(c.max_dT, 0.01 + 4.0 * c.dT_se);
@@ -147,14 +150,16 @@ TEST(CloudFastVsReference, VdbVolume) {
     test::write_vdb(path, {test::make_float_grid("density", 10.0, 21, [](int i, int j, int k) {
                         const double r = std::sqrt(double(i * i + j * j + k * k)) / 20.0;
                         if (r >= 1.0) return 0.0f;
-                        const double w = tileable_worley((i + 21) / 42.0, (j + 21) / 42.0, (k + 21) / 42.0, 4, 3);
+                        const double w =
+                            tileable_worley((i + 21) / 42.0, (j + 21) / 42.0, (k + 21) / 42.0, 4, 3);
                         return float((1.0 - r * r) * (0.3 + 0.7 * w));
                     })});
     VdbCloudOptions o;
     o.matrix_world = glm::translate(glm::dmat4(1.0), glm::dvec3(0.0, 1500.0, 900.0));
     o.density_scale = 0.03;
     const VdbClouds vdb(path, o);
-    const Comparison c = compare("vdb", vdb, test_daylight(), {0, 0, 0}, view_grid({0.0, 1500.0, 900.0}, 0.12, 5), 1024);
+    const Comparison c =
+        compare("vdb", vdb, test_daylight(), {0, 0, 0}, view_grid({0.0, 1500.0, 900.0}, 0.12, 5), 1024);
     EXPECT_LT(std::abs(c.bias), 0.15 + 3.0 * c.ref_se);
     EXPECT_LT(c.mean_abs, 0.25 + 3.0 * c.ref_se);
     EXPECT_LT(c.max_dT, 0.01 + 4.0 * c.dT_se);

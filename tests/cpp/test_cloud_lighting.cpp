@@ -1,21 +1,20 @@
 // Cloud lighting: the fast march and the path-tracing reference against closed forms, and
 // the fast march against the reference on three clouds (a thin wispy layer, a dense
 // cumulus layer, a VDB written here), with the tolerance stated per case.
-#include <gtest/gtest.h>
-
 #include <array>
 #include <cmath>
 #include <cstdio>
 
+#include "cloud_test_util.hpp"
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
 
-#include "cloud_test_util.hpp"
-#include "welkin/clouds/lighting.hpp"
-#include "welkin/clouds/reference.hpp"
 #include "welkin/base/math.hpp"
-#include "welkin/clouds/procedural.hpp"
 #include "welkin/base/rng.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/clouds/procedural.hpp"
+#include "welkin/clouds/reference.hpp"
 #include "welkin/clouds/vdb.hpp"
 
 using namespace welkin;
@@ -46,7 +45,9 @@ TEST(CloudPhase, NormalisedAndSampledMeanCosine) {
 
 namespace {
 
-ConstantIllumination sun_only(glm::dvec3 s, float e) { return ConstantIllumination(s, {e, e, e}, {0.0f, 0.0f, 0.0f}); }
+ConstantIllumination sun_only(glm::dvec3 s, float e) {
+    return ConstantIllumination(s, {e, e, e}, {0.0f, 0.0f, 0.0f});
+}
 
 }  // namespace
 
@@ -82,7 +83,8 @@ TEST(CloudClosedForm, SingleScatteringOfThinSlab) {
     const std::vector<glm::dvec3> dirs = {{1, 0, 0}};
     CloudScattering sc;
     sc.albedo = 0.9;
-    const double expected = sc.albedo * sc.phase(0.0) * 2.0 * std::exp(-sigma * l) * (1.0 - std::exp(-sigma * D));
+    const double expected =
+        sc.albedo * sc.phase(0.0) * 2.0 * std::exp(-sigma * l) * (1.0 - std::exp(-sigma * D));
     CloudLightingOptions o;
     o.scattering = sc;
     o.octaves = 1;
@@ -95,8 +97,8 @@ TEST(CloudClosedForm, SingleScatteringOfThinSlab) {
     ro.paths = 20000;
     const CloudReferenceResult ref = render_clouds_reference(slab, light, {-5, 0, 0}, dirs, ro);
     EXPECT_NEAR(ref.radiance[0], expected, 4.0 * ref.radiance_error[0]);
-    std::printf("single scattering: analytic %.6g, march %.6g, reference %.6g +- %.2g\n", expected, fast.radiance[0],
-                ref.radiance[0], ref.radiance_error[0]);
+    std::printf("single scattering: analytic %.6g, march %.6g, reference %.6g +- %.2g\n", expected,
+                fast.radiance[0], ref.radiance[0], ref.radiance_error[0]);
 }
 
 // In a uniform isotropic radiance field L, a conservative medium (albedo 1) changes
@@ -108,8 +110,8 @@ TEST(CloudClosedForm, UniformSkyIsInvariantAndEnergyIsNeverCreated) {
     const HomogeneousBox cube({-50, -50, -50}, {50, 50, 50}, 0.03);  // tau = 3 across
     const ConstantIllumination sky({0, 0, 1}, {0.0f, 0.0f, 0.0f}, {1.0f, 0.5f, 0.25f});
     const glm::dvec3 eye(-200, 0, 0);
-    const std::vector<glm::dvec3> aimed = {{1, 0, 0}, glm::normalize(glm::dvec3(200, 20, 10)),
-                                           glm::normalize(glm::dvec3(200, 0, 40))};
+    const std::vector<glm::dvec3> aimed = {
+        {1, 0, 0}, glm::normalize(glm::dvec3(200, 20, 10)), glm::normalize(glm::dvec3(200, 0, 40))};
     CloudReferenceOptions ro;
     ro.paths = 1500;
     const CloudReferenceResult ref = render_clouds_reference(cube, sky, eye, aimed, ro);
@@ -118,7 +120,8 @@ TEST(CloudClosedForm, UniformSkyIsInvariantAndEnergyIsNeverCreated) {
         for (std::size_t c = 0; c < 3; ++c) {
             const double L = std::array<double, 3>{1.0, 0.5, 0.25}[c];
             const double expected = (1.0 - ref.transmittance[r]) * L;
-            EXPECT_NEAR(ref.radiance[r * 3 + c], expected, 4.0 * ref.radiance_error[r * 3 + c] + 4.0 * ref.transmittance_error[r] * L);
+            EXPECT_NEAR(ref.radiance[r * 3 + c], expected,
+                        4.0 * ref.radiance_error[r * 3 + c] + 4.0 * ref.transmittance_error[r] * L);
         }
     for (double albedo : {1.0, 0.6}) {
         CloudLightingOptions o;
@@ -126,14 +129,18 @@ TEST(CloudClosedForm, UniformSkyIsInvariantAndEnergyIsNeverCreated) {
         const CloudResult fast = render_clouds(cube, sky, eye, aimed, o);
         for (std::size_t r = 0; r < aimed.size(); ++r) {
             EXPECT_LE(fast.radiance[r * 3], (1.0 - fast.transmittance[r]) * 1.0 + 1e-6);
-            if (albedo == 1.0) EXPECT_NEAR(fast.radiance[r * 3], 1.0 - fast.transmittance[r], 1e-5);
-            std::printf("uniform sky, albedo %.1f, view %zu: march adds %.4f of (1 - T) L (exact: %s)\n", albedo, r,
-                        fast.radiance[r * 3] / (1.0 - fast.transmittance[r]), albedo == 1.0 ? "1" : "< 1");
+            if (albedo == 1.0) {
+                EXPECT_NEAR(fast.radiance[r * 3], 1.0 - fast.transmittance[r], 1e-5);
+            }
+            std::printf("uniform sky, albedo %.1f, view %zu: march adds %.4f of (1 - T) L (exact: %s)\n",
+                        albedo, r, fast.radiance[r * 3] / (1.0 - fast.transmittance[r]),
+                        albedo == 1.0 ? "1" : "< 1");
         }
     }
     CloudReferenceOptions ra = ro;
     ra.scattering.albedo = 0.6;
     const CloudReferenceResult absorbing = render_clouds_reference(cube, sky, eye, aimed, ra);
     for (std::size_t r = 0; r < aimed.size(); ++r)
-        EXPECT_LT(absorbing.radiance[r * 3], (1.0 - absorbing.transmittance[r]) - 4.0 * absorbing.radiance_error[r * 3]);
+        EXPECT_LT(absorbing.radiance[r * 3],
+                  (1.0 - absorbing.transmittance[r]) - 4.0 * absorbing.radiance_error[r * 3]);
 }

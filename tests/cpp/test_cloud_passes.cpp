@@ -3,21 +3,20 @@
 // Blender's Z convention), geometry in front hiding the cloud, pixels without cloud, the
 // air in front of the cloud (froxels against the per-pixel march), the composite's
 // invariants, thread-count independence and cancellation.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <memory>
 
+#include "cloud_test_util.hpp"
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "cloud_test_util.hpp"
-#include "welkin/scene/scene.hpp"
 #include "welkin/aerial/aerial_perspective.hpp"
-#include "welkin/render/cloud_passes.hpp"
-#include "welkin/color/color.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/render/cloud_passes.hpp"
+#include "welkin/scene/scene.hpp"
 
 using namespace welkin;
 using welkin::test::airless;
@@ -117,8 +116,8 @@ TEST(CloudPasses, GeometryInFrontHidesTheCloud) {
     const HomogeneousBox box = slab();
     // Row 0: surfaces at 500 m (in front), 1100 m (inside), sky (+inf), 1e10 (Cycles' sky).
     // Row 1: clear of the slab: nothing hides nothing.
-    std::vector<float> depth{500.0f, 1100.0f, std::numeric_limits<float>::infinity(), 1e10f,
-                             0.0f, 999.0f, 5000.0f, 1e9f};
+    std::vector<float> depth{500.0f,  1100.0f, std::numeric_limits<float>::infinity(), 1e10f, 0.0f, 999.0f,
+                             5000.0f, 1e9f};
     const CloudPasses p = render_cloud_passes(s, box, depth);
     const auto alpha = [&](int q) { return p.clouds[std::size_t(q) * 4 + 3]; };
     for (int q : {0, 4, 5}) {
@@ -137,7 +136,9 @@ TEST(CloudPasses, GeometryInFrontHidesTheCloud) {
         // Orthographic rays start at x = -37.5 .. 37.5 m (ortho_scale 100 across 4 pixels).
         const bool inside = (q % 4) >= 2;
         EXPECT_EQ(h.clouds[std::size_t(q) * 4 + 3] > 0.0f, inside) << q;
-        if (!inside) EXPECT_EQ(h.depth[q], kNoCloudDepth);
+        if (!inside) {
+            EXPECT_EQ(h.depth[q], kNoCloudDepth);
+        }
     }
     EXPECT_THROW(render_cloud_passes(s, box, std::vector<float>{1.0f}), InvalidArgument);
     std::vector<float> nan_depth(8, std::nanf(""));
@@ -187,7 +188,8 @@ TEST(CloudPasses, AirInFrontMarchAgreesWithFroxels) {
         ++cloudy;
         for (int k = 0; k < 3; ++k) {
             const double v = pass.clouds[q * 4 + k];
-            const double f = froxel.transmittance[q * 3 + k] * bare.clouds[q * 4 + k] + a * froxel.inscatter[q * 3 + k];
+            const double f =
+                froxel.transmittance[q * 3 + k] * bare.clouds[q * 4 + k] + a * froxel.inscatter[q * 3 + k];
             rel.push_back(std::abs(f - v) / v);
             conv.push_back(std::abs(converged.clouds[q * 4 + k] - v) / v);
             if (std::abs(bare.clouds[q * 4 + k] - v) > 0.1 * v) ++hazed;
@@ -197,8 +199,8 @@ TEST(CloudPasses, AirInFrontMarchAgreesWithFroxels) {
     std::sort(rel.begin(), rel.end());
     std::sort(conv.begin(), conv.end());
     const double median = rel[rel.size() / 2], p99 = rel[rel.size() * 99 / 100];
-    std::printf("cloud air: march vs froxel median %.3f %%, p99 %.3f %%; 2x steps p99 %.3f %%\n", 100 * median,
-                100 * p99, 100 * conv[conv.size() * 99 / 100]);
+    std::printf("cloud air: march vs froxel median %.3f %%, p99 %.3f %%; 2x steps p99 %.3f %%\n",
+                100 * median, 100 * p99, 100 * conv[conv.size() * 99 / 100]);
     EXPECT_LT(median, 0.01);
     EXPECT_LT(p99, 0.05);
     EXPECT_LT(conv[conv.size() * 99 / 100], 0.005);
@@ -250,8 +252,9 @@ TEST(CloudPasses, CompositeInvariants) {
         for (int k = 0; k < 3; ++k)
             EXPECT_EQ(composite_clouds(p.clouds[q * 4 + k], 0.0f, 7.0f, 0.5f, 0.25f), 7.0f * 0.5f + 0.25f);
     }
-    EXPECT_FLOAT_EQ(composite_clouds(0.2f, 0.25f, 2.0f, 0.5f, 0.1f) - composite_clouds(0.2f, 0.25f, 1.0f, 0.5f, 0.1f),
-                    0.75f * 0.5f);
+    EXPECT_FLOAT_EQ(
+        composite_clouds(0.2f, 0.25f, 2.0f, 0.5f, 0.1f) - composite_clouds(0.2f, 0.25f, 1.0f, 0.5f, 0.1f),
+        0.75f * 0.5f);
 }
 
 TEST(CloudPasses, SameAtOneAndTwoThreadsAndCancellable) {

@@ -4,23 +4,22 @@
 // sky's bit for bit; in an airless atmosphere the image is the plain premultiplied "over"
 // L_sky T_c + L_c (the closed form of no air in front); a layer with no coverage leaves the
 // image unchanged bit for bit.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
-#include <glm/geometric.hpp>
-
 #include "cloud_test_util.hpp"
 #include "peer_table.hpp"
-#include "welkin/scene/scene.hpp"
-#include "welkin/clouds/illumination.hpp"
-#include "welkin/render/cloud_passes.hpp"
-#include "welkin/color/color.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
 #include "welkin/base/equirect.hpp"
+#include "welkin/clouds/illumination.hpp"
 #include "welkin/clouds/procedural.hpp"
+#include "welkin/color/color.hpp"
+#include "welkin/render/cloud_passes.hpp"
 #include "welkin/render/sky_image.hpp"
+#include "welkin/scene/scene.hpp"
 
 using namespace welkin;
 using welkin::test::airless;
@@ -76,25 +75,28 @@ TEST(CloudSkyImage, IsThePanoramasCloudPassesOverTheClearSky) {
     for (int q = 0; q < W * H; ++q) {
         const float a = pass.clouds[q * 4 + 3];
         EXPECT_NEAR(with.cloud_transmittance[q], 1.0f - a, 1e-6f);  // alpha = 1 - T_c, rounded
-        if (!(a > 0.0f)) {  // no cloud: the clear sky, bit for bit
+        if (!(a > 0.0f)) {                                          // no cloud: the clear sky, bit for bit
             for (int k = 0; k < 3; ++k) EXPECT_EQ(with.pixels[q * 3 + k], sky.pixels[q * 3 + k]) << q;
             continue;
         }
         cloudy_pixels += a > 0.05f;
         bool differs = false;
         for (int k = 0; k < 3; ++k) {
-            const double expected = composite_clouds(pass.clouds[q * 4 + k], a, sky.pixels[q * 3 + k], 1.0f, 0.0f);
+            const double expected =
+                composite_clouds(pass.clouds[q * 4 + k], a, sky.pixels[q * 3 + k], 1.0f, 0.0f);
             const double v = with.pixels[q * 3 + k];
             worst = std::max(worst, std::abs(v - expected) / expected);
             EXPECT_NEAR(v, expected, 1e-4 * expected) << q << " " << k;
-            const double no_air = composite_clouds(bare.clouds[q * 4 + k], a, sky.pixels[q * 3 + k], 1.0f, 0.0f);
+            const double no_air =
+                composite_clouds(bare.clouds[q * 4 + k], a, sky.pixels[q * 3 + k], 1.0f, 0.0f);
             differs = differs || std::abs(no_air - expected) > 0.05 * expected;
         }
         hazed += a > 0.05f && differs;
     }
-    std::printf("cloudy HDRI vs panorama passes over the clear HDRI: max relative difference %.3g "
-                "(%d cloudy pixels, %d where the air in front changes a channel > 5 %%)\n",
-                worst, cloudy_pixels, hazed);
+    std::printf(
+        "cloudy HDRI vs panorama passes over the clear HDRI: max relative difference %.3g "
+        "(%d cloudy pixels, %d where the air in front changes a channel > 5 %%)\n",
+        worst, cloudy_pixels, hazed);
     ASSERT_GT(cloudy_pixels, 50);  // 102 at 96 x 48
     EXPECT_GT(hazed, cloudy_pixels / 2);
 }

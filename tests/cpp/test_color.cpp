@@ -1,7 +1,5 @@
 // Colour conversion: the CIE fit against the CIE table, closed-form consistency of the two
 // conversion paths, and the three-sample conversion against the peer's spectral RGB.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -13,9 +11,11 @@
 #include <vector>
 
 #include "peer_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/atmosphere.hpp"
-#include "welkin/color/color.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/color/color.hpp"
 #include "welkin/color/spectral_data.hpp"
 
 using namespace welkin;
@@ -29,30 +29,54 @@ struct CieRow {
 };
 const std::vector<CieRow>& cie1931_table() {
     static const std::vector<CieRow> t = {
-        {360, 0.0001299, 0.000003917, 0.0006061}, {370, 0.0004149, 0.00001239, 0.001946},
-        {380, 0.001368, 0.000039, 0.006450001},   {390, 0.004243, 0.00012, 0.02005001},
-        {400, 0.01431, 0.000396, 0.06785001},     {410, 0.04351, 0.00121, 0.2074},
-        {420, 0.13438, 0.004, 0.6456},            {430, 0.2839, 0.0116, 1.3856},
-        {440, 0.34828, 0.023, 1.74706},           {450, 0.3362, 0.038, 1.77211},
-        {460, 0.2908, 0.06, 1.6692},              {470, 0.19536, 0.09098, 1.28764},
-        {480, 0.09564, 0.13902, 0.8129501},       {490, 0.03201, 0.20802, 0.46518},
-        {500, 0.0049, 0.323, 0.272},              {510, 0.0093, 0.503, 0.1582},
-        {520, 0.06327, 0.71, 0.07824999},         {530, 0.1655, 0.862, 0.04216},
-        {540, 0.2904, 0.954, 0.0203},             {550, 0.4334499, 0.9949501, 0.008749999},
-        {560, 0.5945, 0.995, 0.0039},             {570, 0.7621, 0.952, 0.0021},
-        {580, 0.9163, 0.87, 0.001650001},         {590, 1.0263, 0.757, 0.0011},
-        {600, 1.0622, 0.631, 0.0008},             {610, 1.0026, 0.503, 0.00034},
-        {620, 0.8544499, 0.381, 0.00019},         {630, 0.6424, 0.265, 0.00004999999},
-        {640, 0.4479, 0.175, 0.00002},            {650, 0.2835, 0.107, 0.0},
-        {660, 0.1649, 0.061, 0.0},                {670, 0.0874, 0.032, 0.0},
-        {680, 0.04677, 0.017, 0.0},               {690, 0.0227, 0.00821, 0.0},
-        {700, 0.01135916, 0.004102, 0.0},         {710, 0.005790346, 0.002091, 0.0},
-        {720, 0.002899327, 0.001047, 0.0},        {730, 0.001439971, 0.00052, 0.0},
-        {740, 0.0006900786, 0.0002492, 0.0},      {750, 0.0003323011, 0.00012, 0.0},
-        {760, 0.0001661505, 0.00006, 0.0},        {770, 0.00008307527, 0.00003, 0.0},
-        {780, 0.00004150994, 0.00001499, 0.0},    {790, 0.00002067383, 0.0000074657, 0.0},
-        {800, 0.00001025398, 0.0000037029, 0.0},  {810, 0.000005085868, 0.0000018366, 0.0},
-        {820, 0.000002522525, 0.00000091093, 0.0}, {830, 0.000001251141, 0.00000045181, 0.0},
+        {360, 0.0001299, 0.000003917, 0.0006061},
+        {370, 0.0004149, 0.00001239, 0.001946},
+        {380, 0.001368, 0.000039, 0.006450001},
+        {390, 0.004243, 0.00012, 0.02005001},
+        {400, 0.01431, 0.000396, 0.06785001},
+        {410, 0.04351, 0.00121, 0.2074},
+        {420, 0.13438, 0.004, 0.6456},
+        {430, 0.2839, 0.0116, 1.3856},
+        {440, 0.34828, 0.023, 1.74706},
+        {450, 0.3362, 0.038, 1.77211},
+        {460, 0.2908, 0.06, 1.6692},
+        {470, 0.19536, 0.09098, 1.28764},
+        {480, 0.09564, 0.13902, 0.8129501},
+        {490, 0.03201, 0.20802, 0.46518},
+        {500, 0.0049, 0.323, 0.272},
+        {510, 0.0093, 0.503, 0.1582},
+        {520, 0.06327, 0.71, 0.07824999},
+        {530, 0.1655, 0.862, 0.04216},
+        {540, 0.2904, 0.954, 0.0203},
+        {550, 0.4334499, 0.9949501, 0.008749999},
+        {560, 0.5945, 0.995, 0.0039},
+        {570, 0.7621, 0.952, 0.0021},
+        {580, 0.9163, 0.87, 0.001650001},
+        {590, 1.0263, 0.757, 0.0011},
+        {600, 1.0622, 0.631, 0.0008},
+        {610, 1.0026, 0.503, 0.00034},
+        {620, 0.8544499, 0.381, 0.00019},
+        {630, 0.6424, 0.265, 0.00004999999},
+        {640, 0.4479, 0.175, 0.00002},
+        {650, 0.2835, 0.107, 0.0},
+        {660, 0.1649, 0.061, 0.0},
+        {670, 0.0874, 0.032, 0.0},
+        {680, 0.04677, 0.017, 0.0},
+        {690, 0.0227, 0.00821, 0.0},
+        {700, 0.01135916, 0.004102, 0.0},
+        {710, 0.005790346, 0.002091, 0.0},
+        {720, 0.002899327, 0.001047, 0.0},
+        {730, 0.001439971, 0.00052, 0.0},
+        {740, 0.0006900786, 0.0002492, 0.0},
+        {750, 0.0003323011, 0.00012, 0.0},
+        {760, 0.0001661505, 0.00006, 0.0},
+        {770, 0.00008307527, 0.00003, 0.0},
+        {780, 0.00004150994, 0.00001499, 0.0},
+        {790, 0.00002067383, 0.0000074657, 0.0},
+        {800, 0.00001025398, 0.0000037029, 0.0},
+        {810, 0.000005085868, 0.0000018366, 0.0},
+        {820, 0.000002522525, 0.00000091093, 0.0},
+        {830, 0.000001251141, 0.00000045181, 0.0},
     };
     return t;
 }
@@ -102,8 +126,7 @@ TEST(Color, FitFollowsTheCie1931Table) {
         worst[1] = std::max(worst[1], std::abs(f.y - row.y));
         worst[2] = std::max(worst[2], std::abs(f.z - row.z));
     }
-    std::printf("fit vs CIE table, worst abs error: x %.4f  y %.4f  z %.4f\n", worst[0],
-                worst[1], worst[2]);
+    std::printf("fit vs CIE table, worst abs error: x %.4f  y %.4f  z %.4f\n", worst[0], worst[1], worst[2]);
     EXPECT_LT(worst[0], 0.015 * 1.0622);
     EXPECT_LT(worst[1], 0.015 * 1.0);
     EXPECT_LT(worst[2], 0.015 * 1.7826);
@@ -122,8 +145,8 @@ TEST(Color, FitIntegralsMatchTheTable) {
         fit[0] += w * f.x, fit[1] += w * f.y, fit[2] += w * f.z;
         table[0] += w * t.x, table[1] += w * t.y, table[2] += w * t.z;
     }
-    std::printf("integrals, fit: %.3f %.3f %.3f   table: %.3f %.3f %.3f nm\n", fit[0], fit[1],
-                fit[2], table[0], table[1], table[2]);
+    std::printf("integrals, fit: %.3f %.3f %.3f   table: %.3f %.3f %.3f nm\n", fit[0], fit[1], fit[2],
+                table[0], table[1], table[2]);
     EXPECT_NEAR(table[1], 106.86, 0.2);  // the interpolated 10 nm table itself
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(fit[k] / table[k], 1.0, 0.01) << k;
 }
@@ -164,8 +187,8 @@ TEST(Color, ThreeSampleConversionIsExactForItsOwnSpectrumModel) {
         for (double nm : w48) s48.push_back(spectrum(nm));
         const std::array<double, 3> a = SpectrumToRgb(w3, p).convert(s3);
         const std::array<double, 3> b = SpectrumToRgb(w48).convert(s48);
-        std::printf("p = %+.0f: three-sample %.4f %.4f %.4f   spectral %.4f %.4f %.4f\n", p,
-                    a[0], a[1], a[2], b[0], b[1], b[2]);
+        std::printf("p = %+.0f: three-sample %.4f %.4f %.4f   spectral %.4f %.4f %.4f\n", p, a[0], a[1], a[2],
+                    b[0], b[1], b[2]);
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c] / b[c], 1.0, 3e-3) << "p " << p << " c " << c;
     }
 }
@@ -179,7 +202,9 @@ TEST(Color, ThreeSampleMatrixIsDiagonalAndOrderIndependent) {
     // R depends on the 680 nm sample only, and so on.
     for (int j = 0; j < 3; ++j)
         for (int c = 0; c < 3; ++c)
-            if (j != c) EXPECT_EQ(a.matrix()[j * 3 + c], 0.0);
+            if (j != c) {
+                EXPECT_EQ(a.matrix()[j * 3 + c], 0.0);
+            }
 }
 
 TEST(Color, BatchConversionMatchesSingle) {
@@ -190,15 +215,13 @@ TEST(Color, BatchConversionMatchesSingle) {
     std::vector<float> rgb(15);
     conv.convert(spectra, rgb);
     for (int i = 0; i < 5; ++i) {
-        const auto one =
-            conv.convert(std::span<const float>(spectra).subspan(i * w.size(), w.size()));
+        const auto one = conv.convert(std::span<const float>(spectra).subspan(i * w.size(), w.size()));
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(rgb[3 * i + c], one[c], 1e-5 * std::abs(one[c]));
     }
 }
 
 TEST(Color, RejectsBadWavelengths) {
-    const std::vector<double> two = {500, 600}, unsorted = {440, 680, 550},
-                              repeated = {440, 440, 550, 680};
+    const std::vector<double> two = {500, 600}, unsorted = {440, 680, 550}, repeated = {440, 440, 550, 680};
     EXPECT_THROW(SpectrumToRgb{two}, InvalidArgument);
     EXPECT_THROW(SpectrumToRgb{unsorted}, InvalidArgument);
     EXPECT_THROW(SpectrumToRgb{repeated}, InvalidArgument);
@@ -241,8 +264,8 @@ TEST(Color, ThreeSampleConversionAgainstPeerSpectralRgb) {
         const double lj = w3[j];
         for (double nm = 360.0; nm < 830.0; nm += 1.0) {
             const Xyz t = cie_table_at(nm);
-            const double cmf = kXyzToRgb[3 * j] * t.x + kXyzToRgb[3 * j + 1] * t.y +
-                               kXyzToRgb[3 * j + 2] * t.z;
+            const double cmf =
+                kXyzToRgb[3 * j] * t.x + kXyzToRgb[3 * j + 1] * t.y + kXyzToRgb[3 * j + 2] * t.z;
             k_table[j] += cmf * solar_irradiance_astm_g173(nm) / solar_irradiance_astm_g173(lj) *
                           std::pow(nm / lj, -3.0);
         }
@@ -270,21 +293,21 @@ TEST(Color, ThreeSampleConversionAgainstPeerSpectralRgb) {
             all.push_back(rel);
             all_table.push_back(std::abs(k_table[c] * s[c] - peer) / peer);
             if (away) err_away[c].push_back(rel);
-            err_sun[c].push_back(std::abs(sun_rgb[c] - row.at(sun_names[c])) /
-                                 row.at(sun_names[c]));
+            err_sun[c].push_back(std::abs(sun_rgb[c] - row.at(sun_names[c])) / row.at(sun_names[c]));
         }
     }
     auto worst = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
-    std::printf("three-sample sky RGB vs peer, %zu values: median %.2f %%, worst %.2f %% "
-                "(with the CIE table: median %.2f %%, worst %.2f %%)\n",
-                all.size(), 100 * median(all), 100 * worst(all), 100 * median(all_table),
-                100 * worst(all_table));
+    std::printf(
+        "three-sample sky RGB vs peer, %zu values: median %.2f %%, worst %.2f %% "
+        "(with the CIE table: median %.2f %%, worst %.2f %%)\n",
+        all.size(), 100 * median(all), 100 * worst(all), 100 * median(all_table), 100 * worst(all_table));
     const char* ch = "RGB";
     for (int c = 0; c < 3; ++c)
-        std::printf("  %c: sky median %.2f %% worst %.2f %% | away from sun and horizon "
-                    "median %.2f %% worst %.2f %% | direct sun median %.2f %% worst %.2f %%\n",
-                    ch[c], 100 * median(err[c]), 100 * worst(err[c]), 100 * median(err_away[c]),
-                    100 * worst(err_away[c]), 100 * median(err_sun[c]), 100 * worst(err_sun[c]));
+        std::printf(
+            "  %c: sky median %.2f %% worst %.2f %% | away from sun and horizon "
+            "median %.2f %% worst %.2f %% | direct sun median %.2f %% worst %.2f %%\n",
+            ch[c], 100 * median(err[c]), 100 * worst(err[c]), 100 * median(err_away[c]),
+            100 * worst(err_away[c]), 100 * median(err_sun[c]), 100 * worst(err_sun[c]));
     // Bounds: the measurements above, rounded up.
     EXPECT_LT(median(err[0]), 0.06);
     EXPECT_LT(worst(err[0]), 0.23);

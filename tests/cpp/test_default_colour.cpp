@@ -6,12 +6,12 @@
 // fit (color.cpp: a Fibonacci spiral of 160), so this checks the fit on views it was not
 // fitted to. Tolerances: CIE 1931 xy within 0.005 at the median and 0.015 at worst;
 // luminance within 2 % at the median.
-#include <gtest/gtest.h>
-
 #include <algorithm>
-#include <utility>
 #include <cmath>
+#include <utility>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/math.hpp"
@@ -50,22 +50,22 @@ Errors colour_errors(const std::vector<std::pair<double, double>>& suns) {
         const Atmosphere spectral = Atmosphere::preset(preset, spectral_wavelengths_nm());
         const SpectrumToRgb fast_rgb(fast.wavelengths_nm), spectral_rgb(spectral.wavelengths_nm);
         for (const auto& [elev, altitude] : suns) {
-                const double er = elev * kPi / 180.0;
-                const Observer o{altitude, {std::cos(er), 0.0, std::sin(er)}};
-                std::vector<float> a(n * fast.channels()), b(n * spectral.channels());
-                lut.radiance(fast, o, dirs, a);
-                lut.radiance(spectral, o, dirs, b);
-                std::vector<float> ra(n * 3), rb(n * 3);
-                fast_rgb.convert(a, ra);
-                spectral_rgb.convert(b, rb);
-                for (int k = 0; k < n; ++k) {
-                    const auto xa = xyz_of(&ra[3 * k]), xb = xyz_of(&rb[3 * k]);
-                    const double sa = xa[0] + xa[1] + xa[2], sb = xb[0] + xb[1] + xb[2];
-                    EXPECT_GT(sb, 0.0);
-                    out.xy.push_back(std::hypot(xa[0] / sa - xb[0] / sb, xa[1] / sa - xb[1] / sb));
-                    out.luminance.push_back(std::abs(xa[1] / xb[1] - 1.0));
-                }
+            const double er = elev * kPi / 180.0;
+            const Observer o{altitude, {std::cos(er), 0.0, std::sin(er)}};
+            std::vector<float> a(n * fast.channels()), b(n * spectral.channels());
+            lut.radiance(fast, o, dirs, a);
+            lut.radiance(spectral, o, dirs, b);
+            std::vector<float> ra(n * 3), rb(n * 3);
+            fast_rgb.convert(a, ra);
+            spectral_rgb.convert(b, rb);
+            for (int k = 0; k < n; ++k) {
+                const auto xa = xyz_of(&ra[3 * k]), xb = xyz_of(&rb[3 * k]);
+                const double sa = xa[0] + xa[1] + xa[2], sb = xb[0] + xb[1] + xb[2];
+                EXPECT_GT(sb, 0.0);
+                out.xy.push_back(std::hypot(xa[0] / sa - xb[0] / sb, xa[1] / sa - xb[1] / sb));
+                out.luminance.push_back(std::abs(xa[1] / xb[1] - 1.0));
             }
+        }
     }
     return out;
 }

@@ -1,10 +1,9 @@
 // Blender's equirectangular mapping: landmarks, round trips, pixel centres, solid angles.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <random>
 
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 
 #include "welkin/base/equirect.hpp"
 #include "welkin/base/math.hpp"
@@ -27,11 +26,11 @@ glm::dvec2 cycles_direction_to_equirectangular(const glm::dvec3& dir) {
 
 TEST(Equirect, Landmarks) {
     const auto uv = [](double x, double y, double z) { return direction_to_equirect({x, y, z}); };
-    EXPECT_NEAR(uv(1, 0, 0).x, 0.5, 1e-15);   // +X: the image centre
+    EXPECT_NEAR(uv(1, 0, 0).x, 0.5, 1e-15);  // +X: the image centre
     EXPECT_NEAR(uv(1, 0, 0).y, 0.5, 1e-15);
     EXPECT_NEAR(uv(0, 1, 0).x, 0.25, 1e-15);  // +Y: a quarter from the left
     EXPECT_NEAR(uv(0, -1, 0).x, 0.75, 1e-15);
-    EXPECT_NEAR(uv(-1, 0, 0).x, 0.0, 1e-15);  // -X: the left edge, u in [0, 1)
+    EXPECT_NEAR(uv(-1, 0, 0).x, 0.0, 1e-15);        // -X: the left edge, u in [0, 1)
     EXPECT_NEAR(uv(-1, -1e-300, 0).x, 0.0, 1e-15);  // below the branch cut: folded to 0
     EXPECT_LT(uv(-1, -1e-300, 0).x, 1.0);
     EXPECT_NEAR(uv(0, 0, 1).y, 1.0, 1e-15);   // zenith: top (v = 1)
@@ -95,13 +94,11 @@ TEST(Equirect, PixelSolidAnglesSumToTheSphere) {
         for (int j = 0; j < H; ++j) sum += W * equirect_pixel_solid_angle(j, W, H);
         EXPECT_NEAR(sum, 4.0 * kPi, 1e-12) << W;
         // Symmetric about the horizon, largest at the horizon.
-        EXPECT_NEAR(equirect_pixel_solid_angle(0, W, H), equirect_pixel_solid_angle(H - 1, W, H),
-                    1e-15);
+        EXPECT_NEAR(equirect_pixel_solid_angle(0, W, H), equirect_pixel_solid_angle(H - 1, W, H), 1e-15);
         // A row's solid angle approaches cos(e) dphi de at its centre.
         const int j = H / 3;
         const double e = std::asin(equirect_pixel_direction(0, j, W, H).z);
-        EXPECT_NEAR(equirect_pixel_solid_angle(j, W, H) /
-                        (std::cos(e) * (kTwoPi / W) * (kPi / H)),
-                    1.0, 2.0 / (double(W) * W));  // 1 - (pi/H)^2 / 24
+        EXPECT_NEAR(equirect_pixel_solid_angle(j, W, H) / (std::cos(e) * (kTwoPi / W) * (kPi / H)), 1.0,
+                    2.0 / (double(W) * W));  // 1 - (pi/H)^2 / 24
     }
 }

@@ -1,11 +1,10 @@
 // EXR I/O: round trips (float, half, multilayer names), atomic and careful writing.
-#include <gtest/gtest.h>
-
-#include <unistd.h>
-
 #include <cmath>
 #include <filesystem>
 #include <string>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
@@ -19,9 +18,8 @@ namespace {
 class ExrIo : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("welkin_exr_test_" + std::to_string(::getpid()) + "_" +
-                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        dir_ = fs::temp_directory_path() / ("welkin_exr_test_" + std::to_string(::getpid()) + "_" +
+                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
         fs::remove_all(dir_);
         fs::create_directories(dir_);
     }
@@ -56,7 +54,7 @@ TEST_F(ExrIo, FloatRoundTripIsExactAndTopRowFirst) {
     ASSERT_EQ(back.width, 7);
     ASSERT_EQ(back.height, 5);
     ASSERT_EQ(back.channels(), 4u);
-    for (const std::string& name : {"R", "G", "B", "A"}) {
+    for (const char* name : {"R", "G", "B", "A"}) {
         const int ci = back.channel_index(name), co = im.channel_index(name);
         ASSERT_GE(ci, 0) << name;
         for (int y = 0; y < 5; ++y)
@@ -69,8 +67,8 @@ TEST_F(ExrIo, FloatRoundTripIsExactAndTopRowFirst) {
 
 TEST_F(ExrIo, HalfRoundTripWithinHalfPrecisionAndClampsOverflow) {
     ExrImage im = gradient(4, 3, {"Y"});
-    im.pixels[0] = 1e6f;     // beyond half: clamped to 65504
-    im.pixels[1] = -7e4f;    // likewise, negative
+    im.pixels[0] = 1e6f;   // beyond half: clamped to 65504
+    im.pixels[1] = -7e4f;  // likewise, negative
     im.pixels[2] = 3.14159f;
     ExrWriteOptions opt;
     opt.pixel_type = ExrPixelType::Half;
@@ -84,8 +82,8 @@ TEST_F(ExrIo, HalfRoundTripWithinHalfPrecisionAndClampsOverflow) {
 }
 
 TEST_F(ExrIo, MultilayerChannelNamesRoundTrip) {
-    const ExrImage im = gradient(3, 2, {"Welkin.Sky.R", "Welkin.Sky.G", "Welkin.Sky.B",
-                                        "Welkin.CloudDepth.Z"});
+    const ExrImage im =
+        gradient(3, 2, {"Welkin.Sky.R", "Welkin.Sky.G", "Welkin.Sky.B", "Welkin.CloudDepth.Z"});
     ExrWriteOptions opt;
     opt.attributes = {{"software", "welkin test"}};
     write_exr(path("m.exr"), im, opt);
@@ -95,8 +93,7 @@ TEST_F(ExrIo, MultilayerChannelNamesRoundTrip) {
         const int ci = back.channel_index(name);
         ASSERT_GE(ci, 0) << name;
         for (int y = 0; y < 2; ++y)
-            for (int x = 0; x < 3; ++x)
-                EXPECT_EQ(back.at(x, y, ci), im.at(x, y, im.channel_index(name)));
+            for (int x = 0; x < 3; ++x) EXPECT_EQ(back.at(x, y, ci), im.at(x, y, im.channel_index(name)));
     }
     EXPECT_EQ(back.channel_index("R"), -1);
 }
@@ -127,8 +124,8 @@ TEST_F(ExrIo, UnwritablePlacesRaiseIoErrorNamingThePath) {
     // kernel will not let anyone create files in (even root); the target a directory.
     const std::string missing = path("no/such/dir/a.exr");
     fs::create_directories(dir_ / "sub");
-    for (const std::string& p : {missing, std::string("/proc/welkin_test.exr"),
-                                 path("file.exr") + "/a.exr", path("sub")}) {
+    for (const std::string& p :
+         {missing, std::string("/proc/welkin_test.exr"), path("file.exr") + "/a.exr", path("sub")}) {
         if (p == path("file.exr") + "/a.exr") write_exr(path("file.exr"), im);
         try {
             write_exr(p, im);

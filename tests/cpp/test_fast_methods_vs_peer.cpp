@@ -21,13 +21,13 @@
 // extension (Hillaire's isotropic term) lut measured median 1.6 / 2.3 / 3.3 %, worst
 // 6.1 / 7.1 / 10.3 % here. The analytic method (single scattering only) is held to the
 // peer's single scattering within 25 %, its measured envelope.
-#include <gtest/gtest.h>
-
 #include <array>
 #include <cstdio>
 
 #include "peer_single_scattering.hpp"
 #include "peer_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/sky/method.hpp"
 
 using namespace welkin;
@@ -70,9 +70,11 @@ Errors relative_errors(const std::string& method, bool single_only = false) {
     for (int c = 0; c < 3; ++c) {
         const auto [m, w] = welkin::test::median_and_max(e.corrected[c]);
         const auto [rm, rw] = welkin::test::median_and_max(e.raw[c]);
-        std::printf("%-9s %s vs %s: median %.2f %% worst %.2f %% (raw peer: median %.2f %% worst %.2f %%), %zu views\n",
-                    method.c_str(), kNames[c], single_only ? "single scattering" : "peer (SS converged)",
-                    100 * m, 100 * w, 100 * rm, 100 * rw, e.corrected[c].size());
+        std::printf(
+            "%-9s %s vs %s: median %.2f %% worst %.2f %% (raw peer: median %.2f %% worst %.2f %%), %zu "
+            "views\n",
+            method.c_str(), kNames[c], single_only ? "single scattering" : "peer (SS converged)", 100 * m,
+            100 * w, 100 * rm, 100 * rw, e.corrected[c].size());
     }
     return e;
 }

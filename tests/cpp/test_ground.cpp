@@ -1,11 +1,10 @@
 // The lit ground below the horizon (ground.hpp, sky_image.hpp "The ground"): the closed
 // form without air, the switch, and the horizon.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/atmosphere/ground.hpp"
@@ -60,7 +59,8 @@ TEST(Ground, AirlessGroundIsLambertianUnderTheSun) {
     for (int j = H / 2 + 1; j < H; ++j)
         for (int i = 0; i < W; i += 7) {
             const glm::dvec3 d = equirect_pixel_direction(i, j, W, H);
-            const double t = -r * d.z - std::sqrt(r * r * d.z * d.z - (r * r - atm.bottom_radius_m * atm.bottom_radius_m));
+            const double t =
+                -r * d.z - std::sqrt(r * r * d.z * d.z - (r * r - atm.bottom_radius_m * atm.bottom_radius_m));
             const glm::dvec3 p = glm::dvec3(0, 0, r) + t * d;
             const double mu_s = glm::dot(glm::normalize(p), obs.sun_direction);
             for (std::size_t c = 0; c < atm.channels(); ++c) {
@@ -125,8 +125,12 @@ TEST(Ground, HorizonIsContinuous) {
             const float* down2 = &img.pixels[(std::size_t(j_h + 2) * W + i) * 3];
             const double yd2 = 0.2126 * down2[0] + 0.7152 * down2[1] + 0.0722 * down2[2];
             EXPECT_GT(yd, 0.0) << altitude << " " << i;
-            if (altitude == 0.0) EXPECT_NEAR(yd2, yd, 0.1 * yd) << altitude << " " << i;
-            if (altitude > 0.0) EXPECT_NEAR(yd, yu, 0.5 * yu) << altitude << " " << i;
+            if (altitude == 0.0) {
+                EXPECT_NEAR(yd2, yd, 0.1 * yd) << altitude << " " << i;
+            }
+            if (altitude > 0.0) {
+                EXPECT_NEAR(yd, yu, 0.5 * yu) << altitude << " " << i;
+            }
         }
     }
 }

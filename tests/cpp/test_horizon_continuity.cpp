@@ -5,11 +5,11 @@
 // tangent to the ground does not hit it), so its radiance must be that of the view a hair
 // above, for every method; and the methods must agree with each other there as they do
 // elsewhere.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/math.hpp"

@@ -1,13 +1,6 @@
 // Hostile input and careful output (issue 18, items 4-7; issue 14): every writer writes
 // through symlinks and refuses special files; every reader is bounded; JSON errors name
 // the file, the key path and the failure; temporaries are unique and never left behind.
-#include <gtest/gtest.h>
-
-#include <sys/socket.h>
-#include <sys/stat.h>
-#include <sys/un.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -20,6 +13,12 @@
 
 #include "cloud_test_util.hpp"
 #include "invalid_argument_testing.hpp"
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/clouds/vdb.hpp"
@@ -153,7 +152,8 @@ TEST_F(Hostile, ReadersRefuseDevicesFifosDirectoriesAndHugeFilesAtOnce) {
     ASSERT_EQ(::mkfifo(path("fifo").c_str(), 0644), 0);  // no writer: opening must not block
     EXPECT_TRUE(contains(error_of([&] { Atmosphere::from_json_file(path("fifo")); }), "FIFO"));
     fs::create_directories(dir_ / "adir");
-    EXPECT_TRUE(contains(error_of([&] { SceneDescription::from_json_file(path("adir")); }), "is a directory"));
+    EXPECT_TRUE(
+        contains(error_of([&] { SceneDescription::from_json_file(path("adir")); }), "is a directory"));
     EXPECT_TRUE(contains(error_of([&] { Atmosphere::from_json_file(path("adir")); }), "is a directory"));
     // One byte over the limit (a sparse file: no disk used).
     { std::ofstream(path("big.json")) << ' '; }
@@ -200,7 +200,8 @@ TEST_F(Hostile, VdbVoxelsFarFromTheOriginAreRefusedBeforeAllocating) {
 }
 
 TEST_F(Hostile, CorruptVdbIsAnErrorNamingTheFileNotACrash) {
-    test::write_vdb(path("ok.vdb"), {test::make_float_grid("density", 1.0, 8, [](int, int, int) { return 1.0f; })});
+    test::write_vdb(path("ok.vdb"),
+                    {test::make_float_grid("density", 1.0, 8, [](int, int, int) { return 1.0f; })});
     std::string bytes = read("ok.vdb");
     ASSERT_GT(bytes.size(), 400u);
     // Flip bytes through the tree, one corruption at a time: every outcome is a clean error
@@ -249,8 +250,10 @@ TEST_F(Hostile, NumberOverflowNamesTheFileTheKeyPathAndTheRange) {
 TEST_F(Hostile, MalformedAndTooDeepJsonIsAnInvalidArgument) {
     EXPECT_EQ(test::parameter_of([] { Atmosphere::from_json_string(R"({"mie": {"g": })"); }), "mie.g");
     EXPECT_TRUE(contains(error_of([] { Atmosphere::from_json_string("{\"a\": tru}"); }), "malformed JSON"));
-    const std::string deep = R"({"version": 1, "comment": )" + std::string(100000, '[') + std::string(100000, ']') + "}";
-    EXPECT_TRUE(contains(error_of([&] { SceneDescription::from_json_string(deep); }), "nested deeper than 64"));
+    const std::string deep =
+        R"({"version": 1, "comment": )" + std::string(100000, '[') + std::string(100000, ']') + "}";
+    EXPECT_TRUE(
+        contains(error_of([&] { SceneDescription::from_json_string(deep); }), "nested deeper than 64"));
     // The two schemas share one implementation: the same failure, the same error type.
     EXPECT_THROW(Atmosphere::from_json_file(path("missing.json")), IoError);
     EXPECT_THROW(SceneDescription::from_json_file(path("missing.json")), IoError);
@@ -313,7 +316,8 @@ TEST_F(Hostile, FailedWriteReportsTheReasonAndRemovesTheTemporary) {
     EXPECT_EQ(entries(), std::vector<std::string>{"x.json"});
     EXPECT_EQ(read("x.json"), "theirs");
     // A folder that does not exist: the reason is given.
-    EXPECT_TRUE(contains(error_of([&] { write_file_atomic(path("no/such/x.json"), "x", false); }), "does not exist"));
+    EXPECT_TRUE(
+        contains(error_of([&] { write_file_atomic(path("no/such/x.json"), "x", false); }), "does not exist"));
 }
 
 // A VDB whose tree declares a blosc chunk of 2^56 bytes (found by tests/fuzz/fuzz_vdb.cpp):
@@ -328,7 +332,8 @@ TEST_F(Hostile, VdbWhoseTreeDeclaresAHugeBufferIsOutOfMemoryNamingTheFile) {
     } catch (const OutOfMemory& e) {
         EXPECT_TRUE(contains(e.what(), "blosc_huge_chunk.vdb")) << e.what();
     } catch (const IoError& e) {
-        EXPECT_TRUE(contains(e.what(), "blosc_huge_chunk.vdb")) << e.what();  // a tighter check may come first
+        EXPECT_TRUE(contains(e.what(), "blosc_huge_chunk.vdb"))
+            << e.what();  // a tighter check may come first
     }
 }
 
@@ -336,7 +341,8 @@ TEST_F(Hostile, VdbWhoseTreeDeclaresAHugeBufferIsOutOfMemoryNamingTheFile) {
 // by tests/fuzz/fuzz_vdb.cpp): the tree is read first in a child process, which dies; the
 // host refuses the file with an error naming it and keeps running.
 TEST_F(Hostile, VdbThatOverwritesOpenVdbsHeapIsRefusedAndTheHostLives) {
-    const std::string file = std::string(WELKIN_TEST_DATA_DIR) + "/../fuzz/corpus/vdb/blosc_heap_buffer_overflow.vdb";
+    const std::string file =
+        std::string(WELKIN_TEST_DATA_DIR) + "/../fuzz/corpus/vdb/blosc_heap_buffer_overflow.vdb";
     ASSERT_TRUE(fs::exists(file));
     for (int attempt = 0; attempt < 3; ++attempt) {  // the host's heap stays sound: again and again
         const std::string message = error_of([&] { VdbClouds clouds(file, {}); });

@@ -2,18 +2,17 @@
 // tables, any change of the atmosphere or of the LUT sizes rebuilds them, cached results
 // are identical to fresh ones, and concurrent callers get correct tables. Also: the lut
 // method's output does not depend on the number of threads.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <thread>
 #include <vector>
 
+#include "peer_table.hpp"
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "peer_table.hpp"
-#include "welkin/base/equirect.hpp"
 #include "welkin/atmosphere/lut_cache.hpp"
+#include "welkin/base/equirect.hpp"
 #include "welkin/sky/lut.hpp"
 
 using namespace welkin;
@@ -81,8 +80,8 @@ TEST(LutCache, AnyChangeOfTheAtmosphereOrOfTheLutSizesRebuilds) {
 }
 
 TEST(LutCache, KeepsTheMostRecentlyUsedEntries) {
-    const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm), b = Atmosphere::preset("hazy"),
-                     c = Atmosphere::preset("mars");
+    const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm),
+                     b = Atmosphere::preset("hazy"), c = Atmosphere::preset("mars");
     AtmosphereLutCache cache(2);
     const LutResolution o;
     const auto la = cache.get(a, o);
@@ -99,7 +98,8 @@ TEST(LutCache, KeepsTheMostRecentlyUsedEntries) {
 }
 
 TEST(LutCache, ConcurrentCallersGetTheRightTables) {
-    const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm), b = Atmosphere::preset("polluted");
+    const Atmosphere a = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm),
+                     b = Atmosphere::preset("polluted");
     AtmosphereLutCache cache(1);  // the two atmospheres keep evicting each other
     const LutSky cached({}, &cache), fresh({}, nullptr);
     const Observer obs = sun(0.4, 1.0);

@@ -3,10 +3,10 @@
 // loses digits (r^2 - R^2 near the ground), so these tests hold the float lookup to the
 // double one, TransmittanceLut::to_sun(r, mu_s), from half a metre above the ground to
 // the top, with the sun around the horizon (grazing rays) and everywhere else.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
+
+#include <gtest/gtest.h>
 
 #include "welkin/atmosphere/transmittance_lut.hpp"
 
@@ -32,7 +32,8 @@ TEST(LutPrecision, FloatSunLookupMatchesTheDoubleOneFromHalfAMetreToTheTop) {
                     for (int c = 0; c < 3; ++c) {
                         // Relative where the sun is visible; absolute (to 1) where the
                         // visible fraction runs to zero across the horizon.
-                        const double err = std::abs(double(b[c]) - double(a[c])) / std::max(double(a[c]), 1e-2);
+                        const double err =
+                            std::abs(double(b[c]) - double(a[c])) / std::max(double(a[c]), 1e-2);
                         worst = std::max(worst, err);
                         ASSERT_TRUE(std::isfinite(b[c]));
                     }

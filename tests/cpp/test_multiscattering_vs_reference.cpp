@@ -28,8 +28,6 @@
 //  * The lut method (default sizes), all orders, against the reference, all orders:
 //    within 5 % for every view at every wavelength (issue #2's figure for lut; measured
 //    worst 3.9 / 3.0 / 4.9 %), median within 1.5 % (measured 0.8 / 0.6 / 0.7 %).
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -37,11 +35,13 @@
 
 #include "peer_single_scattering.hpp"
 #include "peer_table.hpp"
-#include "welkin/atmosphere/luts.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/inscattering.hpp"
-#include "welkin/sky/reference.hpp"
-#include "welkin/sky/method.hpp"
+#include "welkin/atmosphere/luts.hpp"
 #include "welkin/atmosphere/view_geometry.hpp"
+#include "welkin/sky/method.hpp"
+#include "welkin/sky/reference.hpp"
 
 using namespace welkin;
 using welkin::test::PeerRow;
@@ -63,7 +63,8 @@ Spectrum4 multiple_scattering_term(const AtmosphereLuts::Batch& b, double r, con
     Spectrum4 L(0.0f);
     for (const RaySamples::Step& st : ray.steps) {
         const double mu_s_t = clamp_cosine((ray.r0 * g.mu_s + st.t * g.nu) / st.r);
-        L += st.weight * (st.rayleigh_scattering + st.mie_scattering) * b.multiscattering.psi(st.ms_v, mu_s_t);
+        L +=
+            st.weight * (st.rayleigh_scattering + st.mie_scattering) * b.multiscattering.psi(st.ms_v, mu_s_t);
     }
     return L * b.medium.solar_irradiance();
 }
@@ -126,15 +127,17 @@ TEST(MultipleScatteringVsReference, TermAndLutAgainstTheReferenceByOrder) {
         const auto [pm, pw] = welkin::test::median_and_max(lut_peer_err[c]);
         const auto [rm, rw] = welkin::test::median_and_max(ref_peer_err[c]);
         const auto [sm, sw] = welkin::test::median_and_max(rel_se[c]);
-        std::printf("[ %s ] multiple scattering vs reference orders >= 2: median %.2f %% worst %.2f %% "
-                    "(isotropic part only: median %.2f %% worst %.2f %%; reference relative se median "
-                    "%.2f %% worst %.2f %%)\n",
-                    kNames[c], 100 * m, 100 * w, 100 * im, 100 * iw, 100 * sm, 100 * sw);
-        std::printf("[ %s ] lut vs reference (all orders): median %.2f %% worst %.2f %%; lut vs peer "
-                    "(SS converged): median %.2f %% worst %.2f %% (at that view the reference is %+.2f %% "
-                    "from the peer); reference vs peer: median %.2f %% worst %.2f %%\n",
-                    kNames[c], 100 * lm, 100 * lw, 100 * pm, 100 * pw, 100 * worst_peer_row_ref[c], 100 * rm,
-                    100 * rw);
+        std::printf(
+            "[ %s ] multiple scattering vs reference orders >= 2: median %.2f %% worst %.2f %% "
+            "(isotropic part only: median %.2f %% worst %.2f %%; reference relative se median "
+            "%.2f %% worst %.2f %%)\n",
+            kNames[c], 100 * m, 100 * w, 100 * im, 100 * iw, 100 * sm, 100 * sw);
+        std::printf(
+            "[ %s ] lut vs reference (all orders): median %.2f %% worst %.2f %%; lut vs peer "
+            "(SS converged): median %.2f %% worst %.2f %% (at that view the reference is %+.2f %% "
+            "from the peer); reference vs peer: median %.2f %% worst %.2f %%\n",
+            kNames[c], 100 * lm, 100 * lw, 100 * pm, 100 * pw, 100 * worst_peer_row_ref[c], 100 * rm,
+            100 * rw);
         EXPECT_LT(m, 0.03) << kNames[c];
         EXPECT_LT(w, c == 0 ? 0.17 : c == 1 ? 0.13 : 0.14) << kNames[c];
         EXPECT_LT(w, iw) << kNames[c];
@@ -198,17 +201,21 @@ TEST(MultipleScatteringLut, RowAndPerViewMarchesAgree) {
         for (double altitude : {0.0, 5000.0}) {
             for (double mu : {1.0, 0.3, 0.02, -0.05, -0.6}) {
                 RaySamples ray;
-                prepare_ray(b.medium, atm.bottom_radius_m + altitude, mu, 30, ray, &b.transmittance, &b.multiscattering);
+                prepare_ray(b.medium, atm.bottom_radius_m + altitude, mu, 30, ray, &b.transmittance,
+                            &b.multiscattering);
                 for (double mu_s : {1.0, 0.5, 0.05, -0.1}) {
                     const double sin_v = std::sqrt(1.0 - mu * mu), sin_s = std::sqrt(1.0 - mu_s * mu_s);
                     std::vector<float> nu;
-                    for (double cos_phi : {1.0, 0.5, 0.0, -1.0}) nu.push_back(float(mu * mu_s + sin_v * sin_s * cos_phi));
+                    for (double cos_phi : {1.0, 0.5, 0.0, -1.0})
+                        nu.push_back(float(mu * mu_s + sin_v * sin_s * cos_phi));
                     std::vector<Spectrum4> row(nu.size());
                     inscatter_row(b.medium, b.multiscattering, ray, mu_s, nu, row, scratch);
                     for (std::size_t k = 0; k < nu.size(); ++k) {
                         const Spectrum4 one =
                             inscatter(b.medium, &b.multiscattering, ray, mu_s, double(nu[k]),
-                                      [&](const RaySamples::Step& st, double m) { return b.transmittance.to_sun(st.sun_at, m); });
+                                      [&](const RaySamples::Step& st, double m) {
+                                          return b.transmittance.to_sun(st.sun_at, m);
+                                      });
                         for (int c = 0; c < 3; ++c) {
                             const double scale = std::max(double(one[c]), 1e-30);
                             worst = std::max(worst, std::abs(double(row[k][c]) - double(one[c])) / scale);

@@ -1,17 +1,17 @@
 // Optical depth: optical_depth.hpp's exact quadrature against closed forms and brute
 // force, and the reference path tracer's column table (reference_column_table.hpp)
 // against optical_depth.hpp.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 
 #include "peer_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
-#include "welkin/reference/column_table.hpp"
 #include "welkin/base/rng.hpp"
+#include "welkin/reference/column_table.hpp"
 
 using namespace welkin;
 
@@ -82,8 +82,8 @@ TEST(OpticalDepth, TentLayerMatchesClosedFormAndBruteForce) {
 
 TEST(OpticalDepth, TransmittanceIsInUnitIntervalAndDecreasesWithPathLength) {
     const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
-    for (auto [h, mu] : {std::pair{0.0, 1.0}, std::pair{0.0, 0.01}, std::pair{10e3, -0.1},
-                         std::pair{59e3, 0.0}}) {
+    for (auto [h, mu] :
+         {std::pair{0.0, 1.0}, std::pair{0.0, 0.01}, std::pair{10e3, -0.1}, std::pair{59e3, 0.0}}) {
         const double r = atm.bottom_radius_m + h;
         const double length = distance_to_boundary(r, mu, atm.bottom_radius_m, atm.top_radius_m);
         std::vector<double> previous(atm.channels(), 1.0);
@@ -99,8 +99,7 @@ TEST(OpticalDepth, TransmittanceIsInUnitIntervalAndDecreasesWithPathLength) {
         }
     }
     // transmittance_to_boundary: 0 for a ray that hits the ground when the ground blocks.
-    for (double t : transmittance_to_boundary(atm, atm.bottom_radius_m + 1000.0, -0.5))
-        EXPECT_EQ(t, 0.0);
+    for (double t : transmittance_to_boundary(atm, atm.bottom_radius_m + 1000.0, -0.5)) EXPECT_EQ(t, 0.0);
     for (double t : transmittance_to_boundary(atm, atm.bottom_radius_m + 1000.0, -0.5, false)) {
         EXPECT_GT(t, 0.0);
         EXPECT_LT(t, 1.0);
@@ -133,15 +132,16 @@ TEST(ColumnTable, MatchesExactOpticalDepthOnRandomRays) {
             const ColumnDensity to_top = table.to_top(r, mu);
             for (std::size_t c = 0; c < atm.channels(); ++c) {
                 const double te = optical_depth(atm, c, top_exact);
-                worst_top = std::max(worst_top, std::abs(optical_depth(atm, c, to_top) - te) /
-                                                    (1e-5 * te + 1e-7));
+                worst_top =
+                    std::max(worst_top, std::abs(optical_depth(atm, c, to_top) - te) / (1e-5 * te + 1e-7));
                 worst_segment = std::max(
                     worst_segment, std::abs(optical_depth(atm, c, seg) - optical_depth(atm, c, seg_exact)));
             }
         }
-        std::printf("[ column table ] %-12s to top: worst |dtau| / (1e-5 tau + 1e-7) = %.3f; "
-                    "segments: worst |dtau| = %.2e\n",
-                    name.c_str(), worst_top, worst_segment);
+        std::printf(
+            "[ column table ] %-12s to top: worst |dtau| / (1e-5 tau + 1e-7) = %.3f; "
+            "segments: worst |dtau| = %.2e\n",
+            name.c_str(), worst_top, worst_segment);
         EXPECT_LT(worst_top, 1.0) << name;
         EXPECT_LT(worst_segment, 1e-5) << name;
     }

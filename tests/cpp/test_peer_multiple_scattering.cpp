@@ -57,24 +57,22 @@
 //
 // Runtime: about 25-35 s on two loaded cores (the reference at 266 view and texel
 // directions, 4096 paths each; the peer's second-order rules at the 58 distinct views).
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
 
-#include <glm/geometric.hpp>
-
-#include <oneapi/tbb/parallel_for.h>
-
 #include "peer_second_order.hpp"
 #include "peer_single_scattering.hpp"
 #include "peer_table.hpp"
 #include "peer_texture_lookup.hpp"
-#include "welkin/sky/reference.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include "welkin/sky/method.hpp"
+#include "welkin/sky/reference.hpp"
 
 using namespace welkin;
 using welkin::test::PeerRow;
@@ -184,15 +182,18 @@ const std::vector<Row>& rows() {
         }
         tbb::parallel_for(0, int(r.size()), [&](int i) {
             if (same[std::size_t(i)] != i) return;
-            const glm::dvec3 s = r[std::size_t(i)].peer.sun_direction(), v = r[std::size_t(i)].peer.view_direction();
-            peer_second[std::size_t(i)] = quadrature.radiance(atm.bottom_radius_m, v.z, s.z, glm::dot(v, s), peer_rules);
+            const glm::dvec3 s = r[std::size_t(i)].peer.sun_direction(),
+                             v = r[std::size_t(i)].peer.view_direction();
+            peer_second[std::size_t(i)] =
+                quadrature.radiance(atm.bottom_radius_m, v.z, s.z, glm::dot(v, s), peer_rules);
         });
         const auto lut = make_sky_method("lut");
         for (std::size_t i = 0; i < r.size(); ++i) {
             Row& row = r[i];
             const auto ref2 = second.at(row.peer.sun_direction().z, row.peer.view_direction());
             for (int c = 0; c < 3; ++c)
-                row.second_order_quadrature[std::size_t(c)] = peer_second[std::size_t(same[i])][std::size_t(c)] - ref2[std::size_t(c)];
+                row.second_order_quadrature[std::size_t(c)] =
+                    peer_second[std::size_t(same[i])][std::size_t(c)] - ref2[std::size_t(c)];
         }
         for (Row& row : r) {
             const glm::dvec3 s = row.peer.sun_direction(), v = row.peer.view_direction();
@@ -236,21 +237,25 @@ void texture_lookup_reproduces_the_peers_orders_two_to_four() {
         for (int c = 0; c < 3; ++c) {
             const auto [rm, rw] = abs_median_max(raw[g][c]);
             const auto [em, ew] = abs_median_max(emulated[g][c]);
-            std::printf("[ peer orders 2-4, sun %2d, %s ] reference vs peer: median %.2f %% worst %.2f %% of L; "
-                        "through the peer's texture lookup: median %.2f %% worst %.2f %%\n",
-                        30 * g, kNames[c], 100 * rm, 100 * rw, 100 * em, 100 * ew);
+            std::printf(
+                "[ peer orders 2-4, sun %2d, %s ] reference vs peer: median %.2f %% worst %.2f %% of L; "
+                "through the peer's texture lookup: median %.2f %% worst %.2f %%\n",
+                30 * g, kNames[c], 100 * rm, 100 * rw, 100 * em, 100 * ew);
         }
     // Towards (az 0) over away (az 180) from the sun, per sun and view zenith.
     for (const Row& a : rows()) {
-        if (a.peer["rel_azimuth_deg"] != 0.0 || a.peer["sun_zenith_deg"] == 0.0 || a.peer["view_zenith_deg"] == 0.0)
+        if (a.peer["rel_azimuth_deg"] != 0.0 || a.peer["sun_zenith_deg"] == 0.0 ||
+            a.peer["view_zenith_deg"] == 0.0)
             continue;
         for (const Row& b : rows()) {
             if (b.peer["rel_azimuth_deg"] != 180.0 || b.peer["sun_zenith_deg"] != a.peer["sun_zenith_deg"] ||
                 b.peer["view_zenith_deg"] != a.peer["view_zenith_deg"])
                 continue;
-            std::printf("[ towards/away, sun %2.0f view %2.0f ]", a.peer["sun_zenith_deg"], a.peer["view_zenith_deg"]);
+            std::printf("[ towards/away, sun %2.0f view %2.0f ]", a.peer["sun_zenith_deg"],
+                        a.peer["view_zenith_deg"]);
             for (int c = 0; c < 3; ++c) {
-                const double p = (peer(a, "L_", c) - peer(a, "L1_", c)) / (peer(b, "L_", c) - peer(b, "L1_", c));
+                const double p =
+                    (peer(a, "L_", c) - peer(a, "L1_", c)) / (peer(b, "L_", c) - peer(b, "L1_", c));
                 const double e = a.ms_emulated[c] / b.ms_emulated[c], d = a.ms_ref[c] / b.ms_ref[c];
                 std::printf("  %s peer %.3f lookup %.3f reference %.3f", kNames[c], p, e, d);
                 EXPECT_LT(std::abs(e / p - 1.0), 0.05) << kNames[c];
@@ -271,11 +276,12 @@ void reference_like_for_like() {
             raw[sun_index(r)][c].push_back((r.ss_exact[c] + r.ms_ref[c]) / L - 1.0);
             err[sun_index(r)][c].push_back(like / L - 1.0);
             if (std::getenv("WELKIN_PEER_DUMP"))
-                std::printf("[ row ] sun %2.0f view %2.0f az %3.0f %s: reference %+.2f %%, lookup %+.2f %%, "
-                            "+ second-order quadratures %+.2f %% of L\n",
-                            r.peer["sun_zenith_deg"], r.peer["view_zenith_deg"], r.peer["rel_azimuth_deg"], kNames[c],
-                            100 * ((r.ss_exact[c] + r.ms_ref[c]) / L - 1), 100 * (lookup_only / L - 1),
-                            100 * (like / L - 1));
+                std::printf(
+                    "[ row ] sun %2.0f view %2.0f az %3.0f %s: reference %+.2f %%, lookup %+.2f %%, "
+                    "+ second-order quadratures %+.2f %% of L\n",
+                    r.peer["sun_zenith_deg"], r.peer["view_zenith_deg"], r.peer["rel_azimuth_deg"], kNames[c],
+                    100 * ((r.ss_exact[c] + r.ms_ref[c]) / L - 1), 100 * (lookup_only / L - 1),
+                    100 * (like / L - 1));
             EXPECT_LT(std::abs(like / L - 1.0), 0.02)
                 << kNames[c] << " sun " << r.peer["sun_zenith_deg"] << " view " << r.peer["view_zenith_deg"]
                 << " az " << r.peer["rel_azimuth_deg"];
@@ -285,10 +291,11 @@ void reference_like_for_like() {
             const auto [rm, rw] = abs_median_max(raw[g][c]);
             const auto [bm, bw] = abs_median_max(before[g][c]);
             const auto [m, w] = abs_median_max(err[g][c]);
-            std::printf("[ reference vs peer, sun %2d, %s ] raw (4 orders): median %.2f %% worst %.2f %%; "
-                        "like for like, lookup only: median %.2f %% worst %.2f %%; "
-                        "with the second order's quadratures: median %.2f %% worst %.2f %%\n",
-                        30 * g, kNames[c], 100 * rm, 100 * rw, 100 * bm, 100 * bw, 100 * m, 100 * w);
+            std::printf(
+                "[ reference vs peer, sun %2d, %s ] raw (4 orders): median %.2f %% worst %.2f %%; "
+                "like for like, lookup only: median %.2f %% worst %.2f %%; "
+                "with the second order's quadratures: median %.2f %% worst %.2f %%\n",
+                30 * g, kNames[c], 100 * rm, 100 * rw, 100 * bm, 100 * bw, 100 * m, 100 * w);
         }
 }
 
@@ -298,7 +305,8 @@ void lut_against_the_peer_corrected() {
         for (int c = 0; c < 3; ++c) {
             // The peer with its measured errors taken out: single scattering, texture
             // lookup, and the quadratures of its second order.
-            const double two = peer(r, "L_", c) - (r.ss_trap50[c] - r.ss_exact[c]) - (r.ms_emulated[c] - r.ms_ref[c]);
+            const double two =
+                peer(r, "L_", c) - (r.ss_trap50[c] - r.ss_exact[c]) - (r.ms_emulated[c] - r.ms_ref[c]);
             const double corrected = two - r.second_order_quadrature[c];
             lookup_only[c].push_back(r.lut[c] / two - 1.0);
             err[c].push_back(r.lut[c] / corrected - 1.0);
@@ -306,9 +314,10 @@ void lut_against_the_peer_corrected() {
     for (int c = 0; c < 3; ++c) {
         const auto [m, w] = abs_median_max(err[c]);
         const auto [m2, w2] = abs_median_max(lookup_only[c]);
-        std::printf("[ lut vs peer corrected, %s ] median %.2f %% worst %.2f %% (%zu views); "
-                    "without the second-order quadratures: median %.2f %% worst %.2f %%\n",
-                    kNames[c], 100 * m, 100 * w, err[c].size(), 100 * m2, 100 * w2);
+        std::printf(
+            "[ lut vs peer corrected, %s ] median %.2f %% worst %.2f %% (%zu views); "
+            "without the second-order quadratures: median %.2f %% worst %.2f %%\n",
+            kNames[c], 100 * m, 100 * w, err[c].size(), 100 * m2, 100 * w2);
         EXPECT_LT(m, 0.025) << kNames[c];
         EXPECT_LT(w, 0.05) << kNames[c];
     }
@@ -363,8 +372,8 @@ TEST(PeerMultipleScattering, PeerQuadraturesDoNotMakeTheAzimuthalStructure) {
     tbb::parallel_for(0, 4, [&](int k) {
         const PeerRow& p = *views[std::size_t(k / 2)];
         const glm::dvec3 s = p.sun_direction(), v = p.view_direction();
-        det[std::size_t(k)] = second.radiance(atm.bottom_radius_m, v.z, s.z, glm::dot(v, s),
-                                              k % 2 ? peer_rules : converged);
+        det[std::size_t(k)] =
+            second.radiance(atm.bottom_radius_m, v.z, s.z, glm::dot(v, s), k % 2 ? peer_rules : converged);
     });
     std::array<std::array<double, 3>, 2> ref{};
     for (std::size_t i = 0; i < 2; ++i) {
@@ -377,15 +386,18 @@ TEST(PeerMultipleScattering, PeerQuadraturesDoNotMakeTheAzimuthalStructure) {
         SkyOptions single;
         single.reference_paths = 1;
         ReferenceSky(single, 1).radiance(atm, Observer{0.0, s}, std::vector<glm::dvec3>{v}, one);
-        for (int c = 0; c < 3; ++c) ref[i][std::size_t(c)] = double(two[std::size_t(c)]) - double(one[std::size_t(c)]);
+        for (int c = 0; c < 3; ++c)
+            ref[i][std::size_t(c)] = double(two[std::size_t(c)]) - double(one[std::size_t(c)]);
     }
     for (int c = 0; c < 3; ++c) {
         for (std::size_t i = 0; i < 2; ++i) {
             const double conv = det[2 * i][std::size_t(c)], peer = det[2 * i + 1][std::size_t(c)];
-            std::printf("[ second order, sun 30 view 60 az %3.0f, %s ] reference %.4e, converged quadrature %+.2f %%, "
-                        "peer's rules %+.2f %%\n",
-                        (*views[i])["rel_azimuth_deg"], kNames[c], ref[i][std::size_t(c)],
-                        100 * (conv / ref[i][std::size_t(c)] - 1), 100 * (peer / conv - 1));
+            std::printf(
+                "[ second order, sun 30 view 60 az %3.0f, %s ] reference %.4e, converged quadrature %+.2f "
+                "%%, "
+                "peer's rules %+.2f %%\n",
+                (*views[i])["rel_azimuth_deg"], kNames[c], ref[i][std::size_t(c)],
+                100 * (conv / ref[i][std::size_t(c)] - 1), 100 * (peer / conv - 1));
             EXPECT_LT(std::abs(conv / ref[i][std::size_t(c)] - 1), 0.015) << kNames[c];
         }
         const double conv_ratio = det[0][std::size_t(c)] / det[2][std::size_t(c)];
@@ -393,8 +405,10 @@ TEST(PeerMultipleScattering, PeerQuadraturesDoNotMakeTheAzimuthalStructure) {
         const double table_ratio =
             ((*views[0])[std::string("L_") + kNames[c]] - (*views[0])[std::string("L1_") + kNames[c]]) /
             ((*views[1])[std::string("L_") + kNames[c]] - (*views[1])[std::string("L1_") + kNames[c]]);
-        std::printf("[ second order towards/away, %s ] converged %.3f, peer's rules %.3f; the peer's orders 2-4 %.3f\n",
-                    kNames[c], conv_ratio, peer_ratio, table_ratio);
+        std::printf(
+            "[ second order towards/away, %s ] converged %.3f, peer's rules %.3f; the peer's orders 2-4 "
+            "%.3f\n",
+            kNames[c], conv_ratio, peer_ratio, table_ratio);
         EXPECT_LT(std::abs(peer_ratio / conv_ratio - 1), 0.10) << kNames[c];
         EXPECT_GT(table_ratio / conv_ratio - 1, 0.25) << kNames[c];
     }
@@ -410,7 +424,8 @@ TEST(PeerMultipleScattering, SecondOrderSunTable) {
     double worst = 0;
     for (int i = 0; i <= 300; ++i)
         for (int j = 0; j <= 1000; ++j) {
-            const double r = atm.bottom_radius_m + (atm.top_radius_m - atm.bottom_radius_m) * std::pow(i / 300.0, 2.0);
+            const double r =
+                atm.bottom_radius_m + (atm.top_radius_m - atm.bottom_radius_m) * std::pow(i / 300.0, 2.0);
             const double mu = -0.2 + 1.2 * (j + 0.37) / 1001.0;
             if (ray_hits_ground(r, mu, atm.bottom_radius_m)) continue;
             double tau[3];

@@ -12,12 +12,11 @@
 // 50-interval trapezoid it must reproduce the peer's L1d column to 0.5 % on every view above
 // the horizon, and with a converged quadrature it gives the true single scattering, which
 // the other tests use to separate the peer's quadrature error from ours. It prints both.
-#include <gtest/gtest.h>
-
 #include <cstdio>
 
-#include "peer_table.hpp"
 #include "peer_single_scattering.hpp"
+#include "peer_table.hpp"
+#include <gtest/gtest.h>
 
 using namespace welkin;
 
@@ -33,15 +32,16 @@ TEST(PeerQuadrature, FiftyIntervalTrapezoidReproducesThePeersSingleScattering) {
             const double peer = row[columns[c]];
             err_trap[c].push_back(std::abs(trap[c] / peer - 1.0));
             bias[c].push_back(peer / exact[c] - 1.0);
-            EXPECT_LT(std::abs(trap[c] / peer - 1.0), 0.005) << columns[c] << " sun " << row["sun_zenith_deg"]
-                                                           << " view " << row["view_zenith_deg"];
+            EXPECT_LT(std::abs(trap[c] / peer - 1.0), 0.005)
+                << columns[c] << " sun " << row["sun_zenith_deg"] << " view " << row["view_zenith_deg"];
         }
     }
     for (int c = 0; c < 3; ++c) {
         const auto [m, w] = welkin::test::median_and_max(err_trap[c]);
         const auto [bm, bw] = welkin::test::median_and_max(bias[c]);
-        std::printf("%s: 50-interval trapezoid vs peer median %.2f %% worst %.2f %%; peer minus converged "
-                    "single scattering: median %+.2f %%, largest %+.2f %%\n",
-                    columns[c], 100 * m, 100 * w, 100 * bm, 100 * bw);
+        std::printf(
+            "%s: 50-interval trapezoid vs peer median %.2f %% worst %.2f %%; peer minus converged "
+            "single scattering: median %+.2f %%, largest %+.2f %%\n",
+            columns[c], 100 * m, 100 * w, 100 * bm, 100 * bw);
     }
 }

@@ -1,13 +1,13 @@
 // Phase functions (phase.hpp) and the reference path tracer's sampling routines
 // (reference_sampling.hpp, reference_rng.hpp).
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
 #include <set>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "welkin/atmosphere/phase.hpp"
 #include "welkin/base/rng.hpp"
@@ -29,16 +29,13 @@ double integrate_cosine(const std::function<double(double)>& f, int n = 400) {
         const double a = 1.0 - 2.0 * std::pow(double(i + 1) / n, 3.0);
         const double b = 1.0 - 2.0 * std::pow(double(i) / n, 3.0);
         const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
-        for (int k = 0; k < 4; ++k)
-            sum += half * w[k] * (f(mid - half * x[k]) + f(mid + half * x[k]));
+        for (int k = 0; k < 4; ++k) sum += half * w[k] * (f(mid - half * x[k]) + f(mid + half * x[k]));
     }
     return sum;
 }
 
 // Solid-angle integral of an axially symmetric p(nu): 2 pi int p dnu.
-double sphere_integral(const std::function<double(double)>& p) {
-    return kTwoPi * integrate_cosine(p);
-}
+double sphere_integral(const std::function<double(double)>& p) { return kTwoPi * integrate_cosine(p); }
 
 double hg_cdf(double nu, double g) {
     return (1.0 - g * g) / (2.0 * g) * (1.0 / std::sqrt(1.0 + g * g - 2.0 * g * nu) - 1.0 / (1.0 + g));
@@ -62,12 +59,9 @@ double ks_distance(std::vector<double> samples, const std::function<double(doubl
 TEST(Phase, EveryPhaseFunctionIntegratesToOneOverTheSphere) {
     EXPECT_NEAR(sphere_integral([](double nu) { return rayleigh_phase(nu); }), 1.0, 1e-12);
     for (double g : {-0.5, 0.0, 0.3, 0.8, 0.95}) {
-        EXPECT_NEAR(sphere_integral([g](double nu) { return henyey_greenstein_phase(nu, g); }), 1.0,
-                    1e-9)
+        EXPECT_NEAR(sphere_integral([g](double nu) { return henyey_greenstein_phase(nu, g); }), 1.0, 1e-9)
             << g;
-        EXPECT_NEAR(sphere_integral([g](double nu) { return cornette_shanks_phase(nu, g); }), 1.0,
-                    1e-9)
-            << g;
+        EXPECT_NEAR(sphere_integral([g](double nu) { return cornette_shanks_phase(nu, g); }), 1.0, 1e-9) << g;
     }
     EXPECT_NEAR(sphere_integral([](double) { return kIsotropicPhase; }), 1.0, 1e-12);
 }
@@ -76,8 +70,7 @@ TEST(Phase, MeanCosinesMatchClosedForms) {
     // HG's asymmetry parameter is its mean cosine; Cornette-Shanks' is
     // 3 g (g^2 + 4) / (5 (g^2 + 2)); Rayleigh's is 0.
     for (double g : {-0.5, 0.3, 0.8, 0.95}) {
-        EXPECT_NEAR(sphere_integral([g](double nu) { return nu * henyey_greenstein_phase(nu, g); }), g,
-                    1e-9);
+        EXPECT_NEAR(sphere_integral([g](double nu) { return nu * henyey_greenstein_phase(nu, g); }), g, 1e-9);
         EXPECT_NEAR(sphere_integral([g](double nu) { return nu * cornette_shanks_phase(nu, g); }),
                     3.0 * g * (g * g + 4.0) / (5.0 * (g * g + 2.0)), 1e-9);
     }
@@ -87,19 +80,23 @@ TEST(Phase, MeanCosinesMatchClosedForms) {
 // The Legendre moments chi_l = 2 pi int p P_l dnu used by the multiple-scattering LUT:
 // the closed forms of phase.hpp against direct quadrature, for l = 0, 1, 2.
 TEST(Phase, LegendreMomentsMatchQuadrature) {
-    const auto legendre = [](int l, double nu) { return l == 0 ? 1.0 : l == 1 ? nu : 0.5 * (3.0 * nu * nu - 1.0); };
+    const auto legendre = [](int l, double nu) {
+        return l == 0 ? 1.0 : l == 1 ? nu : 0.5 * (3.0 * nu * nu - 1.0);
+    };
     for (int l = 0; l <= 2; ++l) {
         EXPECT_NEAR(rayleigh_phase_moment(l),
                     sphere_integral([&](double nu) { return rayleigh_phase(nu) * legendre(l, nu); }), 1e-12)
             << l;
         for (double g : {-0.5, 0.0, 0.3, 0.8, 0.95}) {
-            EXPECT_NEAR(mie_phase_moment(MiePhaseModel::HenyeyGreenstein, l, g),
-                        sphere_integral([&](double nu) { return henyey_greenstein_phase(nu, g) * legendre(l, nu); }),
-                        1e-9)
+            EXPECT_NEAR(
+                mie_phase_moment(MiePhaseModel::HenyeyGreenstein, l, g),
+                sphere_integral([&](double nu) { return henyey_greenstein_phase(nu, g) * legendre(l, nu); }),
+                1e-9)
                 << "HG l " << l << " g " << g;
-            EXPECT_NEAR(mie_phase_moment(MiePhaseModel::CornetteShanks, l, g),
-                        sphere_integral([&](double nu) { return cornette_shanks_phase(nu, g) * legendre(l, nu); }),
-                        1e-9)
+            EXPECT_NEAR(
+                mie_phase_moment(MiePhaseModel::CornetteShanks, l, g),
+                sphere_integral([&](double nu) { return cornette_shanks_phase(nu, g) * legendre(l, nu); }),
+                1e-9)
                 << "CS l " << l << " g " << g;
         }
     }
@@ -148,8 +145,8 @@ TEST(PhaseSampling, SampledDistributionsMatch) {
 
 TEST(PhaseSampling, DirectionsAboutAnAxisHaveTheRequestedCosineAndUniformAzimuth) {
     PathRng rng(3, 0, 0);
-    for (const glm::dvec3 axis : {glm::dvec3(0, 0, 1), glm::dvec3(0, 0, -1),
-                                  glm::normalize(glm::dvec3(0.3, -0.8, 0.2))}) {
+    for (const glm::dvec3 axis :
+         {glm::dvec3(0, 0, 1), glm::dvec3(0, 0, -1), glm::normalize(glm::dvec3(0.3, -0.8, 0.2))}) {
         glm::dvec3 t, b;
         orthonormal_basis(axis, t, b);
         EXPECT_NEAR(glm::dot(t, axis), 0.0, 1e-12);

@@ -1,11 +1,10 @@
 // ProgressTracker: what a host (CLI bar, Blender status, Python callback) may rely on.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <atomic>
 #include <thread>
 #include <vector>
 
+#include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
 #include "welkin/base/error.hpp"

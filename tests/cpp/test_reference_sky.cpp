@@ -6,10 +6,6 @@
 // Runtime: about 21 s on one free core in a Release build (2.4 us of CPU per path with 3
 // wavelengths; the peer comparison dominates); the paths per direction used are printed
 // by each Monte-Carlo test.
-#include <gtest/gtest.h>
-
-#include <oneapi/tbb/global_control.h>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -21,12 +17,14 @@
 #include <string>
 #include <vector>
 
-#include <glm/geometric.hpp>
-
 #include "peer_table.hpp"
-#include "welkin/base/error.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <oneapi/tbb/global_control.h>
+
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/phase.hpp"
+#include "welkin/base/error.hpp"
 #include "welkin/base/quadrature.hpp"
 #include "welkin/reference/column_table.hpp"
 #include "welkin/sky/reference.hpp"
@@ -52,7 +50,7 @@ struct SkyRun {
 };
 
 SkyRun run(const ReferenceSky& sky, const Atmosphere& atm, const Observer& obs,
-        const std::vector<glm::dvec3>& dirs) {
+           const std::vector<glm::dvec3>& dirs) {
     SkyRun r;
     r.radiance.resize(dirs.size() * atm.channels());
     r.standard_error.resize(dirs.size() * atm.channels());
@@ -103,8 +101,8 @@ const char* const kBands[3] = {"680nm", "550nm", "440nm"};
 // irradiance and the phase functions. Transmittances from our column table, so with n = 50
 // this reproduces the peer's L1d column, and with n -> infinity the exact single scattering.
 std::vector<double> trapezoid_single_scattering(const Atmosphere& atm, const ColumnTable& table,
-                                                double altitude_m, const glm::dvec3& v,
-                                                const glm::dvec3& s, int n) {
+                                                double altitude_m, const glm::dvec3& v, const glm::dvec3& s,
+                                                int n) {
     const double R = atm.bottom_radius_m, r = R + altitude_m, mu = v.z, mu_s = s.z;
     const double nu = glm::dot(v, s);
     const ColumnTable::Ray ray = table.ray(r, mu);
@@ -169,12 +167,12 @@ TEST(ReferenceSkyPeer, SingleScatteringReproducesPeerQuadratureAndItsLimit) {
         }
     }
     for (int c = 0; c < 3; ++c) {
-        std::printf("[ single scattering %s ] 50-step replica vs peer L1d: median %.5f worst %.5f; "
-                    "method vs trapezoid limit: worst %.1e; peer L1d vs method: median %.4f "
-                    "worst %.4f (the peer's quadrature)\n",
-                    kBands[c], median_abs(replica_err[c]), worst(replica_err[c]),
-                    worst(limit_err[c]), median_abs(peer_quadrature_err[c]),
-                    worst(peer_quadrature_err[c]));
+        std::printf(
+            "[ single scattering %s ] 50-step replica vs peer L1d: median %.5f worst %.5f; "
+            "method vs trapezoid limit: worst %.1e; peer L1d vs method: median %.4f "
+            "worst %.4f (the peer's quadrature)\n",
+            kBands[c], median_abs(replica_err[c]), worst(replica_err[c]), worst(limit_err[c]),
+            median_abs(peer_quadrature_err[c]), worst(peer_quadrature_err[c]));
         EXPECT_LT(worst(replica_err[c]), 0.005) << kBands[c];
         EXPECT_LT(worst(limit_err[c]), 1e-6) << kBands[c];
     }
@@ -238,8 +236,7 @@ TEST(ReferenceSkyPeer, AllOrdersAgainstThePeer) {
         all.push_back(run(ReferenceSky(paths(kPaths, 11)), atm, sun_at(geo.sun_zenith), geo.dirs));
         directions += geo.dirs.size();
     }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     for (const PeerGeometry& geo : geos)
         four.push_back(run(ReferenceSky(paths(kPaths, 13), 4), atm, sun_at(geo.sun_zenith), geo.dirs));
     std::map<double, std::vector<double>> raw_err[3], four_err[3];
@@ -259,33 +256,36 @@ TEST(ReferenceSkyPeer, AllOrdersAgainstThePeer) {
         for (std::size_t c = 0; c < 3; ++c) {
             const double peer = row.v.at(std::string("L_") + kBands[c]);
             const double reference = all[g].radiance[i * 3 + c];
-            const double truncated = four[g].radiance[i * 3 + c] - exact_single.radiance[c] +
-                                     peer_quadrature[c];
+            const double truncated =
+                four[g].radiance[i * 3 + c] - exact_single.radiance[c] + peer_quadrature[c];
             raw_err[c][row.sun_zenith].push_back(reference / peer - 1.0);
             four_err[c][row.sun_zenith].push_back(truncated / peer - 1.0);
             rel_se[c].push_back(all[g].standard_error[i * 3 + c] / reference);
             std::printf("  %s all %+.4f, 4 orders %+.4f", kBands[c], reference / peer - 1.0,
                         truncated / peer - 1.0);
-            if (row.sun_zenith == 0.0)
+            if (row.sun_zenith == 0.0) {
                 EXPECT_LT(std::abs(truncated / peer - 1.0), 0.02)
                     << kBands[c] << " sun 0 view " << row.view_zenith << " az " << row.azimuth;
+            }
         }
         std::printf("\n");
     }
     for (std::size_t c = 0; c < 3; ++c) {
         for (double sz : {0.0, 30.0, 60.0})
-            std::printf("[ peer %s sun %2.0f ] all orders vs peer: median |err| %.4f worst %.4f;  "
-                        "4 orders, peer quadrature removed: median |err| %.4f worst %.4f\n",
-                        kBands[c], sz, median_abs(raw_err[c][sz]), worst(raw_err[c][sz]),
-                        median_abs(four_err[c][sz]), worst(four_err[c][sz]));
+            std::printf(
+                "[ peer %s sun %2.0f ] all orders vs peer: median |err| %.4f worst %.4f;  "
+                "4 orders, peer quadrature removed: median |err| %.4f worst %.4f\n",
+                kBands[c], sz, median_abs(raw_err[c][sz]), worst(raw_err[c][sz]), median_abs(four_err[c][sz]),
+                worst(four_err[c][sz]));
         // The standard error is small: under 0.5 % of every value.
         std::printf("[ peer %s ] relative standard error: median %.5f worst %.5f\n", kBands[c],
                     median(rel_se[c]), worst(rel_se[c]));
         EXPECT_LT(worst(rel_se[c]), 0.005) << kBands[c];
     }
-    std::printf("[ peer ] %d paths per direction; all orders: %zu directions in %.1f s, %.0f ms "
-                "per direction\n",
-                kPaths, directions, seconds, 1e3 * seconds / double(directions));
+    std::printf(
+        "[ peer ] %d paths per direction; all orders: %zu directions in %.1f s, %.0f ms "
+        "per direction\n",
+        kPaths, directions, seconds, 1e3 * seconds / double(directions));
 }
 
 // The standard error is honest: two seeds differ by amounts whose normalised spread
@@ -308,9 +308,10 @@ TEST(ReferenceSkyPeer, StandardErrorMatchesTheSpreadBetweenSeeds) {
     double rms = 0.0;
     for (double x : z) rms += x * x / double(z.size());
     rms = std::sqrt(rms);
-    std::printf("[ standard error ] %zu values, two seeds of %d paths: RMS of z = %.3f, worst "
-                "|z| = %.2f\n",
-                z.size(), kPaths, rms, worst(z));
+    std::printf(
+        "[ standard error ] %zu values, two seeds of %d paths: RMS of z = %.3f, worst "
+        "|z| = %.2f\n",
+        z.size(), kPaths, rms, worst(z));
     // The 234 values are correlated across the channels of a direction (~80 independent
     // directions), so the RMS scatters by about +-0.1 between seed pairs (0.92 to 1.14
     // over 8 pairs while writing this); the bounds are ~3 times that.
@@ -365,7 +366,8 @@ std::vector<double> plane_parallel_second_order(const Atmosphere& atm, const glm
             const double pv[2] = {rayleigh_phase(nv), mie_phase(atm.mie_phase, nv, atm.mie_g)};
             const double ps[2] = {rayleigh_phase(ns), mie_phase(atm.mie_phase, ns, atm.mie_g)};
             for (int j = 0; j < 2; ++j)
-                for (int k = 0; k < 2; ++k) A[m][std::size_t(2 * j + k)] += wmu[m] * kTwoPi / P * pv[j] * ps[k];
+                for (int k = 0; k < 2; ++k)
+                    A[m][std::size_t(2 * j + k)] += wmu[m] * kTwoPi / P * pv[j] * ps[k];
         }
     std::vector<double> out(atm.channels());
     std::vector<double> tau(N), sig_t(N), src[2];
@@ -496,7 +498,6 @@ Atmosphere homogeneous_layer(double Z, std::vector<double> rayleigh, double mie_
     return atm;
 }
 
-
 }  // namespace
 
 // Single scattering, sun at the zenith, view at zenith cosine mu (nu = mu): the point at
@@ -513,9 +514,9 @@ TEST(ReferenceSkyClosedForm, SingleScatteringInAHomogeneousLayer) {
         for (std::size_t c = 0; c < 3; ++c) {
             const double s = atm.rayleigh_scattering[c] + 1.5e-5 + 2e-6;
             const double path = mu == 1.0 ? Z : -std::expm1(-s * Z * (1.0 - mu) / mu) / (s * (1.0 - mu));
-            const double exact = (atm.rayleigh_scattering[c] * rayleigh_phase(mu) +
-                                  1e-5 * henyey_greenstein_phase(mu, 0.6)) *
-                                 std::exp(-s * Z) * path;
+            const double exact =
+                (atm.rayleigh_scattering[c] * rayleigh_phase(mu) + 1e-5 * henyey_greenstein_phase(mu, 0.6)) *
+                std::exp(-s * Z) * path;
             EXPECT_NEAR(r.radiance[c] / exact, 1.0, 3e-5) << "view " << vz << " channel " << c;
             EXPECT_EQ(r.standard_error[c], 0.0f);
         }
@@ -554,8 +555,8 @@ TEST(ReferenceSkyClosedForm, GroundReflectedLightScatteredOnce) {
             }
             const double exact = std::exp(-tau) / kPi * 3.0 / 8.0 * integral;
             const double mc = a.radiance[c] - b.radiance[c];
-            std::printf("[ ground, view %2.0f, tau %.2f ] %.6e vs %.6e (%+.5f, se %.5f)\n", vz, tau,
-                        mc, exact, mc / exact - 1.0, a.standard_error[c] / exact);
+            std::printf("[ ground, view %2.0f, tau %.2f ] %.6e vs %.6e (%+.5f, se %.5f)\n", vz, tau, mc,
+                        exact, mc / exact - 1.0, a.standard_error[c] / exact);
             EXPECT_NEAR(mc / exact, 1.0, 4.0 * a.standard_error[c] / exact + 1e-4);
         }
     }
@@ -591,8 +592,9 @@ TEST(ReferenceSkyClosedForm, ConservativeLayerConservesEnergy) {
             for (std::size_t c = 0; c < 3; ++c) {
                 const double k = kTwoPi * w[i] * x[i];
                 f[c] += k * (a.radiance[i * 3 + c] + b.radiance[i * 3 + c]);
-                se[c] += k * k * (a.standard_error[i * 3 + c] * a.standard_error[i * 3 + c] +
-                                  b.standard_error[i * 3 + c] * b.standard_error[i * 3 + c]);
+                se[c] += k * k *
+                         (a.standard_error[i * 3 + c] * a.standard_error[i * 3 + c] +
+                          b.standard_error[i * 3 + c] * b.standard_error[i * 3 + c]);
             }
         for (double& s : se) s = std::sqrt(s);
         return f;
@@ -604,10 +606,10 @@ TEST(ReferenceSkyClosedForm, ConservativeLayerConservesEnergy) {
     for (std::size_t c = 0; c < 3; ++c) {
         const double tau = (atm.rayleigh_scattering[c] + 1e-5) * Z;
         const double expected = -std::expm1(-tau);
-        std::printf("[ energy, tau %.1f ] F_up + F_down = %.6f, E (1 - e^-tau) = %.6f (%+.5f, se "
-                    "%.5f); orders <= 1, 2, 3: %.5f %.5f %.5f\n",
-                    tau, all[c], expected, all[c] / expected - 1.0, se[c] / expected, f1[c], f2[c],
-                    f3[c]);
+        std::printf(
+            "[ energy, tau %.1f ] F_up + F_down = %.6f, E (1 - e^-tau) = %.6f (%+.5f, se "
+            "%.5f); orders <= 1, 2, 3: %.5f %.5f %.5f\n",
+            tau, all[c], expected, all[c] / expected - 1.0, se[c] / expected, f1[c], f2[c], f3[c]);
         // 4 standard errors plus 5e-4 for the cosine quadrature and the planet's curvature.
         EXPECT_NEAR(all[c] / expected, 1.0, 4.0 * se[c] / expected + 5e-4);
         EXPECT_LT(f1[c], f2[c]);
@@ -652,8 +654,8 @@ TEST(ReferenceSkyEdges, ObserverAboveTheAtmosphere) {
     // above the ground (the top is tangent 6.3 deg below, the ground 10.2 deg): a long
     // path through dense air, brighter than straight down. From 36000 km, towards the
     // planet's centre.
-    const std::vector<glm::dvec3> dirs = {view_direction(0, 0), view_direction(90, 0),
-                                          view_direction(180, 0), view_direction(99.5, 0)};
+    const std::vector<glm::dvec3> dirs = {view_direction(0, 0), view_direction(90, 0), view_direction(180, 0),
+                                          view_direction(99.5, 0)};
     const SkyRun r = run(sky, atm, sun_at(30.0, 100e3), dirs);
     for (std::size_t c = 0; c < 3; ++c) {
         EXPECT_EQ(r.radiance[0 * 3 + c], 0.0f);
@@ -668,16 +670,16 @@ TEST(ReferenceSkyEdges, ObserverAboveTheAtmosphere) {
     // column, the same as seen from just above the top (the vacuum adds nothing).
     const SkyRun near = run(sky, atm, sun_at(0.0, 60e3 + 1.0), {view_direction(180, 0)});
     for (std::size_t c = 0; c < 3; ++c)
-        EXPECT_NEAR(far.radiance[c] / near.radiance[c], 1.0,
-                    4.0 * std::hypot(far.standard_error[c], near.standard_error[c]) / near.radiance[c] +
-                        1e-4);
+        EXPECT_NEAR(
+            far.radiance[c] / near.radiance[c], 1.0,
+            4.0 * std::hypot(far.standard_error[c], near.standard_error[c]) / near.radiance[c] + 1e-4);
 }
 
 TEST(ReferenceSkyEdges, GroundHittingRaysTwilightAndNight) {
     const Atmosphere atm = Atmosphere::preset("bruneton2017", test::kPeerWavelengthsNm);
     const ReferenceSky sky(paths(1024));
-    const std::vector<glm::dvec3> dirs = {view_direction(0, 0), view_direction(80, 0),
-                                          view_direction(120, 0), view_direction(180, 0)};
+    const std::vector<glm::dvec3> dirs = {view_direction(0, 0), view_direction(80, 0), view_direction(120, 0),
+                                          view_direction(180, 0)};
     double previous_zenith = 1e30;
     for (double sz : {80.0, 90.0, 96.0, 102.0, 120.0}) {
         const SkyRun r = run(sky, atm, sun_at(sz, 10e3), dirs);
@@ -687,7 +689,9 @@ TEST(ReferenceSkyEdges, GroundHittingRaysTwilightAndNight) {
             EXPECT_TRUE(std::isfinite(r.standard_error[i])) << sz;
         }
         // Down from 10 km: the air below carries light (no ground radiance is added).
-        if (sz < 90.0) EXPECT_GT(r.radiance[3 * 3 + 1], 0.0f);
+        if (sz < 90.0) {
+            EXPECT_GT(r.radiance[3 * 3 + 1], 0.0f);
+        }
         // The zenith sky darkens as the sun sets and the Earth's shadow rises (once the
         // whole zenith ray is in the shadow, only rare multiply scattered paths light it).
         if (sz <= 96.0)
@@ -755,8 +759,7 @@ TEST(ReferenceSkyEdges, BadArgumentsNameTheParameter) {
     EXPECT_EQ(parameter_of([&] { sky.radiance(atm, sun_at(0), dirs, out, se); }), "view_directions[1]");
     const std::vector<glm::dvec3> good = {view_direction(0, 0), view_direction(10, 0)};
     EXPECT_EQ(parameter_of([&] { sky.radiance(atm, sun_at(0), good, short_out); }), "out");
-    EXPECT_EQ(parameter_of([&] { sky.radiance(atm, sun_at(0), good, out, short_out); }),
-              "standard_error");
+    EXPECT_EQ(parameter_of([&] { sky.radiance(atm, sun_at(0), good, out, short_out); }), "standard_error");
     EXPECT_EQ(parameter_of([&] { ReferenceSky bad(paths(16), -1); }), "max_scattering_order");
     EXPECT_EQ(parameter_of([&] { ReferenceSky bad(paths(0)); }), "reference_paths");
     EXPECT_EQ(make_sky_method("reference")->name(), "reference");
@@ -795,15 +798,15 @@ TEST(ReferenceSkyEdges, TwilightSingleScatteringMatchesBruteForce) {
     const ReferenceSky single(paths(1), 1);
     for (double sz : {93.0, 97.0})
         for (double altitude : {0.0, 10e3})
-            for (const glm::dvec3& v : {view_direction(0, 0), view_direction(80, 0),
-                                        view_direction(80, 180), view_direction(89, 30)}) {
+            for (const glm::dvec3& v : {view_direction(0, 0), view_direction(80, 0), view_direction(80, 180),
+                                        view_direction(89, 30)}) {
                 const Observer obs = sun_at(sz, altitude);
                 const SkyRun r = run(single, atm, obs, {v});
                 const std::vector<double> t =
                     trapezoid_single_scattering(atm, table, altitude, v, obs.sun_direction, 200000);
                 for (std::size_t c = 0; c < 3; ++c)
                     EXPECT_NEAR(r.radiance[c], t[c], 1e-4 * t[c] + 1e-12)
-                        << "sun " << sz << " altitude " << altitude << " view " << v.x << " "
-                        << v.z << " " << kBands[c];
+                        << "sun " << sz << " altitude " << altitude << " view " << v.x << " " << v.z << " "
+                        << kBands[c];
             }
 }

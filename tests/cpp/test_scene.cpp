@@ -1,13 +1,12 @@
 // The scene description (JSON round trip, errors naming the key) and the camera rays
 // (Blender's view plane, sensor fit, shift, orthographic and equirectangular cameras).
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <string>
 
-#include <glm/geometric.hpp>
-
 #include "invalid_argument_testing.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
 #include "welkin/base/camera.hpp"
 #include "welkin/base/equirect.hpp"
 #include "welkin/base/error.hpp"
@@ -21,7 +20,8 @@ namespace {
 
 std::string scene_with(const std::string& extra) {
     return R"({"version": 1, "camera": {"matrix_world": [[1,0,0,0],[0,1,0,0],[0,0,1,2],[0,0,0,1]],
-               "type": "PERSP"})" + extra + "}";
+               "type": "PERSP"})" +
+           extra + "}";
 }
 
 glm::dvec3 local(const CameraRays& rays, const Camera& cam, const glm::dvec3& world) {
@@ -45,8 +45,8 @@ TEST(Scene, JsonRoundTripIsExact) {
     EXPECT_EQ(s.resolution.width(), 320);
     EXPECT_EQ(s.resolution.height(), 240);
     ASSERT_TRUE(s.camera);
-    EXPECT_EQ(s.camera->matrix_world[3][0], 5.0);   // row 0, column 3: translation x
-    EXPECT_EQ(s.camera->matrix_world[0][1], 1.0);   // row 1, column 0
+    EXPECT_EQ(s.camera->matrix_world[3][0], 5.0);  // row 0, column 3: translation x
+    EXPECT_EQ(s.camera->matrix_world[0][1], 1.0);  // row 1, column 0
     EXPECT_EQ(s.aerial.froxel_slices, 40);
     EXPECT_NEAR(s.sun_direction.z, std::sin(10 * kDegree), 1e-15);
     const std::string text = s.to_json_string();
@@ -65,51 +65,61 @@ TEST(Scene, ErrorsNameTheKey) {
     EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string("{"); }), "scene JSON");
     EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"exposre":1})"); }),
               "exposre");
-    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"atmosphere":"nope"})"); }),
-              "atmosphere.preset");
+    EXPECT_EQ(
+        parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"atmosphere":"nope"})"); }),
+        "atmosphere.preset");
     EXPECT_EQ(parameter_of([] {
-                  SceneDescription::from_json_string(R"({"version":1,"atmosphere":{"preset":"clear","mie":{"g":3}}})");
+                  SceneDescription::from_json_string(
+                      R"({"version":1,"atmosphere":{"preset":"clear","mie":{"g":3}}})");
               }),
               "atmosphere.mie.g");
     EXPECT_EQ(parameter_of([] {
-                  SceneDescription::from_json_string(R"({"version":1,"sun":{"direction":[0,0,1],"elevation_deg":3}})");
+                  SceneDescription::from_json_string(
+                      R"({"version":1,"sun":{"direction":[0,0,1],"elevation_deg":3}})");
               }),
               "sun");
-    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"sun":{"direction":[0,0,0]}})"); }),
+    EXPECT_EQ(parameter_of(
+                  [] { SceneDescription::from_json_string(R"({"version":1,"sun":{"direction":[0,0,0]}})"); }),
               "sun.direction");
-    EXPECT_EQ(parameter_of([] {
-                  SceneDescription::from_json_string(R"({"version":1,"sun":{"elevation_deg":95,"azimuth_deg":0}})");
-              }),
-              "sun.elevation_deg");
-    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"origin_altitude_m":-1})"); }),
-              "origin_altitude_m");
-    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(scene_with(R"(, "resolution": {"x": 0})")); }),
-              "resolution.x");
-    EXPECT_EQ(parameter_of([] {
-                  SceneDescription::from_json_string(R"({"version":1,"camera":{"type":"PERSP"}})");
-              }),
+    EXPECT_EQ(
+        parameter_of([] {
+            SceneDescription::from_json_string(R"({"version":1,"sun":{"elevation_deg":95,"azimuth_deg":0}})");
+        }),
+        "sun.elevation_deg");
+    EXPECT_EQ(
+        parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"origin_altitude_m":-1})"); }),
+        "origin_altitude_m");
+    EXPECT_EQ(
+        parameter_of([] { SceneDescription::from_json_string(scene_with(R"(, "resolution": {"x": 0})")); }),
+        "resolution.x");
+    EXPECT_EQ(parameter_of(
+                  [] { SceneDescription::from_json_string(R"({"version":1,"camera":{"type":"PERSP"}})"); }),
               "camera.matrix_world");
     EXPECT_EQ(parameter_of([] {
                   SceneDescription::from_json_string(
                       R"({"version":1,"camera":{"type":"PERSP","matrix_world":[[1,0,0],[0,1,0],[0,0,1]]}})");
               }),
               "camera.matrix_world");
-    EXPECT_EQ(parameter_of([] {
-                  SceneDescription::from_json_string(
-                      R"({"version":1,"camera":{"type":"PERSP","matrix_world":[[0,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}})");
-              }),
-              "camera.matrix_world");
-    EXPECT_EQ(parameter_of([] {
-                  SceneDescription::from_json_string(
-                      R"({"version":1,"camera":{"type":"PERSP","matrix_world":[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,2]]}})");
-              }),
-              "camera.matrix_world");
-    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(scene_with(R"(, "x": 1)")).camera; }), "x");
+    EXPECT_EQ(
+        parameter_of([] {
+            SceneDescription::from_json_string(
+                R"({"version":1,"camera":{"type":"PERSP","matrix_world":[[0,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}})");
+        }),
+        "camera.matrix_world");
+    EXPECT_EQ(
+        parameter_of([] {
+            SceneDescription::from_json_string(
+                R"({"version":1,"camera":{"type":"PERSP","matrix_world":[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,2]]}})");
+        }),
+        "camera.matrix_world");
+    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(scene_with(R"(, "x": 1)")).camera; }),
+              "x");
     // Inside the camera object.
     const auto camera_error = [](const std::string& fields) {
         return parameter_of([&] {
             SceneDescription::from_json_string(
-                R"({"version":1,"camera":{"matrix_world":[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]],)" + fields + "}}");
+                R"({"version":1,"camera":{"matrix_world":[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]],)" +
+                fields + "}}");
         });
     };
     EXPECT_EQ(camera_error(R"("type": "FISH")"), "camera.type");
@@ -118,16 +128,20 @@ TEST(Scene, ErrorsNameTheKey) {
     EXPECT_EQ(camera_error(R"("type": "PERSP", "fov_deg": 180)"), "camera.fov_deg");
     EXPECT_EQ(camera_error(R"("type": "PERSP", "sensor_fit": "auto")"), "camera.sensor_fit");
     EXPECT_EQ(camera_error(R"("type": "ORTHO", "ortho_scale": 0)"), "camera.ortho_scale");
-    EXPECT_EQ(camera_error(R"("type": "PANO", "panorama_type": "FISHEYE_EQUISOLID")"), "camera.panorama_type");
+    EXPECT_EQ(camera_error(R"("type": "PANO", "panorama_type": "FISHEYE_EQUISOLID")"),
+              "camera.panorama_type");
     EXPECT_EQ(camera_error(R"("type": "PANO", "latitude_min_deg": 10, "latitude_max_deg": 5)"),
               "camera.latitude_min_deg");
     EXPECT_EQ(camera_error(R"("type": "PERSP", "clip_start_m": 10, "clip_end_m": 5)"), "camera.clip_start_m");
     EXPECT_EQ(camera_error(R"("type": "PERSP", "focal": 5)"), "camera.focal");
     EXPECT_EQ(camera_error(R"("type": "PERSP", "shift_x": "a")"), "camera.shift_x");
     // Aerial options.
-    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"aerial":{"froxels":[1,32,32]}})"); }),
+    EXPECT_EQ(parameter_of([] {
+                  SceneDescription::from_json_string(R"({"version":1,"aerial":{"froxels":[1,32,32]}})");
+              }),
               "aerial.froxels[0]");
-    EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"aerial":{"method":"fast"}})"); }),
+    EXPECT_EQ(parameter_of(
+                  [] { SceneDescription::from_json_string(R"({"version":1,"aerial":{"method":"fast"}})"); }),
               "aerial.method");
     EXPECT_EQ(parameter_of([] { SceneDescription::from_json_string(R"({"version":1,"method":"magic"})"); }),
               "method");
@@ -193,8 +207,8 @@ TEST(CameraRays, MatrixWorldPlacesAndTurnsTheCamera) {
     // Blender's usual "look along +X" camera: rotation (90, 0, -90) degrees -> local -Z is
     // world +X, local +Y is world +Z, local +X is world -Y.
     Camera cam;
-    cam.matrix_world = glm::dmat4(glm::dvec4(0, -1, 0, 0), glm::dvec4(0, 0, 1, 0),
-                                  glm::dvec4(-1, 0, 0, 0), glm::dvec4(10, 20, 30, 1));
+    cam.matrix_world = glm::dmat4(glm::dvec4(0, -1, 0, 0), glm::dvec4(0, 0, 1, 0), glm::dvec4(-1, 0, 0, 0),
+                                  glm::dvec4(10, 20, 30, 1));
     const CameraRays rays(cam, 101, 101);
     const CameraRays::Ray c = rays.at_screen(0.5, 0.5);
     EXPECT_NEAR(glm::distance(c.direction, glm::dvec3(1, 0, 0)), 0.0, 1e-12);
@@ -228,8 +242,8 @@ TEST(CameraRays, OrthographicRaysAreParallel) {
 TEST(CameraRays, PanoramaPointedAlongXIsTheEnvironmentMapping) {
     Camera cam;
     cam.type = CameraType::Panoramic;
-    cam.matrix_world = glm::dmat4(glm::dvec4(0, -1, 0, 0), glm::dvec4(0, 0, 1, 0),
-                                  glm::dvec4(-1, 0, 0, 0), glm::dvec4(0, 0, 0, 1));
+    cam.matrix_world = glm::dmat4(glm::dvec4(0, -1, 0, 0), glm::dvec4(0, 0, 1, 0), glm::dvec4(-1, 0, 0, 0),
+                                  glm::dvec4(0, 0, 0, 1));
     const CameraRays rays(cam, 64, 32);
     for (double u : {0.03, 0.25, 0.5, 0.61, 0.97})
         for (double v : {0.05, 0.3, 0.5, 0.8, 0.99}) {

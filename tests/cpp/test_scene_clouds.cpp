@@ -1,26 +1,25 @@
 // A scene's clouds: the "clouds" key of the scene JSON (round trip, defaults, errors naming
 // the key, VDB paths relative to the file), and the union of density sources (sum of
 // sigma_t, merged majorant segments, a closed form for two constant slabs).
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <fstream>
 #include <memory>
 #include <random>
 #include <string>
 
-#include <glm/geometric.hpp>
-
 #include "cloud_test_util.hpp"
 #include "invalid_argument_testing.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "welkin/base/error.hpp"
 #include "welkin/clouds/lighting.hpp"
 #include "welkin/clouds/union.hpp"
-#include "welkin/base/error.hpp"
 #include "welkin/scene/scene.hpp"
 
 using namespace welkin;
-using welkin::test::parameter_of;
 using welkin::test::HomogeneousBox;
+using welkin::test::parameter_of;
 
 namespace {
 
@@ -149,10 +148,11 @@ TEST(SceneClouds, DefaultsAreTheCoresAndAreAllWritten) {
     EXPECT_EQ(c.lighting.multiple_scattering, CloudMultipleScattering::diffusion);
     EXPECT_EQ(c.lighting.scattering.albedo, lo.scattering.albedo);
     const std::string text = s.to_json_string();
-    for (const char* key : {"\"bottom_altitude_m\"", "\"wind_offset_m\"", "\"seed\"", "\"name\"", "\"grid\"",
-                            "\"matrix_world\"", "\"density_scale\"", "\"negative\"", "\"placement\"", "\"albedo\"", "\"g_forward\"",
-                            "\"w_forward\"", "\"max_steps\"", "\"multiple_scattering\"", "\"octave_eccentricity\"", "\"jitter\"",
-                            "\"max_distance_m\""})
+    for (const char* key :
+         {"\"bottom_altitude_m\"", "\"wind_offset_m\"", "\"seed\"", "\"name\"", "\"grid\"",
+          "\"matrix_world\"", "\"density_scale\"", "\"negative\"", "\"placement\"", "\"albedo\"",
+          "\"g_forward\"", "\"w_forward\"", "\"max_steps\"", "\"multiple_scattering\"",
+          "\"octave_eccentricity\"", "\"jitter\"", "\"max_distance_m\""})
         EXPECT_NE(text.find(key), std::string::npos) << key;
 }
 
@@ -169,8 +169,10 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"volumes": [{}]})"), "clouds.volumes[0].file");
     EXPECT_EQ(bad(R"({"volumes": [{"file": ""}]})"), "clouds.volumes[0].file");
     EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "negative": "abs"}]})"), "clouds.volumes[0].negative");
-    EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "placement": "cycles"}]})"), "clouds.volumes[0].placement");
-    EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "density_scale": -1}]})"), "clouds.volumes[0].density_scale");
+    EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "placement": "cycles"}]})"),
+              "clouds.volumes[0].placement");
+    EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "density_scale": -1}]})"),
+              "clouds.volumes[0].density_scale");
     EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "matrix_world": [[1,0,0,0]]}]})"),
               "clouds.volumes[0].matrix_world");
     EXPECT_EQ(bad(R"({"volumes": [{"file": "a.vdb", "frame": 3}]})"), "clouds.volumes[0].frame");
@@ -178,7 +180,8 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"scattering": {"g_forward": 1}})"), "clouds.scattering.g_forward");
     EXPECT_EQ(bad(R"({"lighting": {"max_steps": 0}})"), "clouds.lighting.max_steps");
     EXPECT_EQ(bad(R"({"lighting": {"jitter": 1}})"), "clouds.lighting.jitter");
-    EXPECT_EQ(bad(R"({"lighting": {"multiple_scattering": "wrenninge"}})"), "clouds.lighting.multiple_scattering");
+    EXPECT_EQ(bad(R"({"lighting": {"multiple_scattering": "wrenninge"}})"),
+              "clouds.lighting.multiple_scattering");
     EXPECT_EQ(bad(R"({"lighting": {"steps": 1}})"), "clouds.lighting.steps");
     EXPECT_EQ(bad(R"({"layer": []})"), "clouds.layer");
     EXPECT_EQ(bad(R"([])"), "clouds");
@@ -216,7 +219,8 @@ TEST(SceneClouds, RelativeVdbPathsFollowTheSceneFile) {
     const std::string path = dir.file("shot.json");
     {
         std::ofstream out(path);
-        out << scene_with_clouds(R"({"volumes": [{"file": "cache/cloud.0001.vdb"}, {"file": "/abs/b.vdb"}]})");
+        out << scene_with_clouds(
+            R"({"volumes": [{"file": "cache/cloud.0001.vdb"}, {"file": "/abs/b.vdb"}]})");
     }
     const SceneDescription s = SceneDescription::from_json_file(path);
     EXPECT_EQ(s.clouds->volumes[0].file, (dir.path / "cache" / "cloud.0001.vdb").string());
@@ -257,7 +261,8 @@ TEST(SceneClouds, BadVolumesNameTheFileKey) {
     const std::string missing = dir.file("missing.vdb");
     EXPECT_NE(error(R"({"file": ")" + missing + R"("})").find(missing), std::string::npos);
     EXPECT_NE(error(R"({"file": ")" + corrupt + R"("})").find(corrupt), std::string::npos);
-    const std::string no_grid = error(R"({"name": "Smoke", "file": ")" + good + R"(", "grid": "temperature"})");
+    const std::string no_grid =
+        error(R"({"name": "Smoke", "file": ")" + good + R"(", "grid": "temperature"})");
     EXPECT_NE(no_grid.find("temperature"), std::string::npos);
     EXPECT_NE(no_grid.find("Smoke"), std::string::npos);
     EXPECT_NE(error(R"({"file": ")" + vec + R"("})").find(vec), std::string::npos);
@@ -297,7 +302,9 @@ TEST(CloudUnion, MergedSegmentsBoundAndCoverEverySource) {
         // Increasing, not overlapping, non-empty pieces.
         for (std::size_t i = 0; i < out.size(); ++i) {
             EXPECT_LT(out[i].t0, out[i].t1);
-            if (i > 0) EXPECT_LE(out[i - 1].t1, out[i].t0);
+            if (i > 0) {
+                EXPECT_LE(out[i - 1].t1, out[i].t0);
+            }
         }
         // At points spread along [0, 100]: inside some input segment iff inside some output
         // piece, and the piece's majorant is at least the sum of the open inputs'.
@@ -315,7 +322,9 @@ TEST(CloudUnion, MergedSegmentsBoundAndCoverEverySource) {
             for (const auto& s : out)
                 if (t > s.t0 && t < s.t1) piece = &s;
             EXPECT_EQ(inside, piece != nullptr) << "trial " << trial << " t " << t;
-            if (piece) EXPECT_GE(piece->majorant, sum * (1.0 - 1e-12));
+            if (piece) {
+                EXPECT_GE(piece->majorant, sum * (1.0 - 1e-12));
+            }
         }
         // Total covered length equals the length of the union of the inputs.
         std::vector<std::pair<double, double>> all;

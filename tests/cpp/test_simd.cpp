@@ -1,10 +1,10 @@
 // simd.hpp: the four-lane exponential used for the transmittance LUT's texels, against
 // std::exp in double over the range of arguments it is stated for.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <limits>
+
+#include <gtest/gtest.h>
 
 #include "welkin/base/simd.hpp"
 

@@ -1,23 +1,22 @@
 // Equirect sky images: layout, the single method call, colour conversion, the sun disc's
 // energy and shape, exposure, no NaN, cancellation, bad input.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <atomic>
-#include <memory>
 #include <cmath>
 #include <cstdio>
 #include <limits>
-
-#include <glm/geometric.hpp>
+#include <memory>
 
 #include "peer_table.hpp"
-#include "welkin/color/color.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "welkin/atmosphere/sun.hpp"
 #include "welkin/base/equirect.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/color/color.hpp"
 #include "welkin/render/sky_image.hpp"
-#include "welkin/atmosphere/sun.hpp"
 
 using namespace welkin;
 
@@ -101,10 +100,8 @@ TEST(SkyImage, LayoutAndOneCallWithEveryPixel) {
     EXPECT_EQ(sky.calls, 1);
     EXPECT_EQ(sky.last_count, 64u * 32u);
     // Directions in pixel order, top row first, left to right.
-    EXPECT_NEAR(glm::length(sky.first_direction - equirect_pixel_direction(0, 0, 64, 32)), 0,
-                1e-15);
-    EXPECT_NEAR(glm::length(sky.last_direction - equirect_pixel_direction(63, 31, 64, 32)), 0,
-                1e-15);
+    EXPECT_NEAR(glm::length(sky.first_direction - equirect_pixel_direction(0, 0, 64, 32)), 0, 1e-15);
+    EXPECT_NEAR(glm::length(sky.last_direction - equirect_pixel_direction(63, 31, 64, 32)), 0, 1e-15);
     ASSERT_EQ(im.channel_names, (std::vector<std::string>{"S0.680nm", "S0.550nm", "S0.440nm"}));
     // Radiance 1 + z: brightest on the top row.
     for (int j = 0; j < 32; ++j) {
@@ -141,9 +138,9 @@ TEST(SkyImage, SunDiscCarriesTheDirectIrradianceAtEveryResolution) {
         double elevation_deg, azimuth_deg, altitude_m;
     };
     const double a_deg = atm.sun_angular_radius_rad / kDegree;
-    for (const Case k : {Case{90, 0, 0}, Case{30, 10, 0}, Case{3, -100, 0},
-                         Case{0.5 * a_deg, 45, 0}, Case{0, 180, 0}, Case{-0.9 * a_deg, 12.3, 0},
-                         Case{-4.0, 77, 20e3}, Case{89.8, 33, 0}}) {
+    for (const Case k :
+         {Case{90, 0, 0}, Case{30, 10, 0}, Case{3, -100, 0}, Case{0.5 * a_deg, 45, 0}, Case{0, 180, 0},
+          Case{-0.9 * a_deg, 12.3, 0}, Case{-4.0, 77, 20e3}, Case{89.8, 33, 0}}) {
         const Observer obs = sun_at(k.elevation_deg, k.azimuth_deg, k.altitude_m);
         const SunRadiometry sun = sun_radiometry(atm, obs);
         ASSERT_GT(sun.visible_fraction, 0.0);
@@ -223,13 +220,12 @@ TEST(SkyImage, ExposureScalesEverythingAndDiscCanBeLeftOut) {
 
 TEST(SkyImage, NeverNaNAndNonFiniteMethodOutputIsAnError) {
     const FakeSky constant(FakeSky::Constant);
-    for (const std::string& preset : {"bruneton2017", "mars"}) {
+    for (const char* preset : {"bruneton2017", "mars"}) {
         for (bool spectral : {false, true}) {
-            const Atmosphere atm = spectral ? Atmosphere::preset(preset, spectral_wavelengths_nm())
-                                            : Atmosphere::preset(preset);
-            for (const Observer& obs :
-                 {sun_at(90), sun_at(-90), sun_at(0), sun_at(0.001), sun_at(-89.99, 0, 1e8),
-                  sun_at(10, 0, 1e8), sun_at(45, 180, 5e4)}) {
+            const Atmosphere atm =
+                spectral ? Atmosphere::preset(preset, spectral_wavelengths_nm()) : Atmosphere::preset(preset);
+            for (const Observer& obs : {sun_at(90), sun_at(-90), sun_at(0), sun_at(0.001),
+                                        sun_at(-89.99, 0, 1e8), sun_at(10, 0, 1e8), sun_at(45, 180, 5e4)}) {
                 for (int width : {4, 6, 256}) {
                     SkyImageOptions opt;
                     opt.ground = false;  // the sky and the disc alone (the ground: test_ground.cpp)
@@ -286,8 +282,7 @@ TEST(SkyImage, SubPixelDiscLandsInItsPixel) {
     const SunRadiometry sun = sun_radiometry(atm, obs);
     for (int c = 0; c < 3; ++c) {
         const double v = im.pixels[(9 * 64 + 40) * 3 + c];
-        EXPECT_NEAR(v * equirect_pixel_solid_angle(9, 64, 32) / sun.direct_irradiance[c], 1.0,
-                    1e-5);
+        EXPECT_NEAR(v * equirect_pixel_solid_angle(9, 64, 32) / sun.direct_irradiance[c], 1.0, 1e-5);
     }
     std::size_t lit = 0;
     for (float v : im.pixels) lit += v > 0.0f;

@@ -1,15 +1,14 @@
 // SkyViewLut's lookups (skyview_lut.hpp): the branch-free zenith angle against std::acos,
 // and the block lookup of many views against one call per view.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <vector>
 
-#include <glm/geometric.hpp>
-
 #include "peer_table.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/skyview_lut.hpp"
 
 using namespace welkin;
@@ -17,7 +16,8 @@ using namespace welkin;
 TEST(SkyViewLut, ZenithAngleIsWithinItsBoundOfAcos) {
     double worst = 0.0, at = 0.0;
     // Dense over [-1, 1], denser near the poles and the switch at |mu| = 1/2.
-    std::vector<double> mus = {-1.0, -0.5, 0.0, 0.5, 1.0, std::nextafter(0.5, 1.0), std::nextafter(-0.5, -1.0)};
+    std::vector<double> mus = {
+        -1.0, -0.5, 0.0, 0.5, 1.0, std::nextafter(0.5, 1.0), std::nextafter(-0.5, -1.0)};
     for (int k = 0; k <= 2000000; ++k) mus.push_back(-1.0 + 2.0 * k / 2000000.0);
     for (int k = 0; k <= 100000; ++k) {
         mus.push_back(1.0 - 1e-9 * k);
@@ -60,16 +60,18 @@ TEST(SkyViewLut, BlockLookupEqualsOneLookupPerView) {
             const SkyViewLut sky(batch, t, ms, atm.bottom_radius_m + altitude, sun.z, 192, 108);
             // Random views (unnormalised; the API takes non-zero ones), the poles, the
             // horizon, the sun and its opposite, the horizon below the sun.
-            std::vector<glm::dvec3> dirs = {{0, 0, 1}, {0, 0, -3}, {1, 0, 0}, {0, 2, 1e-9}, sun, -sun, {sun.x + 1e-3, sun.y, 0.0}};
+            std::vector<glm::dvec3> dirs = {
+                {0, 0, 1}, {0, 0, -3}, {1, 0, 0}, {0, 2, 1e-9}, sun, -sun, {sun.x + 1e-3, sun.y, 0.0}};
             for (int k = 0; k < 5000; ++k) dirs.push_back({g(rng), g(rng), g(rng)});
             std::vector<float> block(dirs.size() * 3);
             sky.radiance(dirs, sun, 3, block.data(), 3);
             for (std::size_t k = 0; k < dirs.size(); ++k) {
                 const glm::dvec3 v = dirs[k] / std::sqrt(glm::dot(dirs[k], dirs[k]));
                 const double hv2 = v.x * v.x + v.y * v.y, hs2 = sun.x * sun.x + sun.y * sun.y;
-                const double cos_phi = (hv2 > 1e-24 && hs2 > 1e-24)
-                                           ? std::clamp((v.x * sun.x + v.y * sun.y) / std::sqrt(hv2 * hs2), -1.0, 1.0)
-                                           : 1.0;
+                const double cos_phi =
+                    (hv2 > 1e-24 && hs2 > 1e-24)
+                        ? std::clamp((v.x * sun.x + v.y * sun.y) / std::sqrt(hv2 * hs2), -1.0, 1.0)
+                        : 1.0;
                 const Spectrum4 one = sky.radiance(v.z, cos_phi);
                 for (int c = 0; c < 3; ++c) {
                     ASSERT_TRUE(std::isfinite(block[k * 3 + c]));

@@ -1,7 +1,5 @@
 // The sun: limb darkening (normalisation, Neckel & Labs' own mean/centre ratios), the
 // visible fraction at the horizon, transmittance against the peer.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -10,12 +8,14 @@
 #include <vector>
 
 #include "peer_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/atmosphere.hpp"
-#include "welkin/base/error.hpp"
-#include "welkin/base/math.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/atmosphere/sun.hpp"
 #include "welkin/atmosphere/sun_disc.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 #include "welkin/color/color.hpp"
 
 using namespace welkin;
@@ -59,9 +59,8 @@ TEST(Sun, LimbDarkeningMatchesNeckelLabsMeanToCentreRatios) {
     // Neckel & Labs 1994's own column: mean disc intensity over central intensity, given
     // to 4 decimals beside each row of coefficients. Our centre value is the inverse.
     const std::pair<double, double> rows[] = {
-        {303.327, 0.6826}, {349.947, 0.7260}, {365.875, 0.7445}, {401.970, 0.7303},
-        {445.125, 0.7596}, {541.760, 0.8002}, {610.975, 0.8221}, {669.400, 0.8360},
-        {811.760, 0.8621}, {1098.95, 0.8890}};
+        {303.327, 0.6826}, {349.947, 0.7260}, {365.875, 0.7445}, {401.970, 0.7303}, {445.125, 0.7596},
+        {541.760, 0.8002}, {610.975, 0.8221}, {669.400, 0.8360}, {811.760, 0.8621}, {1098.95, 0.8890}};
     for (const auto& [nm, ratio] : rows) {
         const LimbDarkening ld(0.004675, nm);
         EXPECT_NEAR(1.0 / ld.centre(), ratio, 1.2e-4) << nm;
@@ -133,8 +132,7 @@ TEST(Sun, TransmittanceIsContinuousWhereTheHorizonStartsToCutTheDisc) {
     const double a = atm.sun_angular_radius_rad;
     const SunRadiometry above = sun_radiometry(atm, sun_at(a * (1 + 1e-7)));
     const SunRadiometry below = sun_radiometry(atm, sun_at(a * (1 - 1e-7)));
-    for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(above.transmittance[c] / below.transmittance[c], 1.0, 1e-4) << c;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(above.transmittance[c] / below.transmittance[c], 1.0, 1e-4) << c;
 }
 
 TEST(Sun, BelowTheHorizonAndFromSpace) {

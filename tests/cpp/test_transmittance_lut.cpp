@@ -10,13 +10,13 @@
 // through the tent at 550 nm, against 4e-6 for mars, which has no tent. Asserted: within
 // 1e-4 in tau wherever T > 1e-4 (measured 1.2e-5 for bruneton2017, 7.9e-5 for polluted,
 // with 40 nodes 4e-6 and 3.3e-5; the density table uniform in r^2, atmosphere_batch.hpp).
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 
-#include "welkin/reference/column_table.hpp"
+#include <gtest/gtest.h>
+
 #include "welkin/atmosphere/transmittance_lut.hpp"
+#include "welkin/reference/column_table.hpp"
 
 using namespace welkin;
 

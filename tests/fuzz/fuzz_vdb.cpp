@@ -3,14 +3,14 @@
 // InvalidArgument, OutOfMemory naming the file) is a bug. The memory limit is small, so a
 // corrupt grid must be refused by the checks before its tree is read, not by running out.
 // Built and run by scripts/fuzz.sh; the seed corpus is tests/fuzz/corpus/vdb/.
-#include <unistd.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <new>
 #include <string>
+
+#include <unistd.h>
 
 #include "welkin/base/error.hpp"
 #include "welkin/clouds/vdb.hpp"

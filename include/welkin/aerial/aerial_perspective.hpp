@@ -30,10 +30,10 @@
 //    depth at which a column's ray leaves the atmosphere (beyond it nothing changes). The
 //    rarer deeper pixels (a far ridge's last pixels, the Moon) are marched one by one as
 //    by "raymarch", so that they do not stretch every slice. The volume is built by
-//    marching each column's ray through the slices (steps_per_slice sub-steps each). A pixel reads it bilinearly across the screen and
-//    linearly in depth between its two slices (with L = 0, T = 1 at depth 0); the
-//    transmittance is interpolated as optical depth, -ln T, so that exponential fall-off
-//    across deep slices does not band.
+//    marching each column's ray through the slices (steps_per_slice sub-steps each). A pixel reads it
+//    bilinearly across the screen and linearly in depth between its two slices (with L = 0, T = 1 at depth
+//    0); the transmittance is interpolated as optical depth, -ln T, so that exponential fall-off across deep
+//    slices does not band.
 //  * "raymarch": every pixel's ray marched to its own depth (raymarch_steps uniform steps,
 //    each integrated in Hillaire's energy-conserving form), the reference the froxels are
 //    tested and benchmarked against.
@@ -67,10 +67,10 @@
 #include <glm/vec3.hpp>
 
 #include "welkin/atmosphere/luts.hpp"
-#include "welkin/base/row_range.hpp"
 #include "welkin/atmosphere/observer.hpp"
 #include "welkin/base/camera.hpp"
 #include "welkin/base/progress.hpp"
+#include "welkin/base/row_range.hpp"
 
 namespace welkin {
 
@@ -112,9 +112,7 @@ struct AerialView {
     AerialOptions options;
 
     // The planet centre in the world frame (straight below the scene origin).
-    glm::dvec3 planet_centre() const {
-        return {0.0, 0.0, -(atmosphere.bottom_radius_m + origin.altitude_m)};
-    }
+    glm::dvec3 planet_centre() const { return {0.0, 0.0, -(atmosphere.bottom_radius_m + origin.altitude_m)}; }
     // Throws InvalidArgument naming the field.
     void validate() const;
 };
@@ -147,8 +145,8 @@ inline bool is_sky_depth(float depth, double sky_depth_m) {
 class AerialPerspectiveVolume {
 public:
     // `luts` must be built from view.atmosphere with view.luts. max_depth_m > 0.
-    AerialPerspectiveVolume(const AerialView& view, const AtmosphereLuts& luts, int width,
-                            int height, double max_depth_m, Progress* progress = nullptr);
+    AerialPerspectiveVolume(const AerialView& view, const AtmosphereLuts& luts, int width, int height,
+                            double max_depth_m, Progress* progress = nullptr);
 
     struct Sample {
         std::array<float, 3> inscatter, transmittance;
@@ -206,17 +204,14 @@ private:
 // `rows`: only those rows of the passes are computed (the others are left at T = 1,
 // L = 0), with exactly the values of the whole frame's call: the froxel depth range is
 // fitted to the whole depth buffer and the volume spans the whole screen either way.
-AerialPasses aerial_perspective(const AerialView& view, std::span<const float> depth,
-                                int width, int height, Progress* progress = nullptr,
-                                RowRange rows = {});
+AerialPasses aerial_perspective(const AerialView& view, std::span<const float> depth, int width, int height,
+                                Progress* progress = nullptr, RowRange rows = {});
 
 // Either way explicitly (tests and the bench compare them).
-AerialPasses aerial_perspective_froxel(const AerialView& view, std::span<const float> depth,
-                                       int width, int height, Progress* progress = nullptr,
-                                       RowRange rows = {});
-AerialPasses aerial_perspective_raymarch(const AerialView& view,
-                                         std::span<const float> depth, int width, int height,
-                                         Progress* progress = nullptr, RowRange rows = {});
+AerialPasses aerial_perspective_froxel(const AerialView& view, std::span<const float> depth, int width,
+                                       int height, Progress* progress = nullptr, RowRange rows = {});
+AerialPasses aerial_perspective_raymarch(const AerialView& view, std::span<const float> depth, int width,
+                                         int height, Progress* progress = nullptr, RowRange rows = {});
 
 // The air along explicit rays: the per-pixel march of "raymarch" (the same steps, the same
 // colour) for rays that are not a camera's pixels, each ending at its own distance. This

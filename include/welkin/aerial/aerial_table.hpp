@@ -59,7 +59,7 @@ namespace welkin {
 
 struct AerialTableLayout {
     int azimuths = 128, elevations = 64, slices = 48;
-    double max_distance_m = 0.0;      // > linear_distance_m
+    double max_distance_m = 0.0;       // > linear_distance_m
     double linear_distance_m = 100.0;  // > 0
     int steps_per_slice = 4;
 
@@ -88,7 +88,7 @@ struct AerialTable {
 // Throws InvalidArgument for a bad layout or a non-finite position.
 AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
                          const glm::dvec3& planet_centre, const glm::dvec3& camera_position,
-                         const glm::dvec3& sun_direction, double exposure,
-                         const AerialTableLayout& layout, Progress* progress = nullptr);
+                         const glm::dvec3& sun_direction, double exposure, const AerialTableLayout& layout,
+                         Progress* progress = nullptr);
 
 }  // namespace welkin

@@ -66,8 +66,7 @@ struct Atmosphere {
     // empty means the default four (620, 560, 480, 440 nm); any list of wavelengths in
     // [360, 830] nm resamples the preset's spectral models, which is how the spectral
     // mode gets many wavelengths.
-    static Atmosphere preset(const std::string& name,
-                             const std::vector<double>& wavelengths_nm = {});
+    static Atmosphere preset(const std::string& name, const std::vector<double>& wavelengths_nm = {});
     static std::vector<std::string> preset_names();
 
     // JSON (the schema is documented in docs/pipelines.md, "Atmosphere JSON", and written by to_json).

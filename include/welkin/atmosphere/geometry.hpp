@@ -36,17 +36,14 @@ inline bool ray_hits_ground(double r, double mu, double bottom) {
 // else the top. Rays from above the atmosphere are first moved to their entry point by
 // the caller (see enter_atmosphere).
 inline double distance_to_boundary(double r, double mu, double bottom, double top) {
-    return ray_hits_ground(r, mu, bottom) ? distance_to_bottom(r, mu, bottom)
-                                          : distance_to_top(r, mu, top);
+    return ray_hits_ground(r, mu, bottom) ? distance_to_bottom(r, mu, bottom) : distance_to_top(r, mu, top);
 }
 
 // Radius and zenith cosine at distance t along the ray (law of cosines).
 inline double radius_at(double r, double mu, double t) {
     return std::sqrt(std::max(t * t + 2.0 * r * mu * t + r * r, 0.0));
 }
-inline double mu_at(double r, double mu, double t, double r_t) {
-    return clamp_cosine((r * mu + t) / r_t);
-}
+inline double mu_at(double r, double mu, double t, double r_t) { return clamp_cosine((r * mu + t) / r_t); }
 
 // For an observer above the top of the atmosphere (r > top): the distance to the point
 // where the ray enters the atmosphere, or a negative value when the ray misses it.

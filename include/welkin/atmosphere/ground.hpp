@@ -45,7 +45,7 @@ public:
     void sun_irradiance(double mu_s, std::span<double> out) const;
     void sky_irradiance(double mu_s, std::span<double> out) const;
 
-    static constexpr int kTableSize = 48;  // mu_s in [kMinMuS, 1]
+    static constexpr int kTableSize = 48;     // mu_s in [kMinMuS, 1]
     static constexpr double kMinMuS = -0.35;  // 20.5 degrees below the horizon
 
 private:

@@ -10,13 +10,12 @@
 // 2017, eq. for mu_s_d), and J_ms the multiple-scattering source of multiscattering_lut.hpp:
 // Hillaire's (sigma_R + sigma_M) Psi_ms plus the terms of the multiply-scattered light's
 // dipole and quadrupole about the local zenith, weighted by the view's zenith cosine
-// there, mu_v(t) = (r mu + t) / r(t) (view_zenith_cosine below). Samples are spread as t = d s^2 for s uniform in [0, 1]: dense
-// near the observer, where an upward ray is densest and where a near-horizontal ray from
-// low altitude spends its first kilometres; each segment is integrated with Hillaire's
-// energy-conserving form: with S the source at the segment's midpoint (in s) and
-// T_seg = exp(-sigma_t dt), the segment adds T (S - S T_seg) / sigma_t (Hillaire 2015,
-// "Physically Based and Unified Volumetric Rendering in Frostbite"), which stays right
-// however thick a segment is.
+// there, mu_v(t) = (r mu + t) / r(t) (view_zenith_cosine below). Samples are spread as t = d s^2 for s
+// uniform in [0, 1]: dense near the observer, where an upward ray is densest and where a near-horizontal ray
+// from low altitude spends its first kilometres; each segment is integrated with Hillaire's energy-conserving
+// form: with S the source at the segment's midpoint (in s) and T_seg = exp(-sigma_t dt), the segment adds T
+// (S - S T_seg) / sigma_t (Hillaire 2015, "Physically Based and Unified Volumetric Rendering in Frostbite"),
+// which stays right however thick a segment is.
 //
 // The march is split in two because everything but the sun depends on the ray alone:
 // RaySamples holds, per step, the radius, the scattering coefficients and the weight
@@ -40,8 +39,8 @@ namespace welkin {
 
 struct RaySamples {
     struct Step {
-        double t;   // distance from the observer (not from the atmosphere entry)
-        double r;   // radius of the sample
+        double t;          // distance from the observer (not from the atmosphere entry)
+        double r;          // radius of the sample
         Spectrum4 weight;  // T(0, t_start) (1 - T_seg) / sigma_t, metres
         Spectrum4 rayleigh_scattering, mie_scattering;
         TransmittanceLut::AtRadius sun_at;  // filled when prepared with a transmittance LUT
@@ -90,7 +89,8 @@ inline void prepare_ray(const AtmosphereBatch& batch, double r, double mu, int s
         st.mie_scattering = m.mie_scattering;
         const Spectrum4 T_seg = glm::exp(-m.extinction * float(dt));
         for (int c = 0; c < 4; ++c)
-            st.weight[c] = T[c] * (m.extinction[c] > 1e-12f ? (1.0f - T_seg[c]) / m.extinction[c] : float(dt));
+            st.weight[c] =
+                T[c] * (m.extinction[c] > 1e-12f ? (1.0f - T_seg[c]) / m.extinction[c] : float(dt));
         if (tlut) st.sun_at = tlut->at_radius(st.r);
         if (ms) st.ms_v = ms->v_at_radius(st.r);
         T *= T_seg;
@@ -115,11 +115,12 @@ Spectrum4 inscatter(const AtmosphereBatch& batch, const MultiScatteringLut* ms, 
     Spectrum4 L(0.0f);
     for (const RaySamples::Step& st : ray.steps) {
         const double mu_s_t = clamp_cosine((ray.r0 * mu_s + st.t * nu) / st.r);
-        Spectrum4 source = sun_transmittance(st, mu_s_t) *
-                           (st.rayleigh_scattering * rayleigh_p + st.mie_scattering * mie_p);
+        Spectrum4 source =
+            sun_transmittance(st, mu_s_t) * (st.rayleigh_scattering * rayleigh_p + st.mie_scattering * mie_p);
         if (ms) {
             Spectrum4 w1, w2;
-            ms->source_weights(st.rayleigh_scattering, st.mie_scattering, view_zenith_cosine(ray, st), w1, w2);
+            ms->source_weights(st.rayleigh_scattering, st.mie_scattering, view_zenith_cosine(ray, st), w1,
+                               w2);
             source += ms->source(st.ms_v, mu_s_t, st.rayleigh_scattering + st.mie_scattering, w1, w2);
         }
         L += st.weight * source;
@@ -146,8 +147,8 @@ struct InscatterRowScratch {
     std::vector<Float4> sum_rayleigh, sum_mie, sum_ms;
     std::vector<Spectrum4> ms_source;
 };
-void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms,
-                   const RaySamples& ray, double mu_s, std::span<const float> nu, std::span<Spectrum4> out,
+void inscatter_row(const AtmosphereBatch& batch, const MultiScatteringLut& ms, const RaySamples& ray,
+                   double mu_s, std::span<const float> nu, std::span<Spectrum4> out,
                    InscatterRowScratch& scratch);
 
 }  // namespace welkin

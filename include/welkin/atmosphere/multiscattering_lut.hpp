@@ -88,13 +88,14 @@ public:
     // directions_sqrt: even; directions_sqrt / 2 Gauss-Legendre cosines per hemisphere
     // times directions_sqrt / 2 azimuths over [0, pi] (Hillaire's 8 x 8 = 64 directions,
     // halved by the symmetry about the sun's vertical plane).
-    MultiScatteringLut(const AtmosphereBatch& batch, const TransmittanceLut& transmittance,
-                       int size, int directions_sqrt = 8, int steps = 20);
+    MultiScatteringLut(const AtmosphereBatch& batch, const TransmittanceLut& transmittance, int size,
+                       int directions_sqrt = 8, int steps = 20);
 
     // Psi_ms = a_0, the mean multiply-scattered radiance per unit sun illuminance (sr^-1).
     Spectrum4 psi(double r, double mu_s) const {
         const float u = texcoord_from_unit(float(0.5 * (mu_s + 1.0)), texture_.width());
-        const float v = texcoord_from_unit(float(clamp01((r - bottom_) / (top_ - bottom_))), texture_.height());
+        const float v =
+            texcoord_from_unit(float(clamp01((r - bottom_) / (top_ - bottom_))), texture_.height());
         return texture_.sample(u, v);
     }
 
@@ -120,7 +121,8 @@ public:
     // w1, w2 from source_weights. The three textures share one bilinear coordinate; the
     // source is clamped at zero at each sun-angle texel (see Positivity), after the
     // interpolation in r, exactly as source_row does.
-    Spectrum4 source(float v, double mu_s, const Spectrum4& w0, const Spectrum4& w1, const Spectrum4& w2) const {
+    Spectrum4 source(float v, double mu_s, const Spectrum4& w0, const Spectrum4& w1,
+                     const Spectrum4& w2) const {
         const int n = texture_.width(), m = texture_.height();
         const float u = texcoord_from_unit(float(0.5 * (mu_s + 1.0)), n);
         const float x = std::clamp(u * float(n) - 0.5f, 0.0f, float(n - 1));
@@ -129,8 +131,11 @@ public:
         const float fx = x - float(i), fy = y - float(j);
         // As source_row: interpolate in r, combine, clamp, then interpolate in mu_s.
         const auto combined = [&](int ii) {
-            const auto lerp_r = [&](const Texture2D& t) { return t.at(ii, j) + fy * (t.at(ii, j + 1) - t.at(ii, j)); };
-            return glm::max(w0 * lerp_r(texture_) + w1 * lerp_r(dipole_) + w2 * lerp_r(quadrupole_), Spectrum4(0.0f));
+            const auto lerp_r = [&](const Texture2D& t) {
+                return t.at(ii, j) + fy * (t.at(ii, j + 1) - t.at(ii, j));
+            };
+            return glm::max(w0 * lerp_r(texture_) + w1 * lerp_r(dipole_) + w2 * lerp_r(quadrupole_),
+                            Spectrum4(0.0f));
         };
         const Spectrum4 c0 = combined(i);
         return c0 + fx * (combined(i + 1) - c0);
@@ -163,9 +168,9 @@ public:
         return {buffer.data(), buffer.data(), 0.0f, n - 1};
     }
 
-    const Texture2D& texture() const { return texture_; }       // a_0 = Psi_ms
-    const Texture2D& dipole() const { return dipole_; }         // a_1
-    const Texture2D& quadrupole() const { return quadrupole_; } // a_2
+    const Texture2D& texture() const { return texture_; }        // a_0 = Psi_ms
+    const Texture2D& dipole() const { return dipole_; }          // a_1
+    const Texture2D& quadrupole() const { return quadrupole_; }  // a_2
 
 private:
     double bottom_, top_;

@@ -11,7 +11,7 @@
 namespace welkin {
 
 struct Observer {
-    double altitude_m = 0.0;       // above the ground; may exceed the atmosphere's top
+    double altitude_m = 0.0;                  // above the ground; may exceed the atmosphere's top
     glm::dvec3 sun_direction{0.0, 0.0, 1.0};  // unit vector towards the sun, Z up
 
     // Throws InvalidArgument (altitude below 0 or non-finite, sun not a finite non-zero

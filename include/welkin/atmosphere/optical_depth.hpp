@@ -17,8 +17,8 @@ namespace welkin {
 
 // Integral of profile density (dimensionless) along the ray from radius r, zenith cosine
 // mu, over [0, length_m]; result in metres.
-double density_integral(const DensityProfile& profile, double bottom_radius_m, double r,
-                        double mu, double length_m);
+double density_integral(const DensityProfile& profile, double bottom_radius_m, double r, double mu,
+                        double length_m);
 
 // Column integrals of the three constituents along a ray.
 struct ColumnDensity {

@@ -28,8 +28,8 @@ namespace welkin {
 class SkyViewLut {
 public:
     SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& transmittance,
-               const MultiScatteringLut& multiscattering, double r, double mu_s, int width,
-               int height, int steps = 30);
+               const MultiScatteringLut& multiscattering, double r, double mu_s, int width, int height,
+               int steps = 30);
 
     // Path radiance for a view with zenith cosine mu and azimuth cosine cos_phi relative
     // to the sun.
@@ -41,8 +41,8 @@ public:
     // out[i * stride + c]. The same values as one call per view, computed in blocks: a
     // pass over the block for the texel coordinates (the angles, the acos and the latitude
     // mapping: arithmetic only, it vectorises), then the bilinear fetches.
-    void radiance(std::span<const glm::dvec3> directions, const glm::dvec3& sun, std::size_t count, float* out,
-                  std::size_t stride) const;
+    void radiance(std::span<const glm::dvec3> directions, const glm::dvec3& sun, std::size_t count,
+                  float* out, std::size_t stride) const;
 
     const Texture2D& texture() const { return texture_; }
 

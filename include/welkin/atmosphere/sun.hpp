@@ -20,7 +20,7 @@ struct SunRadiometry {
     // of its visible part (a grazing ray through the centre would be far too dark); 0 when
     // the whole disc is below the horizon.
     std::vector<double> transmittance;
-    std::vector<double> direct_irradiance;    // W m^-2 nm^-1 per channel
+    std::vector<double> direct_irradiance;  // W m^-2 nm^-1 per channel
     // Of the disc's area above the horizon of a spherical ground at the observer's
     // altitude (the horizon is a straight chord across the small disc).
     double visible_fraction = 1.0;

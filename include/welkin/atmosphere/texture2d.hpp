@@ -79,7 +79,11 @@ private:
 
 // Bruneton 2017 (functions.glsl, GetTextureCoordFromUnitRange): maps x in [0, 1] so that
 // 0 and 1 fall on the centres of the first and last texels, where values are exact.
-inline float texcoord_from_unit(float x, int size) { return 0.5f / float(size) + x * (1.0f - 1.0f / float(size)); }
-inline float unit_from_texcoord(float u, int size) { return (u - 0.5f / float(size)) / (1.0f - 1.0f / float(size)); }
+inline float texcoord_from_unit(float x, int size) {
+    return 0.5f / float(size) + x * (1.0f - 1.0f / float(size));
+}
+inline float unit_from_texcoord(float u, int size) {
+    return (u - 0.5f / float(size)) / (1.0f - 1.0f / float(size));
+}
 
 }  // namespace welkin

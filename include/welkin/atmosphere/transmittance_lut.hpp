@@ -108,7 +108,6 @@ private:
     Piece whole_, half_;  // a ray densest at one end; each side of an interior lowest point
 };
 
-Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length,
-                              int samples);
+Spectrum4 march_optical_depth(const AtmosphereBatch& batch, double r, double mu, double length, int samples);
 
 }  // namespace welkin

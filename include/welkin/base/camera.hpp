@@ -93,8 +93,8 @@ public:
     CameraRays(const Camera& camera, int width, int height);
 
     struct Ray {
-        glm::dvec3 origin;     // world, metres
-        glm::dvec3 direction;  // world, unit
+        glm::dvec3 origin;          // world, metres
+        glm::dvec3 direction;       // world, unit
         double distance_per_depth;  // distance along the ray per unit of Z-pass depth (>= 1)
     };
 

@@ -29,10 +29,9 @@ public:
 
     // The stream of path `path` of direction `direction` under `seed`; `stream` separates
     // independent uses of the same path index.
-    PathRng(std::uint64_t seed, std::uint64_t direction, std::uint64_t path,
-            std::uint64_t stream = 0)
-        : state_(splitmix64_mix(
-              splitmix64_mix(splitmix64_mix(splitmix64_mix(seed) + direction) + path) + stream)) {}
+    PathRng(std::uint64_t seed, std::uint64_t direction, std::uint64_t path, std::uint64_t stream = 0)
+        : state_(splitmix64_mix(splitmix64_mix(splitmix64_mix(splitmix64_mix(seed) + direction) + path) +
+                                stream)) {}
 
     std::uint64_t next_u64() {
         state_ += kGolden;

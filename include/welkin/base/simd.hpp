@@ -82,7 +82,7 @@ inline Float4 exp_nonpositive(Float4 x) {
     const Float4 underflow = {-87.33f, -87.33f, -87.33f, -87.33f};
     const Int4 dead = x < underflow;
     x = x < underflow ? underflow : x;
-    const float kRound = 12582912.0f;  // 1.5 * 2^23
+    const float kRound = 12582912.0f;                               // 1.5 * 2^23
     const Float4 k = (x * 1.44269504088896341f + kRound) - kRound;  // nearest integer to x / ln 2
     const Float4 r = (x - k * 0.693359375f) - k * -2.12194440e-4f;  // ln 2 = 0.693359375 - 2.12194440e-4
     const Float4 r2 = r * r;

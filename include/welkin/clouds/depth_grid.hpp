@@ -67,8 +67,8 @@ public:
 
     // The density must outlive the grid. base_spacing_m > 0 (h_0), max_distance_m > 0,
     // steps >= 1.
-    OpticalDepthGrid(const CloudDensity& density, Direction direction, double base_spacing_m, double max_distance_m,
-                     int steps);
+    OpticalDepthGrid(const CloudDensity& density, Direction direction, double base_spacing_m,
+                     double max_distance_m, int steps);
     ~OpticalDepthGrid();
     OpticalDepthGrid(const OpticalDepthGrid&) = delete;
     OpticalDepthGrid& operator=(const OpticalDepthGrid&) = delete;

@@ -82,16 +82,16 @@ DiffuseField eddington_slab(double Z, double z, double albedo, double mu0 = 1.0)
 
 // The similarity-scaled medium of a cloud's albedo and phase mean cosine g (part 2 above).
 struct SimilarityScaling {
-    double forward = 0.0;     // f = max(g, 0)
-    double depth_scale = 1.0; // tau' / tau = 1 - albedo f
-    double albedo = 1.0;      // albedo'
+    double forward = 0.0;      // f = max(g, 0)
+    double depth_scale = 1.0;  // tau' / tau = 1 - albedo f
+    double albedo = 1.0;       // albedo'
     SimilarityScaling(double albedo, double mean_cosine);
 };
 
 // The source of sun light above per unit sigma_s E (parts 1, 2 and 3), for the sun-line
 // depths tau_sun, tau_anti (unscaled), nu = d . s, g the phase's mean cosine, p the phase
 // and p2 the twice-scattered phase at nu.
-double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g, double p,
-                  double p2);
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g,
+                  double p, double p2);
 
 }  // namespace welkin

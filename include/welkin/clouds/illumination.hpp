@@ -30,9 +30,9 @@ class CloudIllumination {
 public:
     virtual ~CloudIllumination() = default;
     virtual std::size_t channels() const = 0;
-    virtual glm::dvec3 sun_direction() const = 0;  // unit, towards the sun
-    virtual glm::dvec3 zenith(const glm::dvec3& p) const = 0;  // unit, the local vertical at p
-    virtual void sun_irradiance(const glm::dvec3& p, float* out) const = 0;    // channels() values
+    virtual glm::dvec3 sun_direction() const = 0;                            // unit, towards the sun
+    virtual glm::dvec3 zenith(const glm::dvec3& p) const = 0;                // unit, the local vertical at p
+    virtual void sun_irradiance(const glm::dvec3& p, float* out) const = 0;  // channels() values
     virtual void ambient_radiance(const glm::dvec3& p, float* out) const = 0;  // channels() values
 };
 
@@ -58,7 +58,8 @@ private:
 // the ground (the planet centre straight below it).
 class AtmosphereIllumination final : public CloudIllumination {
 public:
-    AtmosphereIllumination(const Atmosphere& atmosphere, const Observer& observer, const LutResolution& resolution = {});
+    AtmosphereIllumination(const Atmosphere& atmosphere, const Observer& observer,
+                           const LutResolution& resolution = {});
     std::size_t channels() const override { return luts_->channels(); }
     glm::dvec3 sun_direction() const override { return s_; }
     glm::dvec3 zenith(const glm::dvec3& p) const override;

@@ -97,10 +97,10 @@
 #include <span>
 #include <vector>
 
+#include "welkin/base/progress.hpp"
 #include "welkin/clouds/density.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/clouds/phase.hpp"
-#include "welkin/base/progress.hpp"
 
 namespace welkin {
 
@@ -118,21 +118,22 @@ enum class CloudMultipleScattering {
 
 struct CloudLightingOptions {
     CloudScattering scattering;
-    int max_steps = 96;               // along each view ray, [1, 4096]
-    int light_steps = 8;              // along each shadow ray, [1, 256]
-    int ambient_steps = 4;            // along the ray towards the zenith, [0, 256] (0: no decay)
-    double light_distance_m = 4000.0; // how far the shadow and sky rays look, (0, 1e6]
-    CloudMultipleScattering multiple_scattering = CloudMultipleScattering::diffusion;  // orders >= 2 (see above)
-    int octaves = 4;                  // Wrenninge's octaves, [1, 16]; 1: single scattering in either mode
-    double octave_extinction = 0.5;   // a, (0, 1]
-    double octave_contribution = 0.5; // b, (0, 1]
-    double octave_eccentricity = 0.5; // c, (0, 1]
-    bool octave_optical_size = true;  // scale octave i by (1 - exp(-tau_line))^i (see above)
-    double min_transmittance = 1e-3;  // early termination, [0, 1)
-    double tail_transmittance = 0.1;  // below it, longer view steps (see above), [0, 1]; 0: off
+    int max_steps = 96;                // along each view ray, [1, 4096]
+    int light_steps = 8;               // along each shadow ray, [1, 256]
+    int ambient_steps = 4;             // along the ray towards the zenith, [0, 256] (0: no decay)
+    double light_distance_m = 4000.0;  // how far the shadow and sky rays look, (0, 1e6]
+    CloudMultipleScattering multiple_scattering =
+        CloudMultipleScattering::diffusion;  // orders >= 2 (see above)
+    int octaves = 4;                   // Wrenninge's octaves, [1, 16]; 1: single scattering in either mode
+    double octave_extinction = 0.5;    // a, (0, 1]
+    double octave_contribution = 0.5;  // b, (0, 1]
+    double octave_eccentricity = 0.5;  // c, (0, 1]
+    bool octave_optical_size = true;   // scale octave i by (1 - exp(-tau_line))^i (see above)
+    double min_transmittance = 1e-3;   // early termination, [0, 1)
+    double tail_transmittance = 0.1;   // below it, longer view steps (see above), [0, 1]; 0: off
     std::uint64_t seed = 1;
-    bool jitter = true;               // false: samples at step midpoints
-    double max_distance_m = 1e6;      // view rays end here, (0, 1e8]
+    bool jitter = true;           // false: samples at step midpoints
+    double max_distance_m = 1e6;  // view rays end here, (0, 1e8]
     // Tabulate the optical depths towards the sun (and the zenith) on a lazily filled grid
     // (cloud_depth_grid.hpp) instead of marching a shadow ray per sample.
     bool shadow_grid = true;
@@ -144,11 +145,11 @@ struct CloudLightingOptions {
 // (N, C) radiance, N transmittances and depths; standard errors from estimators only.
 struct CloudResult {
     std::size_t channels = 0;
-    std::vector<float> radiance;              // (N, C)
-    std::vector<float> transmittance;         // N
-    std::vector<float> depth_m;               // N
-    std::vector<float> radiance_error;        // (N, C) standard error, or empty
-    std::vector<float> transmittance_error;   // N, or empty
+    std::vector<float> radiance;             // (N, C)
+    std::vector<float> transmittance;        // N
+    std::vector<float> depth_m;              // N
+    std::vector<float> radiance_error;       // (N, C) standard error, or empty
+    std::vector<float> transmittance_error;  // N, or empty
 };
 
 // Throws InvalidArgument for bad options, a non-finite origin or a bad direction (naming
@@ -186,9 +187,10 @@ struct CloudUpsampling {
 
 // render_clouds for the rays of an image (rows of `width` rays, row-major, from `origin`),
 // upsampled as CloudUpsampling says. Ray i is seeded by first_ray_index + i.
-CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light, const glm::dvec3& origin,
-                               std::span<const glm::dvec3> directions, int width,
-                               const CloudLightingOptions& options = {}, const CloudUpsampling& upsampling = {},
-                               Progress* progress = nullptr, std::uint64_t first_ray_index = 0);
+CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light,
+                               const glm::dvec3& origin, std::span<const glm::dvec3> directions, int width,
+                               const CloudLightingOptions& options = {},
+                               const CloudUpsampling& upsampling = {}, Progress* progress = nullptr,
+                               std::uint64_t first_ray_index = 0);
 
 }  // namespace welkin

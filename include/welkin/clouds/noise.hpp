@@ -38,7 +38,8 @@ double tileable_perlin(double x, double y, double z, int frequency, std::uint64_
 class TileableTexture3D {
 public:
     TileableTexture3D() = default;
-    TileableTexture3D(int nx, int ny, int nz) : nx_(nx), ny_(ny), nz_(nz), texels_(std::size_t(nx) * ny * nz) {}
+    TileableTexture3D(int nx, int ny, int nz)
+        : nx_(nx), ny_(ny), nz_(nz), texels_(std::size_t(nx) * ny * nz) {}
     int size() const { return nx_; }
     glm::vec4& at(int i, int j, int k) { return texels_[(std::size_t(k) * ny_ + j) * nx_ + i]; }
     const glm::vec4& at(int i, int j, int k) const { return texels_[(std::size_t(k) * ny_ + j) * nx_ + i]; }
@@ -59,9 +60,12 @@ template <int N>
 class PeriodicTexture {
 public:
     PeriodicTexture() = default;
-    PeriodicTexture(int nx, int ny, int nz) : nx_(nx), ny_(ny), nz_(nz), texels_(std::size_t(nx) * ny * nz * N) {}
+    PeriodicTexture(int nx, int ny, int nz)
+        : nx_(nx), ny_(ny), nz_(nz), texels_(std::size_t(nx) * ny * nz * N) {}
     float* at(int i, int j, int k) { return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N]; }
-    const float* at(int i, int j, int k) const { return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N]; }
+    const float* at(int i, int j, int k) const {
+        return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N];
+    }
 
     // (x, y, z) in texture units (one period = 1); out receives N values.
     void sample(double x, double y, double z, float* out) const {

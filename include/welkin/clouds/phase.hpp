@@ -18,9 +18,9 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "welkin/atmosphere/phase.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
-#include "welkin/atmosphere/phase.hpp"
 
 namespace welkin {
 

@@ -67,8 +67,8 @@ namespace welkin {
 enum class CloudType { cumulus, stratocumulus, altocumulus, stratus, cirrus };
 
 // "cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus".
-constexpr std::array<std::string_view, 5> kCloudTypeNames{"cumulus", "stratocumulus", "altocumulus", "stratus",
-                                                          "cirrus"};
+constexpr std::array<std::string_view, 5> kCloudTypeNames{"cumulus", "stratocumulus", "altocumulus",
+                                                          "stratus", "cirrus"};
 std::string_view cloud_type_name(CloudType type);
 // InvalidArgument naming `parameter` and listing the accepted names for an unknown one.
 CloudType cloud_type_from_name(std::string_view name, const std::string& parameter = "cloud_type");
@@ -86,8 +86,8 @@ struct CloudLayerParams {
     double weather_variation = 0.6;      // [0, 1]
     glm::dvec2 wind_offset_m{0.0, 0.0};  // shifts the field by this much (finite)
     std::uint64_t seed = 1;
-    double planet_radius_m = 6360e3;     // [1e3, 1e8]
-    double origin_altitude_m = 0.0;      // of the world origin above the ground, [0, 1e6]
+    double planet_radius_m = 6360e3;  // [1e3, 1e8]
+    double origin_altitude_m = 0.0;   // of the world origin above the ground, [0, 1e6]
 
     // The preset of a cloud type (the defaults above are cumulus's).
     static CloudLayerParams preset(CloudType type);

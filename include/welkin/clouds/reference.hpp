@@ -30,10 +30,10 @@ namespace welkin {
 
 struct CloudReferenceOptions {
     CloudScattering scattering;
-    int paths = 256;            // per ray, [1, 1 << 24]
-    int max_bounces = 4096;     // [1, 1 << 20]
+    int paths = 256;         // per ray, [1, 1 << 24]
+    int max_bounces = 4096;  // [1, 1 << 20]
     std::uint64_t seed = 1;
-    double max_distance_m = 1e6; // view rays end here, (0, 1e8]
+    double max_distance_m = 1e6;  // view rays end here, (0, 1e8]
     void validate() const;
 };
 

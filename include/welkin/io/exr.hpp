@@ -34,8 +34,7 @@ struct ExrImage {
     // Index of a channel, or -1 when absent.
     int channel_index(const std::string& name) const;
     float at(int x, int y, std::size_t channel) const {
-        return pixels[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * channels() +
-                      channel];
+        return pixels[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * channels() + channel];
     }
 };
 
@@ -58,8 +57,7 @@ struct ExrWriteReport {
 // Throws InvalidArgument for an inconsistent image (sizes, empty or duplicate channel
 // names) and IoError naming `path` when the file exists (and !overwrite) or cannot be
 // written.
-ExrWriteReport write_exr(const std::string& path, const ExrImage& image,
-                         const ExrWriteOptions& options = {});
+ExrWriteReport write_exr(const std::string& path, const ExrImage& image, const ExrWriteOptions& options = {});
 
 // Reads every channel as float. Throws IoError naming `path` on failure.
 ExrImage read_exr(const std::string& path);

@@ -29,7 +29,8 @@ inline constexpr std::size_t kMaxJsonFileBytes = std::size_t(64) << 20;  // 64 M
 // The whole of a regular file of at most `max_bytes` bytes. IoError naming `path` (and
 // `what`, e.g. "atmosphere file") when it is missing, unreadable, a directory, not a regular
 // file, or larger than max_bytes.
-std::string read_file_bounded(const std::string& path, std::size_t max_bytes, const std::string& what = "file");
+std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
+                              const std::string& what = "file");
 
 // An output path that names a directory or another special file (device, FIFO, socket).
 class NotRegularFile : public IoError {

@@ -35,7 +35,8 @@ void write_json_file(const std::string& path, const std::string& text, bool over
 // json_number: not a number; json_check_keys: not an object, or a key not in `known` (a
 // typo would otherwise be ignored; the error names "where.key").
 double json_number(const nlohmann::json& j, const std::string& parameter);
-void json_check_keys(const nlohmann::json& j, const std::string& where, std::initializer_list<const char*> known);
+void json_check_keys(const nlohmann::json& j, const std::string& where,
+                     std::initializer_list<const char*> known);
 
 // Runs f; an InvalidArgument it throws gets " (in 'path')" appended to its message.
 template <class F>

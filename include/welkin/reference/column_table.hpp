@@ -123,8 +123,7 @@ private:
     template <int N>
     void interpolate(int i_r, const double* w_r, int i_mu, const double* w_mu, double* acc) const;
     // Pieces of analytic constituent k along [0, length] of the ray; returns their count.
-    int linear_pieces(int k, double r, double mu, double q, double length,
-                      Ray::Piece* pieces) const;
+    int linear_pieces(int k, double r, double mu, double q, double length, Ray::Piece* pieces) const;
 
     double bottom_, top_, H_;
     int n_r_, n_mu_;

@@ -55,8 +55,7 @@ inline glm::dvec3 direction_about(const glm::dvec3& axis, double cos_theta, doub
     orthonormal_basis(axis, t, b);
     const double sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
     const double phi = kTwoPi * u;
-    return glm::normalize(sin_theta * (std::cos(phi) * t + std::sin(phi) * b) +
-                          cos_theta * axis);
+    return glm::normalize(sin_theta * (std::cos(phi) * t + std::sin(phi) * b) + cos_theta * axis);
 }
 
 // Lambertian (cosine-weighted) hemisphere about the unit normal n: density cos / pi.

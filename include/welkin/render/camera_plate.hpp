@@ -65,13 +65,13 @@
 namespace welkin {
 
 struct CameraPlate {
-    int width = 0, height = 0;        // of the arrays: the band's rows
-    int row_begin = 0;                // the band's first row in the frame
-    int frame_height = 0;             // the whole frame's
+    int width = 0, height = 0;                                   // of the arrays: the band's rows
+    int row_begin = 0;                                           // the band's first row in the frame
+    int frame_height = 0;                                        // the whole frame's
     std::vector<float> combined, sky, inscatter, transmittance;  // (height, width, 3)
-    std::vector<float> depth;                                     // (height, width)
-    std::vector<float> clouds;                                    // (height, width, 4)
-    std::vector<float> cloud_depth;                               // (height, width)
+    std::vector<float> depth;                                    // (height, width)
+    std::vector<float> clouds;                                   // (height, width, 4)
+    std::vector<float> cloud_depth;                              // (height, width)
     std::string method;  // the sky method that ran (auto resolved by the method itself)
 };
 

@@ -61,9 +61,9 @@
 #include <span>
 #include <vector>
 
-#include "welkin/clouds/density.hpp"
 #include "welkin/base/progress.hpp"
 #include "welkin/base/row_range.hpp"
+#include "welkin/clouds/density.hpp"
 #include "welkin/scene/scene.hpp"
 
 namespace welkin {

@@ -112,9 +112,8 @@ struct SkyImage {
 // `width`: even, in [4, 16384]; the height is width / 2. Throws InvalidArgument on bad
 // input, Cancelled when `progress` cancels, std::runtime_error when the method returns a
 // non-finite radiance.
-SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atmosphere,
-                             const Observer& observer, int width,
-                             const SkyImageOptions& options = {}, Progress* progress = nullptr);
+SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atmosphere, const Observer& observer,
+                             int width, const SkyImageOptions& options = {}, Progress* progress = nullptr);
 
 // Spectral channel name for a wavelength, e.g. 550 -> "S0.550nm", 550.5 -> "S0.550,5nm".
 std::string spectral_channel_name(double wavelength_nm);

@@ -66,6 +66,7 @@ const char* vdb_negative_name(VdbCloudOptions::Negative negative);
 VdbCloudOptions::Negative vdb_negative_from_name(const std::string& name, const std::string& parameter);
 // "blender" | "openvdb" (VdbCloudOptions::VoxelPlacement).
 const char* vdb_placement_name(VdbCloudOptions::VoxelPlacement placement);
-VdbCloudOptions::VoxelPlacement vdb_placement_from_name(const std::string& name, const std::string& parameter);
+VdbCloudOptions::VoxelPlacement vdb_placement_from_name(const std::string& name,
+                                                        const std::string& parameter);
 
 }  // namespace welkin

@@ -35,19 +35,19 @@ struct SceneDescription {
     int version = kVersion;
 
     Atmosphere atmosphere = Atmosphere::preset("bruneton2017");
-    double origin_altitude_m = 0.0;          // the scene origin above the ground, >= 0
+    double origin_altitude_m = 0.0;                          // the scene origin above the ground, >= 0
     glm::dvec3 sun_direction{0.0, 0.5, 0.8660254037844386};  // towards the sun; normalised
-    double exposure = 1.0;                   // multiplies radiance once, at the output
-    std::string method = "auto";             // sky method (sky_method.hpp); auto by default
+    double exposure = 1.0;                                   // multiplies radiance once, at the output
+    std::string method = "auto";                             // sky method (sky_method.hpp); auto by default
     // The lit ground below the horizon (ground.hpp) in the sky image and the camera plate;
     // its albedo in [0, 1] (unset: the atmosphere's ground_albedo).
     bool ground = true;
     std::optional<double> ground_albedo;
-    std::optional<Camera> camera;            // absent: no camera passes can be made
+    std::optional<Camera> camera;  // absent: no camera passes can be made
     RenderResolution resolution;
     AerialOptions aerial;
-    SkyOptions sky_options;                  // LUT sizes and method options
-    std::optional<SceneClouds> clouds;       // absent: a clear sky (scene_clouds.hpp)
+    SkyOptions sky_options;             // LUT sizes and method options
+    std::optional<SceneClouds> clouds;  // absent: a clear sky (scene_clouds.hpp)
 
     // Throws InvalidArgument naming the field (as in the JSON: "camera.lens_mm"). Does not
     // require a camera; camera passes call require_camera().
@@ -57,9 +57,7 @@ struct SceneDescription {
     // The observer at the scene origin (for the sky and the sun).
     Observer origin_observer() const { return Observer{origin_altitude_m, sun_direction}.validated(); }
     // The planet centre in the world frame.
-    glm::dvec3 planet_centre() const {
-        return {0.0, 0.0, -(atmosphere.bottom_radius_m + origin_altitude_m)};
-    }
+    glm::dvec3 planet_centre() const { return {0.0, 0.0, -(atmosphere.bottom_radius_m + origin_altitude_m)}; }
     // What aerial perspective needs of this scene (its camera at its render resolution);
     // throws InvalidArgument naming "camera" when there is none.
     AerialView aerial_view() const;

@@ -12,8 +12,7 @@ public:
     std::string name() const override { return "analytic"; }
     void radiance(const Atmosphere& atmosphere, const Observer& observer,
                   std::span<const glm::dvec3> directions, std::span<float> out,
-                  std::span<float> standard_error = {},
-                  Progress* progress = nullptr) const override;
+                  std::span<float> standard_error = {}, Progress* progress = nullptr) const override;
 
 private:
     SkyOptions options_;

@@ -33,24 +33,22 @@
 namespace welkin {
 
 struct AutoChoice {
-    std::string method;          // the method to run: "analytic" | "lut" | "raymarch"
-    SkyOptions options;          // the caller's options with this setting's sizes / steps
-    std::string setting;         // e.g. "lut 256x64/32/192x108", for messages
-    double predicted_error = 0;  // the table's p95 relative luminance error (worst corner)
+    std::string method;            // the method to run: "analytic" | "lut" | "raymarch"
+    SkyOptions options;            // the caller's options with this setting's sizes / steps
+    std::string setting;           // e.g. "lut 256x64/32/192x108", for messages
+    double predicted_error = 0;    // the table's p95 relative luminance error (worst corner)
     double predicted_seconds = 0;  // CPU s on the chart's machine, for this many directions
     bool meets_tolerance = false;
 };
 
 // Throws InvalidArgument for a tolerance outside [kMinTolerance, kMaxTolerance] (named
 // "tolerance"), an invalid atmosphere or observer.
-AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
-                             std::size_t directions, double tolerance,
-                             const SkyOptions& options = {});
+AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer, std::size_t directions,
+                             double tolerance, const SkyOptions& options = {});
 
 // The same choice from another table (tests use small synthetic ones).
-AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer,
-                             std::size_t directions, double tolerance, const SkyOptions& options,
-                             const auto_table::Table& table);
+AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& observer, std::size_t directions,
+                             double tolerance, const SkyOptions& options, const auto_table::Table& table);
 
 inline constexpr double kMinTolerance = 1e-3;
 inline constexpr double kMaxTolerance = 10.0;
@@ -62,8 +60,7 @@ public:
     std::string name() const override { return "auto"; }
     void radiance(const Atmosphere& atmosphere, const Observer& observer,
                   std::span<const glm::dvec3> directions, std::span<float> out,
-                  std::span<float> standard_error = {},
-                  Progress* progress = nullptr) const override;
+                  std::span<float> standard_error = {}, Progress* progress = nullptr) const override;
 
 private:
     SkyOptions options_;

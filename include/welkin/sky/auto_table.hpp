@@ -21,8 +21,8 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 // in CPU seconds (all threads summed; see bench/chart.py):
 // a call on N directions takes about fixed_seconds + seconds_per_direction * N.
 struct Setting {
-    const char* method;   // "analytic" | "lut" | "raymarch"
-    bool spectral;        // measured at the chart's spectral sampling (else 3 wavelengths)
+    const char* method;  // "analytic" | "lut" | "raymarch"
+    bool spectral;       // measured at the chart's spectral sampling (else 3 wavelengths)
     int transmittance_width, transmittance_height, multiscattering_size;
     int skyview_width, skyview_height;
     int raymarch_steps, raymarch_sun_steps;
@@ -44,8 +44,7 @@ struct Table {
     int reference_paths;
     double reference_seconds_per_path;
 
-    double p95_at(std::size_t preset, std::size_t setting, std::size_t altitude,
-                  std::size_t sun) const {
+    double p95_at(std::size_t preset, std::size_t setting, std::size_t altitude, std::size_t sun) const {
         return p95[((preset * settings.size() + setting) * altitudes_m.size() + altitude) *
                        sun_elevations_deg.size() +
                    sun];

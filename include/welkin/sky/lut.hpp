@@ -18,8 +18,7 @@ public:
     std::string name() const override { return "lut"; }
     void radiance(const Atmosphere& atmosphere, const Observer& observer,
                   std::span<const glm::dvec3> directions, std::span<float> out,
-                  std::span<float> standard_error = {},
-                  Progress* progress = nullptr) const override;
+                  std::span<float> standard_error = {}, Progress* progress = nullptr) const override;
 
     static AtmosphereLutCache* default_cache();
 

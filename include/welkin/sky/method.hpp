@@ -78,19 +78,16 @@ public:
     // receives the per-value standard error (zeros for deterministic methods).
     virtual void radiance(const Atmosphere& atmosphere, const Observer& observer,
                           std::span<const glm::dvec3> directions, std::span<float> out,
-                          std::span<float> standard_error = {},
-                          Progress* progress = nullptr) const = 0;
+                          std::span<float> standard_error = {}, Progress* progress = nullptr) const = 0;
 };
 
 // "analytic" | "lut" | "raymarch" | "reference" | "auto"; throws InvalidArgument otherwise.
-std::unique_ptr<SkyMethod> make_sky_method(const std::string& name,
-                                           const SkyOptions& options = {});
+std::unique_ptr<SkyMethod> make_sky_method(const std::string& name, const SkyOptions& options = {});
 std::vector<std::string> sky_method_names();
 
 // Convenience: allocate and run.
-SkyResult sky_radiance(const SkyMethod& method, const Atmosphere& atmosphere,
-                       const Observer& observer, std::span<const glm::dvec3> directions,
-                       Progress* progress = nullptr);
+SkyResult sky_radiance(const SkyMethod& method, const Atmosphere& atmosphere, const Observer& observer,
+                       std::span<const glm::dvec3> directions, Progress* progress = nullptr);
 
 // The checks every deterministic method makes on entry: the atmosphere, the observer
 // (returned validated), the directions, and the size of `out`; zero-fills standard_error.

@@ -22,8 +22,7 @@ public:
     std::string name() const override { return "reference"; }
     void radiance(const Atmosphere& atmosphere, const Observer& observer,
                   std::span<const glm::dvec3> directions, std::span<float> out,
-                  std::span<float> standard_error = {},
-                  Progress* progress = nullptr) const override;
+                  std::span<float> standard_error = {}, Progress* progress = nullptr) const override;
 
     // Batches the paths of one direction are split into; the standard error is the spread
     // of the batch means (see the derivation).
