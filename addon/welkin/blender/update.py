@@ -144,13 +144,7 @@ def cloudy_scene_json(scene, settings, request, clouds, module, depsgraph=None):
     for volume in moved["volumes"]:
         for row, c in zip(volume["matrix_world"][:3], (cx, cy, cz)):
             row[3] -= c
-    r = scene.render
-    d = scene_export.scene_dict(
-        atmosphere, request.altitude_m, request.sun_direction, request.exposure,
-        sky_request.resolve_method(request.method, module), None,
-        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=moved)
-    del d["camera"]
-    return json.dumps(d)
+    return _sky_scene_json(scene, request, module, atmosphere, request.altitude_m, moved)
 
 
 def shadow_scene_json(scene, settings, request, clouds, module):
@@ -162,9 +156,15 @@ def shadow_scene_json(scene, settings, request, clouds, module):
     if not clouds or not (c.shadows or c.ground_shadows):
         return None
     atmosphere = json.loads(sky_request.build_atmosphere(request, module).to_json_string())
+    return _sky_scene_json(scene, request, module, atmosphere, settings.altitude_m, clouds)
+
+
+def _sky_scene_json(scene, request, module, atmosphere, origin_altitude_m, clouds):
+    """The scene description (JSON text) of the request's sky with `clouds`, its origin at
+    origin_altitude_m, without a camera: what cloudy_scene_json and shadow_scene_json share."""
     r = scene.render
     d = scene_export.scene_dict(
-        atmosphere, settings.altitude_m, request.sun_direction, request.exposure,
+        atmosphere, origin_altitude_m, request.sun_direction, request.exposure,
         sky_request.resolve_method(request.method, module), None,
         (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=clouds)
     del d["camera"]
