@@ -31,9 +31,7 @@ tests=("$@")
 # KNOWN FAILURE with the reason; it does not fail the run, and its passing does (so that
 # the entry goes). Every entry is open work, named in the closing note of the change that
 # added it.
-declare -A known=(
-  [test_cloud_wind_animation@3.4]="frame 2 of a -a render differs from a frame_set render of frame 2 by 0.28 (relative, Cycles world) since the coverage-calibrated cloud layers landed; both frames animate, the cause is not found"
-)
+declare -A known=()
 
 dist=build/blender_dist
 mkdir -p "$dist"

@@ -254,7 +254,7 @@ double ProceduralClouds::height_gradient(CloudType type, double f) {
     return shape_of(type).gradient(f);
 }
 
-// Vertical optical depth of the column above (x, y) (world, before the wind shift) through
+// Vertical optical depth of the column above the world point (x, y) (density applies the wind) through
 // the layer, midpoint rule in 32 steps, stopped once it reaches the coverage threshold.
 double ProceduralClouds::column_depth(double x, double y, double k) const {
     constexpr int kSteps = 32;
@@ -269,7 +269,9 @@ double ProceduralClouds::column_depth(double x, double y, double k) const {
 
 double ProceduralClouds::fraction(double k, int columns) const {
     // R2 low-discrepancy points (Roberts 2018, the plastic number's powers) over a square of
-    // two weather tiles.
+    // two weather tiles, in the field's own frame: the wind translates the field, so the
+    // points move with it and the share (hence k, and the calibration's cache) is the same
+    // for every wind offset.
     constexpr double a1 = 0.7548776662466927, a2 = 0.5698402909980532;
     const double side = 2.0 * p_.weather_scale_m;
     const int cloudy = tbb::parallel_reduce(
@@ -277,7 +279,8 @@ double ProceduralClouds::fraction(double k, int columns) const {
         [&](const tbb::blocked_range<int>& r, int acc) {
             for (int i = r.begin(); i != r.end(); ++i) {
                 const double u = std::fmod(0.5 + a1 * (i + 1), 1.0), v = std::fmod(0.5 + a2 * (i + 1), 1.0);
-                acc += column_depth(side * u, side * v, k) >= kCoverageOpticalDepth;
+                acc += column_depth(side * u + p_.wind_offset_m.x, side * v + p_.wind_offset_m.y, k) >=
+                       kCoverageOpticalDepth;
             }
             return acc;
         },

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <system_error>
 
@@ -14,7 +15,9 @@
 #include <ImfCompression.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
-#include <ImfInputFile.h>
+#include <ImfInputPart.h>
+#include <ImfMultiPartInputFile.h>
+#include <ImfPartType.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
@@ -125,29 +128,86 @@ ExrWriteReport write_exr(const std::string& path, const ExrImage& image, const E
     return report;
 }
 
-ExrImage read_exr(const std::string& path) {
-    try {
-        Imf::InputFile file(path.c_str());
-        const Imf::Header& header = file.header();
-        const Imath::Box2i dw = header.dataWindow();
-        ExrImage image;
-        image.width = dw.max.x - dw.min.x + 1;
-        image.height = dw.max.y - dw.min.y + 1;
+namespace {
+
+// One channel of a file: the part that holds it and its name there.
+struct ChannelSource {
+    int part = 0;
+    std::string name_in_part;
+};
+
+// The channels of every part of a file, as read_exr names them. Blender 5.0 writes a
+// multilayer EXR as a multi-part file, one part per pass, with full "<layer>.<pass>.<chan>"
+// names in each part; single-part files are the common case. A name that occurs in more than
+// one part (the views of a stereo file, say) is qualified with its part's name,
+// "<part>.<channel>". Deep parts are refused; every part must share one data window.
+struct FileChannels {
+    Imath::Box2i data_window;
+    std::vector<std::string> names;  // in the file's order, part by part
+    std::vector<ChannelSource> sources;
+};
+
+FileChannels file_channels(const std::string& path, Imf::MultiPartInputFile& file) {
+    FileChannels out;
+    std::map<std::string, int> count;
+    for (int p = 0; p < file.parts(); ++p)
+        for (auto it = file.header(p).channels().begin(); it != file.header(p).channels().end(); ++it)
+            ++count[it.name()];
+    for (int p = 0; p < file.parts(); ++p) {
+        const Imf::Header& header = file.header(p);
+        if (header.hasType() && Imf::isDeepData(header.type()))
+            throw IoError(fmt::format("cannot read '{}': part {} holds deep data", path, p));
+        if (p == 0)
+            out.data_window = header.dataWindow();
+        else if (header.dataWindow() != out.data_window)
+            throw IoError(fmt::format("cannot read '{}': part {} has another data window than part 0", path, p));
+        const std::string part_name = header.hasName() ? header.name() : fmt::format("part{}", p);
         for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
             if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
                 throw IoError(fmt::format("cannot read '{}': channel '{}' is subsampled", path, it.name()));
-            image.channel_names.push_back(it.name());
+            const std::string name = it.name();
+            out.names.push_back(count[name] > 1 ? part_name + "." + name : name);
+            out.sources.push_back({p, name});
         }
-        const std::size_t nc = image.channels();
-        image.pixels.assign(std::size_t(image.width) * std::size_t(image.height) * nc, 0.0f);
-        Imf::FrameBuffer fb;
-        for (std::size_t c = 0; c < nc; ++c)
-            fb.insert(image.channel_names[c],
-                      Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, dw, sizeof(float) * nc,
-                                       sizeof(float) * nc * std::size_t(image.width)));
-        file.setFrameBuffer(fb);
-        file.readPixels(dw.min.y, dw.max.y);
-        return image;
+    }
+    return out;
+}
+
+// Reads the channels `which` (indices into `channels`) into an interleaved float image.
+ExrImage read_channels(Imf::MultiPartInputFile& file, const FileChannels& channels,
+                       const std::vector<std::size_t>& which) {
+    const Imath::Box2i dw = channels.data_window;
+    ExrImage image;
+    image.width = dw.max.x - dw.min.x + 1;
+    image.height = dw.max.y - dw.min.y + 1;
+    const std::size_t nc = which.size();
+    for (std::size_t k : which) image.channel_names.push_back(channels.names[k]);
+    image.pixels.assign(std::size_t(image.width) * std::size_t(image.height) * nc, 0.0f);
+    std::vector<Imf::FrameBuffer> buffers(std::size_t(file.parts()));
+    for (std::size_t c = 0; c < nc; ++c) {
+        const ChannelSource& source = channels.sources[which[c]];
+        buffers[std::size_t(source.part)].insert(
+            source.name_in_part, Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, dw, sizeof(float) * nc,
+                                                  sizeof(float) * nc * std::size_t(image.width)));
+    }
+    for (int p = 0; p < file.parts(); ++p) {
+        if (buffers[std::size_t(p)].begin() == buffers[std::size_t(p)].end()) continue;
+        Imf::InputPart part(file, p);
+        part.setFrameBuffer(buffers[std::size_t(p)]);
+        part.readPixels(dw.min.y, dw.max.y);
+    }
+    return image;
+}
+
+}  // namespace
+
+ExrImage read_exr(const std::string& path) {
+    try {
+        Imf::MultiPartInputFile file(path.c_str());
+        const FileChannels channels = file_channels(path, file);
+        std::vector<std::size_t> all(channels.names.size());
+        for (std::size_t k = 0; k < all.size(); ++k) all[k] = k;
+        return read_channels(file, channels, all);
     } catch (const IoError&) {
         throw;
     } catch (const std::exception& e) {
@@ -157,43 +217,32 @@ ExrImage read_exr(const std::string& path) {
 
 ExrHeaderInfo read_exr_header(const std::string& path) {
     try {
-        Imf::InputFile file(path.c_str());
-        const Imath::Box2i dw = file.header().dataWindow();
+        Imf::MultiPartInputFile file(path.c_str());
+        const FileChannels channels = file_channels(path, file);
         ExrHeaderInfo info;
-        info.width = dw.max.x - dw.min.x + 1;
-        info.height = dw.max.y - dw.min.y + 1;
-        for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
-            info.channel_names.push_back(it.name());
+        info.width = channels.data_window.max.x - channels.data_window.min.x + 1;
+        info.height = channels.data_window.max.y - channels.data_window.min.y + 1;
+        info.channel_names = channels.names;
         return info;
+    } catch (const IoError&) {
+        throw;
     } catch (const std::exception& e) {
         throw IoError(fmt::format("cannot read '{}': {}", path, e.what()));
     }
 }
 
 ExrImage read_exr_channels(const std::string& path, const std::vector<std::string>& names) {
-    ExrImage image;
     try {
-        Imf::InputFile file(path.c_str());
-        const Imf::Header& header = file.header();
+        Imf::MultiPartInputFile file(path.c_str());
+        const FileChannels channels = file_channels(path, file);
+        std::vector<std::size_t> which;
         for (const std::string& name : names) {
-            const Imf::Channel* channel = header.channels().findChannel(name);
-            if (!channel)
+            const auto it = std::find(channels.names.begin(), channels.names.end(), name);
+            if (it == channels.names.end())
                 throw InvalidArgument("channel", fmt::format("'{}' has no channel '{}'", path, name));
-            if (channel->xSampling != 1 || channel->ySampling != 1)
-                throw IoError(fmt::format("cannot read '{}': channel '{}' is subsampled", path, name));
+            which.push_back(std::size_t(it - channels.names.begin()));
         }
-        const Imath::Box2i dw = header.dataWindow();
-        image.width = dw.max.x - dw.min.x + 1;
-        image.height = dw.max.y - dw.min.y + 1;
-        image.channel_names = names;
-        const std::size_t nc = names.size();
-        image.pixels.assign(std::size_t(image.width) * std::size_t(image.height) * nc, 0.0f);
-        Imf::FrameBuffer fb;
-        for (std::size_t c = 0; c < nc; ++c)
-            fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, image.pixels.data() + c, dw, sizeof(float) * nc,
-                                                 sizeof(float) * nc * std::size_t(image.width)));
-        file.setFrameBuffer(fb);
-        file.readPixels(dw.min.y, dw.max.y);
+        return read_channels(file, channels, which);
     } catch (const InvalidArgument&) {
         throw;
     } catch (const IoError&) {
@@ -201,7 +250,6 @@ ExrImage read_exr_channels(const std::string& path, const std::vector<std::strin
     } catch (const std::exception& e) {
         throw IoError(fmt::format("cannot read '{}': {}", path, e.what()));
     }
-    return image;
 }
 
 void set_exr_thread_count(int threads) {

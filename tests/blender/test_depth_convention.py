@@ -12,8 +12,7 @@ pixels compared). The EXR is read back with
 welkin.read_exr, and the channel is the one `welkin aerial` finds by default
 ("ViewLayer.Depth.Z").
 
-Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
-     --python-exit-code 1 --python tests/blender/test_depth_convention.py
+Run: bash scripts/test_blender.sh tests/blender/test_depth_convention.py
 """
 import json
 import math
@@ -27,10 +26,13 @@ import bpy
 from mathutils import Euler
 
 import numpy as np
-import welkin
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import addon_testing  # noqa: E402
 from camera_testing import camera_json  # noqa: E402
+
+# The compiled core as the installed add-on carries it (legacy zip or Extension's wheel).
+_addon, welkin = addon_testing.install_addon()
 
 CLI = os.environ.get("WELKIN_CLI",
                      str(pathlib.Path(__file__).resolve().parents[2] / "build" / "welkin"))

@@ -149,6 +149,20 @@ TEST(ProceduralClouds, WindShiftsTheField) {
         }
 }
 
+// The wind translates the field and nothing else: the calibrated coverage, and so the clouds
+// a frame shows, do not depend on the offset, nor on which offsets the process saw before
+// (the calibration is cached without the wind). A keyed wind rendered with `-a` must give
+// each frame what a render of that frame alone gives.
+TEST(ProceduralClouds, CoverageDoesNotDependOnTheWind) {
+    CloudLayerParams p = tile_params();
+    p.seed = 9103;  // a layer no other test builds: its calibration is made here
+    p.wind_offset_m = {3000.0, -1700.0};
+    const ProceduralClouds windy(p);
+    p.wind_offset_m = {0.0, 0.0};
+    const ProceduralClouds still(p);
+    EXPECT_EQ(windy.covered_fraction(4096), still.covered_fraction(4096));
+}
+
 TEST(ProceduralClouds, ZeroOutsideTheLayerAndWithoutCoverage) {
     CloudLayerParams p = tile_params();
     const ProceduralClouds layer(p);

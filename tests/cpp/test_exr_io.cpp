@@ -3,6 +3,12 @@
 #include <filesystem>
 #include <string>
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfMultiPartOutputFile.h>
+#include <ImfOutputPart.h>
+#include <ImfPartType.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -96,6 +102,72 @@ TEST_F(ExrIo, MultilayerChannelNamesRoundTrip) {
             for (int x = 0; x < 3; ++x) EXPECT_EQ(back.at(x, y, ci), im.at(x, y, im.channel_index(name)));
     }
     EXPECT_EQ(back.channel_index("R"), -1);
+}
+
+// Blender 5.0 writes a multilayer render as a multi-part file, one part per pass, each
+// channel with its full name. Every part's channels read back as one image; a name that
+// two parts share (a stereo file's views) is qualified with the part's name.
+TEST_F(ExrIo, MultiPartFilesReadEveryPart) {
+    const int w = 4, h = 3;
+    struct Part {
+        std::string name;
+        std::vector<std::string> channels;
+    };
+    const std::vector<Part> parts = {{"ViewLayer.Combined", {"ViewLayer.Combined.R", "ViewLayer.Combined.A"}},
+                                     {"ViewLayer.Depth", {"ViewLayer.Depth.Z"}},
+                                     {"left", {"Y"}},
+                                     {"right", {"Y"}}};
+    std::vector<Imf::Header> headers;
+    for (const Part& part : parts) {
+        Imf::Header header(w, h);
+        header.setName(part.name);
+        header.setType(Imf::SCANLINEIMAGE);
+        for (const std::string& c : part.channels) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+        headers.push_back(header);
+    }
+    // Value of channel c of part p at (x, y): unique, so a mix-up shows.
+    auto value = [](std::size_t p, std::size_t c, int x, int y) { return float(1000 * p + 100 * c + 10 * y + x); };
+    {
+        Imf::MultiPartOutputFile file(path("multi.exr").c_str(), headers.data(), int(headers.size()));
+        for (std::size_t p = 0; p < parts.size(); ++p) {
+            const std::size_t nc = parts[p].channels.size();
+            std::vector<float> pixels(std::size_t(w * h) * nc);
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x)
+                    for (std::size_t c = 0; c < nc; ++c)
+                        pixels[(std::size_t(y * w + x)) * nc + c] = value(p, c, x, y);
+            Imf::FrameBuffer fb;
+            for (std::size_t c = 0; c < nc; ++c)
+                fb.insert(parts[p].channels[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data() + c),
+                                                           sizeof(float) * nc, sizeof(float) * nc * w));
+            Imf::OutputPart out(file, int(p));
+            out.setFrameBuffer(fb);
+            out.writePixels(h);
+        }
+    }
+    const ExrImage image = read_exr(path("multi.exr"));
+    ASSERT_EQ(image.width, w);
+    ASSERT_EQ(image.height, h);
+    const std::vector<std::pair<std::string, std::pair<std::size_t, std::size_t>>> expected = {
+        {"ViewLayer.Combined.R", {0, 0}},
+        {"ViewLayer.Combined.A", {0, 1}},
+        {"ViewLayer.Depth.Z", {1, 0}},
+        {"left.Y", {2, 0}},
+        {"right.Y", {3, 0}}};
+    ASSERT_EQ(image.channels(), expected.size());
+    for (const auto& [name, source] : expected) {
+        const int ci = image.channel_index(name);
+        ASSERT_GE(ci, 0) << name;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                EXPECT_EQ(image.at(x, y, std::size_t(ci)), value(source.first, source.second, x, y)) << name;
+    }
+    EXPECT_EQ(read_exr_header(path("multi.exr")).channel_names, image.channel_names);
+    const ExrImage some = read_exr_channels(path("multi.exr"), {"right.Y", "ViewLayer.Depth.Z"});
+    ASSERT_EQ(some.channels(), 2u);
+    EXPECT_EQ(some.at(3, 2, 0), value(3, 0, 3, 2));
+    EXPECT_EQ(some.at(3, 2, 1), value(1, 0, 3, 2));
+    EXPECT_THROW(read_exr_channels(path("multi.exr"), {"Y"}), InvalidArgument);
 }
 
 TEST_F(ExrIo, RefusesToOverwriteUnlessAsked) {

@@ -25,6 +25,7 @@ render (`blender -b file.blend -a`) such a frame fails (farm.py): Blender stops,
 file is not left on disk, and the exit status is non-zero.
 """
 import json
+import math
 import os
 
 import bpy
@@ -32,7 +33,7 @@ from bpy.app.handlers import persistent
 
 from .. import native, scene_export, sky_request
 from .. import aerial_table
-from . import aerial_frame, cloud_scene, compositor, farm, scene_sun
+from . import aerial_frame, cloud_scene, compat, compositor, farm, scene_sun
 from .scene_sun import UserError
 
 
@@ -60,9 +61,7 @@ class WelkinAerialSettings(bpy.types.PropertyGroup):
                ('raymarch', "Ray march", "Every pixel marched (reference, slow)")))
     status: bpy.props.StringProperty(options={'HIDDEN'})
     nodes_installed: bpy.props.BoolProperty(options={'HIDDEN'})
-    previous_use_nodes: bpy.props.BoolProperty(options={'HIDDEN'})
     previous_use_pass_z: bpy.props.BoolProperty(options={'HIDDEN'})
-    previous_source: bpy.props.StringProperty(options={'HIDDEN'})
     compositor_undo: bpy.props.StringProperty(options={'HIDDEN'})
     added_aovs: bpy.props.StringProperty(options={'HIDDEN'})
 
@@ -150,11 +149,13 @@ def camera_of(scene, depsgraph=None):
     cam = ob.data
     panorama = None
     if cam.type == 'PANO':
-        c = cam.cycles
+        c = compat.camera_panorama(cam)
+        if c is None:
+            raise UserError("panoramic camera: its panorama settings need the Cycles add-on "
+                            "(enabled by default)")
         if c.panorama_type != 'EQUIRECTANGULAR':
             raise UserError(f"camera '{ob.name}': panorama type {c.panorama_type} is not "
                             f"supported by aerial perspective (only EQUIRECTANGULAR)")
-        import math
         panorama = dict(panorama_type=c.panorama_type,
                         latitude_min_deg=math.degrees(c.latitude_min),
                         latitude_max_deg=math.degrees(c.latitude_max),
@@ -300,12 +301,11 @@ def _sync_output_path(scene):
     """Points the File Output node at the current output path. An animation render
     copies the compositor before its first render_pre, so the path is kept in step
     whenever the scene changes and when a file loads, not only when a render starts."""
-    tree = scene.node_tree
-    node = tree.nodes.get(compositor.DEPTH_NODE) if tree is not None else None
+    node = compositor.depth_node(scene)
     if node is not None:
         wanted = scene_export.file_output_base(base_of(scene))
-        if node.base_path != wanted:
-            node.base_path = wanted
+        if compat.file_output_path(node) != wanted:
+            compat.set_file_output_path(node, wanted)
 
 
 @persistent
@@ -336,12 +336,10 @@ def on_render_pre(scene, *_args):
         z_on = all(layer.use_pass_z for layer in scene.view_layers)
         if not z_on:
             _log(scene, "the Z pass was off: turned on (takes effect from the next render)")
-        tree = scene.node_tree
-        node = tree.nodes.get(compositor.DEPTH_NODE) if tree is not None else None
+        node = compositor.depth_node(scene)
         wanted = scene_export.file_output_base(base_of(scene))
         # Touch the scene only when needed: UI renders call this beside the interface.
-        if not z_on or node is None or node.base_path != wanted \
-                or tree.nodes.get(compositor.GROUP_NODE) is None:
+        if not z_on or node is None or compat.file_output_path(node) != wanted:
             enable_side_files(scene)  # the File Output node follows the output path
     except Exception as error:
         _log(scene, f"aerial perspective: unexpected {type(error).__name__}: {error}")

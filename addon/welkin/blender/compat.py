@@ -3,6 +3,7 @@ in one place. The rest of the add-on calls these functions and never tests
 bpy.app.version itself, so a new Blender is one edit here. Each function says which
 versions differ and how (checked against the real 3.4, 4.5 and 5.0 by tests/blender/).
 """
+import os
 import warnings
 
 import bpy
@@ -195,6 +196,36 @@ def compositor_mix(tree, blend_type):
     node.inputs[0].default_value = 1.0
     return node, node.inputs[1], node.inputs[2], node.outputs[0]
 
+
+def set_file_output_inputs(node, items):
+    """A new File Output node's inputs, (name, socket type) pairs ('RGBA', 'FLOAT'): the
+    node's file_output_items in 5.0+, its file_slots (always colour) before."""
+    if hasattr(node, "file_output_items"):
+        node.file_output_items.clear()
+        for name, socket_type in items:
+            node.file_output_items.new(socket_type, name)
+        return
+    node.file_slots.clear()
+    for name, _socket_type in items:
+        node.file_slots.new(name)
+
+
+def file_output_path(node):
+    """Where a File Output node writes, as set_file_output_path takes it: the path up to the
+    frame number ('<dir>/<stem>', Blender appends '0001.exr')."""
+    if hasattr(node, "file_output_items"):
+        return os.path.join(node.directory, node.file_name.rstrip("#"))
+    return node.base_path
+
+
+def set_file_output_path(node, base):
+    """Points a File Output node at `base` + frame + extension: base_path before 5.0; in 5.0
+    directory and file_name, whose frame number comes from its '#' (none: no number)."""
+    if hasattr(node, "file_output_items"):
+        node.directory, name = os.path.split(base)
+        node.file_name = name + "####"
+        return
+    node.base_path = base
 
 
 def set_hashed_transparency(material):

@@ -10,7 +10,10 @@
 // "A"); a multilayer file, as Blender writes and reads them, names each channel
 // "<layer>.<pass>.<channel>", e.g. "Welkin.Sky.R" (Blender splits at the dots: view layer
 // "Welkin", pass "Sky", channel "R"). OpenEXR stores channels sorted by name; the reader
-// returns them in the file's order, so look them up by name (channel_index).
+// returns them in the file's order, so look them up by name (channel_index). Multi-part
+// files (Blender 5.0 writes one part per pass) read as one image with every part's channels;
+// a name found in several parts is qualified as "<part name>.<channel>". All parts must
+// share one data window; deep parts are refused.
 //
 // Half-float files hold magnitudes up to 65504: the writer clamps larger finite values to
 // that (the sun's disc can exceed it) and reports how many it clamped.
