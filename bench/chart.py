@@ -15,8 +15,10 @@ What it does
    CIE 1931. Its own noise is recorded: the standard error of its luminance, bounded above
    by treating the wavelengths as perfectly correlated (every path carries all of them).
 4. Candidates: `analytic`; `lut` at three texture sizes; `raymarch` at five step counts;
-   and, for the defaults of each, 3 wavelengths (680/550/440 nm, converted with Bruneton's
-   lambda^-3 extension) against full spectral sampling (10 nm).
+   and, for the defaults of each, the default 4 wavelengths (620/560/480/440 nm, one SIMD
+   batch, converted with the fitted matrices of src/color/color.cpp) against full spectral
+   sampling (10 nm). `auto` judges an atmosphere of up to four wavelengths by the default
+   rows and a larger one by the spectral rows.
 5. Error, per direction, against the reference: the relative luminance error
    |Y - Y_ref| / max(Y_ref, Y_floor), with Y the CIE Y of the Rec.709 colour and
    Y_floor = 1e-3 x the scene's sphere-mean reference luminance (directions into empty
@@ -418,7 +420,7 @@ def draw_chart(path, rows, n_dirs, paths, n_scenes):
         ax.legend(fontsize=7, loc="lower left")
     dirs_text = f"{n_dirs} directions each" if n_dirs else "directions"
     fig.suptitle(f"Welkin sky methods against the spectral reference: {n_scenes} scenes, "
-                 f"{dirs_text} over the whole sphere (circles 3 wavelengths, "
+                 f"{dirs_text} over the whole sphere (circles the default 4 wavelengths, "
                  f"squares spectral)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -100,11 +100,13 @@ Spectral radiance (W m^-2 sr^-1 nm^-1) at wavelengths_nm -> linear Rec.709
 (W m^-2 sr^-1; CIE 1931 2-degree, D65 white, no 683 lm/W factor, no gamma).
 
 spectra: (N, C) or (C,) array-like with C = len(wavelengths_nm) >= 3; returns
-float32 (N, 3) or (3,). With more than three wavelengths the spectrum is
-integrated against the colour-matching functions; with exactly three, each
-sample is extended as the solar spectrum times (lambda / lambda_j)^lambda_power
-(Bruneton 2017's approximate conversion): -3 for sky light, 0 for sunlight.
-This is the conversion sky_radiance(output="rgb") uses.
+float32 (N, 3) or (3,). The default four wavelengths (620/560/480/440 nm) use
+matrices fitted to the 48-wavelength path (lambda_power -3: sky light, 0:
+sunlight); other sets of more than three wavelengths are integrated against the
+colour-matching functions; with exactly three, each sample is extended as the
+solar spectrum times (lambda / lambda_j)^lambda_power (Bruneton 2017's
+approximate conversion): -3 for sky light, 0 for sunlight. This is the
+conversion sky_radiance(output="rgb") uses.
 )doc");
 
     m.def(

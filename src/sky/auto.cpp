@@ -76,8 +76,10 @@ AutoChoice choose_sky_method(const Atmosphere& atmosphere, const Observer& obser
     const auto [a0, a1] = bracket(t.altitudes_m, obs.altitude_m);
     const auto [s0, s1] = bracket(t.sun_elevations_deg, sun_elevation_deg);
     const std::vector<std::size_t> presets = presets_for(atmosphere, t);
-    // Three wavelengths are judged by the 3-wavelength rows; more by the spectral rows.
-    const bool spectral = atmosphere.channels() > 3;
+    // Up to four wavelengths (the default four, or three: one SIMD batch of the fast
+    // methods, atmosphere/batch.hpp) are judged by the chart's default rows; more by its
+    // spectral rows.
+    const bool spectral = atmosphere.channels() > 4;
 
     // The measured error of every setting of the right kind at this scene: the worst over
     // the presets and the grid corners around it (infinite where it failed: never chosen).

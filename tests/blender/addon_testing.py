@@ -223,10 +223,8 @@ def panoramic_camera(scene, width, height, samples=2):
     cam.rotation_mode = 'XYZ'
     cam.rotation_euler = (m.radians(90.0), 0.0, m.radians(-90.0))
     cam.data.type = 'PANO'
-    if hasattr(cam.data, "panorama_type"):  # Blender 4.x
-        cam.data.panorama_type = 'EQUIRECTANGULAR'
-    else:                                   # Blender 3.x
-        cam.data.cycles.panorama_type = 'EQUIRECTANGULAR'
+    from welkin.blender import compat  # the installed add-on's
+    compat.camera_panorama(cam.data).panorama_type = 'EQUIRECTANGULAR'
     scene.render.engine = 'CYCLES'
     scene.cycles.device = 'CPU'
     scene.cycles.samples = samples
@@ -237,7 +235,7 @@ def panoramic_camera(scene, width, height, samples=2):
     scene.render.resolution_x, scene.render.resolution_y = width, height
     scene.render.resolution_percentage = 100
     scene.render.film_transparent = False
-    scene.render.image_settings.file_format = 'OPEN_EXR'
+    compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
     scene.render.image_settings.color_depth = '32'
     scene.render.image_settings.color_mode = 'RGB'
     scene.view_settings.view_transform = 'Standard'

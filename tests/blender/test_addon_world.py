@@ -28,7 +28,7 @@ scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution='256')
 bpy.ops.welkin.update_sky()
 settings = scene.world.welkin
 shown = T.draw_panel(scene)
-for name in ("preset", "altitude_m", "sun_object", "exposure", "resolution", "method"):
+for name in ("preset", "altitude_m", "sun_object", "exposure", "resolution", "method", "colour"):
     T.check(("prop", name) in shown, f"the panel does not show {name}: {shown}")
 for op in ("welkin.update_sky", "welkin.remove_sky", "welkin.export_hdri"):
     T.check(("operator", op) in shown, f"the panel does not offer {op}")
@@ -214,6 +214,26 @@ ref = welkin.sky_radiance(atm, 0.0, tuple(scene.objects["Sun"].matrix_world.col[
                           output="rgb")[0]
 T.check(np.allclose(T.world_pixels(world.welkin.sky_image)[0, 0], ref, rtol=0.02),
         "the resized sky is not the sky")
+
+# Colour > Spectral: the world is the 48-wavelength sky (the zenith pixel against
+# sky_radiance at 360..830 nm, same method), not the default four wavelengths'.
+world.welkin.method = 'lut'
+world.welkin.colour = 'SPECTRAL'
+bpy.ops.welkin.update_sky()
+zenith = welkin.equirect_pixel_directions(512, 256)[0, :1]
+sun_now = tuple(scene.objects["Sun"].matrix_world.col[2][:3])
+exact = welkin.sky_radiance(welkin.Atmosphere.preset("bruneton2017", welkin.spectral_wavelengths_nm()),
+                            0.0, sun_now, zenith, method="lut", output="rgb")[0]
+got = T.world_pixels(world.welkin.sky_image)[0, 0]
+T.check(np.allclose(got, exact, rtol=1e-4), f"Spectral: zenith {got}, 48-wavelength sky {exact}")
+world.welkin.colour = 'FAST'
+bpy.ops.welkin.update_sky()
+fast = welkin.sky_radiance(atm, 0.0, sun_now, zenith, method="lut", output="rgb")[0]
+T.check(np.allclose(T.world_pixels(world.welkin.sky_image)[0, 0], fast, rtol=1e-4),
+        "Fast: the zenith is not the default wavelengths' sky")
+T.check(not np.allclose(exact, fast, rtol=1e-4), "the two colour paths gave the same pixel")
+print(f"Colour: Spectral zenith {exact}, Fast {fast}")
+world.welkin.method = 'auto'
 bpy.ops.welkin.remove_sky()
 
 # A scene without a world gets one of its own, which remove_sky takes out again.

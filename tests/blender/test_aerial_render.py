@@ -47,7 +47,8 @@ def build_scene():
     scene.cycles.use_denoising = False
     scene.render.resolution_x, scene.render.resolution_y = 96, 48
     scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = 'OPEN_EXR'
+    from welkin.blender import compat
+    compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
     scene.frame_start, scene.frame_end = 1, 2
     scene.render.filepath = str(at.TMP / "out" / "frame_")
     return scene

@@ -32,7 +32,7 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import cloud_shadows, scene_sun, update  # noqa: E402
+from welkin.blender import cloud_shadows, compat, scene_sun, update  # noqa: E402
 
 check = t.check
 N = 32
@@ -69,7 +69,7 @@ scene.cycles.pixel_filter_type = 'BLACKMAN_HARRIS'
 scene.cycles.filter_width = 0.01
 scene.render.resolution_x = scene.render.resolution_y = N
 scene.render.resolution_percentage = 100
-scene.render.image_settings.file_format = 'OPEN_EXR'
+compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
 scene.render.image_settings.color_depth = '32'
 scene.view_settings.view_transform = 'Standard'
 

@@ -30,7 +30,7 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import scene_sun, update  # noqa: E402
+from welkin.blender import compat, scene_sun, update  # noqa: E402
 
 check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=40.0, sun_azimuth_deg=0.0, camera_z=20.0)
@@ -91,7 +91,7 @@ scene.cycles.use_denoising = False
 scene.cycles.seed = 1
 scene.render.resolution_x = scene.render.resolution_y = 48
 scene.render.resolution_percentage = 100
-scene.render.image_settings.file_format = 'OPEN_EXR'
+compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
 scene.render.image_settings.color_depth = '32'
 scene.view_settings.view_transform = 'Standard'
 

@@ -97,20 +97,20 @@ scene.cycles.samples = 4
 scene.cycles.use_denoising = False
 scene.render.resolution_x, scene.render.resolution_y = 64, 32
 scene.render.resolution_percentage = 100
-scene.render.image_settings.file_format = 'OPEN_EXR'
+compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
 scene.render.filepath = str(t.TMP / "out" / "frame_")
 tree, _undo = compat.ensure_scene_compositor(scene, f"{scene.name} Compositing")
 rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
 comp = compat.compositor_output(tree)  # 5.0: the tree's Group Output
-user = tree.nodes.new('CompositorNodeGamma')
-user.name = "User Gamma"
+user = tree.nodes.new('CompositorNodeCurveRGB')  # (5.0 has no compositor Gamma node)
+user.name = "User Curves"
 tree.links.new(rl.outputs["Image"], user.inputs["Image"])
 tree.links.new(user.outputs["Image"], comp.inputs["Image"])
 names_before = {n.name for n in tree.nodes}
 scene.welkin_aerial.side_files = True  # the pass files beside the render
 scene.welkin_aerial.enabled = True
 check(names_before <= {n.name for n in tree.nodes}, "enable removed a user node")
-check(comp.inputs["Image"].links[0].from_node.name == "User Gamma",
+check(comp.inputs["Image"].links[0].from_node.name == "User Curves",
       "enable relinked the output away from the user's node")
 
 scene.frame_set(1)
@@ -166,5 +166,5 @@ vol.data.filepath = str(paths[0])
 
 scene.welkin_aerial.enabled = False
 check({n.name for n in tree.nodes} == names_before, "disable did not restore the user's nodes")
-check(comp.inputs["Image"].links[0].from_node.name == "User Gamma", "user link not restored")
+check(comp.inputs["Image"].links[0].from_node.name == "User Curves", "user link not restored")
 t.done("test_cloud_render")

@@ -32,7 +32,7 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import render_engine  # noqa: E402
+from welkin.blender import compat, render_engine  # noqa: E402
 
 check = t.check
 W, H = 64, 32
@@ -99,7 +99,7 @@ cam.rotation_euler = (math.radians(98.0), 0.0, math.radians(-90.0))  # +X, 8 deg
 cam.data.clip_end = 1e6
 scene.render.engine = 'WELKIN'
 scene.render.resolution_x, scene.render.resolution_y = 48, 32
-scene.render.image_settings.file_format = 'OPEN_EXR'
+compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
 scene.frame_set(1)
 bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 plates = render_anim("welkin", ["-E", "WELKIN"])

@@ -33,6 +33,7 @@ from camera_testing import camera_json  # noqa: E402
 
 # The compiled core as the installed add-on carries it (legacy zip or Extension's wheel).
 _addon, welkin = addon_testing.install_addon()
+from welkin.blender import compat  # noqa: E402
 
 CLI = os.environ.get("WELKIN_CLI",
                      str(pathlib.Path(__file__).resolve().parents[2] / "build" / "welkin"))
@@ -81,7 +82,7 @@ def expected_distance(o, d):
 def check(scene, cam, label, tmp):
     r = scene.render
     path = os.path.join(tmp, f"{label}.exr")
-    r.image_settings.file_format = "OPEN_EXR_MULTILAYER"
+    compat.set_file_format(r.image_settings, "OPEN_EXR_MULTILAYER")
     r.filepath = path
     bpy.ops.render.render(write_still=True)
     pixels, names = welkin.read_exr(path)
@@ -169,7 +170,7 @@ def main():
         cam.rotation_euler = Euler((math.radians(50), 0, math.radians(-20)))
         check(scene, cam, "orthographic", tmp)
         cam.data.type = "PANO"
-        cam.data.cycles.panorama_type = "EQUIRECTANGULAR"
+        compat.camera_panorama(cam.data).panorama_type = "EQUIRECTANGULAR"
         cam.location = (5.0, 0.0, 4.0)
         cam.rotation_euler = Euler((math.radians(90), 0, math.radians(-90)))
         scene.render.resolution_x, scene.render.resolution_y = 128, 64

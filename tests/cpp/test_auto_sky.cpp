@@ -6,11 +6,13 @@
 // not exactly a charted preset is judged by the worst preset. The generated table itself
 // is exercised end to end against the reference in tests/python/test_auto.py.
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "peer_table.hpp"
 #include <gtest/gtest.h>
 
+#include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/sky/auto.hpp"
@@ -120,6 +122,22 @@ TEST(AutoSky, AtmosphereNotAChartedPresetIsJudgedByTheWorstPreset) {
     Atmosphere other = earth();
     other.mie_g = 0.5;  // still named bruneton2017, but not it
     EXPECT_EQ(choose_sky_method(other, scene(0, 0), 2048 * 1024, 0.1, {}, t.table()).method, "raymarch");
+}
+
+// The generated table: the default atmosphere (four wavelengths, one SIMD batch) is judged
+// by the chart's default rows, a 48-wavelength one by its spectral rows; an HDRI of the
+// default sky by day gets a default-wavelength LUT, not a spectral setting (which costs ten
+// times as much).
+TEST(AutoSky, DefaultWavelengthsTakeTheDefaultRows) {
+    const Atmosphere fast = Atmosphere::preset("bruneton2017");
+    ASSERT_EQ(fast.channels(), 4u);
+    const AutoChoice day = choose_sky_method(fast, scene(0, 30), 2048 * 1024, 0.05);
+    EXPECT_EQ(day.setting.find("spectral"), std::string::npos) << day.setting;
+    EXPECT_EQ(day.method, "lut") << day.setting;
+    const Atmosphere spectral = Atmosphere::preset("bruneton2017", spectral_wavelengths_nm());
+    const AutoChoice exact = choose_sky_method(spectral, scene(0, 30), 2048 * 1024, 0.05);
+    EXPECT_NE(exact.setting.find("spectral"), std::string::npos) << exact.setting;
+    EXPECT_GT(exact.predicted_seconds, 5.0 * day.predicted_seconds);
 }
 
 TEST(AutoSky, BadToleranceNamesTheParameterAndRange) {

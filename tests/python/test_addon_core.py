@@ -136,6 +136,33 @@ def test_compute_is_the_modules_sky_disc_and_sun(addon_atm, sun_direction):
     assert result.warnings == []
 
 
+def test_spectral_colour_is_the_48_wavelength_sky():
+    """Colour > Spectral: the sky, disc and lamp of the preset at 360..830 nm (48
+    wavelengths), a different request key, and in twilight the colour the default's fitted
+    conversion approximates (CIE xy of the hemisphere's mean within 0.005)."""
+    e = math.radians(-4.0)
+    sun = (math.cos(e), 0.0, math.sin(e))
+    fast = sky_request.SkyRequest(sun_direction=sun, width=256, method="lut")
+    exact = sky_request.SkyRequest(sun_direction=sun, width=256, method="lut", spectral=True)
+    assert fast.key() != exact.key()
+    atm = sky_request.build_atmosphere(exact, welkin)
+    assert len(atm.wavelengths_nm) == 48
+    result = sky_compute.compute(welkin, exact)
+    np.testing.assert_array_equal(
+        result.sky, welkin.sky_image(atm, 0.0, sun, 256, result.method, sun_disc=False))
+
+    def xy(image):
+        rgb = image[: image.shape[0] // 2].reshape(-1, 3).mean(axis=0)  # upper hemisphere
+        m = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750],
+                      [0.0193339, 0.1191920, 0.9503041]])
+        x = m @ rgb
+        return x[:2] / x.sum()
+
+    fast_sky = sky_compute.compute(welkin, fast).sky
+    assert np.linalg.norm(xy(fast_sky) - xy(result.sky)) < 0.005
+    assert not np.array_equal(fast_sky, result.sky)
+
+
 def test_sun_below_the_horizon_turns_the_lamp_off_with_a_warning():
     e = math.radians(-5.0)
     req = sky_request.SkyRequest(sun_direction=(math.cos(e), 0.0, math.sin(e)), width=256)

@@ -51,6 +51,7 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         col.prop(s, "exposure")
         col.prop(s, "resolution")
         col.prop(s, "method")
+        col.prop(s, "colour")
         col.prop(s, "auto_update")
         lamp = s.sun_object
         animated = lamp is not None and lamp.animation_data is not None

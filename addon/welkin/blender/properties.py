@@ -82,6 +82,13 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
         items=[(str(w), f"{w} x {w // 2}", "") for w in sky_request.WIDTHS])
     method: bpy.props.EnumProperty(name="Method", items=_METHOD_ITEMS, default='auto',
                                    update=_changed)
+    colour: bpy.props.EnumProperty(
+        name="Colour", default='FAST', update=_changed,
+        items=(('FAST', "Fast", "Four wavelengths and a conversion fitted to the spectral "
+                "path (within 0.005 in CIE xy at the median, twilight included)"),
+               ('SPECTRAL', "Spectral", "48 wavelengths, 360 to 830 nm, through the CIE "
+                "colour-matching functions: the exact colour, several times slower")),
+        description="How the sky's colour is computed")
     auto_update: bpy.props.BoolProperty(
         name="Follow Lamp", default=True,
         description="Update the sky when the sun lamp moves or a setting changes, and on "

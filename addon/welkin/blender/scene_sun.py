@@ -74,5 +74,6 @@ def request_for(scene, settings, depsgraph=None):
         method=settings.method,
         exposure=settings.exposure,
         ground=settings.show_ground,
+        spectral=settings.colour == 'SPECTRAL',
     )
     return request, lamp, warnings

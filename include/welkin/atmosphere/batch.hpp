@@ -1,8 +1,9 @@
 // Up to four of an atmosphere's channels, packed for the fast methods.
 //
 // The LUT and ray-march methods work on four wavelengths at a time in single precision
-// (glm::vec4, one SIMD register): the default three channels fill one batch (the fourth
-// lane repeats the third), a spectral atmosphere of 48 wavelengths is twelve batches.
+// (glm::vec4, one SIMD register): the default four channels fill one batch (three would
+// leave the fourth lane repeating the third), a spectral atmosphere of 48 wavelengths is
+// twelve batches.
 // Geometry stays in double (geometry.hpp); radiance and coefficients are float.
 //
 // Densities are tabulated once per batch: the scattering and extinction coefficients at
