@@ -47,6 +47,8 @@ import argparse
 import csv
 import math
 import pathlib
+import shutil
+import subprocess
 import sys
 import time
 
@@ -570,7 +572,7 @@ def draw_stability_preset(path, scene_rows, noise_rows, labels, suns, alts, tole
 def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, paths,
                 ref_per_path, n_dirs):
     """The C++ table `auto` chooses from (src/auto_sky.cpp reads it through
-    include/welkin/auto_sky_table.hpp)."""
+    include/welkin/sky/auto_table.hpp)."""
     def opt(kw, key, default):
         return int(kw.get(key, default))
 
@@ -579,7 +581,7 @@ def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, path
         "// Regenerate: PYTHONPATH=build /usr/bin/python3 bench/chart.py (then rebuild).",
         f"// {len(noise_rows)} scenes x {n_dirs} directions, reference {paths} paths at "
         f"{SPECTRAL_STEP_NM:g} nm; measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.",
-        "#include \"welkin/auto_sky_table.hpp\"",
+        "#include \"welkin/sky/auto_table.hpp\"",
         "",
         "namespace welkin::auto_table {",
         "namespace {",
@@ -655,6 +657,9 @@ def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, path
         "",
     ]
     path.write_text("\n".join(lines))
+    # In the repository's format (.clang-format), which scripts/lint.sh checks.
+    if shutil.which("clang-format"):
+        subprocess.run(["clang-format", "-i", str(path)], check=True)
 
 
 if __name__ == "__main__":

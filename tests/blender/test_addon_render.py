@@ -4,13 +4,12 @@
     same scene: the mapping (azimuth origin, handedness) and the orientation (the row flip
     into Blender's bottom-first images) are right. Error measure, per pixel of the upper
     hemisphere farther than 3 pixels from the sun: |render - HDRI| / (HDRI + 1 % of the
-    mean sky). The lower hemisphere is black in the HDRI (an observer on the ground sees
-    the ground at once); the render must be black there too, up to 1 % of the mean sky,
-    but for the row next to the horizon and the nadir row that blend with their
-    neighbours. Tolerances: median 0.1 %, 99.5th
+    mean sky). Below the horizon both show the lit ground (on by default): the render must
+    reproduce the HDRI there too, and be nowhere black, but for the row next to the horizon
+    and the nadir row that blend with their neighbours. Tolerances: median 0.1 %, 99.5th
     percentile 1 %. The render samples the pixel centres (16 samples through a
     0.01-pixel filter), so it reads the texels back almost exactly; a few samples land
-    off-centre (seen: 2.8 % at one horizon pixel next to the black ground, 16 samples) and
+    off-centre (seen: 2.8 % at one horizon pixel next to the darker ground, 16 samples) and
     the pole rows blend across the image edge (Blender's repeat extension), hence a
     percentile for the worst. A flipped, mirrored or rotated world misses both by far
     more, which the test checks too, so it can fail for the right reason. (The disc,

@@ -30,7 +30,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import addon_testing as at  # noqa: E402
 
 addon, module = at.install_addon()
-from welkin.blender import aerial, compat  # noqa: E402
+from welkin.blender import aerial, aerial_frame, compat  # noqa: E402
 
 TOL = 0.02
 W, H = 128, 64
@@ -253,6 +253,14 @@ def run_engine(scene, engine, tmp):
     bpy.ops.render.render(write_still=True)
     got, _ = read(tmp / "f12.exr")
     compare(f"{engine} F12 frame 1", got, want[1], off[1], far_mask(depth[1]) & blocks(scene, 1, depth[1]))
+    # The group reads the table as this engine filters best: four linear fetches in Cycles,
+    # sixteen nearest-texel fetches filtered by its own nodes in EEVEE.
+    group = bpy.data.node_groups[aerial_frame.SHADER_GROUP]
+    fetches = {n.interpolation for n in group.nodes if n.bl_idname == 'ShaderNodeTexImage'}
+    count = sum(n.bl_idname == 'ShaderNodeTexImage' for n in group.nodes)
+    cycles = engine == 'CYCLES'
+    at.check((fetches, count) == (({'Linear'}, 4) if cycles else ({'Closest'}, 16)),
+             f"{engine}: the group fetches {count} texels, {fetches}")
     # Removable exactly.
     scene.welkin_aerial.enabled = False
     after = snapshot(scene)

@@ -64,7 +64,7 @@ def bake(scene, module, scene_text, max_distance_bu, scale_length, baked):
     what it holds) says it holds this frame's table already."""
     key = f"{scene_text}|{max_distance_bu!r}|{scale_length!r}"
     image = table_image()
-    group = shader_group()
+    group = shader_group(FETCH_LINEAR if scene.render.engine == 'CYCLES' else FETCH_CLOSEST)
     for name, value in ((MAX_DISTANCE_NODE, max_distance_bu),
                         (LINEAR_DISTANCE_NODE, tab.LINEAR_DISTANCE_M / scale_length)):
         node = group.nodes.get(name)
@@ -118,15 +118,36 @@ def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
     return node.outputs["Vector"]
 
 
-def shader_group():
-    """The node group of aerial_table.lookup() in nodes, with its two AOV outputs."""
+# How the group reads the table (both give aerial_table.lookup's bilinear filter):
+#   FETCH_LINEAR   Cycles: four 'Linear' fetches (Cycles filters without mipmaps, and a
+#                  fetch never blends two distance slices: the elevation coordinate stays
+#                  between the first and last texel centres of its slice's tile);
+#   FETCH_CLOSEST  EEVEE: sixteen 'Closest' fetches filtered by the group's own nodes.
+#                  EEVEE filters a 'Linear' image with mipmaps chosen from screen-space
+#                  derivatives, and v jumps by a whole tile where the distance slice
+#                  changes, which would blur the table there.
+# The group takes the form of the engine of the scene whose table is baked (bake()); a
+# change of engine rebuilds it in place (the materials' nodes keep using it).
+FETCH_LINEAR, FETCH_CLOSEST = "linear", "closest"
+
+
+def _layout(fetch):
+    return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}"  # the table's layout and the fetch: the version
+
+
+def shader_group(fetch=None):
+    """The node group of aerial_table.lookup() in nodes, with its two AOV outputs, reading
+    the table as `fetch` says (None: as the existing group does, else FETCH_CLOSEST)."""
     group = bpy.data.node_groups.get(SHADER_GROUP)
-    if group is not None and group.get(MARK) == tab.HEIGHT + 2:
+    built = group.get(MARK) if group is not None else None
+    if fetch is None:
+        fetch = FETCH_LINEAR if built == _layout(FETCH_LINEAR) else FETCH_CLOSEST
+    if built == _layout(fetch):
         return group
     if group is None:
         group = bpy.data.node_groups.new(SHADER_GROUP, 'ShaderNodeTree')
     group.nodes.clear()
-    group[MARK] = tab.HEIGHT + 2  # the layout's version
+    group[MARK] = _layout(fetch)
     E, S, Hh = tab.ELEVATIONS, tab.SLICES, float(tab.HEIGHT)
     geo = group.nodes.new('ShaderNodeNewGeometry')
     geo.location = (-1400, 200)
@@ -174,21 +195,19 @@ def shader_group():
     # v of the nearer slice's L texel; the others are + E / H (farther slice), + 1/2 (tau).
     v0 = _math(group, 'DIVIDE', _math(group, 'MULTIPLY_ADD', k0, float(E), row, x=600, y=0),
                Hh, x=800, y=0)
-    # Bilinear filtering done here, from four texel fetches ('Closest'): EEVEE filters a
-    # 'Linear' image with mipmaps chosen from screen-space derivatives, and v jumps by a
-    # whole tile where the distance slice changes, which would blur the table there.
-    Ww = float(tab.WIDTH)
-    fx = _math(group, 'MULTIPLY_ADD', u, Ww, -0.5, x=900, y=600)
-    x0 = _math(group, 'FLOOR', fx, x=1000, y=600)
-    ax = _math(group, 'SUBTRACT', fx, x0, x=1100, y=600)
-    ua = _math(group, 'DIVIDE', _math(group, 'ADD', x0, 0.5, x=1100, y=700), Ww, x=1200, y=700)
-    ub = _math(group, 'ADD', ua, 1.0 / Ww, x=1300, y=700)
-    fy = _math(group, 'MULTIPLY_ADD', v0, Hh, -0.5, x=900, y=100)
-    y0 = _math(group, 'FLOOR', fy, x=1000, y=100)
-    ay = _math(group, 'SUBTRACT', fy, y0, x=1100, y=100)
-    va = _math(group, 'DIVIDE', _math(group, 'ADD', y0, 0.5, x=1100, y=0), Hh, x=1200, y=0)
+    if fetch == FETCH_CLOSEST:  # the four texels around (u, v0) and the weights between them
+        Ww = float(tab.WIDTH)
+        fx = _math(group, 'MULTIPLY_ADD', u, Ww, -0.5, x=900, y=600)
+        x0 = _math(group, 'FLOOR', fx, x=1000, y=600)
+        ax = _math(group, 'SUBTRACT', fx, x0, x=1100, y=600)
+        ua = _math(group, 'DIVIDE', _math(group, 'ADD', x0, 0.5, x=1100, y=700), Ww, x=1200, y=700)
+        ub = _math(group, 'ADD', ua, 1.0 / Ww, x=1300, y=700)
+        fy = _math(group, 'MULTIPLY_ADD', v0, Hh, -0.5, x=900, y=100)
+        y0 = _math(group, 'FLOOR', fy, x=1000, y=100)
+        ay = _math(group, 'SUBTRACT', fy, y0, x=1100, y=100)
+        va = _math(group, 'DIVIDE', _math(group, 'ADD', y0, 0.5, x=1100, y=0), Hh, x=1200, y=0)
 
-    def fetch(uu, vv, x, y):
+    def fetch_at(uu, vv, x, y, interpolation='Closest'):
         uv = group.nodes.new('ShaderNodeCombineXYZ')
         uv.location = (x, y)
         group.links.new(uu, uv.inputs[0])
@@ -196,7 +215,7 @@ def shader_group():
         tex = group.nodes.new('ShaderNodeTexImage')
         tex.location = (x + 150, y)
         tex.image = table_image()
-        tex.interpolation = 'Closest'
+        tex.interpolation = interpolation
         tex.extension = 'REPEAT'
         group.links.new(uv.outputs[0], tex.inputs["Vector"])
         return tex.outputs["Color"]
@@ -208,10 +227,13 @@ def shader_group():
     samples = {}
     for n, offset in enumerate((0.0, E / Hh, 0.5, 0.5 + E / Hh)):
         y = 300 - 700 * n
+        if fetch == FETCH_LINEAR:
+            samples[n] = fetch_at(u, _math(group, 'ADD', v0, offset, x=1300, y=y), 1500, y, 'Linear')
+            continue
         v_lo = _math(group, 'ADD', va, offset, x=1300, y=y)
         v_hi = _math(group, 'ADD', v_lo, 1.0 / Hh, x=1400, y=y)
-        lo = lerp(fetch(ua, v_lo, 1500, y), fetch(ub, v_lo, 1500, y - 150), ax, 1800, y)
-        hi = lerp(fetch(ua, v_hi, 1500, y - 300), fetch(ub, v_hi, 1500, y - 450), ax, 1800, y - 300)
+        lo = lerp(fetch_at(ua, v_lo, 1500, y), fetch_at(ub, v_lo, 1500, y - 150), ax, 1800, y)
+        hi = lerp(fetch_at(ua, v_hi, 1500, y - 300), fetch_at(ub, v_hi, 1500, y - 450), ax, 1800, y - 300)
         samples[n] = lerp(lo, hi, ay, 2100, y - 150)
 
     def mix(near, far, x, y):  # near + (far - near) w
