@@ -17,8 +17,8 @@
 #include <ImfHeader.h>
 #include <ImfInputPart.h>
 #include <ImfMultiPartInputFile.h>
-#include <ImfPartType.h>
 #include <ImfOutputFile.h>
+#include <ImfPartType.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
 #include <fmt/format.h>
@@ -160,7 +160,8 @@ FileChannels file_channels(const std::string& path, Imf::MultiPartInputFile& fil
         if (p == 0)
             out.data_window = header.dataWindow();
         else if (header.dataWindow() != out.data_window)
-            throw IoError(fmt::format("cannot read '{}': part {} has another data window than part 0", path, p));
+            throw IoError(
+                fmt::format("cannot read '{}': part {} has another data window than part 0", path, p));
         const std::string part_name = header.hasName() ? header.name() : fmt::format("part{}", p);
         for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
             if (it.channel().xSampling != 1 || it.channel().ySampling != 1)

@@ -126,7 +126,9 @@ TEST_F(ExrIo, MultiPartFilesReadEveryPart) {
         headers.push_back(header);
     }
     // Value of channel c of part p at (x, y): unique, so a mix-up shows.
-    auto value = [](std::size_t p, std::size_t c, int x, int y) { return float(1000 * p + 100 * c + 10 * y + x); };
+    auto value = [](std::size_t p, std::size_t c, int x, int y) {
+        return float(1000 * p + 100 * c + 10 * y + x);
+    };
     {
         Imf::MultiPartOutputFile file(path("multi.exr").c_str(), headers.data(), int(headers.size()));
         for (std::size_t p = 0; p < parts.size(); ++p) {
@@ -138,8 +140,9 @@ TEST_F(ExrIo, MultiPartFilesReadEveryPart) {
                         pixels[(std::size_t(y * w + x)) * nc + c] = value(p, c, x, y);
             Imf::FrameBuffer fb;
             for (std::size_t c = 0; c < nc; ++c)
-                fb.insert(parts[p].channels[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data() + c),
-                                                           sizeof(float) * nc, sizeof(float) * nc * w));
+                fb.insert(parts[p].channels[c],
+                          Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data() + c),
+                                     sizeof(float) * nc, sizeof(float) * nc * w));
             Imf::OutputPart out(file, int(p));
             out.setFrameBuffer(fb);
             out.writePixels(h);
