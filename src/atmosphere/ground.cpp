@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <list>
+#include <mutex>
+#include <utility>
 
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/lut_cache.hpp"
@@ -77,6 +80,25 @@ GroundIllumination::GroundIllumination(const Atmosphere& atm) : channels_(atm.ch
     }
 }
 
+std::shared_ptr<const GroundIllumination> GroundIllumination::shared(const Atmosphere& atm) {
+    constexpr std::size_t kCapacity = 2;
+    static std::mutex mutex;
+    static std::list<std::pair<Atmosphere, std::shared_ptr<const GroundIllumination>>> entries;  // recent first
+    {
+        const std::lock_guard<std::mutex> lock(mutex);
+        for (auto it = entries.begin(); it != entries.end(); ++it)
+            if (it->first == atm) {
+                entries.splice(entries.begin(), entries, it);
+                return entries.front().second;
+            }
+    }
+    auto built = std::make_shared<const GroundIllumination>(atm);  // may throw: nothing cached
+    const std::lock_guard<std::mutex> lock(mutex);
+    entries.emplace_front(atm, built);
+    if (entries.size() > kCapacity) entries.pop_back();
+    return built;
+}
+
 void GroundIllumination::lookup(const std::vector<double>& table, double mu_s, std::span<double> out) const {
     const double x = (std::clamp(mu_s, kMinMuS, 1.0) - kMinMuS) / (1.0 - kMinMuS) * (kTableSize - 1);
     const int i = std::min(int(x), kTableSize - 2);
@@ -89,10 +111,13 @@ void GroundIllumination::lookup(const std::vector<double>& table, double mu_s, s
 void GroundIllumination::sun_irradiance(double mu_s, std::span<double> out) const { lookup(sun_, mu_s, out); }
 void GroundIllumination::sky_irradiance(double mu_s, std::span<double> out) const { lookup(sky_, mu_s, out); }
 void GroundIllumination::irradiance(double mu_s, std::span<double> out) const {
-    std::vector<double> s(channels_);
-    lookup(sun_, mu_s, out);
-    lookup(sky_, mu_s, s);
-    for (std::size_t c = 0; c < channels_; ++c) out[c] += s[c];
+    // Both tables at once: called per ground pixel, so no temporary.
+    const double x = (std::clamp(mu_s, kMinMuS, 1.0) - kMinMuS) / (1.0 - kMinMuS) * (kTableSize - 1);
+    const int i = std::min(int(x), kTableSize - 2);
+    const double f = x - i;
+    const std::size_t a = std::size_t(i) * channels_, b = a + channels_;
+    for (std::size_t c = 0; c < channels_; ++c)
+        out[c] = (sun_[a + c] + sky_[a + c]) * (1.0 - f) + (sun_[b + c] + sky_[b + c]) * f;
 }
 
 }  // namespace welkin

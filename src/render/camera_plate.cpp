@@ -94,7 +94,7 @@ struct CameraPlateRenderer::Impl {
         bool sees_ground = false;
         for (const float z : depth) sees_ground = sees_ground || (std::isfinite(z) && z > 0.0f);
         if (scene.ground && sees_ground) {
-            ground = std::make_unique<GroundIllumination>(atm);
+            ground = GroundIllumination::shared(atm);
             for (std::size_t c = 0; c < atm.channels(); ++c)
                 ground_albedo_over_pi.push_back(
                     (scene.ground_albedo ? *scene.ground_albedo : atm.ground_albedo[c]) / kPi);
@@ -123,7 +123,7 @@ struct CameraPlateRenderer::Impl {
     std::unique_ptr<SkyMethod> method;
     std::string method_name;
     std::unique_ptr<SunDisc> sun;
-    std::unique_ptr<GroundIllumination> ground;  // null: no ground in view, or switched off
+    std::shared_ptr<const GroundIllumination> ground;  // null: no ground in view, or switched off
     std::vector<double> ground_albedo_over_pi;
     std::unique_ptr<AerialFrame> aerial;
 };

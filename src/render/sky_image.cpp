@@ -262,7 +262,7 @@ private:
 class GroundShading {
 public:
     GroundShading(const Atmosphere& atm, const Observer& obs, const std::optional<double>& albedo, int height)
-        : light_(atm),
+        : light_(GroundIllumination::shared(atm)),
           nc_(atm.channels()),
           r_(atm.bottom_radius_m + obs.altitude_m),
           sun_(obs.sun_direction),
@@ -292,7 +292,7 @@ public:
                     const std::size_t q = std::size_t(jj) * std::size_t(width) + std::size_t(i);
                     // The ground point p = x + d v, x = (0, 0, r); mu_s = (p / |p|) . s.
                     const glm::dvec3 p = glm::dvec3(0.0, 0.0, r_) + row.distance * dirs[q];
-                    light_.irradiance(glm::dot(p, sun_) / glm::length(p), e);
+                    light_->irradiance(glm::dot(p, sun_) / glm::length(p), e);
                     float* L = sky + q * nc_;
                     for (std::size_t c = 0; c < nc_; ++c)
                         L[c] += float(row.transmittance[c] * albedo_over_pi_[c] * e[c]);
@@ -307,7 +307,7 @@ private:
         double distance = 0.0;
         std::vector<double> transmittance;
     };
-    GroundIllumination light_;
+    std::shared_ptr<const GroundIllumination> light_;  // shared by every image of this atmosphere
     std::size_t nc_;
     double r_;
     glm::dvec3 sun_;

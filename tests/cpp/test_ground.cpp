@@ -134,3 +134,29 @@ TEST(Ground, HorizonIsContinuous) {
         }
     }
 }
+
+// The irradiance tables depend on the atmosphere alone: shared() hands the same tables to
+// every image of an atmosphere (a sun change does not rebuild them), other ones to another
+// atmosphere, and they equal freshly built ones exactly.
+TEST(Ground, TablesAreSharedPerAtmosphereAndEqualFreshOnes) {
+    const Atmosphere clear = Atmosphere::preset("clear");
+    Atmosphere dusty = clear;
+    for (auto* v : {&dusty.mie_scattering, &dusty.mie_extinction})
+        for (double& c : *v) c *= 1.5;
+    const auto a = GroundIllumination::shared(clear);
+    EXPECT_EQ(GroundIllumination::shared(clear), a);
+    const auto b = GroundIllumination::shared(dusty);
+    EXPECT_NE(b, a);
+    EXPECT_EQ(GroundIllumination::shared(clear), a);  // two atmospheres fit
+    const GroundIllumination fresh(clear);
+    std::vector<double> x(clear.channels()), y(clear.channels());
+    for (double mu_s : {-0.3, -0.05, 0.0, 0.2, 0.7, 1.0}) {
+        a->irradiance(mu_s, x);
+        fresh.irradiance(mu_s, y);
+        EXPECT_EQ(x, y) << mu_s;
+    }
+    std::vector<double> z(clear.channels());
+    b->sky_irradiance(0.5, z);
+    a->sky_irradiance(0.5, x);
+    EXPECT_NE(x, z);
+}

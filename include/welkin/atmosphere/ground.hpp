@@ -25,6 +25,7 @@
 // albedo / pi * E_0 * mu_s (tests/cpp/test_ground.cpp).
 #pragma once
 
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -44,6 +45,13 @@ public:
     void irradiance(double mu_s, std::span<double> out) const;
     void sun_irradiance(double mu_s, std::span<double> out) const;
     void sky_irradiance(double mu_s, std::span<double> out) const;
+
+    // The tables for `atmosphere` from a small process-wide cache (the two most recently
+    // used atmospheres, each kept as an exact copy, never a hash, as AtmosphereLutCache
+    // does): they depend on the atmosphere alone, so a sun change reuses them. Building is
+    // deterministic, so cached and fresh tables are identical. Thread-safe; the lock is not
+    // held while building.
+    static std::shared_ptr<const GroundIllumination> shared(const Atmosphere& atmosphere);
 
     static constexpr int kTableSize = 48;     // mu_s in [kMinMuS, 1]
     static constexpr double kMinMuS = -0.35;  // 20.5 degrees below the horizon
