@@ -83,7 +83,8 @@ GroundIllumination::GroundIllumination(const Atmosphere& atm) : channels_(atm.ch
 std::shared_ptr<const GroundIllumination> GroundIllumination::shared(const Atmosphere& atm) {
     constexpr std::size_t kCapacity = 2;
     static std::mutex mutex;
-    static std::list<std::pair<Atmosphere, std::shared_ptr<const GroundIllumination>>> entries;  // recent first
+    static std::list<std::pair<Atmosphere, std::shared_ptr<const GroundIllumination>>>
+        entries;  // recent first
     {
         const std::lock_guard<std::mutex> lock(mutex);
         for (auto it = entries.begin(); it != entries.end(); ++it)
