@@ -72,7 +72,8 @@ if args.sheet:
     base = scene_export.file_base(bpy.path.abspath(scene.render.filepath))
     pixels, names = module.read_exr(scene_export.frame_path(base, "render", 1))
     before = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
-    pixels, names = module.read_exr(scene_export.frame_path(base, "composite", 1))
+    # The frame Blender wrote: hazed in the render itself (the Composite output).
+    pixels, names = module.read_exr(bpy.path.abspath(scene.render.filepath) + scene.render.file_extension)
     after = np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1)
 
     def display(x):

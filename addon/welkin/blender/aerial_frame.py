@@ -132,7 +132,7 @@ FETCH_LINEAR, FETCH_CLOSEST = "linear", "closest"
 
 
 def _layout(fetch):
-    return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}"  # the table's layout and the fetch: the version
+    return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}/3"  # the table's layout, the fetch, the nodes: the version
 
 
 def shader_group(fetch=None):
@@ -161,40 +161,43 @@ def shader_group(fetch=None):
     d0.name = d0.label = LINEAR_DISTANCE_NODE
     d0.location = (-1400, -650)
     d0.outputs[0].default_value = tab.LINEAR_DISTANCE_M
-    # Direction from the camera: -Incoming.
-    v = _vmath(group, 'SCALE', geo.outputs["Incoming"], scale=-1.0, x=-1200, y=200)
+    # Every node below runs at every camera-ray hit, so constants are folded into as few
+    # nodes as the arithmetic allows (Cycles folds nodes whose inputs are all constant: the
+    # Value nodes' expressions cost nothing per hit).
+    # The view direction is -Incoming. u = atan2(y, x) / 2 pi + 1/2 of the view direction
+    # is atan2 of Incoming's components / 2 pi, give or take 1: the same texel with REPEAT.
     sep = group.nodes.new('ShaderNodeSeparateXYZ')
     sep.location = (-1000, 200)
-    group.links.new(v, sep.inputs[0])
-    # u = atan2(y, x) / 2 pi + 1/2
-    u = _math(group, 'MULTIPLY_ADD', _math(group, 'ARCTAN2', sep.outputs["Y"], sep.outputs["X"],
-                                           x=-800, y=400), 1.0 / (2.0 * math.pi), 0.5, x=-600, y=400)
-    # e = sign(theta) sqrt(|theta| 2 / pi) / 2 + 1/2, theta = asin(z); row = e (E - 1) + 1/2
-    theta = _math(group, 'ARCSINE', sep.outputs["Z"], x=-800, y=200)
-    a = _math(group, 'SQRT', _math(group, 'MULTIPLY', _math(group, 'ABSOLUTE', theta, x=-600, y=200),
-                                   2.0 / math.pi, x=-400, y=200), x=-200, y=200)
-    e = _math(group, 'MULTIPLY_ADD', _math(group, 'MULTIPLY', _math(group, 'SIGN', theta, x=-400, y=100),
-                                           a, x=0, y=200), 0.5, 0.5, x=200, y=200)
-    row = _math(group, 'MULTIPLY_ADD', e, float(E - 1), 0.5, x=400, y=200)
-    # x = 1 + d / d_0; c = ln(1 + d_max / d_0) / (S - 1); s = min(ln x / c, S - 1);
-    # k0 = min(floor(s), S - 2); w = (x e^(-c k0) - 1) / (e^c - 1), clamped to [0, 1].
-    x = _math(group, 'ADD', _math(group, 'DIVIDE', cam.outputs["View Distance"], d0.outputs[0],
-                                  x=-1000, y=-300), 1.0, x=-800, y=-300)
+    group.links.new(geo.outputs["Incoming"], sep.inputs[0])
+    u = _math(group, 'MULTIPLY', _math(group, 'ARCTAN2', sep.outputs["Y"], sep.outputs["X"],
+                                       x=-800, y=400), 1.0 / (2.0 * math.pi), x=-600, y=400)
+    # The view's elevation theta = -asin(Incoming.z); e = sign(theta) sqrt(|theta| 2 / pi) / 2
+    # + 1/2; the texel row in its tile, row = e (E - 1) + 1/2, over H:
+    # rowh = -sign(t) sqrt(|t|) sqrt(2 / pi) (E - 1) / (2 H) + E / (2 H), t = asin(Incoming.z).
+    t = _math(group, 'ARCSINE', sep.outputs["Z"], x=-800, y=200)
+    root = _math(group, 'SQRT', _math(group, 'ABSOLUTE', t, x=-600, y=200), x=-400, y=200)
+    rowh = _math(group, 'MULTIPLY_ADD',
+                 _math(group, 'MULTIPLY', _math(group, 'SIGN', t, x=-400, y=100), root, x=-200, y=200),
+                 -math.sqrt(2.0 / math.pi) * (E - 1) / (2.0 * Hh), E / (2.0 * Hh), x=0, y=200)
+    # x = 1 + d / d_0; c = ln(1 + d_max / d_0) / (S - 1); s = ln x / c = log base e^c of x;
+    # k0 = min(floor(s), S - 2) (x >= 1: s >= 0); w = (x e^(-c k0) - 1) / (e^c - 1), clamped
+    # to [0, 1] (beyond d_max: w = 1, the last slice).
+    inv_d0 = _math(group, 'DIVIDE', 1.0, d0.outputs[0], x=-1200, y=-450)
+    x = _math(group, 'MULTIPLY_ADD', cam.outputs["View Distance"], inv_d0, 1.0, x=-1000, y=-300)
     c = _math(group, 'DIVIDE', _math(group, 'LOGARITHM', _math(
-        group, 'ADD', _math(group, 'DIVIDE', dmax.outputs[0], d0.outputs[0], x=-1200, y=-600),
-        1.0, x=-1000, y=-600), math.e, x=-800, y=-600), float(S - 1), x=-600, y=-600)
-    s = _math(group, 'MINIMUM', _math(group, 'DIVIDE', _math(group, 'LOGARITHM', x, math.e,
-                                                             x=-600, y=-300), c, x=-400, y=-300),
-              float(S - 1), x=-200, y=-300)
+        group, 'MULTIPLY_ADD', dmax.outputs[0], inv_d0, 1.0, x=-1000, y=-600), math.e, x=-800, y=-600),
+        float(S - 1), x=-600, y=-600)
+    s = _math(group, 'LOGARITHM', x, _math(group, 'EXPONENT', c, x=-400, y=-600), x=-400, y=-300)
     k0 = _math(group, 'MINIMUM', _math(group, 'FLOOR', s, x=0, y=-300), float(S - 2), x=200, y=-300)
-    step = _math(group, 'SUBTRACT', _math(group, 'EXPONENT', c, x=-400, y=-700), 1.0, x=-200, y=-700)
-    decay = _math(group, 'EXPONENT', _math(group, 'MULTIPLY', _math(group, 'MULTIPLY', k0, c, x=400, y=-500),
-                                           -1.0, x=500, y=-500), x=600, y=-500)
-    w = _math(group, 'DIVIDE', _math(group, 'SUBTRACT', _math(group, 'MULTIPLY', x, decay, x=700, y=-400),
-                                     1.0, x=800, y=-400), step, x=900, y=-400, clamp=True)
+    inv_step = _math(group, 'DIVIDE', 1.0, _math(group, 'SUBTRACT', _math(group, 'EXPONENT', c, x=-400, y=-750),
+                                                  1.0, x=-200, y=-750), x=0, y=-750)
+    decay = _math(group, 'EXPONENT', _math(group, 'MULTIPLY', k0,
+                                           _math(group, 'MULTIPLY', c, -1.0, x=200, y=-600),
+                                           x=400, y=-500), x=600, y=-500)
+    w = _math(group, 'MULTIPLY_ADD', _math(group, 'MULTIPLY', x, decay, x=700, y=-400), inv_step,
+              _math(group, 'MULTIPLY', inv_step, -1.0, x=700, y=-750), x=900, y=-400, clamp=True)
     # v of the nearer slice's L texel; the others are + E / H (farther slice), + 1/2 (tau).
-    v0 = _math(group, 'DIVIDE', _math(group, 'MULTIPLY_ADD', k0, float(E), row, x=600, y=0),
-               Hh, x=800, y=0)
+    v0 = _math(group, 'MULTIPLY_ADD', k0, float(E) / Hh, rowh, x=600, y=0)
     if fetch == FETCH_CLOSEST:  # the four texels around (u, v0) and the weights between them
         Ww = float(tab.WIDTH)
         fx = _math(group, 'MULTIPLY_ADD', u, Ww, -0.5, x=900, y=600)
@@ -228,7 +231,8 @@ def shader_group(fetch=None):
     for n, offset in enumerate((0.0, E / Hh, 0.5, 0.5 + E / Hh)):
         y = 300 - 700 * n
         if fetch == FETCH_LINEAR:
-            samples[n] = fetch_at(u, _math(group, 'ADD', v0, offset, x=1300, y=y), 1500, y, 'Linear')
+            v = v0 if offset == 0.0 else _math(group, 'ADD', v0, offset, x=1300, y=y)
+            samples[n] = fetch_at(u, v, 1500, y, 'Linear')
             continue
         v_lo = _math(group, 'ADD', va, offset, x=1300, y=y)
         v_hi = _math(group, 'ADD', v_lo, 1.0 / Hh, x=1400, y=y)
@@ -236,27 +240,33 @@ def shader_group(fetch=None):
         hi = lerp(fetch_at(ua, v_hi, 1500, y - 300), fetch_at(ub, v_hi, 1500, y - 450), ax, 1800, y - 300)
         samples[n] = lerp(lo, hi, ay, 2100, y - 150)
 
-    def mix(near, far, x, y):  # near + (far - near) w
-        return _vmath(group, 'ADD', near, _vmath(group, 'SCALE', _vmath(group, 'SUBTRACT', far, near,
-                                                                        x=x, y=y), scale=w, x=x + 200, y=y),
-                      x=x + 400, y=y)
+    def mix(near, far, x, y):  # near + (far - near) w: one Mix node
+        node = group.nodes.new('ShaderNodeMix')
+        node.data_type = 'RGBA'
+        node.blend_type = 'MIX'
+        node.clamp_factor = True
+        node.location = (x, y)
+        group.links.new(w, node.inputs[0])
+        group.links.new(near, next(i for i in node.inputs if i.name == "A" and i.type == 'RGBA'))
+        group.links.new(far, next(i for i in node.inputs if i.name == "B" and i.type == 'RGBA'))
+        return next(o for o in node.outputs if o.type == 'RGBA')
 
     L = mix(samples[0], samples[1], 2500, 300)
     tau = mix(samples[2], samples[3], 2500, -200)
-    # 1 - T = 1 - exp(-tau), per channel.
+    # 1 - T = 1 - e^(-tau) = 1 - (1/e)^tau, per channel.
     parts = group.nodes.new('ShaderNodeSeparateXYZ')
-    parts.location = (2300, -200)
-    group.links.new(_vmath(group, 'SCALE', tau, scale=-1.0, x=2100, y=-200), parts.inputs[0])
+    parts.location = (2700, -200)
+    group.links.new(tau, parts.inputs[0])
     transmit = group.nodes.new('ShaderNodeCombineXYZ')
-    transmit.location = (2700, -200)
+    transmit.location = (3100, -200)
     for c in range(3):
-        group.links.new(_math(group, 'EXPONENT', parts.outputs[c], x=2500, y=-100 - 150 * c),
+        group.links.new(_math(group, 'POWER', 1.0 / math.e, parts.outputs[c], x=2900, y=-100 - 150 * c),
                         transmit.inputs[c])
-    opacity = _vmath(group, 'SUBTRACT', (1.0, 1.0, 1.0), transmit.outputs[0], x=2900, y=-200)
+    opacity = _vmath(group, 'SUBTRACT', (1.0, 1.0, 1.0), transmit.outputs[0], x=3300, y=-200)
     for name, socket, y in ((AOV_INSCATTER, L, 300), (AOV_OPACITY, opacity, -200)):
         aov = group.nodes.new('ShaderNodeOutputAOV')
         compat.set_aov_name(aov, name)
-        aov.location = (3100, y)
+        aov.location = (3500, y)
         group.links.new(socket, aov.inputs["Color"])
     return group
 
