@@ -100,23 +100,24 @@ std::shared_ptr<const GroundIllumination> GroundIllumination::shared(const Atmos
     return built;
 }
 
-void GroundIllumination::lookup(const std::vector<double>& table, double mu_s, std::span<double> out) const {
+GroundIllumination::Entry GroundIllumination::entry(double mu_s) const {
     const double x = (std::clamp(mu_s, kMinMuS, 1.0) - kMinMuS) / (1.0 - kMinMuS) * (kTableSize - 1);
     const int i = std::min(int(x), kTableSize - 2);
-    const double f = x - i;
+    return {std::size_t(i) * channels_, x - i};
+}
+
+void GroundIllumination::lookup(const std::vector<double>& table, double mu_s, std::span<double> out) const {
+    const auto [a, f] = entry(mu_s);
     for (std::size_t c = 0; c < channels_; ++c)
-        out[c] =
-            table[std::size_t(i) * channels_ + c] * (1.0 - f) + table[std::size_t(i + 1) * channels_ + c] * f;
+        out[c] = table[a + c] * (1.0 - f) + table[a + channels_ + c] * f;
 }
 
 void GroundIllumination::sun_irradiance(double mu_s, std::span<double> out) const { lookup(sun_, mu_s, out); }
 void GroundIllumination::sky_irradiance(double mu_s, std::span<double> out) const { lookup(sky_, mu_s, out); }
 void GroundIllumination::irradiance(double mu_s, std::span<double> out) const {
     // Both tables at once: called per ground pixel, so no temporary.
-    const double x = (std::clamp(mu_s, kMinMuS, 1.0) - kMinMuS) / (1.0 - kMinMuS) * (kTableSize - 1);
-    const int i = std::min(int(x), kTableSize - 2);
-    const double f = x - i;
-    const std::size_t a = std::size_t(i) * channels_, b = a + channels_;
+    const auto [a, f] = entry(mu_s);
+    const std::size_t b = a + channels_;
     for (std::size_t c = 0; c < channels_; ++c)
         out[c] = (sun_[a + c] + sky_[a + c]) * (1.0 - f) + (sun_[b + c] + sky_[b + c]) * f;
 }

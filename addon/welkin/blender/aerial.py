@@ -303,9 +303,7 @@ def _sync_output_path(scene):
     whenever the scene changes and when a file loads, not only when a render starts."""
     node = compositor.depth_node(scene)
     if node is not None:
-        wanted = scene_export.file_output_base(base_of(scene))
-        if compat.file_output_path(node) != wanted:
-            compat.set_file_output_path(node, wanted)
+        compat.set_file_output_path(node, scene_export.file_output_base(base_of(scene)))
 
 
 @persistent

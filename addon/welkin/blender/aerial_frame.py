@@ -187,10 +187,10 @@ def shader_group(fetch=None):
     c = _math(group, 'DIVIDE', _math(group, 'LOGARITHM', _math(
         group, 'MULTIPLY_ADD', dmax.outputs[0], inv_d0, 1.0, x=-1000, y=-600), math.e, x=-800, y=-600),
         float(S - 1), x=-600, y=-600)
-    s = _math(group, 'LOGARITHM', x, _math(group, 'EXPONENT', c, x=-400, y=-600), x=-400, y=-300)
+    e_c = _math(group, 'EXPONENT', c, x=-400, y=-600)
+    s = _math(group, 'LOGARITHM', x, e_c, x=-400, y=-300)
     k0 = _math(group, 'MINIMUM', _math(group, 'FLOOR', s, x=0, y=-300), float(S - 2), x=200, y=-300)
-    inv_step = _math(group, 'DIVIDE', 1.0, _math(group, 'SUBTRACT', _math(group, 'EXPONENT', c, x=-400, y=-750),
-                                                  1.0, x=-200, y=-750), x=0, y=-750)
+    inv_step = _math(group, 'DIVIDE', 1.0, _math(group, 'SUBTRACT', e_c, 1.0, x=-200, y=-750), x=0, y=-750)
     decay = _math(group, 'EXPONENT', _math(group, 'MULTIPLY', k0,
                                            _math(group, 'MULTIPLY', c, -1.0, x=200, y=-600),
                                            x=400, y=-500), x=600, y=-500)
@@ -241,15 +241,12 @@ def shader_group(fetch=None):
         samples[n] = lerp(lo, hi, ay, 2100, y - 150)
 
     def mix(near, far, x, y):  # near + (far - near) w: one Mix node
-        node = group.nodes.new('ShaderNodeMix')
-        node.data_type = 'RGBA'
-        node.blend_type = 'MIX'
-        node.clamp_factor = True
+        node, a, b, out = compat.rgba_mix(group, 'MIX')
         node.location = (x, y)
         group.links.new(w, node.inputs[0])
-        group.links.new(near, next(i for i in node.inputs if i.name == "A" and i.type == 'RGBA'))
-        group.links.new(far, next(i for i in node.inputs if i.name == "B" and i.type == 'RGBA'))
-        return next(o for o in node.outputs if o.type == 'RGBA')
+        group.links.new(near, a)
+        group.links.new(far, b)
+        return out
 
     L = mix(samples[0], samples[1], 2500, 300)
     tau = mix(samples[2], samples[3], 2500, -200)

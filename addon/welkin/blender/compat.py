@@ -175,21 +175,28 @@ def restore_scene_compositor(scene, undo_kind, undo_value, created_name):
             bpy.data.node_groups.remove(tree)
 
 
+def rgba_mix(tree, blend_type):
+    """The shared Mix node (3.4+) in colour mode, factor 1 and clamped to [0, 1], result
+    unclamped: (node, input A, input B, output). Shader trees in every version, the
+    compositor from 5.0 (compositor_mix)."""
+    node = tree.nodes.new('ShaderNodeMix')
+    node.data_type = 'RGBA'
+    node.blend_type = blend_type
+    node.clamp_result = False
+    node.clamp_factor = True
+    node.inputs[0].default_value = 1.0
+    a = next(s for s in node.inputs if s.name == "A" and s.type == 'RGBA')
+    b = next(s for s in node.inputs if s.name == "B" and s.type == 'RGBA')
+    out = next(s for s in node.outputs if s.type == 'RGBA')
+    return node, a, b, out
+
+
 def compositor_mix(tree, blend_type):
     """A colour Mix node of the compositor, factor 1, unclamped: (node, input A, input B,
-    output). CompositorNodeMixRGB before 5.0; the shared Mix node (RGBA) in 5.0+, where the
-    compositor's own Mix node is gone."""
+    output). CompositorNodeMixRGB before 5.0; the shared Mix node (rgba_mix) in 5.0+, where
+    the compositor's own Mix node is gone."""
     if at_least(5, 0):
-        node = tree.nodes.new('ShaderNodeMix')
-        node.data_type = 'RGBA'
-        node.blend_type = blend_type
-        node.clamp_result = False
-        node.clamp_factor = True
-        node.inputs[0].default_value = 1.0
-        a = next(s for s in node.inputs if s.name == "A" and s.type == 'RGBA')
-        b = next(s for s in node.inputs if s.name == "B" and s.type == 'RGBA')
-        out = next(s for s in node.outputs if s.type == 'RGBA')
-        return node, a, b, out
+        return rgba_mix(tree, blend_type)
     node = tree.nodes.new('CompositorNodeMixRGB')
     node.blend_type = blend_type
     node.use_clamp = False
@@ -220,7 +227,11 @@ def file_output_path(node):
 
 def set_file_output_path(node, base):
     """Points a File Output node at `base` + frame + extension: base_path before 5.0; in 5.0
-    directory and file_name, whose frame number comes from its '#' (none: no number)."""
+    directory and file_name, whose frame number comes from its '#' (none: no number).
+    Writes nothing when it points there already (UI renders call this beside the
+    interface)."""
+    if file_output_path(node) == base:
+        return
     if hasattr(node, "file_output_items"):
         node.directory, name = os.path.split(base)
         node.file_name = name + "####"

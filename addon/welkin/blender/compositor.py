@@ -48,8 +48,7 @@ def install(scene, settings, depth_base):
     compat.set_exr(fmt, multilayer=True)
     fmt.color_depth = '32'
     fmt.exr_codec = 'ZIP'
-    if compat.file_output_path(out) != depth_base:
-        compat.set_file_output_path(out, depth_base)
+    compat.set_file_output_path(out, depth_base)
     tree.links.new(rl.outputs["Image"], out.inputs["Image"])
     if "Depth" in rl.outputs:
         tree.links.new(rl.outputs["Depth"], out.inputs["Depth"])

@@ -57,6 +57,11 @@ public:
     static constexpr double kMinMuS = -0.35;  // 20.5 degrees below the horizon
 
 private:
+    struct Entry {
+        std::size_t first;  // of table row i, the lower of the two mu_s entries around mu_s
+        double fraction;    // the weight of row i + 1
+    };
+    Entry entry(double mu_s) const;
     void lookup(const std::vector<double>& table, double mu_s, std::span<double> out) const;
     std::size_t channels_;
     std::vector<double> sun_, sky_;  // (kTableSize, channels)
