@@ -72,12 +72,14 @@ int main(int argc, char** argv) {
     std::fclose(cases);
     std::fclose(presets);
     FILE* m = std::fopen((dir + "/cie48.txt").c_str(), "w");
-    for (double v : SpectrumToRgb(wl).matrix()) std::fprintf(m, "%.12g\n", v);
+    // The conversion is named: a range-for over a temporary's member would dangle.
+    const SpectrumToRgb cie48(wl);
+    for (double v : cie48.matrix()) std::fprintf(m, "%.12g\n", v);
     std::fclose(m);
     // Bruneton 2017's three-sample sky conversion (the default before the fitted four).
     m = std::fopen((dir + "/bruneton3.txt").c_str(), "w");
-    for (double v : SpectrumToRgb(std::vector<double>{680.0, 550.0, 440.0}).matrix())
-        std::fprintf(m, "%.12g\n", v);
+    const SpectrumToRgb bruneton3(std::vector<double>{680.0, 550.0, 440.0});
+    for (double v : bruneton3.matrix()) std::fprintf(m, "%.12g\n", v);
     std::fclose(m);
     return 0;
 }

@@ -104,6 +104,10 @@ int main(int argc, char** argv) {
     std::string csv;
     app.add_option("--width", width, "sky width in pixels (height = width / 2)");
     app.add_option("--repeats", repeats, "runs per timing; the median is reported");
+    int reference_seeds = 4;
+    app.add_option("--reference-seeds", reference_seeds,
+                   "exact cloudy skies averaged into the converged reference of the upsampling's error")
+        ->check(CLI::Range(1, 64));
     app.add_option("--csv", csv, "also write the figures as CSV");
     bool sky_only = false, cases_only = false;
     app.add_flag("--sky-only", sky_only, "only the sky timings (for profiling)");
@@ -118,10 +122,12 @@ int main(int argc, char** argv) {
 
     // --- the cloudy sky ---------------------------------------------------------------
     // One default layer (the cumulus preset, coverage 0.4), as `welkin sky --scene` renders
-    // it: every ray marched ("exact"), and the cloud pass marched on a coarser grid and
-    // upsampled where smooth (the default, stride 2, and stride 4); the error of each
-    // against the exact image: the mean over sky pixels of |difference| / the exact
-    // image's mean, and the 99th percentile of the per-pixel relative difference.
+    // it: every ray marched ("exact"), and the cloud pass upsampled (CloudUpsampling,
+    // lighting.hpp) at the default and at other settings. The error is taken against a
+    // converged march: the mean of `reference_seeds` exact images with other jitter seeds
+    // (the exact image's own jitter noise is its row): the mean over sky pixels of
+    // |difference| / the reference's mean, and the 99th percentile of the per-pixel
+    // relative difference.
     const CloudLayerParams cumulus;
     const auto t_bake0 = Clock::now();
     auto layer = std::make_shared<const ProceduralClouds>(cumulus);
@@ -135,57 +141,72 @@ int main(int argc, char** argv) {
     fmt::print("| lut sky {}x{}, clear | {:.3f} s | | | |\n", width, width / 2, t_clear);
     rows.push_back(fmt::format("sky,{},clear,{:.4f},,,,,", width, t_clear));
     if (!cases_only) {
-        SkyImage exact_image;
-        double t_exact = 0.0;
-        // (stride, transmittance tolerance, radiance tolerance); the last is the default.
+        SkyImageOptions exact;
+        exact.clouds = layer;
+        exact.cloud_upsampling.stride = 1;
+        // The converged march: seeds 2 .. reference_seeds + 1.
+        std::vector<double> reference;
+        for (int k = 0; k < reference_seeds; ++k) {
+            SkyImageOptions o = exact;
+            o.cloud_lighting.seed = std::uint64_t(k + 2);
+            const SkyImage img = render_equirect_sky(*lut, atm, obs, width, o);
+            if (reference.empty()) reference.assign(img.pixels.size(), 0.0);
+            for (std::size_t q = 0; q < img.pixels.size(); ++q)
+                reference[q] += img.pixels[q] / reference_seeds;
+        }
         struct Setting {
-            int stride;
-            double dT, dL;
+            std::string name;
+            CloudUpsampling up;
         };
-        for (const Setting st : {Setting{1, 0, 0}, Setting{2, 0.02, 0.05}, Setting{2, 0.1, 0.3},
-                                 Setting{4, 0.02, 0.05}, Setting{4, 1.0, 1.0}, Setting{4, 0.1, 0.3}}) {
-            const int stride = st.stride;
+        const auto setting = [](int stride, int finest, double dT, double dL, double block) {
+            CloudUpsampling u;
+            u.stride = stride, u.finest = finest, u.transmittance_tolerance = dT, u.radiance_tolerance = dL;
+            u.max_block_size_m = block;
+            return u;
+        };
+        const std::vector<Setting> settings{
+            {"exact (every ray marched)", setting(1, 1, 0.0, 0.0, 0.0)},
+            {"upsampled, the default (stride 0: width / 256)", CloudUpsampling{}},
+            {"upsampled, stride 4", setting(4, 2, 0.1, 0.3, 500.0)},
+            {"upsampled, stride 16", setting(16, 2, 0.1, 0.3, 500.0)},
+            {"upsampled, finest 1 (edges marched to the pixel)", setting(0, 1, 0.1, 0.3, 500.0)},
+            {"upsampled, no block size limit", setting(0, 2, 0.1, 0.3, 1e7)},
+            {"upsampled, tolerances dT 0.2 dL 0.6", setting(0, 2, 0.2, 0.6, 500.0)},
+            {"upsampled, no refinement", setting(0, 16, 1.0, 1.0, 1e7)},
+        };
+        double t_exact = 0.0;
+        for (const Setting& st : settings) {
             SkyImageOptions cloudy;
             cloudy.clouds = layer;
-            cloudy.cloud_upsampling.stride = stride;
-            cloudy.cloud_upsampling.transmittance_tolerance = st.dT;
-            cloudy.cloud_upsampling.radiance_tolerance = st.dL;
+            cloudy.cloud_upsampling = st.up;
             SkyImage img;
             const double t =
                 median_s(repeats, [&] { img = render_equirect_sky(*lut, atm, obs, width, cloudy); });
+            if (st.up.stride == 1) t_exact = t;
             double err = 0.0, ref = 0.0;
             std::vector<double> rel;
-            if (stride == 1) {
-                exact_image = img;
-                t_exact = t;
-            } else {
-                const std::size_t npx = img.pixels.size() / 3;
-                for (std::size_t q = 0; q < npx / 2; ++q) {  // the upper half: sky
-                    double d = 0.0, a = 0.0;
-                    for (int c = 0; c < 3; ++c) {
-                        d += std::abs(double(img.pixels[q * 3 + c]) - exact_image.pixels[q * 3 + c]);
-                        a += std::abs(double(exact_image.pixels[q * 3 + c]));
-                    }
-                    err += d;
-                    ref += a;
-                    rel.push_back(a > 0.0 ? d / a : 0.0);
+            const std::size_t npx = img.pixels.size() / 3;
+            for (std::size_t q = 0; q < npx / 2; ++q) {  // the upper half: sky
+                double d = 0.0, a = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    d += std::abs(double(img.pixels[q * 3 + c]) - reference[q * 3 + c]);
+                    a += std::abs(reference[q * 3 + c]);
                 }
+                err += d;
+                ref += a;
+                rel.push_back(a > 0.0 ? d / a : 0.0);
             }
-            double p99 = 0.0;
-            if (!rel.empty()) {
-                std::nth_element(rel.begin(), rel.begin() + std::ptrdiff_t(rel.size() * 99 / 100), rel.end());
-                p99 = rel[rel.size() * 99 / 100];
-            }
+            std::nth_element(rel.begin(), rel.begin() + std::ptrdiff_t(rel.size() * 99 / 100), rel.end());
+            const double p99 = rel[rel.size() * 99 / 100];
             const double mean_err = ref > 0.0 ? err / ref : 0.0;
-            const std::string what = stride == 1 ? std::string("exact (every ray marched)")
-                                                 : fmt::format("upsampled, stride {}, tolerances dT {} dL {}",
-                                                               stride, st.dT, st.dL);
             fmt::print(
                 "| lut sky {}x{}, one default cumulus layer, {} | {:.3f} s | {:.2f}x | {:.2f} % | {:.2f} % "
                 "|\n",
-                width, width / 2, what, t, t_exact / t, 100.0 * mean_err, 100.0 * p99);
-            rows.push_back(fmt::format("sky,{},cumulus_stride{}_dT{}_dL{},{:.4f},{:.5f},{:.5f},,,", width,
-                                       stride, st.dT, st.dL, t, mean_err, p99));
+                width, width / 2, st.name, t, t_exact / t, 100.0 * mean_err, 100.0 * p99);
+            rows.push_back(
+                fmt::format("sky,{},cumulus_stride{}_finest{}_dT{}_dL{}_block{},{:.4f},{:.5f},{:.5f},,,",
+                            width, st.up.stride, st.up.finest, st.up.transmittance_tolerance,
+                            st.up.radiance_tolerance, st.up.max_block_size_m, t, mean_err, p99));
             std::fflush(stdout);
         }
     }

@@ -55,6 +55,7 @@ struct SkySettings {
     bool ground = true;                            // the scene's ground (--no-ground wins)
     std::optional<double> ground_albedo{};         // the scene's (--ground-albedo wins)
     CloudLightingOptions cloud_lighting{};
+    CloudUpsampling cloud_upsampling{};
     int air_steps = AerialOptions{}.raymarch_steps;  // the air in front of the clouds
     std::size_t cloud_layers = 0, cloud_volumes = 0;
 };
@@ -96,6 +97,7 @@ SkySettings settings_from(const SkyArgs& args) {
         out.ground_albedo = scene.ground_albedo;
         if (scene.clouds) {
             out.cloud_lighting = scene.clouds->lighting;
+            out.cloud_upsampling = scene.clouds->upsampling;
             out.air_steps = scene.aerial.raymarch_steps;
             out.cloud_layers = scene.clouds->layers.size();
             out.cloud_volumes = scene.clouds->volumes.size();
@@ -136,6 +138,7 @@ int run_sky(const SkyArgs& args) {
         args.spectral_channels ? SkyImageOptions::Output::Spectral : SkyImageOptions::Output::Rgb;
     image_options.clouds = sky.clouds;
     image_options.cloud_lighting = sky.cloud_lighting;
+    image_options.cloud_upsampling = sky.cloud_upsampling;
     image_options.air_steps = sky.air_steps;
     image_options.validate();
 

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include "welkin/atmosphere/observer.hpp"
@@ -225,11 +226,12 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
             result.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
         }
     };
+    tbb::enumerable_thread_specific<Scratch> scratches;
     // Marches the rays `which` (all when null).
     const auto march_rays = [&](const std::vector<std::size_t>* which, ProgressTracker& tracker) {
         const std::size_t count = which ? which->size() : n;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
-            Scratch scratch;
+            Scratch& scratch = scratches.local();  // warm tile caches across a thread's chunks
             for (std::size_t k = range.begin(); k != range.end(); ++k) {
                 march_ray(which ? (*which)[k] : k, scratch);
                 tracker.advance();
@@ -243,79 +245,112 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
         return result;
     }
 
-    // The grid: march every stride-th ray of every stride-th row (and the last row and
-    // column), then each other ray either by bilinear interpolation of the four marched
-    // rays around it, where they agree (transmittances within up.transmittance_tolerance,
-    // radiances within up.radiance_tolerance of the largest), or by its own march.
-    const std::size_t W = std::size_t(grid_width), H = n / W;
-    const std::size_t S = std::size_t(up.stride);
-    std::vector<std::size_t> xs, ys;  // the marched columns and rows
-    for (std::size_t i = 0; i < W; i += S) xs.push_back(i);
+    // The grid, refined as a quadtree (the header's CloudUpsampling): march the rays at
+    // every stride-th column and row (and the last ones), then, level by level, split each
+    // block whose four corner rays disagree at its midpoints, marching the new corners.
+    // Each pixel belongs to the block whose half-open rectangle [x0, x1) x [y0, y1) holds it
+    // (the last column and row closed), so it is interpolated once, from the corners of the
+    // smallest block around it.
+    const int W = grid_width, H = int(n / std::size_t(grid_width));
+    CloudGridInterpolation& grid = result.interpolation;
+    grid.width = W, grid.height = H;
+    grid.marched.assign(n, 0);
+    std::vector<std::size_t> todo;
+    const auto mark = [&](int x, int y) {
+        const std::size_t p = std::size_t(y) * std::size_t(W) + std::size_t(x);
+        if (!grid.marched[p]) grid.marched[p] = 1, todo.push_back(p);
+    };
+    std::vector<int> xs, ys;  // the coarse lattice
+    for (int i = 0; i < W; i += up.stride) xs.push_back(i);
     if (xs.back() != W - 1) xs.push_back(W - 1);
-    for (std::size_t j = 0; j < H; j += S) ys.push_back(j);
+    for (int j = 0; j < H; j += up.stride) ys.push_back(j);
     if (ys.back() != H - 1) ys.push_back(H - 1);
-    std::vector<std::size_t> coarse;
-    coarse.reserve(xs.size() * ys.size());
-    for (std::size_t j : ys)
-        for (std::size_t i : xs) coarse.push_back(j * W + i);
+    using Block = CloudGridInterpolation::Block;
+    std::vector<Block> blocks;
+    for (std::size_t b = 0; b + 1 < ys.size(); ++b)
+        for (std::size_t a = 0; a + 1 < xs.size(); ++a)
+            blocks.push_back({xs[a], ys[b], xs[a + 1], ys[b + 1]});
+    for (int y : ys)
+        for (int x : xs) mark(x, y);
     ProgressTracker tracker(progress, n);
-    march_rays(&coarse, tracker);
-    // Per pixel: interpolate (weights in `interp`) or mark for marching.
-    std::vector<unsigned char> refine(n, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, H), [&](const auto& range) {
-        for (std::size_t j = range.begin(); j != range.end(); ++j) {
-            const std::size_t bj = std::min(j / S, ys.size() - 2);
-            const std::size_t j0 = ys[bj], j1 = ys[bj + 1];
-            for (std::size_t i = 0; i < W; ++i) {
-                if (i % S == 0 && j % S == 0) continue;
-                if ((i == W - 1 || i % S == 0) && (j == H - 1 || j % S == 0)) continue;  // marched
-                const std::size_t bi = std::min(i / S, xs.size() - 2);
-                const std::size_t i0 = xs[bi], i1 = xs[bi + 1];
-                const std::size_t q[4] = {j0 * W + i0, j0 * W + i1, j1 * W + i0, j1 * W + i1};
-                float tmin = 2.0f, tmax = -1.0f;
-                for (std::size_t a : q) {
-                    tmin = std::min(tmin, result.transmittance[a]);
-                    tmax = std::max(tmax, result.transmittance[a]);
-                }
-                bool smooth = tmax - tmin <= up.transmittance_tolerance;
-                for (std::size_t c = 0; c < nc && smooth; ++c) {
-                    float lmin = 1e30f, lmax = 0.0f;
-                    for (std::size_t a : q) {
-                        lmin = std::min(lmin, result.radiance[a * nc + c]);
-                        lmax = std::max(lmax, result.radiance[a * nc + c]);
-                    }
-                    smooth = lmax - lmin <= up.radiance_tolerance * lmax;
-                }
-                const std::size_t p = j * W + i;
-                if (!smooth) {
-                    refine[p] = 1;
-                    continue;
-                }
-                const double u = double(i - i0) / double(i1 - i0), v = double(j - j0) / double(j1 - j0);
-                const double w[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
-                double T = 0.0, dsum = 0.0, dw = 0.0;
-                for (int a = 0; a < 4; ++a) {
-                    T += w[a] * result.transmittance[q[a]];
-                    // Depth: weighted by opacity, where there is cloud.
-                    const double o = w[a] * (1.0 - result.transmittance[q[a]]);
-                    dsum += o * result.depth_m[q[a]];
-                    dw += o;
-                }
-                result.transmittance[p] = float(T);
-                result.depth_m[p] = dw > 0.0 ? float(dsum / dw) : 0.0f;
-                for (std::size_t c = 0; c < nc; ++c) {
-                    double L = 0.0;
-                    for (int a = 0; a < 4; ++a) L += w[a] * result.radiance[q[a] * nc + c];
-                    result.radiance[p * nc + c] = float(L);
-                }
-            }
+    std::size_t marched = 0;
+    // Whether the four corner rays of a block agree (transmittances within
+    // up.transmittance_tolerance, each channel's radiance within up.radiance_tolerance of
+    // the largest).
+    const auto smooth = [&](const Block& b) {
+        const std::size_t q[4] = {std::size_t(b.y0) * W + b.x0, std::size_t(b.y0) * W + b.x1,
+                                  std::size_t(b.y1) * W + b.x0, std::size_t(b.y1) * W + b.x1};
+        float tmin = 2.0f, tmax = -1.0f;
+        for (std::size_t a : q) {
+            tmin = std::min(tmin, result.transmittance[a]);
+            tmax = std::max(tmax, result.transmittance[a]);
         }
+        if (tmax - tmin > up.transmittance_tolerance) return false;
+        for (std::size_t c = 0; c < nc; ++c) {
+            float lmin = 1e30f, lmax = 0.0f;
+            for (std::size_t a : q) {
+                lmin = std::min(lmin, result.radiance[a * nc + c]);
+                lmax = std::max(lmax, result.radiance[a * nc + c]);
+            }
+            if (lmax - lmin > up.radiance_tolerance * lmax) return false;
+        }
+        return true;
+    };
+    // Whether the block spans more than up.max_block_size_m at its farthest cloud: the
+    // angle between its diagonal's corner rays times that depth.
+    const auto too_wide = [&](const Block& b) {
+        const std::size_t q[4] = {std::size_t(b.y0) * W + b.x0, std::size_t(b.y0) * W + b.x1,
+                                  std::size_t(b.y1) * W + b.x0, std::size_t(b.y1) * W + b.x1};
+        float depth = 0.0f;
+        for (std::size_t a : q) depth = std::max(depth, result.depth_m[a]);
+        if (!(depth > 0.0f)) return false;
+        const double chord =
+            std::max(glm::length(glm::normalize(directions[q[0]]) - glm::normalize(directions[q[3]])),
+                     glm::length(glm::normalize(directions[q[1]]) - glm::normalize(directions[q[2]])));
+        return chord * depth > up.max_block_size_m;
+    };
+    while (!todo.empty()) {
+        std::sort(todo.begin(), todo.end());  // neighbouring rays together, whatever the order found
+        march_rays(&todo, tracker);
+        marched += todo.size();
+        todo.clear();
+        std::vector<Block> split;
+        for (const Block& b : blocks) {
+            if (b.x1 - b.x0 <= 1 && b.y1 - b.y0 <= 1) continue;  // every pixel it owns is a corner
+            if ((b.x1 - b.x0 <= up.finest && b.y1 - b.y0 <= up.finest) || (smooth(b) && !too_wide(b))) {
+                grid.blocks.push_back(b);
+                continue;
+            }
+            // Split along each axis at least two pixels long, marching the new corners.
+            const int xm = b.x1 - b.x0 >= 2 ? (b.x0 + b.x1) / 2 : -1;
+            const int ym = b.y1 - b.y0 >= 2 ? (b.y0 + b.y1) / 2 : -1;
+            const int cx[3] = {b.x0, xm, b.x1}, cy[3] = {b.y0, ym, b.y1};
+            for (int j = 0; j < 3; ++j)
+                for (int i = 0; i < 3; ++i)
+                    if (cx[i] >= 0 && cy[j] >= 0) mark(cx[i], cy[j]);
+            for (int j = 0; j < 2; ++j)
+                for (int i = 0; i < 2; ++i) {
+                    const int x0 = xm < 0 ? (i == 0 ? b.x0 : -1) : cx[i], x1 = xm < 0 ? b.x1 : cx[i + 1];
+                    const int y0 = ym < 0 ? (j == 0 ? b.y0 : -1) : cy[j], y1 = ym < 0 ? b.y1 : cy[j + 1];
+                    if (x0 >= 0 && y0 >= 0) split.push_back({x0, y0, x1, y1});
+                }
+        }
+        blocks = std::move(split);
+    }
+    // Every other ray from its block's corners; the depth weighted by opacity, where there
+    // is cloud.
+    grid.interpolate(result.radiance, nc);
+    grid.interpolate(result.transmittance, 1);
+    grid.for_each_interpolated([&](std::size_t p, const std::size_t q[4], const double w[4]) {
+        double dsum = 0.0, dw = 0.0;
+        for (int a = 0; a < 4; ++a) {
+            const double o = w[a] * (1.0 - result.transmittance[q[a]]);
+            dsum += o * result.depth_m[q[a]];
+            dw += o;
+        }
+        result.depth_m[p] = dw > 0.0 ? float(dsum / dw) : 0.0f;
     });
-    std::vector<std::size_t> fine;
-    for (std::size_t p = 0; p < n; ++p)
-        if (refine[p]) fine.push_back(p);
-    march_rays(&fine, tracker);
-    tracker.advance(n - coarse.size() - fine.size());
+    tracker.advance(n - marched);
     tracker.finish();
     return result;
 }
@@ -339,15 +374,33 @@ CloudResult render_clouds_grid(const CloudDensity& density, const CloudIlluminat
     if (width < 1 || directions.size() % std::size_t(width) != 0)
         throw InvalidArgument("width", fmt::format("must divide the number of directions ({}), got {}",
                                                    directions.size(), width));
-    const int stride = directions.size() / std::size_t(width) < 2 || width < 2 ? 1 : upsampling.stride;
+    const int stride = directions.size() / std::size_t(width) < 2 || width < 2 ? 1
+                       : upsampling.stride == 0 ? std::clamp(width / CloudUpsampling::kAutoColumns, 1, 16)
+                                                : upsampling.stride;
     CloudUpsampling up = upsampling;
     up.stride = stride;
     return march(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options, progress,
                  first_ray_index, width, up);
 }
 
+void CloudGridInterpolation::interpolate(std::span<float> values, std::size_t channels) const {
+    if (all_marched()) return;
+    if (values.size() != std::size_t(width) * std::size_t(height) * channels)
+        throw InvalidArgument("values", fmt::format("must hold {} x {} x {} values, got {}", width, height,
+                                                    channels, values.size()));
+    for_each_interpolated([&](std::size_t p, const std::size_t q[4], const double w[4]) {
+        for (std::size_t c = 0; c < channels; ++c) {
+            double v = 0.0;
+            for (int a = 0; a < 4; ++a) v += w[a] * values[q[a] * channels + c];
+            values[p * channels + c] = float(v);
+        }
+    });
+}
+
 void CloudUpsampling::validate() const {
-    require_in_range("stride", stride, 1, 16);
+    require_in_range("stride", stride, 0, 16);
+    require_in_range("finest", finest, 1, 16);
+    require_in_range("max_block_size_m", max_block_size_m, 0.0, 1e7, "m");
     require_in_range("transmittance_tolerance", transmittance_tolerance, 0.0, 1.0);
     require_in_range("radiance_tolerance", radiance_tolerance, 0.0, 1.0);
 }

@@ -48,6 +48,7 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
             if (scene.has_clouds()) {
                 options.clouds = scene.cloud_density();  // opens the VDB files
                 options.cloud_lighting = scene.clouds->lighting;
+                options.cloud_upsampling = scene.clouds->upsampling;
                 options.air_steps = scene.aerial.raymarch_steps;
             }
             const std::unique_ptr<SkyMethod> method = make_sky_method(scene.method, scene.sky_options);

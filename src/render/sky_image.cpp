@@ -316,32 +316,48 @@ private:
 };
 
 // 4. The clouds of one band of rows: the march through the density, and the air between
-// the observer and each cloud (header, "Clouds").
+// the observer and each cloud (header, "Clouds"), combined into the cloud's term of the
+// composite, T(0, d_c) L_c + (1 - T_c) S(0, d_c). Rays the upsampling interpolated
+// (render_clouds_grid) get that term interpolated from the same corner rays: the air is
+// marched for the marched rays only.
 struct BandClouds {
     CloudResult march;
-    AirAlongRays air;                 // in front of the clouds
-    std::vector<float> radiance_rgb;  // RGB output: L_c in Rec.709
+    std::vector<float> cloud;  // (n, 3) in Rec.709 for RGB output, else (n, nc)
 };
 BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIllumination& light,
                              const Atmosphere& atm, const Observer& obs, std::span<const glm::dvec3> dirs,
                              int width, std::uint64_t first_pixel, const SpectrumToRgb* sky_to_rgb,
                              Progress* progress) {
     BandClouds b;
-    // The band's rows are whole image rows (`width` pixels each): the cloud pass is marched
-    // on a coarser grid and upsampled where smooth (render_clouds_grid).
+    const std::size_t n = dirs.size(), nc = atm.channels();
     b.march = render_clouds_grid(*options.clouds, light, glm::dvec3(0.0), dirs, width, options.cloud_lighting,
                                  options.cloud_upsampling, progress, first_pixel);
-    std::vector<double> cloud_d(dirs.size(), 0.0);  // 0: no cloud, not marched
-    for (std::size_t q = 0; q < dirs.size(); ++q)
-        if (b.march.transmittance[q] < 1.0f) cloud_d[q] = double(b.march.depth_m[q]);
+    const CloudGridInterpolation& grid = b.march.interpolation;
+    std::vector<double> cloud_d(n, 0.0);  // 0: no cloud, or not marched
+    for (std::size_t q = 0; q < n; ++q)
+        if (b.march.transmittance[q] < 1.0f && (grid.all_marched() || grid.marched[q]))
+            cloud_d[q] = double(b.march.depth_m[q]);
     const glm::dvec3 origin(0.0);
-    b.air = aerial_along_rays(atm, light.luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},
-                              obs.sun_direction, std::span<const glm::dvec3>(&origin, 1), dirs, cloud_d,
-                              options.air_steps, 1.0, sky_to_rgb == nullptr);
+    const AirAlongRays air =
+        aerial_along_rays(atm, light.luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},
+                          obs.sun_direction, std::span<const glm::dvec3>(&origin, 1), dirs, cloud_d,
+                          options.air_steps, 1.0, sky_to_rgb == nullptr);
+    const std::size_t m = sky_to_rgb ? 3 : nc;
+    b.cloud.resize(n * m);
     if (sky_to_rgb) {
-        b.radiance_rgb.resize(dirs.size() * 3);
-        sky_to_rgb->convert(b.march.radiance, b.radiance_rgb);
+        // As the passes take it: the air's RGB transmittance times the RGB cloud radiance.
+        sky_to_rgb->convert(b.march.radiance, b.cloud);
+        for (std::size_t q = 0; q < n; ++q)
+            for (std::size_t k = 0; k < 3; ++k)
+                b.cloud[q * 3 + k] = air.transmittance[q * 3 + k] * b.cloud[q * 3 + k] +
+                                     (1.0f - b.march.transmittance[q]) * air.inscatter[q * 3 + k];
+    } else {
+        for (std::size_t q = 0; q < n; ++q)
+            for (std::size_t c = 0; c < nc; ++c)
+                b.cloud[q * nc + c] = air.transmittance_spectral[q * nc + c] * b.march.radiance[q * nc + c] +
+                                      (1.0f - b.march.transmittance[q]) * air.inscatter_spectral[q * nc + c];
     }
+    grid.interpolate(b.cloud, m);
     return b;
 }
 
@@ -354,14 +370,6 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
                                   const SpectrumToRgb* to_rgb, const BandClouds* clouds) {
     const bool rgb = to_rgb != nullptr;
     const std::vector<double> m = rgb ? to_rgb->matrix() : std::vector<double>{};
-    // RGB output: the passes' Welkin.Clouds.rgb, T(0, d_c) L_c + (1 - T_c) S(0, d_c) in
-    // Rec.709 (cloud_passes.cpp), added to the converted T_c L_sky.
-    const auto add_cloud_rgb = [&](std::size_t i, float T, float* d) {
-        const AirAlongRays& air = clouds->air;
-        for (int k = 0; k < 3; ++k)
-            d[k] += air.transmittance[i * 3 + k] * clouds->radiance_rgb[i * 3 + k] +
-                    (1.0f - T) * air.inscatter[i * 3 + k];
-    };
     std::atomic<std::size_t> bad{kNone};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& range) {
         std::array<double, 9> m3{};  // local copy: no reloads through possible aliases
@@ -370,16 +378,14 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             float* s = &sky[i * nc];
             // The sky behind the cloud: T_c L_sky; with spectral output also the cloud's
-            // own light through the air and the air in front of it (header).
+            // term (its own light through the air and the air in front of it, header).
             const float T = clouds ? clouds->march.transmittance[i] : 1.0f;
             if (clouds) {
                 if (rgb) {
                     for (std::size_t c = 0; c < nc; ++c) s[c] *= T;
                 } else {
-                    const float* Ta = &clouds->air.transmittance_spectral[i * nc];
-                    const float* Sa = &clouds->air.inscatter_spectral[i * nc];
-                    const float* Lc = &clouds->march.radiance[i * nc];
-                    for (std::size_t c = 0; c < nc; ++c) s[c] = s[c] * T + Ta[c] * Lc[c] + (1.0f - T) * Sa[c];
+                    const float* Lc = &clouds->cloud[i * nc];
+                    for (std::size_t c = 0; c < nc; ++c) s[c] = s[c] * T + Lc[c];
                 }
             }
             bool finite = true;
@@ -401,7 +407,9 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
                 }
                 d[0] = float(r), d[1] = float(g), d[2] = float(b);
             }
-            if (clouds) add_cloud_rgb(i, T, d);
+            // RGB output: the cloud's term in Rec.709, as the passes' Welkin.Clouds.rgb.
+            if (clouds)
+                for (int k = 0; k < 3; ++k) d[k] += clouds->cloud[i * 3 + k];
         }
         std::size_t cur = bad.load();
         while (first < cur && !bad.compare_exchange_weak(cur, first)) {

@@ -81,6 +81,7 @@ void SceneClouds::validate(double planet_radius_m, double origin_altitude_m) con
     CloudLightingOptions rest = lighting;
     rest.scattering = {};
     prefixed("clouds.lighting.", [&] { rest.validate(); });
+    prefixed("clouds.upsampling.", [&] { upsampling.validate(); });
 }
 
 std::shared_ptr<const CloudDensity> make_scene_cloud_density(const SceneClouds& clouds,

@@ -16,7 +16,8 @@
 //     "aerial": {"method": "froxel" | "raymarch", "froxels": [32, 32, 32], "max_depth_m": 0,
 //                "steps_per_slice": 4, "raymarch_steps": 64, "sky_depth_m": 1e9},
 //     "sky_options": {"transmittance_width": 256, ...},
-//     "clouds": {"layers": [...], "volumes": [...], "scattering": {...}, "lighting": {...}}
+//     "clouds": {"layers": [...], "volumes": [...], "scattering": {...}, "lighting": {...},
+//                "upsampling": {...}}
 //   }
 // "clouds" (scene_clouds.hpp; docs/pipelines.md "Scene JSON"), the schema the add-on writes:
 // layers are CloudLayerParams without planet_radius_m / origin_altitude_m (the scene's),
@@ -102,7 +103,7 @@ bool boolean(const json& j, const std::string& parameter) {
 // "clouds" (docs/pipelines.md "Scene JSON"). Relative VDB paths are taken
 // relative to `base` (the scene file's folder).
 SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
-    json_check_keys(j, "clouds", {"layers", "volumes", "scattering", "lighting"});
+    json_check_keys(j, "clouds", {"layers", "volumes", "scattering", "lighting", "upsampling"});
     SceneClouds out;
     const auto array = [&](const char* key) -> const json& {
         const json& a = j[key];
@@ -225,6 +226,23 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         getd("max_distance_m", o.max_distance_m);
         getd("shadow_grid_spacing_m", o.shadow_grid_spacing_m);
     }
+    if (j.contains("upsampling")) {
+        const json& u = j["upsampling"];
+        json_check_keys(
+            u, "clouds.upsampling",
+            {"stride", "finest", "transmittance_tolerance", "radiance_tolerance", "max_block_size_m"});
+        CloudUpsampling& up = out.upsampling;
+        if (u.contains("stride")) up.stride = integer(u["stride"], "clouds.upsampling.stride");
+        if (u.contains("finest")) up.finest = integer(u["finest"], "clouds.upsampling.finest");
+        if (u.contains("max_block_size_m"))
+            up.max_block_size_m = json_number(u["max_block_size_m"], "clouds.upsampling.max_block_size_m");
+        if (u.contains("transmittance_tolerance"))
+            up.transmittance_tolerance =
+                json_number(u["transmittance_tolerance"], "clouds.upsampling.transmittance_tolerance");
+        if (u.contains("radiance_tolerance"))
+            up.radiance_tolerance =
+                json_number(u["radiance_tolerance"], "clouds.upsampling.radiance_tolerance");
+    }
     return out;
 }
 
@@ -276,6 +294,11 @@ ordered_json clouds_json(const SceneClouds& c) {
                      {"jitter", o.jitter},
                      {"max_distance_m", o.max_distance_m},
                      {"shadow_grid_spacing_m", o.shadow_grid_spacing_m}};
+    j["upsampling"] = {{"stride", c.upsampling.stride},
+                       {"finest", c.upsampling.finest},
+                       {"transmittance_tolerance", c.upsampling.transmittance_tolerance},
+                       {"radiance_tolerance", c.upsampling.radiance_tolerance},
+                       {"max_block_size_m", c.upsampling.max_block_size_m}};
     return j;
 }
 

@@ -78,7 +78,9 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
       "lighting": {"max_steps": 64, "light_steps": 6, "ambient_steps": 2, "light_distance_m": 3000,
                    "multiple_scattering": "octaves", "octaves": 3, "octave_extinction": 0.4, "octave_contribution": 0.6,
                    "octave_eccentricity": 0.7, "min_transmittance": 0.01, "seed": 3,
-                   "jitter": false, "max_distance_m": 5e5}})");
+                   "jitter": false, "max_distance_m": 5e5},
+      "upsampling": {"stride": 4, "finest": 1, "transmittance_tolerance": 0.05, "radiance_tolerance": 0.2,
+                     "max_block_size_m": 800}})");
     const SceneDescription s = SceneDescription::from_json_string(text);
     ASSERT_TRUE(s.has_clouds());
     const SceneClouds& c = *s.clouds;
@@ -128,6 +130,12 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     EXPECT_EQ(o.seed, 3u);
     EXPECT_FALSE(o.jitter);
     EXPECT_EQ(o.max_distance_m, 5e5);
+    const CloudUpsampling& u = c.upsampling;
+    EXPECT_EQ(u.stride, 4);
+    EXPECT_EQ(u.finest, 1);
+    EXPECT_EQ(u.transmittance_tolerance, 0.05);
+    EXPECT_EQ(u.radiance_tolerance, 0.2);
+    EXPECT_EQ(u.max_block_size_m, 800);
     // The written text reads back to the same text (every value kept exactly).
     const std::string once = s.to_json_string();
     EXPECT_EQ(SceneDescription::from_json_string(once).to_json_string(), once);
@@ -147,12 +155,29 @@ TEST(SceneClouds, DefaultsAreTheCoresAndAreAllWritten) {
     EXPECT_EQ(c.lighting.max_steps, lo.max_steps);
     EXPECT_EQ(c.lighting.multiple_scattering, CloudMultipleScattering::diffusion);
     EXPECT_EQ(c.lighting.scattering.albedo, lo.scattering.albedo);
+    EXPECT_EQ(c.upsampling.stride, CloudUpsampling{}.stride);
+    EXPECT_EQ(c.upsampling.finest, CloudUpsampling{}.finest);
     const std::string text = s.to_json_string();
-    for (const char* key :
-         {"\"bottom_altitude_m\"", "\"wind_offset_m\"", "\"seed\"", "\"name\"", "\"grid\"",
-          "\"matrix_world\"", "\"density_scale\"", "\"negative\"", "\"placement\"", "\"albedo\"",
-          "\"g_forward\"", "\"w_forward\"", "\"max_steps\"", "\"multiple_scattering\"",
-          "\"octave_eccentricity\"", "\"jitter\"", "\"max_distance_m\""})
+    for (const char* key : {"\"bottom_altitude_m\"",
+                            "\"wind_offset_m\"",
+                            "\"seed\"",
+                            "\"name\"",
+                            "\"grid\"",
+                            "\"matrix_world\"",
+                            "\"density_scale\"",
+                            "\"negative\"",
+                            "\"placement\"",
+                            "\"albedo\"",
+                            "\"g_forward\"",
+                            "\"w_forward\"",
+                            "\"max_steps\"",
+                            "\"multiple_scattering\"",
+                            "\"octave_eccentricity\"",
+                            "\"jitter\"",
+                            "\"max_distance_m\"",
+                            "\"upsampling\"",
+                            "\"finest\"",
+                            "\"max_block_size_m\""})
         EXPECT_NE(text.find(key), std::string::npos) << key;
 }
 
@@ -183,6 +208,11 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"lighting": {"multiple_scattering": "wrenninge"}})"),
               "clouds.lighting.multiple_scattering");
     EXPECT_EQ(bad(R"({"lighting": {"steps": 1}})"), "clouds.lighting.steps");
+    EXPECT_EQ(bad(R"({"upsampling": {"stride": 17}})"), "clouds.upsampling.stride");
+    EXPECT_EQ(bad(R"({"upsampling": {"finest": 0}})"), "clouds.upsampling.finest");
+    EXPECT_EQ(bad(R"({"upsampling": {"radiance_tolerance": -0.1}})"), "clouds.upsampling.radiance_tolerance");
+    EXPECT_EQ(bad(R"({"upsampling": {"max_block_size_m": "far"}})"), "clouds.upsampling.max_block_size_m");
+    EXPECT_EQ(bad(R"({"upsampling": {"strides": 2}})"), "clouds.upsampling.strides");
     EXPECT_EQ(bad(R"({"layer": []})"), "clouds.layer");
     EXPECT_EQ(bad(R"([])"), "clouds");
     // The message says what is accepted.

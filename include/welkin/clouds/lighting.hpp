@@ -21,10 +21,9 @@
 //    steps there change the result little (docs/validation.md, "Clouds") and save
 //    samples. The energy-conserving step keeps the opacity of a long step exact for
 //    its sample's sigma_t.
-//  * Empty space inside the segments (Schneider 2015's adaptive march): after two empty
-//    samples in a row a step spans two base steps (the same fraction u); where such a
-//    step finds cloud it is taken again as base steps. A cloud thinner than a base step
-//    between two empty samples can be stepped over, as the base march can miss it too.
+//  * Empty space inside the segments keeps the base step: a longer step there (Schneider
+//    2015's adaptive march) passes over wisps thinner than itself
+//    (tests/cpp/test_cloud_fast_vs_reference.cpp measures what that costs).
 //  * Early termination: once T < min_transmittance the ray stops (what is behind is
 //    dimmed below that fraction; T is left as it is, not rounded to 0).
 //  * Sun light. At each sample x a shadow ray towards the sun is marched through the
@@ -97,6 +96,9 @@
 #include <span>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "welkin/base/progress.hpp"
 #include "welkin/clouds/density.hpp"
 #include "welkin/clouds/illumination.hpp"
@@ -142,6 +144,31 @@ struct CloudLightingOptions {
     void validate() const;
 };
 
+// Which rays of a grid (render_clouds_grid) were marched, and how each other ray was
+// interpolated: bilinearly from the four corner rays of the block that owns it. A block
+// [x0, x1] x [y0, y1] owns the pixels of [x0, x1) x [y0, y1), its right edge included
+// when x1 is the last column and its bottom edge when y1 is the last row; every pixel is
+// owned by one block. Hosts interpolate their own per-ray quantities (the air in front
+// of a cloud, a composite) the same way, so that they need them for the marched rays only.
+struct CloudGridInterpolation {
+    struct Block {
+        int x0, y0, x1, y1;  // corner columns and rows, x0 < x1 or y0 < y1
+    };
+    int width = 0, height = 0;
+    std::vector<Block> blocks;           // the blocks whose unmarched pixels are interpolated
+    std::vector<unsigned char> marched;  // per ray (row-major); empty: every ray was marched
+
+    bool all_marched() const { return marched.empty(); }
+    // f(p, q, w) for every unmarched pixel p, q its block's corner pixels (top-left,
+    // top-right, bottom-left, bottom-right) and w their bilinear weights; in parallel,
+    // each pixel once.
+    template <class F>
+    void for_each_interpolated(F&& f) const;
+    // values: (width x height, channels); the unmarched pixels' values set from their
+    // corners.
+    void interpolate(std::span<float> values, std::size_t channels) const;
+};
+
 // (N, C) radiance, N transmittances and depths; standard errors from estimators only.
 struct CloudResult {
     std::size_t channels = 0;
@@ -150,6 +177,7 @@ struct CloudResult {
     std::vector<float> depth_m;              // N
     std::vector<float> radiance_error;       // (N, C) standard error, or empty
     std::vector<float> transmittance_error;  // N, or empty
+    CloudGridInterpolation interpolation;    // render_clouds_grid: which rays were marched
 };
 
 // Throws InvalidArgument for bad options, a non-finite origin or a bad direction (naming
@@ -170,18 +198,33 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                           Progress* progress = nullptr, std::uint64_t first_ray_index = 0);
 
 // Upsampling of a grid of rays (render_clouds_grid): a cloud sky is mostly smooth (clear
-// sky, cloud interiors) with sharp edges between. One ray in every stride x stride block
-// is marched (and the last row and column); every other ray is interpolated bilinearly
-// from the four marched rays around it where those agree (transmittances within
-// transmittance_tolerance, each channel's radiance within radiance_tolerance of the
-// largest of the four) and marched itself elsewhere. stride 1 marches every ray.
-// Deterministic: a ray's value is its own march or a fixed combination of marched rays.
-// The default marches every ray: a cloud smaller than the stride between four clear
-// corner rays is lost by interpolation, so a stride above 1 is a choice for previews.
+// sky, cloud interiors) with sharp edges between. The rays at every stride-th column and
+// row (and the last ones) are marched first. Then, as a quadtree, each block whose four
+// marched corner rays disagree (transmittances more than transmittance_tolerance apart,
+// or a channel's radiances more than radiance_tolerance of the largest) is split in four
+// at its midpoints, whose rays are marched, down to blocks `finest` pixels wide; the rays
+// inside the blocks left are interpolated bilinearly from their corners
+// (CloudGridInterpolation). Refining only the blocks that straddle an edge marches about
+// the edge's length in pixels per level, instead of every pixel of every block it
+// touches; finest 2 leaves the last level (half the rays an edge costs) interpolated, an
+// edge softened over two pixels. A block is also split, however well its corners agree,
+// while it spans more than max_block_size_m at the farthest cloud its corners see (the
+// angle between its corner rays times that depth): near a horizon the clouds are tens of
+// kilometres away and their shapes smaller than a block, whose corners can agree by
+// chance. Deterministic: a ray's value is its own march or a fixed combination of marched
+// rays, whatever the thread count.
+// What is lost: a cloud smaller than a block between four corner rays that agree (four
+// clear rays around a small wisp) is interpolated away. docs/validation.md ("Speed of a
+// cloudy sky") charts time against error for these settings, against marching every ray.
 struct CloudUpsampling {
-    int stride = 1;                        // [1, 16]
+    static constexpr int kAutoColumns = 256;  // stride 0: the grid's width / this
+    // Coarse lattice, [0, 16]: 0 (the default) one marched column per 1/256 of the width
+    // (every 1.4 degrees of an equirect sky: stride 8 at 2048 wide), 1 every ray marched.
+    int stride = 0;
+    int finest = 2;                        // [1, 16]: blocks this wide are not split
     double transmittance_tolerance = 0.1;  // [0, 1]
     double radiance_tolerance = 0.3;       // [0, 1], relative
+    double max_block_size_m = 500.0;       // [0, 1e7] m
     void validate() const;
 };
 
@@ -192,5 +235,28 @@ CloudResult render_clouds_grid(const CloudDensity& density, const CloudIlluminat
                                const CloudLightingOptions& options = {},
                                const CloudUpsampling& upsampling = {}, Progress* progress = nullptr,
                                std::uint64_t first_ray_index = 0);
+
+template <class F>
+void CloudGridInterpolation::for_each_interpolated(F&& f) const {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 64), [&](const auto& range) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            const Block& b = blocks[k];
+            const std::size_t w = std::size_t(width);
+            const std::size_t q[4] = {b.y0 * w + b.x0, b.y0 * w + b.x1, b.y1 * w + b.x0, b.y1 * w + b.x1};
+            const int x_end = b.x1 == width - 1 ? b.x1 + 1 : b.x1,
+                      y_end = b.y1 == height - 1 ? b.y1 + 1 : b.y1;
+            for (int y = b.y0; y < y_end; ++y) {
+                const double v = b.y1 > b.y0 ? double(y - b.y0) / double(b.y1 - b.y0) : 0.0;
+                for (int x = b.x0; x < x_end; ++x) {
+                    const std::size_t p = std::size_t(y) * w + std::size_t(x);
+                    if (marched[p]) continue;
+                    const double u = b.x1 > b.x0 ? double(x - b.x0) / double(b.x1 - b.x0) : 0.0;
+                    const double weights[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
+                    f(p, q, weights);
+                }
+            }
+        }
+    });
+}
 
 }  // namespace welkin

@@ -69,18 +69,21 @@ public:
 
     // (x, y, z) in texture units (one period = 1); out receives N values.
     void sample(double x, double y, double z, float* out) const {
-        // Per axis: wrap to one period (u - floor(u) in [0, 1]), texel centres at
-        // (i + 0.5) / n: the lower texel floor(u n - 0.5) is in [-1, n - 1], -1 wrapping
-        // to n - 1 (and u - floor(u) rounded up to 1 clamped to n - 1).
+        // Per axis: texel centres at (i + 0.5) / n, so the lower texel is floor(u n - 0.5)
+        // wrapped into [0, n): a mask for the power-of-two sizes the noise is baked at,
+        // a modulo otherwise.
         const auto axis = [](double u, int n, int& i0, int& i1, float& w) {
-            const float f = float(u - std::floor(u)) * float(n) - 0.5f;
-            const float b = std::floor(f);
-            w = f - b;
-            int i = int(b);
-            if (i < 0) i += n;
-            if (i >= n) i = n - 1;
-            i0 = i;
-            i1 = i + 1 == n ? 0 : i + 1;
+            const double f = u * double(n) - 0.5;
+            const double b = std::floor(f);
+            w = float(f - b);
+            const std::int64_t i = std::int64_t(b);
+            if ((n & (n - 1)) == 0) {
+                i0 = int(i & (n - 1));
+                i1 = int((i + 1) & (n - 1));
+            } else {
+                i0 = int(((i % n) + n) % n);
+                i1 = i0 + 1 == n ? 0 : i0 + 1;
+            }
         };
         int i0, i1, j0, j1, k0 = 0, k1 = 0;
         float wx, wy, wz = 0.0f;

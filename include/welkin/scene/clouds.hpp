@@ -40,6 +40,9 @@ struct SceneClouds {
     std::vector<CloudLayerParams> layers;
     std::vector<SceneCloudVolume> volumes;
     CloudLightingOptions lighting;  // lighting.scattering: the JSON's "scattering"
+    // How an equirect sky's cloud pass is upsampled (lighting.hpp; camera passes march
+    // every ray).
+    CloudUpsampling upsampling;
 
     bool empty() const { return layers.empty() && volumes.empty(); }
 

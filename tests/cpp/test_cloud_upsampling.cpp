@@ -1,0 +1,198 @@
+// The upsampled cloud pass (render_clouds_grid, CloudUpsampling in lighting.hpp): the rays
+// it marches are the plain march's rays bit for bit; every other ray is the bilinear
+// combination of the four marched corners of the one block that owns it; zero tolerances
+// with a finest block of one pixel march every ray that differs (the plain march); the
+// result does not depend on the thread count; the block-size limit splits blocks that
+// span more than it at their cloud's distance, however well their corners agree.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "cloud_test_util.hpp"
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include "welkin/base/error.hpp"
+#include "welkin/clouds/illumination.hpp"
+#include "welkin/clouds/lighting.hpp"
+#include "welkin/clouds/procedural.hpp"
+
+using namespace welkin;
+using welkin::test::HomogeneousBox;
+
+namespace {
+
+// A W x H grid of directions over the upper sky, elevations 3 to 87 degrees, row 0 at
+// the top: an equirect sky's upper half.
+std::vector<glm::dvec3> sky_grid(int W, int H) {
+    std::vector<glm::dvec3> d;
+    for (int j = 0; j < H; ++j) {
+        const double el = (87.0 - 84.0 * j / (H - 1)) * std::numbers::pi / 180.0;
+        for (int i = 0; i < W; ++i) {
+            const double az = 2.0 * std::numbers::pi * (i + 0.5) / W;
+            d.push_back({std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)});
+        }
+    }
+    return d;
+}
+
+const ConstantIllumination& light() {
+    static const ConstantIllumination l(glm::normalize(glm::dvec3(0.6, 0.2, 0.5)), {1.0f, 0.9f, 0.8f},
+                                        {0.1f, 0.15f, 0.25f});
+    return l;
+}
+
+CloudLightingOptions quick() {
+    CloudLightingOptions o;
+    o.max_steps = 32;
+    return o;
+}
+
+CloudUpsampling settings(int stride, int finest, double dT, double dL, double block) {
+    CloudUpsampling u;
+    u.stride = stride, u.finest = finest, u.transmittance_tolerance = dT, u.radiance_tolerance = dL;
+    u.max_block_size_m = block;
+    return u;
+}
+
+}  // namespace
+
+TEST(CloudUpsampling, StrideOneIsThePlainMarch) {
+    const int W = 64, H = 24;
+    const ProceduralClouds layer(CloudLayerParams{});
+    const auto dirs = sky_grid(W, H);
+    const CloudResult plain = render_clouds(layer, light(), glm::dvec3(0.0), dirs, quick());
+    const CloudResult grid = render_clouds_grid(layer, light(), glm::dvec3(0.0), dirs, W, quick(),
+                                                settings(1, 1, 0.1, 0.3, 500.0));
+    EXPECT_TRUE(grid.interpolation.all_marched());
+    EXPECT_EQ(grid.radiance, plain.radiance);
+    EXPECT_EQ(grid.transmittance, plain.transmittance);
+    EXPECT_EQ(grid.depth_m, plain.depth_m);
+}
+
+// The default layer from the ground at stride 8: the marched rays are the plain march's
+// (same seeds), each other ray is owned by exactly one block, whose corners are marched,
+// and is their bilinear combination (so within their range).
+TEST(CloudUpsampling, MarchedRaysAreThePlainMarchAndTheRestTheirBlocksCorners) {
+    const int W = 160, H = 64;
+    const ProceduralClouds layer(CloudLayerParams{});
+    const auto dirs = sky_grid(W, H);
+    const CloudResult plain = render_clouds(layer, light(), glm::dvec3(0.0), dirs, quick());
+    const CloudResult grid = render_clouds_grid(layer, light(), glm::dvec3(0.0), dirs, W, quick(),
+                                                settings(8, 2, 0.1, 0.3, 500.0));
+    const CloudGridInterpolation& g = grid.interpolation;
+    ASSERT_EQ(g.marched.size(), dirs.size());
+    std::size_t marched = 0, cloudy = 0;
+    for (std::size_t p = 0; p < dirs.size(); ++p) {
+        if (!g.marched[p]) continue;
+        ++marched;
+        cloudy += plain.transmittance[p] < 1.0f;
+        ASSERT_EQ(grid.transmittance[p], plain.transmittance[p]) << p;
+        ASSERT_EQ(grid.depth_m[p], plain.depth_m[p]) << p;
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(grid.radiance[p * 3 + c], plain.radiance[p * 3 + c]) << p;
+    }
+    // Some rays interpolated, some refined beyond the coarse lattice (21 x 9 rays), clouds met.
+    EXPECT_LT(marched, dirs.size() * 3 / 4);
+    EXPECT_GT(marched, std::size_t(21 * 9));
+    EXPECT_GT(cloudy, std::size_t(20));
+    std::vector<int> visits(dirs.size(), 0);
+    // for_each_interpolated runs in parallel; each pixel is visited once, so the writes
+    // to visits[p] do not race.
+    g.for_each_interpolated([&](std::size_t p, const std::size_t q[4], const double w[4]) {
+        ++visits[p];
+        double sum_w = 0.0, T = 0.0;
+        float lo = 2.0f, hi = -1.0f;
+        for (int a = 0; a < 4; ++a) {
+            EXPECT_TRUE(g.marched[q[a]]) << p;
+            EXPECT_GE(w[a], 0.0);
+            sum_w += w[a];
+            T += w[a] * grid.transmittance[q[a]];
+            lo = std::min(lo, grid.transmittance[q[a]]);
+            hi = std::max(hi, grid.transmittance[q[a]]);
+        }
+        EXPECT_NEAR(sum_w, 1.0, 1e-12);
+        EXPECT_NEAR(grid.transmittance[p], T, 1e-6);
+        EXPECT_GE(grid.transmittance[p], lo - 1e-6f);
+        EXPECT_LE(grid.transmittance[p], hi + 1e-6f);
+    });
+    for (std::size_t p = 0; p < dirs.size(); ++p) EXPECT_EQ(visits[p], g.marched[p] ? 0 : 1) << p;
+    // A block is left unsplit only at the finest size or where its corners agree.
+    for (const auto& b : g.blocks) EXPECT_TRUE(b.x1 > b.x0 || b.y1 > b.y0);
+}
+
+// Tolerances 0 and a finest block of one pixel split every block whose corners differ in
+// any way: the pass is the plain march. A deck over the whole view: every ray differs.
+TEST(CloudUpsampling, ZeroTolerancesAreThePlainMarch) {
+    const int W = 48, H = 20;
+    const HomogeneousBox deck({-1e6, -1e6, 1000.0}, {1e6, 1e6, 1400.0}, 0.01);
+    const auto dirs = sky_grid(W, H);
+    const CloudResult plain = render_clouds(deck, light(), glm::dvec3(0.0), dirs, quick());
+    const CloudResult grid =
+        render_clouds_grid(deck, light(), glm::dvec3(0.0), dirs, W, quick(), settings(8, 1, 0.0, 0.0, 1e7));
+    EXPECT_EQ(grid.radiance, plain.radiance);
+    EXPECT_EQ(grid.transmittance, plain.transmittance);
+    EXPECT_EQ(grid.depth_m, plain.depth_m);
+}
+
+TEST(CloudUpsampling, ThreadCountDoesNotMatter) {
+    const int W = 96, H = 40;
+    const ProceduralClouds layer(CloudLayerParams{});
+    const auto dirs = sky_grid(W, H);
+    const CloudUpsampling up = settings(8, 2, 0.1, 0.3, 500.0);
+    CloudResult one;
+    tbb::task_arena(1).execute(
+        [&] { one = render_clouds_grid(layer, light(), glm::dvec3(0.0), dirs, W, quick(), up); });
+    const CloudResult many = render_clouds_grid(layer, light(), glm::dvec3(0.0), dirs, W, quick(), up);
+    EXPECT_EQ(one.radiance, many.radiance);
+    EXPECT_EQ(one.transmittance, many.transmittance);
+    EXPECT_EQ(one.depth_m, many.depth_m);
+    EXPECT_EQ(one.interpolation.marched, many.interpolation.marched);
+}
+
+// With tolerances 1 every block's corners agree; only the block-size limit splits. The
+// deck 1 km up is seen 1 to 27 km away: a limit of 0 splits every block down to the
+// finest, no limit splits none, and 2 km splits the far blocks (low elevations: the
+// bottom block, 24 to 3 degrees, spans about 8 km at its farthest corner) and not the
+// near ones (the top block, 87 to 66 degrees, about 0.5 km).
+TEST(CloudUpsampling, BlockSizeLimitSplitsBlocksWiderThanItAtTheirCloud) {
+    const int W = 64, H = 33;
+    const HomogeneousBox deck({-1e6, -1e6, 1000.0}, {1e6, 1e6, 1400.0}, 0.01);
+    const auto dirs = sky_grid(W, H);
+    const auto marched_rows = [&](double limit) {
+        const CloudResult r = render_clouds_grid(deck, light(), glm::dvec3(0.0), dirs, W, quick(),
+                                                 settings(8, 2, 1.0, 1.0, limit));
+        std::vector<int> per_row(H, 0);
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) per_row[j] += r.interpolation.marched[std::size_t(j) * W + i];
+        return per_row;
+    };
+    const std::vector<int> none = marched_rows(1e7), all = marched_rows(0.0), some = marched_rows(2000.0);
+    int n_none = 0, n_all = 0;
+    for (int j = 0; j < H; ++j) n_none += none[j], n_all += all[j];
+    EXPECT_EQ(n_none, 9 * 5);   // the coarse lattice alone: columns 0, 8, .., 56, 63; rows 0, 8, .., 32
+    EXPECT_EQ(n_all, 17 * 33);  // every even row, and in it every even column and the last
+    EXPECT_EQ(some[4], 0);      // the top block's middle row: not split
+    EXPECT_EQ(some[28], 33);    // the bottom block's: split to the finest
+}
+
+TEST(CloudUpsampling, BadSettingsNameTheParameter) {
+    const auto dirs = sky_grid(8, 4);
+    const HomogeneousBox deck({-1e3, -1e3, 1000.0}, {1e3, 1e3, 1400.0}, 0.01);
+    const auto parameter = [&](const CloudUpsampling& up) {
+        try {
+            render_clouds_grid(deck, light(), glm::dvec3(0.0), dirs, 8, quick(), up);
+        } catch (const InvalidArgument& e) {
+            return e.parameter();
+        }
+        return std::string("none");
+    };
+    EXPECT_EQ(parameter(settings(17, 2, 0.1, 0.3, 500.0)), "stride");
+    EXPECT_EQ(parameter(settings(-1, 2, 0.1, 0.3, 500.0)), "stride");
+    EXPECT_EQ(parameter(settings(8, 0, 0.1, 0.3, 500.0)), "finest");
+    EXPECT_EQ(parameter(settings(8, 2, 1.5, 0.3, 500.0)), "transmittance_tolerance");
+    EXPECT_EQ(parameter(settings(8, 2, 0.1, std::nan(""), 500.0)), "radiance_tolerance");
+    EXPECT_EQ(parameter(settings(8, 2, 0.1, 0.3, -1.0)), "max_block_size_m");
+    EXPECT_EQ(parameter(settings(8, 2, 0.1, 0.3, 500.0)), "none");
+}
