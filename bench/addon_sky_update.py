@@ -2,7 +2,11 @@
 beside the time Blender spends preparing its own Nishita sky for a render, in one run.
 
     blender -b --factory-startup --python-use-system-env --python bench/addon_sky_update.py \
-        [-- --repeats 7 --width 2048]
+        [-- --repeats 7 --width 2048 [--clouds]]
+
+--clouds adds one cloud layer at the panel's defaults to the world first: the update is then
+the cloudy sky (the core's upsampled cloud pass, docs/validation.md "Speed of a cloudy sky")
+and the lamp's cloud shadow.
 
 The add-on is installed from its zip as in the tests (tests/blender/addon_testing.py; a
 temporary scripts directory, the machine's Blender configuration untouched). Measured,
@@ -33,6 +37,7 @@ argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 parser = argparse.ArgumentParser()
 parser.add_argument("--repeats", type=int, default=7)
 parser.add_argument("--width", type=int, default=2048)
+parser.add_argument("--clouds", action="store_true", help="one cloud layer at the panel's defaults")
 args = parser.parse_args(argv)
 
 addon, welkin = T.install_addon()
@@ -40,6 +45,9 @@ from welkin.blender import update  # noqa: E402
 
 scene, sun = T.new_scene(30.0, 45.0, resolution=str(args.width))
 T.panoramic_camera(scene, 8, 4, samples=1)
+if args.clouds:
+    layer = scene.world.welkin_clouds.layers.add()
+    layer.name = "Bench Layer"
 bpy.ops.welkin.update_sky()  # the first update creates images and nodes
 elevations = [10.0 + 40.0 * k / max(1, args.repeats - 1) for k in range(args.repeats)]
 
@@ -88,7 +96,8 @@ for e in elevations:
 med = statistics.median
 c = med(constant)
 rows = [
-    (f"welkin: lamp rotation -> new world image {args.width}x{args.width // 2} ({method})",
+    (f"welkin: lamp rotation -> new world image {args.width}x{args.width // 2} ({method}"
+     f"{', one cloud layer' if args.clouds else ''})",
      med(total)),
     ("  of which the module (sky + sun and disc model)", med(module_share)),
     ("  of which Blender (pixels into the image, nodes, lamp)", med(total) - med(module_share)),

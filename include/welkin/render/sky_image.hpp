@@ -45,6 +45,10 @@
 // the passes take it (the air's sunlit-surface RGB T(0, d_c) times the RGB cloud radiance,
 // aerial_perspective.hpp); in spectral output per wavelength (T(lambda) L_c(lambda)). Where
 // there is no air (T = 1, S = 0) this is the plain premultiplied "over" L_sky T_c + L_c.
+// The cloud pass is upsampled (cloud_upsampling, lighting.hpp: by default one marched ray
+// per 1.4 degrees, refined where the clouds have edges): the air is marched for the marched
+// rays only, and each other pixel's cloud term T(0, d_c) L_c + (1 - T_c) S(0, d_c) is
+// interpolated from its block's corners, as its T_c and L_c are.
 // The cloud's depth extent is collapsed to d_c (the air inside one cloud is left out). The
 // sun's disc is dimmed by T_c of its pixels. A procedural layer should be built with
 // origin_altitude_m equal to the observer's altitude (the density source does not know
