@@ -76,6 +76,7 @@ struct Trapezoid {
 struct TypeShape {
     Trapezoid gradient;
     double towers, base_erosion, stretch, curl;
+    double fibres;  // how much the detail noise shapes the whole cloud, not only its edges
 };
 const TypeShape& shape_of(CloudType t) {
     // cumulus: a flat base (steep rise, no erosion at the bottom), towers over half the
@@ -85,11 +86,11 @@ const TypeShape& shape_of(CloudType t) {
     // stratus: a low, uniform grey sheet with faint, stretched undulations;
     // cirrus: thin high streaks, strongly stretched, fibrous (strong curl).
     static const TypeShape shapes[] = {
-        {{0.0, 0.04, 0.45, 1.0}, 0.6, 0.12, 1.0, 0.3},   // cumulus
-        {{0.0, 0.12, 0.5, 0.95}, 0.25, 0.05, 1.6, 0.3},  // stratocumulus
-        {{0.0, 0.25, 0.55, 0.95}, 0.2, 0.0, 1.0, 0.4},   // altocumulus
-        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 2.5, 0.2},     // stratus
-        {{0.0, 0.3, 0.45, 1.0}, 0.3, 0.0, 8.0, 0.8},     // cirrus
+        {{0.0, 0.04, 0.45, 1.0}, 0.6, 0.12, 1.0, 0.3, 0.0},   // cumulus
+        {{0.0, 0.12, 0.5, 0.95}, 0.25, 0.05, 1.6, 0.3, 0.0},  // stratocumulus
+        {{0.0, 0.25, 0.55, 0.95}, 0.2, 0.0, 1.0, 0.4, 0.0},   // altocumulus
+        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0},     // stratus
+        {{0.0, 0.3, 0.45, 1.0}, 0.3, 0.0, 8.0, 0.8, 1.0},     // cirrus
     };
     return shapes[static_cast<int>(t)];
 }
@@ -143,13 +144,13 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
             break;
         case CloudType::stratus:
             p.bottom_altitude_m = 400.0, p.top_altitude_m = 900.0, p.coverage = 0.9, p.density_per_m = 0.04;
-            p.base_scale_m = 15000.0, p.detail_scale_m = 2000.0, p.weather_scale_m = 60000.0;
-            p.detail_strength = 0.2, p.weather_variation = 0.3;
+            p.base_scale_m = 8000.0, p.detail_scale_m = 900.0, p.weather_scale_m = 60000.0;
+            p.detail_strength = 0.35, p.weather_variation = 0.3;
             break;
         case CloudType::cirrus:
             p.bottom_altitude_m = 8000.0, p.top_altitude_m = 9500.0, p.coverage = 0.3,
             p.density_per_m = 0.0025;
-            p.base_scale_m = 8000.0, p.detail_scale_m = 600.0, p.weather_scale_m = 60000.0;
+            p.base_scale_m = 8000.0, p.detail_scale_m = 400.0, p.weather_scale_m = 60000.0;
             p.detail_strength = 0.6, p.weather_variation = 0.6;
             break;
     }
@@ -343,7 +344,12 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     const double modifier = fbm_d + (1.0 - 2.0 * fbm_d) * clamp01d(10.0 * f);  // mix(fbm, 1 - fbm, .)
     const double fade = shape.base_erosion > 0.0 ? clamp01d(f / shape.base_erosion) : 1.0;
     const double e = kMaxErosion * p_.detail_strength * (1.0 - covered) * modifier * fade;
-    return clamp01d(remap(covered, e, 1.0, 0.0, 1.0));
+    const double eroded = clamp01d(remap(covered, e, 1.0, 0.0, 1.0));
+    if (shape.fibres <= 0.0) return eroded;
+    // Fibres: the (streak-stretched) detail noise thins the whole cloud into strands, dense
+    // where it is high and clear where it is low, not only at the edges.
+    const double strands = clamp01d(remap(fbm_d, 0.4, 0.65, 0.0, 1.0));
+    return eroded * (1.0 - shape.fibres * p_.detail_strength * (1.0 - strands));
 }
 
 // The shell between the bottom and top spheres, the ray stopped by the ground: the part of

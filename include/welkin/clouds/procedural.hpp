@@ -31,8 +31,11 @@
 //       shapes edges and leaves no isolated specks:
 //       density = clamp(remap(covered, e, 1, 0, 1)), e = kMaxErosion detail_strength
 //       (1 - covered) modifier;
+//   fibres (cirrus): the streak-stretched detail noise thins the whole cloud into strands,
+//       density *= 1 - fibres detail_strength (1 - clamp(remap(fbm_d, 0.4, 0.65, 0, 1)));
 //   sigma_t = density_per_m * density.
-// Every remap keeps values <= its input when the input is <= 1, so density <= 1: the
+// Every remap keeps values <= its input when the input is <= 1, and the fibres' factor is
+// in [0, 1], so density <= 1: the
 // majorant is density_per_m on the shell.
 //
 // Coverage means coverage: `coverage` is the share of the ground's area over which the
