@@ -27,10 +27,10 @@ constexpr double kConservative = 3e-12;  // k^2 below this: albedo' = 1 to 1e-12
 
 }  // namespace
 
-DiffuseField eddington_slab(double Z, double z, double albedo, double mu0) {
+DiffuseField eddington_slab(double Z, double z, double albedo, double mu0, double leak) {
     Z = std::max(Z, 0.0);
     z = std::clamp(z, 0.0, Z);
-    const double k2 = 3.0 * (1.0 - albedo);
+    const double k2 = 3.0 * (1.0 - albedo) + leak;
     if (k2 < kConservative) return conservative_slab(Z, z, mu0, std::exp(-z / mu0), std::exp(-Z / mu0));
     // phi = A e^{-kz} + B e^{-k(Z-z)} + P(z), P a particular solution; the faces give
     //   A p + B m = -(P(0) - (2/3) P'(0)),   A m + B p = -(P(Z) + (2/3) P'(Z)),
@@ -73,23 +73,36 @@ SimilarityScaling::SimilarityScaling(double a, double g) {
     albedo = depth_scale > 0.0 ? (1.0 - forward) * a / depth_scale : 1.0;
 }
 
-double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g,
-                  double p, double p2) {
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side, double nu,
+                  double g, double p, double p2) {
     const double single = std::exp(-tau_sun);
     const double ts = sim.depth_scale * tau_sun, T = sim.depth_scale * (tau_sun + tau_anti);
+    // The sides (header): the fundamental transverse mode's buckling across the chord's
+    // scaled width W' between extrapolated boundaries, B = pi / (W' + 4/3).
+    const double Bw = std::isfinite(tau_side) ? kPi / (sim.depth_scale * tau_side + 4.0 / 3.0) : 0.0;
+    const double leak = Bw * Bw;
     // The orientation average (see the header): int_0^1 2 mu0 f(mu0) dmu0 = int_0^1 f(sqrt(v)) dv,
     // by 3-point Gauss-Legendre in v = mu0^2 (exact for f polynomial of degree 5 in v).
     // Nodes v = 1/2 -+ sqrt(3/5) / 2, 1/2; weights 5/18, 8/18, 5/18.
     static constexpr std::array<double, 3> w = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
     // mu = sqrt(v):
     static constexpr std::array<double, 3> mu = {0.3357106870197288, 0.7071067811865476, 0.9419651451198934};
-    const bool conservative = 3.0 * (1.0 - sim.albedo) < kConservative;
-    const double beam_t = std::exp(-ts), beam_T = conservative ? std::exp(-T) : 0.0;  // the scaled beam
+    const double beam_t = std::exp(-ts), beam_T = std::exp(-T);  // the scaled beam
+    // The slab's diffuse source towards the viewer at inclination i, with the leak k2_extra.
+    const auto slab = [&](int i, double k2_extra) {
+        const DiffuseField d = 3.0 * (1.0 - sim.albedo) + k2_extra < kConservative
+                                   ? conservative_slab(mu[i] * T, mu[i] * ts, mu[i], beam_t, beam_T)
+                                   : eddington_slab(mu[i] * T, mu[i] * ts, sim.albedo, mu[i], k2_extra);
+        return std::max(0.0, d.fluence + 3.0 * g * d.flux * mu[i] * nu);
+    };
+    // The higher modes' share at depth t' (the header's blend); below 1e-4 of the difference
+    // it is left out.
+    const double near = std::exp(-3.0 * Bw * ts);
     double diffuse = 0.0;
     for (int i = 0; i < 3; ++i) {
-        const DiffuseField d = conservative ? conservative_slab(mu[i] * T, mu[i] * ts, mu[i], beam_t, beam_T)
-                                            : eddington_slab(mu[i] * T, mu[i] * ts, sim.albedo, mu[i]);
-        diffuse += w[i] * std::max(0.0, d.fluence + 3.0 * g * d.flux * mu[i] * nu);
+        double v = slab(i, leak);
+        if (leak > 0.0 && near > 1e-4) v += (slab(i, 0.0) - v) * near;
+        diffuse += w[i] * v;
     }
     const double forward = (beam_t - single) * p2;
     return single * p + forward + diffuse / (4.0 * kPi);

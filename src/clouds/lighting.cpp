@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include <fmt/format.h>
@@ -56,6 +57,8 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 
 namespace {
 
+constexpr int kSideLevels = 3;  // the side grids' levels above the sun grid's
+
 // The march of every ray (grid_width == 0), or of a grid of rays (rows of grid_width) with
 // upsampling (the header's render_clouds_grid).
 CloudResult march(const CloudDensity& density, const CloudIllumination& light,
@@ -107,7 +110,16 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
     const double h0 =
         options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m : 2.0 * density.feature_size_m();
     const bool ambient_decay = options.ambient_steps > 0 && kappa > 0.0;
-    std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid;
+    std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid, side_grid, back_grid;
+    // The cloud's chord across the sun line, for the diffusion's sides (diffusion.hpp): along
+    // the horizontal direction normal to the sun (x where the sun is at the zenith), both
+    // ways, on a grid three levels coarser than the sun's (the chord is a large-scale
+    // quantity: it sets the leak, not the shading's detail).
+    const glm::dvec3 across = [&] {
+        const glm::dvec3 c = glm::cross(s, glm::dvec3(0.0, 0.0, 1.0));
+        return glm::length(c) > 1e-6 ? glm::normalize(c) : glm::dvec3(1.0, 0.0, 0.0);
+    }();
+    const bool sides = options.sides;
     // Orders >= 2: the delta-Eddington slab along the sun line (cloud_diffusion.hpp) or
     // the octaves; either way octaves = 1 is single scattering.
     const bool diffusion = options.multiple_scattering == CloudMultipleScattering::diffusion && octaves > 1;
@@ -120,6 +132,14 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
             anti_grid = std::make_unique<OpticalDepthGrid>(
                 density, [s](const glm::dvec3&) { return -s; }, h0, options.light_distance_m,
                 options.light_steps);
+        if (diffusion && sides) {
+            side_grid = std::make_unique<OpticalDepthGrid>(
+                density, [across](const glm::dvec3&) { return across; }, h0, options.light_distance_m,
+                options.light_steps);
+            back_grid = std::make_unique<OpticalDepthGrid>(
+                density, [across](const glm::dvec3&) { return -across; }, h0, options.light_distance_m,
+                options.light_steps);
+        }
         if (ambient_decay)
             sky_grid = std::make_unique<OpticalDepthGrid>(
                 density, [&light](const glm::dvec3& p) { return light.zenith(p); }, h0,
@@ -130,11 +150,12 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
         std::vector<MajorantSegment> segs, light_segs;
         std::vector<float> sun, sky;
         std::vector<double> acc;
-        OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor;
+        OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor, side_cursor, back_cursor;
     };
     // Marches ray r into the result.
     const auto march_ray = [&](std::size_t r, Scratch& scratch) {
-        auto& [segs, light_segs, sun, sky, acc, sun_cursor, sky_cursor, anti_cursor] = scratch;
+        auto& [segs, light_segs, sun, sky, acc, sun_cursor, sky_cursor, anti_cursor, side_cursor,
+               back_cursor] = scratch;
         sun.resize(nc), sky.resize(nc), acc.resize(nc);
         {
             const glm::dvec3 d = glm::normalize(directions[r]);
@@ -147,6 +168,7 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
             if (!(total > 0.0)) return;
             const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
             const int sun_level = sun_grid ? sun_grid->level_for(dt_target) : 0;
+            const int side_level = std::min(sun_level + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
             PathRng rng(options.seed, first_ray_index + r, 0, 0x636c6f7564ULL);
             const double u = options.jitter ? rng.uniform() : 0.5;
             // Phase values of the octaves: nu = d . s is the same at every sample.
@@ -190,7 +212,18 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
                     double sun_w = 0.0;
                     if (diffusion) {
                         // Single scattering plus the forward-scattered and diffuse parts.
-                        sun_w = sun_source(similarity, tau_sun, tau_anti, nu, mean_g, phase[0], phase2);
+                        double tau_side = std::numeric_limits<double>::infinity();
+                        if (sides)
+                            tau_side =
+                                side_grid
+                                    ? side_grid->tau(x, side_level, side_cursor) +
+                                          back_grid->tau(x, side_level, back_cursor)
+                                    : march_optical_depth(density, {x, across}, options.light_distance_m,
+                                                          options.light_steps, light_segs) +
+                                          march_optical_depth(density, {x, -across}, options.light_distance_m,
+                                                              options.light_steps, light_segs);
+                        sun_w =
+                            sun_source(similarity, tau_sun, tau_anti, tau_side, nu, mean_g, phase[0], phase2);
                     } else {
                         const double f = sized ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
                         double fi = 1.0;

@@ -194,7 +194,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
             li, "clouds.lighting",
             {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "multiple_scattering",
              "octaves", "octave_extinction", "octave_contribution", "octave_eccentricity",
-             "min_transmittance", "seed", "jitter", "max_distance_m", "shadow_grid_spacing_m"});
+             "min_transmittance", "seed", "jitter", "max_distance_m", "shadow_grid_spacing_m", "sides"});
         CloudLightingOptions& o = out.lighting;
         const auto geti = [&](const char* key, int& v) {
             if (li.contains(key)) v = integer(li[key], p + key);
@@ -223,6 +223,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
         getd("min_transmittance", o.min_transmittance);
         if (li.contains("seed")) o.seed = unsigned_integer(li["seed"], p + "seed");
         if (li.contains("jitter")) o.jitter = boolean(li["jitter"], p + "jitter");
+        if (li.contains("sides")) o.sides = boolean(li["sides"], p + "sides");
         getd("max_distance_m", o.max_distance_m);
         getd("shadow_grid_spacing_m", o.shadow_grid_spacing_m);
     }
@@ -293,7 +294,8 @@ ordered_json clouds_json(const SceneClouds& c) {
                      {"seed", o.seed},
                      {"jitter", o.jitter},
                      {"max_distance_m", o.max_distance_m},
-                     {"shadow_grid_spacing_m", o.shadow_grid_spacing_m}};
+                     {"shadow_grid_spacing_m", o.shadow_grid_spacing_m},
+                     {"sides", o.sides}};
     j["upsampling"] = {{"stride", c.upsampling.stride},
                        {"finest", c.upsampling.finest},
                        {"transmittance_tolerance", c.upsampling.transmittance_tolerance},

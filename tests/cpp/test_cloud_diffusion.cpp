@@ -3,6 +3,7 @@
 // against the path-tracing reference on a thick conservative slab.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <tuple>
 
@@ -85,6 +86,58 @@ TEST(EddingtonSlab, ConservesEnergyAndIsLinearDeepInside) {
     EXPECT_GT(at, 0.0);
     EXPECT_NEAR(at, eddington_slab(5.0, 2.0, ar + 1e-7, 0.9).fluence, 1e-6 * at);
     EXPECT_NEAR(at, eddington_slab(5.0, 2.0, ar - 1e-7, 0.9).fluence, 1e-6 * at);
+}
+
+// The sides (cloud_diffusion.hpp): with the transverse buckling B^2 the slab still solves
+// its ODE, phi'' = (k^2 + B^2) phi - 3 albedo e^{-z/mu0}, and its energy balance gains the
+// light leaked through the sides, int (B^2 / 3) phi dz (a 40000-interval midpoint rule):
+// for albedo 1, R + T + leaked = mu0. The leak only removes light.
+TEST(EddingtonSlab, SidesLeakTheirShareOfTheLight) {
+    for (double mu0 : {1.0, 0.5})
+        for (double Z : {0.5, 4.0, 30.0})
+            for (double leak : {0.01, 0.3, 2.0}) {
+                const DiffuseField top = eddington_slab(Z, 0.0, 1.0, mu0, leak),
+                                   bot = eddington_slab(Z, Z, 1.0, mu0, leak);
+                EXPECT_NEAR(top.fluence, -2.0 * top.flux, 1e-9 * (std::abs(top.fluence) + 1e-3));
+                EXPECT_NEAR(bot.fluence, 2.0 * bot.flux, 1e-9 * (std::abs(bot.fluence) + 1e-3));
+                double leaked = 0.0;
+                const int n = 40000;
+                for (int i = 0; i < n; ++i) {
+                    const double z = (i + 0.5) * Z / n;
+                    const double phi = eddington_slab(Z, z, 1.0, mu0, leak).fluence;
+                    EXPECT_LE(phi, eddington_slab(Z, z, 1.0, mu0).fluence + 1e-12) << Z << " " << leak;
+                    leaked += leak / 3.0 * phi * Z / n;
+                }
+                EXPECT_NEAR(-top.flux + bot.flux + mu0 * std::exp(-Z / mu0) + leaked, mu0, 1e-6)
+                    << mu0 << " " << Z << " " << leak;
+                const double h = 1e-4, z = 0.4 * Z;
+                const DiffuseField a = eddington_slab(Z, z - h, 1.0, mu0, leak),
+                                   c = eddington_slab(Z, z, 1.0, mu0, leak),
+                                   b = eddington_slab(Z, z + h, 1.0, mu0, leak);
+                const double rhs = leak * c.fluence - 3.0 * std::exp(-z / mu0);
+                EXPECT_NEAR((a.fluence - 2.0 * c.fluence + b.fluence) / (h * h), rhs,
+                            2e-4 * (std::abs(rhs) + 1.0));
+            }
+}
+
+// The source with sides: an infinite chord is the slab; a wide cloud (chord 1e9) is the
+// slab to rounding; deep in a cloud the source falls as the chord narrows; at the lit face
+// the higher modes hold the slab's value (the blend's weight is 1 there).
+TEST(CloudDiffusion, SidesVanishForWideCloudsAndDarkenNarrowOnes) {
+    const SimilarityScaling sim(1.0, 0.85);
+    const double nu = 0.2, p = 0.1, p2 = 0.12, inf = std::numeric_limits<double>::infinity();
+    for (double ts : {0.0, 3.0, 30.0}) {
+        const double slab = sun_source(sim, ts, 20.0, inf, nu, 0.85, p, p2);
+        EXPECT_NEAR(sun_source(sim, ts, 20.0, 1e9, nu, 0.85, p, p2), slab, 1e-9 * slab);
+    }
+    double last = sun_source(sim, 30.0, 20.0, inf, nu, 0.85, p, p2);
+    for (double chord : {1e3, 100.0, 30.0, 10.0, 3.0}) {
+        const double v = sun_source(sim, 30.0, 20.0, chord, nu, 0.85, p, p2);
+        EXPECT_LT(v, last) << chord;
+        last = v;
+    }
+    EXPECT_NEAR(sun_source(sim, 0.0, 20.0, 3.0, nu, 0.85, p, p2),
+                sun_source(sim, 0.0, 20.0, inf, nu, 0.85, p, p2), 1e-12);
 }
 
 // A thick conservative slab (tau = 16 vertically, wide enough to be infinite), lit by the

@@ -78,7 +78,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
       "lighting": {"max_steps": 64, "light_steps": 6, "ambient_steps": 2, "light_distance_m": 3000,
                    "multiple_scattering": "octaves", "octaves": 3, "octave_extinction": 0.4, "octave_contribution": 0.6,
                    "octave_eccentricity": 0.7, "min_transmittance": 0.01, "seed": 3,
-                   "jitter": false, "max_distance_m": 5e5},
+                   "jitter": false, "max_distance_m": 5e5, "sides": false},
       "upsampling": {"stride": 4, "finest": 1, "transmittance_tolerance": 0.05, "radiance_tolerance": 0.2,
                      "max_block_size_m": 800}})");
     const SceneDescription s = SceneDescription::from_json_string(text);
@@ -130,6 +130,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     EXPECT_EQ(o.seed, 3u);
     EXPECT_FALSE(o.jitter);
     EXPECT_EQ(o.max_distance_m, 5e5);
+    EXPECT_FALSE(o.sides);
     const CloudUpsampling& u = c.upsampling;
     EXPECT_EQ(u.stride, 4);
     EXPECT_EQ(u.finest, 1);
@@ -205,6 +206,7 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"scattering": {"g_forward": 1}})"), "clouds.scattering.g_forward");
     EXPECT_EQ(bad(R"({"lighting": {"max_steps": 0}})"), "clouds.lighting.max_steps");
     EXPECT_EQ(bad(R"({"lighting": {"jitter": 1}})"), "clouds.lighting.jitter");
+    EXPECT_EQ(bad(R"({"lighting": {"sides": "yes"}})"), "clouds.lighting.sides");
     EXPECT_EQ(bad(R"({"lighting": {"multiple_scattering": "wrenninge"}})"),
               "clouds.lighting.multiple_scattering");
     EXPECT_EQ(bad(R"({"lighting": {"steps": 1}})"), "clouds.lighting.steps");

@@ -63,9 +63,28 @@
 //     exp(-tau_sun) p(nu) + (exp(-tau'_sun) - exp(-tau_sun)) p2(nu) + (phi + 3 g F nu)/(4 pi E).
 // Limits: in an optically thin cloud parts 2 and 3 are O(tau) of part 1, as second-order
 // scattering is; in a thick conservative one part 3 is the linear diffusion profile and
-// does not vanish at depth. Not modelled: light leaving through the cloud's sides (the
-// slab is infinite across the sun line, so small, round clouds come out too bright at
-// depth), the sky's share of multiple scattering (its own term, cloud_lighting.hpp).
+// does not vanish at depth.
+//
+// The sides. The slab above is infinite across the sun line, so light that would leave a
+// small, round cloud sideways stays in it: such a cloud came out a third too bright on its
+// shadow side. Across the sun line the cloud has, along one transverse axis u (the
+// horizontal normal to the sun, the one the march measures), a scaled optical chord W'
+// through x. Diffusion in a body finite along u separates into transverse modes
+// cos(n pi w / W_e) between the extrapolated boundaries (W_e = W' + 4/3, the same Marshak
+// extrapolation of 2/3 at each side); mode n obeys the slab equation with the extra
+// "buckling" B_n^2 = (n pi / W_e)^2 added to k^2: light lost through the sides acts as an
+// absorption (the fundamental-mode treatment of reactor theory; e.g. Duderstadt &
+// Hamilton 1976, "Nuclear Reactor Analysis", ch. 5). The fundamental mode, B = pi / W_e,
+// is what remains deep in the cloud; the higher modes (n >= 3) decay within about
+// 1 / (3 B) of the lit face, where the slab without leak holds. So
+//     phi = phi_B + (phi_0 - phi_B) exp(-3 B t'),
+// phi_B the slab with k^2 + B^2, phi_0 without, t' the scaled depth from the lit face;
+// each inclination of the orientation average the same way. The other transverse axis is
+// left infinite, as before: the march measures one chord, and a cloud wider than it leaks
+// less, not more. W' infinite (no cloud across) is the slab itself. The leak and the blend
+// follow from the mode expansion; nothing is fitted. What it buys is measured in
+// docs/validation.md ("Under the add-on's own lighting"). Not modelled: the sky's share of
+// multiple scattering (its own term, cloud_lighting.hpp).
 #pragma once
 
 namespace welkin {
@@ -78,7 +97,8 @@ struct DiffuseField {
     double fluence = 0.0;  // phi / E
     double flux = 0.0;     // F / E along the slab's normal, positive into the slab
 };
-DiffuseField eddington_slab(double Z, double z, double albedo, double mu0 = 1.0);
+// leak: the transverse buckling B^2 added to k^2 (the sides, above); 0 for the slab.
+DiffuseField eddington_slab(double Z, double z, double albedo, double mu0 = 1.0, double leak = 0.0);
 
 // The similarity-scaled medium of a cloud's albedo and phase mean cosine g (part 2 above).
 struct SimilarityScaling {
@@ -89,9 +109,10 @@ struct SimilarityScaling {
 };
 
 // The source of sun light above per unit sigma_s E (parts 1, 2 and 3), for the sun-line
-// depths tau_sun, tau_anti (unscaled), nu = d . s, g the phase's mean cosine, p the phase
-// and p2 the twice-scattered phase at nu.
-double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double nu, double g,
-                  double p, double p2);
+// depths tau_sun, tau_anti (unscaled), the chord tau_side across the sun line (unscaled;
+// infinity: no sides), nu = d . s, g the phase's mean cosine, p the phase and p2 the
+// twice-scattered phase at nu.
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side, double nu,
+                  double g, double p, double p2);
 
 }  // namespace welkin

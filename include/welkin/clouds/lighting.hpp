@@ -47,10 +47,13 @@
 //    scaling tau' = (1 - albedo g) tau, the twice-scattered phase p2), and Eddington's
 //    diffuse field of the scaled slab, averaged over the slab's unknown inclination: the
 //    diffuse light falls off linearly with depth, as diffusion theory has it, where the
-//    octaves below vanish. No fitted parameter. Its error against the reference (bench/clouds) and
-//    against Cycles (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"); a small
-//    round cloud comes out too bright, since the slab has no sides for light to leave by.
-//    octaves = 1 is single scattering in either mode.
+//    octaves below vanish. With `sides` (the default) the slab is finite across the sun
+//    line: the cloud's chord tau_side along the horizontal normal to the sun (both ways,
+//    a third and fourth grid, three levels coarser) makes the diffuse light leak through
+//    its sides (cloud_diffusion.hpp, "The sides"). No fitted parameter. Its error against
+//    the reference (bench/clouds, bench/clouds/lighting_vs_reference.py) and against Cycles
+//    (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"). octaves = 1 is single
+//    scattering in either mode.
 //  * The octaves (multiple_scattering = octaves): Wrenninge et al. 2013 ("Oz: the great
 //    and volumetric", SIGGRAPH talk; also Wrenninge 2015, "Art-directable multiple
 //    volumetric scattering", SIGGRAPH talk): with a, b, c in (0, 1],
@@ -131,8 +134,9 @@ struct CloudLightingOptions {
     double octave_contribution = 0.5;  // b, (0, 1]
     double octave_eccentricity = 0.5;  // c, (0, 1]
     bool octave_optical_size = true;   // scale octave i by (1 - exp(-tau_line))^i (see above)
-    double min_transmittance = 1e-3;   // early termination, [0, 1)
-    double tail_transmittance = 0.1;   // below it, longer view steps (see above), [0, 1]; 0: off
+    bool sides = true;  // diffusion: light leaks through the cloud's sides across the sun line (above)
+    double min_transmittance = 1e-3;  // early termination, [0, 1)
+    double tail_transmittance = 0.1;  // below it, longer view steps (see above), [0, 1]; 0: off
     std::uint64_t seed = 1;
     bool jitter = true;           // false: samples at step midpoints
     double max_distance_m = 1e6;  // view rays end here, (0, 1e8]
