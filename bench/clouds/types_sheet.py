@@ -3,9 +3,10 @@ ground (looking 15 degrees up) and from above (12 km up, looking 30 degrees down
 the scene camera's plate (welkin.camera_plate, the WELKIN render engine's picture), tone
 mapped (exposure per type, x / (1 + x), sRGB gamma); the march at 48 view steps to keep it quick.
 
-    PYTHONPATH=build build/venv-charts/bin/python bench/clouds/types_sheet.py docs/clouds_types.png
+    PYTHONPATH=build /usr/bin/python3 bench/clouds/types_sheet.py docs/clouds_types.png
     ... --views ground --width 480 --types cumulus      # one type, to look at it
-(needs numpy and Pillow.)
+(needs numpy and Pillow: scripts/install_deps.sh installs Debian's python3-numpy, and
+python3-matplotlib brings python3-pil.)
 """
 import argparse
 import json
