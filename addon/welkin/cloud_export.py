@@ -29,7 +29,7 @@ from typing import Any
 CLOUD_TYPES = ("cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus")
 LAYER_FIELDS = ("cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage",
                 "density_per_m", "base_scale_m", "detail_scale_m", "weather_scale_m",
-                "detail_strength", "weather_variation")
+                "detail_strength", "weather_variation", "evolution_m")
 # The lighting fields the panel offers (cloud_lighting.hpp, CloudLightingOptions).
 LIGHTING_FIELDS = ("max_steps", "light_steps", "ambient_steps", "octaves")
 

@@ -103,10 +103,11 @@ constexpr double kStreakCos = 0.8660254037844386, kStreakSin = 0.5;
 constexpr double kMaxInternalCoverage = 4.0;
 
 // The calibration's cache: the internal coverage of every layer built so far, keyed by
-// everything that shapes the field but the wind (a shift does not change the share).
+// everything that shapes the field but the wind (a shift does not change the share; the
+// evolution, which changes the shapes, is in the key).
 std::mutex calibration_mutex;
 std::map<std::tuple<int, double, double, double, double, double, double, double, double, double,
-                    std::uint64_t, double, double>,
+                    std::uint64_t, double, double, double>,
          double>
     calibration_cache;
 
@@ -175,6 +176,9 @@ void CloudLayerParams::validate() const {
     require_in_range("weather_variation", weather_variation, 0.0, 1.0);
     require_finite("wind_offset_m[0]", wind_offset_m.x);
     require_finite("wind_offset_m[1]", wind_offset_m.y);
+    if (!(std::abs(evolution_m) <= 1e9))
+        throw InvalidArgument("evolution_m",
+                              fmt::format("must be finite, in [-1e9, 1e9] m, got {}", evolution_m));
     require_in_range("planet_radius_m", planet_radius_m, 1e3, 1e8, "m");
     require_in_range("origin_altitude_m", origin_altitude_m, 0.0, 1e6, "m");
 }
@@ -231,7 +235,7 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     const auto key = std::make_tuple(static_cast<int>(p_.cloud_type), p_.bottom_altitude_m, p_.top_altitude_m,
                                      p_.coverage, p_.density_per_m, p_.base_scale_m, p_.detail_scale_m,
                                      p_.weather_scale_m, p_.detail_strength, p_.weather_variation, p_.seed,
-                                     p_.planet_radius_m, p_.origin_altitude_m);
+                                     p_.planet_radius_m, p_.origin_altitude_m, p_.evolution_m);
     {
         std::lock_guard<std::mutex> lock(calibration_mutex);
         if (const auto it = calibration_cache.find(key); it != calibration_cache.end()) {
@@ -323,7 +327,7 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
     const double sq = std::sqrt(shape.stretch);
     const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
-    const double zb = (h - p_.bottom_altitude_m) * inv_base_;
+    const double zb = (h - p_.bottom_altitude_m + p_.evolution_m) * inv_base_;
     float b[2];  // the Perlin-Worley channel and fbm_w = 0.625 g + 0.25 b + 0.125 a
     base_.sample(along * inv_base_ / sq, across * inv_base_ * sq, zb, b);
     const double fbm_w = b[1];
@@ -337,7 +341,7 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     curl_.sample(x * inv_detail_ * 0.25, y * inv_detail_ * 0.25, 0.0, cu);
     const double amp = shape.curl * (1.0 - f);
     const double ax = kStreakCos * x + kStreakSin * y, ay = -kStreakSin * x + kStreakCos * y;
-    const double zd = (h - p_.bottom_altitude_m) * inv_detail_;
+    const double zd = (h - p_.bottom_altitude_m + p_.evolution_m) * inv_detail_;
     float fbm_d_f;  // 0.625 r + 0.25 g + 0.125 b of the detail texture
     detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1], zd, &fbm_d_f);
     const double fbm_d = fbm_d_f;

@@ -154,14 +154,16 @@ cloud type, wind). cloud_type is a preset name: "cumulus" (the default), "strato
 preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
 the ground; coverage the share of the ground's area under cloud (a column is cloudy when
 its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
-cloud (m^-1); origin_altitude_m the world origin's (observer's) altitude. ValueError
-names a bad parameter.
+cloud (m^-1); wind_offset_m carries the field (x, y in m) and evolution_m moves its noise
+through the layer's height (m): keyed over time the shapes change in place;
+origin_altitude_m the world origin's (observer's) altitude. ValueError names a bad
+parameter.
 )doc")
         .def(py::init([](const std::string& type, const py::object& bottom, const py::object& top,
                          const py::object& coverage, const py::object& density, const py::object& base_scale,
                          const py::object& detail_scale, const py::object& weather_scale,
                          const py::object& detail_strength, const py::object& weather_variation,
-                         const py::object& wind, std::uint64_t seed, double planet_radius,
+                         const py::object& wind, double evolution, std::uint64_t seed, double planet_radius,
                          double origin_altitude) {
                  CloudLayerParams p = CloudLayerParams::preset(cloud_type_from_name(type, "cloud_type"));
                  const auto set = [](const py::object& o, const char* name, double& v) {
@@ -184,6 +186,7 @@ names a bad parameter.
                  const c_array<double> w =
                      to_c_array<double>(wind, "wind_offset_m", 2, 1, 1, "two numbers (x, y) in m");
                  p.wind_offset_m = {w.data()[0], w.data()[1]};
+                 p.evolution_m = evolution;
                  p.seed = seed;
                  p.planet_radius_m = planet_radius;
                  p.origin_altitude_m = origin_altitude;
@@ -195,7 +198,8 @@ names a bad parameter.
              py::arg("density_per_m") = py::none(), py::arg("base_scale_m") = py::none(),
              py::arg("detail_scale_m") = py::none(), py::arg("weather_scale_m") = py::none(),
              py::arg("detail_strength") = py::none(), py::arg("weather_variation") = py::none(),
-             py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0), py::arg("seed") = CloudLayerParams{}.seed,
+             py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0), py::arg("evolution_m") = 0.0,
+             py::arg("seed") = CloudLayerParams{}.seed,
              py::arg("planet_radius_m") = CloudLayerParams{}.planet_radius_m,
              py::arg("origin_altitude_m") = CloudLayerParams{}.origin_altitude_m)
         .def_property_readonly(

@@ -118,7 +118,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
             json_check_keys(l, p,
                             {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "density_per_m",
                              "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
-                             "weather_variation", "wind_offset_m", "seed"});
+                             "weather_variation", "wind_offset_m", "evolution_m", "seed"});
             // The type's preset first (procedural.hpp), then the keys given override it.
             CloudLayerParams c;
             if (l.contains("cloud_type"))
@@ -136,6 +136,7 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
             get("weather_scale_m", c.weather_scale_m);
             get("detail_strength", c.detail_strength);
             get("weather_variation", c.weather_variation);
+            if (l.contains("evolution_m")) c.evolution_m = json_number(l["evolution_m"], p + ".evolution_m");
             if (l.contains("wind_offset_m")) {
                 const json& w = l["wind_offset_m"];
                 if (!w.is_array() || w.size() != 2)
@@ -262,6 +263,7 @@ ordered_json clouds_json(const SceneClouds& c) {
                           {"detail_strength", l.detail_strength},
                           {"weather_variation", l.weather_variation},
                           {"wind_offset_m", {l.wind_offset_m.x, l.wind_offset_m.y}},
+                          {"evolution_m", l.evolution_m},
                           {"seed", l.seed}});
     j["layers"] = layers;
     ordered_json volumes = ordered_json::array();

@@ -1,7 +1,8 @@
-"""A keyed wind offset moves the clouds in command-line animation renders (`blender -b
-file.blend -a`), in the Cycles world and in the Welkin engine.
+"""A keyed wind offset and evolution move and reshape the clouds in command-line animation
+renders (`blender -b file.blend -a`), in the Cycles world and in the Welkin engine.
 
-A cloud layer's wind offset is keyed (frame 1: 0 m, frame 2: 3 km along +X). The file is
+A cloud layer's wind offset is keyed (frame 1: 0 m, frame 2: 3 km along +X), and its
+evolution (frame 1: 0 m, frame 2: 400 m through the noise's height). The file is
 saved and rendered by a separate headless Blender with `-a` over frames 1-2, once with
 Cycles (a panoramic camera at the origin: the frame is the world's cloudy sky) and once
 with the Welkin engine (a camera looking along +X, 8 degrees up). Each frame must be that
@@ -13,7 +14,10 @@ frame's clouds:
     always moved the clouds): Cycles, rendered here from the world Update Sky made for
     that frame, same seed and samples: every pixel within 1e-3 relative (of max(value,
     1e-3 x the frame's mean)); Welkin, welkin.camera_plate on that frame's scene JSON
-    (the core call `welkin plate --scene` makes): within 1 %, as test_engine_animation.
+    (the core call `welkin plate --scene` makes): within 1 %, as test_engine_animation;
+  * the evolution's own share: Cycles' per-frame render of frame 2 with the evolution's
+    frame-2 key removed (the wind alone) differs from the `-a` frame by more than 1 % of
+    the peak, so the `-a` frame took the keyed evolution too.
 
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_wind_animation.py
@@ -46,6 +50,10 @@ layer.wind_offset_m = (0.0, 0.0)
 layer.keyframe_insert("wind_offset_m", frame=1)
 layer.wind_offset_m = (3000.0, 0.0)
 layer.keyframe_insert("wind_offset_m", frame=2)
+layer.evolution_m = 0.0
+layer.keyframe_insert("evolution_m", frame=1)
+layer.evolution_m = 400.0
+layer.keyframe_insert("evolution_m", frame=2)
 scene.frame_start, scene.frame_end = 1, 2
 scene.frame_set(1)
 check(tuple(layer.wind_offset_m) == (0.0, 0.0), f"keyed wind at frame 1: {layer.wind_offset_m[:]}")
@@ -91,6 +99,19 @@ for f, img in zip((1, 2), cycles):
     print(f"Cycles frame {f}: max relative difference from the per-frame render {err.max():.2e}")
     check(np.isfinite(img).all() and err.max() < 1e-3,
           f"Cycles frame {f}: differs from the frame_set render by {err.max():.3g}")
+
+# The evolution's share: frame 2 without its evolution key (the wind alone).
+layer.keyframe_delete("evolution_m", frame=2)
+scene.frame_set(2)
+check(layer.evolution_m == 0.0, f"evolution without its frame-2 key: {layer.evolution_m}")
+bpy.ops.welkin.update_sky()
+t.render_still(scene, t.TMP / "cycles_wind_only_2.exr")
+wind_only = t.read_rgb_exr(native, t.TMP / "cycles_wind_only_2.exr")
+d = float(np.abs(cycles[1] - wind_only).max() / np.abs(cycles[1]).max())
+print(f"Cycles frame 2: the keyed evolution changes it by {d:.3f} of the peak")
+check(d > 0.01, f"frame 2 with and without the keyed evolution differ by only {d:.2e} of the peak")
+layer.evolution_m = 400.0
+layer.keyframe_insert("evolution_m", frame=2)
 
 # --- The Welkin engine: the camera plate with the clouds.
 cam = scene.camera

@@ -153,6 +153,31 @@ TEST(ProceduralClouds, WindShiftsTheField) {
 // a frame shows, do not depend on the offset, nor on which offsets the process saw before
 // (the calibration is cached without the wind). A keyed wind rendered with `-a` must give
 // each frame what a render of that frame alone gives.
+// The evolution moves the noise through the layer's height: 300 m reshapes the field (not
+// a shift: the coverage stays the setting's), and the least common multiple of the base and
+// detail tiles (the only periodic lookups in height) brings it back to float rounding.
+TEST(ProceduralClouds, EvolutionReshapesInPlaceAndCycles) {
+    CloudLayerParams p;  // cumulus: base 5000 m, detail 700 m tiles
+    const ProceduralClouds still(p);
+    p.evolution_m = 300.0;
+    const ProceduralClouds moved(p);
+    p.evolution_m = 35000.0;
+    const ProceduralClouds cycled(p);
+    std::mt19937_64 gen(5);
+    std::uniform_real_distribution<double> U(-20e3, 20e3), Z(1250.0, 3150.0);
+    double diff = 0.0, mean = 0.0, worst_cycle = 0.0;
+    for (int i = 0; i < 4000; ++i) {
+        const glm::dvec3 x(U(gen), U(gen), Z(gen));
+        const double a = still.sigma_t(x), b = moved.sigma_t(x), c = cycled.sigma_t(x);
+        diff += std::abs(a - b);
+        mean += a;
+        worst_cycle = std::max(worst_cycle, std::abs(a - c));
+    }
+    EXPECT_GT(diff, 0.3 * mean);                       // reshaped
+    EXPECT_LT(worst_cycle, 1e-4 * p.density_per_m);    // cycled back
+    EXPECT_NEAR(moved.covered_fraction(), 0.4, 0.05);  // same coverage
+}
+
 TEST(ProceduralClouds, CoverageDoesNotDependOnTheWind) {
     CloudLayerParams p = tile_params();
     p.seed = 9103;  // a layer no other test builds: its calibration is made here
@@ -218,6 +243,7 @@ TEST(ProceduralClouds, RejectsBadParameters) {
     bad([](CloudLayerParams& p) { p.density_per_m = -1.0; }, "density_per_m");
     bad([](CloudLayerParams& p) { p.base_scale_m = std::nan(""); }, "base_scale_m");
     bad([](CloudLayerParams& p) { p.wind_offset_m.x = INFINITY; }, "wind_offset_m[0]");
+    bad([](CloudLayerParams& p) { p.evolution_m = NAN; }, "evolution_m");
 }
 
 // --- OpenVDB -----------------------------------------------------------------------

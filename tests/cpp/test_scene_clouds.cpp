@@ -70,7 +70,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
       "layers": [{"bottom_altitude_m": 1200, "top_altitude_m": 2800, "coverage": 0.7, "cloud_type": "altocumulus",
                   "density_per_m": 0.05, "base_scale_m": 5000, "detail_scale_m": 700,
                   "weather_scale_m": 30000, "detail_strength": 0.25, "weather_variation": 0.3,
-                  "wind_offset_m": [10, -20], "seed": 7}],
+                  "wind_offset_m": [10, -20], "evolution_m": 250, "seed": 7}],
       "volumes": [{"name": "Cloud", "file": "/abs/cloud.0007.vdb", "grid": "dens",
                    "matrix_world": [[2,0,0,5],[0,2,0,6],[0,0,2,7],[0,0,0,1]],
                    "density_scale": 0.5, "negative": "reject", "placement": "openvdb"}],
@@ -98,6 +98,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     EXPECT_EQ(l.weather_variation, 0.3);
     EXPECT_EQ(l.wind_offset_m.x, 10);
     EXPECT_EQ(l.wind_offset_m.y, -20);
+    EXPECT_EQ(l.evolution_m, 250);
     EXPECT_EQ(l.seed, 7u);
     ASSERT_EQ(c.volumes.size(), 1u);
     const SceneCloudVolume& v = c.volumes[0];
@@ -191,6 +192,8 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"layers": [{"covrage": 0.5}]})"), "clouds.layers[0].covrage");
     EXPECT_EQ(bad(R"({"layers": [{"seed": -1}]})"), "clouds.layers[0].seed");
     EXPECT_EQ(bad(R"({"layers": [{"wind_offset_m": [1]}]})"), "clouds.layers[0].wind_offset_m");
+    EXPECT_EQ(bad(R"({"layers": [{"evolution_m": "soon"}]})"), "clouds.layers[0].evolution_m");
+    EXPECT_EQ(bad(R"({"layers": [{"evolution_m": 1e12}]})"), "clouds.layers[0].evolution_m");
     EXPECT_EQ(bad(R"({"layers": {}})"), "clouds.layers");
     EXPECT_EQ(bad(R"({"volumes": [{}]})"), "clouds.volumes[0].file");
     EXPECT_EQ(bad(R"({"volumes": [{"file": ""}]})"), "clouds.volumes[0].file");

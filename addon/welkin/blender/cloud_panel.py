@@ -50,6 +50,7 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
             col.prop(layer, "detail_strength")
             col.prop(layer, "weather_variation")
             col.prop(layer, "wind_offset_m")
+            col.prop(layer, "evolution_m")
             col.prop(layer, "seed")
         layout.separator()
         col = layout.column()

@@ -71,6 +71,10 @@ class WelkinCloudLayer(bpy.types.PropertyGroup):
     wind_offset_m: bpy.props.FloatVectorProperty(
         name="Wind Offset (m)", size=2, default=(0.0, 0.0), soft_min=-1e6, soft_max=1e6,
         update=_changed, description="Horizontal offset of the layer (animate it for wind), m")
+    evolution_m: bpy.props.FloatProperty(
+        name="Evolution (m)", default=0.0, soft_min=-1e5, soft_max=1e5, update=_changed,
+        description="Moves the cloud noise through the layer's height: animate it and the shapes "
+                    "change in place while the wind offset carries them, m")
     seed: bpy.props.IntProperty(name="Seed", default=1, min=0, update=_changed,
                                 description="Seed of the layer's noise")
 

@@ -16,21 +16,19 @@
 //       (cumulus: tall towers where w_g is high, low mounds elsewhere);
 //   height gradient G(f / f_top): the type's trapezoid (0 below a0, up to 1 at a1, 1 to a2,
 //       down to 0 at a3); a steep a0 -> a1 gives a flat base;
-//   base shape (3D, tile base_scale_m, stretched by the type's `stretch` along a direction
-//       30 degrees off the x axis): base = remap(pw, -(1 - fbm_w), 1, 0, 1), pw the
-//       Perlin-Worley channel and fbm_w its Worley octaves, read at a point displaced by a
-//       low-frequency domain warp (the weather map's b, a channels, half a base tile at
-//       most), which breaks the base texture's repetition (seen over tens of tiles towards
-//       the horizon, a periodic texture shows as streaks running to a vanishing point);
+//   base shape (3D, tile base_scale_m, read at the height h - bottom + evolution_m,
+//       stretched by the type's `stretch` along a direction 30 degrees off the x axis): base = remap(pw, -(1
+//       - fbm_w), 1, 0, 1), pw the Perlin-Worley channel and fbm_w its Worley octaves, read at a point
+//       displaced by a low-frequency domain warp (the weather map's b, a channels, half a base tile at most),
+//       which breaks the base texture's repetition (seen over tens of tiles towards the horizon, a periodic
+//       texture shows as streaks running to a vanishing point);
 //   coverage: covered = clamp(remap(base G, 1 - c, 1, 0, 1)) c (Schneider's remap by coverage);
-//   erosion (3D, tile detail_scale_m, its lookup displaced by the curl noise, Nubis's
-//       "curl distortion", stronger at the bottom): the detail Worley fBm, inverted towards
-//       the top (billowy tops) and faded out at the base by the type's `base_erosion`
-//       (flat bases for cumulus); at most kMaxErosion of the range is eroded, and only
-//       where the cloud is thin (erosion x (1 - covered)), so that raising the detail
-//       shapes edges and leaves no isolated specks:
-//       density = clamp(remap(covered, e, 1, 0, 1)), e = kMaxErosion detail_strength
-//       (1 - covered) modifier;
+//   erosion (3D, tile detail_scale_m, read at the same height, its lookup displaced by the
+//       curl noise, Nubis's "curl distortion", stronger at the bottom): the detail Worley fBm, inverted
+//       towards the top (billowy tops) and faded out at the base by the type's `base_erosion` (flat bases for
+//       cumulus); at most kMaxErosion of the range is eroded, and only where the cloud is thin (erosion x (1
+//       - covered)), so that raising the detail shapes edges and leaves no isolated specks: density =
+//       clamp(remap(covered, e, 1, 0, 1)), e = kMaxErosion detail_strength (1 - covered) modifier;
 //   fibres (cirrus): the streak-stretched detail noise thins the whole cloud into strands,
 //       density *= 1 - fibres detail_strength (1 - clamp(remap(fbm_d, 0.4, 0.65, 0, 1)));
 //   sigma_t = density_per_m * density.
@@ -88,6 +86,11 @@ struct CloudLayerParams {
     double detail_strength = 0.5;        // [0, 1]
     double weather_variation = 0.6;      // [0, 1]
     glm::dvec2 wind_offset_m{0.0, 0.0};  // shifts the field by this much (finite)
+    // Moves the base and detail noise through the layer's height by this much (finite, m),
+    // the heights of the layer and of its type's gradient staying put: keyed over time the
+    // shapes change in place (Schneider's evolving noise) while wind_offset_m carries them;
+    // one base_scale_m brings the base shape back.
+    double evolution_m = 0.0;
     std::uint64_t seed = 1;
     double planet_radius_m = 6360e3;  // [1e3, 1e8]
     double origin_altitude_m = 0.0;   // of the world origin above the ground, [0, 1e6]
