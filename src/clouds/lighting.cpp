@@ -197,31 +197,30 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
                     const glm::dvec3 x = ray.at(t);
                     const double sigma_t = density.sigma_t(x);
                     if (!(sigma_t > 0.0)) continue;
+                    // The cloud's optical depth from x along dir: from the grid when there is
+                    // one, else by its own march of `steps` steps.
+                    const auto depth_along = [&](const std::unique_ptr<OpticalDepthGrid>& grid,
+                                                 OpticalDepthGrid::Cursor& cursor, int level,
+                                                 const glm::dvec3& dir, int steps) {
+                        return grid ? grid->tau(x, level, cursor)
+                                    : march_optical_depth(density, {x, dir}, options.light_distance_m, steps,
+                                                          light_segs);
+                    };
                     const double tau_sun =
-                        sun_grid ? sun_grid->tau(x, sun_level, sun_cursor)
-                                 : march_optical_depth(density, {x, s}, options.light_distance_m,
-                                                       options.light_steps, light_segs);
+                        depth_along(sun_grid, sun_cursor, sun_level, s, options.light_steps);
                     // The cloud's depth away from the sun along the sun line through x: the
                     // slab's thickness (diffusion), or the octaves' optical size f =
                     // 1 - exp(-tau_line), octave i weighted by f^i (see the header).
                     const double tau_anti =
-                        !sized      ? 0.0
-                        : anti_grid ? anti_grid->tau(x, sun_level, anti_cursor)
-                                    : march_optical_depth(density, {x, -s}, options.light_distance_m,
-                                                          options.light_steps, light_segs);
+                        sized ? depth_along(anti_grid, anti_cursor, sun_level, -s, options.light_steps) : 0.0;
                     double sun_w = 0.0;
                     if (diffusion) {
                         // Single scattering plus the forward-scattered and diffuse parts.
                         double tau_side = std::numeric_limits<double>::infinity();
                         if (sides)
                             tau_side =
-                                side_grid
-                                    ? side_grid->tau(x, side_level, side_cursor) +
-                                          back_grid->tau(x, side_level, back_cursor)
-                                    : march_optical_depth(density, {x, across}, options.light_distance_m,
-                                                          options.light_steps, light_segs) +
-                                          march_optical_depth(density, {x, -across}, options.light_distance_m,
-                                                              options.light_steps, light_segs);
+                                depth_along(side_grid, side_cursor, side_level, across, options.light_steps) +
+                                depth_along(back_grid, back_cursor, side_level, -across, options.light_steps);
                         sun_w =
                             sun_source(similarity, tau_sun, tau_anti, tau_side, nu, mean_g, phase[0], phase2);
                     } else {
@@ -232,11 +231,8 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
                     }
                     double sky_w = 1.0;
                     if (ambient_decay) {
-                        const double tau_up =
-                            sky_grid
-                                ? sky_grid->tau(x, sun_level, sky_cursor)
-                                : march_optical_depth(density, {x, light.zenith(x)}, options.light_distance_m,
-                                                      options.ambient_steps, light_segs);
+                        const double tau_up = depth_along(sky_grid, sky_cursor, sun_level, light.zenith(x),
+                                                          options.ambient_steps);
                         sky_w = std::exp(-kappa * tau_up);
                     }
                     light.sun_irradiance(x, sun.data());
@@ -311,8 +307,7 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
     // up.transmittance_tolerance, each channel's radiance within up.radiance_tolerance of
     // the largest).
     const auto smooth = [&](const Block& b) {
-        const std::size_t q[4] = {std::size_t(b.y0) * W + b.x0, std::size_t(b.y0) * W + b.x1,
-                                  std::size_t(b.y1) * W + b.x0, std::size_t(b.y1) * W + b.x1};
+        const std::array<std::size_t, 4> q = b.corners(W);
         float tmin = 2.0f, tmax = -1.0f;
         for (std::size_t a : q) {
             tmin = std::min(tmin, result.transmittance[a]);
@@ -332,8 +327,7 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
     // Whether the block spans more than up.max_block_size_m at its farthest cloud: the
     // angle between its diagonal's corner rays times that depth.
     const auto too_wide = [&](const Block& b) {
-        const std::size_t q[4] = {std::size_t(b.y0) * W + b.x0, std::size_t(b.y0) * W + b.x1,
-                                  std::size_t(b.y1) * W + b.x0, std::size_t(b.y1) * W + b.x1};
+        const std::array<std::size_t, 4> q = b.corners(W);
         float depth = 0.0f;
         for (std::size_t a : q) depth = std::max(depth, result.depth_m[a]);
         if (!(depth > 0.0f)) return false;

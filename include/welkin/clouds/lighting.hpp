@@ -95,6 +95,7 @@
 // Results do not depend on the thread count (each ray is independent and seeded).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -157,6 +158,12 @@ struct CloudLightingOptions {
 struct CloudGridInterpolation {
     struct Block {
         int x0, y0, x1, y1;  // corner columns and rows, x0 < x1 or y0 < y1
+        // The corner pixels in a grid `width` wide: top-left, top-right, bottom-left,
+        // bottom-right.
+        std::array<std::size_t, 4> corners(int width) const {
+            const std::size_t w = std::size_t(width);
+            return {y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1};
+        }
     };
     int width = 0, height = 0;
     std::vector<Block> blocks;           // the blocks whose unmarched pixels are interpolated
@@ -246,7 +253,8 @@ void CloudGridInterpolation::for_each_interpolated(F&& f) const {
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
             const Block& b = blocks[k];
             const std::size_t w = std::size_t(width);
-            const std::size_t q[4] = {b.y0 * w + b.x0, b.y0 * w + b.x1, b.y1 * w + b.x0, b.y1 * w + b.x1};
+            const std::array<std::size_t, 4> corners = b.corners(width);
+            const std::size_t* q = corners.data();
             const int x_end = b.x1 == width - 1 ? b.x1 + 1 : b.x1,
                       y_end = b.y1 == height - 1 ? b.y1 + 1 : b.y1;
             for (int y = b.y0; y < y_end; ++y) {

@@ -51,8 +51,9 @@ private:
     std::vector<glm::vec4> texels_;
 };
 
-// A periodic n^3 (or n^2 x 1) texture of N float channels with the same wrap-around
-// trilinear lookup as TileableTexture3D::sample, for the few channels a density actually
+// A periodic n^3 (or n^2 x 1) texture of N float channels with the texel layout and
+// wrap-around trilinear lookup of TileableTexture3D::sample (its texel coordinate taken in
+// one step, not wrapped first: the two agree to rounding), for the few channels a density actually
 // reads (ProceduralClouds keeps its noise's fixed linear combinations here: trilinear
 // interpolation is linear, so interpolating the combination equals combining the
 // interpolations). Smaller texels stay in the caches: the lookups are the march's cost.
