@@ -84,3 +84,112 @@ def lookup(atlas: np.ndarray, direction: np.ndarray, distance: np.ndarray, max_d
     L = (1 - w) * _bilinear(atlas, u, v) + w * _bilinear(atlas, u, v + far)
     tau = (1 - w) * _bilinear(atlas, u, v + 0.5) + w * _bilinear(atlas, u, v + 0.5 + far)
     return L, np.exp(-tau)
+
+
+# --- the screen table (Cycles) -------------------------------------------------------------
+# welkin.aerial_screen_table() (aerial_table.hpp) gives, for the frame's camera, L and T per
+# (slice k, grid row j from the top, grid column i). Four float RGBA images hold it, each
+# SCREEN columns wide and rows x slices tall, rows counted from the bottom (Blender's
+# order), tile k = rows [k rows, (k + 1) rows) holding one slice:
+#     inscatter, inscatter of the next slice, opacity 1 - T, opacity of the next slice,
+# so that one texture coordinate reads both slices around a distance (the "next" images'
+# last tile repeats the last slice). The shader's arithmetic, per sample (screen_coordinates):
+#     t = log_ratio(d)                    d: View Distance, scene units
+#     k = floor(t), f = t - k             the slice below d is k - first_exponent
+#     (x, y) = (ax u + bx, ay v + by + (k - first_exponent) / slices)
+# with (u, v) the Window coordinate (0 .. 1 left to right, bottom to top); the first slice
+# lies at ratio^first_exponent scene units, so that the integer part of t is the slice.
+SCREEN_COLUMNS, SCREEN_ROWS = 32, 48
+SCREEN_RATIO = 1.15
+SCREEN_STEPS_PER_SLICE = 1
+SCREEN_RANGE = 1e5  # the first slice lies no nearer than clip end / SCREEN_RANGE
+SCREEN_MARGIN_PX = 1.0  # beyond the pixel filter's half width
+
+
+class ScreenLayout:
+    """The screen table's layout for one camera and render (plain numbers)."""
+
+    def __init__(self, width_px: int, height_px: int, filter_px: float, clip_start: float,
+                 clip_end: float, columns: int = SCREEN_COLUMNS, rows: int = SCREEN_ROWS,
+                 ratio: float = SCREEN_RATIO) -> None:
+        if not (clip_end > clip_start > 0.0):
+            raise ValueError(f"aerial screen table: the clip range {clip_start} .. {clip_end} "
+                             "must be positive and increasing")
+        self.columns, self.rows, self.ratio = columns, rows, ratio
+        reach = 0.5 * filter_px + SCREEN_MARGIN_PX  # how far outside the frame samples fall, px
+        self.margin_x, self.margin_y = reach / width_px, reach / height_px
+        log_r = math.log(ratio)
+        first = max(clip_start, clip_end / SCREEN_RANGE)
+        self.first_exponent = math.floor(math.log(first) / log_r)
+        self.slices = math.ceil(math.log(clip_end) / log_r - self.first_exponent) + 2
+        self.first_distance = ratio ** self.first_exponent  # scene units
+
+    @property
+    def height(self) -> int:
+        return self.rows * self.slices
+
+    def affine(self) -> tuple[float, float, float, float]:
+        """(ax, bx, ay, by) of the texture coordinate in the Window coordinate (slice 0)."""
+        C, R, S = self.columns, self.rows, self.slices
+        ax = (C - 1) / (C * (1.0 + 2.0 * self.margin_x))
+        bx = (0.5 + self.margin_x * (C - 1) / (1.0 + 2.0 * self.margin_x)) / C
+        ay = (R - 1) / (S * R * (1.0 + 2.0 * self.margin_y))
+        by = (0.5 + self.margin_y * (R - 1) / (1.0 + 2.0 * self.margin_y)) / (S * R)
+        return ax, bx, ay, by
+
+    def key(self) -> str:
+        return (f"{self.columns}x{self.rows}x{self.slices}/{self.margin_x!r}/{self.margin_y!r}/"
+                f"{self.first_exponent}/{self.ratio!r}")
+
+
+def screen_images(layout: ScreenLayout, inscatter: np.ndarray, transmittance: np.ndarray
+                  ) -> list[np.ndarray]:
+    """The four images' pixels, (rows x slices, columns, 4) float32 each, bottom row first,
+    from the core's (slices, rows, columns, 3) arrays (top row first)."""
+    shape = (layout.slices, layout.rows, layout.columns, 3)
+    if inscatter.shape != shape or transmittance.shape != shape:
+        raise ValueError(f"aerial screen table: arrays of shape {shape} expected, got "
+                         f"{inscatter.shape} and {transmittance.shape}")
+    images = []
+    for rgb in (inscatter, 1.0 - transmittance):
+        rgb = rgb[:, ::-1]  # bottom row first within each slice's tile
+        for shift in (0, 1):
+            tiles = np.concatenate([rgb[shift:], rgb[-1:]], axis=0)[:layout.slices] if shift else rgb
+            image = np.ones((layout.slices * layout.rows, layout.columns, 4), np.float32)
+            image[..., :3] = tiles.reshape(layout.slices * layout.rows, layout.columns, 3)
+            images.append(image)
+    return images
+
+
+def screen_coordinates(layout: ScreenLayout, u: np.ndarray, v: np.ndarray, distance: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x, y, f): the texture coordinate of the nearer slice and the weight of the next, as
+    the material node group computes them (u, v: Window; distance: scene units, > 0)."""
+    ax, bx, ay, by = layout.affine()
+    t = np.log(distance) / math.log(layout.ratio)
+    k = np.floor(t)
+    y = ay * v + by + (k - layout.first_exponent) / layout.slices
+    return ax * u + bx, y, t - k
+
+
+def _bilinear_extend(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    H, W = image.shape[:2]
+    fx, fy = x * W - 0.5, y * H - 0.5
+    x0, y0 = np.floor(fx).astype(np.int64), np.floor(fy).astype(np.int64)
+    ax, ay = (fx - x0)[..., None], (fy - y0)[..., None]
+    xa, xb = np.clip(x0, 0, W - 1), np.clip(x0 + 1, 0, W - 1)
+    ya, yb = np.clip(y0, 0, H - 1), np.clip(y0 + 1, 0, H - 1)
+    rgb = image[..., :3]
+    return ((1 - ay) * ((1 - ax) * rgb[ya, xa] + ax * rgb[ya, xb])
+            + ay * ((1 - ax) * rgb[yb, xa] + ax * rgb[yb, xb]))
+
+
+def screen_lookup(layout: ScreenLayout, images: list[np.ndarray], u: np.ndarray, v: np.ndarray,
+                  distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(L, T), (..., 3) each, as the material node group computes them ('Linear' fetches
+    with 'Extend', two slices mixed by f)."""
+    x, y, f = screen_coordinates(layout, u, v, distance)
+    f = f[..., None]
+    L = (1 - f) * _bilinear_extend(images[0], x, y) + f * _bilinear_extend(images[1], x, y)
+    opacity = (1 - f) * _bilinear_extend(images[2], x, y) + f * _bilinear_extend(images[3], x, y)
+    return L, 1.0 - opacity

@@ -108,6 +108,47 @@ private:
     double exposure_;
 };
 
+// One ray marched once through increasing distances 0 < t_1 < ... < t_n: the passes' RGB
+// (in-scattering times the exposure, transmittance) at each. The buffers are per thread.
+class SliceMarcher {
+public:
+    SliceMarcher(const AtmosphereLuts& luts, const PassColour& colour, int steps)
+        : luts_(luts), colour_(colour), steps_(steps), scratch_(colour.channels()) {}
+
+    // L3 and T3 receive 3 floats per distance.
+    void march(const AirRay& ray, std::span<const double> distances, float* L3, float* T3) {
+        const std::size_t C = colour_.channels(), n = distances.size();
+        L_.resize(n * C);
+        T_.resize(n * C);
+        const float nu = float(clamp_cosine(glm::dot(ray.d, ray.sun)));
+        for (const auto& b : luts_.batches()) {
+            const float rp = b->medium.rayleigh_phase(nu), mp = b->medium.mie_phase(nu);
+            Spectrum4 Ls(0.0f), Ts(1.0f);
+            double t_prev = 0.0;
+            for (std::size_t k = 0; k < n; ++k) {
+                march_segment(*b, ray, rp, mp, t_prev, distances[k], steps_, Ls, Ts);
+                t_prev = distances[k];
+                store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(),
+                               &L_[k * C + b->medium.first_channel()]);
+                store_channels(Ts, b->medium.channel_count(), &T_[k * C + b->medium.first_channel()]);
+            }
+        }
+        for (std::size_t k = 0; k < n; ++k)
+            colour_.convert({&L_[k * C], C}, {&T_[k * C], C}, scratch_, L3 + 3 * k, T3 + 3 * k);
+    }
+
+private:
+    const AtmosphereLuts& luts_;
+    const PassColour& colour_;
+    int steps_;
+    std::vector<float> L_, T_, scratch_;
+};
+
+// -ln T, at most kMaxOpticalDepth.
+float optical_depth_of(float T) {
+    return T > 0.0f ? std::min(-std::log(T), kMaxOpticalDepth) : kMaxOpticalDepth;
+}
+
 AirRay air_ray(const AerialView& view, const CameraRays::Ray& ray, const glm::dvec3& sun) {
     return {ray.origin - view.planet_centre(), ray.direction, sun};
 }
@@ -291,42 +332,25 @@ AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view, const A
     const CameraRays rays(view.camera, width, height);
     const glm::dvec3 sun = view.origin.sun_direction;
     const PassColour colour(view.atmosphere, view.exposure);
-    const std::size_t C = colour.channels();
     inscatter_.assign(std::size_t(nx_) * ny_ * nz_ * 3, 0.0f);
     optical_depth_.assign(inscatter_.size(), 0.0f);
-    const int steps = view.options.steps_per_slice;
     ProgressTracker tracker(progress, std::size_t(nx_) * std::size_t(ny_));
     tbb::parallel_for(tbb::blocked_range<int>(0, nx_ * ny_), [&](const tbb::blocked_range<int>& range) {
-        std::vector<float> L(std::size_t(nz_) * C), T(std::size_t(nz_) * C), scratch(C);
+        SliceMarcher marcher(luts, colour, view.options.steps_per_slice);
+        std::vector<double> distances(static_cast<std::size_t>(nz_));
+        std::vector<float> L(distances.size() * 3), T(L.size());
         for (int column = range.begin(); column != range.end(); ++column) {
             const int i = column % nx_, j = column / nx_;
             const CameraRays::Ray cam =
                 rays.at_screen(double(i) / double(nx_ - 1), double(j) / double(ny_ - 1));
-            const AirRay ray = air_ray(view, cam, sun);
-            for (const auto& b : luts.batches()) {
-                const float nu = float(clamp_cosine(glm::dot(ray.d, sun)));
-                const float rp = b->medium.rayleigh_phase(nu), mp = b->medium.mie_phase(nu);
-                Spectrum4 Ls(0.0f), Ts(1.0f);
-                double t_prev = 0.0;
-                for (int k = 1; k <= nz_; ++k) {
-                    const double t = slice_depth(k) * cam.distance_per_depth;
-                    march_segment(*b, ray, rp, mp, t_prev, t, steps, Ls, Ts);
-                    t_prev = t;
-                    const Spectrum4 Le = Ls * b->medium.solar_irradiance();
-                    store_channels(Le, b->medium.channel_count(),
-                                   &L[std::size_t(k - 1) * C + b->medium.first_channel()]);
-                    store_channels(Ts, b->medium.channel_count(),
-                                   &T[std::size_t(k - 1) * C + b->medium.first_channel()]);
-                }
-            }
+            for (int k = 1; k <= nz_; ++k)
+                distances[std::size_t(k - 1)] = slice_depth(k) * cam.distance_per_depth;
+            marcher.march(air_ray(view, cam, sun), distances, L.data(), T.data());
             for (int k = 0; k < nz_; ++k) {
-                float L3[3], T3[3];
-                colour.convert({&L[std::size_t(k) * C], C}, {&T[std::size_t(k) * C], C}, scratch, L3, T3);
                 const std::size_t at = index(i, j, k);
                 for (int c = 0; c < 3; ++c) {
-                    inscatter_[at + c] = L3[c];
-                    optical_depth_[at + c] =
-                        T3[c] > 0.0f ? std::min(-std::log(T3[c]), kMaxOpticalDepth) : kMaxOpticalDepth;
+                    inscatter_[at + c] = L[std::size_t(k) * 3 + c];
+                    optical_depth_[at + c] = optical_depth_of(T[std::size_t(k) * 3 + c]);
                 }
             }
             tracker.advance();
@@ -621,44 +645,96 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
     if (!(glm::length(sun_direction) > 0.5)) throw InvalidArgument("sun_direction", "must be a unit vector");
     const glm::dvec3 sun = glm::normalize(sun_direction);
     const PassColour colour(atmosphere, exposure);
-    const std::size_t C = colour.channels();
     const int na = layout.azimuths, ne = layout.elevations, nk = layout.slices;
     AerialTable table{layout, {}, {}};
     table.inscatter.assign(std::size_t(na) * ne * nk * 3, 0.0f);
     table.optical_depth.assign(table.inscatter.size(), 0.0f);
-    const auto at = [&](int i, int j, int k) {
-        return ((std::size_t(k) * std::size_t(ne) + std::size_t(j)) * std::size_t(na) + std::size_t(i)) * 3;
-    };
+    std::vector<double> distances(std::size_t(nk - 1));  // slice 0: d = 0, L = 0, T = 1
+    for (int k = 1; k < nk; ++k) distances[std::size_t(k - 1)] = layout.slice_distance(k);
     ProgressTracker tracker(progress, std::size_t(na) * std::size_t(ne));
     tbb::parallel_for(tbb::blocked_range<int>(0, na * ne), [&](const tbb::blocked_range<int>& range) {
-        std::vector<float> L(std::size_t(nk) * C), T(std::size_t(nk) * C), scratch(C);
+        SliceMarcher marcher(luts, colour, layout.steps_per_slice);
+        std::vector<float> L(distances.size() * 3), T(L.size());
         for (int direction = range.begin(); direction != range.end(); ++direction) {
             const int i = direction % na, j = direction / na;
-            const AirRay ray{camera_position - planet_centre, layout.direction(i, j), sun};
-            const float nu = float(clamp_cosine(glm::dot(ray.d, sun)));
-            for (const auto& b : luts.batches()) {
-                const float rp = b->medium.rayleigh_phase(nu), mp = b->medium.mie_phase(nu);
-                Spectrum4 Ls(0.0f), Ts(1.0f);
-                double t_prev = 0.0;
-                for (int k = 1; k < nk; ++k) {  // slice 0: d = 0, L = 0, T = 1
-                    const double t = layout.slice_distance(k);
-                    march_segment(*b, ray, rp, mp, t_prev, t, layout.steps_per_slice, Ls, Ts);
-                    t_prev = t;
-                    store_channels(Ls * b->medium.solar_irradiance(), b->medium.channel_count(),
-                                   &L[std::size_t(k) * C + b->medium.first_channel()]);
-                    store_channels(Ts, b->medium.channel_count(),
-                                   &T[std::size_t(k) * C + b->medium.first_channel()]);
+            marcher.march({camera_position - planet_centre, layout.direction(i, j), sun}, distances, L.data(),
+                          T.data());
+            for (int k = 1; k < nk; ++k) {
+                const std::size_t o =
+                    ((std::size_t(k) * std::size_t(ne) + std::size_t(j)) * std::size_t(na) + std::size_t(i)) *
+                    3;
+                for (int c = 0; c < 3; ++c) {
+                    table.inscatter[o + c] = L[std::size_t(k - 1) * 3 + c];
+                    table.optical_depth[o + c] = optical_depth_of(T[std::size_t(k - 1) * 3 + c]);
                 }
             }
-            for (int k = 1; k < nk; ++k) {
-                float L3[3], T3[3];
-                colour.convert({&L[std::size_t(k) * C], C}, {&T[std::size_t(k) * C], C}, scratch, L3, T3);
-                const std::size_t o = at(i, j, k);
-                for (int c = 0; c < 3; ++c) {
-                    table.inscatter[o + c] = L3[c];
-                    table.optical_depth[o + c] =
-                        T3[c] > 0.0f ? std::min(-std::log(T3[c]), kMaxOpticalDepth) : kMaxOpticalDepth;
-                }
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+    return table;
+}
+
+// The screen table (aerial_table.hpp): one march per grid point of the camera's screen.
+void AerialScreenTableLayout::validate(const std::string& parameter) const {
+    const std::string p = parameter.empty() ? parameter : parameter + ".";
+    require_in_range(p + "columns", columns, 2, 4096);
+    require_in_range(p + "rows", rows, 2, 4096);
+    require_in_range(p + "slices", slices, 2, 1024);
+    require_in_range(p + "margin_x", margin_x, 0.0, 1.0);
+    require_in_range(p + "margin_y", margin_y, 0.0, 1.0);
+    require_in_range(p + "first_distance_m", first_distance_m, 1e-6, 1e9, "m");
+    require_in_range(p + "ratio", ratio, 1.001, 10.0);
+    require_in_range(p + "steps_per_slice", steps_per_slice, 1, 256);
+    if (!(slice_distance(slices - 1) <= 1e12))
+        throw InvalidArgument(p + "slices", fmt::format("the last slice lies at {:g} m: at most 1e12 m",
+                                                        slice_distance(slices - 1)));
+    if (double(columns) * rows * slices > 64.0 * 1024 * 1024)
+        throw InvalidArgument(p + "slices",
+                              fmt::format("{} x {} x {} entries: at most 64 Mi", columns, rows, slices));
+}
+
+double AerialScreenTableLayout::screen_x(int i) const {
+    return -margin_x + (1.0 + 2.0 * margin_x) * double(i) / double(columns - 1);
+}
+
+double AerialScreenTableLayout::screen_y(int j) const {
+    return -margin_y + (1.0 + 2.0 * margin_y) * double(j) / double(rows - 1);
+}
+
+double AerialScreenTableLayout::slice_distance(int k) const {
+    return first_distance_m * std::pow(ratio, double(k));
+}
+
+AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLuts& luts,
+                                      const AerialScreenTableLayout& layout, Progress* progress) {
+    view.validate();
+    layout.validate("table");
+    const CameraRays rays(view.camera, view.width, view.height);
+    const glm::dvec3 sun = view.origin.sun_direction;
+    const PassColour colour(view.atmosphere, view.exposure);
+    const int nx = layout.columns, ny = layout.rows, nk = layout.slices;
+    AerialScreenTable table{layout, {}, {}};
+    table.inscatter.assign(std::size_t(nx) * ny * nk * 3, 0.0f);
+    table.transmittance.assign(table.inscatter.size(), 1.0f);
+    // Distances along each ray from its origin: the camera's position, or for an
+    // orthographic camera its plane (where Blender's View Distance is the depth).
+    std::vector<double> distances(static_cast<std::size_t>(nk));
+    for (int k = 0; k < nk; ++k) distances[std::size_t(k)] = layout.slice_distance(k);
+    ProgressTracker tracker(progress, std::size_t(nx) * std::size_t(ny));
+    tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny), [&](const tbb::blocked_range<int>& range) {
+        SliceMarcher marcher(luts, colour, layout.steps_per_slice);
+        std::vector<float> L(distances.size() * 3), T(L.size());
+        for (int point = range.begin(); point != range.end(); ++point) {
+            const int i = point % nx, j = point / nx;
+            const CameraRays::Ray cam = rays.at_screen(layout.screen_x(i), layout.screen_y(j));
+            marcher.march(air_ray(view, cam, sun), distances, L.data(), T.data());
+            for (int k = 0; k < nk; ++k) {
+                const std::size_t o =
+                    ((std::size_t(k) * std::size_t(ny) + std::size_t(j)) * std::size_t(nx) + std::size_t(i)) *
+                    3;
+                std::copy_n(&L[std::size_t(k) * 3], 3, &table.inscatter[o]);
+                std::copy_n(&T[std::size_t(k) * 3], 3, &table.transmittance[o]);
             }
             tracker.advance();
         }

@@ -131,6 +131,48 @@ py::dict aerial_table_py(const py::handle& scene_in, int azimuths, int elevation
     return out;
 }
 
+const char* const kAerialScreenTableDoc = R"doc(
+Aerial perspective of the scene camera as a table over its screen and the distance
+(include/welkin/aerial/aerial_table.hpp): what a shader that knows a shading point's
+screen position and distance samples to haze a render in the render itself.
+
+scene : SceneDescription or its JSON text (atmosphere, origin altitude, sun, exposure, the
+    camera and the render resolution)
+columns, rows : the screen grid, evenly spaced from -margin to 1 + margin of the screen
+    (left to right, top to bottom)
+margin_x, margin_y : how far beyond the frame's edges the grid reaches, screen fractions
+slices, first_distance_m, ratio : distance slices d_k = first_distance_m ratio^k along
+    each grid point's ray, k = 0 .. slices - 1
+steps_per_slice : march steps per slice
+
+Returns {"inscatter", "transmittance"}: float32 arrays (slices, rows, columns, 3), top row
+first; inscatter in the passes' units (linear Rec.709 W m^-2 sr^-1 times the exposure).
+ValueError names a bad parameter.
+)doc";
+
+py::dict aerial_screen_table_py(const py::handle& scene_in, const AerialScreenTableLayout& layout,
+                                const py::object& progress) {
+    const SceneDescription scene = to_scene(scene_in);
+    require_progress_callback(progress);
+    const AerialView view = scene.aerial_view();
+    layout.validate("");
+    AerialScreenTable table;
+    run_cancellable(
+        [&](Progress* p) {
+            const auto luts = AtmosphereLutCache::shared().get(view.atmosphere, view.luts);
+            table = aerial_screen_table(view, *luts, layout, p);
+        },
+        progress);
+    const std::vector<py::ssize_t> shape{layout.slices, layout.rows, layout.columns, 3};
+    py::array_t<float> L(shape), T(shape);
+    std::copy(table.inscatter.begin(), table.inscatter.end(), L.mutable_data());
+    std::copy(table.transmittance.begin(), table.transmittance.end(), T.mutable_data());
+    py::dict out;
+    out["inscatter"] = L;
+    out["transmittance"] = T;
+    return out;
+}
+
 }  // namespace
 
 void register_aerial(py::module_& m) {
@@ -184,6 +226,18 @@ depth z lies z * distance_per_depth along the ray. ValueError without a camera.
           py::arg("azimuths") = 128, py::arg("elevations") = 64, py::arg("slices") = 48,
           py::arg("max_distance_m"), py::arg("linear_distance_m") = 100.0, py::arg("steps_per_slice") = 4,
           py::arg("progress") = py::none());
+    m.def(
+        "aerial_screen_table",
+        [](const py::handle& scene, int columns, int rows, int slices, double margin_x, double margin_y,
+           double first_distance_m, double ratio, int steps_per_slice, const py::object& progress) {
+            return aerial_screen_table_py(
+                scene, {columns, rows, slices, margin_x, margin_y, first_distance_m, ratio, steps_per_slice},
+                progress);
+        },
+        kAerialScreenTableDoc, py::arg("scene"), py::kw_only(), py::arg("columns") = 48, py::arg("rows") = 32,
+        py::arg("slices"), py::arg("margin_x") = 0.02, py::arg("margin_y") = 0.02,
+        py::arg("first_distance_m"), py::arg("ratio") = 1.15, py::arg("steps_per_slice") = 2,
+        py::arg("progress") = py::none());
 }
 
 }  // namespace welkin::python

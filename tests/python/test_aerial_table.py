@@ -1,10 +1,13 @@
-"""welkin.aerial_table and the add-on's atlas of it (addon/welkin/aerial_table.py).
+"""welkin.aerial_table, welkin.aerial_screen_table and the add-on's images of them
+(addon/welkin/aerial_table.py).
 
 The table read as the material node group reads it (aerial_table.lookup: texel centres,
 bilinear, two slices mixed in distance) against the core's per-pixel march
 (welkin.aerial_perspective, method "raymarch") at the same pixels' directions and
 distances, in hazy air, looking towards and away from the sun: in-scattering within 1 %
-and transmittance within 0.005 over depths from 50 m to 40 km. Plus the closed forms:
+and transmittance within 0.005 over depths from 50 m to 40 km; the same for the screen
+table (aerial_table.screen_lookup, what the Cycles group computes from the Window
+coordinate and View Distance), also for an orthographic camera. Plus the closed forms:
 distance 0 gives L = 0, T = 1 exactly; bad parameters get ValueError naming them.
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_aerial_table.py.
@@ -94,3 +97,112 @@ def test_bad_parameters_name_themselves(field, value):
     kw[field] = value
     with pytest.raises(ValueError, match=field):
         welkin.aerial_table(desc, **kw)
+
+
+# --- the screen table (Cycles' form) ----------------------------------------------------------
+
+def screen_table(desc, layout, steps=tab.SCREEN_STEPS_PER_SLICE):
+    t = welkin.aerial_screen_table(desc, columns=layout.columns, rows=layout.rows,
+                                   slices=layout.slices, margin_x=layout.margin_x,
+                                   margin_y=layout.margin_y, first_distance_m=layout.first_distance,
+                                   ratio=layout.ratio, steps_per_slice=steps)
+    return tab.screen_images(layout, t["inscatter"], t["transmittance"]), t
+
+
+def window(shape_hw):
+    """Blender's Window coordinate of every pixel centre: u left to right, v bottom to top."""
+    j, i = np.mgrid[0:shape_hw[0], 0:shape_hw[1]]
+    return (i + 0.5) / shape_hw[1], 1.0 - (j + 0.5) / shape_hw[0]
+
+
+@pytest.mark.parametrize("sun_azimuth_deg", [30.0, 180.0])
+def test_screen_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth_deg):
+    """The screen table through screen_lookup (what the Cycles node group computes from the
+    Window coordinate and View Distance) against the per-pixel march: L within 1 %, T within
+    0.005, over 50 m to 40 km and the whole frame."""
+    desc = welkin.SceneDescription.from_json_string(scene(sun_azimuth_deg))
+    z = depth_image()
+    L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
+    layout = tab.ScreenLayout(W, H, 1.5, 0.1, 1e6)
+    images, _ = screen_table(desc, layout)
+    _direction, per = rays(desc)
+    u, v = window(z.shape)
+    ground = np.isfinite(z)
+    L, T = tab.screen_lookup(layout, images, u[ground], v[ground], (z * per)[ground])
+    rel = np.abs(L - L_ref[ground]) / np.maximum(L_ref[ground], 1e-3)
+    print(f"screen table, sun azimuth {sun_azimuth_deg}: {layout.slices} slices, L max rel "
+          f"{rel.max():.4f} mean {rel.mean():.5f}, T max abs {np.abs(T - T_ref[ground]).max():.5f}")
+    assert rel.max() < 0.01
+    assert np.abs(T - T_ref[ground]).max() < 0.005
+    far, near = z[ground] > 20e3, z[ground] < 500.0
+    assert T[far].max() < 0.8 and L[far].mean() > 5.0 * L[near].mean()
+
+
+def test_screen_table_of_an_orthographic_camera_measures_from_its_plane():
+    """An orthographic camera's rays start across its plane, and Blender's View Z Depth (what
+    the group reads for it) is the distance along them: the table matches the march."""
+    d = json.loads(scene(30.0, height_m=200.0, pitch_deg=20.0))
+    d["camera"].update(type="ORTHO", ortho_scale=3000.0)
+    desc = welkin.SceneDescription.from_json_string(json.dumps(d))
+    z = np.full((H, W), 1.0, np.float32) * np.linspace(300.0, 30e3, W, dtype=np.float32)[None, :]
+    L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
+    layout = tab.ScreenLayout(W, H, 1.5, 0.1, 1e6)
+    images, _ = screen_table(desc, layout)
+    u, v = window(z.shape)
+    L, T = tab.screen_lookup(layout, images, u, v, z)
+    rel = np.abs(L - L_ref) / np.maximum(L_ref, 1e-3)
+    print(f"orthographic: L max rel {rel.max():.4f}, T max abs {np.abs(T - T_ref).max():.5f}")
+    assert rel.max() < 0.01 and np.abs(T - T_ref).max() < 0.005
+    # Not vacuous: the rays' origins differ across the frame (3 km wide), and so does L.
+    assert L_ref[:, -1].std() > 0.01 * L_ref[:, -1].mean()
+
+
+def test_screen_layout_closed_forms():
+    layout = tab.ScreenLayout(480, 270, 1.5, 0.1, 1e6)
+    # The slices are integer powers of the ratio: the first at or below clip end / 1e5, the
+    # last at or beyond clip end, so that floor(log_ratio d) is the slice for every d drawn.
+    assert layout.first_distance <= 1e6 / tab.SCREEN_RANGE < layout.first_distance * layout.ratio
+    assert layout.first_distance * layout.ratio ** (layout.slices - 1) >= 1e6
+    ax, bx, ay, by = layout.affine()
+    # The frame's edges, widened by the margin, land on the first and last texel centres of
+    # slice 0's tile, and every slice's tile is `rows` rows.
+    C, R, S = layout.columns, layout.rows, layout.slices
+    assert math.isclose(ax * -layout.margin_x + bx, 0.5 / C)
+    assert math.isclose(ax * (1 + layout.margin_x) + bx, 1 - 0.5 / C)
+    assert math.isclose(ay * -layout.margin_y + by, 0.5 / (R * S))
+    assert math.isclose(ay * (1 + layout.margin_y) + by, (R - 0.5) / (R * S))
+    # A distance exactly on a slice reads that slice (f = 0); the "next" images hold the
+    # next slice, the last one repeated.
+    desc = welkin.SceneDescription.from_json_string(scene(30.0))
+    layout = tab.ScreenLayout(W, H, 1.5, 1.0, 1e4)
+    images, t = screen_table(desc, layout)
+    k = 20
+    dk = layout.first_distance * layout.ratio ** k
+    _x, _y, f = tab.screen_coordinates(layout, np.array([0.5]), np.array([0.5]), np.array([dk * 1.0000001]))
+    assert f[0] < 1e-5
+    row = k * layout.rows  # tile k's first row
+    assert np.allclose(images[1][row + 3, 5, :3], images[0][row + layout.rows + 3, 5, :3])
+    assert np.allclose(images[1][-1, 5, :3], images[0][-1, 5, :3])
+    # Core arrays: top row first; the images: bottom row first within each tile.
+    assert np.allclose(images[0][k * layout.rows, 7, :3], t["inscatter"][k, -1, 7])
+    assert np.allclose(images[2][k * layout.rows, 7, :3], 1.0 - t["transmittance"][k, -1, 7])
+    # T falls and L grows with distance along every ray.
+    assert (np.diff(t["transmittance"], axis=0) <= 1e-7).all()
+    assert (np.diff(t["inscatter"].sum(-1), axis=0) > 0).all()
+
+
+@pytest.mark.parametrize("field,value", [("columns", 1), ("rows", 1), ("slices", 1),
+                                         ("first_distance_m", 0.0), ("ratio", 1.0),
+                                         ("margin_x", -0.1), ("steps_per_slice", 0),
+                                         ("first_distance_m", float("nan"))])
+def test_screen_table_bad_parameters_name_themselves(field, value):
+    desc = welkin.SceneDescription.from_json_string(scene(30.0))
+    kw = dict(columns=4, rows=3, slices=5, first_distance_m=10.0)
+    kw[field] = value
+    with pytest.raises(ValueError, match=field):
+        welkin.aerial_screen_table(desc, **kw)
+
+
+def test_screen_layout_rejects_a_bad_clip_range():
+    with pytest.raises(ValueError, match="clip range"):
+        tab.ScreenLayout(64, 36, 1.5, 10.0, 1.0)

@@ -2,16 +2,20 @@
 
 What the add-on adds while Scene.welkin_aerial is on, each found by name and taken out by
 remove() exactly:
-  * the image "Welkin Aerial Table": the frame's aerial-perspective table
-    (welkin.aerial_table for the frame's camera position, sun and atmosphere), packed as
-    an atlas (aerial_table.py), baked again whenever the frame's camera, sun or atmosphere
-    change (frame_change_post, with the render's own depsgraph, so each frame of -a is
-    hazed for its own state);
+  * the frame's aerial-perspective table as float images, baked again whenever the frame's
+    camera, sun or atmosphere change (frame_change_post, with the render's own depsgraph,
+    so each frame of -a is hazed for its own state), in the form the render engine reads
+    fastest (aerial_table.py has both layouts):
+      Cycles: the camera's screen table (welkin.aerial_screen_table), four images
+      "Welkin Aerial Inscatter", "... Inscatter Next", "... Opacity", "... Opacity Next";
+      EEVEE: the direction table (welkin.aerial_table from the camera's position), one
+      atlas "Welkin Aerial Table";
   * the shader node group "Welkin Aerial" and one node of it in every material that uses
-    nodes ("Welkin Aerial" node, unlinked): it reads the view direction (Geometry >
-    Incoming) and the distance (Camera Data > View Distance), samples the table and
-    writes two shader AOVs, Welkin_AerialInscatter (L) and Welkin_AerialOpacity (1 - T, so
-    that a pixel no material writes, the sky, means T = 1);
+    nodes ("Welkin Aerial" node, unlinked): it reads where the shading point is seen
+    (Cycles: Texture Coordinate > Window and Camera Data > View Distance; EEVEE: Geometry
+    > Incoming and View Distance), samples the table and writes two shader AOVs,
+    Welkin_AerialInscatter (L) and Welkin_AerialOpacity (1 - T, so that a pixel no
+    material writes, the sky, means T = 1);
   * those two AOVs on every view layer (Blender turns '.' in AOV names into '_');
   * in the compositor, for each Render Layers node of the scene, the node group "Welkin
     Aerial Haze" fed by its Image and the two AOVs, computing
@@ -21,6 +25,7 @@ remove() exactly:
     Welkin.AerialTransmittance are the passes.
 The materials' shading and the user's nodes are not touched otherwise.
 """
+import json
 import math
 
 import bpy
@@ -29,6 +34,8 @@ from .. import aerial_table as tab
 from . import compat
 
 IMAGE = "Welkin Aerial Table"
+SCREEN_IMAGES = ("Welkin Aerial Inscatter", "Welkin Aerial Inscatter Next", "Welkin Aerial Opacity",
+                 "Welkin Aerial Opacity Next")
 SHADER_GROUP = "Welkin Aerial"
 SHADER_NODE = "Welkin Aerial"
 COMP_GROUP = "Welkin Aerial Haze"
@@ -40,6 +47,7 @@ AOVS = (AOV_INSCATTER, AOV_OPACITY)
 MARK = "welkin_aerial"  # custom property on our nodes: what they belong to
 MAX_DISTANCE_NODE = "Max Distance"
 LINEAR_DISTANCE_NODE = "Linear Distance"
+SLICE_NODE, OFFSET_NODE, SCREEN_NODE = "Slice", "Slice Offset", "Screen"  # the screen form's constants
 # Nodes that keep the render layer's own Image: the pass files' depth/image writer.
 KEEP_UNHAZED = ("Welkin Aerial Depth",)
 
@@ -59,12 +67,16 @@ def table_image():
 
 
 def bake(scene, module, scene_text, max_distance_bu, scale_length, baked):
-    """Bakes the table of the frame described by `scene_text` into the image and sets the
-    node group's distance range; the image is left alone when `baked` (image name -> key of
-    what it holds) says it holds this frame's table already."""
+    """Bakes the table of the frame described by `scene_text` into the images in the form
+    the scene's render engine reads (Cycles: the screen table, else the direction table)
+    and sets the node group's constants; the images are left alone when `baked` (image
+    name -> key of what it holds) says they hold this frame's table already."""
+    if scene.render.engine == 'CYCLES':
+        _bake_screen(scene, module, scene_text, scale_length, baked)
+        return
     key = f"{scene_text}|{max_distance_bu!r}|{scale_length!r}"
     image = table_image()
-    group = shader_group(FETCH_LINEAR if scene.render.engine == 'CYCLES' else FETCH_CLOSEST)
+    group = shader_group(FETCH_CLOSEST)
     for name, value in ((MAX_DISTANCE_NODE, max_distance_bu),
                         (LINEAR_DISTANCE_NODE, tab.LINEAR_DISTANCE_M / scale_length)):
         node = group.nodes.get(name)
@@ -80,6 +92,73 @@ def bake(scene, module, scene_text, max_distance_bu, scale_length, baked):
     image.pixels.foreach_set(pixels.ravel())
     image.update()
     baked[image.name] = key
+
+
+def screen_layout(scene, scene_text, scale_length):
+    """The screen table's layout for the frame: its render size, Cycles' pixel filter and
+    the camera's clip range (scene units)."""
+    d = json.loads(scene_text)
+    camera, res = d["camera"], d["resolution"]
+    width = max(1, res["x"] * res.get("percentage", 100) // 100)
+    height = max(1, res["y"] * res.get("percentage", 100) // 100)
+    cycles = getattr(scene, "cycles", None)
+    filter_px = float(getattr(cycles, "filter_width", 1.5)) if cycles is not None else 1.5
+    return tab.ScreenLayout(width, height, filter_px, camera["clip_start_m"] / scale_length,
+                            camera["clip_end_m"] / scale_length), camera.get("type") == "ORTHO"
+
+
+def _set(socket, value):
+    """Sets a node input's default value only when it changes (a change recompiles)."""
+    current = socket.default_value
+    if isinstance(value, tuple):
+        if any(abs(a - b) > 1e-9 * max(1.0, abs(b)) for a, b in zip(current, value)):
+            socket.default_value = value
+    elif abs(current - value) > 1e-9 * max(1.0, abs(value)):
+        socket.default_value = value
+
+
+def _bake_screen(scene, module, scene_text, scale_length, baked):
+    layout, ortho = screen_layout(scene, scene_text, scale_length)
+    group = shader_group(FETCH_SCREEN)
+    # The constants of the layout (aerial_table.screen_coordinates), and the distance the
+    # slices measure: View Distance from the camera, or for an orthographic camera (whose
+    # rays start on its plane) View Z Depth.
+    ax, bx, ay, by = layout.affine()
+    _set(group.nodes[SLICE_NODE].inputs[1], layout.ratio)
+    offset = group.nodes[OFFSET_NODE]
+    _set(offset.inputs[1], (0.0, 1.0 / layout.slices, 0.0))
+    _set(offset.inputs[2], (bx, by - layout.first_exponent / layout.slices, 0.0))
+    _set(group.nodes[SCREEN_NODE].inputs[1], (ax, ay, 0.0))
+    cam = next(n for n in group.nodes if n.bl_idname == 'ShaderNodeCameraData')
+    distance = cam.outputs["View Z Depth" if ortho else "View Distance"]
+    if not group.nodes[SLICE_NODE].inputs[0].links or group.nodes[SLICE_NODE].inputs[0].links[0].from_socket != distance:
+        group.links.new(distance, group.nodes[SLICE_NODE].inputs[0])
+    images = [screen_image(name, layout) for name in SCREEN_IMAGES]
+    key = f"{scene_text}|{layout.key()}|{scale_length!r}"
+    if all(baked.get(image.name) == key for image in images):
+        return
+    t = module.aerial_screen_table(scene_text, columns=layout.columns, rows=layout.rows,
+                                   slices=layout.slices, margin_x=layout.margin_x,
+                                   margin_y=layout.margin_y,
+                                   first_distance_m=layout.first_distance * scale_length,
+                                   ratio=layout.ratio, steps_per_slice=tab.SCREEN_STEPS_PER_SLICE)
+    for image, pixels in zip(images, tab.screen_images(layout, t["inscatter"], t["transmittance"])):
+        image.pixels.foreach_set(pixels.ravel())
+        image.update()
+        baked[image.name] = key
+
+
+def screen_image(name, layout):
+    """One of the screen table's images, at the layout's size (resized in place, so that the
+    group's texture nodes keep it)."""
+    image = bpy.data.images.get(name)
+    if image is None:
+        image = bpy.data.images.new(name, layout.columns, layout.height, alpha=True, float_buffer=True)
+        image.colorspace_settings.name = 'Non-Color'
+        image[MARK] = True
+    elif tuple(image.size) != (layout.columns, layout.height):
+        image.scale(layout.columns, layout.height)
+    return image
 
 
 # --- the material node group -------------------------------------------------------------
@@ -118,36 +197,85 @@ def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
     return node.outputs["Vector"]
 
 
-# How the group reads the table (both give aerial_table.lookup's bilinear filter):
-#   FETCH_LINEAR   Cycles: four 'Linear' fetches (Cycles filters without mipmaps, and a
-#                  fetch never blends two distance slices: the elevation coordinate stays
-#                  between the first and last texel centres of its slice's tile);
-#   FETCH_CLOSEST  EEVEE: sixteen 'Closest' fetches filtered by the group's own nodes.
-#                  EEVEE filters a 'Linear' image with mipmaps chosen from screen-space
-#                  derivatives, and v jumps by a whole tile where the distance slice
-#                  changes, which would blur the table there.
+# How the group reads the table:
+#   FETCH_SCREEN   Cycles: the screen table (aerial_table.screen_lookup), 15 nodes in all,
+#                  since Cycles evaluates them at every camera-ray sample: the Window
+#                  coordinate and one logarithm of the distance address both slices' texels
+#                  in two multiply-adds, and four 'Linear' fetches (Cycles filters without
+#                  mipmaps; the coordinate stays between its tile's first and last texel
+#                  centres) read them;
+#   FETCH_CLOSEST  EEVEE: the direction table in sixteen 'Closest' fetches filtered by
+#                  the group's own nodes. EEVEE filters a 'Linear' image with mipmaps
+#                  chosen from screen-space derivatives, and v jumps by a whole tile where
+#                  the distance slice changes, which would blur the table there.
 # The group takes the form of the engine of the scene whose table is baked (bake()); a
 # change of engine rebuilds it in place (the materials' nodes keep using it).
-FETCH_LINEAR, FETCH_CLOSEST = "linear", "closest"
+FETCH_SCREEN, FETCH_CLOSEST = "screen", "closest"
 
 
 def _layout(fetch):
+    if fetch == FETCH_SCREEN:
+        return f"screen/{len(SCREEN_IMAGES)}/1"  # the form and the version of its nodes
     return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}/3"  # the table's layout, the fetch, the nodes: the version
 
 
+def _screen_nodes(group):
+    """The screen form (aerial_table.screen_coordinates and screen_lookup in nodes); the
+    constants are the bake's (_bake_screen)."""
+    coords = group.nodes.new('ShaderNodeTexCoord')
+    coords.location = (-800, 200)
+    cam = group.nodes.new('ShaderNodeCameraData')
+    cam.location = (-800, -200)
+    t = _math(group, 'LOGARITHM', cam.outputs["View Distance"], tab.SCREEN_RATIO, x=-600, y=-200)
+    t.node.name = t.node.label = SLICE_NODE
+    k = _math(group, 'FLOOR', t, x=-400, y=-100)
+    f = _math(group, 'SUBTRACT', t, k, x=-400, y=-300)
+    offset = _vmath(group, 'MULTIPLY_ADD', k, (0.0, 0.0, 0.0), x=-200, y=0)
+    offset.node.name = offset.node.label = OFFSET_NODE
+    uv = _vmath(group, 'MULTIPLY_ADD', coords.outputs["Window"], (1.0, 1.0, 0.0), x=0, y=200)
+    uv.node.name = uv.node.label = SCREEN_NODE
+    group.links.new(offset, uv.node.inputs[2])
+    outs = []
+    for n, name in enumerate(SCREEN_IMAGES):
+        tex = group.nodes.new('ShaderNodeTexImage')
+        tex.location = (200, 400 - 300 * n)
+        tex.image = bpy.data.images.get(name) or screen_image(name, tab.ScreenLayout(2, 2, 1.5, 0.1, 1.0))
+        tex.interpolation = 'Linear'
+        tex.extension = 'EXTEND'
+        group.links.new(uv, tex.inputs["Vector"])
+        outs.append(tex.outputs["Color"])
+    mixed = []
+    for n in (0, 2):
+        node, a, b, out = compat.rgba_mix(group, 'MIX')
+        node.location = (500, 300 - 400 * n // 2)
+        group.links.new(f, node.inputs[0])
+        group.links.new(outs[n], a)
+        group.links.new(outs[n + 1], b)
+        mixed.append(out)
+    for name, socket, y in ((AOV_INSCATTER, mixed[0], 300), (AOV_OPACITY, mixed[1], -100)):
+        aov = group.nodes.new('ShaderNodeOutputAOV')
+        compat.set_aov_name(aov, name)
+        aov.location = (700, y)
+        group.links.new(socket, aov.inputs["Color"])
+
+
 def shader_group(fetch=None):
-    """The node group of aerial_table.lookup() in nodes, with its two AOV outputs, reading
-    the table as `fetch` says (None: as the existing group does, else FETCH_CLOSEST)."""
+    """The node group that reads the table (aerial_table.screen_lookup() or lookup() in
+    nodes), with its two AOV outputs, in the form `fetch` (None: the existing group's if it
+    is the screen form, else FETCH_CLOSEST)."""
     group = bpy.data.node_groups.get(SHADER_GROUP)
     built = group.get(MARK) if group is not None else None
     if fetch is None:
-        fetch = FETCH_LINEAR if built == _layout(FETCH_LINEAR) else FETCH_CLOSEST
+        fetch = FETCH_SCREEN if built == _layout(FETCH_SCREEN) else FETCH_CLOSEST
     if built == _layout(fetch):
         return group
     if group is None:
         group = bpy.data.node_groups.new(SHADER_GROUP, 'ShaderNodeTree')
     group.nodes.clear()
     group[MARK] = _layout(fetch)
+    if fetch == FETCH_SCREEN:
+        _screen_nodes(group)
+        return group
     E, S, Hh = tab.ELEVATIONS, tab.SLICES, float(tab.HEIGHT)
     geo = group.nodes.new('ShaderNodeNewGeometry')
     geo.location = (-1400, 200)
@@ -198,19 +326,19 @@ def shader_group(fetch=None):
               _math(group, 'MULTIPLY', inv_step, -1.0, x=700, y=-750), x=900, y=-400, clamp=True)
     # v of the nearer slice's L texel; the others are + E / H (farther slice), + 1/2 (tau).
     v0 = _math(group, 'MULTIPLY_ADD', k0, float(E) / Hh, rowh, x=600, y=0)
-    if fetch == FETCH_CLOSEST:  # the four texels around (u, v0) and the weights between them
-        Ww = float(tab.WIDTH)
-        fx = _math(group, 'MULTIPLY_ADD', u, Ww, -0.5, x=900, y=600)
-        x0 = _math(group, 'FLOOR', fx, x=1000, y=600)
-        ax = _math(group, 'SUBTRACT', fx, x0, x=1100, y=600)
-        ua = _math(group, 'DIVIDE', _math(group, 'ADD', x0, 0.5, x=1100, y=700), Ww, x=1200, y=700)
-        ub = _math(group, 'ADD', ua, 1.0 / Ww, x=1300, y=700)
-        fy = _math(group, 'MULTIPLY_ADD', v0, Hh, -0.5, x=900, y=100)
-        y0 = _math(group, 'FLOOR', fy, x=1000, y=100)
-        ay = _math(group, 'SUBTRACT', fy, y0, x=1100, y=100)
-        va = _math(group, 'DIVIDE', _math(group, 'ADD', y0, 0.5, x=1100, y=0), Hh, x=1200, y=0)
+    # The four texels around (u, v0) and the weights between them.
+    Ww = float(tab.WIDTH)
+    fx = _math(group, 'MULTIPLY_ADD', u, Ww, -0.5, x=900, y=600)
+    x0 = _math(group, 'FLOOR', fx, x=1000, y=600)
+    ax = _math(group, 'SUBTRACT', fx, x0, x=1100, y=600)
+    ua = _math(group, 'DIVIDE', _math(group, 'ADD', x0, 0.5, x=1100, y=700), Ww, x=1200, y=700)
+    ub = _math(group, 'ADD', ua, 1.0 / Ww, x=1300, y=700)
+    fy = _math(group, 'MULTIPLY_ADD', v0, Hh, -0.5, x=900, y=100)
+    y0 = _math(group, 'FLOOR', fy, x=1000, y=100)
+    ay = _math(group, 'SUBTRACT', fy, y0, x=1100, y=100)
+    va = _math(group, 'DIVIDE', _math(group, 'ADD', y0, 0.5, x=1100, y=0), Hh, x=1200, y=0)
 
-    def fetch_at(uu, vv, x, y, interpolation='Closest'):
+    def fetch_at(uu, vv, x, y):
         uv = group.nodes.new('ShaderNodeCombineXYZ')
         uv.location = (x, y)
         group.links.new(uu, uv.inputs[0])
@@ -218,7 +346,7 @@ def shader_group(fetch=None):
         tex = group.nodes.new('ShaderNodeTexImage')
         tex.location = (x + 150, y)
         tex.image = table_image()
-        tex.interpolation = interpolation
+        tex.interpolation = 'Closest'
         tex.extension = 'REPEAT'
         group.links.new(uv.outputs[0], tex.inputs["Vector"])
         return tex.outputs["Color"]
@@ -230,10 +358,6 @@ def shader_group(fetch=None):
     samples = {}
     for n, offset in enumerate((0.0, E / Hh, 0.5, 0.5 + E / Hh)):
         y = 300 - 700 * n
-        if fetch == FETCH_LINEAR:
-            v = v0 if offset == 0.0 else _math(group, 'ADD', v0, offset, x=1300, y=y)
-            samples[n] = fetch_at(u, v, 1500, y, 'Linear')
-            continue
         v_lo = _math(group, 'ADD', va, offset, x=1300, y=y)
         v_hi = _math(group, 'ADD', v_lo, 1.0 / Hh, x=1400, y=y)
         lo = lerp(fetch_at(ua, v_lo, 1500, y), fetch_at(ub, v_lo, 1500, y - 150), ax, 1800, y)
@@ -461,6 +585,7 @@ def remove(scene, settings):
             group = bpy.data.node_groups.get(name)
             if group is not None and group.get(MARK) and group.users == 0:
                 bpy.data.node_groups.remove(group)
-        image = bpy.data.images.get(IMAGE)
-        if image is not None and image.get(MARK):
-            bpy.data.images.remove(image)
+        for name in (IMAGE, *SCREEN_IMAGES):
+            image = bpy.data.images.get(name)
+            if image is not None and image.get(MARK):
+                bpy.data.images.remove(image)
