@@ -87,15 +87,15 @@ def lookup(atlas: np.ndarray, direction: np.ndarray, distance: np.ndarray, max_d
 
 
 # --- the screen table (Cycles) -------------------------------------------------------------
-# welkin.aerial_screen_table() (aerial_table.hpp) gives, for the frame's camera, L and T per
-# (slice k, grid row j from the top, grid column i). Four float RGBA images hold it, each
-# SCREEN columns wide and rows x slices tall, rows counted from the bottom (Blender's
-# order), tile k = rows [k rows, (k + 1) rows) holding one slice:
-#     inscatter, inscatter of the next slice, opacity 1 - T, opacity of the next slice,
-# so that one texture coordinate reads both slices around a distance (the "next" images'
-# last tile repeats the last slice). The shader's arithmetic, per sample (screen_coordinates):
+# welkin.aerial_screen_table() (aerial_table.hpp) gives, for the frame's camera, the table
+# as four float RGBA textures ("textures": AerialScreenTable::step_textures), each
+# `columns` wide and rows x slices tall, rows counted from the bottom (Blender's order),
+# tile k = rows [k rows, (k + 1) rows) holding slice k: L and the opacity 1 - T, each
+# extrapolated to t = 0 along its step to the next slice, and the two steps, so that one
+# texture coordinate reads a slice and the passes are value + t step: one vector
+# multiply-add each. The shader's arithmetic, per sample (screen_coordinates):
 #     t = log_ratio(d)                    d: View Distance, scene units
-#     k = floor(t), f = t - k             the slice below d is k - first_exponent
+#     k = floor(t)                        the slice below d is k - first_exponent
 #     (x, y) = (ax u + bx, ay v + by + (k - first_exponent) / slices)
 # with (u, v) the Window coordinate (0 .. 1 left to right, bottom to top); the first slice
 # lies at ratio^first_exponent scene units, so that the integer part of t is the slice.
@@ -142,34 +142,15 @@ class ScreenLayout:
                 f"{self.first_exponent}/{self.ratio!r}")
 
 
-def screen_images(layout: ScreenLayout, inscatter: np.ndarray, transmittance: np.ndarray
-                  ) -> list[np.ndarray]:
-    """The four images' pixels, (rows x slices, columns, 4) float32 each, bottom row first,
-    from the core's (slices, rows, columns, 3) arrays (top row first)."""
-    shape = (layout.slices, layout.rows, layout.columns, 3)
-    if inscatter.shape != shape or transmittance.shape != shape:
-        raise ValueError(f"aerial screen table: arrays of shape {shape} expected, got "
-                         f"{inscatter.shape} and {transmittance.shape}")
-    images = []
-    for rgb in (inscatter, 1.0 - transmittance):
-        rgb = rgb[:, ::-1]  # bottom row first within each slice's tile
-        for shift in (0, 1):
-            tiles = np.concatenate([rgb[shift:], rgb[-1:]], axis=0)[:layout.slices] if shift else rgb
-            image = np.ones((layout.slices * layout.rows, layout.columns, 4), np.float32)
-            image[..., :3] = tiles.reshape(layout.slices * layout.rows, layout.columns, 3)
-            images.append(image)
-    return images
-
-
 def screen_coordinates(layout: ScreenLayout, u: np.ndarray, v: np.ndarray, distance: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(x, y, f): the texture coordinate of the nearer slice and the weight of the next, as
-    the material node group computes them (u, v: Window; distance: scene units, > 0)."""
+    """(x, y, t): the texture coordinate of the slice below the distance and the slice
+    coordinate, as the material node group computes them (u, v: Window; distance: scene
+    units, > 0)."""
     ax, bx, ay, by = layout.affine()
     t = np.log(distance) / math.log(layout.ratio)
-    k = np.floor(t)
-    y = ay * v + by + (k - layout.first_exponent) / layout.slices
-    return ax * u + bx, y, t - k
+    y = ay * v + by + (np.floor(t) - layout.first_exponent) / layout.slices
+    return ax * u + bx, y, t
 
 
 def _bilinear_extend(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -179,17 +160,17 @@ def _bilinear_extend(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndar
     ax, ay = (fx - x0)[..., None], (fy - y0)[..., None]
     xa, xb = np.clip(x0, 0, W - 1), np.clip(x0 + 1, 0, W - 1)
     ya, yb = np.clip(y0, 0, H - 1), np.clip(y0 + 1, 0, H - 1)
-    rgb = image[..., :3]
+    rgb = image[..., :3].astype(np.float64)
     return ((1 - ay) * ((1 - ax) * rgb[ya, xa] + ax * rgb[ya, xb])
             + ay * ((1 - ax) * rgb[yb, xa] + ax * rgb[yb, xb]))
 
 
-def screen_lookup(layout: ScreenLayout, images: list[np.ndarray], u: np.ndarray, v: np.ndarray,
+def screen_lookup(layout: ScreenLayout, textures: np.ndarray, u: np.ndarray, v: np.ndarray,
                   distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(L, T), (..., 3) each, as the material node group computes them ('Linear' fetches
-    with 'Extend', two slices mixed by f)."""
-    x, y, f = screen_coordinates(layout, u, v, distance)
-    f = f[..., None]
-    L = (1 - f) * _bilinear_extend(images[0], x, y) + f * _bilinear_extend(images[1], x, y)
-    opacity = (1 - f) * _bilinear_extend(images[2], x, y) + f * _bilinear_extend(images[3], x, y)
+    """(L, T), (..., 3) each, as the material node group computes them from the core's four
+    textures ('Linear' fetches with 'Extend', then value + t step)."""
+    x, y, t = screen_coordinates(layout, u, v, distance)
+    t = t[..., None]
+    L = _bilinear_extend(textures[0], x, y) + t * _bilinear_extend(textures[1], x, y)
+    opacity = _bilinear_extend(textures[2], x, y) + t * _bilinear_extend(textures[3], x, y)
     return L, 1.0 - opacity

@@ -706,6 +706,32 @@ double AerialScreenTableLayout::slice_distance(int k) const {
     return first_distance_m * std::pow(ratio, double(k));
 }
 
+std::vector<float> AerialScreenTable::step_textures(int first_index) const {
+    const std::size_t S = std::size_t(layout.slices), R = std::size_t(layout.rows),
+                      C = std::size_t(layout.columns);
+    const std::size_t texture = S * R * C * 4;
+    std::vector<float> out(4 * texture, 1.0f);
+    for (std::size_t k = 0; k < S; ++k) {
+        const bool flat = k == 0 || k + 1 == S;  // slice 0 and the last read as they are
+        const double t = double(first_index) + double(k);
+        for (std::size_t j = 0; j < R; ++j)
+            for (std::size_t i = 0; i < C; ++i) {
+                const std::size_t at = ((k * R + j) * C + i) * 3, next = at + R * C * 3;
+                const std::size_t texel = ((k * R + (R - 1 - j)) * C + i) * 4;  // bottom row first
+                for (std::size_t c = 0; c < 3; ++c) {
+                    const double L = inscatter[at + c], A = 1.0 - double(transmittance[at + c]);
+                    const double dL = flat ? 0.0 : inscatter[next + c] - L;
+                    const double dA = flat ? 0.0 : (1.0 - double(transmittance[next + c])) - A;
+                    out[texel + c] = float(L - t * dL);
+                    out[texture + texel + c] = float(dL);
+                    out[2 * texture + texel + c] = float(A - t * dA);
+                    out[3 * texture + texel + c] = float(dA);
+                }
+            }
+    }
+    return out;
+}
+
 AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLuts& luts,
                                       const AerialScreenTableLayout& layout, Progress* progress) {
     view.validate();

@@ -144,14 +144,18 @@ margin_x, margin_y : how far beyond the frame's edges the grid reaches, screen f
 slices, first_distance_m, ratio : distance slices d_k = first_distance_m ratio^k along
     each grid point's ray, k = 0 .. slices - 1
 steps_per_slice : march steps per slice
+first_index : the slice coordinate t of slice 0 in the textures (AerialScreenTable::
+    step_textures: a shader reads value + t step, t = first_index + k + f)
 
-Returns {"inscatter", "transmittance"}: float32 arrays (slices, rows, columns, 3), top row
-first; inscatter in the passes' units (linear Rec.709 W m^-2 sr^-1 times the exposure).
-ValueError names a bad parameter.
+Returns {"inscatter", "transmittance", "textures"}: float32 arrays (slices, rows, columns,
+3), top row first, inscatter in the passes' units (linear Rec.709 W m^-2 sr^-1 times the
+exposure); and (4, slices x rows, columns, 4), the four RGBA textures a shader reads (L
+and 1 - T extrapolated to t = 0 and their steps to the next slice; rows bottom first, slice
+k in rows k rows .. (k + 1) rows - 1). ValueError names a bad parameter.
 )doc";
 
 py::dict aerial_screen_table_py(const py::handle& scene_in, const AerialScreenTableLayout& layout,
-                                const py::object& progress) {
+                                int first_index, const py::object& progress) {
     const SceneDescription scene = to_scene(scene_in);
     require_progress_callback(progress);
     const AerialView view = scene.aerial_view();
@@ -167,9 +171,14 @@ py::dict aerial_screen_table_py(const py::handle& scene_in, const AerialScreenTa
     py::array_t<float> L(shape), T(shape);
     std::copy(table.inscatter.begin(), table.inscatter.end(), L.mutable_data());
     std::copy(table.transmittance.begin(), table.transmittance.end(), T.mutable_data());
+    const std::vector<float> textures = table.step_textures(first_index);
+    py::array_t<float> tex({py::ssize_t(4), py::ssize_t(layout.slices) * layout.rows,
+                            py::ssize_t(layout.columns), py::ssize_t(4)});
+    std::copy(textures.begin(), textures.end(), tex.mutable_data());
     py::dict out;
     out["inscatter"] = L;
     out["transmittance"] = T;
+    out["textures"] = tex;
     return out;
 }
 
@@ -229,15 +238,16 @@ depth z lies z * distance_per_depth along the ray. ValueError without a camera.
     m.def(
         "aerial_screen_table",
         [](const py::handle& scene, int columns, int rows, int slices, double margin_x, double margin_y,
-           double first_distance_m, double ratio, int steps_per_slice, const py::object& progress) {
+           double first_distance_m, double ratio, int steps_per_slice, int first_index,
+           const py::object& progress) {
             return aerial_screen_table_py(
                 scene, {columns, rows, slices, margin_x, margin_y, first_distance_m, ratio, steps_per_slice},
-                progress);
+                first_index, progress);
         },
-        kAerialScreenTableDoc, py::arg("scene"), py::kw_only(), py::arg("columns") = 48, py::arg("rows") = 32,
+        kAerialScreenTableDoc, py::arg("scene"), py::kw_only(), py::arg("columns") = 32, py::arg("rows") = 48,
         py::arg("slices"), py::arg("margin_x") = 0.02, py::arg("margin_y") = 0.02,
-        py::arg("first_distance_m"), py::arg("ratio") = 1.15, py::arg("steps_per_slice") = 2,
-        py::arg("progress") = py::none());
+        py::arg("first_distance_m"), py::arg("ratio") = 1.15, py::arg("steps_per_slice") = 1,
+        py::arg("first_index") = 0, py::arg("progress") = py::none());
 }
 
 }  // namespace welkin::python

@@ -262,10 +262,10 @@ def run_engine(scene, engine, tmp):
     cycles = engine == 'CYCLES'
     at.check((fetches, count) == (({'Linear'}, 4) if cycles else ({'Closest'}, 16)),
              f"{engine}: the group fetches {count} texels, {fetches}")
-    # Cycles evaluates the group at every camera-ray sample: the screen form's 15 nodes are
+    # Cycles evaluates the group at every camera-ray sample: the screen form's 14 nodes are
     # what keeps aerial perspective within 10 % of a render (docs/validation.md).
     if cycles:
-        at.check(len(group.nodes) == 15, f"the Cycles group has {len(group.nodes)} nodes, not 15")
+        at.check(len(group.nodes) == 14, f"the Cycles group has {len(group.nodes)} nodes, not 14")
     # Removable exactly.
     scene.welkin_aerial.enabled = False
     after = snapshot(scene)

@@ -105,8 +105,9 @@ def screen_table(desc, layout, steps=tab.SCREEN_STEPS_PER_SLICE):
     t = welkin.aerial_screen_table(desc, columns=layout.columns, rows=layout.rows,
                                    slices=layout.slices, margin_x=layout.margin_x,
                                    margin_y=layout.margin_y, first_distance_m=layout.first_distance,
-                                   ratio=layout.ratio, steps_per_slice=steps)
-    return tab.screen_images(layout, t["inscatter"], t["transmittance"]), t
+                                   ratio=layout.ratio, steps_per_slice=steps,
+                                   first_index=layout.first_exponent)
+    return t["textures"], t
 
 
 def window(shape_hw):
@@ -171,21 +172,25 @@ def test_screen_layout_closed_forms():
     assert math.isclose(ax * (1 + layout.margin_x) + bx, 1 - 0.5 / C)
     assert math.isclose(ay * -layout.margin_y + by, 0.5 / (R * S))
     assert math.isclose(ay * (1 + layout.margin_y) + by, (R - 0.5) / (R * S))
-    # A distance exactly on a slice reads that slice (f = 0); the "next" images hold the
-    # next slice, the last one repeated.
     desc = welkin.SceneDescription.from_json_string(scene(30.0))
     layout = tab.ScreenLayout(W, H, 1.5, 1.0, 1e4)
     images, t = screen_table(desc, layout)
     k = 20
     dk = layout.first_distance * layout.ratio ** k
-    _x, _y, f = tab.screen_coordinates(layout, np.array([0.5]), np.array([0.5]), np.array([dk * 1.0000001]))
-    assert f[0] < 1e-5
+    # At a slice's distance t is the slice's index (first_exponent + k) and value + t step is
+    # the slice's own L (1 - T); the steps are the differences to the next slice, 0 in slice
+    # 0 and the last.
+    _x, _y, t_k = tab.screen_coordinates(layout, np.array([0.6]), np.array([0.4]), np.array([dk]))
+    assert abs(t_k[0] - (layout.first_exponent + k)) < 1e-6
     row = k * layout.rows  # tile k's first row
-    assert np.allclose(images[1][row + 3, 5, :3], images[0][row + layout.rows + 3, 5, :3])
-    assert np.allclose(images[1][-1, 5, :3], images[0][-1, 5, :3])
-    # Core arrays: top row first; the images: bottom row first within each tile.
-    assert np.allclose(images[0][k * layout.rows, 7, :3], t["inscatter"][k, -1, 7])
-    assert np.allclose(images[2][k * layout.rows, 7, :3], 1.0 - t["transmittance"][k, -1, 7])
+    for value, step, table in ((0, 1, t["inscatter"]), (2, 3, 1.0 - t["transmittance"])):
+        assert np.allclose(images[step][row + 3, 5, :3],
+                           table[k + 1, layout.rows - 4, 5] - table[k, layout.rows - 4, 5], atol=1e-6)
+        at_k = images[value][row + 3, 5, :3] + (layout.first_exponent + k) * images[step][row + 3, 5, :3]
+        assert np.allclose(at_k, table[k, layout.rows - 4, 5], rtol=1e-5, atol=1e-6)
+        assert (images[step][:layout.rows, :, :3] == 0).all()
+        assert (images[step][-layout.rows:, :, :3] == 0).all()
+    assert (images[..., 3] == 1).all()
     # T falls and L grows with distance along every ray.
     assert (np.diff(t["transmittance"], axis=0) <= 1e-7).all()
     assert (np.diff(t["inscatter"].sum(-1), axis=0) > 0).all()

@@ -7,7 +7,7 @@ remove() exactly:
     so each frame of -a is hazed for its own state), in the form the render engine reads
     fastest (aerial_table.py has both layouts):
       Cycles: the camera's screen table (welkin.aerial_screen_table), four images
-      "Welkin Aerial Inscatter", "... Inscatter Next", "... Opacity", "... Opacity Next";
+      "Welkin Aerial Inscatter", "... Inscatter Step", "... Opacity", "... Opacity Step";
       EEVEE: the direction table (welkin.aerial_table from the camera's position), one
       atlas "Welkin Aerial Table";
   * the shader node group "Welkin Aerial" and one node of it in every material that uses
@@ -34,8 +34,8 @@ from .. import aerial_table as tab
 from . import compat
 
 IMAGE = "Welkin Aerial Table"
-SCREEN_IMAGES = ("Welkin Aerial Inscatter", "Welkin Aerial Inscatter Next", "Welkin Aerial Opacity",
-                 "Welkin Aerial Opacity Next")
+SCREEN_IMAGES = ("Welkin Aerial Inscatter", "Welkin Aerial Inscatter Step", "Welkin Aerial Opacity",
+                 "Welkin Aerial Opacity Step")
 SHADER_GROUP = "Welkin Aerial"
 SHADER_NODE = "Welkin Aerial"
 COMP_GROUP = "Welkin Aerial Haze"
@@ -141,9 +141,10 @@ def _bake_screen(scene, module, scene_text, scale_length, baked):
                                    slices=layout.slices, margin_x=layout.margin_x,
                                    margin_y=layout.margin_y,
                                    first_distance_m=layout.first_distance * scale_length,
-                                   ratio=layout.ratio, steps_per_slice=tab.SCREEN_STEPS_PER_SLICE)
-    for image, pixels in zip(images, tab.screen_images(layout, t["inscatter"], t["transmittance"])):
-        image.pixels.foreach_set(pixels.ravel())
+                                   ratio=layout.ratio, steps_per_slice=tab.SCREEN_STEPS_PER_SLICE,
+                                   first_index=layout.first_exponent)
+    for image, pixels in zip(images, t["textures"]):
+        image.pixels.foreach_set(pixels.reshape(-1))
         image.update()
         baked[image.name] = key
 
@@ -198,12 +199,13 @@ def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
 
 
 # How the group reads the table:
-#   FETCH_SCREEN   Cycles: the screen table (aerial_table.screen_lookup), 15 nodes in all,
+#   FETCH_SCREEN   Cycles: the screen table (aerial_table.screen_lookup), 14 nodes in all,
 #                  since Cycles evaluates them at every camera-ray sample: the Window
-#                  coordinate and one logarithm of the distance address both slices' texels
-#                  in two multiply-adds, and four 'Linear' fetches (Cycles filters without
-#                  mipmaps; the coordinate stays between its tile's first and last texel
-#                  centres) read them;
+#                  coordinate and t, one logarithm of the distance, address the slice's
+#                  texels in two multiply-adds, four 'Linear' fetches (Cycles filters
+#                  without mipmaps; the coordinate stays between its tile's first and last
+#                  texel centres) read the slice's values and steps, and two multiply-adds
+#                  give value + t step;
 #   FETCH_CLOSEST  EEVEE: the direction table in sixteen 'Closest' fetches filtered by
 #                  the group's own nodes. EEVEE filters a 'Linear' image with mipmaps
 #                  chosen from screen-space derivatives, and v jumps by a whole tile where
@@ -215,7 +217,7 @@ FETCH_SCREEN, FETCH_CLOSEST = "screen", "closest"
 
 def _layout(fetch):
     if fetch == FETCH_SCREEN:
-        return f"screen/{len(SCREEN_IMAGES)}/1"  # the form and the version of its nodes
+        return f"screen/{len(SCREEN_IMAGES)}/2"  # the form and the version of its nodes
     return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}/3"  # the table's layout, the fetch, the nodes: the version
 
 
@@ -229,7 +231,6 @@ def _screen_nodes(group):
     t = _math(group, 'LOGARITHM', cam.outputs["View Distance"], tab.SCREEN_RATIO, x=-600, y=-200)
     t.node.name = t.node.label = SLICE_NODE
     k = _math(group, 'FLOOR', t, x=-400, y=-100)
-    f = _math(group, 'SUBTRACT', t, k, x=-400, y=-300)
     offset = _vmath(group, 'MULTIPLY_ADD', k, (0.0, 0.0, 0.0), x=-200, y=0)
     offset.node.name = offset.node.label = OFFSET_NODE
     uv = _vmath(group, 'MULTIPLY_ADD', coords.outputs["Window"], (1.0, 1.0, 0.0), x=0, y=200)
@@ -244,14 +245,10 @@ def _screen_nodes(group):
         tex.extension = 'EXTEND'
         group.links.new(uv, tex.inputs["Vector"])
         outs.append(tex.outputs["Color"])
-    mixed = []
+    mixed = []  # value + t step, per quantity
     for n in (0, 2):
-        node, a, b, out = compat.rgba_mix(group, 'MIX')
-        node.location = (500, 300 - 400 * n // 2)
-        group.links.new(f, node.inputs[0])
-        group.links.new(outs[n], a)
-        group.links.new(outs[n + 1], b)
-        mixed.append(out)
+        mixed.append(_vmath(group, 'MULTIPLY_ADD', outs[n + 1], t, x=500, y=300 - 200 * n))
+        group.links.new(outs[n], mixed[-1].node.inputs[2])
     for name, socket, y in ((AOV_INSCATTER, mixed[0], 300), (AOV_OPACITY, mixed[1], -100)):
         aov = group.nodes.new('ShaderNodeOutputAOV')
         compat.set_aov_name(aov, name)

@@ -115,10 +115,12 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
 // (read linearly, not as optical depth: over a slice 15 % deep, T = e^-tau bends by less
 // than 0.1 % of 1 between slices).
 //
-// Cost: columns x rows x slices x steps_per_slice samples; the default 48 x 32 grid at
-// ratio 1.15 from 10 m to 1000 km (84 slices), 2 steps each, is 0.26 M samples.
+// Cost: columns x rows x slices x steps_per_slice samples; the default 32 x 48 grid at
+// ratio 1.15 from 10 m to 1000 km (85 slices), 1 step each, is 0.13 M samples. The rows
+// are the finer axis: near the horizon a row's step in elevation moves a long ray's
+// altitude by a fraction of the haze's scale height.
 struct AerialScreenTableLayout {
-    int columns = 48, rows = 32, slices = 84;
+    int columns = 32, rows = 48, slices = 85;
     double margin_x = 0.02, margin_y = 0.02;  // screen fractions beyond each edge, >= 0
     double first_distance_m = 10.0;           // > 0
     double ratio = 1.15;                      // > 1
@@ -135,6 +137,18 @@ struct AerialScreenTable {
     // (slices, rows, columns, 3), slice 0 and the top row (screen y = -margin_y) first:
     // in-scattering (RGB, times the exposure) and transmittance (RGB, in [0, 1]).
     std::vector<float> inscatter, transmittance;
+
+    // The table as four RGBA float textures for a shader that reads one slice's texels and
+    // goes linearly to the next in t = first_index + k + f (f the fraction of the way from
+    // slice k to k + 1; first_index any integer, e.g. log_ratio of first_distance_m in the
+    // shader's unit): (4, slices x rows, columns, 4), each texture's rows bottom first
+    // (OpenGL's and Blender's order) with slice k in rows [k rows, (k + 1) rows), alpha 1:
+    //     step_L = L_(k+1) - L_k,            L_k - (first_index + k) step_L,
+    //     step_A = A_(k+1) - A_k (A = 1 - T), A_k - (first_index + k) step_A,
+    // in the order (L at t = 0, step_L, A at t = 0, step_A), so that the passes are
+    // value + t step, one multiply-add per pass. Slice 0 and the last slice have step 0:
+    // distances before slice 1 read slice 0's passes, beyond the last slice the last's.
+    std::vector<float> step_textures(int first_index) const;
 };
 
 // The table of `view`'s camera at its render resolution (view.options are not used);
