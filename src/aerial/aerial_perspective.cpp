@@ -149,6 +149,41 @@ float optical_depth_of(float T) {
     return T > 0.0f ? std::min(-std::log(T), kMaxOpticalDepth) : kMaxOpticalDepth;
 }
 
+// Marches one ray per point (i, j) of a columns x rows grid through its slices, in
+// parallel, one SliceMarcher per thread: ray(i, j, distances) gives the point's ray and may
+// set its slice distances (else they stay `distances`); store(i, j, L, T) receives the
+// passes, 3 floats per slice each. Progress counts grid points.
+template <class RayOf, class Store>
+void march_grid(const AtmosphereLuts& luts, const PassColour& colour, int steps, int columns, int rows,
+                const std::vector<double>& distances, Progress* progress, RayOf ray, Store store) {
+    ProgressTracker tracker(progress, std::size_t(columns) * std::size_t(rows));
+    tbb::parallel_for(tbb::blocked_range<int>(0, columns * rows), [&](const tbb::blocked_range<int>& range) {
+        SliceMarcher marcher(luts, colour, steps);
+        std::vector<double> d = distances;
+        std::vector<float> L(d.size() * 3), T(L.size());
+        for (int point = range.begin(); point != range.end(); ++point) {
+            const int i = point % columns, j = point / columns;
+            const AirRay r = ray(i, j, d);
+            marcher.march(r, d, L.data(), T.data());
+            store(i, j, L, T);
+            tracker.advance();
+        }
+    });
+    tracker.finish();
+}
+
+// Offset of entry (slice k, row j, column i) of a (slices, rows, columns, 3) table.
+std::size_t table_offset(int k, int j, int i, int rows, int columns) {
+    return ((std::size_t(k) * std::size_t(rows) + std::size_t(j)) * std::size_t(columns) + std::size_t(i)) *
+           3;
+}
+
+// A table of a x b x c entries must stay within 64 Mi of them.
+void require_table_entries(const std::string& parameter, int a, int b, int c) {
+    if (double(a) * b * c > 64.0 * 1024 * 1024)
+        throw InvalidArgument(parameter, fmt::format("{} x {} x {} entries: at most 64 Mi", a, b, c));
+}
+
 AirRay air_ray(const AerialView& view, const CameraRays::Ray& ray, const glm::dvec3& sun) {
     return {ray.origin - view.planet_centre(), ray.direction, sun};
 }
@@ -334,18 +369,16 @@ AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view, const A
     const PassColour colour(view.atmosphere, view.exposure);
     inscatter_.assign(std::size_t(nx_) * ny_ * nz_ * 3, 0.0f);
     optical_depth_.assign(inscatter_.size(), 0.0f);
-    ProgressTracker tracker(progress, std::size_t(nx_) * std::size_t(ny_));
-    tbb::parallel_for(tbb::blocked_range<int>(0, nx_ * ny_), [&](const tbb::blocked_range<int>& range) {
-        SliceMarcher marcher(luts, colour, view.options.steps_per_slice);
-        std::vector<double> distances(static_cast<std::size_t>(nz_));
-        std::vector<float> L(distances.size() * 3), T(L.size());
-        for (int column = range.begin(); column != range.end(); ++column) {
-            const int i = column % nx_, j = column / nx_;
+    march_grid(
+        luts, colour, view.options.steps_per_slice, nx_, ny_, std::vector<double>(std::size_t(nz_)), progress,
+        [&](int i, int j, std::vector<double>& distances) {
             const CameraRays::Ray cam =
                 rays.at_screen(double(i) / double(nx_ - 1), double(j) / double(ny_ - 1));
             for (int k = 1; k <= nz_; ++k)
                 distances[std::size_t(k - 1)] = slice_depth(k) * cam.distance_per_depth;
-            marcher.march(air_ray(view, cam, sun), distances, L.data(), T.data());
+            return air_ray(view, cam, sun);
+        },
+        [&](int i, int j, const std::vector<float>& L, const std::vector<float>& T) {
             for (int k = 0; k < nz_; ++k) {
                 const std::size_t at = index(i, j, k);
                 for (int c = 0; c < 3; ++c) {
@@ -353,10 +386,7 @@ AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view, const A
                     optical_depth_[at + c] = optical_depth_of(T[std::size_t(k) * 3 + c]);
                 }
             }
-            tracker.advance();
-        }
-    });
-    tracker.finish();
+        });
 }
 
 double AerialPerspectiveVolume::slice_depth(int k) const {
@@ -601,10 +631,7 @@ void AerialTableLayout::validate(const std::string& parameter) const {
     require_in_range(p + "steps_per_slice", steps_per_slice, 1, 256);
     require_in_range(p + "linear_distance_m", linear_distance_m, 1e-3, 1e9, "m");
     require_in_range(p + "max_distance_m", max_distance_m, 2.0 * linear_distance_m, 1e9, "m");
-    if (double(azimuths) * elevations * slices > 64.0 * 1024 * 1024)
-        throw InvalidArgument(
-            parameter.empty() ? "slices" : parameter,
-            fmt::format("{} x {} x {} entries: at most 64 Mi", azimuths, elevations, slices));
+    require_table_entries(parameter.empty() ? "slices" : parameter, azimuths, elevations, slices);
 }
 
 double AerialTableLayout::azimuth_coordinate(const glm::dvec3& v) {
@@ -651,27 +678,20 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
     table.optical_depth.assign(table.inscatter.size(), 0.0f);
     std::vector<double> distances(std::size_t(nk - 1));  // slice 0: d = 0, L = 0, T = 1
     for (int k = 1; k < nk; ++k) distances[std::size_t(k - 1)] = layout.slice_distance(k);
-    ProgressTracker tracker(progress, std::size_t(na) * std::size_t(ne));
-    tbb::parallel_for(tbb::blocked_range<int>(0, na * ne), [&](const tbb::blocked_range<int>& range) {
-        SliceMarcher marcher(luts, colour, layout.steps_per_slice);
-        std::vector<float> L(distances.size() * 3), T(L.size());
-        for (int direction = range.begin(); direction != range.end(); ++direction) {
-            const int i = direction % na, j = direction / na;
-            marcher.march({camera_position - planet_centre, layout.direction(i, j), sun}, distances, L.data(),
-                          T.data());
+    march_grid(
+        luts, colour, layout.steps_per_slice, na, ne, distances, progress,
+        [&](int i, int j, std::vector<double>&) {
+            return AirRay{camera_position - planet_centre, layout.direction(i, j), sun};
+        },
+        [&](int i, int j, const std::vector<float>& L, const std::vector<float>& T) {
             for (int k = 1; k < nk; ++k) {
-                const std::size_t o =
-                    ((std::size_t(k) * std::size_t(ne) + std::size_t(j)) * std::size_t(na) + std::size_t(i)) *
-                    3;
+                const std::size_t o = table_offset(k, j, i, ne, na);
                 for (int c = 0; c < 3; ++c) {
                     table.inscatter[o + c] = L[std::size_t(k - 1) * 3 + c];
                     table.optical_depth[o + c] = optical_depth_of(T[std::size_t(k - 1) * 3 + c]);
                 }
             }
-            tracker.advance();
-        }
-    });
-    tracker.finish();
+        });
     return table;
 }
 
@@ -689,9 +709,7 @@ void AerialScreenTableLayout::validate(const std::string& parameter) const {
     if (!(slice_distance(slices - 1) <= 1e12))
         throw InvalidArgument(p + "slices", fmt::format("the last slice lies at {:g} m: at most 1e12 m",
                                                         slice_distance(slices - 1)));
-    if (double(columns) * rows * slices > 64.0 * 1024 * 1024)
-        throw InvalidArgument(p + "slices",
-                              fmt::format("{} x {} x {} entries: at most 64 Mi", columns, rows, slices));
+    require_table_entries(p + "slices", columns, rows, slices);
 }
 
 double AerialScreenTableLayout::screen_x(int i) const {
@@ -747,25 +765,18 @@ AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLu
     // orthographic camera its plane (where Blender's View Distance is the depth).
     std::vector<double> distances(static_cast<std::size_t>(nk));
     for (int k = 0; k < nk; ++k) distances[std::size_t(k)] = layout.slice_distance(k);
-    ProgressTracker tracker(progress, std::size_t(nx) * std::size_t(ny));
-    tbb::parallel_for(tbb::blocked_range<int>(0, nx * ny), [&](const tbb::blocked_range<int>& range) {
-        SliceMarcher marcher(luts, colour, layout.steps_per_slice);
-        std::vector<float> L(distances.size() * 3), T(L.size());
-        for (int point = range.begin(); point != range.end(); ++point) {
-            const int i = point % nx, j = point / nx;
-            const CameraRays::Ray cam = rays.at_screen(layout.screen_x(i), layout.screen_y(j));
-            marcher.march(air_ray(view, cam, sun), distances, L.data(), T.data());
+    march_grid(
+        luts, colour, layout.steps_per_slice, nx, ny, distances, progress,
+        [&](int i, int j, std::vector<double>&) {
+            return air_ray(view, rays.at_screen(layout.screen_x(i), layout.screen_y(j)), sun);
+        },
+        [&](int i, int j, const std::vector<float>& L, const std::vector<float>& T) {
             for (int k = 0; k < nk; ++k) {
-                const std::size_t o =
-                    ((std::size_t(k) * std::size_t(ny) + std::size_t(j)) * std::size_t(nx) + std::size_t(i)) *
-                    3;
+                const std::size_t o = table_offset(k, j, i, ny, nx);
                 std::copy_n(&L[std::size_t(k) * 3], 3, &table.inscatter[o]);
                 std::copy_n(&T[std::size_t(k) * 3], 3, &table.transmittance[o]);
             }
-            tracker.advance();
-        }
-    });
-    tracker.finish();
+        });
     return table;
 }
 

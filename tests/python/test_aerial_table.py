@@ -53,6 +53,21 @@ def rays(desc):
     return d, per
 
 
+def check_against_march(label, L, T, L_ref, T_ref):
+    """L within 1 % of the march (relative, above 1e-3), T within 0.005."""
+    rel = np.abs(L - L_ref) / np.maximum(L_ref, 1e-3)
+    print(f"{label}: L max rel {rel.max():.4f} mean {rel.mean():.5f}, "
+          f"T max abs {np.abs(T - T_ref).max():.5f}")
+    assert rel.max() < 0.01
+    assert np.abs(T - T_ref).max() < 0.005
+
+
+def check_far_is_hazed(z, L, T):
+    """Not vacuous: beyond 20 km T is well below 1, and L well above its value within 500 m."""
+    far, near = z > 20e3, z < 500.0
+    assert T[far].max() < 0.8 and L[far].mean() > 5.0 * L[near].mean()
+
+
 @pytest.mark.parametrize("sun_azimuth_deg", [30.0, 180.0])
 def test_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth_deg):
     desc = welkin.SceneDescription.from_json_string(scene(sun_azimuth_deg))
@@ -66,14 +81,8 @@ def test_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth_deg):
     direction, per = rays(desc)
     ground = np.isfinite(z)
     L, T = tab.lookup(atlas, direction[ground], (z * per)[ground], d_max)
-    rel = np.abs(L - L_ref[ground]) / np.maximum(L_ref[ground], 1e-3)
-    print(f"sun azimuth {sun_azimuth_deg}: L max rel {rel.max():.4f} mean {rel.mean():.5f}, "
-          f"T max abs {np.abs(T - T_ref[ground]).max():.5f}")
-    assert rel.max() < 0.01
-    assert np.abs(T - T_ref[ground]).max() < 0.005
-    # The far pixels are hazed (the test is not vacuous): T well below 1, L well above 0.
-    far, near = z[ground] > 20e3, z[ground] < 500.0
-    assert T[far].max() < 0.8 and L[far].mean() > 5.0 * L[near].mean()
+    check_against_march(f"sun azimuth {sun_azimuth_deg}", L, T, L_ref[ground], T_ref[ground])
+    check_far_is_hazed(z[ground], L, T)
 
 
 def test_distance_zero_is_no_air_and_the_layout_is_the_documented_one():
@@ -130,13 +139,9 @@ def test_screen_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth
     u, v = window(z.shape)
     ground = np.isfinite(z)
     L, T = tab.screen_lookup(layout, images, u[ground], v[ground], (z * per)[ground])
-    rel = np.abs(L - L_ref[ground]) / np.maximum(L_ref[ground], 1e-3)
-    print(f"screen table, sun azimuth {sun_azimuth_deg}: {layout.slices} slices, L max rel "
-          f"{rel.max():.4f} mean {rel.mean():.5f}, T max abs {np.abs(T - T_ref[ground]).max():.5f}")
-    assert rel.max() < 0.01
-    assert np.abs(T - T_ref[ground]).max() < 0.005
-    far, near = z[ground] > 20e3, z[ground] < 500.0
-    assert T[far].max() < 0.8 and L[far].mean() > 5.0 * L[near].mean()
+    check_against_march(f"screen table ({layout.slices} slices), sun azimuth {sun_azimuth_deg}",
+                        L, T, L_ref[ground], T_ref[ground])
+    check_far_is_hazed(z[ground], L, T)
 
 
 def test_screen_table_of_an_orthographic_camera_measures_from_its_plane():
@@ -151,9 +156,7 @@ def test_screen_table_of_an_orthographic_camera_measures_from_its_plane():
     images, _ = screen_table(desc, layout)
     u, v = window(z.shape)
     L, T = tab.screen_lookup(layout, images, u, v, z)
-    rel = np.abs(L - L_ref) / np.maximum(L_ref, 1e-3)
-    print(f"orthographic: L max rel {rel.max():.4f}, T max abs {np.abs(T - T_ref).max():.5f}")
-    assert rel.max() < 0.01 and np.abs(T - T_ref).max() < 0.005
+    check_against_march("orthographic", L, T, L_ref, T_ref)
     # Not vacuous: the rays' origins differ across the frame (3 km wide), and so does L.
     assert L_ref[:, -1].std() > 0.01 * L_ref[:, -1].mean()
 

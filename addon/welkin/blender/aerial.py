@@ -32,7 +32,6 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .. import native, scene_export, sky_request
-from .. import aerial_table
 from . import aerial_frame, cloud_scene, compat, compositor, farm, scene_sun
 from .scene_sun import UserError
 
@@ -103,13 +102,8 @@ def bake(scene, depsgraph=None, text=None):
         raise UserError(native.message())
     if text is None:
         text = scene_json(scene, module, depsgraph)
-    d = json.loads(text)
-    camera = d["camera"]
-    scale = scene.unit_settings.scale_length
-    d_max = aerial_table.max_distance_m(camera.get("clip_end_m", 1e6), d["atmosphere"]["bottom_radius_m"],
-                                        d["atmosphere"]["top_radius_m"])
     try:
-        aerial_frame.bake(scene, module, text, d_max / scale, scale, _baked)
+        aerial_frame.bake(scene, module, text, scene.unit_settings.scale_length, _baked)
     except (ValueError, OSError) as error:
         raise UserError(str(error)) from None
 

@@ -66,22 +66,24 @@ def table_image():
     return image
 
 
-def bake(scene, module, scene_text, max_distance_bu, scale_length, baked):
+def bake(scene, module, scene_text, scale_length, baked):
     """Bakes the table of the frame described by `scene_text` into the images in the form
     the scene's render engine reads (Cycles: the screen table, else the direction table)
     and sets the node group's constants; the images are left alone when `baked` (image
     name -> key of what it holds) says they hold this frame's table already."""
+    description = json.loads(scene_text)
     if scene.render.engine == 'CYCLES':
-        _bake_screen(scene, module, scene_text, scale_length, baked)
+        _bake_screen(scene, module, scene_text, description, scale_length, baked)
         return
+    atmosphere = description["atmosphere"]
+    max_distance_bu = tab.max_distance_m(description["camera"].get("clip_end_m", 1e6),
+                                         atmosphere["bottom_radius_m"],
+                                         atmosphere["top_radius_m"]) / scale_length
     key = f"{scene_text}|{max_distance_bu!r}|{scale_length!r}"
     image = table_image()
     group = shader_group(FETCH_CLOSEST)
-    for name, value in ((MAX_DISTANCE_NODE, max_distance_bu),
-                        (LINEAR_DISTANCE_NODE, tab.LINEAR_DISTANCE_M / scale_length)):
-        node = group.nodes.get(name)
-        if abs(node.outputs[0].default_value - value) > 1e-6 * value:
-            node.outputs[0].default_value = value
+    _set(group.nodes[MAX_DISTANCE_NODE].outputs[0], max_distance_bu)
+    _set(group.nodes[LINEAR_DISTANCE_NODE].outputs[0], tab.LINEAR_DISTANCE_M / scale_length)
     if baked.get(image.name) == key:
         return
     t = module.aerial_table(scene_text, azimuths=tab.AZIMUTHS, elevations=tab.ELEVATIONS,
@@ -94,11 +96,10 @@ def bake(scene, module, scene_text, max_distance_bu, scale_length, baked):
     baked[image.name] = key
 
 
-def screen_layout(scene, scene_text, scale_length):
-    """The screen table's layout for the frame: its render size, Cycles' pixel filter and
-    the camera's clip range (scene units)."""
-    d = json.loads(scene_text)
-    camera, res = d["camera"], d["resolution"]
+def screen_layout(scene, description, scale_length):
+    """The screen table's layout for the frame (`description`: its scene JSON, parsed): its
+    render size, Cycles' pixel filter and the camera's clip range (scene units)."""
+    camera, res = description["camera"], description["resolution"]
     width = max(1, res["x"] * res.get("percentage", 100) // 100)
     height = max(1, res["y"] * res.get("percentage", 100) // 100)
     cycles = getattr(scene, "cycles", None)
@@ -108,7 +109,7 @@ def screen_layout(scene, scene_text, scale_length):
 
 
 def _set(socket, value):
-    """Sets a node input's default value only when it changes (a change recompiles)."""
+    """Sets a node socket's default value only when it changes (a change recompiles)."""
     current = socket.default_value
     if isinstance(value, tuple):
         if any(abs(a - b) > 1e-9 * max(1.0, abs(b)) for a, b in zip(current, value)):
@@ -117,8 +118,8 @@ def _set(socket, value):
         socket.default_value = value
 
 
-def _bake_screen(scene, module, scene_text, scale_length, baked):
-    layout, ortho = screen_layout(scene, scene_text, scale_length)
+def _bake_screen(scene, module, scene_text, description, scale_length, baked):
+    layout, ortho = screen_layout(scene, description, scale_length)
     group = shader_group(FETCH_SCREEN)
     # The constants of the layout (aerial_table.screen_coordinates), and the distance the
     # slices measure: View Distance from the camera, or for an orthographic camera (whose
@@ -131,9 +132,10 @@ def _bake_screen(scene, module, scene_text, scale_length, baked):
     _set(group.nodes[SCREEN_NODE].inputs[1], (ax, ay, 0.0))
     cam = next(n for n in group.nodes if n.bl_idname == 'ShaderNodeCameraData')
     distance = cam.outputs["View Z Depth" if ortho else "View Distance"]
-    if not group.nodes[SLICE_NODE].inputs[0].links or group.nodes[SLICE_NODE].inputs[0].links[0].from_socket != distance:
-        group.links.new(distance, group.nodes[SLICE_NODE].inputs[0])
-    images = [screen_image(name, layout) for name in SCREEN_IMAGES]
+    slice_input = group.nodes[SLICE_NODE].inputs[0]
+    if not slice_input.links or slice_input.links[0].from_socket != distance:
+        group.links.new(distance, slice_input)
+    images = [screen_image(name, layout.columns, layout.height) for name in SCREEN_IMAGES]
     key = f"{scene_text}|{layout.key()}|{scale_length!r}"
     if all(baked.get(image.name) == key for image in images):
         return
@@ -149,16 +151,16 @@ def _bake_screen(scene, module, scene_text, scale_length, baked):
         baked[image.name] = key
 
 
-def screen_image(name, layout):
-    """One of the screen table's images, at the layout's size (resized in place, so that the
+def screen_image(name, width, height):
+    """One of the screen table's images, width x height (resized in place, so that the
     group's texture nodes keep it)."""
     image = bpy.data.images.get(name)
     if image is None:
-        image = bpy.data.images.new(name, layout.columns, layout.height, alpha=True, float_buffer=True)
+        image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
         image.colorspace_settings.name = 'Non-Color'
         image[MARK] = True
-    elif tuple(image.size) != (layout.columns, layout.height):
-        image.scale(layout.columns, layout.height)
+    elif tuple(image.size) != (width, height):
+        image.scale(width, height)
     return image
 
 
@@ -240,7 +242,7 @@ def _screen_nodes(group):
     for n, name in enumerate(SCREEN_IMAGES):
         tex = group.nodes.new('ShaderNodeTexImage')
         tex.location = (200, 400 - 300 * n)
-        tex.image = bpy.data.images.get(name) or screen_image(name, tab.ScreenLayout(2, 2, 1.5, 0.1, 1.0))
+        tex.image = bpy.data.images.get(name) or screen_image(name, 1, 1)  # sized by the bake
         tex.interpolation = 'Linear'
         tex.extension = 'EXTEND'
         group.links.new(uv, tex.inputs["Vector"])
