@@ -102,8 +102,11 @@ def main():
     if bpy.app.version < (5, 0, 0):
         raise SystemExit(f"blender5_sky_peer: needs Blender 5.0's bpy, this is "
                          f"{bpy.app.version_string}")
+    import atexit
+    import shutil
     import tempfile
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="welkin_peer_"))
+    atexit.register(shutil.rmtree, tmp, ignore_errors=True)
     scene = bpy.context.scene
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj)

@@ -29,6 +29,8 @@ import runpy
 import statistics
 import subprocess
 import sys
+import atexit
+import shutil
 import tempfile
 import time
 
@@ -46,6 +48,7 @@ p.add_argument("--cli", default=os.path.join(ROOT, "build", "welkin"))
 args = p.parse_args(argv)
 
 out = tempfile.mkdtemp(prefix="welkin_cycles_aerial_")
+atexit.register(shutil.rmtree, out, ignore_errors=True)
 rows = []
 
 

@@ -22,6 +22,8 @@ import os
 import runpy
 import statistics
 import sys
+import atexit
+import shutil
 import tempfile
 import time
 
@@ -37,6 +39,7 @@ p.add_argument("--csv")
 args = p.parse_args(argv)
 
 out = tempfile.mkdtemp(prefix="welkin_bench_aerial_frame_")
+atexit.register(shutil.rmtree, out, ignore_errors=True)
 sys.argv = [sys.argv[0], "--", "--out", out, "--size", str(args.size), "--samples", str(args.samples)]
 runpy.run_path(os.path.join(ROOT, "blend", "make_aerial_demo.py"), run_name="__main__")
 scene = bpy.context.scene

@@ -25,6 +25,8 @@ import argparse
 import math
 import os
 import sys
+import atexit
+import shutil
 import tempfile
 import time
 
@@ -74,6 +76,7 @@ def report(stage, name, x, ref, mask, note=""):
 
 
 tmp = tempfile.mkdtemp(prefix="welkin_cycles_clouds_")
+atexit.register(shutil.rmtree, tmp, ignore_errors=True)
 vdb = os.path.join(tmp, "cumulus.vdb")
 cv.write_cumulus(vdb)
 light = dict(density_scale=SIGMA, sun_direction=SUN, sun_irradiance=E_SUN, sky_radiance=L_SKY)

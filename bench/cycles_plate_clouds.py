@@ -23,6 +23,8 @@ import os
 import runpy
 import subprocess
 import sys
+import atexit
+import shutil
 import tempfile
 import time
 
@@ -40,6 +42,7 @@ args = p.parse_args(argv)
 W, H = args.width, args.width * 9 // 16
 
 out = tempfile.mkdtemp(prefix="welkin_cycles_plate_clouds_")
+atexit.register(shutil.rmtree, out, ignore_errors=True)
 sys.argv = [sys.argv[0], "--", "--out", out, "--size", "320", "--samples", "1"]
 runpy.run_path(os.path.join(ROOT, "blend", "make_aerial_demo.py"), run_name="__main__")
 import cycles_volume as cv  # noqa: E402

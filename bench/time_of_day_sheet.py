@@ -20,6 +20,8 @@ import math
 import pathlib
 import subprocess
 import sys
+import atexit
+import shutil
 import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -110,6 +112,7 @@ def main(out_png):
     import addon_testing as T
     T.install_addon()
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="welkin_sheet_"))
+    atexit.register(shutil.rmtree, tmp, ignore_errors=True)
 
     scene, sun = T.new_scene(ELEVATIONS[0], AZIMUTH, resolution='1024')
     setup_camera(scene)

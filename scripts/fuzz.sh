@@ -30,6 +30,10 @@ done
 
 out=$BUILD_DIR/fuzz
 mkdir -p "$out/artifacts"
+# The targets' scratch files (fuzz_vdb's input file) go into a folder removed at the end.
+scratch=$(mktemp -d "${TMPDIR:-/tmp}/welkin_fuzz.XXXXXX")
+trap 'rm -rf "$scratch"' EXIT
+export TMPDIR=$scratch
 instrumented=(src/io/file.cpp src/io/json.cpp src/atmosphere/json.cpp src/scene/json.cpp src/clouds/vdb.cpp)
 launcher=()
 command -v ccache >/dev/null && launcher=(ccache)

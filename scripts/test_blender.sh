@@ -33,6 +33,13 @@ tests=("$@")
 # added it.
 declare -A known=()
 
+# Every temporary file of the run (the tests', bpy_blender.py's user folders, Blender's
+# session folders) goes into one folder, removed when the run ends however it ends: a test
+# stopped by the timeout, or Blender exiting without its clean-up, leaves nothing in /tmp.
+scratch=$(mktemp -d "${TMPDIR:-/tmp}/welkin_test_blender.XXXXXX")
+trap 'rm -rf "$scratch"' EXIT
+export TMPDIR=$scratch
+
 dist=build/blender_dist
 mkdir -p "$dist"
 version=$(sed -n 's/^project(welkin VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)

@@ -12,17 +12,22 @@ that is not a legacy add-on is looked up among the installed extensions, bl_ext.
 project's tests, not a full emulation: unknown options fail loudly.
 
 The user folders (scripts, config, extensions) are a temporary directory unless the
-environment names them, so the machine's Blender settings are never touched.
+environment names them, so the machine's Blender settings are never touched; it is removed
+at exit, with whatever the script registered with atexit (the tests' own temporary folders)
+and Blender's session temporary folder.
 """
+import atexit
 import os
 import pathlib
 import runpy
+import shutil
 import sys
 import tempfile
 import traceback
 
 if "BLENDER_USER_RESOURCES" not in os.environ:
     _home = tempfile.mkdtemp(prefix="welkin_bpy_home_")
+    atexit.register(shutil.rmtree, _home, ignore_errors=True)
     os.environ["BLENDER_USER_RESOURCES"] = _home
     os.environ.setdefault("BLENDER_USER_CONFIG", os.path.join(_home, "config"))
     os.environ.setdefault("BLENDER_USER_EXTENSIONS", os.path.join(_home, "extensions"))
@@ -69,6 +74,23 @@ def frame_list(text):
     return frames
 
 
+def finish(code):
+    """Exits with `code` at once, as Blender does after --python-exit-code, but first runs
+    the atexit functions (Blender's own, which removes its session temporary folder, and the
+    tests' and this script's clean-ups), which os._exit alone would skip."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    try:
+        atexit._run_exitfuncs()
+        session = bpy.app.tempdir  # Blender's session folder (blender_XXXXXX/), not its parent
+        if os.path.basename(os.path.dirname(session)).startswith("blender_"):
+            shutil.rmtree(session, ignore_errors=True)
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+
+
 def main(argv):
     exit_code = 0
     i = 0
@@ -97,8 +119,7 @@ def main(argv):
             except BaseException:
                 traceback.print_exc()
                 if exit_code:
-                    sys.stdout.flush()
-                    os._exit(exit_code)
+                    finish(exit_code)
         elif arg == "--addons":
             for name in value.split(","):
                 enable_addon(name)
@@ -130,10 +151,13 @@ def main(argv):
             bpy.ops.wm.open_mainfile(filepath=arg)
         else:
             raise SystemExit(f"bpy_blender: unsupported argument {arg!r}")
-    sys.stdout.flush()
-    sys.stderr.flush()
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
-    os._exit(0)
+    try:
+        main(sys.argv[1:])
+    except SystemExit as stop:
+        if stop.code not in (None, 0):
+            print(stop.code if isinstance(stop.code, str) else "", file=sys.stderr)
+            finish(stop.code if isinstance(stop.code, int) else 1)
+    finish(0)

@@ -36,6 +36,8 @@ Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
 import os
 import pathlib
 import sys
+import atexit
+import shutil
 import tempfile
 
 import numpy as np
@@ -60,6 +62,7 @@ SIZE, SAMPLES, PATHS = 48, 48, 48
 
 def main():
     tmp = tempfile.mkdtemp(prefix="welkin_test_cycles_clouds_")
+    atexit.register(shutil.rmtree, tmp, ignore_errors=True)
     vdb = os.path.join(tmp, "ball.vdb")
     cv.write_ball(vdb, voxel_m=10.0, radius_m=100.0)
     light = dict(density_scale=0.03, sun_direction=(-0.5, -0.6, 0.62), sun_irradiance=3.0, sky_radiance=0.3)
