@@ -24,13 +24,13 @@ All times are the median of --repeats whole calls (1 by default) on this shared 
 machine, measured in the same run; the ratios are the figures.
 """
 import argparse
+import atexit
 import os
 import runpy
+import shutil
 import statistics
 import subprocess
 import sys
-import atexit
-import shutil
 import tempfile
 import time
 

@@ -18,12 +18,12 @@ repeat to the next), of the wall time and of the process's CPU time (all threads
 ratio within a repeat varies less.
 """
 import argparse
+import atexit
 import os
 import runpy
+import shutil
 import statistics
 import sys
-import atexit
-import shutil
 import tempfile
 import time
 

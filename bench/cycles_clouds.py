@@ -22,11 +22,11 @@ bench/cycles_volume.py. Two stages, one run:
    same process on the same (shared) machine; the ratio is the figure.
 """
 import argparse
+import atexit
 import math
 import os
-import sys
-import atexit
 import shutil
+import sys
 import tempfile
 import time
 

@@ -18,13 +18,13 @@ light, so only times are compared. Both whole calls (Cycles: sync, volume, rende
 process, LUTs, VDB, plate, EXR write), the same run.
 """
 import argparse
+import atexit
 import json
 import os
 import runpy
+import shutil
 import subprocess
 import sys
-import atexit
-import shutil
 import tempfile
 import time
 

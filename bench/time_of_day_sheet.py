@@ -16,12 +16,12 @@ x / (1 + x) per channel, then sRGB. The add-on is installed from its zip as in t
 (a temporary scripts directory; the machine's Blender configuration is untouched).
 """
 import argparse
+import atexit
 import math
 import pathlib
+import shutil
 import subprocess
 import sys
-import atexit
-import shutil
 import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -88,89 +88,88 @@ def lookup(atlas: np.ndarray, direction: np.ndarray, distance: np.ndarray, max_d
 
 # --- the screen table (Cycles) -------------------------------------------------------------
 # welkin.aerial_screen_table() (aerial_table.hpp) gives, for the frame's camera, the table
-# as four float RGBA textures ("textures": AerialScreenTable::step_textures), each
-# `columns` wide and rows x slices tall, rows counted from the bottom (Blender's order),
-# tile k = rows [k rows, (k + 1) rows) holding slice k: L and the opacity 1 - T, each
-# extrapolated to t = 0 along its step to the next slice, and the two steps, so that one
-# texture coordinate reads a slice and the passes are value + t step: one vector
-# multiply-add each. The shader's arithmetic, per sample (screen_coordinates):
-#     t = log_ratio(d)                    d: View Distance, scene units
-#     k = floor(t)                        the slice below d is k - first_exponent
-#     (x, y) = (ax u + bx, ay v + by + (k - first_exponent) / slices)
-# with (u, v) the Window coordinate (0 .. 1 left to right, bottom to top); the first slice
-# lies at ratio^first_exponent scene units, so that the integer part of t is the slice.
+# as three float RGBA textures on a lattice that repeats in every axis ("textures" and
+# "lattice": AerialScreenTable::textures), so that the shader's arithmetic per sample is
+# (screen_coordinates):
+#     tau = log_B(d), B = ratio^slices     d: View Distance (View Z Depth: orthographic)
+#     (u, v) = (x, y) * scale + snap(tau, (1, 1 / slices))   'Linear', 'Repeat'
+#     L = tex0 + tau tex1,  1 - T = tex2 + tau (tex0.a, tex1.a, tex2.a)
+# with (x, y) the View Vector's (perspective) or the Window coordinate (0 .. 1 left to right,
+# bottom to top): one logarithm, one snap, one multiply-add, three fetches, a combine and
+# two multiply-adds. The snap's x is floor(tau), an integer: it leaves a repeating texture's
+# u as it is.
 SCREEN_COLUMNS, SCREEN_ROWS = 32, 48
 SCREEN_RATIO = 1.15
 SCREEN_STEPS_PER_SLICE = 1
-SCREEN_RANGE = 1e5  # the first slice lies no nearer than clip end / SCREEN_RANGE
 SCREEN_MARGIN_PX = 1.0  # beyond the pixel filter's half width
 
 
-class ScreenLayout:
-    """The screen table's layout for one camera and render (plain numbers)."""
+def screen_margins(width_px: int, height_px: int, filter_px: float) -> tuple[float, float]:
+    """How far beyond the frame's edges samples fall (Window fractions): the pixel filter's
+    half width and a pixel more."""
+    reach = 0.5 * filter_px + SCREEN_MARGIN_PX
+    return reach / width_px, reach / height_px
 
-    def __init__(self, width_px: int, height_px: int, filter_px: float, clip_start: float,
-                 clip_end: float, columns: int = SCREEN_COLUMNS, rows: int = SCREEN_ROWS,
-                 ratio: float = SCREEN_RATIO) -> None:
-        if not (clip_end > clip_start > 0.0):
-            raise ValueError(f"aerial screen table: the clip range {clip_start} .. {clip_end} "
-                             "must be positive and increasing")
-        self.columns, self.rows, self.ratio = columns, rows, ratio
-        reach = 0.5 * filter_px + SCREEN_MARGIN_PX  # how far outside the frame samples fall, px
-        self.margin_x, self.margin_y = reach / width_px, reach / height_px
-        log_r = math.log(ratio)
-        first = max(clip_start, clip_end / SCREEN_RANGE)
-        self.first_exponent = math.floor(math.log(first) / log_r)
-        self.slices = math.ceil(math.log(clip_end) / log_r - self.first_exponent) + 2
-        self.first_distance = ratio ** self.first_exponent  # scene units
+
+class ScreenLattice:
+    """A baked screen table's lattice (welkin.aerial_screen_table()["lattice"]) and the
+    constants of the shader's arithmetic."""
+
+    def __init__(self, lattice: dict) -> None:
+        self.coordinate = str(lattice["coordinate"])
+        self.columns, self.rows = int(lattice["columns"]), int(lattice["rows"])
+        self.slices = int(lattice["slices"])
+        self.spacing_x, self.spacing_y = float(lattice["spacing_x"]), float(lattice["spacing_y"])
+        self.ratio = float(lattice["ratio"])
+        self.first_exponent = int(lattice["first_exponent"])
 
     @property
     def height(self) -> int:
         return self.rows * self.slices
 
-    def affine(self) -> tuple[float, float, float, float]:
-        """(ax, bx, ay, by) of the texture coordinate in the Window coordinate (slice 0)."""
-        C, R, S = self.columns, self.rows, self.slices
-        ax = (C - 1) / (C * (1.0 + 2.0 * self.margin_x))
-        bx = (0.5 + self.margin_x * (C - 1) / (1.0 + 2.0 * self.margin_x)) / C
-        ay = (R - 1) / (S * R * (1.0 + 2.0 * self.margin_y))
-        by = (0.5 + self.margin_y * (R - 1) / (1.0 + 2.0 * self.margin_y)) / (S * R)
-        return ax, bx, ay, by
+    @property
+    def log_base(self) -> float:
+        return self.ratio ** self.slices
 
-    def key(self) -> str:
-        return (f"{self.columns}x{self.rows}x{self.slices}/{self.margin_x!r}/{self.margin_y!r}/"
-                f"{self.first_exponent}/{self.ratio!r}")
+    @property
+    def snap(self) -> tuple[float, float, float]:
+        return 1.0, 1.0 / self.slices, 1.0
+
+    @property
+    def scale(self) -> tuple[float, float, float]:
+        return (1.0 / (self.columns * self.spacing_x),
+                1.0 / (self.slices * self.rows * self.spacing_y), 0.0)
 
 
-def screen_coordinates(layout: ScreenLayout, u: np.ndarray, v: np.ndarray, distance: np.ndarray
+def screen_coordinates(lattice: ScreenLattice, x: np.ndarray, y: np.ndarray, distance: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(x, y, t): the texture coordinate of the slice below the distance and the slice
-    coordinate, as the material node group computes them (u, v: Window; distance: scene
-    units, > 0)."""
-    ax, bx, ay, by = layout.affine()
-    t = np.log(distance) / math.log(layout.ratio)
-    y = ay * v + by + (np.floor(t) - layout.first_exponent) / layout.slices
-    return ax * u + bx, y, t
+    """(u, v, tau) as the material node group computes them (x, y: the lattice's
+    coordinate; distance: scene units, > 0)."""
+    tau = np.log(distance) / math.log(lattice.log_base)
+    snap_x, snap_y, _ = lattice.snap
+    scale_x, scale_y, _ = lattice.scale
+    return (x * scale_x + np.floor(tau / snap_x) * snap_x,
+            y * scale_y + np.floor(tau / snap_y) * snap_y, tau)
 
 
-def _bilinear_extend(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+def _bilinear_repeat(image: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     H, W = image.shape[:2]
-    fx, fy = x * W - 0.5, y * H - 0.5
+    fx, fy = u * W - 0.5, v * H - 0.5
     x0, y0 = np.floor(fx).astype(np.int64), np.floor(fy).astype(np.int64)
     ax, ay = (fx - x0)[..., None], (fy - y0)[..., None]
-    xa, xb = np.clip(x0, 0, W - 1), np.clip(x0 + 1, 0, W - 1)
-    ya, yb = np.clip(y0, 0, H - 1), np.clip(y0 + 1, 0, H - 1)
-    rgb = image[..., :3].astype(np.float64)
-    return ((1 - ay) * ((1 - ax) * rgb[ya, xa] + ax * rgb[ya, xb])
-            + ay * ((1 - ax) * rgb[yb, xa] + ax * rgb[yb, xb]))
+    xa, xb, ya, yb = x0 % W, (x0 + 1) % W, y0 % H, (y0 + 1) % H
+    rgba = image.astype(np.float64)
+    return ((1 - ay) * ((1 - ax) * rgba[ya, xa] + ax * rgba[ya, xb])
+            + ay * ((1 - ax) * rgba[yb, xa] + ax * rgba[yb, xb]))
 
 
-def screen_lookup(layout: ScreenLayout, textures: np.ndarray, u: np.ndarray, v: np.ndarray,
+def screen_lookup(lattice: ScreenLattice, textures: np.ndarray, x: np.ndarray, y: np.ndarray,
                   distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(L, T), (..., 3) each, as the material node group computes them from the core's four
-    textures ('Linear' fetches with 'Extend', then value + t step)."""
-    x, y, t = screen_coordinates(layout, u, v, distance)
-    t = t[..., None]
-    L = _bilinear_extend(textures[0], x, y) + t * _bilinear_extend(textures[1], x, y)
-    opacity = _bilinear_extend(textures[2], x, y) + t * _bilinear_extend(textures[3], x, y)
+    """(L, T), (..., 3) each, as the material node group computes them from the core's three
+    textures ('Linear' fetches with 'Repeat', then value + tau step)."""
+    u, v, tau = screen_coordinates(lattice, x, y, distance)
+    tau = tau[..., None]
+    t0, t1, t2 = (_bilinear_repeat(t, u, v) for t in textures)
+    L = t0[..., :3] + tau * t1[..., :3]
+    opacity = t2[..., :3] + tau * np.stack([t0[..., 3], t1[..., 3], t2[..., 3]], axis=-1)
     return L, 1.0 - opacity

@@ -695,59 +695,84 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
     return table;
 }
 
-// The screen table (aerial_table.hpp): one march per grid point of the camera's screen.
+// The screen table (aerial_table.hpp): one march per lattice point of the camera's screen.
 void AerialScreenTableLayout::validate(const std::string& parameter) const {
     const std::string p = parameter.empty() ? parameter : parameter + ".";
-    require_in_range(p + "columns", columns, 2, 4096);
-    require_in_range(p + "rows", rows, 2, 4096);
-    require_in_range(p + "slices", slices, 2, 1024);
+    require_in_range(p + "columns", columns, 4, 4096);
+    require_in_range(p + "rows", rows, 4, 4096);
     require_in_range(p + "margin_x", margin_x, 0.0, 1.0);
     require_in_range(p + "margin_y", margin_y, 0.0, 1.0);
-    require_in_range(p + "first_distance_m", first_distance_m, 1e-6, 1e9, "m");
+    require_in_range(p + "unit_m", unit_m, 1e-6, 1e6, "m");
     require_in_range(p + "ratio", ratio, 1.001, 10.0);
+    require_in_range(p + "max_slices", max_slices, 8, 1024);
     require_in_range(p + "steps_per_slice", steps_per_slice, 1, 256);
-    if (!(slice_distance(slices - 1) <= 1e12))
-        throw InvalidArgument(p + "slices", fmt::format("the last slice lies at {:g} m: at most 1e12 m",
-                                                        slice_distance(slices - 1)));
-    require_table_entries(p + "slices", columns, rows, slices);
+    require_table_entries(p + "max_slices", columns, rows, max_slices);
 }
 
-double AerialScreenTableLayout::screen_x(int i) const {
-    return -margin_x + (1.0 + 2.0 * margin_x) * double(i) / double(columns - 1);
+namespace {
+
+int wrap(long long a, long long n) {
+    const long long r = a % n;
+    return int(r < 0 ? r + n : r);
 }
 
-double AerialScreenTableLayout::screen_y(int j) const {
-    return -margin_y + (1.0 + 2.0 * margin_y) * double(j) / double(rows - 1);
+// The lattice along one axis over [lo, hi]: points - 2 spacings across it, the first point
+// half a spacing past a multiple of the spacing at or below lo (so the last lies at or
+// beyond hi).
+void lattice_axis(double lo, double hi, int points, double& spacing, int& first) {
+    spacing = (hi - lo) / double(points - 2);
+    first = int(std::floor(lo / spacing - 0.5));
 }
 
-double AerialScreenTableLayout::slice_distance(int k) const {
-    return first_distance_m * std::pow(ratio, double(k));
+}  // namespace
+
+double AerialScreenLattice::slice_distance_m(int k) const {
+    return unit_m * std::pow(ratio, double(first_exponent + k));
 }
 
-std::vector<float> AerialScreenTable::step_textures(int first_index) const {
-    const std::size_t S = std::size_t(layout.slices), R = std::size_t(layout.rows),
-                      C = std::size_t(layout.columns);
+int AerialScreenLattice::texel_column(int i) const { return wrap((long long)first_x + i, columns); }
+
+int AerialScreenLattice::texel_row(int j, int k) const {
+    return wrap((long long)(first_exponent + k) * rows + first_y + j, (long long)slices * rows);
+}
+
+std::size_t AerialScreenTable::texture_floats() const {
+    return 3 * std::size_t(lattice.slices) * std::size_t(lattice.rows) * std::size_t(lattice.columns) * 4;
+}
+
+std::vector<float> AerialScreenTable::textures() const {
+    std::vector<float> out(texture_floats());
+    textures(out);
+    return out;
+}
+
+void AerialScreenTable::textures(std::span<float> out) const {
+    if (out.size() != texture_floats())
+        throw InvalidArgument("textures",
+                              fmt::format("{} floats given, {} needed", out.size(), texture_floats()));
+    const AerialScreenLattice& g = lattice;
+    const std::size_t S = std::size_t(g.slices), R = std::size_t(g.rows), C = std::size_t(g.columns);
     const std::size_t texture = S * R * C * 4;
-    std::vector<float> out(4 * texture, 1.0f);
-    for (std::size_t k = 0; k < S; ++k) {
-        const bool flat = k == 0 || k + 1 == S;  // slice 0 and the last read as they are
-        const double t = double(first_index) + double(k);
+    const double n = double(g.slices);
+    tbb::parallel_for(std::size_t(0), S, [&](std::size_t k) {
+        const bool last = k + 1 == S;  // read flat: no distance seen lies beyond it
+        const double s = double(g.first_exponent) + double(k);
         for (std::size_t j = 0; j < R; ++j)
             for (std::size_t i = 0; i < C; ++i) {
                 const std::size_t at = ((k * R + j) * C + i) * 3, next = at + R * C * 3;
-                const std::size_t texel = ((k * R + (R - 1 - j)) * C + i) * 4;  // bottom row first
+                const std::size_t texel =
+                    (std::size_t(g.texel_row(int(j), int(k))) * C + std::size_t(g.texel_column(int(i)))) * 4;
                 for (std::size_t c = 0; c < 3; ++c) {
                     const double L = inscatter[at + c], A = 1.0 - double(transmittance[at + c]);
-                    const double dL = flat ? 0.0 : inscatter[next + c] - L;
-                    const double dA = flat ? 0.0 : (1.0 - double(transmittance[next + c])) - A;
-                    out[texel + c] = float(L - t * dL);
-                    out[texture + texel + c] = float(dL);
-                    out[2 * texture + texel + c] = float(A - t * dA);
-                    out[3 * texture + texel + c] = float(dA);
+                    const double dL = last ? 0.0 : inscatter[next + c] - L;
+                    const double dA = last ? 0.0 : (1.0 - double(transmittance[next + c])) - A;
+                    out[texel + c] = float(L - s * dL);
+                    out[texture + texel + c] = float(n * dL);
+                    out[2 * texture + texel + c] = float(A - s * dA);
+                    out[c * texture + texel + 3] = float(n * dA);
                 }
             }
-    }
-    return out;
+    });
 }
 
 AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLuts& luts,
@@ -755,20 +780,88 @@ AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLu
     view.validate();
     layout.validate("table");
     const CameraRays rays(view.camera, view.width, view.height);
+    const bool view_vector = layout.coordinate == ScreenCoordinate::ViewVector;
+    if (view_vector && rays.type() != CameraType::Perspective)
+        throw InvalidArgument("table.coordinate",
+                              fmt::format("\"view_vector\" needs a perspective camera, this one is {}",
+                                          camera_type_name(view.camera.type)));
+
+    // The frame widened by the margins, in the coordinate, and the farthest distance seen
+    // (Cycles clips a perspective camera's rays at clip end in depth, so its oblique rays
+    // reach farther): from the widened frame's edges, sampled finely (the extremes of a
+    // view vector over a straight edge of the film lie at its ends or where it crosses an
+    // axis, both within a sample's spacing of a sample).
+    double x_lo = 1e300, x_hi = -1e300, y_lo = 1e300, y_hi = -1e300, reach = 1.0;
+    constexpr int kEdge = 256;
+    const double mx = layout.margin_x, my = layout.margin_y;
+    for (int e = 0; e < 4; ++e)
+        for (int q = 0; q <= kEdge; ++q) {
+            const double f = double(q) / kEdge;
+            const double wx = e < 2 ? -mx + (1.0 + 2.0 * mx) * f : (e == 2 ? -mx : 1.0 + mx);
+            const double wy = e < 2 ? (e == 0 ? -my : 1.0 + my) : -my + (1.0 + 2.0 * my) * f;
+            const CameraRays::Ray r = rays.at_screen(wx, 1.0 - wy);  // Window's y is upwards
+            double cx = wx, cy = wy;
+            if (view_vector) {
+                const glm::dvec3 v = rays.view_vector(r.direction);
+                cx = v.x;
+                cy = v.y;
+            }
+            x_lo = std::min(x_lo, cx);
+            x_hi = std::max(x_hi, cx);
+            y_lo = std::min(y_lo, cy);
+            y_hi = std::max(y_hi, cy);
+            if (rays.type() == CameraType::Perspective) reach = std::max(reach, r.distance_per_depth);
+        }
+    const double slack_x = 1e-3 * (x_hi - x_lo), slack_y = 1e-3 * (y_hi - y_lo);
+    AerialScreenTable table;
+    AerialScreenLattice& g = table.lattice;
+    g.coordinate = layout.coordinate;
+    g.columns = layout.columns;
+    g.rows = layout.rows;
+    lattice_axis(x_lo - slack_x, x_hi + slack_x, g.columns, g.spacing_x, g.first_x);
+    lattice_axis(y_lo - slack_y, y_hi + slack_y, g.rows, g.spacing_y, g.first_y);
+
+    // Slices: one below the clip start and one beyond the farthest distance besides those
+    // that bracket them, so that a shader's float rounding of log d near either end still
+    // reads its own slice, never the other end's across the wrap.
+    g.unit_m = layout.unit_m;
+    const double near = view.camera.clip_start_m / layout.unit_m;
+    const double far = view.camera.clip_end_m * reach / layout.unit_m;
+    g.ratio = layout.ratio;
+    auto span = [&](double ratio, int& first) {
+        first = int(std::floor(std::log(near) / std::log(ratio))) - 1;
+        return int(std::ceil(std::log(far) / std::log(ratio))) + 1 - first + 1;
+    };
+    g.slices = span(g.ratio, g.first_exponent);
+    if (g.slices > layout.max_slices) {
+        g.ratio = std::pow(far / near, 1.0 / double(layout.max_slices - 5));
+        g.slices = span(g.ratio, g.first_exponent);
+    }
+    require_table_entries("table.max_slices", g.columns, g.rows, g.slices);
+
     const glm::dvec3 sun = view.origin.sun_direction;
     const PassColour colour(view.atmosphere, view.exposure);
-    const int nx = layout.columns, ny = layout.rows, nk = layout.slices;
-    AerialScreenTable table{layout, {}, {}};
+    const int nx = g.columns, ny = g.rows, nk = g.slices;
     table.inscatter.assign(std::size_t(nx) * ny * nk * 3, 0.0f);
     table.transmittance.assign(table.inscatter.size(), 1.0f);
     // Distances along each ray from its origin: the camera's position, or for an
-    // orthographic camera its plane (where Blender's View Distance is the depth).
+    // orthographic camera its plane (where Blender's View Z Depth is the distance).
     std::vector<double> distances(static_cast<std::size_t>(nk));
-    for (int k = 0; k < nk; ++k) distances[std::size_t(k)] = layout.slice_distance(k);
+    for (int k = 0; k < nk; ++k) distances[std::size_t(k)] = g.slice_distance_m(k);
     march_grid(
         luts, colour, layout.steps_per_slice, nx, ny, distances, progress,
         [&](int i, int j, std::vector<double>&) {
-            return air_ray(view, rays.at_screen(layout.screen_x(i), layout.screen_y(j)), sun);
+            if (!view_vector) return air_ray(view, rays.at_screen(g.x(i), 1.0 - g.y(j)), sun);
+            // Lattice points beyond the unit disc (corners of a very wide frame's lattice,
+            // outside the frame) take the nearest direction ahead.
+            double vx = g.x(i), vy = g.y(j);
+            const double r2 = vx * vx + vy * vy, most = 1.0 - 1e-6;
+            if (r2 > most) {
+                const double f = std::sqrt(most / r2);
+                vx *= f;
+                vy *= f;
+            }
+            return air_ray(view, rays.at_view_vector(vx, vy), sun);
         },
         [&](int i, int j, const std::vector<float>& L, const std::vector<float>& T) {
             for (int k = 0; k < nk; ++k) {

@@ -194,4 +194,26 @@ CameraRays::Ray CameraRays::at_screen(double sx, double sy) const {
     return ray;
 }
 
+glm::dvec3 CameraRays::view_vector(const glm::dvec3& direction) const {
+    // Blender hands Cycles the camera's matrix times scale(1, 1, -1): its camera space is the
+    // object's local frame with z flipped (forward, where the camera looks).
+    return glm::normalize(
+        glm::dvec3(glm::dot(direction, right_), glm::dot(direction, up_), -glm::dot(direction, back_)));
+}
+
+CameraRays::Ray CameraRays::at_view_vector(double vx, double vy) const {
+    if (type_ != CameraType::Perspective)
+        throw InvalidArgument("camera.type", "a ray along a view vector needs a perspective camera");
+    const double vz2 = 1.0 - vx * vx - vy * vy;
+    if (!(vz2 > 0.0))
+        throw InvalidArgument("view_vector",
+                              fmt::format("({:g}, {:g}) is not the x, y of a unit vector ahead", vx, vy));
+    const double vz = std::sqrt(vz2);
+    Ray ray;
+    ray.origin = position_;
+    ray.direction = glm::normalize(vx * right_ + vy * up_ - vz * back_);
+    ray.distance_per_depth = 1.0 / vz;
+    return ray;
+}
+
 }  // namespace welkin

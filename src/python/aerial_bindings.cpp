@@ -133,29 +133,38 @@ py::dict aerial_table_py(const py::handle& scene_in, int azimuths, int elevation
 
 const char* const kAerialScreenTableDoc = R"doc(
 Aerial perspective of the scene camera as a table over its screen and the distance
-(include/welkin/aerial/aerial_table.hpp): what a shader that knows a shading point's
-screen position and distance samples to haze a render in the render itself.
+(include/welkin/aerial/aerial_table.hpp): what a shader that knows a shading point's place
+in the frame and its distance samples to haze a render in the render itself.
 
 scene : SceneDescription or its JSON text (atmosphere, origin altitude, sun, exposure, the
-    camera and the render resolution)
-columns, rows : the screen grid, evenly spaced from -margin to 1 + margin of the screen
-    (left to right, top to bottom)
-margin_x, margin_y : how far beyond the frame's edges the grid reaches, screen fractions
-slices, first_distance_m, ratio : distance slices d_k = first_distance_m ratio^k along
-    each grid point's ray, k = 0 .. slices - 1
+    camera with its clip range, and the render resolution)
+coordinate : "window" (Blender's Texture Coordinate > Window) or "view_vector" (Camera
+    Data > View Vector; perspective cameras only): what the lattice is laid over
+columns, rows : lattice points across the frame widened by margin_x, margin_y (Window
+    fractions beyond each edge)
+unit_m : the shader's distance unit in metres (Blender's unit scale)
+ratio, max_slices : distance slices at integer powers of ratio (in that unit) from below
+    the clip start to beyond the farthest distance seen; the ratio grows to keep to
+    max_slices
 steps_per_slice : march steps per slice
-first_index : the slice coordinate t of slice 0 in the textures (AerialScreenTable::
-    step_textures: a shader reads value + t step, t = first_index + k + f)
 
-Returns {"inscatter", "transmittance", "textures"}: float32 arrays (slices, rows, columns,
-3), top row first, inscatter in the passes' units (linear Rec.709 W m^-2 sr^-1 times the
-exposure); and (4, slices x rows, columns, 4), the four RGBA textures a shader reads (L
-and 1 - T extrapolated to t = 0 and their steps to the next slice; rows bottom first, slice
-k in rows k rows .. (k + 1) rows - 1). ValueError names a bad parameter.
+Returns {"inscatter", "transmittance", "textures", "lattice"}: float32 arrays (slices,
+rows, columns, 3), lattice row 0 (the lowest) first, inscatter in the passes' units (linear
+Rec.709 W m^-2 sr^-1 times the exposure); (3, slices x rows, columns, 4), the three RGBA
+textures a shader reads (AerialScreenTable::textures; rows bottom first); and the lattice:
+{"coordinate", "columns", "rows", "slices", "spacing_x", "spacing_y", "first_x",
+"first_y", "ratio", "first_exponent", "unit_m"}. ValueError names a bad parameter.
 )doc";
 
+ScreenCoordinate screen_coordinate_from_name(const std::string& name) {
+    if (name == "window") return ScreenCoordinate::Window;
+    if (name == "view_vector") return ScreenCoordinate::ViewVector;
+    throw InvalidArgument("coordinate",
+                          fmt::format("must be \"window\" or \"view_vector\", got \"{}\"", name));
+}
+
 py::dict aerial_screen_table_py(const py::handle& scene_in, const AerialScreenTableLayout& layout,
-                                int first_index, const py::object& progress) {
+                                const py::object& progress) {
     const SceneDescription scene = to_scene(scene_in);
     require_progress_callback(progress);
     const AerialView view = scene.aerial_view();
@@ -167,18 +176,31 @@ py::dict aerial_screen_table_py(const py::handle& scene_in, const AerialScreenTa
             table = aerial_screen_table(view, *luts, layout, p);
         },
         progress);
-    const std::vector<py::ssize_t> shape{layout.slices, layout.rows, layout.columns, 3};
+    const AerialScreenLattice& g = table.lattice;
+    const std::vector<py::ssize_t> shape{g.slices, g.rows, g.columns, 3};
     py::array_t<float> L(shape), T(shape);
     std::copy(table.inscatter.begin(), table.inscatter.end(), L.mutable_data());
     std::copy(table.transmittance.begin(), table.transmittance.end(), T.mutable_data());
-    const std::vector<float> textures = table.step_textures(first_index);
-    py::array_t<float> tex({py::ssize_t(4), py::ssize_t(layout.slices) * layout.rows,
-                            py::ssize_t(layout.columns), py::ssize_t(4)});
-    std::copy(textures.begin(), textures.end(), tex.mutable_data());
+    py::array_t<float> tex(
+        {py::ssize_t(3), py::ssize_t(g.slices) * g.rows, py::ssize_t(g.columns), py::ssize_t(4)});
+    table.textures({tex.mutable_data(), table.texture_floats()});
+    py::dict lattice;
+    lattice["coordinate"] = g.coordinate == ScreenCoordinate::ViewVector ? "view_vector" : "window";
+    lattice["columns"] = g.columns;
+    lattice["rows"] = g.rows;
+    lattice["slices"] = g.slices;
+    lattice["spacing_x"] = g.spacing_x;
+    lattice["spacing_y"] = g.spacing_y;
+    lattice["first_x"] = g.first_x;
+    lattice["first_y"] = g.first_y;
+    lattice["ratio"] = g.ratio;
+    lattice["first_exponent"] = g.first_exponent;
+    lattice["unit_m"] = g.unit_m;
     py::dict out;
     out["inscatter"] = L;
     out["transmittance"] = T;
     out["textures"] = tex;
+    out["lattice"] = lattice;
     return out;
 }
 
@@ -237,17 +259,25 @@ depth z lies z * distance_per_depth along the ray. ValueError without a camera.
           py::arg("progress") = py::none());
     m.def(
         "aerial_screen_table",
-        [](const py::handle& scene, int columns, int rows, int slices, double margin_x, double margin_y,
-           double first_distance_m, double ratio, int steps_per_slice, int first_index,
+        [](const py::handle& scene, const std::string& coordinate, int columns, int rows, double margin_x,
+           double margin_y, double unit_m, double ratio, int max_slices, int steps_per_slice,
            const py::object& progress) {
-            return aerial_screen_table_py(
-                scene, {columns, rows, slices, margin_x, margin_y, first_distance_m, ratio, steps_per_slice},
-                first_index, progress);
+            AerialScreenTableLayout layout;
+            layout.coordinate = screen_coordinate_from_name(coordinate);
+            layout.columns = columns;
+            layout.rows = rows;
+            layout.margin_x = margin_x;
+            layout.margin_y = margin_y;
+            layout.unit_m = unit_m;
+            layout.ratio = ratio;
+            layout.max_slices = max_slices;
+            layout.steps_per_slice = steps_per_slice;
+            return aerial_screen_table_py(scene, layout, progress);
         },
-        kAerialScreenTableDoc, py::arg("scene"), py::kw_only(), py::arg("columns") = 32, py::arg("rows") = 48,
-        py::arg("slices"), py::arg("margin_x") = 0.02, py::arg("margin_y") = 0.02,
-        py::arg("first_distance_m"), py::arg("ratio") = 1.15, py::arg("steps_per_slice") = 1,
-        py::arg("first_index") = 0, py::arg("progress") = py::none());
+        kAerialScreenTableDoc, py::arg("scene"), py::kw_only(), py::arg("coordinate") = "window",
+        py::arg("columns") = 32, py::arg("rows") = 48, py::arg("margin_x") = 0.02, py::arg("margin_y") = 0.02,
+        py::arg("unit_m") = 1.0, py::arg("ratio") = 1.15, py::arg("max_slices") = 256,
+        py::arg("steps_per_slice") = 1, py::arg("progress") = py::none());
 }
 
 }  // namespace welkin::python

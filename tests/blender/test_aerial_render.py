@@ -225,7 +225,7 @@ def main():
 
     # Orthographic and equirectangular frames: supported by the core; passes finite, T in
     # [0, 1]; the frame Blender wrote, hazed by the material group (Cycles: the screen table
-    # at the Window coordinate), equals the core's composite of the same frame.
+    # over the Window coordinate), equals the core's composite of the same frame.
     ground = bpy.data.materials.new("Ground")  # a material added late gets the group too
     ground.use_nodes = True
     for ob in scene.objects:
@@ -241,6 +241,10 @@ def main():
     slice_input = bpy.data.node_groups[aerial_frame.SHADER_GROUP].nodes[aerial_frame.SLICE_NODE].inputs[0]
     at.check(slice_input.links[0].from_socket.name == "View Z Depth",
              f"ortho: the group reads {slice_input.links[0].from_socket.name}")
+    # Its lattice lies over the Window coordinate (the View Vector is one for the whole frame).
+    screen_input = bpy.data.node_groups[aerial_frame.SHADER_GROUP].nodes[aerial_frame.SCREEN_NODE].inputs[0]
+    at.check(screen_input.links[0].from_socket.name == "Window",
+             f"ortho: the group's lattice is over {screen_input.links[0].from_socket.name}")
     scene.camera.data.type = 'PANO'
     pano = compat.camera_panorama(scene.camera.data)
     pano.panorama_type = 'EQUIRECTANGULAR'

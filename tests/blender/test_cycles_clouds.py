@@ -33,11 +33,11 @@ test (3.4, placement="openvdb": measured RMS 0.150 vs noise
 Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cycles_clouds.py
 """
+import atexit
 import os
 import pathlib
-import sys
-import atexit
 import shutil
+import sys
 import tempfile
 
 import numpy as np

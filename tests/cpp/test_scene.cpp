@@ -2,6 +2,7 @@
 // (Blender's view plane, sensor fit, shift, orthographic and equirectangular cameras).
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "invalid_argument_testing.hpp"
 #include <glm/geometric.hpp>
@@ -221,6 +222,33 @@ TEST(CameraRays, MatrixWorldPlacesAndTurnsTheCamera) {
     for (int k = 0; k < 3; ++k) scaled.matrix_world[k] *= 3.0;
     const CameraRays::Ray sr = CameraRays(scaled, 101, 101).at_screen(0.2, 0.7);
     EXPECT_NEAR(glm::distance(sr.direction, rays.at_screen(0.2, 0.7).direction), 0.0, 1e-12);
+}
+
+// Cycles' View Vector: the camera's local frame with z flipped (x right, y up, z ahead),
+// normalised; at_view_vector is its inverse for a perspective camera, shift and turn included.
+TEST(CameraRays, ViewVectorIsCyclesCameraSpace) {
+    Camera cam;
+    cam.matrix_world = glm::dmat4(glm::dvec4(0, -1, 0, 0), glm::dvec4(0, 0, 1, 0), glm::dvec4(-1, 0, 0, 0),
+                                  glm::dvec4(10, 20, 30, 1));
+    cam.shift_x = 0.2;
+    cam.shift_y = -0.1;
+    const CameraRays rays(cam, 640, 360);
+    EXPECT_NEAR(glm::distance(rays.view_vector(glm::dvec3(1, 0, 0)), glm::dvec3(0, 0, 1)), 0.0, 1e-15);
+    EXPECT_NEAR(glm::distance(rays.view_vector(glm::dvec3(0, -1, 0)), glm::dvec3(1, 0, 0)), 0.0, 1e-15);
+    EXPECT_NEAR(glm::distance(rays.view_vector(glm::dvec3(0, 0, 1)), glm::dvec3(0, 1, 0)), 0.0, 1e-15);
+    for (const auto& [sx, sy] : {std::pair{0.0, 0.0}, {1.0, 0.3}, {0.4, 1.0}, {-0.05, 1.05}}) {
+        const CameraRays::Ray r = rays.at_screen(sx, sy);
+        const glm::dvec3 v = rays.view_vector(r.direction);
+        EXPECT_NEAR(glm::length(v), 1.0, 1e-14);
+        const CameraRays::Ray back = rays.at_view_vector(v.x, v.y);
+        EXPECT_NEAR(glm::distance(back.direction, r.direction), 0.0, 1e-12);
+        EXPECT_EQ(back.origin, r.origin);
+        EXPECT_NEAR(back.distance_per_depth, r.distance_per_depth, 1e-12);  // 1 / z: the depth's
+    }
+    EXPECT_THROW((void)rays.at_view_vector(0.8, 0.7), InvalidArgument);  // not a unit vector ahead
+    Camera ortho;
+    ortho.type = CameraType::Orthographic;
+    EXPECT_THROW((void)CameraRays(ortho, 64, 64).at_view_vector(0.0, 0.0), InvalidArgument);
 }
 
 TEST(CameraRays, OrthographicRaysAreParallel) {

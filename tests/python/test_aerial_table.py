@@ -6,8 +6,9 @@ bilinear, two slices mixed in distance) against the core's per-pixel march
 (welkin.aerial_perspective, method "raymarch") at the same pixels' directions and
 distances, in hazy air, looking towards and away from the sun: in-scattering within 1 %
 and transmittance within 0.005 over depths from 50 m to 40 km; the same for the screen
-table (aerial_table.screen_lookup, what the Cycles group computes from the Window
-coordinate and View Distance), also for an orthographic camera. Plus the closed forms:
+table (aerial_table.screen_lookup, what the Cycles group computes from the View Vector or
+the Window coordinate and View Distance), also for an orthographic camera; the screen
+table's lattice reads back its own entries and wraps without mixing the ends. Plus the closed forms:
 distance 0 gives L = 0, T = 1 exactly; bad parameters get ValueError naming them.
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_aerial_table.py.
@@ -110,13 +111,13 @@ def test_bad_parameters_name_themselves(field, value):
 
 # --- the screen table (Cycles' form) ----------------------------------------------------------
 
-def screen_table(desc, layout, steps=tab.SCREEN_STEPS_PER_SLICE):
-    t = welkin.aerial_screen_table(desc, columns=layout.columns, rows=layout.rows,
-                                   slices=layout.slices, margin_x=layout.margin_x,
-                                   margin_y=layout.margin_y, first_distance_m=layout.first_distance,
-                                   ratio=layout.ratio, steps_per_slice=steps,
-                                   first_index=layout.first_exponent)
-    return t["textures"], t
+def screen_table(desc, coordinate, width=W, height=H, **kw):
+    margin_x, margin_y = tab.screen_margins(width, height, 1.5)
+    t = welkin.aerial_screen_table(desc, coordinate=coordinate, columns=tab.SCREEN_COLUMNS,
+                                   rows=tab.SCREEN_ROWS, margin_x=margin_x, margin_y=margin_y,
+                                   ratio=tab.SCREEN_RATIO, steps_per_slice=tab.SCREEN_STEPS_PER_SLICE,
+                                   **kw)
+    return tab.ScreenLattice(t["lattice"]), t["textures"], t
 
 
 def window(shape_hw):
@@ -125,22 +126,37 @@ def window(shape_hw):
     return (i + 0.5) / shape_hw[1], 1.0 - (j + 0.5) / shape_hw[0]
 
 
+def view_vectors(desc_json, direction):
+    """Cycles' View Vector (camera space: x right, y up, z forward) of world directions."""
+    m = np.array(json.loads(desc_json)["camera"]["matrix_world"])[:3, :3]
+    right, up, back = m[:, 0], m[:, 1], m[:, 2]
+    return direction @ right, direction @ up, -(direction @ back)
+
+
+def coordinate_of(coordinate, desc_json, direction, shape_hw):
+    if coordinate == "window":
+        return window(shape_hw)
+    x, y, _z = view_vectors(desc_json, direction)
+    return x, y
+
+
+@pytest.mark.parametrize("coordinate", ["view_vector", "window"])
 @pytest.mark.parametrize("sun_azimuth_deg", [30.0, 180.0])
-def test_screen_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth_deg):
+def test_screen_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth_deg, coordinate):
     """The screen table through screen_lookup (what the Cycles node group computes from the
-    Window coordinate and View Distance) against the per-pixel march: L within 1 %, T within
-    0.005, over 50 m to 40 km and the whole frame."""
-    desc = welkin.SceneDescription.from_json_string(scene(sun_azimuth_deg))
+    View Vector or the Window coordinate and View Distance) against the per-pixel march: L
+    within 1 %, T within 0.005, over 50 m to 40 km and the whole frame."""
+    text = scene(sun_azimuth_deg)
+    desc = welkin.SceneDescription.from_json_string(text)
     z = depth_image()
     L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
-    layout = tab.ScreenLayout(W, H, 1.5, 0.1, 1e6)
-    images, _ = screen_table(desc, layout)
-    _direction, per = rays(desc)
-    u, v = window(z.shape)
+    lattice, images, _ = screen_table(desc, coordinate)
+    direction, per = rays(desc)
+    x, y = coordinate_of(coordinate, text, direction, z.shape)
     ground = np.isfinite(z)
-    L, T = tab.screen_lookup(layout, images, u[ground], v[ground], (z * per)[ground])
-    check_against_march(f"screen table ({layout.slices} slices), sun azimuth {sun_azimuth_deg}",
-                        L, T, L_ref[ground], T_ref[ground])
+    L, T = tab.screen_lookup(lattice, images, x[ground], y[ground], (z * per)[ground])
+    check_against_march(f"screen table ({coordinate}, {lattice.slices} slices), sun azimuth "
+                        f"{sun_azimuth_deg}", L, T, L_ref[ground], T_ref[ground])
     check_far_is_hazed(z[ground], L, T)
 
 
@@ -152,65 +168,102 @@ def test_screen_table_of_an_orthographic_camera_measures_from_its_plane():
     desc = welkin.SceneDescription.from_json_string(json.dumps(d))
     z = np.full((H, W), 1.0, np.float32) * np.linspace(300.0, 30e3, W, dtype=np.float32)[None, :]
     L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
-    layout = tab.ScreenLayout(W, H, 1.5, 0.1, 1e6)
-    images, _ = screen_table(desc, layout)
+    lattice, images, _ = screen_table(desc, "window")
     u, v = window(z.shape)
-    L, T = tab.screen_lookup(layout, images, u, v, z)
+    L, T = tab.screen_lookup(lattice, images, u, v, z)
     check_against_march("orthographic", L, T, L_ref, T_ref)
     # Not vacuous: the rays' origins differ across the frame (3 km wide), and so does L.
     assert L_ref[:, -1].std() > 0.01 * L_ref[:, -1].mean()
+    with pytest.raises(ValueError, match="coordinate"):
+        screen_table(desc, "view_vector")
 
 
-def test_screen_layout_closed_forms():
-    layout = tab.ScreenLayout(480, 270, 1.5, 0.1, 1e6)
-    # The slices are integer powers of the ratio: the first at or below clip end / 1e5, the
-    # last at or beyond clip end, so that floor(log_ratio d) is the slice for every d drawn.
-    assert layout.first_distance <= 1e6 / tab.SCREEN_RANGE < layout.first_distance * layout.ratio
-    assert layout.first_distance * layout.ratio ** (layout.slices - 1) >= 1e6
-    ax, bx, ay, by = layout.affine()
-    # The frame's edges, widened by the margin, land on the first and last texel centres of
-    # slice 0's tile, and every slice's tile is `rows` rows.
-    C, R, S = layout.columns, layout.rows, layout.slices
-    assert math.isclose(ax * -layout.margin_x + bx, 0.5 / C)
-    assert math.isclose(ax * (1 + layout.margin_x) + bx, 1 - 0.5 / C)
-    assert math.isclose(ay * -layout.margin_y + by, 0.5 / (R * S))
-    assert math.isclose(ay * (1 + layout.margin_y) + by, (R - 0.5) / (R * S))
-    desc = welkin.SceneDescription.from_json_string(scene(30.0))
-    layout = tab.ScreenLayout(W, H, 1.5, 1.0, 1e4)
-    images, t = screen_table(desc, layout)
-    k = 20
-    dk = layout.first_distance * layout.ratio ** k
-    # At a slice's distance t is the slice's index (first_exponent + k) and value + t step is
-    # the slice's own L (1 - T); the steps are the differences to the next slice, 0 in slice
-    # 0 and the last.
-    _x, _y, t_k = tab.screen_coordinates(layout, np.array([0.6]), np.array([0.4]), np.array([dk]))
-    assert abs(t_k[0] - (layout.first_exponent + k)) < 1e-6
-    row = k * layout.rows  # tile k's first row
-    for value, step, table in ((0, 1, t["inscatter"]), (2, 3, 1.0 - t["transmittance"])):
-        assert np.allclose(images[step][row + 3, 5, :3],
-                           table[k + 1, layout.rows - 4, 5] - table[k, layout.rows - 4, 5], atol=1e-6)
-        at_k = images[value][row + 3, 5, :3] + (layout.first_exponent + k) * images[step][row + 3, 5, :3]
-        assert np.allclose(at_k, table[k, layout.rows - 4, 5], rtol=1e-5, atol=1e-6)
-        assert (images[step][:layout.rows, :, :3] == 0).all()
-        assert (images[step][-layout.rows:, :, :3] == 0).all()
-    assert (images[..., 3] == 1).all()
-    # T falls and L grows with distance along every ray.
-    assert (np.diff(t["transmittance"], axis=0) <= 1e-7).all()
-    assert (np.diff(t["inscatter"].sum(-1), axis=0) > 0).all()
+@pytest.mark.parametrize("coordinate", ["view_vector", "window"])
+def test_screen_lattice_closed_forms(coordinate):
+    text = scene(30.0)
+    desc = welkin.SceneDescription.from_json_string(text)
+    lattice, images, t = screen_table(desc, coordinate, unit_m=0.5)
+    g = t["lattice"]
+    C, R, S = lattice.columns, lattice.rows, lattice.slices
+    assert images.shape == (3, S * R, C, 4) and t["inscatter"].shape == (S, R, C, 3)
+    # The lattice covers the frame widened by the margins with C - 2 and R - 2 spacings, the
+    # first point at or before the widened frame's first edge.
+    margin_x, margin_y = tab.screen_margins(W, H, 1.5)
+    edge_x, edge_y = np.meshgrid(np.linspace(-margin_x, 1 + margin_x, 65),
+                                 np.linspace(-margin_y, 1 + margin_y, 65))
+    if coordinate == "window":
+        xs, ys = edge_x, edge_y
+    else:
+        d = np.array([desc.camera_ray(a, 1.0 - b)[1] for a, b in zip(edge_x.ravel(), edge_y.ravel())])
+        xs, ys, _z = view_vectors(text, d)
+    x0, y0 = (g["first_x"] + 0.5) * g["spacing_x"], (g["first_y"] + 0.5) * g["spacing_y"]
+    assert x0 <= xs.min() and x0 + (C - 1) * g["spacing_x"] >= xs.max()
+    assert y0 <= ys.min() and y0 + (R - 1) * g["spacing_y"] >= ys.max()
+    assert math.isclose((C - 2) * g["spacing_x"], (xs.max() - xs.min()) * 1.002, rel_tol=0.01)
+    # Slices: integer powers of the ratio in the unit, one beyond each end of the distances
+    # seen: the clip start (0.1 m) and the clip end (1e6 m) along the most oblique ray.
+    unit, r, e = 0.5, lattice.ratio, lattice.first_exponent
+    assert unit * r ** (e + 1) <= 0.1 and unit * r ** (e + S - 2) >= 1e6
+    # Read as the shader reads them, at the lattice's own points and slices the textures give
+    # back the table's entries exactly (texel centres: no filtering), wrap or no wrap.
+    k, j, i = np.meshgrid(np.arange(S), np.arange(R), np.arange(C), indexing="ij")
+    d = r ** (e + k.astype(np.float64))
+    x, y = (g["first_x"] + i + 0.5) * g["spacing_x"], (g["first_y"] + j + 0.5) * g["spacing_y"]
+    L, T = tab.screen_lookup(lattice, images, x, y, d)
+    assert np.allclose(L, t["inscatter"], rtol=1e-4, atol=1e-6)
+    assert np.allclose(T, t["transmittance"], atol=1e-5)
+    # Halfway between slices, linearly in log d.
+    mid = tab.screen_lookup(lattice, images, x[:-1], y[:-1], d[:-1] * math.sqrt(r))[0]
+    assert np.allclose(mid, 0.5 * (t["inscatter"][:-1] + t["inscatter"][1:]), rtol=1e-4, atol=1e-6)
+    # Every texel is some entry's: the placement is a bijection.
+    placed = np.zeros((S * R, C), bool)
+    rows = (k * R + g["first_y"] + j + e * R) % (S * R)
+    placed[rows, (g["first_x"] + i) % C] = True
+    assert placed.all()
+    # T falls and L grows with distance along every ray, within 50 km (beyond, where T is a
+    # few per cent, its Rec.709 blue is not monotonic: the spectrum's conversion has
+    # negative lobes).
+    within = unit * r ** (e + np.arange(S)) <= 50e3
+    assert (np.diff(t["transmittance"][within], axis=0) <= 1e-7).all()
+    assert (np.diff(t["inscatter"].sum(-1), axis=0) >= 0).all()
 
 
-@pytest.mark.parametrize("field,value", [("columns", 1), ("rows", 1), ("slices", 1),
-                                         ("first_distance_m", 0.0), ("ratio", 1.0),
-                                         ("margin_x", -0.1), ("steps_per_slice", 0),
-                                         ("first_distance_m", float("nan"))])
+def test_screen_table_ends_read_their_own_slices():
+    """A surface at the clip start and one at the clip end on the frame's most oblique ray
+    read the slices beside them, not the other end's across the wrap."""
+    text = scene(30.0)
+    desc = welkin.SceneDescription.from_json_string(text)
+    lattice, images, t = screen_table(desc, "view_vector")
+    o, corner, per = desc.camera_ray(1.0, 1.0)
+    x, y, _z = view_vectors(text, np.array([corner]))
+    for distance in (0.1, 1e6 * per):
+        L, T = tab.screen_lookup(lattice, images, x, y, np.array([distance]))
+        z = np.full((H, W), np.inf, np.float32)
+        z[-1, -1] = distance / desc.camera_ray((W - 0.5) / W, (H - 0.5) / H)[2]
+        L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
+        if distance < 1.0:  # 10 cm of air: nothing, not 1000 km of it
+            assert (T[0] > 0.9999).all() and (L[0] < 1e-4 * t["inscatter"][-1].max()).all(), (T, L)
+        else:
+            assert (np.abs(T[0] - T_ref[-1, -1]) < 0.005).all(), (T, T_ref[-1, -1])
+            assert (np.abs(L[0] - L_ref[-1, -1]) < 0.02 * L_ref[-1, -1]).all(), (L, L_ref[-1, -1])
+
+
+@pytest.mark.parametrize("field,value", [("columns", 3), ("rows", 3), ("unit_m", 0.0),
+                                         ("ratio", 1.0), ("margin_x", -0.1), ("steps_per_slice", 0),
+                                         ("max_slices", 4), ("unit_m", float("nan")),
+                                         ("coordinate", "screen")])
 def test_screen_table_bad_parameters_name_themselves(field, value):
     desc = welkin.SceneDescription.from_json_string(scene(30.0))
-    kw = dict(columns=4, rows=3, slices=5, first_distance_m=10.0)
+    kw = dict(columns=4, rows=4)
     kw[field] = value
     with pytest.raises(ValueError, match=field):
         welkin.aerial_screen_table(desc, **kw)
 
 
-def test_screen_layout_rejects_a_bad_clip_range():
-    with pytest.raises(ValueError, match="clip range"):
-        tab.ScreenLayout(64, 36, 1.5, 10.0, 1.0)
+def test_screen_table_keeps_to_max_slices():
+    desc = welkin.SceneDescription.from_json_string(scene(30.0))
+    t = welkin.aerial_screen_table(desc, columns=4, rows=4, max_slices=40)
+    g = t["lattice"]
+    assert g["slices"] <= 40 and g["ratio"] > 1.15
+    assert 1.0 * g["ratio"] ** (g["first_exponent"] + 1) <= 0.1
+    assert g["ratio"] ** (g["first_exponent"] + g["slices"] - 2) >= 1e6

@@ -6,14 +6,15 @@ remove() exactly:
     camera, sun or atmosphere change (frame_change_post, with the render's own depsgraph,
     so each frame of -a is hazed for its own state), in the form the render engine reads
     fastest (aerial_table.py has both layouts):
-      Cycles: the camera's screen table (welkin.aerial_screen_table), four images
-      "Welkin Aerial Inscatter", "... Inscatter Step", "... Opacity", "... Opacity Step";
+      Cycles: the camera's screen table (welkin.aerial_screen_table), three images
+      "Welkin Aerial Inscatter", "... Inscatter Step" and "... Opacity";
       EEVEE: the direction table (welkin.aerial_table from the camera's position), one
       atlas "Welkin Aerial Table";
   * the shader node group "Welkin Aerial" and one node of it in every material that uses
     nodes ("Welkin Aerial" node, unlinked): it reads where the shading point is seen
-    (Cycles: Texture Coordinate > Window and Camera Data > View Distance; EEVEE: Geometry
-    > Incoming and View Distance), samples the table and writes two shader AOVs,
+    (Cycles: Camera Data > View Vector, or Texture Coordinate > Window for other than
+    perspective cameras, and View Distance, or View Z Depth for orthographic ones; EEVEE:
+    Geometry > Incoming and View Distance), samples the table and writes two shader AOVs,
     Welkin_AerialInscatter (L) and Welkin_AerialOpacity (1 - T, so that a pixel no
     material writes, the sky, means T = 1);
   * those two AOVs on every view layer (Blender turns '.' in AOV names into '_');
@@ -34,8 +35,8 @@ from .. import aerial_table as tab
 from . import compat
 
 IMAGE = "Welkin Aerial Table"
-SCREEN_IMAGES = ("Welkin Aerial Inscatter", "Welkin Aerial Inscatter Step", "Welkin Aerial Opacity",
-                 "Welkin Aerial Opacity Step")
+SCREEN_IMAGES = ("Welkin Aerial Inscatter", "Welkin Aerial Inscatter Step", "Welkin Aerial Opacity")
+OLD_IMAGES = ("Welkin Aerial Opacity Step",)  # an earlier form's, removed with the rest
 SHADER_GROUP = "Welkin Aerial"
 SHADER_NODE = "Welkin Aerial"
 COMP_GROUP = "Welkin Aerial Haze"
@@ -45,6 +46,7 @@ AOV_INSCATTER = "Welkin_AerialInscatter"
 AOV_OPACITY = "Welkin_AerialOpacity"
 AOVS = (AOV_INSCATTER, AOV_OPACITY)
 MARK = "welkin_aerial"  # custom property on our nodes: what they belong to
+LATTICE = "welkin_aerial_lattice"  # on the shader group: the bake its screen constants are for
 MAX_DISTANCE_NODE = "Max Distance"
 LINEAR_DISTANCE_NODE = "Linear Distance"
 SLICE_NODE, OFFSET_NODE, SCREEN_NODE = "Slice", "Slice Offset", "Screen"  # the screen form's constants
@@ -96,16 +98,21 @@ def bake(scene, module, scene_text, scale_length, baked):
     baked[image.name] = key
 
 
-def screen_layout(scene, description, scale_length):
-    """The screen table's layout for the frame (`description`: its scene JSON, parsed): its
-    render size, Cycles' pixel filter and the camera's clip range (scene units)."""
+def screen_request(scene, description, scale_length):
+    """What the frame's screen table is asked for (welkin.aerial_screen_table's keywords):
+    the coordinate the group reads for the camera, the margins Cycles' pixel filter needs
+    at the render size (`description`: the frame's scene JSON, parsed), the scene unit."""
     camera, res = description["camera"], description["resolution"]
     width = max(1, res["x"] * res.get("percentage", 100) // 100)
     height = max(1, res["y"] * res.get("percentage", 100) // 100)
     cycles = getattr(scene, "cycles", None)
     filter_px = float(getattr(cycles, "filter_width", 1.5)) if cycles is not None else 1.5
-    return tab.ScreenLayout(width, height, filter_px, camera["clip_start_m"] / scale_length,
-                            camera["clip_end_m"] / scale_length), camera.get("type") == "ORTHO"
+    margin_x, margin_y = tab.screen_margins(width, height, filter_px)
+    kind = camera.get("type", "PERSP")
+    return dict(coordinate="view_vector" if kind == "PERSP" else "window",
+                columns=tab.SCREEN_COLUMNS, rows=tab.SCREEN_ROWS, margin_x=margin_x,
+                margin_y=margin_y, unit_m=float(scale_length), ratio=tab.SCREEN_RATIO,
+                steps_per_slice=tab.SCREEN_STEPS_PER_SLICE), kind == "ORTHO"
 
 
 def _set(socket, value):
@@ -119,36 +126,39 @@ def _set(socket, value):
 
 
 def _bake_screen(scene, module, scene_text, description, scale_length, baked):
-    layout, ortho = screen_layout(scene, description, scale_length)
+    request, ortho = screen_request(scene, description, scale_length)
     group = shader_group(FETCH_SCREEN)
-    # The constants of the layout (aerial_table.screen_coordinates), and the distance the
-    # slices measure: View Distance from the camera, or for an orthographic camera (whose
-    # rays start on its plane) View Z Depth.
-    ax, bx, ay, by = layout.affine()
-    _set(group.nodes[SLICE_NODE].inputs[1], layout.ratio)
-    offset = group.nodes[OFFSET_NODE]
-    _set(offset.inputs[1], (0.0, 1.0 / layout.slices, 0.0))
-    _set(offset.inputs[2], (bx, by - layout.first_exponent / layout.slices, 0.0))
-    _set(group.nodes[SCREEN_NODE].inputs[1], (ax, ay, 0.0))
+    # What the group reads: the View Vector (perspective) or the Window coordinate, and the
+    # distance the slices measure: View Distance from the camera, or for an orthographic
+    # camera (whose rays start on its plane) View Z Depth.
     cam = next(n for n in group.nodes if n.bl_idname == 'ShaderNodeCameraData')
-    distance = cam.outputs["View Z Depth" if ortho else "View Distance"]
-    slice_input = group.nodes[SLICE_NODE].inputs[0]
-    if not slice_input.links or slice_input.links[0].from_socket != distance:
-        group.links.new(distance, slice_input)
-    images = [screen_image(name, layout.columns, layout.height) for name in SCREEN_IMAGES]
-    key = f"{scene_text}|{layout.key()}|{scale_length!r}"
-    if all(baked.get(image.name) == key for image in images):
+    coords = next(n for n in group.nodes if n.bl_idname == 'ShaderNodeTexCoord')
+    _link(group, cam.outputs["View Vector"] if request["coordinate"] == "view_vector"
+          else coords.outputs["Window"], group.nodes[SCREEN_NODE].inputs[0])
+    _link(group, cam.outputs["View Z Depth" if ortho else "View Distance"],
+          group.nodes[SLICE_NODE].inputs[0])
+    key = f"{scene_text}|{sorted(request.items())!r}"
+    if all(baked.get(name) == key for name in SCREEN_IMAGES) and group.get(LATTICE) == key:
         return
-    t = module.aerial_screen_table(scene_text, columns=layout.columns, rows=layout.rows,
-                                   slices=layout.slices, margin_x=layout.margin_x,
-                                   margin_y=layout.margin_y,
-                                   first_distance_m=layout.first_distance * scale_length,
-                                   ratio=layout.ratio, steps_per_slice=tab.SCREEN_STEPS_PER_SLICE,
-                                   first_index=layout.first_exponent)
-    for image, pixels in zip(images, t["textures"]):
+    t = module.aerial_screen_table(scene_text, **request)
+    lattice = tab.ScreenLattice(t["lattice"])
+    # The lattice's constants (aerial_table.screen_coordinates).
+    _set(group.nodes[SLICE_NODE].inputs[1], lattice.log_base)
+    _set(group.nodes[OFFSET_NODE].inputs[1], lattice.snap)
+    _set(group.nodes[SCREEN_NODE].inputs[1], lattice.scale)
+    group[LATTICE] = key
+    for name, pixels in zip(SCREEN_IMAGES, t["textures"]):
+        image = screen_image(name, lattice.columns, lattice.height)
         image.pixels.foreach_set(pixels.reshape(-1))
         image.update()
-        baked[image.name] = key
+        baked[name] = key
+
+
+def _link(group, socket, into):
+    """Links `socket` into the input `into` unless it is linked so already (a change
+    recompiles the shaders)."""
+    if not into.links or into.links[0].from_socket != socket:
+        group.links.new(socket, into)
 
 
 def screen_image(name, width, height):
@@ -157,10 +167,12 @@ def screen_image(name, width, height):
     image = bpy.data.images.get(name)
     if image is None:
         image = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
-        image.colorspace_settings.name = 'Non-Color'
+        image.colorspace_settings.name = 'Non-Color'  # data: no view transform
         image[MARK] = True
     elif tuple(image.size) != (width, height):
         image.scale(width, height)
+    if image.alpha_mode != 'CHANNEL_PACKED':  # alpha holds a step, not coverage (also in an
+        image.alpha_mode = 'CHANNEL_PACKED'   # earlier form's image of this name)
     return image
 
 
@@ -219,39 +231,43 @@ FETCH_SCREEN, FETCH_CLOSEST = "screen", "closest"
 
 def _layout(fetch):
     if fetch == FETCH_SCREEN:
-        return f"screen/{len(SCREEN_IMAGES)}/2"  # the form and the version of its nodes
+        return f"screen/{len(SCREEN_IMAGES)}/3"  # the form and the version of its nodes
     return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}/3"  # the table's layout, the fetch, the nodes: the version
 
 
 def _screen_nodes(group):
     """The screen form (aerial_table.screen_coordinates and screen_lookup in nodes); the
-    constants are the bake's (_bake_screen)."""
+    constants, and which coordinate and distance feed it, are the bake's (_bake_screen).
+    Cycles leaves out the unlinked one of Texture Coordinate and View Vector."""
     coords = group.nodes.new('ShaderNodeTexCoord')
-    coords.location = (-800, 200)
+    coords.location = (-800, 300)
     cam = group.nodes.new('ShaderNodeCameraData')
-    cam.location = (-800, -200)
-    t = _math(group, 'LOGARITHM', cam.outputs["View Distance"], tab.SCREEN_RATIO, x=-600, y=-200)
-    t.node.name = t.node.label = SLICE_NODE
-    k = _math(group, 'FLOOR', t, x=-400, y=-100)
-    offset = _vmath(group, 'MULTIPLY_ADD', k, (0.0, 0.0, 0.0), x=-200, y=0)
+    cam.location = (-800, -100)
+    tau = _math(group, 'LOGARITHM', cam.outputs["View Distance"], tab.SCREEN_RATIO ** 100, x=-600, y=-200)
+    tau.node.name = tau.node.label = SLICE_NODE
+    offset = _vmath(group, 'SNAP', tau, (1.0, 0.01, 1.0), x=-400, y=-100)
     offset.node.name = offset.node.label = OFFSET_NODE
-    uv = _vmath(group, 'MULTIPLY_ADD', coords.outputs["Window"], (1.0, 1.0, 0.0), x=0, y=200)
+    uv = _vmath(group, 'MULTIPLY_ADD', cam.outputs["View Vector"], (1.0, 1.0, 0.0), x=-200, y=100)
     uv.node.name = uv.node.label = SCREEN_NODE
     group.links.new(offset, uv.node.inputs[2])
-    outs = []
+    texs = []
     for n, name in enumerate(SCREEN_IMAGES):
         tex = group.nodes.new('ShaderNodeTexImage')
-        tex.location = (200, 400 - 300 * n)
+        tex.location = (0, 400 - 300 * n)
         tex.image = bpy.data.images.get(name) or screen_image(name, 1, 1)  # sized by the bake
         tex.interpolation = 'Linear'
-        tex.extension = 'EXTEND'
+        tex.extension = 'REPEAT'
         group.links.new(uv, tex.inputs["Vector"])
-        outs.append(tex.outputs["Color"])
-    mixed = []  # value + t step, per quantity
-    for n in (0, 2):
-        mixed.append(_vmath(group, 'MULTIPLY_ADD', outs[n + 1], t, x=500, y=300 - 200 * n))
-        group.links.new(outs[n], mixed[-1].node.inputs[2])
-    for name, socket, y in ((AOV_INSCATTER, mixed[0], 300), (AOV_OPACITY, mixed[1], -100)):
+        texs.append(tex)
+    steps = group.nodes.new('ShaderNodeCombineXYZ')  # the opacity's step, from the alphas
+    steps.location = (250, -500)
+    for n, tex in enumerate(texs):
+        group.links.new(tex.outputs["Alpha"], steps.inputs[n])
+    inscatter = _vmath(group, 'MULTIPLY_ADD', texs[1].outputs["Color"], tau, x=450, y=300)
+    group.links.new(texs[0].outputs["Color"], inscatter.node.inputs[2])
+    opacity = _vmath(group, 'MULTIPLY_ADD', steps.outputs[0], tau, x=450, y=-200)
+    group.links.new(texs[2].outputs["Color"], opacity.node.inputs[2])
+    for name, socket, y in ((AOV_INSCATTER, inscatter, 300), (AOV_OPACITY, opacity, -200)):
         aov = group.nodes.new('ShaderNodeOutputAOV')
         compat.set_aov_name(aov, name)
         aov.location = (700, y)
@@ -271,6 +287,8 @@ def shader_group(fetch=None):
     if group is None:
         group = bpy.data.node_groups.new(SHADER_GROUP, 'ShaderNodeTree')
     group.nodes.clear()
+    if LATTICE in group:  # the constants went with the nodes
+        del group[LATTICE]
     group[MARK] = _layout(fetch)
     if fetch == FETCH_SCREEN:
         _screen_nodes(group)
@@ -584,7 +602,7 @@ def remove(scene, settings):
             group = bpy.data.node_groups.get(name)
             if group is not None and group.get(MARK) and group.users == 0:
                 bpy.data.node_groups.remove(group)
-        for name in (IMAGE, *SCREEN_IMAGES):
+        for name in (IMAGE, *SCREEN_IMAGES, *OLD_IMAGES):
             image = bpy.data.images.get(name)
             if image is not None and image.get(MARK):
                 bpy.data.images.remove(image)

@@ -46,6 +46,7 @@
 // Threads: TBB; results do not depend on the thread count.
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -93,67 +94,97 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
                          Progress* progress = nullptr);
 
 // The same passes for one camera, as a table over its screen and the distance: what a
-// renderer samples when it knows a shading point's screen position (Blender's Texture
-// Coordinate > Window) and its distance (Camera Data > View Distance), which is cheaper per
-// sample than the direction table's angles and needs no direction crowding, since the
-// screen is all a frame sees.
+// renderer samples when it knows where a shading point lies in the frame (Blender's Camera
+// Data > View Vector, or Texture Coordinate > Window) and its distance (Camera Data > View
+// Distance, or View Z Depth for an orthographic camera, whose rays start on its plane).
+// Cheaper per sample than the direction table's angles, and with no directions to spare:
+// the screen is all a frame sees.
 //
-// Layout (all of it an affine function of the screen position and of log d, so that a
-// shader reaches a texel in a few multiply-adds):
-//  * grid point (i, j) at screen coordinates (screen_x(i), screen_y(j)) (camera.hpp's:
-//    left to right, top to bottom), columns evenly spaced from -margin_x to 1 + margin_x and
-//    rows from -margin_y to 1 + margin_y, so that samples a pixel filter takes just outside
-//    the frame still fall between grid points; its ray is CameraRays::at_screen's (an
-//    orthographic camera's starts on the camera's plane: exact, not from the centre);
-//  * slice k (0..slices-1) at distance d_k = first_distance_m ratio^k along the ray: purely
-//    geometric, so the slice coordinate log_ratio(d / first_distance_m) is one logarithm,
-//    and reading linearly in it between slices errs by at most about ln(ratio)^2 / 8 of
-//    the value (L grows like d^1 at short range, e^(k ln ratio) in k; 0.24 % for 1.15).
-//    Surfaces nearer than first_distance_m read slice 0, those beyond the last slice the
-//    last slice.
-// Each entry holds the passes' RGB: in-scattering times the exposure and the transmittance
-// (read linearly, not as optical depth: over a slice 15 % deep, T = e^-tau bends by less
-// than 0.1 % of 1 between slices).
+// Layout: a lattice, periodic in every axis, so that a shader reaches a texel with one
+// logarithm, one snap and one multiply-add and reads it with a repeating texture.
+//  * Screen axes. Lattice column i lies at x_i = (first_x + i + 1/2) spacing_x in the
+//    coordinate (Window: x and y in [0, 1] left to right and bottom to top; View Vector: the
+//    unit camera-space direction's x (right) and y (up)), row j at y_j likewise. The
+//    lattice covers the frame widened by margin_x and margin_y on each side (where a pixel
+//    filter's samples fall) with columns - 2 and rows - 2 spacings, so that the last
+//    spacing, where a repeating texture wraps, lies outside it. Texel column
+//    (first_x + i) mod columns holds column i: the texture coordinate is x / (columns
+//    spacing_x) plus any integer.
+//  * Distance. Slice k lies at d_k = ratio^(first_exponent + k) scene units (unit_m metres
+//    each), k = 0 .. slices - 1, from a slice below the camera's clip start to one beyond
+//    the farthest distance it sees (clip end along the frame's most oblique ray), so that
+//    the slice of a sample is s = floor(t), t = log_ratio(d), with no clamping. Texel row
+//    (s rows + first_y + j) mod (slices rows), bottom row first, holds slice s's row j: the
+//    texture coordinate is y / (slices rows spacing_y) + s / slices. With tau = t / slices
+//    = log_(ratio^slices) d, snap(tau, (1, 1 / slices)) = (floor tau, s / slices) is the
+//    part of (u, v) that the slice adds (floor tau is an integer: no change to u).
+//  * Between slices, linearly in t: the passes are value + tau step, one multiply-add each,
+//    with value and step per texel (textures()). Reading linearly in log d errs by at most
+//    about ln(ratio)^2 / 8 of the value (L grows like d at short range); 0.24 % for 1.15.
+// The ray of lattice point (i, j) is CameraRays::at_view_vector or at_screen's: exact for
+// every camera type, an orthographic camera's rays starting across its plane.
 //
-// Cost: columns x rows x slices x steps_per_slice samples; the default 32 x 48 grid at
-// ratio 1.15 from 10 m to 1000 km (85 slices), 1 step each, is 0.13 M samples. The rows
-// are the finer axis: near the horizon a row's step in elevation moves a long ray's
-// altitude by a fraction of the haze's scale height.
+// Cost: columns x rows x slices x steps_per_slice samples (0.17 M for 32 x 48 at ratio
+// 1.15 from 0.1 m to 1000 km). The rows are the finer axis: near the horizon a row's step
+// moves a long ray's altitude by a fraction of the haze's scale height.
+
+// What the shader knows of a sample's place in the frame (see above).
+enum class ScreenCoordinate { Window, ViewVector };
+
 struct AerialScreenTableLayout {
-    int columns = 32, rows = 48, slices = 85;
-    double margin_x = 0.02, margin_y = 0.02;  // screen fractions beyond each edge, >= 0
-    double first_distance_m = 10.0;           // > 0
-    double ratio = 1.15;                      // > 1
-    int steps_per_slice = 2;
+    ScreenCoordinate coordinate = ScreenCoordinate::Window;  // ViewVector: perspective only
+    int columns = 32, rows = 48;                             // >= 4
+    double margin_x = 0.02, margin_y = 0.02;                 // Window fractions beyond each edge, [0, 1]
+    double unit_m = 1.0;                                     // the shader's distance unit, m
+    double ratio = 1.15;                                     // distance growth per slice, (1, 10]
+    int max_slices = 256;                                    // the ratio grows rather than exceed it
+    int steps_per_slice = 1;
     // Throws InvalidArgument naming `parameter`.<field> and its range.
     void validate(const std::string& parameter = "table") const;
-    double screen_x(int i) const;
-    double screen_y(int j) const;
-    double slice_distance(int k) const;  // m
+};
+
+// The lattice of one camera's table (see above), derived from the layout and the camera.
+struct AerialScreenLattice {
+    ScreenCoordinate coordinate = ScreenCoordinate::Window;
+    int columns = 0, rows = 0, slices = 0;
+    double spacing_x = 0.0, spacing_y = 0.0;
+    int first_x = 0, first_y = 0;
+    double ratio = 1.15;  // may exceed the layout's, to keep to max_slices
+    int first_exponent = 0;
+    double unit_m = 1.0;
+
+    double x(int i) const { return (double(first_x + i) + 0.5) * spacing_x; }
+    double y(int j) const { return (double(first_y + j) + 0.5) * spacing_y; }
+    double slice_distance_m(int k) const;
+    // The texel holding lattice column i, and row j of slice k (bottom row first).
+    int texel_column(int i) const;
+    int texel_row(int j, int k) const;
 };
 
 struct AerialScreenTable {
-    AerialScreenTableLayout layout;
-    // (slices, rows, columns, 3), slice 0 and the top row (screen y = -margin_y) first:
-    // in-scattering (RGB, times the exposure) and transmittance (RGB, in [0, 1]).
+    AerialScreenLattice lattice;
+    // (slices, rows, columns, 3), slice k, row j (y_j, upwards), column i: in-scattering
+    // (RGB, times the exposure) and transmittance (RGB, in [0, 1]).
     std::vector<float> inscatter, transmittance;
 
-    // The table as four RGBA float textures for a shader that reads one slice's texels and
-    // goes linearly to the next in t = first_index + k + f (f the fraction of the way from
-    // slice k to k + 1; first_index any integer, e.g. log_ratio of first_distance_m in the
-    // shader's unit): (4, slices x rows, columns, 4), each texture's rows bottom first
-    // (OpenGL's and Blender's order) with slice k in rows [k rows, (k + 1) rows), alpha 1:
-    //     step_L = L_(k+1) - L_k,            L_k - (first_index + k) step_L,
-    //     step_A = A_(k+1) - A_k (A = 1 - T), A_k - (first_index + k) step_A,
-    // in the order (L at t = 0, step_L, A at t = 0, step_A), so that the passes are
-    // value + t step, one multiply-add per pass. Slice 0 and the last slice have step 0:
-    // distances before slice 1 read slice 0's passes, beyond the last slice the last's.
-    std::vector<float> step_textures(int first_index) const;
+    // The three RGBA float textures the shader reads, (3, slices x rows, columns, 4), texels
+    // placed as above. With A = 1 - T, t = log_ratio d and the steps to the next slice
+    // dL = L_(k+1) - L_k, dA likewise (0 in the last slice), slice s = first_exponent + k:
+    //     texture 0: L_k - s dL,  alpha: slices dA.r
+    //     texture 1: slices dL,   alpha: slices dA.g
+    //     texture 2: A_k - s dA,  alpha: slices dA.b
+    // so that L = tex0 + tau tex1 and A = tex2 + tau (tex0.a, tex1.a, tex2.a), tau = t /
+    // slices: at t = s the slice's own values, linear in t up to the next. texture_floats()
+    // floats, written into `out` (every one of them).
+    std::size_t texture_floats() const;
+    void textures(std::span<float> out) const;
+    std::vector<float> textures() const;
 };
 
-// The table of `view`'s camera at its render resolution (view.options are not used);
-// `luts` built from view.atmosphere with view.luts. Throws InvalidArgument for a bad
-// layout (naming table.<field>) or view.
+// The table of `view`'s camera at its render resolution and clip range (view.options are
+// not used); `luts` built from view.atmosphere with view.luts. Throws InvalidArgument for a
+// bad layout (naming table.<field>) or view, or a View Vector table of a camera that is not
+// perspective.
 AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLuts& luts,
                                       const AerialScreenTableLayout& layout, Progress* progress = nullptr);
 

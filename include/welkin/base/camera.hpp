@@ -104,6 +104,13 @@ public:
         return at_screen((double(i) + 0.5) / double(width_), (double(j) + 0.5) / double(height_));
     }
 
+    // Cycles' camera space (Camera Data > View Vector): x right, y up, z forward. The unit
+    // camera-space vector of a world direction, and for a perspective camera the ray along
+    // the camera-space direction (vx, vy, sqrt(1 - vx^2 - vy^2)) (vx^2 + vy^2 < 1).
+    glm::dvec3 view_vector(const glm::dvec3& direction) const;
+    Ray at_view_vector(double vx, double vy) const;
+    CameraType type() const { return type_; }
+
     int width() const { return width_; }
     int height() const { return height_; }
     glm::dvec3 position() const { return position_; }
