@@ -16,6 +16,11 @@ ratio to its own "off" render (target: <= 1.10; the order of the three alternate
 repeat to the next), of the wall time and of the process's CPU time (all threads). A
 2-second render on a shared machine varies by up to 20 % from one repeat to the next; the
 ratio within a repeat varies less.
+
+--group-only replaces the demo's shading by emission of each material's base colour and
+turns bounces off, so that what is left of a render is its camera rays and the material
+group: the group's own cost, reported per camera sample (pixels x samples) in ns, as the
+CPU time the cached state adds.
 """
 import argparse
 import atexit
@@ -36,6 +41,7 @@ p.add_argument("--size", type=int, default=480)
 p.add_argument("--samples", type=int, default=16)
 p.add_argument("--repeats", type=int, default=3)
 p.add_argument("--csv")
+p.add_argument("--group-only", action="store_true")
 args = p.parse_args(argv)
 
 out = tempfile.mkdtemp(prefix="welkin_bench_aerial_frame_")
@@ -46,6 +52,15 @@ scene = bpy.context.scene
 aerial = sys.modules[next(m for m in sys.modules if m.endswith("welkin.blender.aerial"))]
 scene.render.filepath = os.path.join(out, "bench.exr")
 scene.welkin_aerial.side_files = False  # the frame alone: no Z pass, no pass files
+if args.group_only:
+    scene.cycles.max_bounces = 0
+    for material in bpy.data.materials:
+        tree = material.node_tree
+        if tree is None or "Principled BSDF" not in tree.nodes:
+            continue
+        emission = tree.nodes.new('ShaderNodeEmission')
+        emission.inputs["Color"].default_value = tree.nodes["Principled BSDF"].inputs["Base Color"].default_value
+        tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
 
 times = {"off": [], "on": [], "on_cached": [], "bake": []}
 cpu = {"off": [], "on": [], "on_cached": []}  # the process's CPU time, all threads: steadier
@@ -87,6 +102,11 @@ print(f"cycles_aerial_frame: {args.size} px wide, {args.samples} samples, {args.
       f"{c['on_cached']:.2f} s (ratio {rc['on_cached']:.3f}); least CPU time: off {low['off']:.2f} s, on "
       f"{low['on']:.2f} s (ratio {low['on'] / low['off']:.3f}), cached {low['on_cached']:.2f} s (ratio "
       f"{low['on_cached'] / low['off']:.3f})")
+if args.group_only:
+    samples = scene.render.resolution_x * scene.render.resolution_y * scene.cycles.samples
+    per_sample = (c["on_cached"] - c["off"]) / samples * 1e9
+    print(f"cycles_aerial_frame: --group-only: the group adds {per_sample:.0f} ns of CPU time per "
+          f"camera sample ({samples} samples)")
 if args.csv:
     with open(args.csv, "w") as f:
         f.write("size,samples,repeats,off_s,on_s,on_cached_s,bake_s,ratio,off_cpu_s,on_cpu_s,"
