@@ -213,13 +213,14 @@ def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
 
 
 # How the group reads the table:
-#   FETCH_SCREEN   Cycles: the screen table (aerial_table.screen_lookup), 14 nodes in all,
-#                  since Cycles evaluates them at every camera-ray sample: the Window
-#                  coordinate and t, one logarithm of the distance, address the slice's
-#                  texels in two multiply-adds, four 'Linear' fetches (Cycles filters
-#                  without mipmaps; the coordinate stays between its tile's first and last
-#                  texel centres) read the slice's values and steps, and two multiply-adds
-#                  give value + t step;
+#   FETCH_SCREEN   Cycles: the screen table (aerial_table.screen_lookup), 12 nodes at
+#                  every camera-ray sample (Cycles evaluates them there): the View Vector
+#                  (or Window) and tau, one logarithm of the distance, address the slice's
+#                  texels in a snap and one multiply-add, three 'Linear' fetches of
+#                  repeating textures (Cycles filters without mipmaps; the lattice wraps
+#                  outside the frame) read the slice's values and steps, a Combine XYZ
+#                  gathers the opacity's step from the alphas, and two multiply-adds give
+#                  value + tau step;
 #   FETCH_CLOSEST  EEVEE: the direction table in sixteen 'Closest' fetches filtered by
 #                  the group's own nodes. EEVEE filters a 'Linear' image with mipmaps
 #                  chosen from screen-space derivatives, and v jumps by a whole tile where
