@@ -20,7 +20,8 @@ def script_args(parser):
 def enable_welkin():
     """Enables the Welkin add-on: the one the user installed when there is one (legacy
     add-on or Extension), else the zip that `bash scripts/build_addon.sh` built (dist/),
-    installed into the user's add-ons as Preferences > Install would."""
+    installed into the user's add-ons as Preferences > Install would; a zip older than the
+    add-on's sources or build/'s compiled module is refused (it holds the previous code)."""
     import glob
 
     import addon_utils
@@ -36,6 +37,12 @@ def enable_welkin():
     if not zips:
         raise SystemExit("demo: the Welkin add-on is not installed and dist/ holds no "
                          "welkin-<version>.zip; run bash scripts/build_addon.sh first")
+    sources = [f for f in glob.glob(os.path.join(ROOT, "addon", "**", "*"), recursive=True)
+               if "__pycache__" not in f]
+    sources += glob.glob(os.path.join(ROOT, "build", "welkin.cpython*"))
+    if os.path.getmtime(zips[-1]) < max(map(os.path.getmtime, sources), default=0.0):
+        raise SystemExit(f"demo: {zips[-1]} is older than addon/ or build/'s compiled module; "
+                         "run bash scripts/build_addon.sh first")
     bpy.ops.preferences.addon_install(filepath=zips[-1])
     bpy.ops.preferences.addon_enable(module="welkin")
     return "welkin"

@@ -810,7 +810,7 @@ AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLu
             x_hi = std::max(x_hi, cx);
             y_lo = std::min(y_lo, cy);
             y_hi = std::max(y_hi, cy);
-            if (rays.type() == CameraType::Perspective) reach = std::max(reach, r.distance_per_depth);
+            reach = std::max(reach, r.distance_per_depth);  // 1 but for perspective cameras
         }
     const double slack_x = 1e-3 * (x_hi - x_lo), slack_y = 1e-3 * (y_hi - y_lo);
     AerialScreenTable table;

@@ -76,8 +76,9 @@ def frame_list(text):
 
 def finish(code):
     """Exits with `code` at once, as Blender does after --python-exit-code, but first runs
-    the atexit functions (Blender's own, which removes its session temporary folder, and the
-    tests' and this script's clean-ups), which os._exit alone would skip."""
+    the atexit functions (the tests' and this script's clean-ups) and removes Blender's
+    session temporary folder, which os._exit alone would leave (Blender removes it when
+    the interpreter finalizes)."""
     sys.stdout.flush()
     sys.stderr.flush()
     try:
