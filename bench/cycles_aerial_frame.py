@@ -21,6 +21,11 @@ repeat to the next), of the wall time and of the process's CPU time (all threads
 2-second render on a shared machine varies by up to 20 % from one repeat to the next; the
 ratio within a repeat varies less.
 
+--markers prints a line after each render; run with Blender's --debug-cycles and the output
+kept in a file, bench/cycles_log_split.py then splits each render's time into Cycles' path
+tracing, the rest of Cycles' render (scene and image sync) and what lies outside Cycles (the
+handlers and the bake, the compositor, saving), each as the median ratio to "off".
+
 --group-only replaces the demo's shading by emission of each material's base colour and
 turns bounces off, so that what is left of a render is its camera rays and the material
 group: the group's own cost, reported per camera sample (pixels x samples) in ns, as the
@@ -46,6 +51,9 @@ p.add_argument("--samples", type=int, default=16)
 p.add_argument("--repeats", type=int, default=3)
 p.add_argument("--csv")
 p.add_argument("--group-only", action="store_true")
+p.add_argument("--markers", action="store_true",
+               help="print a line per render (repeat, state, wall and CPU time) for "
+                    "bench/cycles_log_split.py to pair with Cycles' own timings")
 args = p.parse_args(argv)
 
 out = tempfile.mkdtemp(prefix="welkin_bench_aerial_frame_")
@@ -82,6 +90,9 @@ for repeat in range(args.repeats):
         bpy.ops.render.render(write_still=True)
         times[state].append(time.perf_counter() - t0)
         cpu[state].append(time.process_time() - c0)
+        if args.markers:
+            print(f"cycles_aerial_frame: render {repeat} {state} wall {times[state][-1]:.4f} "
+                  f"cpu {cpu[state][-1]:.4f}", flush=True)
     aerial._baked.clear()
     t0 = time.perf_counter()
     aerial.bake(scene)
