@@ -48,8 +48,11 @@ def main():
     p.add_argument("--baseline", default="off", help="the state the others are compared with")
     args = p.parse_args()
     base = args.baseline
-    with open(args.log, encoding="utf-8", errors="replace") as f:
-        r = renders(f)
+    try:
+        with open(args.log, encoding="utf-8", errors="replace") as f:
+            r = renders(f)
+    except OSError as error:
+        raise SystemExit(f"log: cannot read {args.log}: {error.strerror}") from None
     repeats = sorted({k for k, s in r if s == base})
     states = sorted({s for _k, s in r if s != base})
     if not repeats or not states:
