@@ -24,7 +24,8 @@ ratio within a repeat varies less.
 --markers prints a line after each render; run with Blender's --debug-cycles and the output
 kept in a file, bench/cycles_log_split.py then splits each render's time into Cycles' path
 tracing, the rest of Cycles' render (scene and image sync) and what lies outside Cycles (the
-handlers and the bake, the compositor, saving), each as the median ratio to "off".
+handlers and the bake, the compositor, saving), each as the median difference to the same
+repeat's "off" render.
 
 --group-only replaces the demo's shading by emission of each material's base colour and
 turns bounces off, so that what is left of a render is its camera rays and the material

@@ -711,11 +711,6 @@ void AerialScreenTableLayout::validate(const std::string& parameter) const {
 
 namespace {
 
-int wrap(long long a, long long n) {
-    const long long r = a % n;
-    return int(r < 0 ? r + n : r);
-}
-
 // The lattice along one axis over [lo, hi]: points - 2 spacings across it, the first point
 // half a spacing past a multiple of the spacing at or below lo (so the last lies at or
 // beyond hi).
@@ -730,10 +725,10 @@ double AerialScreenLattice::slice_distance_m(int k) const {
     return unit_m * std::pow(ratio, double(first_exponent + k));
 }
 
-int AerialScreenLattice::texel_column(int i) const { return wrap((long long)first_x + i, columns); }
+int AerialScreenLattice::texel_column(int i) const { return wrap_index(first_x + i, columns); }
 
 int AerialScreenLattice::texel_row(int j, int k) const {
-    return wrap((long long)(first_exponent + k) * rows + first_y + j, (long long)slices * rows);
+    return int(wrap_index((long long)(first_exponent + k) * rows + first_y + j, (long long)slices * rows));
 }
 
 std::size_t AerialScreenTable::texture_floats() const {

@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "welkin/base/math.hpp"
 #include "welkin/base/rng.hpp"
 
 namespace welkin {
@@ -23,8 +24,6 @@ std::uint64_t hash_cell(std::uint64_t seed, int i, int j, int k, std::uint64_t s
 double unit_from_bits(std::uint64_t h, int shift) {
     return double((h >> shift) & 0xfffff) / double(0x100000);
 }
-
-int wrap(int i, int n) { return ((i % n) + n) % n; }
 
 double fade(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
 
@@ -42,7 +41,8 @@ double tileable_worley(double x, double y, double z, int f, std::uint64_t seed) 
         for (int dj = -1; dj <= 1; ++dj)
             for (int di = -1; di <= 1; ++di) {
                 const int i = ci + di, j = cj + dj, k = ck + dk;
-                const std::uint64_t h = hash_cell(seed, wrap(i, f), wrap(j, f), wrap(k, f), 1);
+                const std::uint64_t h =
+                    hash_cell(seed, wrap_index(i, f), wrap_index(j, f), wrap_index(k, f), 1);
                 const double fx = i + unit_from_bits(h, 0) - px;
                 const double fy = j + unit_from_bits(h, 20) - py;
                 const double fz = k + unit_from_bits(h, 40) - pz;
@@ -58,7 +58,8 @@ double tileable_perlin(double x, double y, double z, int f, std::uint64_t seed) 
     double corner[8];
     for (int c = 0; c < 8; ++c) {
         const int di = c & 1, dj = (c >> 1) & 1, dk = (c >> 2) & 1;
-        const std::uint64_t h = hash_cell(seed, wrap(ci + di, f), wrap(cj + dj, f), wrap(ck + dk, f), 2);
+        const std::uint64_t h =
+            hash_cell(seed, wrap_index(ci + di, f), wrap_index(cj + dj, f), wrap_index(ck + dk, f), 2);
         const int* g = kGradients[h % 12];
         corner[c] = g[0] * (tx - di) + g[1] * (ty - dj) + g[2] * (tz - dk);
     }

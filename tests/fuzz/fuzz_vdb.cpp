@@ -45,19 +45,12 @@ void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 
-namespace {
-// One input file per process, in $TMPDIR: scripts/fuzz.sh points it at a folder it removes
-// after the run (libFuzzer ends the process without running atexit functions).
-const std::string& input_path() {
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    // One input file per process, in $TMPDIR: scripts/fuzz.sh points it at a folder it
+    // removes after the run (libFuzzer ends the process without running atexit functions).
     static const std::string path =
         (std::filesystem::temp_directory_path() / ("welkin_fuzz_vdb_" + std::to_string(::getpid()) + ".vdb"))
             .string();
-    return path;
-}
-}  // namespace
-
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    const std::string& path = input_path();
     if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
         std::fwrite(data, 1, size, f);
         std::fclose(f);

@@ -45,4 +45,11 @@ inline T clamp_value(T x, T lo, T hi) {
     return min_value(max_value(x, lo), hi);
 }
 
+// a mod n in [0, n) for n > 0 (C++'s % keeps the sign of a): the index of a periodic table.
+template <class T>
+inline T wrap_index(T a, T n) {
+    const T r = a % n;
+    return r < T(0) ? r + n : r;
+}
+
 }  // namespace welkin
