@@ -93,11 +93,11 @@ def lookup(atlas: np.ndarray, direction: np.ndarray, distance: np.ndarray, max_d
 # (screen_coordinates):
 #     tau = log_B(d), B = ratio^slices     d: View Distance (View Z Depth: orthographic)
 #     (u, v) = (x, y) * scale + snap(tau, (1, 1 / slices))   'Linear', 'Repeat'
-#     L = tex0 + tau tex1,  1 - T = tex2 + tau (tex0.a, tex1.a, tex2.a)
-# with (x, y) the View Vector's (perspective) or the Window coordinate (0 .. 1 left to right,
-# bottom to top): one logarithm, one snap, one multiply-add, three fetches, a combine and
-# two multiply-adds. The snap's x is floor(tau), an integer: it leaves a repeating texture's
-# u as it is.
+#     L = mix(tex0, tex1, tau),  1 - T = mix(tex2, (tex0.a, tex1.a, tex2.a), tau)
+# (mix(p, q, f) = (1 - f) p + f q, the Mix node's) with (x, y) the View Vector's
+# (perspective) or the Window coordinate (0 .. 1 left to right, bottom to top): one
+# logarithm, one snap, one multiply-add, three fetches, a combine and two mixes. The snap's x
+# is floor(tau), an integer: it leaves a repeating texture's u as it is.
 SCREEN_COLUMNS, SCREEN_ROWS = 32, 48
 SCREEN_RATIO = 1.15
 SCREEN_STEPS_PER_SLICE = 1
@@ -166,10 +166,11 @@ def _bilinear_repeat(image: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndar
 def screen_lookup(lattice: ScreenLattice, textures: np.ndarray, x: np.ndarray, y: np.ndarray,
                   distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(L, T), (..., 3) each, as the material node group computes them from the core's three
-    textures ('Linear' fetches with 'Repeat', then value + tau step)."""
+    textures ('Linear' fetches with 'Repeat', then the two mixes by tau)."""
     u, v, tau = screen_coordinates(lattice, x, y, distance)
     tau = tau[..., None]
     t0, t1, t2 = (_bilinear_repeat(t, u, v) for t in textures)
-    L = t0[..., :3] + tau * t1[..., :3]
-    opacity = t2[..., :3] + tau * np.stack([t0[..., 3], t1[..., 3], t2[..., 3]], axis=-1)
+    L = (1.0 - tau) * t0[..., :3] + tau * t1[..., :3]
+    far = np.stack([t0[..., 3], t1[..., 3], t2[..., 3]], axis=-1)
+    opacity = (1.0 - tau) * t2[..., :3] + tau * far
     return L, 1.0 - opacity

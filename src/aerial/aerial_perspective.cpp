@@ -762,9 +762,9 @@ void AerialScreenTable::textures(std::span<float> out) const {
                     const double dL = last ? 0.0 : inscatter[next + c] - L;
                     const double dA = last ? 0.0 : (1.0 - double(transmittance[next + c])) - A;
                     out[texel + c] = float(L - s * dL);
-                    out[texture + texel + c] = float(n * dL);
+                    out[texture + texel + c] = float(L + (n - s) * dL);
                     out[2 * texture + texel + c] = float(A - s * dA);
-                    out[c * texture + texel + 3] = float(n * dA);
+                    out[c * texture + texel + 3] = float(A + (n - s) * dA);
                 }
             }
     });

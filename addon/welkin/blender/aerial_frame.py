@@ -218,9 +218,11 @@ def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
 #                  (or Window) and tau, one logarithm of the distance, address the slice's
 #                  texels in a snap and one multiply-add, three 'Linear' fetches of
 #                  repeating textures (Cycles filters without mipmaps; the lattice wraps
-#                  outside the frame) read the slice's values and steps, a Combine XYZ
-#                  gathers the opacity's step from the alphas, and two multiply-adds give
-#                  value + tau step;
+#                  outside the frame) read each pass's line through the slice as its values
+#                  at tau = 0 and 1, a Combine XYZ gathers the opacity's second value from
+#                  the alphas, and two Mix nodes read the lines at tau (one Cycles
+#                  instruction each, where a vector multiply-add takes two and a conversion
+#                  of tau to a vector);
 #   FETCH_CLOSEST  EEVEE: the direction table in sixteen 'Closest' fetches filtered by
 #                  the group's own nodes. EEVEE filters a 'Linear' image with mipmaps
 #                  chosen from screen-space derivatives, and v jumps by a whole tile where
@@ -232,7 +234,7 @@ FETCH_SCREEN, FETCH_CLOSEST = "screen", "closest"
 
 def _layout(fetch):
     if fetch == FETCH_SCREEN:
-        return f"screen/{len(SCREEN_IMAGES)}/3"  # the form and the version of its nodes
+        return f"screen/{len(SCREEN_IMAGES)}/4"  # the form and the version of its nodes
     return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}/3"  # the table's layout, the fetch, the nodes: the version
 
 
@@ -260,15 +262,20 @@ def _screen_nodes(group):
         tex.extension = 'REPEAT'
         group.links.new(uv, tex.inputs["Vector"])
         texs.append(tex)
-    steps = group.nodes.new('ShaderNodeCombineXYZ')  # the opacity's step, from the alphas
-    steps.location = (250, -500)
+    far = group.nodes.new('ShaderNodeCombineXYZ')  # the opacity at tau = 1, from the alphas
+    far.location = (250, -500)
     for n, tex in enumerate(texs):
-        group.links.new(tex.outputs["Alpha"], steps.inputs[n])
-    inscatter = _vmath(group, 'MULTIPLY_ADD', texs[1].outputs["Color"], tau, x=450, y=300)
-    group.links.new(texs[0].outputs["Color"], inscatter.node.inputs[2])
-    opacity = _vmath(group, 'MULTIPLY_ADD', steps.outputs[0], tau, x=450, y=-200)
-    group.links.new(texs[2].outputs["Color"], opacity.node.inputs[2])
-    for name, socket, y in ((AOV_INSCATTER, inscatter, 300), (AOV_OPACITY, opacity, -200)):
+        group.links.new(tex.outputs["Alpha"], far.inputs[n])
+    outputs = []
+    for near, at_one, y in ((texs[0].outputs["Color"], texs[1].outputs["Color"], 300),
+                            (texs[2].outputs["Color"], far.outputs[0], -200)):
+        node, factor, a, b, out = compat.vector_mix(group)
+        node.location = (450, y)
+        group.links.new(tau, factor)
+        group.links.new(near, a)
+        group.links.new(at_one, b)
+        outputs.append(out)
+    for name, socket, y in ((AOV_INSCATTER, outputs[0], 300), (AOV_OPACITY, outputs[1], -200)):
         aov = group.nodes.new('ShaderNodeOutputAOV')
         compat.set_aov_name(aov, name)
         aov.location = (700, y)

@@ -191,6 +191,20 @@ def rgba_mix(tree, blend_type):
     return node, a, b, out
 
 
+def vector_mix(tree):
+    """The shared Mix node (3.4+) in vector mode with one float factor, unclamped:
+    (node, factor, input A, input B, output); the result is (1 - factor) A + factor B."""
+    node = tree.nodes.new('ShaderNodeMix')
+    node.data_type = 'VECTOR'
+    node.factor_mode = 'UNIFORM'
+    node.clamp_factor = False
+    factor = next(s for s in node.inputs if s.name == "Factor" and s.type == 'VALUE')
+    a = next(s for s in node.inputs if s.name == "A" and s.type == 'VECTOR')
+    b = next(s for s in node.inputs if s.name == "B" and s.type == 'VECTOR')
+    out = next(s for s in node.outputs if s.type == 'VECTOR')
+    return node, factor, a, b, out
+
+
 def compositor_mix(tree, blend_type):
     """A colour Mix node of the compositor, factor 1, unclamped: (node, input A, input B,
     output). CompositorNodeMixRGB before 5.0; the shared Mix node (rgba_mix) in 5.0+, where

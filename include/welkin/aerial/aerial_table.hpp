@@ -118,9 +118,10 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
 //    texture coordinate is y / (slices rows spacing_y) + s / slices. With tau = t / slices
 //    = log_(ratio^slices) d, snap(tau, (1, 1 / slices)) = (floor tau, s / slices) is the
 //    part of (u, v) that the slice adds (floor tau is an integer: no change to u).
-//  * Between slices, linearly in t: the passes are value + tau step, one multiply-add each,
-//    with value and step per texel (textures()). Reading linearly in log d errs by at most
-//    about ln(ratio)^2 / 8 of the value (L grows like d at short range); 0.24 % for 1.15.
+//  * Between slices, linearly in t: each pass is a mix (1 - tau) P + tau Q of two values per
+//    texel (textures()), whose line through the slice's own value and the next slice's
+//    value is reached at tau = t / slices. Reading linearly in log d errs by at most about
+//    ln(ratio)^2 / 8 of the value (L grows like d at short range); 0.24 % for 1.15.
 // The ray of lattice point (i, j) is CameraRays::at_view_vector or at_screen's: exact for
 // every camera type, an orthographic camera's rays starting across its plane.
 //
@@ -168,14 +169,15 @@ struct AerialScreenTable {
     std::vector<float> inscatter, transmittance;
 
     // The three RGBA float textures the shader reads, (3, slices x rows, columns, 4), texels
-    // placed as above. With A = 1 - T, t = log_ratio d and the steps to the next slice
-    // dL = L_(k+1) - L_k, dA likewise (0 in the last slice), slice s = first_exponent + k:
-    //     texture 0: L_k - s dL,  alpha: slices dA.r
-    //     texture 1: slices dL,   alpha: slices dA.g
-    //     texture 2: A_k - s dA,  alpha: slices dA.b
-    // so that L = tex0 + tau tex1 and A = tex2 + tau (tex0.a, tex1.a, tex2.a), tau = t /
-    // slices: at t = s the slice's own values, linear in t up to the next. texture_floats()
-    // floats, written into `out` (every one of them).
+    // placed as above. With A = 1 - T, t = log_ratio d, n = slices and the steps to the next
+    // slice dL = L_(k+1) - L_k, dA likewise (0 in the last slice), slice s = first_exponent
+    // + k, each pass's line L_k + (t - s) dL is held as its values at tau = t / n = 0 and 1:
+    //     texture 0: L_k - s dL,        alpha: (A_k + (n - s) dA).r
+    //     texture 1: L_k + (n - s) dL,  alpha: (A_k + (n - s) dA).g
+    //     texture 2: A_k - s dA,        alpha: (A_k + (n - s) dA).b
+    // so that L = mix(tex0, tex1, tau) and A = mix(tex2, (tex0.a, tex1.a, tex2.a), tau),
+    // mix(p, q, f) = (1 - f) p + f q: at t = s the slice's own values, linear in t up to
+    // the next. texture_floats() floats, written into `out` (every one of them).
     std::size_t texture_floats() const;
     void textures(std::span<float> out) const;
     std::vector<float> textures() const;
