@@ -77,35 +77,44 @@ void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayl
 
 // Spectral (L, T) of all channels -> the passes' RGB (see the header: the sky's
 // conversion for L, the sunlit-surface ratio for T).
+// Both are linear in the spectrum, so each is one 3 x C matrix, built once:
+//     L3 = exposure M_sky L,    T3 = clamp01(M_sun (E_sun T) / white),  white = M_sun E_sun
+// (white: the sun's own colour, so that air that dims every wavelength alike leaves a
+// sunlit surface's colour as it is).
 class PassColour {
 public:
-    PassColour(const Atmosphere& atm, double exposure)
-        : sky_(atm.wavelengths_nm, -3.0),
-          sun_(atm.wavelengths_nm, 0.0),
-          solar_(atm.solar_irradiance.begin(), atm.solar_irradiance.end()),
-          exposure_(exposure) {
-        white_ = sun_.convert(solar_);
+    PassColour(const Atmosphere& atm, double exposure) : channels_(atm.wavelengths_nm.size()) {
+        const SpectrumToRgb sky(atm.wavelengths_nm, -3.0), sun(atm.wavelengths_nm, 0.0);
+        const std::vector<float> solar(atm.solar_irradiance.begin(), atm.solar_irradiance.end());
+        const std::array<double, 3> white = sun.convert(solar);
+        sky_.resize(3 * channels_);
+        sun_.resize(3 * channels_);
+        for (std::size_t k = 0; k < 3; ++k)
+            for (std::size_t c = 0; c < channels_; ++c) {
+                sky_[k * channels_ + c] = sky.matrix()[k * channels_ + c] * exposure;
+                sun_[k * channels_ + c] =
+                    white[k] > 0.0 ? sun.matrix()[k * channels_ + c] * double(solar[c]) / white[k] : 0.0;
+            }
     }
 
-    std::size_t channels() const { return solar_.size(); }
+    std::size_t channels() const { return channels_; }
 
-    // `scratch` holds channels() floats.
-    void convert(std::span<const float> L, std::span<const float> T, std::span<float> scratch, float* L3,
-                 float* T3) const {
-        const std::array<double, 3> l = sky_.convert(L);
-        for (std::size_t c = 0; c < solar_.size(); ++c) scratch[c] = solar_[c] * T[c];
-        const std::array<double, 3> t = sun_.convert(scratch);
-        for (int k = 0; k < 3; ++k) {
-            L3[k] = float(l[k] * exposure_);
-            T3[k] = float(white_[k] > 0.0 ? clamp01(t[k] / white_[k]) : 0.0);
+    // L and T hold channels() floats each.
+    void convert(const float* L, const float* T, float* L3, float* T3) const {
+        for (std::size_t k = 0; k < 3; ++k) {
+            double l = 0.0, t = 0.0;
+            for (std::size_t c = 0; c < channels_; ++c) {
+                l += sky_[k * channels_ + c] * double(L[c]);
+                t += sun_[k * channels_ + c] * double(T[c]);
+            }
+            L3[k] = float(l);
+            T3[k] = float(clamp01(t));
         }
     }
 
 private:
-    SpectrumToRgb sky_, sun_;
-    std::vector<float> solar_;
-    std::array<double, 3> white_{};
-    double exposure_;
+    std::size_t channels_;
+    std::vector<double> sky_, sun_;  // 3 x C, row-major
 };
 
 // One ray marched once through increasing distances 0 < t_1 < ... < t_n: the passes' RGB
@@ -113,7 +122,7 @@ private:
 class SliceMarcher {
 public:
     SliceMarcher(const AtmosphereLuts& luts, const PassColour& colour, int steps)
-        : luts_(luts), colour_(colour), steps_(steps), scratch_(colour.channels()) {}
+        : luts_(luts), colour_(colour), steps_(steps) {}
 
     // L3 and T3 receive 3 floats per distance.
     void march(const AirRay& ray, std::span<const double> distances, float* L3, float* T3) {
@@ -133,15 +142,14 @@ public:
                 store_channels(Ts, b->medium.channel_count(), &T_[k * C + b->medium.first_channel()]);
             }
         }
-        for (std::size_t k = 0; k < n; ++k)
-            colour_.convert({&L_[k * C], C}, {&T_[k * C], C}, scratch_, L3 + 3 * k, T3 + 3 * k);
+        for (std::size_t k = 0; k < n; ++k) colour_.convert(&L_[k * C], &T_[k * C], L3 + 3 * k, T3 + 3 * k);
     }
 
 private:
     const AtmosphereLuts& luts_;
     const PassColour& colour_;
     int steps_;
-    std::vector<float> L_, T_, scratch_;
+    std::vector<float> L_, T_;
 };
 
 // -ln T, at most kMaxOpticalDepth.
@@ -241,8 +249,8 @@ public:
           top_(view.atmosphere.top_radius_m) {}
 
     struct Scratch {
-        explicit Scratch(std::size_t C) : L(C), T(C), tmp(C) {}
-        std::vector<float> L, T, tmp;
+        explicit Scratch(std::size_t C) : L(C), T(C) {}
+        std::vector<float> L, T;
     };
     std::size_t channels() const { return colour_.channels(); }
 
@@ -257,7 +265,7 @@ public:
         const AirRay ray = air_ray(view_, cam, sun_);
         if (!march_ray(luts_, ray, top_, double(z) * cam.distance_per_depth, steps_, s.L.data(), s.T.data()))
             return;
-        colour_.convert(s.L, s.T, s.tmp, L3, T3);
+        colour_.convert(s.L.data(), s.T.data(), L3, T3);
     }
 
 private:
@@ -570,14 +578,14 @@ AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLut
     }
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-            std::vector<float> L(C), T(C), tmp(C);
+            std::vector<float> L(C), T(C);
             for (std::size_t q = r.begin(); q != r.end(); ++q) {
                 if (!(distances[q] > 0.0)) continue;
                 const AirRay ray{origins[origins.size() == 1 ? 0 : q] - planet_centre, directions[q], sun};
                 std::fill(L.begin(), L.end(), 0.0f);
                 std::fill(T.begin(), T.end(), 1.0f);
                 if (!march_ray(luts, ray, top, distances[q], steps, L.data(), T.data())) continue;
-                colour.convert(L, T, tmp, &out.inscatter[q * 3], &out.transmittance[q * 3]);
+                colour.convert(L.data(), T.data(), &out.inscatter[q * 3], &out.transmittance[q * 3]);
                 if (spectral) {
                     std::copy(L.begin(), L.end(), out.inscatter_spectral.begin() + std::ptrdiff_t(q * C));
                     std::copy(T.begin(), T.end(), out.transmittance_spectral.begin() + std::ptrdiff_t(q * C));

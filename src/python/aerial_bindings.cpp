@@ -71,11 +71,8 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
     run_cancellable(
         [&](Progress* p) { passes = aerial_perspective(scene.aerial_view(), z, width, height, p); },
         progress);
-    py::array_t<float> L({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
-    py::array_t<float> T({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
-    std::copy(passes.inscatter.begin(), passes.inscatter.end(), L.mutable_data());
-    std::copy(passes.transmittance.begin(), passes.transmittance.end(), T.mutable_data());
-    return py::make_tuple(L, T);
+    return py::make_tuple(to_image_array(std::move(passes.inscatter), width, height, 3),
+                          to_image_array(std::move(passes.transmittance), width, height, 3));
 }
 
 const char* const kAerialTableDoc = R"doc(
@@ -122,12 +119,9 @@ py::dict aerial_table_py(const py::handle& scene_in, int azimuths, int elevation
         },
         progress);
     const std::vector<py::ssize_t> shape{slices, elevations, azimuths, 3};
-    py::array_t<float> L(shape), tau(shape);
-    std::copy(table.inscatter.begin(), table.inscatter.end(), L.mutable_data());
-    std::copy(table.optical_depth.begin(), table.optical_depth.end(), tau.mutable_data());
     py::dict out;
-    out["inscatter"] = L;
-    out["optical_depth"] = tau;
+    out["inscatter"] = to_array(std::move(table.inscatter), shape);
+    out["optical_depth"] = to_array(std::move(table.optical_depth), shape);
     return out;
 }
 
@@ -177,13 +171,12 @@ py::dict aerial_screen_table_py(const py::handle& scene_in, const AerialScreenTa
         },
         progress);
     const AerialScreenLattice& g = table.lattice;
-    const std::vector<py::ssize_t> shape{g.slices, g.rows, g.columns, 3};
-    py::array_t<float> L(shape), T(shape);
-    std::copy(table.inscatter.begin(), table.inscatter.end(), L.mutable_data());
-    std::copy(table.transmittance.begin(), table.transmittance.end(), T.mutable_data());
     py::array_t<float> tex(
         {py::ssize_t(3), py::ssize_t(g.slices) * g.rows, py::ssize_t(g.columns), py::ssize_t(4)});
     table.textures({tex.mutable_data(), table.texture_floats()});
+    const std::vector<py::ssize_t> shape{g.slices, g.rows, g.columns, 3};
+    py::array_t<float> L = to_array(std::move(table.inscatter), shape);
+    py::array_t<float> T = to_array(std::move(table.transmittance), shape);
     py::dict lattice;
     lattice["coordinate"] = g.coordinate == ScreenCoordinate::ViewVector ? "view_vector" : "window";
     lattice["columns"] = g.columns;

@@ -73,6 +73,8 @@ c_array<T> to_c_array(const py::handle& values, const std::string& parameter, py
 // as numpy's own allocations are; else copied into `storage`.
 std::span<const glm::dvec3> as_dvec3_span(const c_array<double>& array, std::vector<glm::dvec3>& storage);
 
+// A float32 array of `shape` (C order) that owns `values` (moved, not copied).
+py::array_t<float> to_array(std::vector<float>&& values, const std::vector<py::ssize_t>& shape);
 // A (height, width, channels) float32 array that owns `pixels` (moved, not copied).
 py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height, std::size_t channels);
 

@@ -24,17 +24,26 @@ using namespace std::chrono_literals;
 // How often the waiting thread checks for Ctrl-C when the core reports nothing: short
 // enough to feel immediate, long enough to cost nothing.
 constexpr auto kSignalPollInterval = 50ms;
+// Reports closer together than this are coalesced (the latest fraction is kept): each
+// wake-up takes a core from the computation, which on a small machine is one in two.
+constexpr auto kReportInterval = 10ms;
 
 // Between the core's threads (report, finish) and the waiting Python thread (wait).
 class ProgressChannel final : public Progress {
 public:
     bool report(double fraction) override {
+        const auto now = std::chrono::steady_clock::now();
+        bool wake = false;
         {
             std::lock_guard lock(mutex_);
             fraction_ = fraction;
             fresh_ = true;
+            if (now - last_wake_ >= kReportInterval) {
+                last_wake_ = now;
+                wake = true;
+            }
         }
-        wake_.notify_one();
+        if (wake) wake_.notify_one();
         return !stop_.load(std::memory_order_relaxed);
     }
 
@@ -71,6 +80,7 @@ private:
     std::condition_variable wake_;
     double fraction_ = 0.0;
     bool fresh_ = false;
+    std::chrono::steady_clock::time_point last_wake_{};
     bool done_ = false;
     std::atomic<bool> stop_{false};
 };

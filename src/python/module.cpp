@@ -48,11 +48,14 @@ std::string shape_string(const py::array& array) {
     return s.str();
 }
 
-py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height, std::size_t channels) {
-    auto* owner = new std::vector<float>(std::move(pixels));
+py::array_t<float> to_array(std::vector<float>&& values, const std::vector<py::ssize_t>& shape) {
+    auto* owner = new std::vector<float>(std::move(values));
     py::capsule free_when_done(owner, [](void* p) { delete static_cast<std::vector<float>*>(p); });
-    return py::array_t<float>({py::ssize_t(height), py::ssize_t(width), py::ssize_t(channels)}, owner->data(),
-                              free_when_done);
+    return py::array_t<float>(shape, owner->data(), free_when_done);
+}
+
+py::array_t<float> to_image_array(std::vector<float>&& pixels, int width, int height, std::size_t channels) {
+    return to_array(std::move(pixels), {py::ssize_t(height), py::ssize_t(width), py::ssize_t(channels)});
 }
 
 static_assert(sizeof(glm::dvec3) == 3 * sizeof(double),
