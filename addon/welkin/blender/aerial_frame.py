@@ -219,8 +219,8 @@ def _vmath(group, op, a, b=None, scale=None, x=0, y=0):
 #                  texels in a snap and one multiply-add, three 'Linear' fetches of
 #                  repeating textures (Cycles filters without mipmaps; the lattice wraps
 #                  outside the frame) read each pass's line through the slice as its values
-#                  at tau = 0 and 1, a Combine XYZ gathers the opacity's second value from
-#                  the alphas, and two Mix nodes read the lines at tau (one Cycles
+#                  at tau = 0 and 1, a Combine Color gathers the opacity's second value
+#                  from the alphas, and two Mix nodes read the lines at tau (one Cycles
 #                  instruction each, where a vector multiply-add takes two and a conversion
 #                  of tau to a vector);
 #   FETCH_CLOSEST  EEVEE: the direction table in sixteen 'Closest' fetches filtered by
@@ -234,7 +234,7 @@ FETCH_SCREEN, FETCH_CLOSEST = "screen", "closest"
 
 def _layout(fetch):
     if fetch == FETCH_SCREEN:
-        return f"screen/{len(SCREEN_IMAGES)}/4"  # the form and the version of its nodes
+        return f"screen/{len(SCREEN_IMAGES)}/5"  # the form and the version of its nodes
     return f"{tab.HEIGHT}x{tab.WIDTH}/{fetch}/3"  # the table's layout, the fetch, the nodes: the version
 
 
@@ -262,7 +262,9 @@ def _screen_nodes(group):
         tex.extension = 'REPEAT'
         group.links.new(uv, tex.inputs["Vector"])
         texs.append(tex)
-    far = group.nodes.new('ShaderNodeCombineXYZ')  # the opacity at tau = 1, from the alphas
+    # The opacity at tau = 1, from the alphas: Combine Color (one instruction; Combine XYZ
+    # takes one per component).
+    far = group.nodes.new('ShaderNodeCombineColor')
     far.location = (250, -500)
     for n, tex in enumerate(texs):
         group.links.new(tex.outputs["Alpha"], far.inputs[n])
