@@ -5,8 +5,10 @@
 // TBB worker finished the item, and CPython handles signals on its main thread only
 // (PyErr_CheckSignals returns 0 anywhere else), so Ctrl-C would be seen only by luck.
 // Instead the core runs on a worker thread and the calling thread waits for it, waking
-// on each progress report and at least every 50 ms to check for signals. The core never
-// touches Python; the Python callback always runs on the calling thread with the GIL.
+// on progress reports (at most every 10 ms) and at least every 50 ms to check for
+// signals. The core never touches Python; the Python callback always runs on the calling
+// thread with the GIL, and once it returns False the call raises, however soon the core
+// finishes.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -126,6 +128,9 @@ void run_cancellable(const std::function<void(Progress*)>& work, const py::objec
     if (python_error) throw std::move(*python_error);
     if (host_error) std::rethrow_exception(host_error);
     if (core_error) std::rethrow_exception(core_error);
+    // The callback asked to stop, but the core finished first (reports are coalesced, so a
+    // short computation may end before the first callback returns): still cancelled.
+    if (channel.stopped()) throw Cancelled();
 }
 
 }  // namespace welkin::python
