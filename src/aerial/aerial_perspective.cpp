@@ -75,12 +75,12 @@ void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayl
     }
 }
 
-// Spectral (L, T) of all channels -> the passes' RGB (see the header: the sky's
-// conversion for L, the sunlit-surface ratio for T).
-// Both are linear in the spectrum, so each is one 3 x C matrix, built once:
+// Spectral (L, T) of all channels -> the passes' RGB (see the header): the sky's conversion
+// for L, the sunlit-surface ratio for T,
 //     L3 = exposure M_sky L,    T3 = clamp01(M_sun (E_sun T) / white),  white = M_sun E_sun
 // (white: the sun's own colour, so that air that dims every wavelength alike leaves a
-// sunlit surface's colour as it is).
+// sunlit surface's colour as it is). Both are linear in the spectrum: one 3 x C matrix
+// each, built once.
 class PassColour {
 public:
     PassColour(const Atmosphere& atm, double exposure) : channels_(atm.wavelengths_nm.size()) {

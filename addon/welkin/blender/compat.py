@@ -175,6 +175,15 @@ def restore_scene_compositor(scene, undo_kind, undo_value, created_name):
             bpy.data.node_groups.remove(tree)
 
 
+def _mix_sockets(node, kind):
+    """The shared Mix node's inputs A and B and its output of socket type `kind` (the node
+    carries one set per data type; the others are hidden)."""
+    a = next(s for s in node.inputs if s.name == "A" and s.type == kind)
+    b = next(s for s in node.inputs if s.name == "B" and s.type == kind)
+    out = next(s for s in node.outputs if s.type == kind)
+    return a, b, out
+
+
 def rgba_mix(tree, blend_type):
     """The shared Mix node (3.4+) in colour mode, factor 1 and clamped to [0, 1], result
     unclamped: (node, input A, input B, output). Shader trees in every version, the
@@ -185,10 +194,7 @@ def rgba_mix(tree, blend_type):
     node.clamp_result = False
     node.clamp_factor = True
     node.inputs[0].default_value = 1.0
-    a = next(s for s in node.inputs if s.name == "A" and s.type == 'RGBA')
-    b = next(s for s in node.inputs if s.name == "B" and s.type == 'RGBA')
-    out = next(s for s in node.outputs if s.type == 'RGBA')
-    return node, a, b, out
+    return (node, *_mix_sockets(node, 'RGBA'))
 
 
 def vector_mix(tree):
@@ -199,10 +205,7 @@ def vector_mix(tree):
     node.factor_mode = 'UNIFORM'
     node.clamp_factor = False
     factor = next(s for s in node.inputs if s.name == "Factor" and s.type == 'VALUE')
-    a = next(s for s in node.inputs if s.name == "A" and s.type == 'VECTOR')
-    b = next(s for s in node.inputs if s.name == "B" and s.type == 'VECTOR')
-    out = next(s for s in node.outputs if s.type == 'VECTOR')
-    return node, factor, a, b, out
+    return (node, factor, *_mix_sockets(node, 'VECTOR'))
 
 
 def compositor_mix(tree, blend_type):
