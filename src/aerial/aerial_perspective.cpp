@@ -31,6 +31,7 @@
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/base/simd.hpp"
 #include "welkin/color/color.hpp"
 
 namespace welkin {
@@ -62,16 +63,19 @@ void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayl
         const MediumSample m = medium.sample(r - R);
         const double r_lookup = std::max(r, R);  // below the ground sphere: the ground's air
         const double mu_s = clamp_cosine(glm::dot(x, ray.sun) / r);
-        const Spectrum4 sun_t = b.transmittance.to_sun(r_lookup, mu_s);
+        const Spectrum4 sun_t = b.transmittance.to_sun_within(r_lookup, mu_s);
         const Spectrum4 psi = b.multiscattering.psi(r_lookup, mu_s);
-        const Spectrum4 source = sun_t * (m.rayleigh_scattering * rayleigh_p + m.mie_scattering * mie_p) +
-                                 (m.rayleigh_scattering + m.mie_scattering) * psi;
-        const Spectrum4 T_seg = glm::exp(-m.extinction * dtf);
-        Spectrum4 w;
-        for (int c = 0; c < 4; ++c)
-            w[c] = m.extinction[c] > 1e-12f ? (1.0f - T_seg[c]) / m.extinction[c] : dtf;
-        L += T * w * source;
-        T *= T_seg;
+        const Float4 source =
+            to_float4(sun_t * (m.rayleigh_scattering * rayleigh_p + m.mie_scattering * mie_p) +
+                      (m.rayleigh_scattering + m.mie_scattering) * psi);
+        const Float4 extinction = to_float4(m.extinction);
+        const Float4 T_seg = exp_nonpositive(-extinction * dtf);
+        // (1 - T_seg) / sigma_t, or dt where the step holds no extinction.
+        const Float4 tiny = {1e-12f, 1e-12f, 1e-12f, 1e-12f}, one = {1.0f, 1.0f, 1.0f, 1.0f};
+        const Float4 thin = extinction > tiny ? extinction : one;
+        const Float4 w = extinction > tiny ? (one - T_seg) / thin : Float4{dtf, dtf, dtf, dtf};
+        L += to_vec4(to_float4(T) * w * source);
+        T *= to_vec4(T_seg);
     }
 }
 
@@ -757,14 +761,16 @@ void AerialScreenTable::textures(std::span<float> out) const {
     const std::size_t S = std::size_t(g.slices), R = std::size_t(g.rows), C = std::size_t(g.columns);
     const std::size_t texture = S * R * C * 4;
     const double n = double(g.slices);
+    std::vector<std::size_t> column(C);
+    for (std::size_t i = 0; i < C; ++i) column[i] = std::size_t(g.texel_column(int(i))) * 4;
     tbb::parallel_for(std::size_t(0), S, [&](std::size_t k) {
         const bool last = k + 1 == S;  // read flat: no distance seen lies beyond it
         const double s = double(g.first_exponent) + double(k);
-        for (std::size_t j = 0; j < R; ++j)
+        for (std::size_t j = 0; j < R; ++j) {
+            const std::size_t row = std::size_t(g.texel_row(int(j), int(k))) * C * 4;
             for (std::size_t i = 0; i < C; ++i) {
                 const std::size_t at = ((k * R + j) * C + i) * 3, next = at + R * C * 3;
-                const std::size_t texel =
-                    (std::size_t(g.texel_row(int(j), int(k))) * C + std::size_t(g.texel_column(int(i)))) * 4;
+                const std::size_t texel = row + column[i];
                 for (std::size_t c = 0; c < 3; ++c) {
                     const double L = inscatter[at + c], A = 1.0 - double(transmittance[at + c]);
                     const double dL = last ? 0.0 : inscatter[next + c] - L;
@@ -775,6 +781,7 @@ void AerialScreenTable::textures(std::span<float> out) const {
                     out[c * texture + texel + 3] = float(A + (n - s) * dA);
                 }
             }
+        }
     });
 }
 

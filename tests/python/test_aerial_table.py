@@ -225,7 +225,10 @@ def test_screen_lattice_closed_forms(coordinate):
     # negative lobes).
     within = unit * r ** (e + np.arange(S)) <= 50e3
     assert (np.diff(t["transmittance"][within], axis=0) <= 1e-7).all()
-    assert (np.diff(t["inscatter"].sum(-1), axis=0) >= 0).all()
+    # (L's sum may fall by the rounding of its three float channels where the air adds
+    # nothing: a few units in the last place.)
+    brightness = t["inscatter"].sum(-1)
+    assert (np.diff(brightness, axis=0) >= -4 * np.spacing(brightness[1:])).all()
 
 
 def test_screen_table_ends_read_their_own_slices():

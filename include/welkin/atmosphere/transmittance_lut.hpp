@@ -16,7 +16,9 @@
 #include <cmath>
 #include <vector>
 
+#include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/texture2d.hpp"
+#include "welkin/base/math.hpp"
 
 namespace welkin {
 
@@ -31,6 +33,23 @@ public:
     // above the horizon, linear in the sine of the elevation across the disc (Bruneton
     // 2017, GetTransmittanceToSun).
     Spectrum4 to_sun(double r, double mu_s) const;
+
+    // to_sun for a point within the atmosphere (bottom <= r <= top), inline for the marches
+    // that look the sun up at every sample: the same lookup, with rho = sqrt(r^2 - R^2)
+    // computed once for both halves (the horizon's zenith cosine is -sqrt(1 - R^2 / r^2) =
+    // -rho / r, and x_r = rho / H).
+    Spectrum4 to_sun_within(double r, double mu_s) const {
+        const double rho = safe_sqrt((r - bottom_) * (r + bottom_));
+        const double alpha = sun_angular_radius_;
+        const double s = std::clamp((mu_s + rho / r + alpha) / (2.0 * alpha), 0.0, 1.0);
+        if (s <= 0.0) return Spectrum4(0.0f);
+        const double d = distance_to_top(r, mu_s, top_);
+        const double d_min = top_ - r, d_max = rho + H_;
+        const double x_mu = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+        const float u = texcoord_from_unit(float(clamp01(x_mu)), texture_.width());
+        const float v = texcoord_from_unit(float(clamp01(rho / H_)), texture_.height());
+        return texture_.sample(u, v) * float(s * s * (3.0 - 2.0 * s));
+    }
 
     // The parts of a sun lookup that depend on the radius alone, computed once in double
     // for many sun angles at the same radius (the marches evaluate a whole row of the
