@@ -17,9 +17,11 @@ cleared before each render), the material node group's evaluation at the camera 
 AOVs and the compositor group; "on, cached" renders again with the table already baked, and
 the bake is also timed alone. The figure is the median over the repeats of each repeat's
 ratio to its own "off" render (target: <= 1.10; the order of the three alternates from one
-repeat to the next), of the wall time and of the process's CPU time (all threads). A
-2-second render on a shared machine varies by up to 20 % from one repeat to the next; the
-ratio within a repeat varies less.
+repeat to the next), of the wall time and of the process's CPU time (all threads), with a
+bootstrap 90 % interval for the wall-time figure. A 2-second render on this shared machine
+varies by about 10 % (standard deviation) from one render to the next, with no drift that
+pairing would cancel, so the median of 41 repeats is known to some +-4 %: pass --repeats
+121 or more to settle a figure near the target.
 
 --markers prints a line after each render; run with Blender's --debug-cycles and the output
 kept in a file, bench/cycles_log_split.py then splits each render's time into Cycles' path
@@ -43,6 +45,7 @@ import tempfile
 import time
 
 import bpy
+import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -105,15 +108,28 @@ def ratio(series, state):
     return statistics.median(a / b for a, b in zip(series[state], series["off"]))
 
 
+def ratio_interval(series, state, level=0.90, resamples=4000):
+    """A bootstrap interval of ratio(series, state): the central `level` of the medians of
+    `resamples` resamplings of the repeats (with replacement; seeded, so a log reads the
+    same twice). A 2-second render here varies by about 10 % from one render to the next,
+    so one repeat's ratio varies by some 14 %, and the median of 41 by several per cent."""
+    r = np.array(series[state]) / np.array(series["off"])
+    medians = np.median(np.random.default_rng(0).choice(r, (resamples, r.size)), axis=1)
+    return tuple(np.quantile(medians, [(1.0 - level) / 2.0, (1.0 + level) / 2.0]))
+
+
 m = {k: statistics.median(v) for k, v in times.items()}
 low = {k: min(v) for k, v in cpu.items()}  # noise only adds: the least CPU time is the steadiest
 c = {k: statistics.median(v) for k, v in cpu.items()}
 r = {k: ratio(times, k) for k in ("on", "on_cached")}
+ci = {k: ratio_interval(times, k) for k in ("on", "on_cached")}
 rc = {k: ratio(cpu, k) for k in ("on", "on_cached")}
 print(f"cycles_aerial_frame: {args.size} px wide, {args.samples} samples, {args.repeats} repeats "
       f"(medians; ratios: the median of each repeat's ratio): off {m['off']:.2f} s, on "
-      f"{m['on']:.2f} s (ratio {r['on']:.3f}, target <= 1.10), on with the table already baked "
-      f"{m['on_cached']:.2f} s (ratio {r['on_cached']:.3f}); the bake alone {m['bake']:.3f} s; "
+      f"{m['on']:.2f} s (ratio {r['on']:.3f}, 90 % interval {ci['on'][0]:.3f}-{ci['on'][1]:.3f}, "
+      f"target <= 1.10), on with the table already baked {m['on_cached']:.2f} s (ratio "
+      f"{r['on_cached']:.3f}, {ci['on_cached'][0]:.3f}-{ci['on_cached'][1]:.3f}); the bake alone "
+      f"{m['bake']:.3f} s; "
       f"CPU time: off {c['off']:.2f} s, on {c['on']:.2f} s (ratio {rc['on']:.3f}), cached "
       f"{c['on_cached']:.2f} s (ratio {rc['on_cached']:.3f}); least CPU time: off {low['off']:.2f} s, on "
       f"{low['on']:.2f} s (ratio {low['on'] / low['off']:.3f}), cached {low['on_cached']:.2f} s (ratio "
@@ -125,8 +141,9 @@ if args.group_only:
           f"camera sample ({samples} samples)")
 if args.csv:
     with open(args.csv, "w") as f:
-        f.write("size,samples,repeats,off_s,on_s,on_cached_s,bake_s,ratio,off_cpu_s,on_cpu_s,"
-                "on_cached_cpu_s,cpu_ratio,least_cpu_ratio\n")
+        f.write("size,samples,repeats,off_s,on_s,on_cached_s,bake_s,ratio,ratio_lo90,ratio_hi90,"
+                "off_cpu_s,on_cpu_s,on_cached_cpu_s,cpu_ratio,least_cpu_ratio\n")
         f.write(f"{args.size},{args.samples},{args.repeats},{m['off']:.3f},{m['on']:.3f},"
-                f"{m['on_cached']:.3f},{m['bake']:.3f},{r['on']:.4f},{c['off']:.3f},"
+                f"{m['on_cached']:.3f},{m['bake']:.3f},{r['on']:.4f},{ci['on'][0]:.4f},"
+                f"{ci['on'][1]:.4f},{c['off']:.3f},"
                 f"{c['on']:.3f},{c['on_cached']:.3f},{rc['on']:.4f},{low['on'] / low['off']:.4f}\n")
