@@ -112,8 +112,7 @@ def ratio(series, state):
 def ratio_interval(series, state, level=0.90, resamples=4000):
     """A bootstrap interval of ratio(series, state): the central `level` of the medians of
     `resamples` resamplings of the repeats (with replacement; seeded, so a log reads the
-    same twice). A 2-second render here varies by about 10 % from one render to the next,
-    so one repeat's ratio varies by some 14 %, and the median of 41 by several per cent."""
+    same twice); it sees the noise within a run, not what changes between runs."""
     r = np.array(series[state]) / np.array(series["off"])
     medians = np.median(np.random.default_rng(0).choice(r, (resamples, r.size)), axis=1)
     return tuple(np.quantile(medians, [(1.0 - level) / 2.0, (1.0 + level) / 2.0]))

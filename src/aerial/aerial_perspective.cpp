@@ -63,7 +63,7 @@ void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayl
         const MediumSample m = medium.sample(r - R);
         const double r_lookup = std::max(r, R);  // below the ground sphere: the ground's air
         const double mu_s = clamp_cosine(glm::dot(x, ray.sun) / r);
-        const Spectrum4 sun_t = b.transmittance.to_sun_within(r_lookup, mu_s);
+        const Spectrum4 sun_t = b.transmittance.to_sun(r_lookup, mu_s);
         const Spectrum4 psi = b.multiscattering.psi(r_lookup, mu_s);
         const Float4 source =
             to_float4(sun_t * (m.rayleigh_scattering * rayleigh_p + m.mie_scattering * mie_p) +

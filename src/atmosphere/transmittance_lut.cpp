@@ -211,13 +211,7 @@ TransmittanceLut::TransmittanceLut(const AtmosphereBatch& batch, int width, int 
 }
 
 void TransmittanceLut::uv_from_r_mu(double r, double mu, float& u, float& v) const {
-    const double H = H_;
-    const double rho = safe_sqrt((r - bottom_) * (r + bottom_));
-    const double d = distance_to_top(r, mu, top_);
-    const double d_min = top_ - r, d_max = rho + H;
-    const double x_mu = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
-    u = texcoord_from_unit(float(clamp01(x_mu)), texture_.width());
-    v = texcoord_from_unit(float(clamp01(rho / H)), texture_.height());
+    uv_from_r_rho_mu(r, safe_sqrt((r - bottom_) * (r + bottom_)), mu, u, v);
 }
 
 void TransmittanceLut::r_mu_from_uv(float u, float v, double& r, double& mu) const {
@@ -238,13 +232,6 @@ Spectrum4 TransmittanceLut::to_top(double r, double mu) const {
     return texture_.sample(u, v);
 }
 
-double sun_visible_fraction(double bottom_radius, double r, double mu_s, double angular_radius) {
-    const double sin_h = std::min(bottom_radius / r, 1.0);
-    const double cos_h = -safe_sqrt(1.0 - sin_h * sin_h);  // zenith cosine of the horizon
-    const double x = std::clamp((mu_s - cos_h + angular_radius) / (2.0 * angular_radius), 0.0, 1.0);
-    return x * x * (3.0 - 2.0 * x);
-}
-
 TransmittanceLut::AtRadius TransmittanceLut::at_radius(double r_in) const {
     AtRadius a;
     a.r = std::min(r_in, top_);
@@ -256,19 +243,12 @@ TransmittanceLut::AtRadius TransmittanceLut::at_radius(double r_in) const {
     const double range = rho + H_ - d_min;
     a.x_scale = range > 0.0 ? float(double(texture_.width() - 1) / range) : 0.0f;
     // sun_visible_fraction's smoothstep argument (mu_s - cos_h + alpha) / (2 alpha).
-    const double sin_h = std::min(bottom_ / a.r, 1.0);
-    const double cos_h = -safe_sqrt(1.0 - sin_h * sin_h);
+    const double cos_h = horizon_cosine(a.r, rho);
     const double alpha = sun_angular_radius_;
     a.fraction_scale = float(1.0 / (2.0 * alpha));
     a.fraction_offset = float((alpha - cos_h) / (2.0 * alpha));
     a.row = texture_.row(texcoord_from_unit(float(clamp01(rho / H_)), texture_.height()));
     return a;
-}
-
-Spectrum4 TransmittanceLut::to_sun(double r, double mu_s) const {
-    const double fraction = sun_visible_fraction(bottom_, r, mu_s, sun_angular_radius_);
-    if (fraction <= 0.0) return Spectrum4(0.0f);
-    return to_top(r, mu_s) * float(fraction);
 }
 
 }  // namespace welkin

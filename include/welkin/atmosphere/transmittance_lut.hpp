@@ -22,6 +22,25 @@
 
 namespace welkin {
 
+// Fraction of the sun's disc (angular radius `angular_radius`) above a horizon of zenith
+// cosine cos_horizon: 0 when the sun is set, 1 when risen, smooth in between (a smoothstep
+// in the sine of the elevation across the disc, as Bruneton 2017's GetTransmittanceToSun).
+inline double sun_visible_fraction_at(double mu_s, double cos_horizon, double angular_radius) {
+    const double x = std::clamp((mu_s - cos_horizon + angular_radius) / (2.0 * angular_radius), 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+}
+
+// The horizon of a point at radius r above a ground sphere of radius R, given
+// rho = sqrt(r^2 - R^2): zenith cosine -sqrt(1 - R^2 / r^2) = -rho / r (0 at or below the
+// ground, where rho is 0).
+inline double horizon_cosine(double r, double rho) { return rho > 0.0 ? -rho / r : 0.0; }
+
+// sun_visible_fraction_at for a point at radius r.
+inline double sun_visible_fraction(double bottom_radius, double r, double mu_s, double angular_radius) {
+    const double rho = safe_sqrt((r - bottom_radius) * (r + bottom_radius));
+    return sun_visible_fraction_at(mu_s, horizon_cosine(r, rho), angular_radius);
+}
+
 class TransmittanceLut {
 public:
     TransmittanceLut(const AtmosphereBatch& batch, int width, int height, int steps = 32);
@@ -32,23 +51,18 @@ public:
     // Sun transmittance at (r, mu_s), with the planet's shadow: the fraction of the sun disc
     // above the horizon, linear in the sine of the elevation across the disc (Bruneton
     // 2017, GetTransmittanceToSun).
-    Spectrum4 to_sun(double r, double mu_s) const;
-
-    // to_sun for a point within the atmosphere (bottom <= r <= top), inline for the marches
-    // that look the sun up at every sample: the same lookup, with rho = sqrt(r^2 - R^2)
-    // computed once for both halves (the horizon's zenith cosine is -sqrt(1 - R^2 / r^2) =
-    // -rho / r, and x_r = rho / H).
-    Spectrum4 to_sun_within(double r, double mu_s) const {
+    // (rho, the radius's square root, is formed once for the horizon and the texel row; inline:
+    // the marches look the sun up at every sample.)
+    Spectrum4 to_sun(double r, double mu_s) const {
         const double rho = safe_sqrt((r - bottom_) * (r + bottom_));
-        const double alpha = sun_angular_radius_;
-        const double s = std::clamp((mu_s + rho / r + alpha) / (2.0 * alpha), 0.0, 1.0);
-        if (s <= 0.0) return Spectrum4(0.0f);
-        const double d = distance_to_top(r, mu_s, top_);
-        const double d_min = top_ - r, d_max = rho + H_;
-        const double x_mu = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
-        const float u = texcoord_from_unit(float(clamp01(x_mu)), texture_.width());
-        const float v = texcoord_from_unit(float(clamp01(rho / H_)), texture_.height());
-        return texture_.sample(u, v) * float(s * s * (3.0 - 2.0 * s));
+        const double fraction = sun_visible_fraction_at(mu_s, horizon_cosine(r, rho), sun_angular_radius_);
+        if (fraction <= 0.0) return Spectrum4(0.0f);
+        float u, v;
+        if (r <= top_)
+            uv_from_r_rho_mu(r, rho, mu_s, u, v);
+        else
+            uv_from_r_mu(top_, mu_s, u, v);
+        return texture_.sample(u, v) * float(fraction);
     }
 
     // The parts of a sun lookup that depend on the radius alone, computed once in double
@@ -93,15 +107,19 @@ public:
     void r_mu_from_uv(float u, float v, double& r, double& mu) const;
 
 private:
+    // uv_from_r_mu with rho = sqrt(r^2 - bottom^2) given.
+    void uv_from_r_rho_mu(double r, double rho, double mu, float& u, float& v) const {
+        const double d = distance_to_top(r, mu, top_);
+        const double d_min = top_ - r, d_max = rho + H_;
+        const double x_mu = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+        u = texcoord_from_unit(float(clamp01(x_mu)), texture_.width());
+        v = texcoord_from_unit(float(clamp01(rho / H_)), texture_.height());
+    }
+
     double bottom_, top_, H_;  // H = sqrt(top^2 - bottom^2)
     float sun_angular_radius_;
     Texture2D texture_;
 };
-
-// Fraction of the sun's disc (angular radius `angular_radius`) above the horizon of a
-// point at radius r: 0 when the sun is set, 1 when risen, smooth in between (a smoothstep
-// in the sine of the elevation across the disc, as Bruneton 2017's GetTransmittanceToSun).
-double sun_visible_fraction(double bottom_radius, double r, double mu_s, double angular_radius);
 
 // Optical depth (as a Spectrum4 of tau) along [0, length] of the ray (r, mu), by
 // Gauss-Legendre on panels graded towards the lowest altitude; `samples` evaluations, plus
