@@ -22,7 +22,8 @@ bootstrap 90 % interval for the wall-time figure. A 2-second render on this shar
 varies by about 10 % (standard deviation) from one render to the next, with no drift that
 pairing would cancel, so the median of 41 repeats is known to some +-4 %, and two runs of
 121 repeats still differ by about a per cent (the machine's state changes between them):
-pass --repeats 121 or more, and pool runs, to settle a figure near the target.
+pass --repeats 121 or more, and pool runs (bench/cycles_log_split.py takes several
+logs), to settle a figure near the target.
 
 --markers prints a line after each render; run with Blender's --debug-cycles and the output
 kept in a file, bench/cycles_log_split.py then splits each render's time into Cycles' path
