@@ -571,7 +571,7 @@ def draw_stability_preset(path, scene_rows, noise_rows, labels, suns, alts, tole
 
 def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, paths,
                 ref_per_path, n_dirs):
-    """The C++ table `auto` chooses from (src/auto_sky.cpp reads it through
+    """The C++ table `auto` chooses from (src/sky/auto.cpp reads it through
     include/welkin/sky/auto_table.hpp)."""
     def opt(kw, key, default):
         return int(kw.get(key, default))

@@ -1,4 +1,4 @@
-// A lazily filled grid of cloud optical depth; see cloud_depth_grid.hpp.
+// A lazily filled grid of cloud optical depth; see clouds/depth_grid.hpp.
 #include "welkin/clouds/depth_grid.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// welkin.SceneDescription and welkin.aerial_perspective (include/welkin/scene.hpp,
+// welkin.SceneDescription and welkin.aerial_perspective (include/welkin/scene/scene.hpp,
 // aerial_perspective.hpp): what the Blender add-on needs to turn a rendered frame's depth
 // into its aerial-perspective passes (EXR files in and out: exr_bindings.cpp). Thin: the
 // scene travels as its JSON text, the depth as a numpy array, the passes come back as

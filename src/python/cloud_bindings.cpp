@@ -1,6 +1,6 @@
 // welkin.CloudLayer, welkin.VdbClouds, welkin.cloud_radiance and welkin.sky_image: the cloud
-// density sources (include/welkin/procedural_clouds.hpp, vdb_clouds.hpp), their lighting
-// (cloud_lighting.hpp, cloud_reference.hpp) and the equirect sky with clouds (sky_image.hpp).
+// density sources (include/welkin/clouds/procedural.hpp, clouds/vdb.hpp), their lighting
+// (clouds/lighting.hpp, clouds/reference.hpp) and the equirect sky with clouds (sky_image.hpp).
 // Thin: converts, releases the GIL, calls the core.
 #include "bindings.hpp"
 #include <fmt/format.h>
@@ -74,7 +74,7 @@ W m^-2 sr^-1): the sun's irradiance at normal incidence everywhere and a uniform
 that radiance from every direction, below included (a Cycles sun lamp of that strength
 and a world of that colour); atm and altitude_m then do not light the cloud.
 g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
-(include/welkin/cloud_phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
+(include/welkin/clouds/phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
 )doc";
 
 py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere atmosphere, double altitude_m,

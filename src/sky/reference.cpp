@@ -3,7 +3,7 @@
 // What it computes. For an observer at x looking along v, the sky (path) radiance is the
 // light scattered towards x by the air along the view ray, up to where the ray leaves
 // the atmosphere or meets the ground (the ground's own radiance at the end of the ray is
-// not part of it; sky_method.hpp):
+// not part of it; sky/method.hpp):
 //
 //   L(x, v) = int_0^D T(x, y_t) sum_k sigma_k(y_t) int_S2 p_k(w . v) L_in(y_t, w) dw dt,   (1)
 //
@@ -73,13 +73,13 @@
 //     is event 1, the sun added on the flight after event m is order m + 1; ground
 //     reflections count as events. max_scattering_order = n keeps orders <= n.
 //   - Sampling decisions come from randomised quasi-Monte Carlo points (QmcSampler in
-//     reference_rng.hpp: padded, Owen-scrambled Sobol' pairs, exactly uniform per
+//     base/rng.hpp: padded, Owen-scrambled Sobol' pairs, exactly uniform per
 //     point): event 1 uses (view-ray point, lobe), (cosine, azimuth); each flight
 //     (forced collision, continue?) and each later event (lobe, -), (cosine, azimuth),
 //     so the pairs stay aligned with the events; beyond 24 dimensions, and for the
 //     roulette, plain pseudo-random numbers.
 //
-// Transmittances come from ColumnTable (reference_column_table.hpp): exact closed forms
+// Transmittances come from ColumnTable (reference/column_table.hpp): exact closed forms
 // for piecewise-linear layers (ozone) and a fine double-precision table of the exact
 // columns for the exponential ones, checked against optical_depth.hpp to 1e-5 in
 // tests/cpp/test_optical_depth.cpp; nothing is shared with the LUT methods. The free-

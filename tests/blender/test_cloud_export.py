@@ -1,4 +1,4 @@
-"""The scene JSON's "clouds" section from a Blender scene (README "Clouds in Blender"):
+"""The scene JSON's "clouds" section from a Blender scene (docs/artists.md "Clouds in Blender"):
 the world's procedural layers, a marked Volume object's VDB file for the current frame of
 a real 3-frame sequence (the file Blender itself loads, Volume.grids.frame_filepath, in
 each sequence mode), its matrix_world by rows in metres, grid and density scale; the

@@ -1,5 +1,5 @@
 // Phase functions (phase.hpp) and the reference path tracer's sampling routines
-// (reference_sampling.hpp, reference_rng.hpp).
+// (reference/sampling.hpp, base/rng.hpp).
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -1,8 +1,8 @@
 """World.welkin_clouds (the world's procedural cloud layers and cloud lighting) and
 Object.welkin_cloud (a Volume object marked as Welkin clouds).
 
-Defaults and hard ranges are the core's (procedural_clouds.hpp CloudLayerParams,
-cloud_lighting.hpp CloudLightingOptions); the soft ranges are what the sliders offer.
+Defaults and hard ranges are the core's (clouds/procedural.hpp CloudLayerParams,
+clouds/lighting.hpp CloudLightingOptions); the soft ranges are what the sliders offer.
 """
 import bpy
 

@@ -62,7 +62,7 @@ def scene_world(scene, depsgraph, native):
 
 
 def scene_description_json(scene, depsgraph, native):
-    """The frame's scene JSON (README "Scene JSON"); UserError for what the user can fix."""
+    """The frame's scene JSON (docs/pipelines.md "Scene JSON"); UserError for what the user can fix."""
     if scene.camera is None:
         raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
                         "active (Ctrl+Numpad 0)")

@@ -123,7 +123,7 @@ def sky_key(settings, request, clouds):
 
 
 def cloudy_scene_json(scene, settings, request, clouds, module, depsgraph=None):
-    """The scene description of the world's cloudy sky (README "Scene JSON"), re-centred on
+    """The scene description of the world's cloudy sky (docs/pipelines.md "Scene JSON"), re-centred on
     the observer: the world texture is the sky seen from the scene camera (with Add Camera
     Height on and a camera; else from the scene origin), and the core renders a scene's sky
     from its origin. So the origin moves to the camera: origin_altitude_m is the observer's

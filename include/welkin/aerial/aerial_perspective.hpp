@@ -11,7 +11,7 @@
 // The passes hold exactly these two, per pixel: `Welkin.AerialInscatter` = L_in (RGB) and
 // `Welkin.AerialTransmittance` = T (RGB), so that a compositor's Image x T + Inscatter is
 // the hazed render. Sun transmittance and Psi_ms come from the atmosphere's LUTs
-// (atmosphere_luts.hpp); terrain shadows on the air (light shafts) are not modelled.
+// (atmosphere/luts.hpp); terrain shadows on the air (light shafts) are not modelled.
 //
 // Units and colour, as the sky's: L_in is linear Rec.709 in W m^-2 sr^-1 (CIE 1931
 // weighted, without the 683 lm/W factor; color.hpp, lambda power -3, the sky's

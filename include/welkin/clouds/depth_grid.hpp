@@ -1,6 +1,6 @@
 // A lazily filled, sparse, multi-resolution grid of cloud optical depth towards a light.
 //
-// The fast march (cloud_lighting.hpp) needs, at every lit sample x, the cloud's optical
+// The fast march (clouds/lighting.hpp) needs, at every lit sample x, the cloud's optical
 // depth towards the sun, tau(x) = integral_0^D sigma_t(x + l s) dl. Marching a shadow ray
 // per sample costs light_steps density lookups each time, and neighbouring samples (of the
 // same ray and of neighbouring rays) march nearly the same ray. tau is a continuous

@@ -43,7 +43,7 @@ struct CloudPhase {
     double mean_cosine() const { return w_forward * g_forward + (1.0 - w_forward) * g_back; }
 
     // The angular distribution of light scattered twice, p convolved with itself over the
-    // sphere (the path between the two events left out; cloud_diffusion.hpp). A phase's
+    // sphere (the path between the two events left out; clouds/diffusion.hpp). A phase's
     // Legendre moments multiply under this convolution (Funk-Hecke), and HG(g)'s moments
     // are g^l, so HG(g1) * HG(g2) = HG(g1 g2) and for the two lobes
     //     p2 = w^2 HG(g_f^2) + 2 w (1 - w) HG(g_f g_b) + (1 - w)^2 HG(g_b^2).
