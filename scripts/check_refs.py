@@ -8,10 +8,10 @@ reports, one line each, ``file:line: message``:
   ``docs/design.md#layout``) or a source file's bare name (``lut.hpp``, ``farm.py``) that
   names no tracked file, or a Markdown anchor that names no heading of that file;
 - a Markdown link whose target or anchor does not exist, or a section named by its heading
-  after its file (``README "Scene JSON"``, ``docs/pipelines.md "Farms"``) that is not there;
+  in quotes after its file (README or a docs/ page) that is not there;
 - a history reference in code: ``issue #N`` (the tracker is not in the repository: what a
   change did belongs in the git log) or a name of a file that lives outside it
-  (``../shared/...``, ``DESIGN.md``).
+  (a shared folder beside the checkout, a design file that moved into docs/).
 
 A bare name resolves when some tracked file has that name; a path resolves relative to the
 repository root, the naming file's folder, ``include/welkin/`` or ``src/``. Names of files
@@ -46,7 +46,7 @@ MD_LINK_RE = re.compile(r"\]\(([^)\s]+)\)")
 ISSUE_RE = re.compile(r"\bissue #\d+|(?:^|(?<=[\s(]))#\d+\b(?=[:)])", re.IGNORECASE)
 OUTSIDE_RE = re.compile(r"\.\./shared/|\bDESIGN\.md\b")
 FENCE_RE = re.compile(r"^\s*```")
-# A section named by its heading in quotes after a Markdown file: README "Scene JSON".
+# A section named by its heading in quotes after a Markdown file or README.
 SECTION_RE = re.compile(r"\b((?:[\w\-]+/)*[\w\-]+\.md|README)(?:'s)? \"([^\"]+)\"")
 PLACEHOLDER_RE = re.compile(r"(^|/)[A-Z][A-Z_]+(/|$)")
 
