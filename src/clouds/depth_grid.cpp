@@ -121,7 +121,6 @@ double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) con
                                double(t.origin[2] + k) * h);
             v = float(march(x, cursor.segs));
             vertex.store(v, std::memory_order_relaxed);
-            computed_.fetch_add(1, std::memory_order_relaxed);
         }
         corner[c] = v;
     }

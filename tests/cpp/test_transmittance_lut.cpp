@@ -1,5 +1,5 @@
 // The transmittance LUT's texels against exact optical depths (the column table of
-// reference/column_table.hpp: closed forms for the piecewise-linear ozone tent, 1e-5
+// atmosphere/column_table.hpp: closed forms for the piecewise-linear ozone tent, 1e-5
 // relative for the exponentials), every preset, every texel of the default 256 x 64 LUT
 // with its default 32 nodes per ray (8 panels, plus 4 for each panel a breakpoint cuts).
 //
@@ -16,7 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "welkin/atmosphere/transmittance_lut.hpp"
-#include "welkin/reference/column_table.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 
 using namespace welkin;
 

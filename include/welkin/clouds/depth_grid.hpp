@@ -94,9 +94,6 @@ public:
     // The optical depth straight from a march (what a vertex stores, at any point).
     double march(const glm::dvec3& p, std::vector<MajorantSegment>& segs) const;
 
-    // Vertices computed so far (for the benchmark and tests).
-    std::uint64_t vertices_computed() const { return computed_.load(std::memory_order_relaxed); }
-
 private:
     Tile* find(std::uint64_t key) const;
 
@@ -106,7 +103,6 @@ private:
     int steps_;
     struct Map;
     std::unique_ptr<Map> map_;
-    mutable std::atomic<std::uint64_t> computed_{0};
 };
 
 }  // namespace welkin

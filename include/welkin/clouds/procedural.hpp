@@ -117,7 +117,6 @@ public:
     // The share of `columns` columns (the header's point set) whose vertical optical depth
     // reaches kCoverageOpticalDepth: the measured coverage.
     double covered_fraction(int columns = kCoverageColumns) const;
-    double internal_coverage() const { return k_; }
 
     // The type's height gradient G(f) for f in [0, 1] of its local height (0 outside).
     static double height_gradient(CloudType type, double f);
