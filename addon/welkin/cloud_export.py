@@ -1,6 +1,6 @@
 """The scene JSON's "clouds" section (docs/artists.md "Clouds in Blender", /work notes' schema) as
 plain data, and the frame rule of Blender's VDB sequences. Blender-free: the bpy layer
-(blender/cloud_scene.py) reads the world's cloud layers and the marked volume objects and
+(blender/clouds/scene.py) reads the world's cloud layers and the marked volume objects and
 hands plain values here; the core validates every field (and names it when it refuses).
 
 A volume object's file for a frame follows Blender's own sequence rule (the rule of

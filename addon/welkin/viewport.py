@@ -1,4 +1,4 @@
-"""The viewport preview's camera and schedule, Blender-free (blender/viewport_preview.py
+"""The viewport preview's camera and schedule, Blender-free (blender/engine/viewport.py
 draws it).
 
 A 3D viewport in Rendered shading sees the world through its region's matrices:

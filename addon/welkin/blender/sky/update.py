@@ -11,8 +11,9 @@ import json
 
 import bpy
 
-from .. import native, scene_export, sky_compute, sky_request
-from . import cloud_scene, cloud_shadows, images, scene_sun, world_nodes
+from ... import native, scene_export, sky_compute, sky_request
+from ..clouds import scene as cloud_scene, shadows as cloud_shadows
+from . import images, scene_sun, world_nodes
 from .scene_sun import UserError
 
 WORLD_NAME = "Welkin World"

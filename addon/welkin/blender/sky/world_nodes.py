@@ -32,7 +32,7 @@ setting back.
 """
 import math
 
-from . import compat
+from .. import compat
 
 MAP_RESOLUTION = 1024
 ROLE_KEY = "welkin_role"

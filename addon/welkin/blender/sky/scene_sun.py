@@ -2,7 +2,7 @@
 high the observer stands."""
 import math
 
-from .. import sky_request
+from ... import sky_request
 
 
 class UserError(Exception):
