@@ -41,7 +41,7 @@ parser.add_argument("--clouds", action="store_true", help="one cloud layer at th
 args = parser.parse_args(argv)
 
 addon, welkin = T.install_addon()
-from welkin.blender import update  # noqa: E402
+from welkin.blender.sky import update  # noqa: E402
 
 scene, sun = T.new_scene(30.0, 45.0, resolution=str(args.width))
 T.panoramic_camera(scene, 8, 4, samples=1)

@@ -201,7 +201,7 @@ def _timed(atm, sun, dirs, method, kw):
     return time.process_time() - c0, time.perf_counter() - t0
 
 
-def main():
+def parse_args():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true",
                     help="reduced scene set and fewer paths (development); does not write "
@@ -224,35 +224,14 @@ def main():
     ap.add_argument("--retime", action="store_true",
                     help="only measure the times again (a few minutes), keep the errors in "
                          "--out's CSV files; rewrites chart.csv, the pictures and the table")
-    args = ap.parse_args()
-    if args.replot:
-        return replot(pathlib.Path(args.out or (ROOT / "bench/results")), args.tolerance)
-    if args.retime:
-        return retime(pathlib.Path(args.out or (ROOT / "bench/results")), args)
+    return ap.parse_args()
 
-    n_dirs = args.directions or (96 if args.quick else 160)
-    paths = args.paths or (1024 if args.quick else 2048)
-    suns = QUICK_SUN_ELEVATIONS_DEG if args.quick else SUN_ELEVATIONS_DEG
-    alts = QUICK_ALTITUDES_M if args.quick else ALTITUDES_M
-    out = pathlib.Path(args.out or (ROOT / "bench/results" / ("quick" if args.quick else "")))
-    out.mkdir(parents=True, exist_ok=True)
-    table = None
-    if not args.no_table:
-        table = args.table or (None if args.quick else str(ROOT / "src/sky/auto_table.cpp"))
 
-    start = time.perf_counter()
-    atms = Atmospheres()
-    settings = candidate_settings()
-    dirs = fibonacci_sphere(n_dirs)
-
-    # Timing first, while nothing else of ours runs.
-    timing, wall = {}, {}
-    for label, method, spectral, kw in settings:
-        timing[label], wall[label] = time_setting(atms, method, spectral, kw, repeats=TIMING_REPEATS)
-        print(f"time {label:26s} fixed {timing[label][0]*1e3:8.2f} ms, "
-              f"{timing[label][1]*1e6:8.3f} us/direction CPU; wall {wall[label][0]*1e3:8.2f} "
-              f"ms, {wall[label][1]*1e6:8.3f} us/direction", flush=True)
-
+def measure_scenes(atms, settings, dirs, suns, alts, paths, seed, start):
+    """Every preset x altitude x sun: the reference's radiance and noise, and each setting's
+    errors against it. Returns (scene rows, noise rows, per-setting errors, reference
+    CPU seconds per path)."""
+    n_dirs = len(dirs)
     scene_rows, noise_rows = [], []
     per_setting = {label: dict(rel=[], rel_day=[], de=[], nonfinite=0)
                    for label, *_ in settings}
@@ -263,7 +242,7 @@ def main():
                 sun = sun_direction(sun_el)
                 scene_paths = paths * (TWILIGHT_PATH_FACTOR if sun_el <= 0 else 1)
                 ref_rgb, ref_se_y, secs = reference_scene(atms.get(preset, True), alt, sun,
-                                                          dirs, scene_paths, args.seed)
+                                                          dirs, scene_paths, seed)
                 ref_seconds += secs
                 ref_evals += n_dirs * scene_paths
                 y_ref = luminance(ref_rgb)
@@ -311,7 +290,11 @@ def main():
                       f"{secs:5.1f} s, noise p95 {noise_rows[-1]['noise_p95']:.4f}; "
                       f"elapsed {time.perf_counter() - start:6.0f} s", flush=True)
 
-    ref_per_path = ref_seconds / ref_evals
+    return scene_rows, noise_rows, per_setting, ref_seconds / ref_evals
+
+
+def chart_rows_of(settings, per_setting, timing, wall, noise_rows, paths, ref_per_path):
+    """One chart row per setting (time against error) and one for the reference's noise."""
     chart_rows = []
     for label, method, spectral, kw in settings:
         acc = per_setting[label]
@@ -350,6 +333,42 @@ def main():
         rel_lum_max_sun_up=float(np.max([r["noise_max"] for r in noise_day])),
         de2000_mean=float("nan"), de2000_p95=float("nan"), de2000_max=float("nan"),
         nonfinite_or_negative=0))
+    return chart_rows
+
+
+def main():
+    args = parse_args()
+    if args.replot:
+        return replot(pathlib.Path(args.out or (ROOT / "bench/results")), args.tolerance)
+    if args.retime:
+        return retime(pathlib.Path(args.out or (ROOT / "bench/results")), args)
+
+    n_dirs = args.directions or (96 if args.quick else 160)
+    paths = args.paths or (1024 if args.quick else 2048)
+    suns = QUICK_SUN_ELEVATIONS_DEG if args.quick else SUN_ELEVATIONS_DEG
+    alts = QUICK_ALTITUDES_M if args.quick else ALTITUDES_M
+    out = pathlib.Path(args.out or (ROOT / "bench/results" / ("quick" if args.quick else "")))
+    out.mkdir(parents=True, exist_ok=True)
+    table = None
+    if not args.no_table:
+        table = args.table or (None if args.quick else str(ROOT / "src/sky/auto_table.cpp"))
+
+    start = time.perf_counter()
+    atms = Atmospheres()
+    settings = candidate_settings()
+    dirs = fibonacci_sphere(n_dirs)
+
+    # Timing first, while nothing else of ours runs.
+    timing, wall = {}, {}
+    for label, method, spectral, kw in settings:
+        timing[label], wall[label] = time_setting(atms, method, spectral, kw, repeats=TIMING_REPEATS)
+        print(f"time {label:26s} fixed {timing[label][0]*1e3:8.2f} ms, "
+              f"{timing[label][1]*1e6:8.3f} us/direction CPU; wall {wall[label][0]*1e3:8.2f} "
+              f"ms, {wall[label][1]*1e6:8.3f} us/direction", flush=True)
+
+    scene_rows, noise_rows, per_setting, ref_per_path = measure_scenes(
+        atms, settings, dirs, suns, alts, paths, args.seed, start)
+    chart_rows = chart_rows_of(settings, per_setting, timing, wall, noise_rows, paths, ref_per_path)
 
     write_csv(out / "chart.csv", chart_rows)
     write_csv(out / "scenes.csv", scene_rows)
@@ -571,7 +590,7 @@ def draw_stability_preset(path, scene_rows, noise_rows, labels, suns, alts, tole
 
 def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, paths,
                 ref_per_path, n_dirs):
-    """The C++ table `auto` chooses from (src/auto_sky.cpp reads it through
+    """The C++ table `auto` chooses from (src/sky/auto.cpp reads it through
     include/welkin/sky/auto_table.hpp)."""
     def opt(kw, key, default):
         return int(kw.get(key, default))

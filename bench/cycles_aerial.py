@@ -1,5 +1,5 @@
-"""The aerial demo frame at 1920 x 1080: Cycles against Welkin's aerial passes (issue #5) and
-against Welkin's own plate of the same world (issue #7), one Blender process, one run.
+"""The aerial demo frame at 1920 x 1080: Cycles against Welkin's aerial passes and
+against Welkin's own plate of the same world, one Blender process, one run.
 
     PYTHONPATH=build blender -b --factory-startup --python-use-system-env \
         --python bench/cycles_aerial.py -- [--size 1920] [--samples 16] \
@@ -7,14 +7,14 @@ against Welkin's own plate of the same world (issue #7), one Blender process, on
 
 1. blend/make_aerial_demo.py builds the demo (ground and blocks to 40 km, `hazy`, the Welkin
    world texture) at --size and renders it once with the add-on's aerial perspective on, which
-   leaves the frame's scene JSON and its render + Z pass EXR (README "Aerial perspective in
+   leaves the frame's scene JSON and its render + Z pass EXR (docs/artists.md "Aerial perspective in
    Blender"); the whole script is timed as "demo_script_total".
-2. #5: the same frame rendered by Cycles alone (aerial perspective off: the render call,
+2. the same frame rendered by Cycles alone (aerial perspective off: the render call,
    scene sync and BVH included), against, for the same frame's passes:
    `welkin aerial --scene ... --depth ...` (the CLI: LUTs, EXR read, froxels, write) and
    welkin.aerial_perspective(scene, depth) in process (LUTs, froxel build and per-pixel
    application; no file I/O), method froxel (32^3), and raymarch for scale.
-3. #7: the same camera and world: the Welkin render engine (`WELKIN`, the render call:
+3. the same camera and world: the Welkin render engine (`WELKIN`, the render call:
    plate computed by the core and handed to Blender) and `welkin plate --scene` (CLI),
    against Cycles rendering the same world (the meshes hidden from the render, so both
    show sky and sun over the world's own ground) at 1 sample per pixel -- a camera ray that
@@ -94,7 +94,7 @@ scene.welkin_aerial.enabled = False
 t_cycles = timed(render_once)
 row("cycles_frame", t_cycles, f"{args.samples} spp, aerial off")
 
-# 2. #5: the aerial passes of the same frame.
+# 2. the aerial passes of the same frame.
 passes = os.path.join(out, "passes.exr")
 for method in ("froxel", "raymarch"):
     cmd = [args.cli, "aerial", "--scene", scene_json, "--depth", render_exr, "--depth-channel", "Depth.V",
@@ -110,7 +110,7 @@ for method in ("froxel", "raymarch"):
 t_froxel = [r[1] for r in rows if r[0] == "module_aerial_froxel"][0]
 row("cycles_over_aerial_froxel", t_cycles / t_froxel, "ratio (x), Cycles frame / module froxel passes")
 
-# 3. #7: the plate against Cycles on the same world.
+# 3. the plate against Cycles on the same world.
 t = timed(lambda: subprocess.run([args.cli, "plate", "--scene", scene_json, "-o", os.path.join(out, "plate.exr"),
                                   "--overwrite"], check=True, capture_output=True))
 row("cli_plate", t, "welkin plate: LUTs, plate, EXR write")

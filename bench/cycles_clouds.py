@@ -1,4 +1,4 @@
-"""Welkin's cloud lighting against Cycles on one VDB cumulus (issue #6): accuracy and speed.
+"""Welkin's cloud lighting against Cycles on one VDB cumulus: accuracy and speed.
 
     PYTHONPATH=build blender -b --factory-startup --python-use-system-env \
         --python bench/cycles_clouds.py -- [--small 160 90 --samples 1024 --paths 1024] \

@@ -1,5 +1,5 @@
 """A 1920 x 1080 plate with a VDB cloud: `welkin plate` against Cycles rendering the same
-world and volume (issue #7's benchmark), one Blender process.
+world and volume, one Blender process.
 
     PYTHONPATH=build blender -b --factory-startup --python-use-system-env \
         --python bench/cycles_plate_clouds.py -- [--samples 11] [--cli build/welkin] \

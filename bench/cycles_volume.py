@@ -13,7 +13,7 @@ matched, and why it is the same problem for both renderers:
   index i, which Welkin follows): at (i + 1/2) voxel along each axis (measured: Cycles'
   opacity against Welkin's differs by up to 0.22 at the cloud's edges unshifted, 0.35 and
   0.09, the noise, with Welkin's copy moved by -1/2 and +1/2 voxel). That +1/2 is Welkin's
-  default placement="blender" (include/welkin/vdb_clouds.hpp), which welkin_render uses
+  default placement="blender" (include/welkin/clouds/vdb.hpp), which welkin_render uses
   unless told placement="openvdb", so both render the same density.
 * Albedo 1 and the phase: one Henyey-Greenstein lobe of eccentricity G (Cycles' Volume
   Scatter anisotropy is HG's g, positive forward, as Welkin's), Welkin's CloudPhase set to

@@ -1,12 +1,12 @@
 """Makes the aerial-perspective demo scene and renders it headless:
 
     blender -b --factory-startup --python-use-system-env --python blend/make_aerial_demo.py \
-        [-- --out out/aerial_demo --size 480 --samples 16 --sheet docs/aerial_demo.png]
+        [-- --out out/aerial_demo --size 480 --samples 16 --sheet docs/aerial_blender_demo.png]
 
 A ground plane 200 km across and pairs of blocks from 300 m out to 40 km, the camera 30 m up
 looking along +X, the sun 8 degrees up to the camera's left, `hazy` air, the Welkin sky in
 the world. With Scene.welkin_aerial enabled the render leaves OUT/frame_welkin_*_0001.*
-(scene JSON, passes, composite: README "Aerial perspective in Blender"). --sheet writes the
+(scene JSON, passes, composite: docs/artists.md "Aerial perspective in Blender"). --sheet writes the
 render before (the render layer's Image) and after (Image x T + Inscatter) side by side as
 one PNG (exposure 2^-3.5, x / (1 + x), sRGB).
 """

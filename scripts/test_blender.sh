@@ -14,7 +14,7 @@
 # Prints each suite's time; the exit status is non-zero if any test failed. A test that
 # runs longer than $WELKIN_TEST_TIMEOUT seconds (900) is stopped and fails.
 #
-#   bash scripts/test_blender.sh [-v 3.4,4.5,5.0] [tests/blender/test_x.py ...]
+#   bash scripts/test_blender.sh [-v 3.4,4.5,5.0] [tests/blender/test_<name>.py ...]
 set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 

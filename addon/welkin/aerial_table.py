@@ -9,7 +9,7 @@ row j, azimuth column i). The image packs them as one float RGBA atlas, AZIMUTHS
 so that azimuth runs along the image's width (a repeating texture wraps it exactly) and a
 tile of ELEVATIONS rows is one distance slice. lookup() reads it the way the node group does
 (texel centres, bilinear, the two slices around the distance mixed linearly in distance);
-the shader's nodes are built from the same formulas (blender/aerial_frame.py).
+the shader's nodes are built from the same formulas (blender/aerial/frame.py).
 """
 from __future__ import annotations
 

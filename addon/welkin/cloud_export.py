@@ -1,6 +1,6 @@
-"""The scene JSON's "clouds" section (README "Clouds in Blender", /work notes' schema) as
+"""The scene JSON's "clouds" section (docs/artists.md "Clouds in Blender", /work notes' schema) as
 plain data, and the frame rule of Blender's VDB sequences. Blender-free: the bpy layer
-(blender/cloud_scene.py) reads the world's cloud layers and the marked volume objects and
+(blender/clouds/scene.py) reads the world's cloud layers and the marked volume objects and
 hands plain values here; the core validates every field (and names it when it refuses).
 
 A volume object's file for a frame follows Blender's own sequence rule (the rule of
@@ -23,14 +23,14 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-# The layer fields of the schema, with the core's defaults (procedural_clouds.hpp,
+# The layer fields of the schema, with the core's defaults (clouds/procedural.hpp,
 # CloudLayerParams); planet radius and origin altitude come from the scene.
 # cloud_type is a preset name (CLOUD_TYPES); the others are numbers.
 CLOUD_TYPES = ("cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus")
 LAYER_FIELDS = ("cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage",
                 "density_per_m", "base_scale_m", "detail_scale_m", "weather_scale_m",
                 "detail_strength", "weather_variation", "evolution_m")
-# The lighting fields the panel offers (cloud_lighting.hpp, CloudLightingOptions).
+# The lighting fields the panel offers (clouds/lighting.hpp, CloudLightingOptions).
 LIGHTING_FIELDS = ("max_steps", "light_steps", "ambient_steps", "octaves")
 
 SEQUENCE_MODES = ("CLIP", "EXTEND", "REPEAT", "PING_PONG")

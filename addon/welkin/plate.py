@@ -1,10 +1,10 @@
 """The render engine's plate, Blender-free: the scene description it renders, and the
 passes as Blender's render result wants them.
 
-The Welkin render engine (blender/render_engine.py) renders the active camera's plate:
+The Welkin render engine (blender/engine/render_engine.py) renders the active camera's plate:
 sky, sun disc and aerial perspective over the ground, no meshes. The core computes it
 (`welkin.camera_plate`, camera_plate.hpp); this module only writes the scene description
-(README "Scene JSON") from plain values read off bpy, and reshapes the core's arrays
+(docs/pipelines.md "Scene JSON") from plain values read off bpy, and reshapes the core's arrays
 (top row first, RGB) into Blender's pass rectangles (bottom row first, RGBA or RGB).
 """
 from __future__ import annotations

@@ -1,10 +1,10 @@
-"""A frame's SceneDescription (README "Scene JSON") as plain data, and the files the
+"""A frame's SceneDescription (docs/pipelines.md "Scene JSON") as plain data, and the files the
 aerial-perspective handler writes beside a render. Blender-free: the bpy layer
-(blender/aerial.py) reads the scene and hands plain values here.
+(blender/aerial/settings.py) reads the scene and hands plain values here.
 
 Everything the core takes is in metres: Blender's scene units are scaled by
 `unit_settings.scale_length` (the camera's translation, orthographic scale and clip range
-here; the Z pass in the handler), as README "Scene JSON" says.
+here; the Z pass in the handler), as docs/pipelines.md "Scene JSON" says.
 """
 from __future__ import annotations
 
@@ -95,7 +95,7 @@ def scene_dict(atmosphere: str | dict[str, Any], origin_altitude_m: float,
 def composite(image_rgb: npt.NDArray[np.floating], inscatter: npt.NDArray[np.floating],
               transmittance: npt.NDArray[np.floating],
               clouds: npt.NDArray[np.floating] | None = None) -> npt.NDArray[np.floating]:
-    """The hazed render: Image x Transmittance + Inscatter (README "Aerial perspective"),
+    """The hazed render: Image x Transmittance + Inscatter (docs/artists.md "Aerial perspective in Blender"),
     and with clouds (premultiplied RGBA, the air in front of them included) the clouds
     over it: Clouds.rgb + (1 - Clouds.a) x (Image x T + Inscatter)."""
     hazed = image_rgb * transmittance + inscatter

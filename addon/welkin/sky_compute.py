@@ -1,7 +1,7 @@
 """Turning a SkyRequest into the world's images and the sun lamp's values, by calling the
 compiled module (never by computing physics here).
 
-Energy appears once (DESIGN.md): the sky image carries no sun disc, because the sun lamp
+Energy appears once (docs/design.md): the sky image carries no sun disc, because the sun lamp
 lights the scene; the world draws the disc with shader nodes from the view direction
 (world_nodes.py), shown to camera rays only, from the numbers of a DiscModel: the disc's
 centre, angular radius and horizon, and its radiance profile as a polynomial in mu (below).

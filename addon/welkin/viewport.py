@@ -1,4 +1,4 @@
-"""The viewport preview's camera and schedule, Blender-free (blender/viewport_preview.py
+"""The viewport preview's camera and schedule, Blender-free (blender/engine/viewport.py
 draws it).
 
 A 3D viewport in Rendered shading sees the world through its region's matrices:
@@ -54,7 +54,7 @@ def _rigid_inverse(m: list[list[float]]) -> list[list[float]]:
 def camera_from_view(view_matrix: Iterable[Iterable[float]],
                      window_matrix: Iterable[Iterable[float]], is_perspective: bool,
                      width: int, height: int, scale_length: float = 1.0) -> dict[str, Any]:
-    """The scene JSON's "camera" (README "Scene JSON") that sees what a viewport region of
+    """The scene JSON's "camera" (docs/pipelines.md "Scene JSON") that sees what a viewport region of
     width x height pixels sees, from its view_matrix and window_matrix (4 rows each, in
     scene units; see the module's docstring). ValueError naming the matrix when it is not
     a projection Blender makes."""

@@ -1,4 +1,4 @@
-// Speed and accuracy of the cloud lighting (issue #6), side by side in one run:
+// Speed and accuracy of the cloud lighting, side by side in one run:
 //  * a 2048 x 1024 equirectangular sky (lut) clear and with a procedural cumulus layer;
 //  * the fast march against the path-tracing reference on three clouds (a thin wispy
 //    layer, a dense cumulus layer, a VDB ball written here with OpenVDB): the error of the
@@ -253,7 +253,7 @@ int main(int argc, char** argv) {
     // on; "legacy" is the march as it was before the grid, the dim-tail steps and the
     // octaves' optical size (a shadow ray per sample, fixed steps), at the defaults' steps.
     // "octaves" is the defaults with Wrenninge's octaves (weighted by the optical size) in
-    // place of the delta-Eddington slab (cloud_diffusion.hpp), as the default was before it.
+    // place of the delta-Eddington slab (clouds/diffusion.hpp), as the default was before it.
     struct Setting {
         const char* label;
         int max_steps, light_steps;

@@ -1,5 +1,5 @@
 """Writes a VDB ball and a 1920x1080 scene JSON that sees it, for timing the camera cloud
-passes (README "Clouds in scenes"):
+passes (docs/pipelines.md "Clouds in a scene"):
 
     /usr/bin/python3 bench/clouds/cloud_pass_scene.py OUT_DIR [--distance 3000] [--height 500]
     build/welkin clouds --scene OUT_DIR/scene.json -o OUT_DIR/clouds.exr

@@ -25,12 +25,12 @@
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <unistd.h>
 
 #include "welkin/aerial/aerial_table.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/base/memory.hpp"
 #include "welkin/base/simd.hpp"
 #include "welkin/color/color.hpp"
 
@@ -235,7 +235,7 @@ void check_call(const AerialView& view, std::span<const float> depth, int width,
     if (width != view.width || height != view.height)
         throw InvalidArgument("depth", fmt::format("is {} x {} pixels but the camera renders {} x {}", width,
                                                    height, view.width, view.height));
-    check_aerial_memory(width, height);
+    check_frame_memory(width, height, kAerialPassBytesPerPixel, "depth and aerial passes (float)");
     validate_depth(depth, width, height);
 }
 
@@ -330,20 +330,6 @@ AerialPasses allocate(int width, int height) {
 }
 
 }  // namespace
-
-void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixel) {
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
-    const double physical = pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
-    // In double: 65536^2 pixels at 32767 % overflow any integer.
-    const double needed = double(width) * double(height) * double(sizeof(float) * 7 + extra_bytes_per_pixel);
-    if (physical > 0.0 && needed > 0.5 * physical)
-        throw MemoryLimit("resolution",
-                          fmt::format("a {} x {} render needs {:.1f} GiB for its depth and "
-                                      "aerial passes (float), more than half of this "
-                                      "machine's {:.1f} GiB of memory; lower "
-                                      "resolution.percentage",
-                                      width, height, needed / double(1 << 30), physical / double(1 << 30)));
-}
 
 void validate_depth(std::span<const float> depth, int width, int height) {
     if (depth.size() != std::size_t(width) * std::size_t(height))

@@ -37,6 +37,51 @@ WELKIN_SIMD_CLONES_WIDE void sun_coordinates(const TransmittanceLut::AtRadius& a
 
 }  // namespace
 
+namespace {
+
+// The (phi, mu_s) pairs of a row, l = b size + i: mu_s of texel column i and
+// sin_s cos(phi) for azimuth stratum b of n_phi over [0, pi].
+struct SunPairs {
+    std::vector<float> mu_s, sin_cos;
+
+    SunPairs(int n_phi, int size) : mu_s(std::size_t(n_phi) * size), sin_cos(mu_s.size()) {
+        for (int b = 0; b < n_phi; ++b) {
+            const double cos_phi = std::cos(kPi * (double(b) + 0.5) / double(n_phi));
+            for (int i = 0; i < size; ++i) {
+                const double mu =
+                    clamp_cosine(2.0 * unit_from_texcoord((float(i) + 0.5f) / float(size), size) - 1.0);
+                mu_s[std::size_t(b) * size + i] = float(mu);
+                sin_cos[std::size_t(b) * size + i] = float(safe_sqrt(1.0 - mu * mu) * cos_phi);
+            }
+        }
+    }
+};
+
+}  // namespace
+
+// Row j of the three textures from the moments of the arriving light's first order summed
+// over the directions (m0, m1, m2 per pair) and the transfer's (f0, f1, f2): orders >= 2
+// are a geometric series in <f'> for the mean, Psi_ms f'(w) for its shape.
+void MultiScatteringLut::store_row(int j, int n_phi, const std::vector<Spectrum4>& m0,
+                                   const std::vector<Spectrum4>& m1, const std::vector<Spectrum4>& m2,
+                                   const Spectrum4& f0, const Spectrum4& f1, const Spectrum4& f2) {
+    const int size = texture_.width();
+    const Spectrum4 series = 1.0f / glm::max(Spectrum4(1.0f) - f0, Spectrum4(1e-3f));
+    for (int i = 0; i < size; ++i) {
+        Spectrum4 s0(0.0f), s1(0.0f), s2(0.0f);
+        for (int b = 0; b < n_phi; ++b) {
+            const std::size_t l = std::size_t(b) * size + i;
+            s0 += m0[l];
+            s1 += m1[l];
+            s2 += m2[l];
+        }
+        const Spectrum4 psi = s0 * series;
+        texture_.at(i, j) = psi;
+        dipole_.at(i, j) = 3.0f * (s1 + psi * f1);
+        quadrupole_.at(i, j) = 5.0f * (s2 + psi * f2);
+    }
+}
+
 // Texel (i, j) holds the moments a_0 = Psi_ms, a_1, a_2 for mu_s = -1 + 2 x_i and r = R + (top - R) x_j (x on
 // the texel-centre grid of texcoord_from_unit). One row shares its radius, so each of the row's rays (a
 // direction w about the local zenith) is marched once and reused for all 32 sun angles: only the sun's
@@ -73,20 +118,10 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
     std::vector<double> gl_x, gl_w;
     gauss_legendre_unit(n_half, gl_x, gl_w);
     const TransmittanceLut::AtRadius ground_at = tlut.at_radius(R);
-    // The (phi, mu_s) pairs, l = b size + i: mu_s and sin_s cos(phi).
-    const std::size_t n_pairs = std::size_t(n_phi) * std::size_t(size);
-    std::vector<float> pair_mu_s(n_pairs), pair_sin_cos(n_pairs);
-    for (int b = 0; b < n_phi; ++b) {
-        const double cos_phi = std::cos(kPi * (double(b) + 0.5) / double(n_phi));
-        for (int i = 0; i < size; ++i) {
-            const double mu_s =
-                clamp_cosine(2.0 * unit_from_texcoord((float(i) + 0.5f) / float(size), size) - 1.0);
-            pair_mu_s[std::size_t(b) * size + i] = float(mu_s);
-            pair_sin_cos[std::size_t(b) * size + i] = float(safe_sqrt(1.0 - mu_s * mu_s) * cos_phi);
-        }
-    }
-    const float* const pm = pair_mu_s.data();
-    const float* const psc = pair_sin_cos.data();
+    const SunPairs pairs(n_phi, size);
+    const std::size_t n_pairs = pairs.mu_s.size();
+    const float* const pm = pairs.mu_s.data();
+    const float* const psc = pairs.sin_cos.data();
     tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& rows) {
         RaySamples ray;
         std::vector<int> texel_buf(n_pairs);
@@ -167,22 +202,7 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                     m2_buf[l] += L * p2;
                 }
             }
-            // Orders >= 2 of the arriving light: a geometric series in <f'> for the mean,
-            // Psi_ms f'(w) for its shape.
-            const Spectrum4 series = 1.0f / glm::max(Spectrum4(1.0f) - f0, Spectrum4(1e-3f));
-            for (int i = 0; i < size; ++i) {
-                Spectrum4 s0(0.0f), s1(0.0f), s2(0.0f);
-                for (int b = 0; b < n_phi; ++b) {
-                    const std::size_t l = std::size_t(b) * size + i;
-                    s0 += m0_buf[l];
-                    s1 += m1_buf[l];
-                    s2 += m2_buf[l];
-                }
-                const Spectrum4 psi = s0 * series;
-                texture_.at(i, j) = psi;
-                dipole_.at(i, j) = 3.0f * (s1 + psi * f1);
-                quadrupole_.at(i, j) = 5.0f * (s2 + psi * f2);
-            }
+            store_row(j, n_phi, m0_buf, m1_buf, m2_buf, f0, f1, f2);
         }
     });
 }

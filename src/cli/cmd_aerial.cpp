@@ -15,6 +15,7 @@
 
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/base/memory.hpp"
 #include "welkin/io/exr.hpp"
 #include "welkin/render/cloud_passes.hpp"
 #include "welkin/scene/scene.hpp"
@@ -45,7 +46,8 @@ int run_aerial(const AerialArgs& args) {
     const int width = scene.resolution.width(), height = scene.resolution.height();
     try {
         // Besides the core's buffers: the EXR image (6 floats a pixel), and its half copy.
-        check_aerial_memory(width, height, 6 * sizeof(float) + (args.half ? 6 * 2 : 0));
+        check_frame_memory(width, height, kAerialPassBytesPerPixel + 6 * sizeof(float) + (args.half ? 6 * 2 : 0),
+                           "depth, aerial passes and EXR image");
     } catch (const InvalidArgument& e) {
         rethrow_as("--scene", e, args.scene);
     }

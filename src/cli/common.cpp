@@ -16,6 +16,7 @@
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/base/memory.hpp"
 #include "welkin/io/file.hpp"
 #include "welkin/scene/scene.hpp"
 
@@ -207,7 +208,9 @@ std::shared_ptr<const CloudDensity> load_scene_clouds(const SceneDescription& sc
     try {
         const auto clouds = scene.cloud_density();
         // Besides the passes: the cloud march's buffers and the EXR's 5 cloud channels.
-        if (clouds) check_aerial_memory(scene.resolution.width(), scene.resolution.height(), 96 + 48 + 20);
+        if (clouds)
+            check_frame_memory(scene.resolution.width(), scene.resolution.height(),
+                               kAerialPassBytesPerPixel + 96 + 48 + 20, "aerial and cloud passes");
         return clouds;
     } catch (const InvalidArgument& e) {
         throw InvalidArgument("--scene", fmt::format("{} (in '{}')", e.what(), scene_path));

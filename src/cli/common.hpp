@@ -1,7 +1,7 @@
 // Pieces the `welkin` subcommands share: choosing an atmosphere, placing the sun, checking
 // an output path before any work, and the command registry.
 //
-// The CLI owns no physics (../shared/DESIGN.md): every number comes from the core. Angles
+// The CLI owns no physics (docs/design.md): every number comes from the core. Angles
 // are degrees here, at the user's edge, and radians from here on.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Cloud density sources: shared geometry; see cloud_density.hpp.
+// Cloud density sources: shared geometry; see clouds/density.hpp.
 #include "welkin/clouds/density.hpp"
 
 #include <algorithm>

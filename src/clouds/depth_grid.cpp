@@ -1,4 +1,4 @@
-// A lazily filled grid of cloud optical depth; see cloud_depth_grid.hpp.
+// A lazily filled grid of cloud optical depth; see clouds/depth_grid.hpp.
 #include "welkin/clouds/depth_grid.hpp"
 
 #include <algorithm>
@@ -121,7 +121,6 @@ double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) con
                                double(t.origin[2] + k) * h);
             v = float(march(x, cursor.segs));
             vertex.store(v, std::memory_order_relaxed);
-            computed_.fetch_add(1, std::memory_order_relaxed);
         }
         corner[c] = v;
     }

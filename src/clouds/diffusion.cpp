@@ -1,4 +1,4 @@
-// The delta-Eddington slab along the sun line; see cloud_diffusion.hpp.
+// The delta-Eddington slab along the sun line; see clouds/diffusion.hpp.
 #include "welkin/clouds/diffusion.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// What lights a cloud; see cloud_illumination.hpp.
+// What lights a cloud; see clouds/illumination.hpp.
 #include "welkin/clouds/illumination.hpp"
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Fast cloud lighting; see cloud_lighting.hpp.
+// Fast cloud lighting; see clouds/lighting.hpp.
 #include "welkin/clouds/lighting.hpp"
 
 #include <algorithm>
@@ -105,7 +105,7 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
     const double mean_g = sc.phase.mean_cosine();
     const double kappa = std::sqrt(std::max(0.0, 3.0 * (1.0 - sc.albedo) * (1.0 - sc.albedo * mean_g)));
 
-    // The optical-depth grids (cloud_depth_grid.hpp) towards the sun and, when the sky
+    // The optical-depth grids (clouds/depth_grid.hpp) towards the sun and, when the sky
     // light decays (albedo < 1), towards the local zenith; filled lazily by the rays.
     const double h0 =
         options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m : 2.0 * density.feature_size_m();
@@ -120,7 +120,7 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
         return glm::length(c) > 1e-6 ? glm::normalize(c) : glm::dvec3(1.0, 0.0, 0.0);
     }();
     const bool sides = options.sides;
-    // Orders >= 2: the delta-Eddington slab along the sun line (cloud_diffusion.hpp) or
+    // Orders >= 2: the delta-Eddington slab along the sun line (clouds/diffusion.hpp) or
     // the octaves; either way octaves = 1 is single scattering.
     const bool diffusion = options.multiple_scattering == CloudMultipleScattering::diffusion && octaves > 1;
     const bool sized = octaves > 1 && (diffusion || options.octave_optical_size);

@@ -1,4 +1,4 @@
-// Tileable cloud noise; see cloud_noise.hpp.
+// Tileable cloud noise; see clouds/noise.hpp.
 #include "welkin/clouds/noise.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Reference cloud lighting by path tracing; see cloud_reference.hpp.
+// Reference cloud lighting by path tracing; see clouds/reference.hpp.
 #include "welkin/clouds/reference.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The union of cloud density sources; see cloud_union.hpp.
+// The union of cloud density sources; see clouds/union.hpp.
 #include "welkin/clouds/union.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Clouds from an OpenVDB file; see vdb_clouds.hpp.
+// Clouds from an OpenVDB file; see clouds/vdb.hpp.
 #include "welkin/clouds/vdb.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// OpenEXR reading and atomic writing; see exr_io.hpp.
+// OpenEXR reading and atomic writing; see io/exr.hpp.
 #include "welkin/io/exr.hpp"
 
 #include <algorithm>

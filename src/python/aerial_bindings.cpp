@@ -1,4 +1,4 @@
-// welkin.SceneDescription and welkin.aerial_perspective (include/welkin/scene.hpp,
+// welkin.SceneDescription and welkin.aerial_perspective (include/welkin/scene/scene.hpp,
 // aerial_perspective.hpp): what the Blender add-on needs to turn a rendered frame's depth
 // into its aerial-perspective passes (EXR files in and out: exr_bindings.cpp). Thin: the
 // scene travels as its JSON text, the depth as a numpy array, the passes come back as
@@ -12,6 +12,7 @@
 #include "welkin/atmosphere/lut_cache.hpp"
 #include "welkin/base/camera.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/base/memory.hpp"
 #include "welkin/scene/scene.hpp"
 
 namespace welkin::python {
@@ -58,7 +59,8 @@ py::tuple aerial_perspective_py(const py::handle& scene_in, const py::handle& de
     require_progress_callback(progress);
     scene.require_camera();
     const int width = scene.resolution.width(), height = scene.resolution.height();
-    check_aerial_memory(width, height, 6 * sizeof(float));  // plus the two returned arrays
+    check_frame_memory(width, height, kAerialPassBytesPerPixel + 6 * sizeof(float),  // the returned arrays
+                       "depth and aerial passes (float)");
     const c_array<float> depth =
         to_c_array<float>(depth_in, "depth", -1, 2, 2, "a (height, width) array of depths in metres");
     if (depth.shape(0) != height || depth.shape(1) != width)

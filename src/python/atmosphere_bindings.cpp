@@ -1,6 +1,6 @@
 // welkin.Atmosphere, welkin.DensityProfile and welkin.DensityLayer.
 //
-// An Atmosphere is plain data (include/welkin/atmosphere.hpp). Python reads and writes its
+// An Atmosphere is plain data (include/welkin/atmosphere/atmosphere.hpp). Python reads and writes its
 // fields freely; nothing is checked per field, because changing the wavelengths means
 // changing every spectrum with them. validate() checks the whole, and every computation
 // validates again, so an inconsistent atmosphere raises ValueError naming the field
@@ -133,7 +133,7 @@ editing (every computation validates too, raising ValueError naming the field).
             },
             py::arg("name"), py::arg("wavelengths_nm") = py::none(), R"doc(
 A built-in atmosphere: one of Atmosphere.preset_names() ("bruneton2017",
-"clear", "hazy", "polluted", "mars"; sources in src/presets.cpp).
+"clear", "hazy", "polluted", "mars"; sources in src/atmosphere/presets.cpp).
 
 wavelengths_nm: None for the default 620, 560, 480, 440 nm, or any sequence of
 wavelengths in [360, 830] nm (e.g. welkin.spectral_wavelengths_nm()) at which

@@ -1,6 +1,6 @@
 // welkin.CloudLayer, welkin.VdbClouds, welkin.cloud_radiance and welkin.sky_image: the cloud
-// density sources (include/welkin/procedural_clouds.hpp, vdb_clouds.hpp), their lighting
-// (cloud_lighting.hpp, cloud_reference.hpp) and the equirect sky with clouds (sky_image.hpp).
+// density sources (include/welkin/clouds/procedural.hpp, clouds/vdb.hpp), their lighting
+// (clouds/lighting.hpp, clouds/reference.hpp) and the equirect sky with clouds (sky_image.hpp).
 // Thin: converts, releases the GIL, calls the core.
 #include "bindings.hpp"
 #include <fmt/format.h>
@@ -74,7 +74,7 @@ W m^-2 sr^-1): the sun's irradiance at normal incidence everywhere and a uniform
 that radiance from every direction, below included (a Cycles sun lamp of that strength
 and a world of that colour); atm and altitude_m then do not light the cloud.
 g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
-(include/welkin/cloud_phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
+(include/welkin/clouds/phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
 )doc";
 
 py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere atmosphere, double altitude_m,
@@ -130,22 +130,8 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
                           to_array(result.depth_m, {n}));
 }
 
-}  // namespace
-
-void register_clouds(py::module_& m) {
-    py::class_<CloudDensity, std::shared_ptr<CloudDensity>>(m, "CloudDensity", R"doc(
-A cloud density source (base class of CloudLayer and VdbClouds).
-)doc")
-        .def(
-            "sigma_t",
-            [](const CloudDensity& d, const py::object& points) {
-                const std::vector<glm::dvec3> p = to_points(points, "points");
-                std::vector<float> out(p.size());
-                for (std::size_t i = 0; i < p.size(); ++i) out[i] = float(d.sigma_t(p[i]));
-                return to_array(out, {py::ssize_t(p.size())});
-            },
-            py::arg("points"), "Extinction coefficient (m^-1) at world points, (N, 3) -> (N,).");
-
+// CloudLayer (procedural), its presets and CLOUD_TYPES.
+void register_cloud_layer(py::module_& m) {
     py::class_<ProceduralClouds, CloudDensity, std::shared_ptr<ProceduralClouds>>(m, "CloudLayer", R"doc(
 A procedural cloud layer on the curved planet (Schneider's Nubis: weather map,
 Perlin-Worley base shape, Worley erosion with curl distortion, a height gradient per
@@ -236,7 +222,10 @@ parameter.
         "The layer parameters of a cloud type's preset, as a dict; ValueError lists the names.");
     m.attr("CLOUD_TYPES") =
         py::cast(std::vector<std::string>(kCloudTypeNames.begin(), kCloudTypeNames.end()));
+}
 
+// VdbClouds: clouds from an OpenVDB file.
+void register_vdb_clouds(py::module_& m) {
     py::class_<VdbClouds, CloudDensity, std::shared_ptr<VdbClouds>>(m, "VdbClouds", R"doc(
 Clouds from an OpenVDB file: the FloatGrid `grid` (default "density"), placed by
 matrix_world (Blender's Object.matrix_world, 4 x 4, [row][column]) on top of the
@@ -277,6 +266,26 @@ values; every message names the file and the grid.
             const glm::dvec3 lo = v.world_bounds_min(), hi = v.world_bounds_max();
             return py::make_tuple(py::make_tuple(lo.x, lo.y, lo.z), py::make_tuple(hi.x, hi.y, hi.z));
         });
+}
+
+}  // namespace
+
+void register_clouds(py::module_& m) {
+    py::class_<CloudDensity, std::shared_ptr<CloudDensity>>(m, "CloudDensity", R"doc(
+A cloud density source (base class of CloudLayer and VdbClouds).
+)doc")
+        .def(
+            "sigma_t",
+            [](const CloudDensity& d, const py::object& points) {
+                const std::vector<glm::dvec3> p = to_points(points, "points");
+                std::vector<float> out(p.size());
+                for (std::size_t i = 0; i < p.size(); ++i) out[i] = float(d.sigma_t(p[i]));
+                return to_array(out, {py::ssize_t(p.size())});
+            },
+            py::arg("points"), "Extinction coefficient (m^-1) at world points, (N, 3) -> (N,).");
+
+    register_cloud_layer(m);
+    register_vdb_clouds(m);
 
     const CloudLightingOptions lo;
     m.def("cloud_radiance", &cloud_radiance, kCloudRadianceDoc, py::arg("clouds"), py::arg("atmosphere"),

@@ -1,5 +1,5 @@
 // welkin.cloud_passes: the scene camera's Welkin.Clouds and Welkin.CloudDepth passes
-// (include/welkin/cloud_passes.hpp) as numpy arrays. Thin: converts, releases the GIL,
+// (include/welkin/render/cloud_passes.hpp) as numpy arrays. Thin: converts, releases the GIL,
 // calls the core.
 #include <optional>
 #include <utility>

@@ -1,4 +1,4 @@
-// welkin.write_exr, welkin.read_exr: the core's OpenEXR files (include/welkin/exr_io.hpp)
+// welkin.write_exr, welkin.read_exr: the core's OpenEXR files (include/welkin/io/exr.hpp)
 // from and to numpy arrays, top row first. Thin: the core's writer is atomic and never
 // replaces a file unless asked.
 #include "bindings.hpp"

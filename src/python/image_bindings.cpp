@@ -1,5 +1,5 @@
 // welkin.sky_image, welkin.sun_disc_image: the core's equirectangular sky images
-// (include/welkin/sky_image.hpp) as numpy arrays, for the Blender add-on and scripts.
+// (include/welkin/render/sky_image.hpp) as numpy arrays, for the Blender add-on and scripts.
 //
 // Thin, like the other bindings: arguments are converted, the GIL is released, the core
 // computes, and its pixel buffer becomes the returned array without a copy.

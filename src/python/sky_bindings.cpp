@@ -1,4 +1,4 @@
-// welkin.sky_radiance and welkin.methods: the sky methods of include/welkin/sky_method.hpp.
+// welkin.sky_radiance and welkin.methods: the sky methods of include/welkin/sky/method.hpp.
 //
 // The hot path copies nothing it does not have to: a C-contiguous float64 (N, 3) array
 // reaches the core as the std::span<const glm::dvec3> it already is, and the core writes

@@ -1,4 +1,4 @@
-// welkin.sun: the sun as seen from the observer (include/welkin/sun.hpp), so that a sun
+// welkin.sun: the sun as seen from the observer (include/welkin/atmosphere/sun.hpp), so that a sun
 // lamp and the sky agree.
 #include <memory>
 

@@ -1,5 +1,6 @@
 // The camera plate: sky, sun disc and aerial perspective over the ground; see
 // camera_plate.hpp.
+#include "welkin/base/memory.hpp"
 #include "welkin/render/camera_plate.hpp"
 
 #include <algorithm>
@@ -108,7 +109,8 @@ struct CameraPlateRenderer::Impl {
     static const SceneDescription& checked(const SceneDescription& s) {
         s.validate();
         s.require_camera();
-        check_aerial_memory(s.resolution.width(), s.resolution.height(), 18 * sizeof(float));
+        check_frame_memory(s.resolution.width(), s.resolution.height(),
+                           kAerialPassBytesPerPixel + 18 * sizeof(float), "plate and its passes (float)");
         return s;
     }
 

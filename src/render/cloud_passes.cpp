@@ -1,4 +1,5 @@
 // Camera cloud passes; see cloud_passes.hpp.
+#include "welkin/base/memory.hpp"
 #include "welkin/render/cloud_passes.hpp"
 
 #include <cmath>
@@ -25,7 +26,7 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
     const std::size_t nc = scene.atmosphere.channels();
     // Besides the aerial passes' own buffers: rays (origin, direction, length: 56 bytes),
     // the march's radiance, transmittance and depth, the RGB and the passes (40 bytes).
-    check_aerial_memory(w, h, 96 + 4 * nc);
+    check_frame_memory(w, h, kAerialPassBytesPerPixel + 96 + 4 * nc, "aerial and cloud passes");
     if (!depth.empty()) validate_depth(depth, w, h);
     const CloudLightingOptions options = scene.clouds ? scene.clouds->lighting : CloudLightingOptions{};
     const RowRange band = rows_in.resolved(h);

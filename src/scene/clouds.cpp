@@ -1,4 +1,4 @@
-// A scene's clouds; see scene_clouds.hpp.
+// A scene's clouds; see scene/clouds.hpp.
 #include "welkin/scene/clouds.hpp"
 
 #include <fmt/format.h>

@@ -19,7 +19,7 @@
 //     "clouds": {"layers": [...], "volumes": [...], "scattering": {...}, "lighting": {...},
 //                "upsampling": {...}}
 //   }
-// "clouds" (scene_clouds.hpp; docs/pipelines.md "Scene JSON"), the schema the add-on writes:
+// "clouds" (scene/clouds.hpp; docs/pipelines.md "Scene JSON"), the schema the add-on writes:
 // layers are CloudLayerParams without planet_radius_m / origin_altitude_m (the scene's),
 // volumes {name, file, grid, matrix_world (by rows), density_scale, negative, placement}, scattering
 // {albedo, g_forward, g_back, w_forward}, lighting CloudLightingOptions' other fields.

@@ -1,5 +1,5 @@
 // The scene description's checks and small conversions; see scene.hpp. The JSON form is
-// in scene_json.cpp.
+// in src/scene/json.cpp.
 #include "welkin/scene/scene.hpp"
 
 #include <cmath>

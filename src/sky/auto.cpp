@@ -1,5 +1,5 @@
-// The "auto" sky method; the rules are in include/welkin/auto_sky.hpp, the numbers in the
-// generated src/auto_sky_table.cpp (bench/chart.py).
+// The "auto" sky method; the rules are in include/welkin/sky/auto.hpp, the numbers in the
+// generated src/sky/auto_table.cpp (bench/chart.py).
 #include "welkin/sky/auto.hpp"
 
 #include <algorithm>

@@ -3,7 +3,7 @@
 // What it computes. For an observer at x looking along v, the sky (path) radiance is the
 // light scattered towards x by the air along the view ray, up to where the ray leaves
 // the atmosphere or meets the ground (the ground's own radiance at the end of the ray is
-// not part of it; sky_method.hpp):
+// not part of it; sky/method.hpp):
 //
 //   L(x, v) = int_0^D T(x, y_t) sum_k sigma_k(y_t) int_S2 p_k(w . v) L_in(y_t, w) dw dt,   (1)
 //
@@ -73,13 +73,13 @@
 //     is event 1, the sun added on the flight after event m is order m + 1; ground
 //     reflections count as events. max_scattering_order = n keeps orders <= n.
 //   - Sampling decisions come from randomised quasi-Monte Carlo points (QmcSampler in
-//     reference_rng.hpp: padded, Owen-scrambled Sobol' pairs, exactly uniform per
+//     base/rng.hpp: padded, Owen-scrambled Sobol' pairs, exactly uniform per
 //     point): event 1 uses (view-ray point, lobe), (cosine, azimuth); each flight
 //     (forced collision, continue?) and each later event (lobe, -), (cosine, azimuth),
 //     so the pairs stay aligned with the events; beyond 24 dimensions, and for the
 //     roulette, plain pseudo-random numbers.
 //
-// Transmittances come from ColumnTable (reference_column_table.hpp): exact closed forms
+// Transmittances come from ColumnTable (atmosphere/column_table.hpp): exact closed forms
 // for piecewise-linear layers (ozone) and a fine double-precision table of the exact
 // columns for the exponential ones, checked against optical_depth.hpp to 1e-5 in
 // tests/cpp/test_optical_depth.cpp; nothing is shared with the LUT methods. The free-
@@ -115,8 +115,8 @@
 #include "welkin/base/error.hpp"
 #include "welkin/base/quadrature.hpp"
 #include "welkin/base/rng.hpp"
-#include "welkin/reference/column_table.hpp"
-#include "welkin/reference/sampling.hpp"
+#include "welkin/atmosphere/column_table.hpp"
+#include "welkin/atmosphere/phase_sampling.hpp"
 
 namespace welkin {
 namespace {
@@ -438,6 +438,55 @@ private:
         return s;
     }
 
+    // Russian roulette before event `event`: false ends the path; a survivor's throughput
+    // is divided by its survival probability.
+    bool survives_roulette(int event, PathRng& rng) {
+        double q = 0.0;
+        for (std::size_t c = 0; c < m_.C; ++c)
+            if (beta1_[c] > 0.0) q = std::max(q, beta_[c] / beta1_[c]);
+        q = std::min(1.0, q);
+        if (event > kRouletteDepth) q *= 0.9;
+        if (q < 1.0) {
+            if (!(rng.uniform() < q)) return false;
+            for (double& b : beta_) b /= q;
+        }
+        return true;
+    }
+
+    // lit_[c]: the probability mass of channel c's free flight from pos along w (the whole
+    // ray's column col_end) outside the Earth's shadow [a, b], 1 - T(a) + T(b) - T(D); and
+    // for the hero, before_h = 1 - T_h(a), after_h = T_h(b). True when the ray crosses the
+    // shadow (else lit_ is 1 - T(D) and the two stay as they are).
+    bool lit_fractions(const ColumnTable::Ray& ray, const glm::dvec3& pos, const glm::dvec3& w,
+                       const ColumnDensity& col_end, std::size_t hero, double& before_h, double& after_h) {
+        double shadow_a, shadow_b;
+        m_.shadow_interval(pos, w, ray.length(), shadow_a, shadow_b);
+        if (!(shadow_a < ray.length())) {
+            for (std::size_t c = 0; c < m_.C; ++c) lit_[c] = -std::expm1(-m_.tau(c, col_end));
+            return false;
+        }
+        const ColumnDensity ca = ray.upto(shadow_a), cb = ray.upto(shadow_b);
+        for (std::size_t c = 0; c < m_.C; ++c)
+            lit_[c] = -std::expm1(-m_.tau(c, ca)) + (std::exp(-m_.tau(c, cb)) - tr_end_[c]);
+        before_h = -std::expm1(-m_.tau(hero, ca));
+        after_h = std::exp(-m_.tau(hero, cb));
+        return true;
+    }
+
+    // The sun reflected by the Lambertian ground where the flight from pos along w ends
+    // (the ray meets the ground), with its exact weight T_c(D), added to contrib_; returns
+    // the ground's unit normal there.
+    glm::dvec3 sun_at_ground(const ColumnTable::Ray& ray, const glm::dvec3& pos, const glm::dvec3& w) {
+        const glm::dvec3 ground = glm::normalize(pos + ray.length() * w);
+        const double cos_sun = glm::dot(ground, m_.s);
+        if (cos_sun > 0.0) {
+            m_.sun_transmittance(ground * m_.R, m_.R, sun_t_.data());
+            for (std::size_t c = 0; c < m_.C; ++c)
+                contrib_[c] += beta_[c] * tr_end_[c] * m_.albedo[c] / kPi * m_.sun[c] * sun_t_[c] * cos_sun;
+        }
+        return ground;
+    }
+
     void trace_path(const ViewRay& vr, const glm::dvec3& v, PathRng& rng, QmcSampler& qmc, std::size_t hero) {
         const double u_start = qmc.next();
         // Event 1: a point on the view ray, from the panel distribution.
@@ -459,16 +508,7 @@ private:
         beta1_ = beta_;
 
         for (int event = 2; event <= kMaxEvents; ++event) {
-            // Russian roulette.
-            double q = 0.0;
-            for (std::size_t c = 0; c < m_.C; ++c)
-                if (beta1_[c] > 0.0) q = std::max(q, beta_[c] / beta1_[c]);
-            q = std::min(1.0, q);
-            if (event > kRouletteDepth) q *= 0.9;
-            if (q < 1.0) {
-                if (!(rng.uniform() < q)) return;
-                for (double& b : beta_) b /= q;
-            }
+            if (!survives_roulette(event, rng)) return;
             // The flight from pos along w, of length D to the ground or the top.
             r = std::clamp(glm::length(pos), m_.R, m_.top);
             const ColumnTable::Ray ray = m_.table->ray(r, clamp_cosine(glm::dot(pos, w) / r));
@@ -485,19 +525,8 @@ private:
             // is the free-flight density conditioned on colliding; in twilight it keeps the
             // samples where the sun is; (b) at the ground, if the ray meets it, with its
             // exact weight T_c(D).
-            double shadow_a, shadow_b;
-            m_.shadow_interval(pos, w, ray.length(), shadow_a, shadow_b);
-            const bool shadowed = shadow_a < ray.length();
             double before_h = 0.0, after_h = 0.0;  // 1 - T_h(a), T_h(b)
-            if (shadowed) {
-                const ColumnDensity ca = ray.upto(shadow_a), cb = ray.upto(shadow_b);
-                for (std::size_t c = 0; c < m_.C; ++c)
-                    lit_[c] = -std::expm1(-m_.tau(c, ca)) + (std::exp(-m_.tau(c, cb)) - tr_end_[c]);
-                before_h = -std::expm1(-m_.tau(hero, ca));
-                after_h = std::exp(-m_.tau(hero, cb));
-            } else {
-                for (std::size_t c = 0; c < m_.C; ++c) lit_[c] = -std::expm1(-m_.tau(c, col_end));
-            }
+            const bool shadowed = lit_fractions(ray, pos, w, col_end, hero, before_h, after_h);
             double s = 0.0;
             glm::dvec3 z{0.0};
             if (lit_[hero] > 0.0) {
@@ -520,17 +549,7 @@ private:
                 mean /= double(m_.C);
                 if (mean > 0.0) sun_at_scattering(z, r_z_, w, d, 1.0 / mean);
             }
-            glm::dvec3 ground{0.0};
-            if (ray.hits_ground()) {
-                ground = glm::normalize(pos + ray.length() * w);
-                const double cos_sun = glm::dot(ground, m_.s);
-                if (cos_sun > 0.0) {
-                    m_.sun_transmittance(ground * m_.R, m_.R, sun_t_.data());
-                    for (std::size_t c = 0; c < m_.C; ++c)
-                        contrib_[c] +=
-                            beta_[c] * tr_end_[c] * m_.albedo[c] / kPi * m_.sun[c] * sun_t_[c] * cos_sun;
-                }
-            }
+            const glm::dvec3 ground = ray.hits_ground() ? sun_at_ground(ray, pos, w) : glm::dvec3(0.0);
             if (max_order_ > 0 && event >= max_order_) return;
 
             // Continue: collide with probability 1 - T_h(D), which makes the continuation

@@ -1,4 +1,4 @@
-"""The scene JSON's camera, written from bpy data as README "Scene JSON" says the add-on
+"""The scene JSON's camera, written from bpy data as docs/pipelines.md "Scene JSON" says the add-on
 writes it. Tests of the camera convention build it here, independently of the add-on's
 own export, so that the core is checked against Blender itself."""
 import math

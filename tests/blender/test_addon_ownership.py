@@ -87,7 +87,7 @@ T.check(world_b.welkin.sky_image == world_a.welkin.sky_image,
 pixels_a = T.world_pixels(world_a.welkin.sky_image).copy()
 def update_scene(s):
     # Scripts run here without a window: update_sky takes the scene from the context.
-    from welkin.blender import update
+    from welkin.blender.sky import update
     depsgraph = s.view_layers[0].depsgraph
     s.view_layers[0].update()
     return update.update_sky(s, depsgraph, force=False, pack=True)
@@ -139,7 +139,7 @@ bpy.ops.welkin.update_sky()
 T.check(world_a.welkin.sky_image == image_a, "renaming the world replaced its image")
 T.check(image_a.get("welkin_world") == world_a.name_full, "the renamed world did not claim it")
 # Removing the copy's sky leaves the original's images and nodes.
-from welkin.blender import update  # noqa: E402
+from welkin.blender.sky import update  # noqa: E402
 update.remove_sky(scene_b)
 T.check(world_a.welkin.sky_image == image_a and image_a.name in bpy.data.images,
         "removing the copy's sky took the original's image")
@@ -187,8 +187,8 @@ from welkin.blender import handlers  # noqa: E402
 T.check(linked.welkin.active and linked.welkin.auto_update, "the library's sky is not live")
 T.check(handlers._run(scene, None, pack=False) is not None, "the handler updated a linked world")
 scene.frame_set(2)  # frame_change_post runs; it must not raise
-from welkin.blender import background  # noqa: E402
-from welkin.blender.scene_sun import UserError  # noqa: E402
+from welkin.blender.sky import background  # noqa: E402
+from welkin.blender.sky.scene_sun import UserError  # noqa: E402
 try:
     background.start(scene)  # the UI's cloudy-sky job refuses it as well
     raise AssertionError("background.start accepted a linked world")

@@ -30,7 +30,8 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import addon_testing as at  # noqa: E402
 
 addon, module = at.install_addon()
-from welkin.blender import aerial, aerial_frame, compat  # noqa: E402
+from welkin.blender.aerial import frame as aerial_frame, settings as aerial  # noqa: E402
+from welkin.blender import compat  # noqa: E402
 
 TOL = 0.02
 W, H = 128, 64

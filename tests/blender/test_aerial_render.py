@@ -114,7 +114,8 @@ def frame_matches_the_core(scene, module, base, what):
 def main():
     addon, module = at.install_addon()
     from welkin import scene_export
-    from welkin.blender import aerial, aerial_frame, compat, compositor
+    from welkin.blender.aerial import compositor, frame as aerial_frame, settings as aerial
+    from welkin.blender import compat
     scene = build_scene()
     tree, comp = add_user_nodes(scene)
     names_before = {n.name for n in tree.nodes}

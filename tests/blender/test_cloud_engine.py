@@ -24,7 +24,8 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import compat, render_engine  # noqa: E402
+from welkin.blender import compat  # noqa: E402
+from welkin.blender.engine import render_engine  # noqa: E402
 
 check = t.check
 CLI = t.ROOT / "build" / "welkin"

@@ -1,4 +1,4 @@
-"""The scene JSON's "clouds" section from a Blender scene (README "Clouds in Blender"):
+"""The scene JSON's "clouds" section from a Blender scene (docs/artists.md "Clouds in Blender"):
 the world's procedural layers, a marked Volume object's VDB file for the current frame of
 a real 3-frame sequence (the file Blender itself loads, Volume.grids.frame_filepath, in
 each sequence mode), its matrix_world by rows in metres, grid and density scale; the
@@ -15,8 +15,8 @@ import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
 from welkin import cloud_export  # noqa: E402
-from welkin.blender import cloud_scene  # noqa: E402
-from welkin.blender.scene_sun import UserError  # noqa: E402
+from welkin.blender.clouds import scene as cloud_scene  # noqa: E402
+from welkin.blender.sky.scene_sun import UserError  # noqa: E402
 
 check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=20.0)
@@ -109,7 +109,7 @@ for frame in (1, 2, 3):
 check(len(set(texts)) == 3, "each frame's section names its own file")
 
 # The frame's scene JSON (the aerial handler's, validated by the core) carries the section.
-from welkin.blender import aerial  # noqa: E402
+from welkin.blender.aerial import settings as aerial  # noqa: E402
 scene.frame_set(2)
 text = aerial.scene_json(scene, native, bpy.context.evaluated_depsgraph_get())
 desc = native.SceneDescription.from_json_string(text)

@@ -32,7 +32,9 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import cloud_shadows, compat, scene_sun, update  # noqa: E402
+from welkin.blender.clouds import shadows as cloud_shadows  # noqa: E402
+from welkin.blender import compat  # noqa: E402
+from welkin.blender.sky import scene_sun, update  # noqa: E402
 
 check = t.check
 N = 32

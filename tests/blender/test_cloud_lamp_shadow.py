@@ -30,7 +30,8 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import compat, scene_sun, update  # noqa: E402
+from welkin.blender import compat  # noqa: E402
+from welkin.blender.sky import scene_sun, update  # noqa: E402
 
 check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=40.0, sun_azimuth_deg=0.0, camera_z=20.0)

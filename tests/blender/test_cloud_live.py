@@ -29,9 +29,9 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import background as B  # noqa: E402
+from welkin.blender.sky import background as B  # noqa: E402
 from welkin.blender import handlers as H  # noqa: E402
-from welkin.blender import scene_sun, update  # noqa: E402
+from welkin.blender.sky import scene_sun, update  # noqa: E402
 
 check = t.check
 H._headless = lambda: False

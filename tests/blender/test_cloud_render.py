@@ -27,7 +27,8 @@ import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
 from welkin import scene_export  # noqa: E402
-from welkin.blender import compat, update  # noqa: E402
+from welkin.blender import compat  # noqa: E402
+from welkin.blender.sky import update  # noqa: E402
 
 check = t.check
 
@@ -67,7 +68,7 @@ check("with clouds" in world.welkin.status, world.welkin.status)
 cloudy = t.world_pixels(world.welkin.sky_image).copy()
 check(np.isfinite(cloudy).all(), "the cloudy world texture is not finite")
 # Where the clouds are: their transmittance per pixel for the same scene (the core's).
-from welkin.blender import scene_sun  # noqa: E402
+from welkin.blender.sky import scene_sun  # noqa: E402
 request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
 text = update.cloudy_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
 _img, T = native.scene_sky_image(text, request.width, sun_disc=False, return_transmittance=True)

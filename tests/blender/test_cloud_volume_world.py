@@ -30,7 +30,8 @@ import addon_testing as t  # noqa: E402
 import cloud_testing as ct  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import render_engine, scene_sun, update  # noqa: E402
+from welkin.blender.engine import render_engine  # noqa: E402
+from welkin.blender.sky import scene_sun, update  # noqa: E402
 
 check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=25.0, sun_azimuth_deg=30.0, camera_z=2.0)

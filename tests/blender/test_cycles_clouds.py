@@ -1,5 +1,5 @@
 """Headless Blender + Cycles: Cycles and Welkin's reference path tracer light the same VDB
-cloud alike (issue #6: the reference validated against an independent renderer).
+cloud alike (the reference validated against an independent renderer).
 
 A ball of constant density (radius 100 m, sigma_t 0.03 m^-1: optical depth 6 through the
 centre, so tens of scattering orders matter), written with pyopenvdb, one Henyey-Greenstein

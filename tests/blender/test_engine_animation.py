@@ -15,7 +15,8 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import addon_testing as t  # noqa: E402
 
 addon, native = t.install_addon()
-from welkin.blender import compat, render_engine  # noqa: E402
+from welkin.blender import compat  # noqa: E402
+from welkin.blender.engine import render_engine  # noqa: E402
 
 check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=10.0, sun_azimuth_deg=0.0, camera_z=30.0)

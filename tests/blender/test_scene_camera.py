@@ -2,7 +2,7 @@
 
 For cameras of every supported kind (perspective with each sensor fit, portrait and
 landscape renders, lens shift, field of view; orthographic), the scene JSON is written from
-bpy data exactly as README "Scene JSON" says the add-on writes it, and the rays Welkin's
+bpy data exactly as docs/pipelines.md "Scene JSON" says the add-on writes it, and the rays Welkin's
 core computes through the image corners must pass through the corners of Blender's own
 view frame (Camera.view_frame, which applies sensor fit, aspect and shift), to 2e-5 (mathutils is float32). An
 equirectangular panorama pointed along +X must look where Blender's Environment Texture

@@ -18,7 +18,7 @@ import addon_testing as t  # noqa: E402
 
 addon, native = t.install_addon()
 from welkin import plate, viewport  # noqa: E402
-from welkin.blender import render_engine  # noqa: E402
+from welkin.blender.engine import render_engine  # noqa: E402
 
 scene, sun = t.new_scene(sun_elevation_deg=8, sun_azimuth_deg=20, camera_z=3.0)
 scene.render.engine = 'WELKIN'

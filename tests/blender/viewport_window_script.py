@@ -54,7 +54,7 @@ def expect(condition, message):
 try:
     addon, native = t.install_addon()
     from welkin import plate, viewport  # noqa: E402
-    from welkin.blender import render_engine, viewport_preview as vp  # noqa: E402
+    from welkin.blender.engine import render_engine, viewport as vp  # noqa: E402
 
     scene, sun = t.new_scene(sun_elevation_deg=12, sun_azimuth_deg=40, camera_z=2.0)
     scene.render.engine = 'WELKIN'

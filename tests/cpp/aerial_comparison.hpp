@@ -1,4 +1,4 @@
-// How the froxel aerial passes are compared with the per-pixel march (issue #5), in the
+// How the froxel aerial passes are compared with the per-pixel march, in the
 // tests (which assert on it) and the benchmark (which reports it): over the non-sky pixels,
 // the in-scattering relative to the march's value where that exceeds 1e-3 of the frame's
 // largest (so that pixels a few metres away do not dominate by dividing by almost

@@ -50,7 +50,7 @@
 #include "welkin/atmosphere/phase.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/base/quadrature.hpp"
-#include "welkin/reference/column_table.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 
 namespace welkin::test {
 
@@ -70,7 +70,7 @@ struct SecondOrderRules {
 };
 
 // The optical depth towards the sun, tau_c(r, mu_s) to the top, tabulated once from the
-// column table on its own (x_r, x_mu) parametrisation (reference_column_table.hpp) at
+// column table on its own (x_r, x_mu) parametrisation (atmosphere/column_table.hpp) at
 // 256 x 2048 nodes and read bilinearly: the quadratures below need it some 10^6 times per
 // view, where the column table's cubic lookup would dominate their cost (3x faster in
 // all). Its error against the column table, on a grid offset from the nodes

@@ -18,6 +18,7 @@
 #include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/base/memory.hpp"
 #include "welkin/color/color.hpp"
 #include "welkin/scene/scene.hpp"
 
@@ -186,7 +187,7 @@ TEST(AerialPerspective, BadInputNamesTheParameter) {
               "depth");
     SceneDescription huge = s;
     huge.resolution = {65536, 65536, 32767};
-    EXPECT_EQ(parameter_of([&] { check_aerial_memory(huge.resolution.width(), huge.resolution.height()); }),
+    EXPECT_EQ(parameter_of([&] { check_frame_memory(huge.resolution.width(), huge.resolution.height(), kAerialPassBytesPerPixel, "passes"); }),
               "resolution");
     SceneDescription none = s;
     none.camera.reset();

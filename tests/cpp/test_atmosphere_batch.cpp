@@ -1,4 +1,4 @@
-// The density table of AtmosphereBatch (atmosphere_batch.hpp): kTableSize entries evenly
+// The density table of AtmosphereBatch (atmosphere/batch.hpp): kTableSize entries evenly
 // spaced in s = r^2 - R^2, interpolated linearly in s. For f(s) = exp(-h(s) / H) with
 // h(s) = sqrt(R^2 + s) - R, linear interpolation on nodes ds apart errs by at most
 // ds^2 / 8 max |f''|, and f'' = f [1 / (2 r H)]^2 (1 + H / r) (h' = 1 / 2r, h'' = -1 / 4r^3),

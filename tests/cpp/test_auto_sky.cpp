@@ -1,4 +1,4 @@
-// The rules by which method="auto" chooses (include/welkin/auto_sky.hpp), on small
+// The rules by which method="auto" chooses (include/welkin/sky/auto.hpp), on small
 // synthetic tables whose answer is known: cheapest that meets the tolerance, the cost
 // depending on the number of directions; the worst grid corner around an off-grid scene;
 // a setting that failed (non-finite) at a corner is never chosen there; no setting

@@ -1,4 +1,4 @@
-// The lazily filled optical-depth grid (cloud_depth_grid.hpp) and the march through it.
+// The lazily filled optical-depth grid (clouds/depth_grid.hpp) and the march through it.
 #include <cmath>
 #include <cstdio>
 

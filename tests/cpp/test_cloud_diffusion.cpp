@@ -1,4 +1,4 @@
-// The delta-Eddington slab of cloud_diffusion.hpp: its closed form against its own
+// The delta-Eddington slab of clouds/diffusion.hpp: its closed form against its own
 // equations and energy balance, and the fast march's multiple scattering built on it
 // against the path-tracing reference on a thick conservative slab.
 #include <cmath>
@@ -88,7 +88,7 @@ TEST(EddingtonSlab, ConservesEnergyAndIsLinearDeepInside) {
     EXPECT_NEAR(at, eddington_slab(5.0, 2.0, ar - 1e-7, 0.9).fluence, 1e-6 * at);
 }
 
-// The sides (cloud_diffusion.hpp): with the transverse buckling B^2 the slab still solves
+// The sides (clouds/diffusion.hpp): with the transverse buckling B^2 the slab still solves
 // its ODE, phi'' = (k^2 + B^2) phi - 3 albedo e^{-z/mu0}, and its energy balance gains the
 // light leaked through the sides, int (B^2 / 3) phi dz (a 40000-interval midpoint rule):
 // for albedo 1, R + T + leaked = mu0. The leak only removes light.
@@ -144,7 +144,7 @@ TEST(CloudDiffusion, SidesVanishForWideCloudsAndDarkenNarrowOnes) {
 // sun alone, views from below (transmitted light) and from above (reflected light): the
 // fast march against the path-tracing reference (all orders). The sun stands at
 // sin(elevation) = 2/3: there a horizontal slab's Eddington escape factor 1/2 + 3 mu0 / 4
-// is 1, its orientation average (cloud_diffusion.hpp), so deep in the slab the model's
+// is 1, its orientation average (clouds/diffusion.hpp), so deep in the slab the model's
 // assumption about the unknown surface orientation holds. What is left:
 //  * the delta-Eddington error (Joseph, Wiscombe & Weinman 1976: fluxes within ~10 % for
 //    thick conservative slabs);

@@ -1,5 +1,5 @@
-// The fast cloud march (cloud_lighting.hpp, defaults) against the path-tracing reference
-// (cloud_reference.hpp, all orders) on three clouds: a thin wispy layer, a dense cumulus
+// The fast cloud march (clouds/lighting.hpp, defaults) against the path-tracing reference
+// (clouds/reference.hpp, all orders) on three clouds: a thin wispy layer, a dense cumulus
 // layer, and a VDB volume written here with OpenVDB. The same density, phase, albedo and
 // light in both; the light is a constant sun and sky (the atmosphere's part is the same
 // lookup in both methods and is tested with the LUTs).
@@ -92,7 +92,7 @@ ConstantIllumination test_daylight() {
 // fixed share (b + b^2 + b^3 = 0.875 of single scattering at tau -> 0) whatever the
 // cloud's optical size, and came out too bright: +58 % (4096 paths, se 1.7 %). With the
 // octaves weighted by the optical size along the sun line: bias +0.1 %, mean |error|
-// 5.0 %. With the delta-Eddington slab (cloud_diffusion.hpp, the default) measured:
+// 5.0 %. With the delta-Eddington slab (clouds/diffusion.hpp, the default) measured:
 // bias -0.7 %, mean |error| 4.9 %; with its sides (the default since): -3.8 %, 5.3 %.
 // Tolerance, the stated accuracy of the default march on such clouds: bias within
 // +-10 %, mean |error| < 15 % (tightened from [-10 %, +70 %] and 70 %); transmittance

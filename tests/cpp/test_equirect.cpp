@@ -14,7 +14,7 @@ namespace {
 
 // Cycles' own form (intern/cycles/kernel/camera/projection.h):
 // direction_to_equirectangular_range(dir, range = (-2 pi, pi, -pi, pi)), written out
-// independently of src/equirect.cpp.
+// independently of src/base/equirect.cpp.
 glm::dvec2 cycles_direction_to_equirectangular(const glm::dvec3& dir) {
     const double range[4] = {-kTwoPi, kPi, -kPi, kPi};
     const double u = (std::atan2(dir.y, dir.x) - range[1]) / range[0];

@@ -6,7 +6,7 @@
 // its single-scattering part replaced by the converged one, L - L1d + SS_converged; the raw
 // figures are printed too.
 //
-// Tolerances. Issue #2 asks lut within 5 %. Measured (multiple-scattering LUT with the
+// Tolerances. The target for lut is 5 %. Measured (multiple-scattering LUT with the
 // dipole and quadrupole of the multiply-scattered light, multiscattering_lut.hpp): lut
 // median 1.5 / 1.4 / 2.0 %, worst 5.2 / 6.6 / 9.7 % at 680 / 550 / 440 nm; raymarch
 // median 1.1 / 1.2 / 1.7 %, worst 5.1 / 6.3 / 9.5 %. Asserted: median within 2.5 %, worst

@@ -26,7 +26,7 @@
 //    every wavelength (measured 21.7 / 17.9 / 17.6 %): the dipole and quadrupole are what
 //    carry the zenith dependence.
 //  * The lut method (default sizes), all orders, against the reference, all orders:
-//    within 5 % for every view at every wavelength (issue #2's figure for lut; measured
+//    within 5 % for every view at every wavelength (the target for lut; measured
 //    worst 3.9 / 3.0 / 4.9 %), median within 1.5 % (measured 0.8 / 0.6 / 0.7 %).
 #include <cmath>
 #include <cstdio>

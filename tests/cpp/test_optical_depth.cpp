@@ -1,5 +1,5 @@
 // Optical depth: optical_depth.hpp's exact quadrature against closed forms and brute
-// force, and the reference path tracer's column table (reference_column_table.hpp)
+// force, and the reference path tracer's column table (atmosphere/column_table.hpp)
 // against optical_depth.hpp.
 #include <cmath>
 #include <cstdio>
@@ -11,7 +11,7 @@
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/base/rng.hpp"
-#include "welkin/reference/column_table.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 
 using namespace welkin;
 
@@ -107,7 +107,7 @@ TEST(OpticalDepth, TransmittanceIsInUnitIntervalAndDecreasesWithPathLength) {
 }
 
 // The reference path tracer's column table against the exact quadrature, on random rays of
-// every preset at 48 wavelengths (see reference_column_table.hpp for the two kinds of
+// every preset at 48 wavelengths (see atmosphere/column_table.hpp for the two kinds of
 // constituent and why the criteria differ for whole rays and segments).
 TEST(ColumnTable, MatchesExactOpticalDepthOnRandomRays) {
     for (const std::string name : {"bruneton2017", "hazy", "polluted", "mars"}) {

@@ -47,11 +47,11 @@
 //     at sun 60, view 60, 680 nm, where the peer's ratio is only 1.05).
 //  2. The reference like for like: the reference with the peer's three errors put in (its
 //     50-interval single scattering, the texture lookup of its orders 2-4 and the
-//     quadratures of its second order) within 2 % (issue #2) of the peer's L for every view
+//     quadratures of its second order) within 2 % of the peer's L for every view
 //     at sun zenith 0, 30 and 60 degrees. Measured worst 1.31 / 1.17 / 1.13 %, median
 //     0.18-0.50 %; with the first two errors only: worst 1.54 / 1.54 / 2.39 %.
 //  3. `lut` against the peer with the three errors taken out (peer L minus the emulated
-//     errors): median within 2.5 %, worst within 5 % (issue #2; measured median
+//     errors): median within 2.5 %, worst within 5 % (measured median
 //     1.1 / 1.1 / 1.7 %, worst 3.9 / 2.8 / 4.7 % at 680 / 550 / 440 nm).
 // WELKIN_PEER_DUMP=1 prints every row.
 //

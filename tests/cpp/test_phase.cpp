@@ -1,5 +1,5 @@
 // Phase functions (phase.hpp) and the reference path tracer's sampling routines
-// (reference_sampling.hpp, reference_rng.hpp).
+// (atmosphere/phase_sampling.hpp, base/rng.hpp).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "welkin/atmosphere/phase.hpp"
 #include "welkin/base/rng.hpp"
-#include "welkin/reference/sampling.hpp"
+#include "welkin/atmosphere/phase_sampling.hpp"
 
 using namespace welkin;
 

@@ -26,7 +26,7 @@
 #include "welkin/atmosphere/phase.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/quadrature.hpp"
-#include "welkin/reference/column_table.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 #include "welkin/sky/reference.hpp"
 
 using namespace welkin;

@@ -1,5 +1,5 @@
 // The transmittance LUT's texels against exact optical depths (the column table of
-// reference_column_table.hpp: closed forms for the piecewise-linear ozone tent, 1e-5
+// atmosphere/column_table.hpp: closed forms for the piecewise-linear ozone tent, 1e-5
 // relative for the exponentials), every preset, every texel of the default 256 x 64 LUT
 // with its default 32 nodes per ray (8 panels, plus 4 for each panel a breakpoint cuts).
 //
@@ -9,14 +9,14 @@
 // worst texel was 0.024 off in tau (2.4 % in T; 0.0057 with 80 nodes, 0.0016 with 160) on grazing rays
 // through the tent at 550 nm, against 4e-6 for mars, which has no tent. Asserted: within
 // 1e-4 in tau wherever T > 1e-4 (measured 1.2e-5 for bruneton2017, 7.9e-5 for polluted,
-// with 40 nodes 4e-6 and 3.3e-5; the density table uniform in r^2, atmosphere_batch.hpp).
+// with 40 nodes 4e-6 and 3.3e-5; the density table uniform in r^2, atmosphere/batch.hpp).
 #include <cmath>
 #include <cstdio>
 
 #include <gtest/gtest.h>
 
 #include "welkin/atmosphere/transmittance_lut.hpp"
-#include "welkin/reference/column_table.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 
 using namespace welkin;
 

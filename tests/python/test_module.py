@@ -543,7 +543,7 @@ def test_spectrum_to_rgb_bad_input():
 
 
 def test_equirect_matches_blenders_mapping():
-    # u = -atan2(y, x) / 2pi + 1/2, v = atan2(z, hypot(x, y)) / pi + 1/2 (DESIGN.md).
+    # u = -atan2(y, x) / 2pi + 1/2, v = atan2(z, hypot(x, y)) / pi + 1/2 (docs/design.md).
     dirs = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0],
                      [0.0, 0.0, 1.0], [0.0, 0.0, -2.0], [1.0, 1.0, np.sqrt(2.0)]])
     expected = np.array([[0.5, 0.5], [0.25, 0.5], [0.75, 0.5],

@@ -1,6 +1,6 @@
 """Stability sweep: no sky method ever returns NaN, Inf or negative radiance.
 
-DESIGN.md names the places where sky methods are known to break: the camera above the
+docs/design.md names the places where sky methods are known to break: the camera above the
 atmosphere (the sky-view LUT is parametrised for an observer inside it), the sun far
 below the horizon (deep twilight, Earth shadow), grazing rays near the horizon at
 planet scale (r^2 - R^2 cancels in float32), a Mie phase peak near g = 1, and

@@ -1,30 +1,32 @@
-"""The bpy layer of the add-on: one concern per file, classes registered from one tuple
+"""The bpy layer of the add-on, one folder per feature; classes registered from one tuple
 (in order) and unregistered in reverse.
 
-  properties.py  WelkinWorldSettings (World.welkin): the panel's parameters and the state
-                 the add-on keeps (its images, the output node it replaced)
-  scene_sun.py   which sun lamp drives the sky, its direction, the observer altitude
-  images.py      the world's float images: create, fill, pack
-  world_nodes.py the add-on's own nodes in the world tree (the user's stay untouched)
-  update.py      one sky update: request -> compute -> images, nodes, lamp
-  operators.py   welkin.update_sky, welkin.remove_sky, welkin.export_hdri
-  panel.py       Properties > World > Welkin Sky
-  aerial.py      aerial perspective per render (Scene.welkin_aerial), compositor.py its nodes
-  handlers.py    the sky follows the lamp: depsgraph (debounced timer), frame change, save
-  background.py  a cloudy sky for the live UI, computed on a thread beside the interface
-  farm.py        a frame the add-on could not prepare fails a command-line render (-a, -f)
-  render_engine.py  the render engine "WELKIN": the camera's plate with Welkin's passes
-  viewport_preview.py  its viewport preview (Rendered shading), in a background thread
-  cloud_properties.py  World.welkin_clouds (layers, lighting), Object.welkin_cloud
-  cloud_scene.py     the scene's clouds as the scene JSON's "clouds" section
-  cloud_shadows.py   Ground Shadows: the shadow layer (plane, map, material) above the scene
-  compat.py          differences between Blender versions
-  cloud_operators.py, cloud_panel.py  Welkin Clouds: add/remove layers, mark volumes
+  sky/       the world's sky: properties.py (World.welkin: the panel's parameters and the
+             add-on's state), scene_sun.py (which sun lamp drives the sky, the observer),
+             update.py (one sky update: request -> compute -> images, nodes, lamp),
+             images.py, world_nodes.py (the add-on's own nodes; the user's stay untouched),
+             operators.py (welkin.update_sky, remove_sky, export_hdri), panel.py,
+             background.py (a cloudy sky for the live UI, on a thread beside it)
+  clouds/    properties.py (World.welkin_clouds, Object.welkin_cloud), scene.py (the scene
+             JSON's "clouds" section), shadows.py (Ground Shadows), operators.py, panel.py
+  aerial/    aerial perspective per render (Scene.welkin_aerial): settings.py (its
+             properties, panel, handlers and pass files), frame.py (in the frame: material
+             and compositor groups), compositor.py (the Write Pass Files node)
+  engine/    the render engine "WELKIN" (render_engine.py) and its viewport preview
+             (viewport.py)
+  handlers.py  the sky follows the lamp: depsgraph (debounced timer), frame change, save
+  farm.py      a frame the add-on could not prepare fails a command-line render (-a, -f)
+  compat.py    every difference between Blender versions
 """
 import bpy
 
-from . import (aerial, cloud_operators, cloud_panel, cloud_properties, handlers, operators,
-               panel, properties, render_engine)
+from . import handlers
+from .aerial import settings as aerial_settings
+from .clouds import operators as cloud_operators
+from .clouds import panel as cloud_panel
+from .clouds import properties as cloud_properties
+from .engine import render_engine
+from .sky import operators, panel, properties
 
 classes = (
     properties.WelkinWorldSettings,
@@ -44,7 +46,7 @@ def register():
         bpy.utils.register_class(cls)
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
     handlers.register()
-    aerial.register()
+    aerial_settings.register()
     render_engine.register()
     from .. import native
     if native.message():
@@ -53,7 +55,7 @@ def register():
 
 def unregister():
     render_engine.unregister()
-    aerial.unregister()
+    aerial_settings.unregister()
     handlers.unregister()
     del bpy.types.World.welkin
     for cls in reversed(classes):

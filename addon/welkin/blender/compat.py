@@ -91,6 +91,19 @@ def set_file_format(image_settings, file_format):
     image_settings.file_format = file_format
 
 
+def is_movie_output(render):
+    """True when the render writes a movie (one file for all frames): `is_movie_format` in
+    3.4-4.5, image_settings.media_type 'VIDEO' in 5.0+ (older builds without either: the
+    movie file formats)."""
+    if hasattr(render, "is_movie_format"):
+        return render.is_movie_format
+    settings = render.image_settings
+    media = getattr(settings, "media_type", None)
+    if media is not None:
+        return media == 'VIDEO'
+    return settings.file_format in {'FFMPEG', 'AVI_JPEG', 'AVI_RAW'}
+
+
 def sky_type_nishita():
     """Blender's physically based Sky Texture model: 'NISHITA' in 2.90-4.5; 5.0 renamed it
     'SINGLE_SCATTERING' (beside a new 'MULTIPLE_SCATTERING')."""
@@ -117,7 +130,7 @@ def cycles_vdb_placement():
     return "openvdb" if at_least(5, 0) else "blender"
 
 
-# --- Node groups, AOVs and the compositor (aerial_frame.py) --------------------------------
+# --- Node groups, AOVs and the compositor (blender/aerial/frame.py) --------------------------------
 
 def new_group_socket(group, name, in_out, socket_type):
     """A socket on a node group's interface: group.interface in 4.0+, inputs/outputs before."""
@@ -125,6 +138,15 @@ def new_group_socket(group, name, in_out, socket_type):
         return group.interface.new_socket(name, in_out=in_out, socket_type=socket_type)
     sockets = group.inputs if in_out == 'INPUT' else group.outputs
     return sockets.new(socket_type, name)
+
+
+def clear_group_sockets(group):
+    """Removes every socket of a node group's interface (4.0+) or its inputs and outputs."""
+    if hasattr(group, "interface"):
+        group.interface.clear()
+    else:
+        group.inputs.clear()
+        group.outputs.clear()
 
 
 def set_aov_name(node, name):

@@ -23,6 +23,8 @@ import time
 
 import bpy
 
+from . import compat
+
 _RENDER_FLAGS = {"-a", "--render-anim", "-f", "--render-frame"}
 
 
@@ -75,24 +77,13 @@ def frame_started(scene):
     _started[scene.name] = time.time()
 
 
-def _movie(render):
-    """True for a movie output (one file for all frames: never removed)."""
-    if hasattr(render, "is_movie_format"):
-        return render.is_movie_format
-    settings = render.image_settings
-    media = getattr(settings, "media_type", None)  # 5.x
-    if media is not None:
-        return media == 'VIDEO'
-    return settings.file_format in {'FFMPEG', 'AVI_JPEG', 'AVI_RAW'}
-
-
 def _remove_written_frame(scene):
     """Deletes the image file Blender wrote for the current frame during this render
     (render_post comes after the file is saved in `-a` and `-f`), so that a failed frame
     leaves no file. Movies and files older than the frame's render are left alone.
     Returns the removed path or None."""
     render = scene.render
-    if _movie(render):
+    if compat.is_movie_output(render):  # one file for all frames: never removed
         return None
     path = render.frame_path(frame=scene.frame_current)
     started = _started.get(scene.name)

@@ -25,8 +25,10 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, cloud_scene, cloud_shadows, farm, scene_sun, update
-from .scene_sun import UserError
+from .sky import background, scene_sun, update
+from .clouds import scene as cloud_scene, shadows as cloud_shadows
+from . import farm
+from .sky.scene_sun import UserError
 
 DEBOUNCE_S = 0.15
 _state = {"due": 0.0, "armed": False}
@@ -145,7 +147,7 @@ def on_frame_change_pre(scene, depsgraph=None):
 
 @persistent
 def on_frame_change_post(scene, depsgraph=None):
-    cloud_scene.capture(scene, depsgraph)  # before anything is written (cloud_scene.py)
+    cloud_scene.capture(scene, depsgraph)  # before anything is written (blender/clouds/scene.py)
     if not _live(scene):
         return
     # UI renders (F12, Ctrl F12) call frame handlers on the render thread while the

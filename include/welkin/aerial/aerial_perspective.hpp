@@ -11,7 +11,7 @@
 // The passes hold exactly these two, per pixel: `Welkin.AerialInscatter` = L_in (RGB) and
 // `Welkin.AerialTransmittance` = T (RGB), so that a compositor's Image x T + Inscatter is
 // the hazed render. Sun transmittance and Psi_ms come from the atmosphere's LUTs
-// (atmosphere_luts.hpp); terrain shadows on the air (light shafts) are not modelled.
+// (atmosphere/luts.hpp); terrain shadows on the air (light shafts) are not modelled.
 //
 // Units and colour, as the sky's: L_in is linear Rec.709 in W m^-2 sr^-1 (CIE 1931
 // weighted, without the 683 lm/W factor; color.hpp, lambda power -3, the sky's
@@ -123,11 +123,9 @@ struct AerialPasses {
     std::vector<float> transmittance;  // (height, width, 3), top row first
 };
 
-// Throws InvalidArgument naming "resolution" when the passes of a width x height render
-// (depth in, two RGB passes out, float: 28 bytes per pixel) plus what the caller holds
-// besides (`extra_bytes_per_pixel`: the CLI's EXR buffer, the module's numpy copies) need
-// more than half of this machine's physical memory.
-void check_aerial_memory(int width, int height, std::size_t extra_bytes_per_pixel = 0);
+// What the aerial passes of one pixel take: its depth in and two RGB passes out, float.
+// Callers add what they hold besides and ask base/memory.hpp's check_frame_memory first.
+inline constexpr double kAerialPassBytesPerPixel = 7 * sizeof(float);
 
 // Throws InvalidArgument naming "depth" (and the pixel) for a NaN, negative or -infinite
 // value, or when depth.size() != width * height.

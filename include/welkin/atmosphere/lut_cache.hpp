@@ -2,7 +2,7 @@
 // only for the sky-view LUT.
 //
 // The transmittance and multiple-scattering LUTs depend on the atmosphere and on their
-// sizes alone (DESIGN.md, data flow); a host that moves the sun (the Blender add-on
+// sizes alone (docs/design.md#data-flow); a host that moves the sun (the Blender add-on
 // rotating a sun lamp, an animation) asks again and again for the same ones. get()
 // returns the tables built for an exactly equal key (Atmosphere::operator== on every
 // field, and the LutResolution) or builds them; a copy of the key is kept,

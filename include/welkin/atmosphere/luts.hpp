@@ -1,4 +1,4 @@
-// The look-up tables that depend on the atmosphere alone (DESIGN.md, data flow): for each
+// The look-up tables that depend on the atmosphere alone (docs/design.md#data-flow): for each
 // batch of four channels, the transmittance and the multiple-scattering LUTs. Built once
 // per atmosphere; the per-view sky-view LUT (skyview_lut.hpp) and the ray-march method
 // read them. Immutable after construction, so any number of threads may read it.

@@ -141,10 +141,8 @@ public:
         return c0 + fx * (combined(i + 1) - c0);
     }
 
-    // psi for many sun angles at one radius (Texture2D::Row): the row of v_at_radius(r),
-    // and the texel coordinate of mu_s, x = (mu_s + 1) / 2 (width - 1), which is
-    // u * width - 0.5 for the u of psi(v, mu_s).
-    Texture2D::Row row_at_radius(double r) const { return texture_.row(v_at_radius(r)); }
+    // The texel coordinate of mu_s in a row of the textures, x = (mu_s + 1) / 2 (width - 1),
+    // which is u * width - 0.5 for the u of psi(v, mu_s).
     float texel_x(float mu_s) const { return 0.5f * (mu_s + 1.0f) * float(texture_.width() - 1); }
 
     // source() for many sun angles at one radius and one set of weights: the three rows
@@ -173,6 +171,10 @@ public:
     const Texture2D& quadrupole() const { return quadrupole_; }  // a_2
 
 private:
+    void store_row(int j, int n_phi, const std::vector<Spectrum4>& m0, const std::vector<Spectrum4>& m1,
+                   const std::vector<Spectrum4>& m2, const Spectrum4& f0, const Spectrum4& f1,
+                   const Spectrum4& f2);
+
     double bottom_, top_;
     double mie_chi1_, mie_chi2_;
     Texture2D texture_, dipole_, quadrupole_;

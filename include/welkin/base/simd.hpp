@@ -17,8 +17,8 @@
 // for AVX2, and the loader picks the one the processor runs (an ifunc, resolved once).
 // The AVX2 build does the same IEEE operations in the same order, four or eight lanes at a
 // time with three-operand instructions, and uses no fused multiply-add (that is the
-// separate "fma" target), so both give bit-identical results; on the build machine the
-// AVX2 one takes ~20 % less time for the multiple-scattering and sky-view LUTs. Callees
+// separate "fma" target), so both give bit-identical results (what each build gains:
+// docs/validation.md#sky-speed). Callees
 // inlined into such a function are compiled for its target; WELKIN_ALWAYS_INLINE makes
 // sure a helper pass is. Elsewhere (other processors or compilers) the macro is empty.
 // (Defining it empty on the command line, -DWELKIN_SIMD_CLONES=, builds the baseline only.)
@@ -34,9 +34,8 @@
 #endif
 // WELKIN_SIMD_CLONES_WIDE adds an AVX-512 build for loops of float arithmetic (the sun
 // lookups' coordinates of the multiple-scattering and sky-view LUTs), which do sixteen
-// lanes at a time there; measured on the build machine (Sapphire Rapids), those LUTs take
-// ~10 % less time with it. The transmittance LUT's loop, in double, measured slower with
-// it and keeps WELKIN_SIMD_CLONES. The same IEEE operations again: AVX-512F has fused
+// lanes at a time there. The transmittance LUT's loop, in double, gains nothing from it
+// and keeps WELKIN_SIMD_CLONES. The same IEEE operations again: AVX-512F has fused
 // multiply-adds, which the core's -ffp-contract=off (CMakeLists.txt) keeps GCC from using
 // for a * b + c.
 #ifndef WELKIN_SIMD_CLONES_WIDE

@@ -3,13 +3,13 @@
 // As in pbrt-v4 (Pharr, Jakob & Humphreys, "Physically Based Rendering", 4th ed., ch. 11),
 // a medium only says how dense it is: the extinction coefficient sigma_t(p) at a point,
 // and, for a ray, the pieces of the ray where sigma_t may be non-zero together with an
-// upper bound (the majorant) of sigma_t on each piece. The integrators (cloud_lighting.hpp,
-// the fast march; cloud_reference.hpp, the path tracer) do all the marching, for every
+// upper bound (the majorant) of sigma_t on each piece. The integrators (clouds/lighting.hpp,
+// the fast march; clouds/reference.hpp, the path tracer) do all the marching, for every
 // source alike: the fast march steps only through the pieces (empty-space skipping), the
 // path tracer samples free paths against the majorants (delta and ratio tracking).
 //
 // Units: points in Blender's world frame (Z up, metres; the planet centre straight below
-// the origin, DESIGN.md), sigma_t in m^-1. Cloud droplets scatter visible light almost
+// the origin, docs/design.md), sigma_t in m^-1. Cloud droplets scatter visible light almost
 // without absorbing it and without depending on wavelength (Mie regime, droplets ~10 um):
 // extinction is grey, and the single-scattering albedo is a lighting parameter.
 //

@@ -1,6 +1,6 @@
 // A lazily filled, sparse, multi-resolution grid of cloud optical depth towards a light.
 //
-// The fast march (cloud_lighting.hpp) needs, at every lit sample x, the cloud's optical
+// The fast march (clouds/lighting.hpp) needs, at every lit sample x, the cloud's optical
 // depth towards the sun, tau(x) = integral_0^D sigma_t(x + l s) dl. Marching a shadow ray
 // per sample costs light_steps density lookups each time, and neighbouring samples (of the
 // same ray and of neighbouring rays) march nearly the same ray. tau is a continuous
@@ -94,9 +94,6 @@ public:
     // The optical depth straight from a march (what a vertex stores, at any point).
     double march(const glm::dvec3& p, std::vector<MajorantSegment>& segs) const;
 
-    // Vertices computed so far (for the benchmark and tests).
-    std::uint64_t vertices_computed() const { return computed_.load(std::memory_order_relaxed); }
-
 private:
     Tile* find(std::uint64_t key) const;
 
@@ -106,7 +103,6 @@ private:
     int steps_;
     struct Map;
     std::unique_ptr<Map> map_;
-    mutable std::atomic<std::uint64_t> computed_{0};
 };
 
 }  // namespace welkin

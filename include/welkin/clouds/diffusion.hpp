@@ -1,6 +1,6 @@
 // Multiple scattering in thick clouds: the delta-Eddington slab along the sun line.
 //
-// Why. Wrenninge's octaves (cloud_lighting.hpp) attenuate every order as exp(-a^i tau_sun):
+// Why. Wrenninge's octaves (clouds/lighting.hpp) attenuate every order as exp(-a^i tau_sun):
 // deep in a thick cloud they all vanish, but the light there does not. In a thick, nearly
 // conservative medium the diffuse light falls off only linearly with optical depth: the
 // net flux F is constant and Fick's law F = -(1/3) dphi/dtau' holds, so the fluence phi is
@@ -84,7 +84,7 @@
 // less, not more. W' infinite (no cloud across) is the slab itself. The leak and the blend
 // follow from the mode expansion; nothing is fitted. What it buys is measured in
 // docs/validation.md ("Under the add-on's own lighting"). Not modelled: the sky's share of
-// multiple scattering (its own term, cloud_lighting.hpp).
+// multiple scattering (its own term, clouds/lighting.hpp).
 #pragma once
 
 namespace welkin {

@@ -29,15 +29,15 @@
 //  * Sun light. At each sample x a shadow ray towards the sun is marched through the
 //    density's segments (light_steps midpoint steps, at most light_distance_m) for the
 //    cloud's optical depth tau_sun. With shadow_grid (the default) that march is made at
-//    the vertices of a lazily filled world-space grid instead (cloud_depth_grid.hpp) and
+//    the vertices of a lazily filled world-space grid instead (clouds/depth_grid.hpp) and
 //    tau_sun is interpolated trilinearly from it: the finest cell is h_0 =
 //    shadow_grid_spacing_m (by default twice the density's feature size), and a sample
 //    whose view step is dt reads the level of cell h_0 2^L <= max(dt, h_0), so far
 //    samples of a sky, a kilometre apart, share coarse cells. Each vertex march is shared
 //    by every sample around it. The sun's irradiance E(x) comes through the
-//    atmosphere (cloud_illumination.hpp).
+//    atmosphere (clouds/illumination.hpp).
 //  * Multiple scattering of sun light, by default (multiple_scattering = diffusion) from
-//    the delta-Eddington slab along the sun line (cloud_diffusion.hpp, with its
+//    the delta-Eddington slab along the sun line (clouds/diffusion.hpp, with its
 //    derivation): tau_line = tau_sun + tau_antisun, the cloud's optical depth along the
 //    sun's line through x (both ways, each at most light_distance_m; a second grid), and
 //    with nu = d . s,
@@ -50,7 +50,7 @@
 //    octaves below vanish. With `sides` (the default) the slab is finite across the sun
 //    line: the cloud's chord tau_side along the horizontal normal to the sun (both ways,
 //    a third and fourth grid, three levels coarser) makes the diffuse light leak through
-//    its sides (cloud_diffusion.hpp, "The sides"). No fitted parameter. Its error against
+//    its sides (clouds/diffusion.hpp, "The sides"). No fitted parameter. Its error against
 //    the reference (bench/clouds, bench/clouds/lighting_vs_reference.py) and against Cycles
 //    (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"). octaves = 1 is single
 //    scattering in either mode.
@@ -71,7 +71,7 @@
 //    Travis 1974, "Light scattering in planetary atmospheres", sec. 3) and tends to
 //    Wrenninge's b^i in a thick one (docs/validation.md, "Clouds").
 //  * Sky light. The sky is an isotropic radiance L_sky(x) around the cloud
-//    (cloud_illumination.hpp). In a uniform isotropic field a conservative medium
+//    (clouds/illumination.hpp). In a uniform isotropic field a conservative medium
 //    (albedo 1) changes nothing: the radiance is L_sky everywhere inside, at all orders
 //    of scattering (in-scattering sigma_s L equals extinction sigma_t L), so the source
 //    is exactly S_sky = sigma_s L_sky, however deep the point. With absorption the field
@@ -119,7 +119,7 @@ struct CloudScattering {
 // How the march approximates the orders of sun light beyond the first (see above).
 enum class CloudMultipleScattering {
     octaves,    // Wrenninge's octaves (weighted by the optical size when octave_optical_size)
-    diffusion,  // the delta-Eddington slab along the sun line (cloud_diffusion.hpp)
+    diffusion,  // the delta-Eddington slab along the sun line (clouds/diffusion.hpp)
 };
 
 struct CloudLightingOptions {
@@ -142,7 +142,7 @@ struct CloudLightingOptions {
     bool jitter = true;           // false: samples at step midpoints
     double max_distance_m = 1e6;  // view rays end here, (0, 1e8]
     // Tabulate the optical depths towards the sun (and the zenith) on a lazily filled grid
-    // (cloud_depth_grid.hpp) instead of marching a shadow ray per sample.
+    // (clouds/depth_grid.hpp) instead of marching a shadow ray per sample.
     bool shadow_grid = true;
     double shadow_grid_spacing_m = 0.0;  // finest cell h_0, [0, 1e5] m; 0: twice the feature size
 

@@ -10,7 +10,7 @@
 //     p(nu) = w HG(nu, g_forward) + (1 - w) HG(nu, g_back),
 // normalised to 1 over the sphere, mean cosine w g_forward + (1 - w) g_back.
 // Sampling picks a lobe with probability w, then inverts HG's cumulative distribution
-// (pbrt-v4, SampleHenyeyGreenstein).
+// (atmosphere/phase_sampling.hpp, the reference sky's sampler).
 #pragma once
 
 #include <cmath>
@@ -19,6 +19,7 @@
 #include <glm/vec3.hpp>
 
 #include "welkin/atmosphere/phase.hpp"
+#include "welkin/atmosphere/phase_sampling.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
 
@@ -43,7 +44,7 @@ struct CloudPhase {
     double mean_cosine() const { return w_forward * g_forward + (1.0 - w_forward) * g_back; }
 
     // The angular distribution of light scattered twice, p convolved with itself over the
-    // sphere (the path between the two events left out; cloud_diffusion.hpp). A phase's
+    // sphere (the path between the two events left out; clouds/diffusion.hpp). A phase's
     // Legendre moments multiply under this convolution (Funk-Hecke), and HG(g)'s moments
     // are g^l, so HG(g1) * HG(g2) = HG(g1 g2) and for the two lobes
     //     p2 = w^2 HG(g_f^2) + 2 w (1 - w) HG(g_f g_b) + (1 - w)^2 HG(g_b^2).
@@ -58,23 +59,7 @@ struct CloudPhase {
     // lobe, (u1, u2) the direction, all uniform in [0, 1).
     glm::dvec3 sample(const glm::dvec3& d, double u0, double u1, double u2) const {
         const double g = u0 < w_forward ? g_forward : g_back;
-        // Inverse CDF of HG in the cosine (pbrt-v4, eq. 11.12).
-        double cos_t;
-        if (std::abs(g) < 1e-3) {
-            cos_t = 1.0 - 2.0 * u1;
-        } else {
-            const double s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u1);
-            cos_t = (1.0 + g * g - s * s) / (2.0 * g);
-        }
-        cos_t = clamp_cosine(cos_t);
-        const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
-        const double phi = kTwoPi * u2;
-        // An orthonormal basis about d (Duff et al. 2017, "Building an orthonormal basis, revisited").
-        const double sign = std::copysign(1.0, d.z);
-        const double a = -1.0 / (sign + d.z), b = d.x * d.y * a;
-        const glm::dvec3 t1(1.0 + sign * d.x * d.x * a, sign * b, -sign * d.x);
-        const glm::dvec3 t2(b, sign + d.y * d.y * a, -d.y);
-        return glm::normalize(sin_t * std::cos(phi) * t1 + sin_t * std::sin(phi) * t2 + cos_t * d);
+        return direction_about(d, sample_henyey_greenstein_cosine(u1, g), u2);
     }
 };
 

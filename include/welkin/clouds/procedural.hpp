@@ -6,7 +6,7 @@
 //
 // The layer is the spherical shell between bottom_altitude_m and top_altitude_m above a
 // ground of radius planet_radius_m, whose centre is straight below the world origin
-// (which stands origin_altitude_m above the ground, DESIGN.md). A layer has one cloud
+// (which stands origin_altitude_m above the ground, docs/design.md). A layer has one cloud
 // type (CloudType), whose preset (CloudLayerParams::preset) gives altitudes, scales and
 // density typical of it, and whose shape constants (below) give its height profile.
 // At a point p with altitude h and height fraction f = (h - bottom) / (top - bottom):
@@ -117,7 +117,6 @@ public:
     // The share of `columns` columns (the header's point set) whose vertical optical depth
     // reaches kCoverageOpticalDepth: the measured coverage.
     double covered_fraction(int columns = kCoverageColumns) const;
-    double internal_coverage() const { return k_; }
 
     // The type's height gradient G(f) for f in [0, 1] of its local height (0 outside).
     static double height_gradient(CloudType type, double f);

@@ -1,6 +1,6 @@
 // Reference cloud lighting: a volumetric path tracer, all scattering orders.
 //
-// The same question as render_clouds (cloud_lighting.hpp), for the same density, phase,
+// The same question as render_clouds (clouds/lighting.hpp), for the same density, phase,
 // albedo and illumination, answered without approximation, so that the fast march can be
 // measured against it. The radiative transfer in the cloud is solved by Monte Carlo:
 //

@@ -4,7 +4,7 @@
 // the probability of passing a length dt is the product of the transmittances,
 // exp(-sigma_1 dt) exp(-sigma_2 dt) = exp(-(sigma_1 + sigma_2) dt). So
 //     sigma_t(p) = sum_k sigma_t,k(p),
-// with one albedo and phase for all (cloud droplets everywhere: cloud_lighting.hpp).
+// with one albedo and phase for all (cloud droplets everywhere: clouds/lighting.hpp).
 //
 // Majorant segments. Each source's segments of the ray are merged by a sweep over their
 // end points: between two consecutive end points the set of open segments does not change,

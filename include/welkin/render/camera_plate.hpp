@@ -4,7 +4,7 @@
 // For every pixel of the scene's render (scene.resolution, camera.hpp's rays):
 //   * A ray that misses the ground sphere (the planet, radius atmosphere.bottom_radius_m,
 //     centred below the scene origin: scene.hpp) sees the sky: the sky method's path
-//     radiance for its direction (sky_method.hpp, one call for all sky pixels, the observer
+//     radiance for its direction (sky/method.hpp, one call for all sky pixels, the observer
 //     at the camera's altitude), plus the sun's disc.
 //   * A ray that hits it sees the ground through the air: its depth (Blender's Z
 //     convention, camera.hpp) goes to aerial_perspective() and the pixel is

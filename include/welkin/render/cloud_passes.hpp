@@ -4,7 +4,7 @@
 //
 // For every pixel of the scene's render (scene.resolution, camera.hpp's rays: perspective,
 // orthographic and equirectangular panoramas) the pixel's centre ray is marched through
-// the clouds' density (cloud_lighting.hpp, the scene's clouds.lighting options, lit by the
+// the clouds' density (clouds/lighting.hpp, the scene's clouds.lighting options, lit by the
 // atmosphere: AtmosphereIllumination with the observer at the scene origin, as the sky
 // image's clouds are). The ray ends at the scene's geometry: the Z pass `depth` (Blender's
 // convention, camera.hpp), converted to a distance along the ray by the ray's

@@ -25,7 +25,7 @@
 //
 // Clouds (optional). With `clouds` set, every pixel's ray from the observer (the world
 // origin, the planet centre straight below it) is also marched through the cloud density
-// (cloud_lighting.hpp), lit by the same atmosphere (AtmosphereIllumination: the sun
+// (clouds/lighting.hpp), lit by the same atmosphere (AtmosphereIllumination: the sun
 // through the air at the cloud, the sky's mean radiance from the multiple-scattering LUT).
 // The march gives the cloud's in-scattered radiance L_c (premultiplied), its transmittance
 // T_c and the transmittance-weighted depth d_c of its scattering. The air between the

@@ -3,7 +3,7 @@
 // "Scene JSON", the schema the Blender add-on writes).
 //
 // A scene's clouds are the union of all its layers and volumes: one density,
-// sigma_t = the sum of every source's (cloud_union.hpp), lit once. make_scene_cloud_density
+// sigma_t = the sum of every source's (clouds/union.hpp), lit once. make_scene_cloud_density
 // builds it; that is where VDB files are opened (not when the JSON is read, so that a scene
 // can be read, checked and rewritten without touching its volumes).
 //

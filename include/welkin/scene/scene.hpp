@@ -1,11 +1,11 @@
-// The scene description (../shared/DESIGN.md, data flow): everything one frame's sky and
+// The scene description (docs/design.md, data flow): everything one frame's sky and
 // camera passes depend on, as plain data, in and out of JSON.
 //
 // One description drives both Blender and the CLI: the add-on writes it from bpy data
 // (a few lines: the camera's matrix_world and its Camera data, the sun lamp's direction,
 // the render resolution) beside each frame's passes, and `welkin aerial --scene` or
 // `welkin sky --scene` reproduces the frame from the JSON alone. The schema is documented
-// in docs/pipelines.md ("Scene JSON"); scene_json.cpp reads and writes it. to_json writes the
+// in docs/pipelines.md ("Scene JSON"); src/scene/json.cpp reads and writes it. to_json writes the
 // atmosphere in full (not by preset name), so a file stays valid when a preset changes.
 //
 // Frame: Blender's world frame, Z up, metres. The scene origin (0, 0, 0) sits
@@ -38,7 +38,7 @@ struct SceneDescription {
     double origin_altitude_m = 0.0;                          // the scene origin above the ground, >= 0
     glm::dvec3 sun_direction{0.0, 0.5, 0.8660254037844386};  // towards the sun; normalised
     double exposure = 1.0;                                   // multiplies radiance once, at the output
-    std::string method = "auto";                             // sky method (sky_method.hpp); auto by default
+    std::string method = "auto";                             // sky method (sky/method.hpp); auto by default
     // The lit ground below the horizon (ground.hpp) in the sky image and the camera plate;
     // its albedo in [0, 1] (unset: the atmosphere's ground_albedo).
     bool ground = true;
@@ -47,7 +47,7 @@ struct SceneDescription {
     RenderResolution resolution;
     AerialOptions aerial;
     SkyOptions sky_options;             // LUT sizes and method options
-    std::optional<SceneClouds> clouds;  // absent: a clear sky (scene_clouds.hpp)
+    std::optional<SceneClouds> clouds;  // absent: a clear sky (scene/clouds.hpp)
 
     // Throws InvalidArgument naming the field (as in the JSON: "camera.lens_mm"). Does not
     // require a camera; camera passes call require_camera().

@@ -1,4 +1,4 @@
-// The "analytic" sky method; see sky_method.hpp for the ladder and src/analytic_sky.cpp for the
+// The "analytic" sky method; see sky/method.hpp for the ladder and src/sky/analytic.cpp for the
 // derivation.
 #pragma once
 

@@ -3,7 +3,7 @@
 // Given a tolerance on the relative luminance error, auto picks, per scene (observer
 // altitude, sun elevation, number of directions, atmosphere), the cheapest charted method
 // and setting whose measured error meets it, then runs that method. The measurements are
-// the chart's (bench/chart.py -> auto_sky_table.hpp): the 95th percentile over the whole
+// the chart's (bench/chart.py -> sky/auto_table.hpp): the 95th percentile over the whole
 // sphere of |Y - Y_ref| / Y_ref, Y the CIE luminance, against the spectral reference.
 //
 // How a scene between the chart's grid points is judged: by the worst of the grid

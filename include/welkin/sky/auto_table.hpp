@@ -1,8 +1,8 @@
-// The measured table the "auto" sky method chooses from (see auto_sky.hpp).
+// The measured table the "auto" sky method chooses from (see sky/auto.hpp).
 //
 // Its numbers are not written by hand: bench/chart.py measures every method and setting
 // against the reference on a grid of scenes (observer altitude x sun elevation x preset)
-// and writes src/auto_sky_table.cpp. Rerun the chart (and rebuild) whenever a method's
+// and writes src/sky/auto_table.cpp. Rerun the chart (and rebuild) whenever a method's
 // speed or accuracy changes:
 //     PYTHONPATH=build /usr/bin/python3 bench/chart.py
 //
@@ -51,7 +51,7 @@ struct Table {
     }
 };
 
-// The table compiled into this build (src/auto_sky_table.cpp, generated).
+// The table compiled into this build (src/sky/auto_table.cpp, generated).
 const Table& table();
 
 }  // namespace welkin::auto_table

@@ -1,4 +1,4 @@
-// The "lut" sky method; see sky_method.hpp for the ladder and src/lut_sky.cpp for the
+// The "lut" sky method; see sky/method.hpp for the ladder and src/sky/lut.cpp for the
 // derivation.
 #pragma once
 

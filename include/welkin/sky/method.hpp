@@ -7,13 +7,13 @@
 // that the air then scatters towards the observer is included where the method models
 // multiple scattering). Rays that hit the ground carry the path radiance up to the ground.
 //
-// The ladder, from fast to exact (see ../shared/DESIGN.md):
+// The ladder, from fast to exact (see docs/design.md):
 //   analytic  no marching: plane-parallel single scattering with Chapman air masses
 //   lut       Hillaire 2020: transmittance, multiple-scattering and sky-view LUTs
 //   raymarch  nested single-scattering march plus Hillaire's multiple-scattering term
 //   reference Monte-Carlo path tracing, all orders, ground reflection, seeded
 // and "auto", which picks the cheapest of the first three that the chart shows meets a
-// tolerance for the scene (auto_sky.hpp).
+// tolerance for the scene (sky/auto.hpp).
 //
 // Frame: Blender's world frame, Z up. The observer stands on the Z axis at
 // bottom_radius + altitude from the planet centre. Output: radiance in
@@ -49,10 +49,10 @@ struct SkyOptions {
     int reference_paths = 4096;
     std::uint64_t seed = 1;
     // auto: the relative luminance error to meet (95th percentile over the sphere, against
-    // the reference; see auto_sky.hpp), in [0.001, 10].
+    // the reference; see sky/auto.hpp), in [0.001, 10].
     // The default 0.1: the default lut meets it on the bruneton2017 preset at every charted
     // altitude with the sun 3 degrees or more up (bench/results/scenes.csv); under haze and
-    // in twilight no fast method does, and auto falls back (auto_sky.hpp).
+    // in twilight no fast method does, and auto falls back (sky/auto.hpp).
     double tolerance = 0.1;
 
     LutResolution luts() const { return {transmittance_width, transmittance_height, multiscattering_size}; }

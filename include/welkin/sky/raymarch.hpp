@@ -1,4 +1,4 @@
-// The "raymarch" sky method; see sky_method.hpp for the ladder and src/raymarch_sky.cpp for the
+// The "raymarch" sky method; see sky/method.hpp for the ladder and src/sky/raymarch.cpp for the
 // derivation.
 #pragma once
 

@@ -1,6 +1,6 @@
 // The "reference" sky method: Monte-Carlo path tracing through the atmosphere, all
 // scattering orders, ground reflection, Earth shadow, seeded and thread-count independent.
-// See sky_method.hpp for the ladder and src/reference_sky.cpp for the derivation.
+// See sky/method.hpp for the ladder and src/sky/reference.cpp for the derivation.
 //
 // Thread safety: radiance() is const and may run concurrently; it parallelises itself
 // with TBB (results do not depend on the thread count).

@@ -1,5 +1,5 @@
-// Direction sampling for the reference path tracer: phase functions and a Lambertian
-// ground. Each sampler maps uniform numbers in [0, 1) to a cosine (or a direction) whose
+// Direction sampling for the path tracers (the reference sky, the clouds' phase): phase
+// functions and a Lambertian ground. Each sampler maps uniform numbers in [0, 1) to a cosine (or a direction) whose
 // density is stated; tests/cpp/test_phase.cpp checks the distributions.
 //
 // Conventions as in phase.hpp: nu is the cosine between the two propagation directions;

@@ -9,7 +9,7 @@ import os
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
-from .. import sky_compute
+from ... import sky_compute
 from . import scene_sun, update
 from .scene_sun import UserError
 

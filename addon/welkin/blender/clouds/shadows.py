@@ -25,7 +25,7 @@ import math
 import bpy
 import numpy as np
 
-from . import compat
+from .. import compat
 
 SHADOW_KEY = "welkin_cloud_shadows"  # on the add-on's object, mesh, material and image: the world
 NAME = "Welkin Cloud Shadows"

@@ -2,7 +2,7 @@
 objects only)."""
 import bpy
 
-from . import cloud_scene
+from . import scene as cloud_scene
 
 
 class WELKIN_UL_cloud_layers(bpy.types.UIList):

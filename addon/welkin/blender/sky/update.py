@@ -11,8 +11,9 @@ import json
 
 import bpy
 
-from .. import native, scene_export, sky_compute, sky_request
-from . import cloud_scene, cloud_shadows, images, scene_sun, world_nodes
+from ... import native, scene_export, sky_compute, sky_request
+from ..clouds import scene as cloud_scene, shadows as cloud_shadows
+from . import images, scene_sun, world_nodes
 from .scene_sun import UserError
 
 WORLD_NAME = "Welkin World"
@@ -123,7 +124,7 @@ def sky_key(settings, request, clouds):
 
 
 def cloudy_scene_json(scene, settings, request, clouds, module, depsgraph=None):
-    """The scene description of the world's cloudy sky (README "Scene JSON"), re-centred on
+    """The scene description of the world's cloudy sky (docs/pipelines.md "Scene JSON"), re-centred on
     the observer: the world texture is the sky seen from the scene camera (with Add Camera
     Height on and a camera; else from the scene origin), and the core renders a scene's sky
     from its origin. So the origin moves to the camera: origin_altitude_m is the observer's

@@ -31,8 +31,8 @@ import math
 
 import bpy
 
-from .. import aerial_table as tab
-from . import compat
+from ... import aerial_table as tab
+from .. import compat
 
 IMAGE = "Welkin Aerial Table"
 SCREEN_IMAGES = ("Welkin Aerial Inscatter", "Welkin Aerial Inscatter Step", "Welkin Aerial Opacity")
@@ -488,11 +488,8 @@ def with_context_remove_aov(scene, layer):
     override = {"scene": scene, "view_layer": layer}
     if window is not None:
         override["window"] = window
-    if hasattr(bpy.context, "temp_override"):
-        with bpy.context.temp_override(**override):
-            bpy.ops.scene.view_layer_remove_aov()
-    else:
-        bpy.ops.scene.view_layer_remove_aov(override)
+    with bpy.context.temp_override(**override):
+        bpy.ops.scene.view_layer_remove_aov()
 
 
 # --- the compositor ----------------------------------------------------------------------
@@ -505,11 +502,7 @@ def comp_group():
         group = bpy.data.node_groups.new(COMP_GROUP, 'CompositorNodeTree')
     else:  # an earlier version's group: rebuilt in place (its users keep their links)
         group.nodes.clear()
-        if hasattr(group, "interface"):
-            group.interface.clear()
-        else:
-            group.inputs.clear()
-            group.outputs.clear()
+        compat.clear_group_sockets(group)
     group[MARK] = 2
     for name in ("Image", "Inscatter", "Opacity"):
         compat.new_group_socket(group, name, 'INPUT', 'NodeSocketColor')

@@ -2,15 +2,15 @@
 
 "Welkin Aerial Depth", a File Output node writing a multilayer EXR of the render's Image
 and Depth (Z pass) for every frame, <base>welkin_render_<frame>.exr: the only way to read
-the Z pass back in `blender -b` (the Viewer node cannot be read there). aerial.py computes
+the Z pass back in `blender -b` (the Viewer node cannot be read there). blender/aerial/settings.py computes
 the pass files and the hazed frame from it in render_post. The frame itself is hazed in the
-compositor by aerial_frame.py's group; this node only writes.
+compositor by blender/aerial/frame.py's group; this node only writes.
 
 The compositor tree is the one aerial_frame.install made sure of (compat.ensure_scene_
 compositor). The node is found by name; remove() takes it out. The user's nodes are never
 touched.
 """
-from . import compat
+from .. import compat
 
 DEPTH_NODE = "Welkin Aerial Depth"
 

@@ -6,7 +6,7 @@ import os
 
 import bpy
 
-from . import cloud_scene
+from . import scene as cloud_scene
 
 
 def _fail(operator, text):

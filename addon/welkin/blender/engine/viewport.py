@@ -33,10 +33,10 @@ import gpu
 import numpy as np
 from gpu_extras.presets import draw_texture_2d
 
-from .. import native as native_module
-from .. import plate, viewport
-from . import update
-from .scene_sun import UserError
+from ... import native as native_module
+from ... import plate, viewport
+from ..sky import update
+from ..sky.scene_sun import UserError
 
 # The newest preview drawn (tests/blender/viewport_window_script.py reads it), and, when
 # READBACK is a (x, y, width, height) box of region pixels, the viewport's framebuffer

@@ -11,7 +11,7 @@ image whose owner shows it no more (the world renamed, a file from before the ke
 claimed by the world that updates it."""
 import bpy
 
-from .. import pixels
+from ... import pixels
 
 ROLE_KEY = "welkin_role"  # custom property marking the add-on's own images
 OWNER_KEY = "welkin_world"  # the name_full of the world the image belongs to

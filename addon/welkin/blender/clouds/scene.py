@@ -10,9 +10,9 @@ out of its own render.
 """
 import bpy
 
-from .. import cloud_export
-from . import compat
-from .scene_sun import UserError
+from ... import cloud_export
+from .. import compat
+from ..sky.scene_sun import UserError
 
 
 def marked_volumes(scene):

@@ -1,6 +1,6 @@
 // Column densities for the reference path tracer; see the header for the two kinds of
 // constituent, the table's parametrisation and storage, and the accuracy.
-#include "welkin/reference/column_table.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,8 +1,8 @@
 """World.welkin_clouds (the world's procedural cloud layers and cloud lighting) and
 Object.welkin_cloud (a Volume object marked as Welkin clouds).
 
-Defaults and hard ranges are the core's (procedural_clouds.hpp CloudLayerParams,
-cloud_lighting.hpp CloudLightingOptions); the soft ranges are what the sliders offer.
+Defaults and hard ranges are the core's (clouds/procedural.hpp CloudLayerParams,
+clouds/lighting.hpp CloudLightingOptions); the soft ranges are what the sliders offer.
 """
 import bpy
 
@@ -11,13 +11,13 @@ def _changed(_self, context):
     # A cloud edit changes the sky: the live update follows as for the sky's settings.
     world = getattr(context, "world", None) or getattr(context.scene, "world", None)
     if world is not None:
-        from . import handlers
+        from .. import handlers
         handlers.settings_changed(world.welkin, context)
 
 
 def _type_changed(self, context):
     # A new type loads its preset (the core's welkin.cloud_type_preset) into the layer.
-    from .. import native
+    from ... import native
     try:
         preset = native.module().cloud_type_preset(self.cloud_type)
     except Exception:  # the core not loadable: keep the values, the render reports it

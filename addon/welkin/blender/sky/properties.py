@@ -1,7 +1,7 @@
 """World.welkin: the sky's parameters (shown in the panel) and the add-on's state."""
 import bpy
 
-from .. import native, sky_request
+from ... import native, sky_request
 
 
 def _is_sun_lamp(_settings, obj):
@@ -21,7 +21,7 @@ def _presets(_self, _context):
 
 
 def _changed(settings, context):
-    from . import handlers
+    from .. import handlers
     handlers.settings_changed(settings, context)
 
 

@@ -5,7 +5,7 @@ its own World Output, and makes that output the active one. The user's output (a
 everything linked to it) stays as it was, one click away: remove() deletes the add-on's
 nodes and makes the user's output active again, which restores the tree exactly.
 
-The tree (energy appears once, DESIGN.md):
+The tree (energy appears once, docs/design.md):
 
     Environment Texture (sky, no disc) -> Background ---------------------------\
     the sun's disc from the view direction -> Background (strength = Is Camera Ray) -> Add -> World Output
@@ -32,7 +32,7 @@ setting back.
 """
 import math
 
-from . import compat
+from .. import compat
 
 MAP_RESOLUTION = 1024
 ROLE_KEY = "welkin_role"

@@ -3,7 +3,7 @@ import textwrap
 
 import bpy
 
-from .. import native
+from ... import native
 
 
 def _wrapped(layout, text, icon='NONE', width=60):

@@ -30,7 +30,7 @@ import threading
 
 import bpy
 
-from .. import sky_compute
+from ... import sky_compute
 from . import scene_sun, update
 from .scene_sun import UserError
 

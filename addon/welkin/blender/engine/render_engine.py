@@ -13,13 +13,16 @@ test_break) stops the core. The plate, clear or cloudy, is computed in tiles of 
 rows (welkin.CameraPlateRenderer: the frame-wide part once, then render(rows=...) per
 tile, with the whole frame's values), each shown as soon as it is done, with
 update_progress and test_break between tiles. view_update / view_draw: the viewport
-preview (viewport_preview.py), the same plate for the viewport's view.
+preview (blender/engine/viewport.py), the same plate for the viewport's view.
 """
 import bpy
 
-from .. import plate, sky_request
-from . import cloud_scene, compat, scene_sun, update, viewport_preview
-from .scene_sun import UserError
+from ... import plate, sky_request
+from ..clouds import scene as cloud_scene
+from .. import compat
+from ..sky import scene_sun, update
+from . import viewport as viewport_preview
+from ..sky.scene_sun import UserError
 
 BAND_ROWS = 64
 
@@ -62,7 +65,7 @@ def scene_world(scene, depsgraph, native):
 
 
 def scene_description_json(scene, depsgraph, native):
-    """The frame's scene JSON (README "Scene JSON"); UserError for what the user can fix."""
+    """The frame's scene JSON (docs/pipelines.md "Scene JSON"); UserError for what the user can fix."""
     if scene.camera is None:
         raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
                         "active (Ctrl+Numpad 0)")
@@ -107,7 +110,7 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
         if preview is not None:
             preview.stop()
 
-    # The viewport preview (Rendered shading): viewport_preview.py.
+    # The viewport preview (Rendered shading): blender/engine/viewport.py.
     def view_update(self, context, depsgraph):
         if self.preview is None:
             self.preview = viewport_preview.Preview(self, scene_world)

@@ -2,7 +2,7 @@
 high the observer stands."""
 import math
 
-from .. import sky_request
+from ... import sky_request
 
 
 class UserError(Exception):
@@ -31,7 +31,7 @@ def choose_sun(scene, settings):
 
 
 def sun_direction(obj, depsgraph=None):
-    """Unit vector towards the sun: the lamp's local +Z in world space (DESIGN.md)."""
+    """Unit vector towards the sun: the lamp's local +Z in world space (docs/design.md)."""
     if depsgraph is not None:
         obj = obj.evaluated_get(depsgraph)
     z = obj.matrix_world.col[2]

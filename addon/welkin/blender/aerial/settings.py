@@ -2,7 +2,7 @@
 Welkin Aerial Perspective). Off by default.
 
 On, it hazes the frame Blender renders itself, in Cycles and EEVEE (F12, `-f`, `-a`, any
-`-o`, the Composite / Group Output node and File Output nodes): aerial_frame.py adds a node
+`-o`, the Composite / Group Output node and File Output nodes): blender/aerial/frame.py adds a node
 group to every material that samples the frame's aerial-perspective table and writes two
 shader AOVs, and a compositor group that applies Image x T + Inscatter after the Render
 Layers node. The table is baked for each frame's camera, sun and atmosphere in
@@ -31,9 +31,12 @@ import os
 import bpy
 from bpy.app.handlers import persistent
 
-from .. import native, scene_export, sky_request
-from . import aerial_frame, cloud_scene, compat, compositor, farm, scene_sun
-from .scene_sun import UserError
+from ... import native, scene_export, sky_request
+from . import compositor, frame as aerial_frame
+from ..clouds import scene as cloud_scene
+from .. import compat, farm
+from ..sky import scene_sun
+from ..sky.scene_sun import UserError
 
 
 def _toggled(settings, context):

@@ -1,0 +1,1 @@
+"""Aerial perspective for camera renders (Scene.welkin_aerial)."""

@@ -1,0 +1,1 @@
+"""Welkin Clouds: procedural layers, marked VDB volumes, ground shadows."""

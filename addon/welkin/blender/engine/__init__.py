@@ -1,0 +1,1 @@
+"""The WELKIN render engine and its viewport preview."""
