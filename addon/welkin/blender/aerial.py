@@ -32,7 +32,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .. import native, scene_export, sky_request
-from . import aerial_frame, cloud_scene, compat, compositor, farm, scene_sun
+from . import aerial_frame, cloud_scene, compat, compositor, farm, images, scene_sun
 from .scene_sun import UserError
 
 
@@ -273,6 +273,11 @@ def on_frame_change_post(scene, depsgraph=None):
     handed over (in `-a`, `-f` and F12 alike), and used by render_post."""
     if depsgraph is None or not scene.welkin_aerial.enabled:
         return
+    if scene.welkin_aerial.side_files:
+        # `blender -b file.blend -o PATH -f N` sets the output path after the file loaded,
+        # with no update of the scene: the depth node follows it here, before the render
+        # evaluates its compositor (a change made here is evaluated for this frame).
+        _sync_output_path(scene)
     module = native.module()
     if module is None:
         return
@@ -294,10 +299,13 @@ def on_frame_change_post(scene, depsgraph=None):
 def _sync_output_path(scene):
     """Points the File Output node at the current output path. An animation render
     copies the compositor before its first render_pre, so the path is kept in step
-    whenever the scene changes and when a file loads, not only when a render starts."""
+    whenever the scene changes, when a file loads and when a frame changes (the output
+    path of `-o` is set after the file loaded), not only when a render starts."""
     node = compositor.depth_node(scene)
     if node is not None:
-        compat.set_file_output_path(node, scene_export.file_output_base(base_of(scene)))
+        wanted = scene_export.file_output_base(base_of(scene))
+        if compat.file_output_path(node) != wanted:  # a change recompiles the compositor
+            compat.set_file_output_path(node, wanted)
 
 
 @persistent
@@ -312,6 +320,36 @@ def on_load_post(*_args):
     for scene in bpy.data.scenes:
         if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
             _sync_output_path(scene)
+
+
+def pack_tables(scene):
+    """Bakes the table of the scene's current frame and packs its images into the .blend
+    (save_pre), so that the saved file carries the haze it shows: a Blender without the
+    add-on renders a scene whose camera, sun and atmosphere do not change over the frames
+    as the add-on does (docs/pipelines.md#saved-files-without-the-add-on). Returns the
+    problem, or None."""
+    try:
+        bake(scene)
+    except UserError as error:
+        return f"aerial perspective not saved with the file: {error}"
+    names = (aerial_frame.SCREEN_IMAGES if scene.render.engine == 'CYCLES'
+             else (aerial_frame.IMAGE,))
+    for name in names:
+        image = bpy.data.images.get(name)
+        if image is None or not image.get(aerial_frame.MARK) or image.library is not None:
+            continue
+        if image.packed_file is None or image.is_dirty:
+            images.pack(image)
+    return None
+
+
+@persistent
+def on_save_pre(*_args):
+    for scene in bpy.data.scenes:
+        if scene.library is None and scene.welkin_aerial.enabled:
+            problem = pack_tables(scene)
+            if problem is not None:
+                _log(scene, problem)
 
 
 @persistent
@@ -382,6 +420,7 @@ classes = (WelkinAerialSettings, RENDER_PT_welkin_aerial)
 _HANDLERS = ((bpy.app.handlers.frame_change_post, on_frame_change_post),
              (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
              (bpy.app.handlers.load_post, on_load_post),
+             (bpy.app.handlers.save_pre, on_save_pre),
              (bpy.app.handlers.render_pre, on_render_pre),
              (bpy.app.handlers.render_post, on_render_post))
 
