@@ -273,11 +273,6 @@ def on_frame_change_post(scene, depsgraph=None):
     handed over (in `-a`, `-f` and F12 alike), and used by render_post."""
     if depsgraph is None or not scene.welkin_aerial.enabled:
         return
-    if scene.welkin_aerial.side_files:
-        # `blender -b file.blend -o PATH -f N` sets the output path after the file loaded,
-        # with no update of the scene: the depth node follows it here, before the render
-        # evaluates its compositor (a change made here is evaluated for this frame).
-        _sync_output_path(scene)
     module = native.module()
     if module is None:
         return
@@ -297,10 +292,11 @@ def on_frame_change_post(scene, depsgraph=None):
 
 
 def _sync_output_path(scene):
-    """Points the File Output node at the current output path. An animation render
-    copies the compositor before its first render_pre, so the path is kept in step
-    whenever the scene changes, when a file loads and when a frame changes (the output
-    path of `-o` is set after the file loaded), not only when a render starts."""
+    """Points the File Output node at the current output path. A render copies the
+    compositor before its first render_pre, so the path is kept in step whenever the
+    scene changes, when a file loads and when a render is initialised (render_init, before
+    that copy: `blender -b file.blend -o PATH -f N` sets the output path after the file
+    loaded, with no update of the scene), not only when a frame's render starts."""
     node = compositor.depth_node(scene)
     if node is not None:
         wanted = scene_export.file_output_base(base_of(scene))
@@ -350,6 +346,12 @@ def on_save_pre(*_args):
             problem = pack_tables(scene)
             if problem is not None:
                 _log(scene, problem)
+
+
+@persistent
+def on_render_init(scene, *_args):
+    if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
+        _sync_output_path(scene)
 
 
 @persistent
@@ -421,6 +423,7 @@ _HANDLERS = ((bpy.app.handlers.frame_change_post, on_frame_change_post),
              (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
              (bpy.app.handlers.load_post, on_load_post),
              (bpy.app.handlers.save_pre, on_save_pre),
+             (bpy.app.handlers.render_init, on_render_init),
              (bpy.app.handlers.render_pre, on_render_pre),
              (bpy.app.handlers.render_post, on_render_post))
 
