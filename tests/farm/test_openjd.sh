@@ -14,7 +14,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 
-openjd=build/venv-openjd/bin/openjd
+openjd=${WELKIN_OPENJD:-build/venv-openjd/bin/openjd}
 [[ -x $openjd ]] || { echo "test_openjd: FAILED: $openjd missing (bash scripts/install_openjd.sh)" >&2; exit 1; }
 template=farm/openjd/welkin_render.yaml
 

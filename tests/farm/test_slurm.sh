@@ -112,7 +112,7 @@ echo "test_slurm: without the add-on: FAILED, nothing written"
 # --- sky HDRIs without Blender: a short time-lapse
 lines=$scratch/shared/day.txt
 for elevation in 2 10 25; do
-  echo "--preset hazy --sun-elevation $elevation --sun-azimuth 100 --width 64"
+  echo "--preset hazy --method lut --sun-elevation $elevation --sun-azimuth 100 --width 64"
 done >"$lines"
 echo "--preset hazy --sun-elevation 95 --width 64" >>"$lines"  # out of range: fails
 job4=$(WELKIN_CLI=$root/build/welkin sbatch --parsable --array=1-4 "$root/farm/slurm/sky.sbatch" \
