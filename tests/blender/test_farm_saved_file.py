@@ -12,11 +12,13 @@ sample count, CPU).
     differently.
 (b) The table's images are packed in the file, as float OpenEXR (they reload unchanged),
     not 1 x 1 generated images.
+(c) Saving a scene whose sun is animated says, in the panel's status line, that the file
+    renders right only with the add-on (a stock Blender would render every frame with
+    the saved frame's sky and haze; nothing in a .blend can make it fail instead).
 Runs on every Blender of scripts/test_blender.sh (the binary's command line, or
 tests/blender/bpy_blender.py for PyPI's bpy).
 """
 import os
-import pathlib
 import subprocess
 import sys
 
@@ -93,6 +95,8 @@ scene.welkin_aerial.enabled = True
 
 blend = T.TMP / "static.blend"
 bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+T.check("farms with the add-on only" not in scene.welkin_aerial.status,
+        f"a static scene saved with a warning: {scene.welkin_aerial.status}")
 
 # (b) The images in the file: packed float EXR at the table's size.
 names = aerial_frame.SCREEN_IMAGES
@@ -127,5 +131,19 @@ haze = float(np.abs(plain - with_addon).max())
 print(f"(a) hazed vs not: max |diff| {haze:.3g}")
 T.check(haze > 0.01 * float(with_addon.max()), f"the haze is missing: max |diff| {haze}")
 print("(a) a stock Blender renders the saved file as the add-on does, bit for bit")
+
+# (c) An animated sun: saving says the file needs the add-on on the farm.
+bpy.ops.wm.open_mainfile(filepath=str(blend))
+scene = bpy.context.scene
+sun = scene.objects["Sun"]
+sun.keyframe_insert("rotation_quaternion", frame=1)
+T.aim_sun(sun, 20.0, 60.0)
+sun.keyframe_insert("rotation_quaternion", frame=3)
+scene.frame_set(1)
+bpy.ops.wm.save_as_mainfile(filepath=str(T.TMP / "animated.blend"))
+status = scene.welkin_aerial.status
+T.check("farms with the add-on only" in status and "sun lamp 'Sun'" in status,
+        f"saving an animated sun does not say it needs the add-on: {status!r}")
+print(f"(c) saving an animated scene: {status}")
 
 T.done("test_farm_saved_file")

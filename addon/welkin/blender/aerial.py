@@ -342,10 +342,23 @@ def pack_tables(scene):
 @persistent
 def on_save_pre(*_args):
     for scene in bpy.data.scenes:
-        if scene.library is None and scene.welkin_aerial.enabled:
+        if scene.library is not None:
+            continue
+        if scene.welkin_aerial.enabled:
             problem = pack_tables(scene)
             if problem is not None:
                 _log(scene, problem)
+        sky = scene.world is not None and scene.world.welkin.active
+        if not (sky or scene.welkin_aerial.enabled):
+            continue
+        changing = farm.changing_inputs(scene)
+        if changing:
+            text = (f"saved for farms with the add-on only: {', '.join(changing)} "
+                    f"animated; a Blender without Welkin would render every frame with "
+                    f"frame {scene.frame_current}'s sky and haze")
+            print(f"Welkin: warning: scene '{scene.name}': {text}")
+            if scene.welkin_aerial.enabled:
+                scene.welkin_aerial.status = text
 
 
 @persistent

@@ -135,3 +135,51 @@ def _remove_frames(scene, remove_written):
             continue
         removed.append((path, why))
     return removed
+
+
+def _animated(id_):
+    """True when `id_` has keyframes, drivers or NLA strips."""
+    data = getattr(id_, "animation_data", None) if id_ is not None else None
+    return data is not None and (data.action is not None or len(data.drivers) > 0
+                                 or len(data.nla_tracks) > 0)
+
+
+def _moves(ob, with_data):
+    """True when the object (or its data, `with_data`), a parent, or a constraint may make
+    it change from frame to frame (constraints: their targets may move)."""
+    seen = set()
+    while ob is not None and ob.name_full not in seen:
+        seen.add(ob.name_full)
+        if _animated(ob) or len(ob.constraints) > 0 or (with_data and _animated(ob.data)):
+            return True
+        ob = ob.parent
+    return False
+
+
+def changing_inputs(scene):
+    """What the add-on recomputes per frame that may change over the scene's frames: the
+    names of the animated camera, sun lamp, world, scene settings and cloud volumes (a
+    list, empty for a static scene). A Blender without the add-on renders every frame
+    with the saved frame's sky, lamp and haze (docs/pipelines.md#saved-files-without-the-
+    add-on), right only when this is empty. Conservative: any keyframe, driver, NLA strip
+    or constraint on them counts."""
+    from . import cloud_scene, scene_sun
+    changing = []
+    if _animated(scene) or any(m.camera is not None for m in scene.timeline_markers):
+        changing.append(f"scene '{scene.name}'")
+    if scene.camera is not None and _moves(scene.camera, with_data=True):
+        changing.append(f"camera '{scene.camera.name}'")
+    world = scene.world
+    if world is not None:
+        if _animated(world) or _animated(world.node_tree):
+            changing.append(f"world '{world.name}'")
+        try:
+            lamp, _warning = scene_sun.choose_sun(scene, world.welkin)
+        except scene_sun.UserError:
+            lamp = None
+        if lamp is not None and _moves(lamp, with_data=False):
+            changing.append(f"sun lamp '{lamp.name}'")
+    for ob in cloud_scene.marked_volumes(scene):
+        if ob.data.is_sequence or _moves(ob, with_data=True):
+            changing.append(f"cloud volume '{ob.name}'")
+    return changing
