@@ -160,9 +160,9 @@ def changing_inputs(scene):
     """What the add-on recomputes per frame that may change over the scene's frames: the
     names of the animated camera, sun lamp, world, scene settings and cloud volumes (a
     list, empty for a static scene). A Blender without the add-on renders every frame
-    with the saved frame's sky, lamp and haze (docs/pipelines.md#saved-files-without-the-
-    add-on), right only when this is empty. Conservative: any keyframe, driver, NLA strip
-    or constraint on them counts."""
+    with the saved frame's sky, lamp and haze, right only when this is empty
+    (docs/pipelines.md#saved-files-without-the-add-on). Conservative: any keyframe,
+    driver, NLA strip or constraint on them counts."""
     from . import cloud_scene, scene_sun
     changing = []
     if _animated(scene) or any(m.camera is not None for m in scene.timeline_markers):
