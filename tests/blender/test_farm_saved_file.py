@@ -9,7 +9,7 @@ sample count, CPU).
     user folders hold no add-on; a script checks that Welkin is not loaded) give the same
     pixels, and frame 3 of the stock render equals frame 1 of the add-on's (the scene does
     not change). The haze is there: the file saved with Aerial Perspective off renders
-    differently.
+    differently; that file (the sky alone) renders the same with and without the add-on.
 (b) The table's images are packed in the file, as float OpenEXR (they reload unchanged),
     not 1 x 1 generated images.
 (c) Saving a scene whose sun is animated says, in the panel's status line, that the file
@@ -130,6 +130,10 @@ plain = render(plain_blend, T.TMP / "plain_out", 1, with_addon=False)
 haze = float(np.abs(plain - with_addon).max())
 print(f"(a) hazed vs not: max |diff| {haze:.3g}")
 T.check(haze > 0.01 * float(with_addon.max()), f"the haze is missing: max |diff| {haze}")
+# The sky alone (aerial perspective off): the packed sky renders as the add-on's.
+plain_addon = render(plain_blend, T.TMP / "plain_addon", 1, with_addon=True)
+T.check(np.array_equal(plain, plain_addon), "the sky-only file renders differently without "
+        f"the add-on: max |diff| {float(np.abs(plain - plain_addon).max())}")
 print("(a) a stock Blender renders the saved file as the add-on does, bit for bit")
 
 # (c) An animated sun: saving says the file needs the add-on on the farm.
