@@ -15,6 +15,8 @@ sample count, CPU).
 (c) Saving a scene whose sun is animated says, in the panel's status line, that the file
     renders right only with the add-on (a stock Blender would render every frame with
     the saved frame's sky and haze; nothing in a .blend can make it fail instead).
+(d) Write Pass Files follows `-o`: `blender -b file.blend -o /elsewhere/f_#### -f 1`
+    writes the depth file and the passes under /elsewhere, nothing at the saved path.
 Runs on every Blender of scripts/test_blender.sh (the binary's command line, or
 tests/blender/bpy_blender.py for PyPI's bpy).
 """
@@ -149,5 +151,23 @@ status = scene.welkin_aerial.status
 T.check("farms with the add-on only" in status and "sun lamp 'Sun'" in status,
         f"saving an animated sun does not say it needs the add-on: {status!r}")
 print(f"(c) saving an animated scene: {status}")
+
+# (d) Write Pass Files follows -o: the depth file and the passes go beside the frames of
+# the command line's output path, not the saved one.
+bpy.ops.wm.open_mainfile(filepath=str(blend))
+scene = bpy.context.scene
+scene.render.filepath = str(T.TMP / "saved" / "f_####")
+scene.welkin_aerial.side_files = True
+passes_blend = T.TMP / "passes.blend"
+bpy.ops.wm.save_as_mainfile(filepath=str(passes_blend))
+elsewhere = T.TMP / "elsewhere"
+render(passes_blend, elsewhere, 1, with_addon=True)
+written = sorted(p.name for p in elsewhere.iterdir())
+for name in ("f_welkin_render_0001.exr", "f_welkin_aerial_0001.exr", "f_welkin_scene_0001.json"):
+    T.check(name in written, f"{name} is not beside the frame of -o: {written}")
+saved = T.TMP / "saved"
+T.check(not saved.exists(), "files were written at the saved output path: "
+        f"{sorted(p.name for p in saved.iterdir()) if saved.exists() else []}")
+print(f"(d) Write Pass Files follows -o: {written}")
 
 T.done("test_farm_saved_file")
