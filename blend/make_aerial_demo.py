@@ -2,13 +2,16 @@
 
     blender -b --factory-startup --python-use-system-env --python blend/make_aerial_demo.py \
         [-- --out out/aerial_demo --size 480 --samples 16 --sheet docs/aerial_blender_demo.png]
+        [-- --frames 4 --no-render]
 
 A ground plane 200 km across and pairs of blocks from 300 m out to 40 km, the camera 30 m up
 looking along +X, the sun 8 degrees up to the camera's left, `hazy` air, the Welkin sky in
 the world. With Scene.welkin_aerial enabled the render leaves OUT/frame_welkin_*_0001.*
 (scene JSON, passes, composite: docs/artists.md "Aerial perspective in Blender"). --sheet writes the
 render before (the render layer's Image) and after (Image x T + Inscatter) side by side as
-one PNG (exposure 2^-3.5, x / (1 + x), sRGB).
+one PNG (exposure 2^-3.5, x / (1 + x), sRGB). --frames N makes a sequence, frames 1-N, the
+sun rising one degree a frame (the farm tests render it, tests/farm/); --no-render saves
+the .blend only.
 """
 import argparse
 import math
@@ -25,6 +28,8 @@ parser.add_argument("--out", default=os.path.join(ds.ROOT, "out", "aerial_demo")
 parser.add_argument("--size", type=int, default=480, help="image width, pixels")
 parser.add_argument("--samples", type=int, default=16)
 parser.add_argument("--sheet", help="write the before / after pair as one PNG")
+parser.add_argument("--frames", type=int, default=1, help="frames 1-N, the sun rising 1 degree a frame")
+parser.add_argument("--no-render", action="store_true", help="save the .blend, render nothing")
 args = ds.script_args(parser)
 os.makedirs(args.out, exist_ok=True)
 addon_name = ds.enable_welkin()
@@ -43,7 +48,13 @@ for k, d in enumerate((300.0, 700.0, 1500.0, 3000.0, 6000.0, 12000.0, 24000.0, 4
         bpy.context.active_object.data.materials.append(block)
 
 ds.add_camera(scene, (0.0, 0.0, 30.0), 88.5, 30.0, clip_end_m=1e6)
-ds.aim_sun(ds.add_sun(scene), 8.0, 60.0)
+sun = ds.add_sun(scene)
+ds.aim_sun(sun, 8.0, 60.0)
+if args.frames > 1:
+    scene.frame_start, scene.frame_end = 1, args.frames
+    for frame in range(1, args.frames + 1):
+        ds.aim_sun(sun, 8.0 + (frame - 1), 60.0)
+        sun.keyframe_insert("rotation_quaternion", frame=frame)
 
 settings = scene.world.welkin
 settings.preset = "hazy"
@@ -59,6 +70,8 @@ scene.frame_set(1)
 scene.welkin_aerial.side_files = True
 scene.welkin_aerial.enabled = True
 bpy.ops.wm.save_as_mainfile(filepath=os.path.join(args.out, "welkin_aerial_demo.blend"))
+if args.no_render:
+    raise SystemExit(0)
 bpy.ops.render.render(write_still=True)
 print(f"make_aerial_demo: {scene.welkin_aerial.status}")
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages Welkin needs to build, test and render (xvfb: the
 # viewport preview's windowed Blender test, tests/blender/test_viewport_window.py; clang
-# and its runtime: the fuzz targets, scripts/fuzz.sh).
+# and its runtime: the fuzz targets, scripts/fuzz.sh; munge and slurm-wlm: the Slurm farm
+# test, tests/farm/test_slurm.sh, which starts its own daemons).
 # Idempotent and quick when everything is there: it asks dpkg first, and runs
 # apt-get (update + install, non-interactively) only for what is missing.
 set -euo pipefail
@@ -14,6 +15,7 @@ packages=(
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-openvdb python3-skimage
   blender
   xvfb xauth
+  munge slurm-wlm
 )
 
 missing=()

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Installs, builds, and runs every test suite: GoogleTest (ctest), the Python module
-# (pytest), the fuzz targets for a bounded time (scripts/fuzz.sh), and the headless
-# Blender tests on Blender 3.4, 4.5 and 5.0 (scripts/test_blender.sh). Every suite runs
+# (pytest), the fuzz targets for a bounded time (scripts/fuzz.sh), the headless
+# Blender tests on Blender 3.4, 4.5 and 5.0 (scripts/test_blender.sh), and the farm tests
+# (tests/farm/: Slurm on localhost, the Open Job Description template). Every suite runs
 # even when an earlier one fails; the exit status is non-zero if any failed.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 bash scripts/install_deps.sh
 bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.5 and 5.0, for the Blender tests
+bash scripts/install_openjd.sh  # PyPI's openjd-cli, for the farm tests
 WELKIN_WERROR=ON bash scripts/build.sh  # warnings are errors in CI
 
 failed=()
@@ -33,6 +35,12 @@ if compgen -G "tests/blender/test_*.py" >/dev/null; then
   # a user does: the legacy zip on 3.4, the Extension (with the repaired wheel) on 4.5/5.0.
   bash scripts/test_blender.sh -v 3.4,4.5,5.0 || failed+=(blender)
 fi
+
+echo "=== Farm tests (Slurm on localhost, the Open Job Description template: tests/farm/)"
+# Debian's Blender 3.4 on the workers; each test stops what it started, within its limit.
+for t in tests/farm/test_*.sh; do
+  timeout -k 10 1200 bash "$t" || failed+=("$(basename "$t" .sh)")
+done
 
 if ((${#failed[@]})); then
   echo "test: FAILED: ${failed[*]}" >&2

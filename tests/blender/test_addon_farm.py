@@ -5,7 +5,9 @@ item 3): `blender -b file.blend --addons welkin -a` in a separate Blender, as a 
     cloud, the world's cloudy sky following every frame, placeholders on. Frames 1 and 2
     are written; the render stops at frame 3 with "sky not updated" and the reason; no
     file for frames 3 and 4 (the placeholder of frame 3 is gone too); exit status
-    non-zero. With frame 3's file in place the same render writes all four and exits 0.
+    non-zero. With frame 3's file in place the same render writes all four and exits 0;
+    failing again over that complete run, it leaves frames 1 and 2 (rewritten) and none of
+    the earlier run's frames 3 and 4.
 (b) The aerial perspective, failing after the frame was saved (render_post follows the
     save): a foreign file where frame 2's aerial passes go. Frame 1 and its passes are
     written; frame 2's image is removed again, frame 3 is not rendered; exit non-zero.
@@ -20,6 +22,7 @@ import os
 import pathlib
 import subprocess
 import sys
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import addon_testing as T  # noqa: E402
@@ -101,7 +104,22 @@ rc, log = render(blend, 4)
 T.check(rc == 0, f"the render with every VDB frame exited {rc}:\n{log[-3000:]}")
 T.check(frames_on_disk(out_ok) == [f"f_{f:04d}.png" for f in (1, 2, 3, 4)],
         f"frames on disk: {frames_on_disk(out_ok)}")
-print("(a) a frame whose sky failed stops the -a render: exit non-zero, no file for it")
+# A failed run over an earlier complete one: the earlier run's frames 3 and 4 go (the
+# render failed at frame 3 and was to write 4), frames 1 and 2 are this run's.
+earlier = time.time() - 3600.0
+for path in out_ok.glob("f_*.png"):
+    os.utime(path, (earlier, earlier))
+missing.rename(missing.with_suffix(".kept"))
+rc, log = render(blend, 4)
+T.check(rc != 0, f"the -a render exited {rc} with frame 3's sky not updated:\n{log[-3000:]}")
+T.check(frames_on_disk(out_ok) == ["f_0001.png", "f_0002.png"],
+        f"frames on disk after a failed run over an earlier one: {frames_on_disk(out_ok)}")
+T.check(all((out_ok / f"f_{f:04d}.png").stat().st_mtime > earlier + 1800.0 for f in (1, 2)),
+        "frames 1 and 2 are not this run's")
+T.check("an earlier run's frame" in log, f"the log does not say what was removed:\n{log[-3000:]}")
+missing.with_suffix(".kept").rename(missing)
+print("(a) a frame whose sky failed stops the -a render: exit non-zero, no file for it "
+      "(nor an earlier run's for it and the frames after it)")
 
 # (b) The aerial perspective of frame 2 fails after the frame was saved.
 bpy.ops.welkin.remove_sky()

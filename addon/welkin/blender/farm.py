@@ -11,6 +11,15 @@ removes its placeholder, Output > Placeholders), renders no later frame, runs th
 render_cancel handlers, and exits with EXIT_FAILURE (creator.cc: G.is_break ?
 EXIT_FAILURE : EXIT_SUCCESS), in 3.4 as in 4.x and 5.x. The frames before it are on disk.
 
+What a failed render leaves: the frames before the failed one, written by this run, and
+nothing for the failed frame or the frames after it that this render was to write (`-a`:
+up to the scene's end frame, `-s/-e` included; `-f N`: frame N alone): an image an
+earlier run left at one of those frames' paths is removed too (`_remove_frames`), so that
+a farm or a script that counts the files on disk never takes an earlier run's frame for
+this one. Not removed: movies (one file for all frames), frames kept on purpose
+(Output > Overwrite off: Blender skips them), files that are not the render's images
+(Write Pass Files' files of an earlier run: each frame's own are replaced when it renders).
+
 Only there: in the interface, and in Python scripts that render from a background session
 (bpy.ops.render.render), a failed frame is printed and shown in the panel's status line,
 as before (a second break event would kill Blender: "Press ^C again to kill Blender"); and
@@ -50,10 +59,8 @@ def fail_frame(scene, reason, *, remove_written=False):
     frame = scene.frame_current
     if not (command_line_render() and _blender_owns_sigint()):
         return False
-    if remove_written:
-        removed = _remove_written_frame(scene)
-        if removed:
-            print(f"Welkin: removed {removed}: frame {frame} failed")
+    for removed, why in _remove_frames(scene, remove_written):
+        print(f"Welkin: removed {removed}: frame {frame} failed ({why})")
     if _state["stopping"]:
         # One break event per process: Blender keeps G.is_break (later frames and `-f`
         # renders are cancelled too), and a second event would kill it at once.
@@ -69,6 +76,8 @@ def fail_frame(scene, reason, *, remove_written=False):
 
 # scene name -> time.time() when the frame's render began (render_pre)
 _started = {}
+# Files older than this process are an earlier run's (the add-on loads before any render).
+_PROCESS_START = time.time()
 _state = {"stopping": False}
 
 
@@ -77,20 +86,92 @@ def frame_started(scene):
     _started[scene.name] = time.time()
 
 
-def _remove_written_frame(scene):
-    """Deletes the image file Blender wrote for the current frame during this render
-    (render_post comes after the file is saved in `-a` and `-f`), so that a failed frame
-    leaves no file. Movies and files older than the frame's render are left alone.
-    Returns the removed path or None."""
+def _single_frame():
+    """True for `-f N` (the frames to render are the listed ones, not the scene's range)."""
+    argv = sys.argv[:sys.argv.index("--")] if "--" in sys.argv else sys.argv
+    return any(a in {"-f", "--render-frame"} for a in argv[1:])
+
+
+def _remove_frames(scene, remove_written):
+    """Deletes what the failed render would have replaced (see the module's docstring):
+    the image Blender wrote for the current frame during this render (`remove_written`:
+    render_post comes after the file is saved in `-a` and `-f`), and images an earlier run
+    left at the paths of the current frame and, for `-a`, the later frames of the range.
+    Returns [(path, why)]."""
     render = scene.render
     if compat.is_movie_output(render):  # one file for all frames: never removed
-        return None
-    path = render.frame_path(frame=scene.frame_current)
+        return []
+    frame = scene.frame_current
     started = _started.get(scene.name)
-    try:
-        if started is None or os.path.getmtime(path) < started - 2.0:
-            return None
-        os.remove(path)
-    except OSError:
-        return None
-    return path
+    frames = [frame] if _single_frame() else \
+        range(frame, scene.frame_end + 1, max(1, scene.frame_step))
+    removed = []
+    for f in frames:
+        path = render.frame_path(frame=f)
+        try:
+            if not os.path.isfile(path):
+                continue
+            mtime = os.path.getmtime(path)
+            if mtime < _PROCESS_START - 1.0:
+                if not render.use_overwrite:
+                    continue  # kept on purpose: Blender skips an existing frame
+                why = "an earlier run's frame"
+            elif f == frame and remove_written and started is not None \
+                    and mtime >= started - 2.0:
+                why = "written for the failed frame"
+            else:
+                continue
+            os.remove(path)
+        except OSError:
+            continue
+        removed.append((path, why))
+    return removed
+
+
+def _animated(id_):
+    """True when `id_` has keyframes, drivers or NLA strips."""
+    data = getattr(id_, "animation_data", None) if id_ is not None else None
+    return data is not None and (data.action is not None or len(data.drivers) > 0
+                                 or len(data.nla_tracks) > 0)
+
+
+def _moves(ob, with_data):
+    """True when the object (or its data, `with_data`), a parent, or a constraint may make
+    it change from frame to frame (constraints: their targets may move)."""
+    seen = set()
+    while ob is not None and ob.name_full not in seen:
+        seen.add(ob.name_full)
+        if _animated(ob) or len(ob.constraints) > 0 or (with_data and _animated(ob.data)):
+            return True
+        ob = ob.parent
+    return False
+
+
+def changing_inputs(scene):
+    """What the add-on recomputes per frame that may change over the scene's frames: the
+    names of the animated camera, sun lamp, world, scene settings and cloud volumes (a
+    list, empty for a static scene). A Blender without the add-on renders every frame
+    with the saved frame's sky, lamp and haze, right only when this is empty
+    (docs/pipelines.md#saved-files-without-the-add-on). Conservative: any keyframe,
+    driver, NLA strip or constraint on them counts."""
+    from .clouds import scene as cloud_scene
+    from .sky import scene_sun
+    changing = []
+    if _animated(scene) or any(m.camera is not None for m in scene.timeline_markers):
+        changing.append(f"scene '{scene.name}'")
+    if scene.camera is not None and _moves(scene.camera, with_data=True):
+        changing.append(f"camera '{scene.camera.name}'")
+    world = scene.world
+    if world is not None:
+        if _animated(world) or _animated(world.node_tree):
+            changing.append(f"world '{world.name}'")
+        try:
+            lamp, _warning = scene_sun.choose_sun(scene, world.welkin)
+        except scene_sun.UserError:
+            lamp = None
+        if lamp is not None and _moves(lamp, with_data=False):
+            changing.append(f"sun lamp '{lamp.name}'")
+    for ob in cloud_scene.marked_volumes(scene):
+        if ob.data.is_sequence or _moves(ob, with_data=True):
+            changing.append(f"cloud volume '{ob.name}'")
+    return changing

@@ -35,7 +35,7 @@ from ... import native, scene_export, sky_request
 from . import compositor, frame as aerial_frame
 from ..clouds import scene as cloud_scene
 from .. import compat, farm
-from ..sky import scene_sun
+from ..sky import images, scene_sun
 from ..sky.scene_sun import UserError
 
 
@@ -295,12 +295,16 @@ def on_frame_change_post(scene, depsgraph=None):
 
 
 def _sync_output_path(scene):
-    """Points the File Output node at the current output path. An animation render
-    copies the compositor before its first render_pre, so the path is kept in step
-    whenever the scene changes and when a file loads, not only when a render starts."""
+    """Points the File Output node at the current output path. A render copies the
+    compositor before its first render_pre, so the path is kept in step whenever the
+    scene changes, when a file loads and when a render is initialised (render_init, before
+    that copy: `blender -b file.blend -o PATH -f N` sets the output path after the file
+    loaded, with no update of the scene), not only when a frame's render starts."""
     node = compositor.depth_node(scene)
     if node is not None:
-        compat.set_file_output_path(node, scene_export.file_output_base(base_of(scene)))
+        wanted = scene_export.file_output_base(base_of(scene))
+        if compat.file_output_path(node) != wanted:  # a change recompiles the compositor
+            compat.set_file_output_path(node, wanted)
 
 
 @persistent
@@ -315,6 +319,55 @@ def on_load_post(*_args):
     for scene in bpy.data.scenes:
         if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
             _sync_output_path(scene)
+
+
+def pack_tables(scene):
+    """Bakes the table of the scene's current frame and packs its images into the .blend
+    (save_pre), so that the saved file carries the haze it shows: a Blender without the
+    add-on renders a scene whose camera, sun and atmosphere do not change over the frames
+    as the add-on does (docs/pipelines.md#saved-files-without-the-add-on). Returns the
+    problem, or None."""
+    try:
+        bake(scene)
+    except UserError as error:
+        return f"aerial perspective not saved with the file: {error}"
+    names = (aerial_frame.SCREEN_IMAGES if scene.render.engine == 'CYCLES'
+             else (aerial_frame.IMAGE,))
+    for name in names:
+        image = bpy.data.images.get(name)
+        if image is None or not image.get(aerial_frame.MARK) or image.library is not None:
+            continue
+        if image.packed_file is None or image.is_dirty:
+            images.pack(image)
+    return None
+
+
+@persistent
+def on_save_pre(*_args):
+    for scene in bpy.data.scenes:
+        if scene.library is not None:
+            continue
+        if scene.welkin_aerial.enabled:
+            problem = pack_tables(scene)
+            if problem is not None:
+                _log(scene, problem)
+        sky = scene.world is not None and scene.world.welkin.active
+        if not (sky or scene.welkin_aerial.enabled):
+            continue
+        changing = farm.changing_inputs(scene)
+        if changing:
+            text = (f"saved for farms with the add-on only: {', '.join(changing)} "
+                    f"animated; a Blender without Welkin would render every frame with "
+                    f"frame {scene.frame_current}'s sky and haze")
+            print(f"Welkin: warning: scene '{scene.name}': {text}")
+            if scene.welkin_aerial.enabled:
+                scene.welkin_aerial.status = text
+
+
+@persistent
+def on_render_init(scene, *_args):
+    if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
+        _sync_output_path(scene)
 
 
 @persistent
@@ -385,6 +438,8 @@ classes = (WelkinAerialSettings, RENDER_PT_welkin_aerial)
 _HANDLERS = ((bpy.app.handlers.frame_change_post, on_frame_change_post),
              (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
              (bpy.app.handlers.load_post, on_load_post),
+             (bpy.app.handlers.save_pre, on_save_pre),
+             (bpy.app.handlers.render_init, on_render_init),
              (bpy.app.handlers.render_pre, on_render_pre),
              (bpy.app.handlers.render_post, on_render_post))
 
