@@ -48,7 +48,8 @@ SPACES = (('Linear Rec.709', "rec709"), ('Linear Rec.2020', "rec2020"), ('ACEScg
 
 def grey(name, value):
     m = bpy.data.materials.new(name)
-    m.use_nodes = True
+    if m.node_tree is None:  # before 5.0 (use_nodes is deprecated from 5.0)
+        m.use_nodes = True
     m.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (value, value, value, 1)
     return m
 
