@@ -73,8 +73,10 @@ public:
 };
 
 py::array_t<float> sun_disc_image(Atmosphere atmosphere, double altitude_m, const py::object& sun_direction,
-                                  int width, const std::string& output, double exposure) {
+                                  int width, const std::string& output, double exposure,
+                                  const std::string& color_space) {
     SkyImageOptions options;
+    options.color_space = color_space_from_name(color_space);
     options.sun_disc = true;
     options.ground = false;
     options.exposure = exposure;
@@ -118,7 +120,7 @@ parameter for bad input.
 
     m.def("sun_disc_image", &sun_disc_image, py::arg("atmosphere"), py::arg("altitude_m"),
           py::arg("sun_direction"), py::arg("width"), py::arg("output") = "rgb", py::kw_only(),
-          py::arg("exposure") = 1.0, R"doc(
+          py::arg("exposure") = 1.0, py::arg("color_space") = "rec709", R"doc(
 The sun's disc alone, in the layout and units of sky_image: the term that
 sky_image(sun_disc=True) adds to sky_image(sun_disc=False). Zero everywhere but
 the few pixels the disc touches (none when the sun is below the horizon).

@@ -77,8 +77,11 @@ TEST(ColorSpace, WhiteStaysWhiteAndPrimariesAreUnitVectors) {
         for (int k = 0; k < 3; ++k) {
             const auto& xy = primaries[k];
             const auto rgb = mat_vec(to_rgb, {xy[0] / xy[1], 1.0, (1.0 - xy[0] - xy[1]) / xy[1]});
-            for (int j = 0; j < 3; ++j)
-                if (j != k) EXPECT_NEAR(rgb[j], 0.0, 1e-12) << color_space_name(to) << " primary " << k;
+            for (int j = 0; j < 3; ++j) {
+                if (j != k) {
+                    EXPECT_NEAR(rgb[j], 0.0, 1e-12) << color_space_name(to) << " primary " << k;
+                }
+            }
             EXPECT_GT(rgb[k], 0.0);
         }
     }

@@ -87,3 +87,16 @@ def test_cli_sun_color_space():
                                rtol=1e-9)
     r = subprocess.run([CLI, "sun", "--color-space", "srgb"], capture_output=True, text=True)
     assert r.returncode != 0 and "--color-space" in r.stderr
+
+
+def test_sky_radiance_and_disc_image_take_the_space():
+    atm = welkin.Atmosphere.preset("clear")
+    sun_dir = [0.0, 0.5, 0.866]
+    dirs = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.05]]) / np.array([[1.0], [np.hypot(1.0, 0.05)]])
+    m = welkin.color_space_matrix("rec709", "rec2020")
+    a = welkin.sky_radiance(atm, 0.0, sun_dir, dirs, "lut", "rgb")
+    b = welkin.sky_radiance(atm, 0.0, sun_dir, dirs, "lut", "rgb", color_space="rec2020")
+    np.testing.assert_allclose(b, a @ m.T, rtol=2e-5)
+    d709 = welkin.sun_disc_image(atm, 0.0, sun_dir, 64)
+    d2020 = welkin.sun_disc_image(atm, 0.0, sun_dir, 64, color_space="rec2020")
+    np.testing.assert_allclose(d2020, d709 @ m.T, rtol=2e-5, atol=1e-6 * d709.max())
