@@ -56,13 +56,14 @@ def camera_dict(matrix_rows: Iterable[Iterable[float]], data: Mapping[str, Any],
 
 def scene_json(atmosphere_json: str, origin_altitude_m: float, sun_direction: Iterable[float],
                exposure: float, method: str, camera: dict[str, Any],
-               resolution: Sequence[int], clouds: dict[str, Any] | None = None) -> str:
+               resolution: Sequence[int], clouds: dict[str, Any] | None = None,
+               color_space: str = "rec709") -> str:
     """The scene description's JSON text (scene_export.scene_dict's). `atmosphere_json`:
     Atmosphere.to_json_string() (written in full, so the file reproduces the frame);
-    `resolution`: (x, y, percentage)."""
+    `resolution`: (x, y, percentage); `color_space`: of the passes (the working space)."""
     return json.dumps(scene_export.scene_dict(json.loads(atmosphere_json), origin_altitude_m,
                                               sun_direction, exposure, method, camera,
-                                              resolution, clouds=clouds))
+                                              resolution, clouds=clouds, color_space=color_space))
 
 
 def pass_rect(np: ModuleType, plate: Mapping[str, Any], source: str, channels: int,

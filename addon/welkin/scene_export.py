@@ -75,15 +75,18 @@ def scene_dict(atmosphere: str | dict[str, Any], origin_altitude_m: float,
                sun_direction: Iterable[float], exposure: float, method: str,
                camera: dict[str, Any], resolution: Sequence[int],
                aerial: Mapping[str, Any] | None = None,
-               clouds: dict[str, Any] | None = None) -> dict[str, Any]:
+               clouds: dict[str, Any] | None = None,
+               color_space: str = "rec709") -> dict[str, Any]:
     """The whole scene JSON. `atmosphere` is a preset name or an atmosphere object (dict),
     `resolution` (x, y, percentage), `clouds` the "clouds" section (cloud_export.clouds_dict)
-    or None for a clear sky."""
+    or None for a clear sky, `color_space` the linear RGB of its colours (rec709, rec2020,
+    acescg)."""
     x, y, pct = resolution
     d: dict[str, Any] = {
         "version": 1, "atmosphere": atmosphere, "origin_altitude_m": float(origin_altitude_m),
         "sun": {"direction": [float(c) for c in sun_direction]},
-        "exposure": float(exposure), "method": method, "camera": camera,
+        "exposure": float(exposure), "color_space": color_space, "method": method,
+        "camera": camera,
         "resolution": {"x": int(x), "y": int(y), "percentage": int(pct)}}
     if aerial:
         d["aerial"] = dict(aerial)

@@ -10,13 +10,14 @@ The exported HDRI keeps the core's own energy-exact disc (welkin.sky_image).
 Sun lamp sync (Blender's sun strength is an irradiance in W m^-2; with colour c the lamp
 delivers strength x c per channel at normal incidence): the lamp takes the transmitted
 direct irradiance of the sun's disc at the observer, welkin.sun(...).direct_irradiance_rgb
-(linear Rec.709, W m^-2), times the exposure, as strength = its largest channel and colour =
+(linear RGB of the request's colour space, W m^-2), times the exposure, as strength = its largest channel and colour =
 the irradiance divided by that (so the colour stays within [0, 1]); its angle is the sun's
 angular diameter.
 """
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -31,7 +32,7 @@ from . import sky_request
 
 @dataclasses.dataclass
 class LampValues:
-    color: tuple[float, ...]  # linear Rec.709, max channel 1
+    color: tuple[float, ...]  # linear RGB of the request's colour space, max channel 1
     strength_w_m2: float  # Blender sun strength (irradiance), W m^-2
     angle_rad: float      # angular diameter of the sun's disc
 
@@ -41,7 +42,8 @@ class DiscModel:
     """The sun's disc as the world's nodes draw it. A view direction at angle rho from
     `direction` sees, when rho < radius_rad and its z is above horizon_z, the radiance
         L_c(rho) = sum_k coefficients[k, c] mu^k,   mu = sqrt(1 - (sin rho / sin radius)^2)
-    (mu: the cosine of the heliocentric angle, sun.hpp), linear Rec.709 W m^-2 sr^-1 times
+    (mu: the cosine of the heliocentric angle, sun.hpp), linear RGB (the request's colour
+    space) W m^-2 sr^-1 times
     the exposure; its integral over the visible disc is the lamp's direct irradiance."""
     direction: tuple[float, float, float]  # unit vector towards the disc's centre
     radius_rad: float                       # angular radius of the disc
@@ -65,8 +67,9 @@ class SkyResult:
 
 
 def lamp_values(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401 (welkin.Atmosphere)
-                sun_direction: Sequence[float], exposure: float) -> LampValues:
-    sun = native.sun(atm, altitude_m, sun_direction)
+                sun_direction: Sequence[float], exposure: float,
+                color_space: str = "rec709") -> LampValues:
+    sun = native.sun(atm, altitude_m, sun_direction, color_space=color_space)
     rgb = np.asarray(sun.direct_irradiance_rgb, dtype=np.float64) * exposure
     strength = float(rgb.max()) if rgb.size else 0.0
     color = tuple(float(c) for c in rgb / strength) if strength > 0.0 else (1.0, 1.0, 1.0)
@@ -82,12 +85,13 @@ def horizon_z(atm: Any, altitude_m: float) -> float:  # noqa: ANN401 (welkin.Atm
 
 
 def disc_model(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401
-               sun_direction: Sequence[float], exposure: float) -> DiscModel | None:
+               sun_direction: Sequence[float], exposure: float,
+               color_space: str = "rec709") -> DiscModel | None:
     """The disc for the world's nodes, or None when none of it is above the horizon."""
     x, y, z = (float(c) for c in sun_direction)
     norm = math.sqrt(x * x + y * y + z * z)
     direction = (x / norm, y / norm, z / norm)
-    sun = native.sun(atm, altitude_m, direction)
+    sun = native.sun(atm, altitude_m, direction, color_space=color_space)
     if not float(sun.visible_fraction) > 0.0:
         return None
     alpha = float(sun.angular_radius_rad)
@@ -123,7 +127,8 @@ def lamp_for(native: ModuleType, request: sky_request.SkyRequest) -> LampValues:
     """The lamp's values alone for `request` (no images): cheap."""
     sky_request.validate(request, native)
     atm = sky_request.build_atmosphere(request, native)
-    return lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure)
+    return lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure,
+                       request.color_space)
 
 
 def sun_elevation_rad(sun_direction: Sequence[float]) -> float:
@@ -170,14 +175,15 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     else:
         sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
                                method, "rgb", sun_disc=False, exposure=request.exposure,
-                               ground=request.ground)
+                               ground=request.ground, color_space=request.color_space)
     model = None
     if disc:
         model = disc_model(native, atm, request.altitude_m, request.sun_direction,
-                           request.exposure)
+                           request.exposure, request.color_space)
         if model is not None and transmittance is not None:
             model.coefficients *= _pixel_at(native, transmittance, model.direction)
-    lamp = lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure)
+    lamp = lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure,
+                       request.color_space)
     shade, ground = 1.0, None
     if shadow_json is not None and shade_lamp:
         shade = lamp_transmittance(native, shadow_json)
@@ -203,11 +209,14 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
     sun_disc is False), for export. `scene_json`: the cloudy sky's scene description (as
     for compute): the HDRI is then the world's cloudy sky, the clouds composited over it
     and the disc dimmed by their transmittance (welkin.scene_sky_image), the sky the world
-    shows; `progress` as for compute."""
+    shows; `progress` as for compute. In linear Rec.709 whatever the request's colour space:
+    an EXR carries no colour space, and Rec.709 is what HDRIs are read as."""
     sky_request.validate(dataclasses.replace(request, width=sky_request.WIDTHS[0]), native)
     if scene_json is not None:
+        scene = json.loads(scene_json)
+        scene["color_space"] = "rec709"
         image: npt.NDArray[np.float32] = native.scene_sky_image(
-            native.SceneDescription.from_json_string(scene_json), width, sun_disc=sun_disc,
+            native.SceneDescription.from_json_string(json.dumps(scene)), width, sun_disc=sun_disc,
             progress=progress)
         return image
     method = sky_request.resolve_method(request.method, native)

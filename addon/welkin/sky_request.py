@@ -24,6 +24,10 @@ LIVE_METHODS = ("auto", "analytic", "lut", "raymarch")
 WIDTHS = (256, 512, 1024, 2048, 4096)
 
 
+# The linear RGB spaces the core writes (include/welkin/color/color_space.hpp).
+COLOR_SPACES = ("rec709", "rec2020", "acescg")
+
+
 @dataclasses.dataclass(frozen=True)
 class SkyRequest:
     preset: str = "bruneton2017"
@@ -38,6 +42,7 @@ class SkyRequest:
     exposure: float = 1.0
     ground: bool = True             # the lit ground below the horizon (False: black)
     spectral: bool = False          # 48 wavelengths (exact colour) instead of the default 4
+    color_space: str = "rec709"     # linear RGB of every colour: rec709, rec2020, acescg
 
     def key(self) -> str:
         """A string that changes whenever the sky would (sun rounded to 1e-7)."""
@@ -63,6 +68,9 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
     if request.width not in WIDTHS:
         raise ValueError(f"width: must be one of {', '.join(map(str, WIDTHS))}, got "
                          f"{request.width}")
+    if request.color_space not in COLOR_SPACES:
+        raise ValueError(f"color_space: must be one of {', '.join(COLOR_SPACES)}, got "
+                         f"{request.color_space!r}")
     if not (math.isfinite(request.exposure) and 0.0 < request.exposure <= 1e6):
         raise ValueError(f"exposure: must be in (0, 1e6], got {request.exposure}")
     s = request.sun_direction

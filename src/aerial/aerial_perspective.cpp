@@ -87,8 +87,9 @@ void march_segment(const AtmosphereLuts::Batch& b, const AirRay& ray, float rayl
 // each, built once.
 class PassColour {
 public:
-    PassColour(const Atmosphere& atm, double exposure) : channels_(atm.wavelengths_nm.size()) {
-        const SpectrumToRgb sky(atm.wavelengths_nm, -3.0), sun(atm.wavelengths_nm, 0.0);
+    PassColour(const Atmosphere& atm, double exposure, ColorSpace space)
+        : channels_(atm.wavelengths_nm.size()) {
+        const SpectrumToRgb sky(atm.wavelengths_nm, -3.0, space), sun(atm.wavelengths_nm, 0.0, space);
         const std::vector<float> solar(atm.solar_irradiance.begin(), atm.solar_irradiance.end());
         const std::array<double, 3> white = sun.convert(solar);
         sky_.resize(3 * channels_);
@@ -248,7 +249,7 @@ public:
           luts_(luts),
           rays_(view.camera, width, height),
           sun_(view.origin.sun_direction),
-          colour_(view.atmosphere, view.exposure),
+          colour_(view.atmosphere, view.exposure, view.color_space),
           steps_(view.options.raymarch_steps),
           top_(view.atmosphere.top_radius_m) {}
 
@@ -364,7 +365,7 @@ AerialPerspectiveVolume::AerialPerspectiveVolume(const AerialView& view, const A
     require_in_range("aerial.max_depth_m", max_depth_m, 1e-6, 1e12, "m");
     const CameraRays rays(view.camera, width, height);
     const glm::dvec3 sun = view.origin.sun_direction;
-    const PassColour colour(view.atmosphere, view.exposure);
+    const PassColour colour(view.atmosphere, view.exposure, view.color_space);
     inscatter_.assign(std::size_t(nx_) * ny_ * nz_ * 3, 0.0f);
     optical_depth_.assign(inscatter_.size(), 0.0f);
     march_grid(
@@ -546,7 +547,8 @@ AerialPasses aerial_perspective(const AerialView& view, std::span<const float> d
 AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
                                const glm::dvec3& planet_centre, const glm::dvec3& sun_direction,
                                std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
-                               std::span<const double> distances, int steps, double exposure, bool spectral) {
+                               std::span<const double> distances, int steps, double exposure, bool spectral,
+                               ColorSpace color_space) {
     const std::size_t n = directions.size();
     if (distances.size() != n)
         throw InvalidArgument("distances",
@@ -555,7 +557,7 @@ AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLut
         throw InvalidArgument(
             "origins", fmt::format("has {} points for {} directions (1 or one per ray)", origins.size(), n));
     require_in_range("steps", steps, 1, 1 << 20, "steps");
-    const PassColour colour(atmosphere, exposure);
+    const PassColour colour(atmosphere, exposure, color_space);
     const std::size_t C = colour.channels();
     const glm::dvec3 sun = glm::normalize(sun_direction);
     const double top = atmosphere.top_radius_m;
@@ -660,7 +662,7 @@ double AerialTableLayout::slice_distance(int k) const {
 AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
                          const glm::dvec3& planet_centre, const glm::dvec3& camera_position,
                          const glm::dvec3& sun_direction, double exposure, const AerialTableLayout& layout,
-                         Progress* progress) {
+                         Progress* progress, ColorSpace color_space) {
     layout.validate();
     for (int c = 0; c < 3; ++c) {
         require_finite("camera_position", camera_position[c]);
@@ -669,7 +671,7 @@ AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& lut
     require_in_range("exposure", exposure, 1e-12, 1e6);
     if (!(glm::length(sun_direction) > 0.5)) throw InvalidArgument("sun_direction", "must be a unit vector");
     const glm::dvec3 sun = glm::normalize(sun_direction);
-    const PassColour colour(atmosphere, exposure);
+    const PassColour colour(atmosphere, exposure, color_space);
     const int na = layout.azimuths, ne = layout.elevations, nk = layout.slices;
     AerialTable table{layout, {}, {}};
     table.inscatter.assign(std::size_t(na) * ne * nk * 3, 0.0f);
@@ -836,7 +838,7 @@ AerialScreenTable aerial_screen_table(const AerialView& view, const AtmosphereLu
     require_table_entries("table.max_slices", g.columns, g.rows, g.slices);
 
     const glm::dvec3 sun = view.origin.sun_direction;
-    const PassColour colour(view.atmosphere, view.exposure);
+    const PassColour colour(view.atmosphere, view.exposure, view.color_space);
     const int nx = g.columns, ny = g.rows, nk = g.slices;
     table.inscatter.assign(std::size_t(nx) * ny * nk * 3, 0.0f);
     table.transmittance.assign(table.inscatter.size(), 1.0f);

@@ -40,7 +40,8 @@ struct SkyArgs {
     int threads = 0;
     int reference_paths = SkyOptions{}.reference_paths;
     std::uint64_t seed = SkyOptions{}.seed;
-    std::string scene;  // a scene JSON replaces the atmosphere, sun, method and exposure options
+    std::string scene;        // a scene JSON replaces the atmosphere, sun, method and exposure options
+    std::string color_space;  // empty: the scene's, else rec709
 };
 
 // The sky's settings from --scene: atmosphere, observer at the scene origin, sky method and
@@ -51,6 +52,7 @@ struct SkySettings {
     SkyOptions options;
     std::string method{};
     double exposure = 1.0;
+    ColorSpace color_space = ColorSpace::Rec709;
     std::shared_ptr<const CloudDensity> clouds{};  // the scene's (none without --scene)
     bool ground = true;                            // the scene's ground (--no-ground wins)
     std::optional<double> ground_albedo{};         // the scene's (--ground-albedo wins)
@@ -91,6 +93,7 @@ SkySettings settings_from(const SkyArgs& args) {
         SkySettings out{scene.atmosphere, scene.origin_observer(), scene.sky_options};
         out.method = scene.method;
         out.exposure = scene.exposure;
+        out.color_space = scene.color_space;
         // The scene's clouds (VDBs opened now, before the render), seen from the scene origin.
         out.clouds = scene.cloud_density();
         out.ground = scene.ground;
@@ -134,6 +137,8 @@ int run_sky(const SkyArgs& args) {
     image_options.ground = args.ground && sky.ground;
     image_options.ground_albedo = args.ground_albedo ? args.ground_albedo : sky.ground_albedo;
     image_options.exposure = sky.exposure;
+    image_options.color_space =
+        args.color_space.empty() ? sky.color_space : color_space_from_name(args.color_space);
     image_options.output =
         args.spectral_channels ? SkyImageOptions::Output::Spectral : SkyImageOptions::Output::Rgb;
     image_options.clouds = sky.clouds;
@@ -236,6 +241,7 @@ Command add_sky_command(CLI::App& app) {
                     "sphere, against the reference), in [0.001, 10]")
         ->type_name("X")
         ->capture_default_str();
+    add_color_space_option(sub, args->color_space);
     sub->add_option("--exposure", args->exposure,
                     "Multiplies every output value (sky and sun) once, after colour "
                     "conversion; in (0, 1e6]. 1 keeps physical units: linear Rec.709 in "

@@ -16,6 +16,7 @@ namespace {
 struct SunArgs {
     AtmosphereArgs atmosphere;
     ObserverArgs observer;
+    std::string color_space = "rec709";
 };
 
 int run_sun(const SunArgs& args) {
@@ -39,7 +40,8 @@ int run_sun(const SunArgs& args) {
     if (atm.channels() >= 3) {
         // Sunlight converts with lambda power 0 (Bruneton's sun factors) when three
         // wavelengths; spectrally otherwise. Units: W m^-2, CIE-weighted, no 683.
-        const SpectrumToRgb to_rgb(atm.wavelengths_nm, 0.0);
+        const SpectrumToRgb to_rgb(atm.wavelengths_nm, 0.0, color_space_from_name(args.color_space));
+        j["color_space"] = args.color_space;
         const std::vector<float> e(sun.direct_irradiance.begin(), sun.direct_irradiance.end());
         const std::array<double, 3> rgb = to_rgb.convert(e);
         j["direct_irradiance_rgb_W_m2"] = rgb;
@@ -57,10 +59,12 @@ Command add_sun_command(CLI::App& app) {
         "sun", "Print the sun's transmittance and direct irradiance at the observer (JSON)");
     add_atmosphere_options(sub, args->atmosphere);
     add_observer_options(sub, args->observer);
+    add_color_space_option(sub, args->color_space);
     sub->footer(
         "direct_irradiance is the normal-incidence irradiance of the sun's disc at the "
         "observer, E_sun * T * visible fraction (W m^-2 nm^-1 per wavelength; linear "
-        "Rec.709 W m^-2 for the RGB triple): the strength of a matching Blender sun lamp.");
+        "RGB of --color-space, Rec.709 by default, W m^-2 for the RGB triple): the strength of a matching "
+        "Blender sun lamp.");
     return {sub, [args] { return run_sun(*args); }};
 }
 

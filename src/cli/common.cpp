@@ -257,4 +257,12 @@ ExrWriteOptions exr_write_options(const SceneOutputArgs& args, const SceneDescri
     return write;
 }
 
+void add_color_space_option(CLI::App* app, std::string& value) {
+    app->add_option("--color-space", value,
+                    "Linear RGB space of the colours written: rec709 (sRGB primaries, D65), "
+                    "rec2020 (ITU-R BT.2020, D65) or acescg (ACES AP1, ACES white by the Bradford "
+                    "adaptation); each from the spectrum's CIE XYZ through the space's matrix")
+        ->check(CLI::IsMember({"rec709", "rec2020", "acescg"}));
+}
+
 }  // namespace welkin::cli

@@ -54,6 +54,10 @@ struct ObserverArgs {
     double altitude_m = 0.0;
 };
 void add_observer_options(CLI::App* app, ObserverArgs& args);
+
+// --color-space rec709|rec2020|acescg: the linear RGB of every colour the command writes
+// (color_space.hpp); `value` keeps its default when the option is not given.
+void add_color_space_option(CLI::App* app, std::string& value);
 // Unit vector towards the sun: azimuth counter-clockwise from +X, elevation above XY.
 Observer make_observer(const ObserverArgs& args);
 

@@ -1,4 +1,4 @@
-// Spectral radiance to linear Rec.709; see color.hpp for the two paths and their units.
+// Spectral radiance to linear RGB; see color.hpp for the two paths and their units.
 #include "welkin/color/color.hpp"
 
 #include <algorithm>
@@ -34,12 +34,6 @@ double lobe(double lambda, double mu, double s1, double s2) {
 constexpr double kCieMinNm = 360.0;
 constexpr double kCieMaxNm = 830.0;
 
-// IEC 61966-2-1 XYZ -> linear sRGB (= Rec.709 primaries, D65), the matrix of Bruneton's
-// atmosphere/constants.h (XYZ_TO_SRGB).
-constexpr double kXyzToRec709[9] = {3.2406,  -1.5372, -0.4986,  //
-                                    -0.9689, 1.8758,  0.0415,   //
-                                    0.0557,  -0.2040, 1.0570};
-
 // Rec.709 colour-matching functions: rbar = M xbar (one row of XYZ -> Rec.709 per channel).
 std::array<double, 3> rec709_cmf(double lambda) {
     const Xyz c = cie1931_cmf(lambda);
@@ -56,10 +50,7 @@ Xyz cie1931_cmf(double lambda) {
 }
 
 std::array<double, 3> xyz_to_rec709(const Xyz& c) {
-    const double* m = kXyzToRec709;
-    return {m[0] * c.x + m[1] * c.y + m[2] * c.z,  //
-            m[3] * c.x + m[4] * c.y + m[5] * c.z,  //
-            m[6] * c.x + m[7] * c.y + m[8] * c.z};
+    return mat_vec(xyz_to_rgb_matrix(ColorSpace::Rec709), {c.x, c.y, c.z});
 }
 
 // The default four wavelengths (atmosphere.hpp) and their conversions, fitted to the
@@ -84,8 +75,23 @@ constexpr double kFittedSunToRgb[3][4] = {{19.0651092359, -18.9594345412, -26.81
                                           {-27.0384092063, 49.3062962749, 86.0535912731, -7.3284578089},
                                           {73.9384629377, 32.8758997524, -8.142372254, -2.4481847796}};
 
-SpectrumToRgb::SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power)
-    : channels_(wavelengths_nm.size()) {
+SpectrumToRgb::SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power, ColorSpace space)
+    : channels_(wavelengths_nm.size()), space_(space) {
+    build_rec709(wavelengths_nm, lambda_power);
+    if (space == ColorSpace::Rec709) return;
+    // The matrix is M_709 X, with X the spectrum's XYZ (each path's integral or fit);
+    // M_space M_709^-1 makes it M_space X: the same spectrum's XYZ through the space's
+    // own matrix (color_space.hpp), with nothing clamped on the way.
+    const Matrix3 to_space = rgb_to_rgb_matrix(ColorSpace::Rec709, space);
+    const std::vector<double> rec709 = matrix_;
+    const std::size_t n = channels_;
+    for (std::size_t j = 0; j < 3; ++j)
+        for (std::size_t c = 0; c < n; ++c)
+            matrix_[j * n + c] = to_space[j][0] * rec709[c] + to_space[j][1] * rec709[n + c] +
+                                 to_space[j][2] * rec709[2 * n + c];
+}
+
+void SpectrumToRgb::build_rec709(std::span<const double> wavelengths_nm, double lambda_power) {
     const std::size_t n = channels_;
     if (n < 3)
         throw InvalidArgument("wavelengths_nm",

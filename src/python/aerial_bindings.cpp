@@ -117,7 +117,7 @@ py::dict aerial_table_py(const py::handle& scene_in, int azimuths, int elevation
             const auto luts = AtmosphereLutCache::shared().get(view.atmosphere, view.luts);
             table = aerial_table(view.atmosphere, *luts, view.planet_centre(),
                                  CameraRays(view.camera, view.width, view.height).position(),
-                                 view.origin.sun_direction, view.exposure, layout, p);
+                                 view.origin.sun_direction, view.exposure, layout, p, view.color_space);
         },
         progress);
     const std::vector<py::ssize_t> shape{slices, elevations, azimuths, 3};

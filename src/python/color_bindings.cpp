@@ -21,9 +21,9 @@ std::vector<py::ssize_t> with_last_axis(const py::array& a, py::ssize_t last) {
 }
 
 py::array_t<float> spectrum_to_rgb(const py::object& spectra, const py::object& wavelengths_nm,
-                                   double lambda_power) {
+                                   double lambda_power, const std::string& color_space) {
     const std::vector<double> wavelengths = to_vector(wavelengths_nm, "wavelengths_nm");
-    const SpectrumToRgb to_rgb(wavelengths, lambda_power);
+    const SpectrumToRgb to_rgb(wavelengths, lambda_power, color_space_from_name(color_space));
     const auto channels = static_cast<py::ssize_t>(wavelengths.size());
     const c_array<float> in =
         to_c_array<float>(spectra, "spectra", channels, 1, 2,
@@ -95,9 +95,11 @@ py::array_t<double> equirect_pixel_directions(int width, int height) {
 
 void register_color(py::module_& m) {
     m.def("spectrum_to_rgb", &spectrum_to_rgb, py::arg("spectra"), py::arg("wavelengths_nm"),
-          py::arg("lambda_power") = -3.0, R"doc(
-Spectral radiance (W m^-2 sr^-1 nm^-1) at wavelengths_nm -> linear Rec.709
-(W m^-2 sr^-1; CIE 1931 2-degree, D65 white, no 683 lm/W factor, no gamma).
+          py::arg("lambda_power") = -3.0, py::kw_only(), py::arg("color_space") = "rec709", R"doc(
+Spectral radiance (W m^-2 sr^-1 nm^-1) at wavelengths_nm -> linear RGB of
+color_space, "rec709" (default), "rec2020" or "acescg" (W m^-2 sr^-1; CIE 1931
+2-degree XYZ through the space's matrix, color_space.hpp: D65 white, ACEScg's
+ACES white reached by the Bradford adaptation; no 683 lm/W factor, no gamma).
 
 spectra: (N, C) or (C,) array-like with C = len(wavelengths_nm) >= 3; returns
 float32 (N, 3) or (3,). The default four wavelengths (620/560/480/440 nm) use
@@ -107,6 +109,24 @@ colour-matching functions; with exactly three, each sample is extended as the
 solar spectrum times (lambda / lambda_j)^lambda_power (Bruneton 2017's
 approximate conversion): -3 for sky light, 0 for sunlight. This is the
 conversion sky_radiance(output="rgb") uses.
+)doc");
+
+    m.def(
+        "color_space_matrix",
+        [](const std::string& from, const std::string& to) {
+            const Matrix3 m3 =
+                from == "xyz" ? xyz_to_rgb_matrix(color_space_from_name(to))
+                              : rgb_to_rgb_matrix(color_space_from_name(from), color_space_from_name(to));
+            std::vector<double> flat;
+            for (const auto& row : m3) flat.insert(flat.end(), row.begin(), row.end());
+            py::array_t<double> a = to_readonly_array(flat);
+            return a.attr("reshape")(3, 3);
+        },
+        py::arg("from_space"), py::arg("to_space"), R"doc(
+The 3 x 3 matrix taking linear RGB of from_space to linear RGB of to_space
+(rgb_to = M @ rgb_from), both "rec709", "rec2020" or "acescg"; from_space
+"xyz": the CIE XYZ (D65-referred) -> to_space matrix every spectrum goes
+through (color_space.hpp). Raises ValueError naming color_space otherwise.
 )doc");
 
     m.def(

@@ -41,8 +41,10 @@ py::array_t<float> sky_image(Atmosphere atmosphere, double altitude_m, const py:
                              int width, const std::string& method, const std::string& output, bool sun_disc,
                              double exposure, int steps, int sun_steps, int paths, std::uint64_t seed,
                              std::shared_ptr<const CloudDensity> clouds, const py::object& progress,
-                             bool ground, std::optional<double> ground_albedo) {
+                             bool ground, std::optional<double> ground_albedo,
+                             const std::string& color_space) {
     SkyImageOptions options;
+    options.color_space = color_space_from_name(color_space);
     options.clouds = std::move(clouds);
     options.sun_disc = sun_disc;
     options.ground = ground;
@@ -71,8 +73,10 @@ public:
 };
 
 py::array_t<float> sun_disc_image(Atmosphere atmosphere, double altitude_m, const py::object& sun_direction,
-                                  int width, const std::string& output, double exposure) {
+                                  int width, const std::string& output, double exposure,
+                                  const std::string& color_space) {
     SkyImageOptions options;
+    options.color_space = color_space_from_name(color_space);
     options.sun_disc = true;
     options.ground = false;
     options.exposure = exposure;
@@ -89,7 +93,8 @@ void register_image(py::module_& m) {
           py::arg("sun_disc") = true, py::arg("exposure") = 1.0, py::arg("steps") = defaults.raymarch_steps,
           py::arg("sun_steps") = defaults.raymarch_sun_steps, py::arg("paths") = defaults.reference_paths,
           py::arg("seed") = defaults.seed, py::arg("clouds") = py::none(), py::arg("progress") = py::none(),
-          py::arg("ground") = true, py::arg("ground_albedo") = py::none(), R"doc(
+          py::arg("ground") = true, py::arg("ground_albedo") = py::none(), py::arg("color_space") = "rec709",
+          R"doc(
 An equirectangular sky image (HDRI) of the whole sphere, as the CLI renders it.
 
     img = welkin.sky_image(atm, altitude_m, sun_direction, width, method="lut",
@@ -98,8 +103,9 @@ An equirectangular sky image (HDRI) of the whole sphere, as the CLI renders it.
 Blender's Environment Texture mapping (see direction_to_equirect), width x
 width/2 pixels (width even, 4..16384), TOP ROW (zenith) FIRST as in EXR files;
 Blender's own images are bottom row first (flip rows before Image.pixels).
-Returns float32 (height, width, 3) linear Rec.709 in W m^-2 sr^-1 for
-output="rgb", or (height, width, C) W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm for
+Returns float32 (height, width, 3) linear RGB of color_space ("rec709",
+"rec2020" or "acescg": the spectrum's CIE XYZ through that space's matrix,
+color_space.hpp) in W m^-2 sr^-1 for output="rgb", or (height, width, C) W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm for
 "spectral"; every value times exposure. sun_disc adds the sun's disc, limb
 darkened and scaled so that the image delivers exactly welkin.sun()'s direct
 irradiance; leave it out when a sun lamp lights the scene. steps, sun_steps,
@@ -114,7 +120,7 @@ parameter for bad input.
 
     m.def("sun_disc_image", &sun_disc_image, py::arg("atmosphere"), py::arg("altitude_m"),
           py::arg("sun_direction"), py::arg("width"), py::arg("output") = "rgb", py::kw_only(),
-          py::arg("exposure") = 1.0, R"doc(
+          py::arg("exposure") = 1.0, py::arg("color_space") = "rec709", R"doc(
 The sun's disc alone, in the layout and units of sky_image: the term that
 sky_image(sun_disc=True) adds to sky_image(sun_disc=False). Zero everywhere but
 the few pixels the disc touches (none when the sun is below the horizon).

@@ -41,6 +41,7 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
     options.ground = ground && scene.ground;
     options.ground_albedo = scene.ground_albedo;
     options.exposure = scene.exposure;
+    options.color_space = scene.color_space;
     options.output = parse_output(output);
     SkyImage image;
     run_cancellable(

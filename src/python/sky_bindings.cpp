@@ -46,8 +46,9 @@ method : str
     meeting `tolerance` (see welkin.auto_choice).
 output : str
     "spectral": W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm, shape (N, C).
-    "rgb": linear Rec.709 in W m^-2 sr^-1 (CIE 1931, without the 683 lm/W
-    factor; 3 wavelengths are extended as a power law, lambda^-3), shape (N, 3).
+    "rgb": linear RGB of color_space (keyword: "rec709" by default, "rec2020",
+    "acescg") in W m^-2 sr^-1 (CIE 1931, without the 683 lm/W factor; 3
+    wavelengths are extended as a power law, lambda^-3), shape (N, 3).
 
 Keyword-only options (defaults are the core's, welkin::SkyOptions)
 ----------------------------------------------------------------
@@ -91,7 +92,7 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
                         const std::string& output, int steps, int sun_steps, int paths, std::uint64_t seed,
                         int transmittance_width, int transmittance_height, int multiscattering_size,
                         int skyview_width, int skyview_height, double tolerance, bool return_standard_error,
-                        const py::object& progress) {
+                        const py::object& progress, const std::string& color_space) {
     // The checks that need no core work come first. `atmosphere` is a copy, so that Python
     // code running while the GIL is released (other threads, the progress callback) cannot
     // change it under the core.
@@ -126,7 +127,7 @@ py::object sky_radiance(Atmosphere atmosphere, double altitude_m, const py::obje
     const std::size_t channels = atmosphere.channels();
     const auto rows = static_cast<py::ssize_t>(n);
     std::optional<SpectrumToRgb> to_rgb;
-    if (rgb) to_rgb.emplace(atmosphere.wavelengths_nm, -3.0);
+    if (rgb) to_rgb.emplace(atmosphere.wavelengths_nm, -3.0, color_space_from_name(color_space));
 
     // Spectral output goes straight into the returned array; RGB through one (N, C) buffer.
     py::array_t<float> result({rows, static_cast<py::ssize_t>(rgb ? 3 : channels)});
@@ -166,7 +167,8 @@ void register_sky(py::module_& m) {
           py::arg("multiscattering_size") = defaults.multiscattering_size,
           py::arg("skyview_width") = defaults.skyview_width,
           py::arg("skyview_height") = defaults.skyview_height, py::arg("tolerance") = defaults.tolerance,
-          py::arg("return_standard_error") = false, py::arg("progress") = py::none());
+          py::arg("return_standard_error") = false, py::arg("progress") = py::none(),
+          py::arg("color_space") = "rec709");
 
     m.def(
         "auto_choice",

@@ -15,7 +15,8 @@ namespace {
 struct Sun {
     SunRadiometry radiometry;
     std::vector<double> wavelengths_nm;
-    std::shared_ptr<const SunDisc> disc;  // the disc model (sun_disc.hpp)
+    std::shared_ptr<const SunDisc> disc;          // the disc model (sun_disc.hpp)
+    ColorSpace color_space = ColorSpace::Rec709;  // of the *_rgb values
 };
 
 // (rows, 6) read-only float64 array.
@@ -29,13 +30,13 @@ py::array_t<double> coefficient_rows(const std::vector<std::array<double, 6>>& r
 }
 
 SunDisc::Rgb disc_rgb(const Sun& sun) {
-    return sun.disc->rgb(SpectrumToRgb(sun.wavelengths_nm, 0.0).matrix());
+    return sun.disc->rgb(SpectrumToRgb(sun.wavelengths_nm, 0.0, sun.color_space).matrix());
 }
 
-// Sunlight in linear Rec.709: the three-sample conversion with lambda power 0 (the
+// Sunlight in linear RGB of sun.color_space: the three-sample conversion with lambda power 0 (the
 // sun's own spectrum between the samples), see color.hpp.
 py::array_t<double> direct_irradiance_rgb(const Sun& sun) {
-    const SpectrumToRgb to_rgb(sun.wavelengths_nm, 0.0);
+    const SpectrumToRgb to_rgb(sun.wavelengths_nm, 0.0, sun.color_space);
     const std::vector<float> spectrum(sun.radiometry.direct_irradiance.begin(),
                                       sun.radiometry.direct_irradiance.end());
     const std::array<double, 3> rgb = to_rgb.convert(spectrum);
@@ -55,10 +56,12 @@ Attributes (per wavelength of wavelengths_nm unless noted)
                          observer, W m^-2 nm^-1: solar irradiance x transmittance
                          x the visible fraction of the disc
   visible_fraction       fraction of the disc above the horizon (a float)
-  direct_irradiance_rgb  direct_irradiance in linear Rec.709, W m^-2, (3,)
+  direct_irradiance_rgb  direct_irradiance in linear RGB of color_space (Rec.709
+                         unless welkin.sun() was given another), W m^-2, (3,)
                          (CIE 1931, no 683 lm/W factor; lambda power 0 between
                          three samples) -- a Blender sun lamp's strength/colour
   wavelengths_nm         the wavelengths, nm
+  color_space            "rec709", "rec2020" or "acescg": of the *_rgb values
 
 The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
   angular_radius_rad     the disc's angular radius alpha, rad
@@ -70,7 +73,7 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
   limb_coefficients      (C, 6): Neckel & Labs 1994 a_0..a_5, radiance at angle
                          rho from the centre = centre_radiance x sum_k a_k mu^k,
                          mu = sqrt(1 - (sin rho / sin alpha)^2)
-  centre_radiance_rgb    (3,) the same in linear Rec.709, W m^-2 sr^-1
+  centre_radiance_rgb    (3,) the same in linear RGB of color_space, W m^-2 sr^-1
   limb_coefficients_rgb  (3, 6) so that the RGB disc is exactly
                          centre_radiance_rgb[j] x sum_k b[j, k] mu^k
 )doc")
@@ -80,6 +83,7 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
                                [](const Sun& s) { return to_readonly_array(s.radiometry.direct_irradiance); })
         .def_property_readonly("visible_fraction", [](const Sun& s) { return s.radiometry.visible_fraction; })
         .def_property_readonly("direct_irradiance_rgb", &direct_irradiance_rgb)
+        .def_property_readonly("color_space", [](const Sun& s) { return color_space_name(s.color_space); })
         .def_property_readonly("wavelengths_nm",
                                [](const Sun& s) { return to_readonly_array(s.wavelengths_nm); })
         .def_property_readonly("angular_radius_rad",
@@ -111,9 +115,11 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
 
     m.def(
         "sun",
-        [](Atmosphere atmosphere, double altitude_m, const py::object& sun_direction) {
+        [](Atmosphere atmosphere, double altitude_m, const py::object& sun_direction,
+           const std::string& color_space) {
             const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
             Sun sun;
+            sun.color_space = color_space_from_name(color_space);
             {
                 py::gil_scoped_release release;
                 sun.disc = std::make_shared<const SunDisc>(atmosphere, observer);
@@ -122,12 +128,15 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
             sun.wavelengths_nm = atmosphere.wavelengths_nm;
             return sun;
         },
-        py::arg("atmosphere"), py::arg("altitude_m"), py::arg("sun_direction"), R"doc(
+        py::arg("atmosphere"), py::arg("altitude_m"), py::arg("sun_direction"), py::kw_only(),
+        py::arg("color_space") = "rec709", R"doc(
 Sun radiometry at an observer altitude_m (m) above the ground, for a sun in
 sun_direction (vector towards the sun, Z up; normalised here). Returns a
 welkin.SunRadiometry: transmittance, direct_irradiance (W m^-2 nm^-1),
-visible_fraction, direct_irradiance_rgb (W m^-2). Raises ValueError for
-altitude_m < 0, a zero or NaN sun_direction, or an invalid atmosphere.
+visible_fraction, direct_irradiance_rgb (W m^-2) in the linear RGB of
+color_space ("rec709", "rec2020" or "acescg", color_space.hpp). Raises
+ValueError for altitude_m < 0, a zero or NaN sun_direction, an invalid
+atmosphere or an unknown color_space.
 )doc");
 }
 

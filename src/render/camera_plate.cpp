@@ -169,7 +169,8 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
             sky_dirs.push_back(
                 f.rays.at_pixel(int((q0 + q) % std::size_t(w)), int((q0 + q) / std::size_t(w))).direction);
         }
-    const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0), sun_to_rgb(atm.wavelengths_nm, 0.0);
+    const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0, scene.color_space),
+        sun_to_rgb(atm.wavelengths_nm, 0.0, scene.color_space);
     plate.sky.assign(nb * 3, 0.0f);
     if (!sky_dirs.empty()) {
         ProgressStage stage(progress, 0.02, 0.6);

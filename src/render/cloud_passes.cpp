@@ -61,7 +61,7 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
     CloudResult march = render_clouds(density, light, origins, dirs, lengths, options, &march_stage, q0);
     lengths = {};
 
-    // Cloud radiance to Rec.709 (the sky's conversion).
+    // Cloud radiance to the scene's RGB (the sky's conversion).
     CloudPasses out;
     out.width = w;
     out.height = band.size();
@@ -69,7 +69,7 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
     out.clouds.assign(n * 4, 0.0f);
     out.depth.assign(n, kNoCloudDepth);
     std::vector<float> rgb(n * 3);
-    SpectrumToRgb(scene.atmosphere.wavelengths_nm, -3.0).convert(march.radiance, rgb);
+    SpectrumToRgb(scene.atmosphere.wavelengths_nm, -3.0, scene.color_space).convert(march.radiance, rgb);
     march.radiance = {};
 
     // The air in front of each cloud, marched per pixel to its cloud depth d_c (header;
@@ -83,9 +83,9 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
         if (march.transmittance[q] < 1.0f &&
             !is_sky_depth(float(double(march.depth_m[q]) / per_depth[q]), scene.aerial.sky_depth_m))
             cloud_d[q] = double(march.depth_m[q]);
-    const AirAlongRays air = aerial_along_rays(scene.atmosphere, light.luts(), scene.planet_centre(),
-                                               scene.origin_observer().sun_direction, origins, dirs, cloud_d,
-                                               scene.aerial.raymarch_steps, scene.exposure);
+    const AirAlongRays air = aerial_along_rays(
+        scene.atmosphere, light.luts(), scene.planet_centre(), scene.origin_observer().sun_direction, origins,
+        dirs, cloud_d, scene.aerial.raymarch_steps, scene.exposure, false, scene.color_space);
     origins = {};
     dirs = {};
     const float exposure = float(scene.exposure);

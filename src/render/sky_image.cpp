@@ -341,7 +341,7 @@ BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIll
     const AirAlongRays air =
         aerial_along_rays(atm, light.luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},
                           obs.sun_direction, std::span<const glm::dvec3>(&origin, 1), dirs, cloud_d,
-                          options.air_steps, 1.0, sky_to_rgb == nullptr);
+                          options.air_steps, 1.0, sky_to_rgb == nullptr, options.color_space);
     const std::size_t m = sky_to_rgb ? 3 : nc;
     b.cloud.resize(n * m);
     if (sky_to_rgb) {
@@ -478,8 +478,8 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm, con
     // Conversions first: they reject unusable wavelengths before the expensive part.
     std::optional<SpectrumToRgb> sky_to_rgb, sun_to_rgb;
     if (rgb) {
-        sky_to_rgb.emplace(atm.wavelengths_nm, -3.0);
-        sun_to_rgb.emplace(atm.wavelengths_nm, 0.0);
+        sky_to_rgb.emplace(atm.wavelengths_nm, -3.0, options.color_space);
+        sun_to_rgb.emplace(atm.wavelengths_nm, 0.0, options.color_space);
     }
 
     SkyImage image = make_image(atm, width, rgb);

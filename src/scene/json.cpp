@@ -6,6 +6,7 @@
 //     "origin_altitude_m": 0,
 //     "sun": {"direction": [x, y, z]} | {"elevation_deg": 30, "azimuth_deg": 90},
 //     "exposure": 1, "method": "auto",
+//     "color_space": "rec709" | "rec2020" | "acescg",   // of every RGB output
 //     "ground": {"enabled": true, "albedo": null},   // null: the atmosphere's ground_albedo
 //     "camera": {"matrix_world": [[4 numbers] x 4 rows], "type": "PERSP" | "ORTHO" | "PANO",
 //                "lens_mm", "sensor_width_mm", "sensor_height_mm", "sensor_fit", "fov_deg",
@@ -378,9 +379,10 @@ Camera parse_camera(const json& j) {
 
 SceneDescription parse(const json& j, const std::filesystem::path& base) {
     if (!j.is_object()) throw InvalidArgument("scene", "must be a JSON object");
-    json_check_keys(j, "",
-                    {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "method", "ground",
-                     "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
+    json_check_keys(
+        j, "",
+        {"version", "atmosphere", "origin_altitude_m", "sun", "exposure", "color_space", "method", "ground",
+         "camera", "resolution", "aerial", "sky_options", "clouds", "$schema", "comment"});
     SceneDescription s;
     if (!j.contains("version"))
         throw InvalidArgument("version", fmt::format("is required (this Welkin writes version {})",
@@ -420,6 +422,8 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
         }
     }
     if (j.contains("exposure")) s.exposure = json_number(j["exposure"], "exposure");
+    if (j.contains("color_space"))
+        s.color_space = color_space_from_name(string(j["color_space"], "color_space"));
     if (j.contains("method")) s.method = string(j["method"], "method");
     if (j.contains("ground")) {
         const json& g = j["ground"];
@@ -514,6 +518,7 @@ std::string SceneDescription::to_json_string() const {
     j["origin_altitude_m"] = origin_altitude_m;
     j["sun"] = {{"direction", {sun_direction.x, sun_direction.y, sun_direction.z}}};
     j["exposure"] = exposure;
+    j["color_space"] = color_space_name(color_space);
     j["method"] = method;
     j["ground"] = {{"enabled", ground},
                    {"albedo", ground_albedo ? ordered_json(*ground_albedo) : ordered_json(nullptr)}};

@@ -62,7 +62,8 @@ glm::dvec3 sun_direction_from_angles_deg(double elevation_deg, double azimuth_de
 
 AerialView SceneDescription::aerial_view() const {
     return AerialView{atmosphere,         sky_options.luts(),  origin_observer(), require_camera(),
-                      resolution.width(), resolution.height(), exposure,          aerial};
+                      resolution.width(), resolution.height(), exposure,          aerial,
+                      color_space};
 }
 
 }  // namespace welkin

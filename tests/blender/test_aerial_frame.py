@@ -87,12 +87,13 @@ def build_scene():
     # The user's compositor: a node after the Render Layers that changes nothing (a reroute,
     # which every Blender's compositor has).
     tree, _undo = compat.ensure_scene_compositor(scene, "User Compositing")
-    rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
+    rl = next((n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers'), None)
+    frame = compat.compositor_frame(tree, rl)  # 5.3: an effect's Group Input
     user = tree.nodes.new('NodeReroute')
     user.name = "User Reroute"
-    link = next(l for l in tree.links if l.from_node == rl and l.from_socket.name == "Image")
+    link = next(l for l in tree.links if l.from_socket == frame)
     target = link.to_socket
-    tree.links.new(rl.outputs["Image"], user.inputs[0])
+    tree.links.new(frame, user.inputs[0])
     tree.links.new(user.outputs[0], target)
     return scene
 

@@ -58,15 +58,16 @@ def build_scene():
 
 
 def add_user_nodes(scene):
-    """The user's compositor: Render Layers -> "User Curves" -> the output (Composite, or
-    5.0's Group Output). Returns the output node."""
+    """The user's compositor: the frame (Render Layers, or a 5.3 effect's Group Input) ->
+    "User Curves" -> the output (Composite, or 5.0's Group Output). Returns the output
+    node."""
     from welkin.blender import compat
     tree, _undo = compat.ensure_scene_compositor(scene, "User Compositor")
-    rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
+    rl = next((n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers'), None)
     comp = compat.compositor_output(tree)
     curves = tree.nodes.new('CompositorNodeCurveRGB')
     curves.name = "User Curves"
-    tree.links.new(rl.outputs["Image"], curves.inputs["Image"])
+    tree.links.new(compat.compositor_frame(tree, rl), curves.inputs["Image"])
     tree.links.new(curves.outputs["Image"], comp.inputs[0])
     return tree, comp
 
@@ -125,7 +126,7 @@ def main():
     at.check(compat.scene_compositor(scene) == tree, "enable replaced the user's compositor")
     at.check(names_before <= {n.name for n in tree.nodes}, "enable removed a user node")
     at.check(feeder(comp) == "User Curves", "the output is no longer fed by the user's node")
-    depth = tree.nodes[compositor.DEPTH_NODE]
+    depth = compositor.depth_node(scene)  # in the user's tree, or (5.3+) Welkin's effect
     at.check(depth.inputs["Depth"].is_linked and depth.inputs["Image"].is_linked,
              "the depth node's inputs are not linked")
     at.check(depth.inputs["Image"].links[0].from_node.bl_idname == 'CompositorNodeRLayers',
@@ -200,8 +201,8 @@ def main():
 
     # The Depth link to our File Output node removed: no depth written, reported.
     scene.frame_set(9)
-    out_node = tree.nodes[compositor.DEPTH_NODE]
-    tree.links.remove(out_node.inputs["Depth"].links[0])
+    out_node = compositor.depth_node(scene)
+    out_node.id_data.links.remove(out_node.inputs["Depth"].links[0])
     bpy.ops.render.render(write_still=True)
     # (3.4 leaves the unlinked input out of the file, 4.5 and 5.0 write it as zeros)
     at.check("no Z pass" in scene.welkin_aerial.status
@@ -210,7 +211,7 @@ def main():
              "passes written without a Z pass")
     scene.welkin_aerial.enabled = False
     scene.welkin_aerial.enabled = True  # relinks
-    at.check(tree.nodes[compositor.DEPTH_NODE].inputs["Depth"].is_linked,
+    at.check(compositor.depth_node(scene).inputs["Depth"].is_linked,
              "toggling did not relink the Depth input")
     print(f"ok: unlinked Z pass reported: {scene.welkin_aerial.status}")
 
@@ -300,8 +301,9 @@ def main():
     at.check(names == names_before, f"after disable: {sorted(names ^ names_before)}")
     at.check(feeder(comp) == "User Curves", "disable did not restore the user's link")
     curves = tree.nodes["User Curves"]
-    at.check(curves.inputs["Image"].links[0].from_node.bl_idname == 'CompositorNodeRLayers',
-             "disable did not relink the render layer to the user's node")
+    at.check(curves.inputs["Image"].links[0].from_node.bl_idname in ('CompositorNodeRLayers',
+                                                                      'NodeGroupInput'),
+             "disable did not relink the frame to the user's node")
     print("ok: user nodes survive enable/disable")
     at.done("test_aerial_render")
 

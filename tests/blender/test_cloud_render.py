@@ -101,11 +101,11 @@ scene.render.resolution_percentage = 100
 compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
 scene.render.filepath = str(t.TMP / "out" / "frame_")
 tree, _undo = compat.ensure_scene_compositor(scene, f"{scene.name} Compositing")
-rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
+rl = next((n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers'), None)
 comp = compat.compositor_output(tree)  # 5.0: the tree's Group Output
 user = tree.nodes.new('CompositorNodeCurveRGB')  # (5.0 has no compositor Gamma node)
 user.name = "User Curves"
-tree.links.new(rl.outputs["Image"], user.inputs["Image"])
+tree.links.new(compat.compositor_frame(tree, rl), user.inputs["Image"])  # 5.3: Group Input
 tree.links.new(user.outputs["Image"], comp.inputs["Image"])
 names_before = {n.name for n in tree.nodes}
 scene.welkin_aerial.side_files = True  # the pass files beside the render

@@ -1,4 +1,4 @@
-"""Differences between the Blender versions Welkin supports (3.4, 4.2 LTS, 4.5 LTS, 5.0),
+"""Differences between the Blender versions Welkin supports (3.4, 4.2 LTS, 4.5 LTS, 5.0-5.3),
 in one place. The rest of the add-on calls these functions and never tests
 bpy.app.version itself, so a new Blender is one edit here. Each function says which
 versions differ and how (checked against the real 3.4, 4.5 and 5.0 by tests/blender/).
@@ -158,28 +158,67 @@ def set_aov_name(node, name):
 
 
 def scene_compositor(scene):
-    """The scene's compositing node tree, or None: scene.compositing_node_group in 5.0+,
-    scene.node_tree (when Use Nodes is on) before."""
+    """The scene's compositing node tree, or None: scene.node_tree (when Use Nodes is on)
+    before 5.0, scene.compositing_node_group in 5.0-5.2, the active compositor effect's
+    group in 5.3+ (where compositing_node_group is deprecated and creates an effect when
+    none exists: it is never read there)."""
+    if hasattr(scene, "compositor_effects"):
+        active = scene.compositor_effects.active
+        return active.node_group if active is not None else None
     if hasattr(scene, "compositing_node_group"):
         return scene.compositing_node_group
     return scene.node_tree if scene.use_nodes else None
 
 
+def _new_compositing_group(name, source):
+    """A compositing node group `name` passing its frame to the Group Output: from a Render
+    Layers node (`source` 'render', 5.0-5.2's scene compositor) or from the Group Input
+    (`source` 'input', a 5.3 effect, which receives the frame of the effects before it)."""
+    tree = bpy.data.node_groups.new(name, 'CompositorNodeTree')
+    new_group_socket(tree, "Image", 'OUTPUT', 'NodeSocketColor')
+    out = tree.nodes.new('NodeGroupOutput')
+    out.location = (600, 0)
+    if source == 'input':
+        new_group_socket(tree, "Image", 'INPUT', 'NodeSocketColor')
+        node = tree.nodes.new('NodeGroupInput')
+        node.location = (-600, 300)
+    else:
+        node = tree.nodes.new('CompositorNodeRLayers')
+    tree.links.new(node.outputs["Image"], out.inputs[0])
+    return tree
+
+
+def _add_effect(scene, name, index=None):
+    """5.3+: a new compositor effect `name` with a new group of that name (frame in, frame
+    out), at `index` of the stack (None: last), the active effect left as it was. Returns
+    (tree, ('effect', name of the previously active effect or ''))."""
+    effects = scene.compositor_effects
+    active = effects.active.name if effects.active is not None else ""
+    effect = effects.new(name=name)
+    effect.node_group = _new_compositing_group(name, 'input')
+    if index is not None and effects[index].name != effect.name:
+        with bpy.context.temp_override(scene=scene):
+            bpy.ops.scene.move_compositor_effect_to_index(name=effect.name, index=index)
+    if active:
+        effects.active = effects[active]
+    return effect.node_group, ('effect', active)
+
+
 def ensure_scene_compositor(scene, name):
-    """Turns compositing on: returns (tree, undo) where undo is what remove needs to put back:
-    ('use_nodes', previous value) before 5.0 (Blender makes the default Render Layers ->
-    Composite tree), ('created', None) in 5.0+ when the scene had no compositing group (a new
-    one, Render Layers -> Group Output, named `name`), or ('kept', None)."""
+    """Turns compositing on: returns (tree, undo) where undo is what restore needs to put
+    back: ('use_nodes', previous value) before 5.0 (Blender makes the default Render
+    Layers -> Composite tree), ('created', None) in 5.0-5.2 when the scene had no
+    compositing group (a new one, Render Layers -> Group Output, named `name`), ('effect',
+    previously active effect) in 5.3+ when the scene had no effect (a new last one,
+    Group Input -> Group Output), or ('kept', None)."""
+    if hasattr(scene, "compositor_effects"):
+        tree = scene_compositor(scene)
+        return (tree, ('kept', None)) if tree is not None else _add_effect(scene, name)
     if hasattr(scene, "compositing_node_group"):
         tree = scene.compositing_node_group
         if tree is not None:
             return tree, ('kept', None)
-        tree = bpy.data.node_groups.new(name, 'CompositorNodeTree')
-        new_group_socket(tree, "Image", 'OUTPUT', 'NodeSocketColor')
-        rl = tree.nodes.new('CompositorNodeRLayers')
-        out = tree.nodes.new('NodeGroupOutput')
-        out.location = (600, 0)
-        tree.links.new(rl.outputs["Image"], out.inputs[0])
+        tree = _new_compositing_group(name, 'render')
         scene.compositing_node_group = tree
         return tree, ('created', None)
     previous = scene.use_nodes
@@ -187,9 +226,66 @@ def ensure_scene_compositor(scene, name):
     return scene.node_tree, ('use_nodes', previous)
 
 
+def _own_effect(scene, name):
+    """5.3+: the compositor effect `name` whose group is also called `name` (the one
+    _add_effect made), or None."""
+    effect = scene.compositor_effects.get(name)
+    if effect is not None and effect.node_group is not None and effect.node_group.name == name:
+        return effect
+    return None
+
+
+def own_compositor(scene, name):
+    """The compositing tree an add-on puts its nodes in, or None: the scene's compositor
+    (scene_compositor) before 5.3; from 5.3 the group of the add-on's own effect `name`
+    (ensure_own_compositor), so that the user's effects are never edited."""
+    if not hasattr(scene, "compositor_effects"):
+        return scene_compositor(scene)
+    effect = _own_effect(scene, name)
+    return effect.node_group if effect is not None else None
+
+
+def ensure_own_compositor(scene, name):
+    """own_compositor, made if missing: (tree, undo) as ensure_scene_compositor. From 5.3
+    the add-on's effect goes first in the stack (it works on the rendered frame, before
+    the user's effects), with a Render Layers node for the passes it reads."""
+    if not hasattr(scene, "compositor_effects"):
+        return ensure_scene_compositor(scene, name)
+    tree = own_compositor(scene, name)
+    if tree is not None:
+        return tree, ('kept', None)
+    tree, undo = _add_effect(scene, name, index=0)
+    tree.nodes.new('CompositorNodeRLayers').location = (-600, -100)
+    return tree, undo
+
+
+def compositor_frame(tree, render_layers):
+    """The socket carrying the frame that reaches `tree` from `render_layers`: the Group
+    Input's Image in a 5.3 effect's group (the frame of the effects before it), the Render
+    Layers' Image otherwise."""
+    if hasattr(bpy.types, "SceneCompositorEffect"):
+        for node in tree.nodes:
+            if node.bl_idname == 'NodeGroupInput' and "Image" in node.outputs:
+                return node.outputs["Image"]
+    return render_layers.outputs["Image"]
+
+
 def restore_scene_compositor(scene, undo_kind, undo_value, created_name):
+    """Undoes ensure_scene_compositor / ensure_own_compositor; `undo_value` as a string
+    ('True'/'False' for use_nodes, the active effect's name for effect). 5.3+: the effect
+    `created_name` goes whatever the kind (a file from 5.0-5.2 has 'created' or 'kept')."""
     if undo_kind == 'use_nodes':
-        scene.use_nodes = bool(undo_value)
+        scene.use_nodes = undo_value == "True"
+    elif hasattr(scene, "compositor_effects"):
+        effects = scene.compositor_effects
+        effect = _own_effect(scene, created_name)
+        if effect is not None:
+            tree = effect.node_group
+            effects.remove(effect)
+            if tree.users == 0:
+                bpy.data.node_groups.remove(tree)
+        if undo_kind == 'effect' and undo_value in effects:
+            effects.active = effects[undo_value]
     elif undo_kind == 'created' and hasattr(scene, "compositing_node_group"):
         tree = scene.compositing_node_group
         if tree is not None and tree.name == created_name:
@@ -305,3 +401,33 @@ def set_non_color(image):
 def set_exr(image_settings, multilayer):
     """OpenEXR output, multilayer or not (set_file_format says how 5.0 differs)."""
     set_file_format(image_settings, 'OPEN_EXR_MULTILAYER' if multilayer else 'OPEN_EXR')
+
+
+# --- Colour ---------------------------------------------------------------------------------
+
+# Blender's working spaces (5.0+) -> the core's colour spaces (color_space.hpp), and the
+# image colour space (OpenColorIO name) of each.
+_WORKING_SPACES = {'Linear Rec.709': "rec709", 'Linear Rec.2020': "rec2020", 'ACEScg': "acescg"}
+_IMAGE_SPACES = {"rec709": ("Linear Rec.709", "Linear"), "rec2020": ("Linear Rec.2020",),
+                 "acescg": ("ACEScg",)}
+
+
+def working_color_space():
+    """The file's working colour space, as the core names it: Blender 5.0+ stores colours
+    in bpy.data.colorspace.working_space (Linear Rec.709, Linear Rec.2020 or ACEScg, set by
+    wm.set_working_color_space); 3.4-4.5 always in Linear Rec.709. A space the core does
+    not write (none in 5.0-5.3) falls back to "rec709"."""
+    colorspace = getattr(bpy.data, "colorspace", None)
+    working = getattr(colorspace, "working_space", 'Linear Rec.709')
+    return _WORKING_SPACES.get(working, "rec709")
+
+
+def image_color_space(image, color_space):
+    """The name of `image`'s colour space setting for pixels in the core's `color_space`:
+    "Linear Rec.709" ("Linear" in 3.4), "Linear Rec.2020", "ACEScg"."""
+    names = {item.identifier for item in
+             image.colorspace_settings.bl_rna.properties['name'].enum_items}
+    for name in _IMAGE_SPACES[color_space]:
+        if name in names:
+            return name
+    raise ValueError(f"color_space: this Blender has no image colour space for {color_space}")

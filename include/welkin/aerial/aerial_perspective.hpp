@@ -71,6 +71,7 @@
 #include "welkin/base/camera.hpp"
 #include "welkin/base/progress.hpp"
 #include "welkin/base/row_range.hpp"
+#include "welkin/color/color_space.hpp"
 
 namespace welkin {
 
@@ -110,6 +111,7 @@ struct AerialView {
     int width = 0, height = 0;  // the render resolution the depth buffer must have
     double exposure = 1.0;
     AerialOptions options;
+    ColorSpace color_space = ColorSpace::Rec709;  // of the RGB passes (color_space.hpp)
 
     // The planet centre in the world frame (straight below the scene origin).
     glm::dvec3 planet_centre() const { return {0.0, 0.0, -(atmosphere.bottom_radius_m + origin.altitude_m)}; }
@@ -230,6 +232,6 @@ AirAlongRays aerial_along_rays(const Atmosphere& atmosphere, const AtmosphereLut
                                const glm::dvec3& planet_centre, const glm::dvec3& sun_direction,
                                std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
                                std::span<const double> distances, int steps, double exposure,
-                               bool spectral = false);
+                               bool spectral = false, ColorSpace color_space = ColorSpace::Rec709);
 
 }  // namespace welkin

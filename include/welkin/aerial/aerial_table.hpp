@@ -91,7 +91,7 @@ struct AerialTable {
 AerialTable aerial_table(const Atmosphere& atmosphere, const AtmosphereLuts& luts,
                          const glm::dvec3& planet_centre, const glm::dvec3& camera_position,
                          const glm::dvec3& sun_direction, double exposure, const AerialTableLayout& layout,
-                         Progress* progress = nullptr);
+                         Progress* progress = nullptr, ColorSpace color_space = ColorSpace::Rec709);
 
 // The same passes for one camera, as a table over its screen and the distance: what a
 // renderer samples when it knows where a shading point lies in the frame (Blender's Camera

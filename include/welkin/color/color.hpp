@@ -1,6 +1,7 @@
-// From spectral radiance to linear Rec.709.
+// From spectral radiance to linear RGB (Rec.709 and the other spaces of color_space.hpp).
 //
-// Units: linear Rec.709 (sRGB primaries, D65 white, no white balance, no gamma) in
+// Units: linear Rec.709 (sRGB primaries, D65 white, no white balance, no gamma) or another
+// linear space of color_space.hpp (the same XYZ through its matrix), in
 // W m^-2 sr^-1, CIE-weighted without the 683 lm/W factor — the convention of
 // tests/data and the scale of Blender's Nishita sky.
 //
@@ -26,6 +27,7 @@
 #include <span>
 #include <vector>
 
+#include "welkin/color/color_space.hpp"
 #include "welkin/color/spectral_data.hpp"
 
 namespace welkin {
@@ -40,13 +42,16 @@ Xyz cie1931_cmf(double wavelength_nm);
 // XYZ -> linear Rec.709 (IEC 61966-2-1 matrix).
 std::array<double, 3> xyz_to_rec709(const Xyz& xyz);
 
-// Converts (N, C) spectral radiance at `wavelengths_nm` to (N, 3) linear Rec.709.
+// Converts (N, C) spectral radiance at `wavelengths_nm` to (N, 3) linear RGB of `space`
+// (color_space.hpp; Rec.709 by default): the spectrum's XYZ by one of the two paths above,
+// then the space's matrix. The only place where spectra become RGB.
 class SpectrumToRgb {
 public:
     // `lambda_power`: p of the three-sample conversion (-3 for sky, 0 for sun); unused
     // when there are more than three wavelengths. Throws InvalidArgument if the
     // wavelengths are not strictly increasing or decreasing, or C < 3.
-    SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power = -3.0);
+    SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power = -3.0,
+                  ColorSpace space = ColorSpace::Rec709);
 
     std::array<double, 3> convert(std::span<const float> spectrum) const;
     void convert(std::span<const float> spectra, std::span<float> rgb_out) const;  // (N,C)->(N,3)
@@ -54,9 +59,13 @@ public:
     // rgb = M * spectrum: the 3 x C matrix.
     const std::vector<double>& matrix() const { return matrix_; }
     std::size_t channels() const { return channels_; }
+    ColorSpace space() const { return space_; }
 
 private:
+    void build_rec709(std::span<const double> wavelengths_nm, double lambda_power);
+
     std::size_t channels_;
+    ColorSpace space_;
     std::vector<double> matrix_;  // 3 x C, row-major
 };
 

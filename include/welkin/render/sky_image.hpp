@@ -6,7 +6,8 @@
 // directions at once (bands of rows only beyond 512 MiB of radiance: spectral images
 // wider than 2048); then, unless switched off, the sun's disc is added.
 //
-// Units. RGB output: linear Rec.709 in W m^-2 sr^-1 (color.hpp), the sky converted with
+// Units. RGB output: linear RGB of `color_space` (Rec.709 by default; color_space.hpp)
+// in W m^-2 sr^-1 (color.hpp), the sky converted with
 // lambda power -3 and the disc with 0 (Bruneton 2017's sky and sun conversions).
 // Spectral output: W m^-2 sr^-1 nm^-1 per atmosphere wavelength. Both are multiplied by
 // `exposure`, once, at the end.
@@ -41,7 +42,7 @@
 // are two numerical integrals of the same air; their difference is the method's error.)
 // This is the passes' Welkin.Clouds.rgb composited "over" the clear sky, so a panoramic
 // camera's cloud passes over the clear HDRI give this image (tests/cpp/
-// test_cloud_sky_image.cpp). Colour: in RGB output the composite is taken in Rec.709 as
+// test_cloud_sky_image.cpp). Colour: in RGB output the composite is taken in the output space as
 // the passes take it (the air's sunlit-surface RGB T(0, d_c) times the RGB cloud radiance,
 // aerial_perspective.hpp); in spectral output per wavelength (T(lambda) L_c(lambda)). Where
 // there is no air (T = 1, S = 0) this is the plain premultiplied "over" L_sky T_c + L_c.
@@ -70,6 +71,7 @@
 #include <vector>
 
 #include "welkin/clouds/lighting.hpp"
+#include "welkin/color/color_space.hpp"
 #include "welkin/sky/method.hpp"
 
 namespace welkin {
@@ -86,7 +88,8 @@ struct SkyImageOptions {
     double exposure = 1.0;  // multiplies every output value; (0, 1e6]
     enum class Output { Rgb, Spectral };
     Output output = Output::Rgb;
-    std::shared_ptr<const CloudDensity> clouds;  // none: a clear sky
+    ColorSpace color_space = ColorSpace::Rec709;  // of RGB output
+    std::shared_ptr<const CloudDensity> clouds;   // none: a clear sky
     CloudLightingOptions cloud_lighting;
     // The cloud pass is marched on a coarser grid and upsampled where smooth (lighting.hpp).
     CloudUpsampling cloud_upsampling;

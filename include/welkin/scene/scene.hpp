@@ -38,6 +38,7 @@ struct SceneDescription {
     double origin_altitude_m = 0.0;                          // the scene origin above the ground, >= 0
     glm::dvec3 sun_direction{0.0, 0.5, 0.8660254037844386};  // towards the sun; normalised
     double exposure = 1.0;                                   // multiplies radiance once, at the output
+    ColorSpace color_space = ColorSpace::Rec709;             // of every RGB output (color/color_space.hpp)
     std::string method = "auto";                             // sky method (sky/method.hpp); auto by default
     // The lit ground below the horizon (ground.hpp) in the sky image and the camera plate;
     // its albedo in [0, 1] (unset: the atmosphere's ground_albedo).

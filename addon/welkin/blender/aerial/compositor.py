@@ -6,11 +6,12 @@ the Z pass back in `blender -b` (the Viewer node cannot be read there). blender/
 the pass files and the hazed frame from it in render_post. The frame itself is hazed in the
 compositor by blender/aerial/frame.py's group; this node only writes.
 
-The compositor tree is the one aerial_frame.install made sure of (compat.ensure_scene_
-compositor). The node is found by name; remove() takes it out. The user's nodes are never
+The compositor tree is the one aerial_frame.install made sure of (compat.ensure_own_
+compositor: the scene's compositor, or from Blender 5.3 Welkin's own compositor effect). The node is found by name; remove() takes it out. The user's nodes are never
 touched.
 """
 from .. import compat
+from .frame import CREATED_TREE
 
 DEPTH_NODE = "Welkin Aerial Depth"
 
@@ -26,14 +27,14 @@ def _render_layers(tree, scene):
 
 def depth_node(scene):
     """Our File Output node, or None."""
-    tree = compat.scene_compositor(scene)
+    tree = compat.own_compositor(scene, CREATED_TREE)
     return tree.nodes.get(DEPTH_NODE) if tree is not None else None
 
 
 def install(scene, settings, depth_base):
     """Adds (or updates) the depth node, writing to `depth_base` + frame + ".exr"; returns a
     list of warnings."""
-    tree = compat.scene_compositor(scene)
+    tree = compat.own_compositor(scene, CREATED_TREE)
     if tree is None:
         return ["no compositor: turn Aerial Perspective off and on"]
     warnings = []
@@ -60,7 +61,7 @@ def install(scene, settings, depth_base):
 
 def remove(scene, settings):
     """Takes the depth node out."""
-    tree = compat.scene_compositor(scene)
+    tree = compat.own_compositor(scene, CREATED_TREE)
     if tree is None:
         tree = getattr(scene, "node_tree", None)  # compositing turned off meanwhile (3.4-4.5)
     node = tree.nodes.get(DEPTH_NODE) if tree is not None else None

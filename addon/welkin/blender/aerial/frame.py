@@ -536,13 +536,14 @@ def _render_layer_nodes(tree, scene):
 
 
 def install_compositor(scene, settings):
-    """Our group after every Render Layers node of the scene; returns warnings."""
+    """Our group after every Render Layers node of the scene (from 5.3 in our own
+    compositor effect, compat.ensure_own_compositor); returns warnings."""
     warnings = []
-    tree = compat.scene_compositor(scene)
+    tree = compat.own_compositor(scene, CREATED_TREE)
     if tree is None or not settings.compositor_undo:
-        tree, (kind, value) = compat.ensure_scene_compositor(scene, CREATED_TREE)
+        tree, (kind, value) = compat.ensure_own_compositor(scene, CREATED_TREE)
         if not settings.compositor_undo:
-            settings.compositor_undo = f"{kind}\t{value!r}"
+            settings.compositor_undo = f"{kind}\t{value}"
     group = comp_group()
     for rl in _render_layer_nodes(tree, scene):
         if any(n.get(MARK) == rl.name for n in tree.nodes if n.bl_idname == 'CompositorNodeGroup'):
@@ -551,24 +552,31 @@ def install_compositor(scene, settings):
         if missing:
             warnings.append(f"the Render Layers node '{rl.name}' has no output {missing[0]}")
             continue
-        node = tree.nodes.new('CompositorNodeGroup')
-        node.node_tree = group
-        node.name = node.label = COMP_NODE
-        node[MARK] = rl.name
-        node.location = (rl.location.x + 250, rl.location.y + 150)
-        targets = [link.to_socket for link in tree.links
-                   if link.from_socket == rl.outputs["Image"] and not link.to_node.get(MARK)
-                   and link.to_node.name not in KEEP_UNHAZED]
-        tree.links.new(rl.outputs["Image"], node.inputs["Image"])
-        tree.links.new(rl.outputs[AOV_INSCATTER], node.inputs["Inscatter"])
-        tree.links.new(rl.outputs[AOV_OPACITY], node.inputs["Opacity"])
-        for socket in targets:
-            tree.links.new(node.outputs["Image"], socket)
+        _insert_haze(tree, rl, group)
     return warnings
 
 
+def _insert_haze(tree, rl, group):
+    """Our group node on the frame that comes from Render Layers `rl`, the frame's users
+    (but KEEP_UNHAZED) moved to the group's output."""
+    frame = compat.compositor_frame(tree, rl)
+    node = tree.nodes.new('CompositorNodeGroup')
+    node.node_tree = group
+    node.name = node.label = COMP_NODE
+    node[MARK] = rl.name
+    node.location = (rl.location.x + 250, rl.location.y + 150)
+    targets = [link.to_socket for link in tree.links
+               if link.from_socket == frame and not link.to_node.get(MARK)
+               and link.to_node.name not in KEEP_UNHAZED]
+    tree.links.new(frame, node.inputs["Image"])
+    tree.links.new(rl.outputs[AOV_INSCATTER], node.inputs["Inscatter"])
+    tree.links.new(rl.outputs[AOV_OPACITY], node.inputs["Opacity"])
+    for socket in targets:
+        tree.links.new(node.outputs["Image"], socket)
+
+
 def remove_compositor(scene, settings):
-    tree = compat.scene_compositor(scene)
+    tree = compat.own_compositor(scene, CREATED_TREE)
     if tree is None and hasattr(scene, "node_tree"):
         tree = scene.node_tree
     if tree is not None:
@@ -576,12 +584,13 @@ def remove_compositor(scene, settings):
             rl = tree.nodes.get(node[MARK])
             targets = [link.to_socket for link in tree.links if link.from_socket == node.outputs["Image"]]
             if rl is not None:
+                frame = compat.compositor_frame(tree, rl)
                 for socket in targets:
-                    tree.links.new(rl.outputs["Image"], socket)
+                    tree.links.new(frame, socket)
             tree.nodes.remove(node)
     if settings.compositor_undo:
-        kind, value = settings.compositor_undo.split("\t")
-        compat.restore_scene_compositor(scene, kind, value == "True", CREATED_TREE)
+        kind, value = settings.compositor_undo.split("\t", 1)
+        compat.restore_scene_compositor(scene, kind, value, CREATED_TREE)
         settings.compositor_undo = ""
 
 

@@ -181,7 +181,7 @@ def scene_json(scene, module, depsgraph=None):
         sky_request.resolve_method(settings.method, module), camera_of(scene, depsgraph),
         (r.resolution_x, r.resolution_y, r.resolution_percentage),
         aerial={"method": scene.welkin_aerial.method},
-        clouds=cloud_scene.clouds_section(scene, depsgraph))
+        clouds=cloud_scene.clouds_section(scene, depsgraph), color_space=request.color_space)
     return module.SceneDescription.from_json_string(json.dumps(d)).to_json_string()
 
 

@@ -61,7 +61,8 @@ def scene_world(scene, depsgraph, native):
     clouds = cloud_scene.frame_clouds(scene, depsgraph)
     return {"atmosphere_json": atm.to_json_string(), "origin_altitude_m": settings.altitude_m,
             "sun_direction": tuple(request.sun_direction), "exposure": request.exposure,
-            "method": sky_request.resolve_method(request.method, native), "clouds": clouds}
+            "method": sky_request.resolve_method(request.method, native), "clouds": clouds,
+            "color_space": request.color_space}
 
 
 def scene_description_json(scene, depsgraph, native):

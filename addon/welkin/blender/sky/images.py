@@ -12,23 +12,21 @@ claimed by the world that updates it."""
 import bpy
 
 from ... import pixels
+from .. import compat
 
 ROLE_KEY = "welkin_role"  # custom property marking the add-on's own images
 OWNER_KEY = "welkin_world"  # the name_full of the world the image belongs to
 NAMES = {"sky": "Welkin Sky"}
 
 
-def _linear(image):
-    # 3.4 calls it "Linear"; 4.x "Linear Rec.709".
-    names = {item.identifier for item in
-             image.colorspace_settings.bl_rna.properties['name'].enum_items}
-    # Set only when it differs: assigning it frees the image's buffers (a packed image is
-    # then decoded again, ~0.2 s at 2048 x 1024).
-    for name in ("Linear Rec.709", "Linear"):
-        if name in names:
-            if image.colorspace_settings.name != name:
-                image.colorspace_settings.name = name
-            return
+def _linear(image, color_space):
+    """Tags `image` with the linear space its pixels are in (compat.image_color_space), so
+    that Blender converts them to the file's working space exactly (none when they are in
+    it already). Set only when it differs: assigning it frees the image's buffers (a packed
+    image is then decoded again, ~0.2 s at 2048 x 1024)."""
+    name = compat.image_color_space(image, color_space)
+    if image.colorspace_settings.name != name:
+        image.colorspace_settings.name = name
 
 
 def _owned_elsewhere(image, world):
@@ -47,8 +45,9 @@ def owned(settings):
                                  and not _owned_elsewhere(image, settings.id_data))
 
 
-def ensure(settings, role, width, height):
-    """The add-on's image for `role` ("sky") at width x height, the world's own."""
+def ensure(settings, role, width, height, color_space="rec709"):
+    """The add-on's image for `role` ("sky") at width x height, the world's own, tagged with
+    `color_space` (the linear space of the pixels it will get)."""
     attr = "sky_image"
     world = settings.id_data
     image = getattr(settings, attr)
@@ -66,7 +65,7 @@ def ensure(settings, role, width, height):
         setattr(settings, attr, image)
     if image.get(OWNER_KEY) != world.name_full:
         image[OWNER_KEY] = world.name_full
-    _linear(image)
+    _linear(image, color_space)
     return image
 
 

@@ -3,6 +3,7 @@ high the observer stands."""
 import math
 
 from ... import sky_request
+from .. import compat
 
 
 class UserError(Exception):
@@ -75,5 +76,6 @@ def request_for(scene, settings, depsgraph=None):
         exposure=settings.exposure,
         ground=settings.show_ground,
         spectral=settings.colour == 'SPECTRAL',
+        color_space=compat.working_color_space(),
     )
     return request, lamp, warnings

@@ -167,7 +167,8 @@ def _sky_scene_json(scene, request, module, atmosphere, origin_altitude_m, cloud
     d = scene_export.scene_dict(
         atmosphere, origin_altitude_m, request.sun_direction, request.exposure,
         sky_request.resolve_method(request.method, module), None,
-        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=clouds)
+        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=clouds,
+        color_space=request.color_space)
     del d["camera"]
     return json.dumps(d)
 
@@ -242,7 +243,7 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     settings = scene.world.welkin
     outcome.warnings += result.warnings
     height = request.width // 2
-    sky = images.ensure(settings, "sky", request.width, height)
+    sky = images.ensure(settings, "sky", request.width, height, request.color_space)
     images.write(sky, result.sky)
     if pack:
         images.pack(sky)
