@@ -33,6 +33,7 @@
 #include "welkin/base/math.hpp"
 #include "welkin/base/simd.hpp"
 #include "welkin/color/color.hpp"
+#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 namespace {
@@ -114,6 +115,7 @@ public:
             L3[k] = float(l);
             T3[k] = float(clamp01(t));
         }
+        gamut_map(L3, 1, kRec709LuminanceWeights);  // gamut.hpp: no negative in-scattering
     }
 
 private:

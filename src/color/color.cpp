@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 namespace {
@@ -174,7 +175,7 @@ std::array<double, 3> SpectrumToRgb::convert(std::span<const float> spectrum) co
     for (int j = 0; j < 3; ++j)
         for (std::size_t c = 0; c < channels_; ++c)
             rgb[j] += matrix_[j * channels_ + c] * double(spectrum[c]);
-    return rgb;
+    return gamut_map(rgb, kRec709LuminanceWeights);
 }
 
 void SpectrumToRgb::convert(std::span<const float> spectra, std::span<float> rgb_out) const {
@@ -197,6 +198,7 @@ void SpectrumToRgb::convert(std::span<const float> spectra, std::span<float> rgb
                                   for (std::size_t c = 0; c < n; ++c) sum += m[j * n + c] * s[c];
                                   rgb_out[3 * i + j] = float(sum);
                               }
+                              gamut_map(&rgb_out[3 * i], 1, kRec709LuminanceWeights);
                           }
                       });
 }

@@ -101,7 +101,7 @@ def disc_energy(model):
 def addon_atm():
     """The add-on's atmosphere for the default request: the preset at the library's default
     wavelengths (not conftest's 680/550/440 nm)."""
-    return welkin.Atmosphere.preset("bruneton2017")
+    return welkin.Atmosphere.preset(sky_request.SkyRequest().preset)
 
 
 def test_compute_is_the_modules_sky_disc_and_sun(addon_atm, sun_direction):

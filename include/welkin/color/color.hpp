@@ -48,10 +48,12 @@ public:
     // wavelengths are not strictly increasing or decreasing, or C < 3.
     SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power = -3.0);
 
+    // gamut_map(M * spectrum) (gamut.hpp): never a negative channel.
     std::array<double, 3> convert(std::span<const float> spectrum) const;
     void convert(std::span<const float> spectra, std::span<float> rgb_out) const;  // (N,C)->(N,3)
 
-    // rgb = M * spectrum: the 3 x C matrix.
+    // rgb = M * spectrum before the gamut mapping: the 3 x C matrix. Whoever applies it
+    // directly applies gamut_map() to what it outputs.
     const std::vector<double>& matrix() const { return matrix_; }
     std::size_t channels() const { return channels_; }
 
