@@ -449,8 +449,10 @@ def test_presets_print_their_aerosol_optical_depth_and_the_option_sets_it(tmp_pa
             assert 0.05 <= tau <= 0.7, line
     base = json.loads(welkin("atmosphere", "--preset", "hazy").stdout)
     thin = json.loads(welkin("atmosphere", "--preset", "hazy", "--aerosol-optical-depth", "0.0327").stdout)
+    # The default channels bracket 550 nm by 480 and 560 nm, across the kink of OPAC's two
+    # Angstrom exponents at 500 nm: the interpolated column is within 0.2 % of 0.327.
     np.testing.assert_allclose(np.asarray(thin["mie"]["extinction"]),
-                               0.1 * np.asarray(base["mie"]["extinction"]), rtol=1e-6)
+                               0.1 * np.asarray(base["mie"]["extinction"]), rtol=3e-3)
     t = json.loads(welkin("atmosphere", "--turbidity", "2").stdout)
     d = json.loads(welkin("atmosphere").stdout)
     ratio = np.asarray(t["mie"]["extinction"]) / np.asarray(d["mie"]["extinction"])
