@@ -117,14 +117,16 @@ Atmosphere earth_opac(const std::string& name, const std::vector<double>& w, con
     // of one exponential (header).
     const double column_m = t.scale_height_m * (1.0 - std::exp(-t.mixing_layer_m / t.scale_height_m));
     const double beta_550 = tau_550 / column_m;  // m^-1 at the ground
-    Atmosphere a = earth(name, w, Aerosol{beta_550, 0.0, [&](double) { return t.omega; }, column_m, t.g,
-                                          MiePhaseModel::HenyeyGreenstein},
+    Atmosphere a = earth(name, w,
+                         Aerosol{beta_550, 0.0, [&](double) { return t.omega; }, column_m, t.g,
+                                 MiePhaseModel::HenyeyGreenstein},
                          ground_albedo);
     for (std::size_t c = 0; c < w.size(); ++c) {
         // Angstrom's law in two pieces, continuous at 500 nm.
         const double l = w[c];
-        const double f = l >= 500.0 ? std::pow(l / 550.0, -t.alpha_red)
-                                    : std::pow(500.0 / 550.0, -t.alpha_red) * std::pow(l / 500.0, -t.alpha_blue);
+        const double f = l >= 500.0
+                             ? std::pow(l / 550.0, -t.alpha_red)
+                             : std::pow(500.0 / 550.0, -t.alpha_red) * std::pow(l / 500.0, -t.alpha_blue);
         a.mie_extinction[c] = beta_550 * f;
         a.mie_scattering[c] = beta_550 * f * t.omega;
     }
@@ -146,8 +148,15 @@ Atmosphere bruneton2017(const std::vector<double>& w) {
 // 30 degrees); a city's 0.12 grey (Taha 1997, "Urban climates and heat islands", Energy
 // and Buildings 25: 0.10-0.20).
 std::function<double(double)> vegetation() {
-    return knots({{400, 0.04}, {450, 0.05}, {500, 0.07}, {550, 0.11}, {600, 0.07}, {650, 0.05},
-                  {690, 0.07}, {720, 0.25}, {760, 0.45}});
+    return knots({{400, 0.04},
+                  {450, 0.05},
+                  {500, 0.07},
+                  {550, 0.11},
+                  {600, 0.07},
+                  {650, 0.05},
+                  {690, 0.07},
+                  {720, 0.25},
+                  {760, 0.45}});
 }
 std::function<double(double)> sand() {
     return knots({{400, 0.20}, {450, 0.25}, {550, 0.34}, {650, 0.42}, {750, 0.47}});
@@ -233,10 +242,14 @@ using PresetFactory = Atmosphere (*)(const std::vector<double>&);
 // In the order offered: the default first, then by the weather, then the validation and
 // the other planet.
 const std::vector<std::pair<std::string, PresetFactory>>& presets() {
-    static const std::vector<std::pair<std::string, PresetFactory>> p{
-        {"clear_day", clear_day}, {"clear", clear},       {"hazy", hazy},
-        {"polluted", polluted},   {"desert_dust", desert_dust}, {"maritime", maritime},
-        {"bruneton2017", bruneton2017}, {"mars", mars}};
+    static const std::vector<std::pair<std::string, PresetFactory>> p{{"clear_day", clear_day},
+                                                                      {"clear", clear},
+                                                                      {"hazy", hazy},
+                                                                      {"polluted", polluted},
+                                                                      {"desert_dust", desert_dust},
+                                                                      {"maritime", maritime},
+                                                                      {"bruneton2017", bruneton2017},
+                                                                      {"mars", mars}};
     return p;
 }
 
@@ -249,7 +262,8 @@ std::vector<std::string> Atmosphere::preset_names() {
 }
 
 Atmosphere Atmosphere::preset(const std::string& name, const std::vector<double>& wavelengths_nm) {
-    const auto it = std::find_if(presets().begin(), presets().end(), [&](const auto& p) { return p.first == name; });
+    const auto it =
+        std::find_if(presets().begin(), presets().end(), [&](const auto& p) { return p.first == name; });
     if (it == presets().end())
         throw InvalidArgument("preset", fmt::format("unknown preset '{}'; choose one of: {}", name,
                                                     fmt::join(preset_names(), ", ")));

@@ -36,7 +36,8 @@ double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
 }  // namespace
 
 TEST(Gamut, InGamutColoursAreUntouched) {
-    for (const std::array<double, 3> c : {std::array<double, 3>{0.0, 0.0, 0.0}, {1.0, 2.0, 3.0}, {0.0, 5.0, 0.1}})
+    for (const std::array<double, 3> c :
+         {std::array<double, 3>{0.0, 0.0, 0.0}, {1.0, 2.0, 3.0}, {0.0, 5.0, 0.1}})
         EXPECT_EQ(gamut_map(c, kRec709LuminanceWeights), c);
 }
 
@@ -62,8 +63,10 @@ TEST(Gamut, KeepsLuminanceAndDominantWavelength) {
             if (w != kRec709LuminanceWeights) continue;             // chromaticity: Rec.709's
             // The mapped chromaticity lies between the white point and the input's, on one line.
             const auto a = xy(c), b = xy(m);
-            const double cross = (a[0] - white[0]) * (b[1] - white[1]) - (a[1] - white[1]) * (b[0] - white[0]);
-            const double along = (a[0] - white[0]) * (b[0] - white[0]) + (a[1] - white[1]) * (b[1] - white[1]);
+            const double cross =
+                (a[0] - white[0]) * (b[1] - white[1]) - (a[1] - white[1]) * (b[0] - white[0]);
+            const double along =
+                (a[0] - white[0]) * (b[0] - white[0]) + (a[1] - white[1]) * (b[1] - white[1]);
             EXPECT_NEAR(cross, 0.0, 1e-9);
             EXPECT_GE(along, 0.0);
         }
@@ -75,7 +78,8 @@ TEST(Gamut, FloatTriplesInPlaceAndNonFiniteLeftForTheCaller) {
     float px[9] = {-0.1f, 0.5f, 1.0f, 1.0f, 1.0f, 1.0f, NAN, 1.0f, -1.0f};
     gamut_map(px, 3, kRec709LuminanceWeights);
     EXPECT_GE(std::min({px[0], px[1], px[2]}), 0.0f);
-    EXPECT_NEAR(0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2], 0.2126 * -0.1 + 0.7152 * 0.5 + 0.0722, 1e-6);
+    EXPECT_NEAR(0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2], 0.2126 * -0.1 + 0.7152 * 0.5 + 0.0722,
+                1e-6);
     EXPECT_EQ(px[3], 1.0f);
     EXPECT_TRUE(std::isnan(px[6]));
 }
@@ -89,8 +93,9 @@ TEST(Aerosol, OpticalDepthOfAnExponentialIsItsClosedForm) {
 }
 
 TEST(Aerosol, PresetsHaveTheirOpacColumnsAndTheDefaultIsAClearDay) {
-    const std::pair<const char*, double> want[] = {{"clear_day", 0.12}, {"clear", 0.064},   {"hazy", 0.327},
-                                                   {"polluted", 0.643}, {"desert_dust", 0.286}, {"maritime", 0.096}};
+    const std::pair<const char*, double> want[] = {{"clear_day", 0.12},    {"clear", 0.064},
+                                                   {"hazy", 0.327},        {"polluted", 0.643},
+                                                   {"desert_dust", 0.286}, {"maritime", 0.096}};
     // Exact where 550 nm is a channel (the spectral grid); between the default channels (480
     // and 560 nm) the log-log interpolation misses the kink of OPAC's two Angstrom exponents
     // at 500 nm by a fraction of a per cent.

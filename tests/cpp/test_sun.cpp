@@ -237,7 +237,8 @@ TEST(SunDisc, RgbPolynomialIsAPhysicalProfileWithTheLampsEnergy) {
             }
             // Against the per-pixel RGB of the spectral disc, half-way out.
             std::vector<float> spectrum(atm.channels());
-            for (std::size_t c = 0; c < atm.channels(); ++c) spectrum[c] = float(disc.radiance(c, 0.5 * alpha));
+            for (std::size_t c = 0; c < atm.channels(); ++c)
+                spectrum[c] = float(disc.radiance(c, 0.5 * alpha));
             const std::array<double, 3> want = to_rgb.convert(spectrum);
             const double mu = std::sqrt(0.75);
             for (int j = 0; j < 3; ++j) {

@@ -39,7 +39,8 @@ constexpr std::array<double, 3> luminance_weights(const std::array<double, 9>& r
     return {rgb_to_xyz[3], rgb_to_xyz[4], rgb_to_xyz[5]};
 }
 
-std::array<double, 3> gamut_map(const std::array<double, 3>& rgb, const std::array<double, 3>& luminance_weights);
+std::array<double, 3> gamut_map(const std::array<double, 3>& rgb,
+                                const std::array<double, 3>& luminance_weights);
 
 // In place on `count` packed triples (float, as the images hold them).
 void gamut_map(float* rgb, std::size_t count, const std::array<double, 3>& luminance_weights);
