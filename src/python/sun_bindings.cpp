@@ -72,7 +72,10 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
                          mu = sqrt(1 - (sin rho / sin alpha)^2)
   centre_radiance_rgb    (3,) the same in linear Rec.709, W m^-2 sr^-1
   limb_coefficients_rgb  (3, 6) so that the RGB disc is exactly
-                         centre_radiance_rgb[j] x sum_k b[j, k] mu^k
+                         centre_radiance_rgb[j] x sum_k b[j, k] mu^k; each
+                         row a convex combination of limb_coefficients' rows
+                         (a positive profile darkening to the limb), the
+                         disc's integral the lamp's colour
 )doc")
         .def_property_readonly("transmittance",
                                [](const Sun& s) { return to_readonly_array(s.radiometry.transmittance); })
