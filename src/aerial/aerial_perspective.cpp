@@ -115,7 +115,8 @@ public:
             L3[k] = float(l);
             T3[k] = float(clamp01(t));
         }
-        gamut_map(L3, 1, kRec709LuminanceWeights);  // gamut.hpp: no negative in-scattering
+        if (L3[0] < 0.0f || L3[1] < 0.0f || L3[2] < 0.0f)  // no negative in-scattering (gamut.hpp)
+            gamut_map(L3, 1, kRec709LuminanceWeights);
     }
 
 private:

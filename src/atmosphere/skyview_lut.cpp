@@ -86,8 +86,9 @@ WELKIN_ALWAYS_INLINE double zenith_angle_of(double mu) {
 WELKIN_ALWAYS_INLINE float v_of_zenith_angle(double theta, double theta_h, double beta, int h) {
     // Above: s = 1 - sqrt(1 - theta / theta_h), row j = s / s_last (h/2 - 1) (upper_row_s).
     const double s = 1.0 - std::sqrt(max_value(1.0 - theta / theta_h, 0.0));
-    const double row = min_value(s * double(h / 2 - 1) / (1.0 - 1.0 / double(h)), double(h / 2 - 1));
-    const float above = float((row + 0.5) / double(h));  // stays above the horizon
+    const double rows_per_s = double(h / 2 - 1) / (1.0 - 1.0 / double(h)), inv_h = 1.0 / double(h);
+    const double row = min_value(s * rows_per_s, double(h / 2 - 1));
+    const float above = float((row + 0.5) * inv_h);  // stays above the horizon
     const float below = max_value(float(0.5 * (1.0 + std::sqrt(max_value((theta - theta_h) / beta, 0.0)))),
                                   (float(h / 2) + 0.5f) / float(h));  // stay below it
     return theta <= theta_h ? above : below;

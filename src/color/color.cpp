@@ -198,7 +198,9 @@ void SpectrumToRgb::convert(std::span<const float> spectra, std::span<float> rgb
                                   for (std::size_t c = 0; c < n; ++c) sum += m[j * n + c] * s[c];
                                   rgb_out[3 * i + j] = float(sum);
                               }
-                              gamut_map(&rgb_out[3 * i], 1, kRec709LuminanceWeights);
+                              float* p = &rgb_out[3 * i];
+                              if (p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f)
+                                  gamut_map(p, 1, kRec709LuminanceWeights);
                           }
                       });
 }

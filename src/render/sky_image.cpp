@@ -411,7 +411,8 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
             // RGB output: the cloud's term in Rec.709, as the passes' Welkin.Clouds.rgb.
             if (clouds)
                 for (int k = 0; k < 3; ++k) d[k] += clouds->cloud[i * 3 + k];
-            gamut_map(d, 1, kRec709LuminanceWeights);  // the matrix's output into Rec.709's gamut
+            if (d[0] < 0.0f || d[1] < 0.0f || d[2] < 0.0f)  // into Rec.709's gamut (gamut.hpp)
+                gamut_map(d, 1, kRec709LuminanceWeights);
         }
         std::size_t cur = bad.load();
         while (first < cur && !bad.compare_exchange_weak(cur, first)) {

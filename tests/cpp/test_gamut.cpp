@@ -22,11 +22,15 @@ constexpr std::array<double, 9> kRec709ToXyz = {0.4124, 0.3576, 0.1805, 0.2126, 
 // ACEScg (AP1, D60; SMPTE ST 2065-1 / Academy S-2014-004): another space's weights.
 constexpr std::array<double, 3> kAcesCgLuminance = {0.2722287168, 0.6740817658, 0.0536895174};
 
-std::array<double, 2> xy(const std::array<double, 3>& c) {
+std::array<double, 3> xyz(const std::array<double, 3>& c) {
     const auto& m = kRec709ToXyz;
-    const double X = m[0] * c[0] + m[1] * c[1] + m[2] * c[2], Y = m[3] * c[0] + m[4] * c[1] + m[5] * c[2],
-                 Z = m[6] * c[0] + m[7] * c[1] + m[8] * c[2];
-    return {X / (X + Y + Z), Y / (X + Y + Z)};
+    return {m[0] * c[0] + m[1] * c[1] + m[2] * c[2], m[3] * c[0] + m[4] * c[1] + m[5] * c[2],
+            m[6] * c[0] + m[7] * c[1] + m[8] * c[2]};
+}
+
+std::array<double, 2> xy(const std::array<double, 3>& c) {
+    const auto t = xyz(c);
+    return {t[0] / (t[0] + t[1] + t[2]), t[1] / (t[0] + t[1] + t[2])};
 }
 
 double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
@@ -45,7 +49,7 @@ TEST(Gamut, KeepsLuminanceAndDominantWavelength) {
     PathRng rng(7, 0, 0);
     const std::array<double, 2> white = xy({1.0, 1.0, 1.0});
     for (const auto& w : {kRec709LuminanceWeights, kAcesCgLuminance, luminance_weights(kRec709ToXyz)}) {
-        int mapped = 0;
+        int mapped = 0, hue_checked = 0;
         for (int n = 0; n < 20000; ++n) {
             const std::array<double, 3> c = {4.0 * rng.uniform() - 1.0, 4.0 * rng.uniform() - 1.0,
                                              4.0 * rng.uniform() - 1.0};
@@ -60,7 +64,10 @@ TEST(Gamut, KeepsLuminanceAndDominantWavelength) {
             if (std::min({c[0], c[1], c[2]}) >= 0.0) continue;
             ++mapped;
             EXPECT_NEAR(std::min({m[0], m[1], m[2]}), 0.0, 1e-12);  // on the gamut's boundary
-            if (w != kRec709LuminanceWeights) continue;             // chromaticity: Rec.709's
+            // Chromaticity (Rec.709's), for colours a spectrum can have (X, Y, Z >= 0; an
+            // RGB triple with a negative X or Z has no chromaticity on the white's side).
+            const auto t = xyz(c);
+            if (w != kRec709LuminanceWeights || std::min({t[0], t[1], t[2]}) < 0.0) continue;
             // The mapped chromaticity lies between the white point and the input's, on one line.
             const auto a = xy(c), b = xy(m);
             const double cross =
@@ -69,8 +76,10 @@ TEST(Gamut, KeepsLuminanceAndDominantWavelength) {
                 (a[0] - white[0]) * (b[0] - white[0]) + (a[1] - white[1]) * (b[1] - white[1]);
             EXPECT_NEAR(cross, 0.0, 1e-9);
             EXPECT_GE(along, 0.0);
+            ++hue_checked;
         }
         EXPECT_GT(mapped, 1000);
+        if (w == kRec709LuminanceWeights) EXPECT_GT(hue_checked, 200);
     }
 }
 
