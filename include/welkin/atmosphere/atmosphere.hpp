@@ -62,7 +62,7 @@ struct Atmosphere {
     // Scattering (Rayleigh + Mie, m^-1) of channel c at altitude h.
     double scattering(std::size_t c, double altitude_m) const;
 
-    // Built-in presets (see src/presets.cpp for each one's sources). `wavelengths_nm`
+    // Built-in presets (see src/atmosphere/presets.cpp for each one's sources). `wavelengths_nm`
     // empty means the default four (620, 560, 480, 440 nm); any list of wavelengths in
     // [360, 830] nm resamples the preset's spectral models, which is how the spectral
     // mode gets many wavelengths.
