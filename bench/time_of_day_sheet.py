@@ -1,5 +1,5 @@
-"""A time-of-day contact sheet: Welkin beside Blender's own skies, sun 60, 20, 5, 1, -2 and
--6 degrees, one row each, the same camera and exposure across a row.
+"""A time-of-day contact sheet: Welkin beside Blender's own skies, sun 60, 20, 5, 1, -2, -6
+and -12 degrees, one row each, the same camera and exposure across a row.
 
     blender -b --factory-startup --python-use-system-env --python bench/time_of_day_sheet.py \
         [-- --out docs/time_of_day.png]
@@ -25,7 +25,7 @@ import sys
 import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-ELEVATIONS = (60.0, 20.0, 5.0, 1.0, -2.0, -6.0)
+ELEVATIONS = (60.0, 20.0, 5.0, 1.0, -2.0, -6.0, -12.0)
 AZIMUTH = 0.0  # the sun towards +X
 TILE_W, TILE_H = 240, 160
 LON_HALF, LAT_MIN, LAT_MAX = 60.0, -10.0, 70.0

@@ -7,8 +7,10 @@ whether the world image is already up to date.
 
 Atmosphere parameters are the preset's, with three density multipliers in the spirit of
 Blender's Nishita sky (air, dust, ozone): they scale the preset's Rayleigh scattering, its
-aerosol (Mie) scattering and extinction, and its ozone absorption. Scaling a coefficient
-is not new physics: the core still computes every number.
+aerosol (Mie) scattering and extinction, and its ozone absorption. The aerosol can instead
+be given as its optical depth at 550 nm, or as Preetham's turbidity (the core converts
+it); the aerosol multiplier then scales that. Scaling a coefficient is not new physics:
+the core still computes every number.
 """
 from __future__ import annotations
 
@@ -17,7 +19,8 @@ import math
 from types import ModuleType
 from typing import Any
 
-FALLBACK_PRESETS = ("bruneton2017", "clear", "hazy", "polluted", "mars")
+FALLBACK_PRESETS = ("clear_day", "clear", "hazy", "polluted", "desert_dust", "maritime", "mars",
+                    "bruneton2017")
 # Methods the add-on offers. "reference" (Monte-Carlo, hours at 2048 wide) is left to the
 # CLI and the module: a live sky must not freeze Blender.
 LIVE_METHODS = ("auto", "analytic", "lut", "raymarch")
@@ -30,9 +33,11 @@ COLOR_SPACES = ("rec709", "rec2020", "acescg")
 
 @dataclasses.dataclass(frozen=True)
 class SkyRequest:
-    preset: str = "bruneton2017"
+    preset: str = "clear_day"
     air_density: float = 1.0        # x Rayleigh scattering
     aerosol_density: float = 1.0    # x Mie scattering and extinction
+    aerosol_optical_depth: float = -1.0  # at 550 nm, in [0, 10]; < 0: the preset's
+    turbidity: float = -1.0         # Preetham's T in [1, 20], instead; < 0: not used
     ozone_density: float = 1.0      # x ozone absorption
     ground_albedo: float = -1.0     # < 0: the preset's
     altitude_m: float = 0.0         # observer above the ground, m (>= 0)
@@ -60,6 +65,12 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
         value = getattr(request, name)
         if not (math.isfinite(value) and 0.0 <= value <= 100.0):
             raise ValueError(f"{name}: must be in [0, 100], got {value}")
+    aod, turbidity = request.aerosol_optical_depth, request.turbidity
+    if not (math.isfinite(aod) and aod <= 10.0):
+        raise ValueError(f"aerosol_optical_depth: must be in [0, 10] (or < 0 for the preset's), "
+                         f"got {aod}")
+    if not (math.isfinite(turbidity) and (turbidity < 0.0 or 1.0 <= turbidity <= 20.0)):
+        raise ValueError(f"turbidity: must be in [1, 20] (or < 0: not used), got {turbidity}")
     if not (request.ground_albedo < 0.0 or request.ground_albedo <= 1.0):
         raise ValueError(f"ground_albedo: must be in [0, 1] (or < 0 for the preset's), got "
                          f"{request.ground_albedo}")
@@ -92,11 +103,17 @@ def resolve_method(method: str, native: ModuleType) -> str:
 
 
 def build_atmosphere(request: SkyRequest, native: ModuleType) -> Any:  # noqa: ANN401 (welkin.Atmosphere)
-    """The preset with the request's multipliers applied (validated by the core), at the
+    """The preset with the request's aerosol optical depth (or turbidity) and multipliers
+    applied (validated by the core), at the
     default four wavelengths or, `spectral`, at 360..830 nm every 10 nm (48; the colour the
     default's fitted conversion approximates, at several times the cost)."""
     atm = (native.Atmosphere.preset(request.preset, native.spectral_wavelengths_nm())
            if request.spectral else native.Atmosphere.preset(request.preset))
+    if request.turbidity >= 0.0:
+        atm.set_aerosol_optical_depth(
+            native.preetham_turbidity_to_aerosol_optical_depth(request.turbidity))
+    elif request.aerosol_optical_depth >= 0.0:
+        atm.set_aerosol_optical_depth(request.aerosol_optical_depth)
     if request.air_density != 1.0:
         atm.rayleigh_scattering = atm.rayleigh_scattering * request.air_density
     if request.aerosol_density != 1.0:

@@ -33,6 +33,7 @@
 #include "welkin/base/memory.hpp"
 #include "welkin/base/simd.hpp"
 #include "welkin/color/color.hpp"
+#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 namespace {
@@ -90,6 +91,7 @@ public:
     PassColour(const Atmosphere& atm, double exposure, ColorSpace space)
         : channels_(atm.wavelengths_nm.size()) {
         const SpectrumToRgb sky(atm.wavelengths_nm, -3.0, space), sun(atm.wavelengths_nm, 0.0, space);
+        luminance_ = sky.luminance_weights();
         const std::vector<float> solar(atm.solar_irradiance.begin(), atm.solar_irradiance.end());
         const std::array<double, 3> white = sun.convert(solar);
         sky_.resize(3 * channels_);
@@ -115,10 +117,13 @@ public:
             L3[k] = float(l);
             T3[k] = float(clamp01(t));
         }
+        if (L3[0] < 0.0f || L3[1] < 0.0f || L3[2] < 0.0f)  // no negative in-scattering (gamut.hpp)
+            gamut_map(L3, 1, luminance_);
     }
 
 private:
     std::size_t channels_;
+    std::array<double, 3> luminance_{};
     std::vector<double> sky_, sun_;  // 3 x C, row-major
 };
 

@@ -8,16 +8,25 @@
 //  * Ozone: 300 Dobson units in a tent from 10 km through 25 km to 40 km. The tent's
 //    integral is 15 km, so the peak number density is 300 DU / 15 km, times the
 //    Serdyuchenko 2014 cross-section (spectral_data.hpp).
-//  * Aerosol (Mie): beta_M(lambda) = beta_550 (lambda / 550 nm)^-alpha (Angstrom 1929),
-//    with single-scattering albedo omega. The presets differ by the aerosol's surface
-//    extinction, chosen from a meteorological visibility V by Koschmieder's relation
-//    V = 3.912 / beta_ext(550 nm) (Koschmieder 1924), its scale height, alpha, omega and
-//    asymmetry g, taken from the OPAC aerosol types (Hess, Koepke & Schult 1998,
-//    "Optical Properties of Aerosols and Clouds: The Software Package OPAC", BAMS 79).
+//  * Aerosol (Mie): the aerosol types of OPAC (Hess, Koepke & Schult 1998, "Optical
+//    Properties of Aerosols and Clouds: The Software Package OPAC", BAMS 79(5), 831-844,
+//    Table 4, relative humidity 80 %): per type the vertical optical depth at 550 nm
+//    tau_550, the single-scattering albedo omega and the asymmetry parameter g at
+//    550 nm, the Angstrom exponents over 350-500 nm and 500-800 nm, and OPAC's height
+//    profile, exp(-h / Z) through a mixing layer of height H (continental types Z = 8 km,
+//    H = 2 km; desert Z = 2 km, H = 6 km; maritime Z = 1 km, H = 2 km). Welkin takes it as
+//    one exponential with OPAC's surface extinction and column: scale height
+//    Z (1 - exp(-H / Z)) (1.77 km continental, 1.90 km desert, 0.86 km maritime), surface
+//    extinction beta_550 = tau_550 / that, OPAC's small free-tropospheric and stratospheric
+//    parts folded in so that the column keeps the type's tau_550. (The layer's sharp top
+//    itself would cost the fast methods' few steps along a ray more than its shape is
+//    worth to the sky's look.) The phase function is Henyey-Greenstein with OPAC's asymmetry parameter (its
+//    first Legendre moment is g, as the asymmetry parameter's definition asks).
 //  * Sun: ASTM G-173 extraterrestrial spectrum; angular radius 0.004675 rad.
+#include <algorithm>
 #include <cmath>
 #include <functional>
-#include <map>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -49,7 +58,7 @@ struct Aerosol {
 };
 
 Atmosphere earth(const std::string& name, const std::vector<double>& w, const Aerosol& aerosol,
-                 double ground_albedo) {
+                 const std::function<double(double)>& ground_albedo) {
     Atmosphere a;
     a.name = name;
     a.wavelengths_nm = w;
@@ -68,14 +77,9 @@ Atmosphere earth(const std::string& name, const std::vector<double>& w, const Ae
         a.mie_extinction.push_back(ext);
         a.mie_scattering.push_back(ext * aerosol.albedo(l));
         a.absorption_extinction.push_back(ozone_earth(l, 300.0));
-        a.ground_albedo.push_back(ground_albedo);
+        a.ground_albedo.push_back(ground_albedo(l));
     }
     return a;
-}
-
-double koschmieder_aerosol_extinction(double visibility_m, double lambda_nm = 550.0) {
-    // Total extinction 3.912 / V at the surface, less the Rayleigh part.
-    return std::max(0.0, 3.912 / visibility_m - rayleigh_earth(lambda_nm));
 }
 
 // Linear interpolation through (lambda, value) knots, clamped at the ends.
@@ -91,36 +95,108 @@ std::function<double(double)> knots(std::vector<std::pair<double, double>> k) {
     };
 }
 
+// An OPAC aerosol type (header): tau_550, omega, g, the Angstrom exponents below and
+// above 500 nm, and the profile (scale height Z through a mixing layer of height H).
+struct OpacType {
+    double tau_550, omega, g, alpha_blue, alpha_red, scale_height_m, mixing_layer_m;
+};
+
+// Continental clean, average and polluted, urban, desert, maritime clean (Table 4).
+constexpr OpacType kContinentalClean{0.064, 0.972, 0.709, 1.10, 1.42, 8000.0, 2000.0};
+constexpr OpacType kContinentalAverage{0.151, 0.925, 0.703, 1.11, 1.42, 8000.0, 2000.0};
+constexpr OpacType kContinentalPolluted{0.327, 0.892, 0.698, 1.13, 1.45, 8000.0, 2000.0};
+constexpr OpacType kUrban{0.643, 0.817, 0.689, 1.14, 1.43, 8000.0, 2000.0};
+constexpr OpacType kDesert{0.286, 0.888, 0.729, 0.20, 0.17, 2000.0, 6000.0};
+constexpr OpacType kMaritimeClean{0.096, 0.998, 0.772, 0.12, 0.08, 1000.0, 2000.0};
+
+// The Earth with an OPAC aerosol type whose optical depth at 550 nm is `tau_550` (the
+// type's own, or a climatology's for the same type).
+Atmosphere earth_opac(const std::string& name, const std::vector<double>& w, const OpacType& t,
+                      double tau_550, const std::function<double(double)>& ground_albedo) {
+    // OPAC's column per unit surface extinction, Z (1 - exp(-H / Z)), as the scale height
+    // of one exponential (header).
+    const double column_m = t.scale_height_m * (1.0 - std::exp(-t.mixing_layer_m / t.scale_height_m));
+    const double beta_550 = tau_550 / column_m;  // m^-1 at the ground
+    Atmosphere a = earth(name, w,
+                         Aerosol{beta_550, 0.0, [&](double) { return t.omega; }, column_m, t.g,
+                                 MiePhaseModel::HenyeyGreenstein},
+                         ground_albedo);
+    for (std::size_t c = 0; c < w.size(); ++c) {
+        // Angstrom's law in two pieces, continuous at 500 nm.
+        const double l = w[c];
+        const double f = l >= 500.0
+                             ? std::pow(l / 550.0, -t.alpha_red)
+                             : std::pow(500.0 / 550.0, -t.alpha_red) * std::pow(l / 500.0, -t.alpha_blue);
+        a.mie_extinction[c] = beta_550 * f;
+        a.mie_scattering[c] = beta_550 * f * t.omega;
+    }
+    return a;
+}
+
 // Bruneton 2017's demo atmosphere (the peer data's; see tests/data/README.md):
 // Mie extinction 5.328e-3 / 1200 m at every wavelength, albedo 0.9, g = 0.8
 // Cornette-Shanks, ground albedo 0.1.
 Atmosphere bruneton2017(const std::vector<double>& w) {
     return earth("bruneton2017", w, Aerosol{5.328e-3 / 1200.0, 0.0, [](double) { return 0.9; }, 1200.0, 0.8},
-                 0.1);
+                 [](double) { return 0.1; });
 }
 
-// Clear: clean continental aerosol (OPAC), visibility 150 km, alpha 1.1, omega 0.97,
-// g 0.7, scale height 1.2 km; green-vegetation ground albedo 0.15.
+// Ground albedos (Lambertian) through the visible, rounded readings of the USGS Spectral Library
+// (Kokaly et al. 2017, "USGS Spectral Library Version 7", Data Series 1035): green
+// vegetation (lawn grass: dark in the blue and red, the green peak at 550 nm), desert sand;
+// open sea 0.06 (Payne 1972, "Albedo of the sea surface", J. Atmos. Sci. 29, sun above
+// 30 degrees); a city's 0.12 grey (Taha 1997, "Urban climates and heat islands", Energy
+// and Buildings 25: 0.10-0.20).
+std::function<double(double)> vegetation() {
+    return knots({{400, 0.04},
+                  {450, 0.05},
+                  {500, 0.07},
+                  {550, 0.11},
+                  {600, 0.07},
+                  {650, 0.05},
+                  {690, 0.07},
+                  {720, 0.25},
+                  {760, 0.45}});
+}
+std::function<double(double)> sand() {
+    return knots({{400, 0.20}, {450, 0.25}, {550, 0.34}, {650, 0.42}, {750, 0.47}});
+}
+std::function<double(double)> grey(double albedo) {
+    return [albedo](double) { return albedo; };
+}
+
+// The weather an artist picks, each an OPAC type (header) over a ground albedo.
+// Very clear air ("clear"): continental clean, tau_550 = 0.064; green vegetation.
 Atmosphere clear(const std::vector<double>& w) {
-    return earth(
-        "clear", w,
-        Aerosol{koschmieder_aerosol_extinction(150e3), 1.1, [](double) { return 0.97; }, 1200.0, 0.7}, 0.15);
+    return earth_opac("clear", w, kContinentalClean, kContinentalClean.tau_550, vegetation());
 }
 
-// Hazy: continental average aerosol (OPAC), visibility 20 km, alpha 1.3, omega 0.93,
-// g 0.71, deeper mixing layer (scale height 2 km); ground albedo 0.15.
+// An ordinary clear day (the default): continental average aerosol with the global mean
+// optical depth of the aerosol climatologies, tau_550 = 0.12 (Kinne et al. 2013, "MAC-v1:
+// A new global aerosol climatology for climate studies", JAMES 5, 704-740: 0.12 annual
+// global mean at 550 nm); green vegetation.
+Atmosphere clear_day(const std::vector<double>& w) {
+    return earth_opac("clear_day", w, kContinentalAverage, 0.12, vegetation());
+}
+
+// Hazy: continental polluted, tau_550 = 0.327; green vegetation.
 Atmosphere hazy(const std::vector<double>& w) {
-    return earth(
-        "hazy", w,
-        Aerosol{koschmieder_aerosol_extinction(20e3), 1.3, [](double) { return 0.93; }, 2000.0, 0.71}, 0.15);
+    return earth_opac("hazy", w, kContinentalPolluted, kContinentalPolluted.tau_550, vegetation());
 }
 
-// Polluted: urban aerosol (OPAC), visibility 8 km, alpha 1.4, absorbing soot (omega 0.82),
-// g 0.69, shallow boundary layer (scale height 1.2 km); urban ground albedo 0.12.
+// Polluted: urban, tau_550 = 0.643, absorbing soot (omega 0.817); a city's grey.
 Atmosphere polluted(const std::vector<double>& w) {
-    return earth("polluted", w,
-                 Aerosol{koschmieder_aerosol_extinction(8e3), 1.4, [](double) { return 0.82; }, 1200.0, 0.69},
-                 0.12);
+    return earth_opac("polluted", w, kUrban, kUrban.tau_550, grey(0.12));
+}
+
+// Desert dust: desert, tau_550 = 0.286, nearly grey extinction; sand.
+Atmosphere desert_dust(const std::vector<double>& w) {
+    return earth_opac("desert_dust", w, kDesert, kDesert.tau_550, sand());
+}
+
+// Maritime: maritime clean, tau_550 = 0.096, sea salt (omega 0.998); open sea.
+Atmosphere maritime(const std::vector<double>& w) {
+    return earth_opac("maritime", w, kMaritimeClean, kMaritimeClean.tau_550, grey(0.06));
 }
 
 // Mars, at 1.524 AU (solar irradiance / 1.524^2, angular radius / 1.524).
@@ -163,12 +239,17 @@ Atmosphere mars(const std::vector<double>& w) {
 }
 
 using PresetFactory = Atmosphere (*)(const std::vector<double>&);
-const std::map<std::string, PresetFactory>& presets() {
-    static const std::map<std::string, PresetFactory> p{{"bruneton2017", bruneton2017},
-                                                        {"clear", clear},
-                                                        {"hazy", hazy},
-                                                        {"polluted", polluted},
-                                                        {"mars", mars}};
+// In the order offered: the default first, then by the weather, then the validation and
+// the other planet.
+const std::vector<std::pair<std::string, PresetFactory>>& presets() {
+    static const std::vector<std::pair<std::string, PresetFactory>> p{{"clear_day", clear_day},
+                                                                      {"clear", clear},
+                                                                      {"hazy", hazy},
+                                                                      {"polluted", polluted},
+                                                                      {"desert_dust", desert_dust},
+                                                                      {"maritime", maritime},
+                                                                      {"bruneton2017", bruneton2017},
+                                                                      {"mars", mars}};
     return p;
 }
 
@@ -181,7 +262,8 @@ std::vector<std::string> Atmosphere::preset_names() {
 }
 
 Atmosphere Atmosphere::preset(const std::string& name, const std::vector<double>& wavelengths_nm) {
-    const auto it = presets().find(name);
+    const auto it =
+        std::find_if(presets().begin(), presets().end(), [&](const auto& p) { return p.first == name; });
     if (it == presets().end())
         throw InvalidArgument("preset", fmt::format("unknown preset '{}'; choose one of: {}", name,
                                                     fmt::join(preset_names(), ", ")));

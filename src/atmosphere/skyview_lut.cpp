@@ -8,6 +8,19 @@
 
 namespace welkin {
 
+namespace {
+
+// The upper half's rows (j < h/2) in Hillaire's variable s = 1 - sqrt(1 - theta / theta_h)
+// (theta = theta_h (1 - (1 - s)^2), header), spread evenly from the zenith, s = 0 at row 0,
+// to s_last = 1 - 1/h at row h/2 - 1 (theta_h (1 - 1/h^2): just above the horizon). Row 0
+// is the zenith itself, where every azimuth is one direction: a lookup at the zenith reads
+// it exactly rather than a ring of texel centres half a row from it (Hillaire's texel
+// centres, s = (2j + 1)/h, put the first row 1.7 degrees from the zenith at h = 108, and a
+// zenith lookup clamps to that ring, in the sun's azimuth).
+double upper_row_s(int j, int h) { return double(j) * (1.0 - 1.0 / double(h)) / double(h / 2 - 1); }
+
+}  // namespace
+
 SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlut,
                        const MultiScatteringLut& mslut, double r, double mu_s, int width, int height,
                        int steps)
@@ -26,7 +39,7 @@ SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlu
             const double v = (double(j) + 0.5) / double(height);
             double theta;
             if (v < 0.5) {
-                const double c = 1.0 - 2.0 * v;
+                const double c = 1.0 - upper_row_s(j, height);
                 theta = theta_h_ * (1.0 - c * c);
             } else {
                 const double c = 2.0 * v - 1.0;
@@ -71,8 +84,11 @@ WELKIN_ALWAYS_INLINE double zenith_angle_of(double mu) {
 // horizon, theta = theta_h, is sky: a ray tangent to the ground does not hit it (mu = 0 from
 // the ground; geometry.hpp's ray_hits_ground), as every other method sees it.
 WELKIN_ALWAYS_INLINE float v_of_zenith_angle(double theta, double theta_h, double beta, int h) {
-    const float above = min_value(float(0.5 * (1.0 - std::sqrt(max_value(1.0 - theta / theta_h, 0.0)))),
-                                  (float(h / 2) - 0.5f) / float(h));  // stay above the horizon
+    // Above: s = 1 - sqrt(1 - theta / theta_h), row j = s / s_last (h/2 - 1) (upper_row_s).
+    const double s = 1.0 - std::sqrt(max_value(1.0 - theta / theta_h, 0.0));
+    const double rows_per_s = double(h / 2 - 1) / (1.0 - 1.0 / double(h)), inv_h = 1.0 / double(h);
+    const double row = min_value(s * rows_per_s, double(h / 2 - 1));
+    const float above = float((row + 0.5) * inv_h);  // stays above the horizon
     const float below = max_value(float(0.5 * (1.0 + std::sqrt(max_value((theta - theta_h) / beta, 0.0)))),
                                   (float(h / 2) + 0.5f) / float(h));  // stay below it
     return theta <= theta_h ? above : below;

@@ -1,6 +1,7 @@
 // The sun's disc as a radiance distribution; see sun_disc.hpp.
 #include "welkin/atmosphere/sun_disc.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -8,6 +9,7 @@
 
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 
@@ -32,28 +34,40 @@ std::vector<double> SunDisc::centre_radiance() const {
     return out;
 }
 
-SunDisc::Rgb SunDisc::rgb(std::span<const double> m) const {
+SunDisc::Rgb SunDisc::rgb(std::span<const double> m, const std::array<double, 3>& luminance) const {
     const std::size_t n = channels();
     if (m.size() != 3 * n)
         throw InvalidArgument("to_rgb", fmt::format("must hold 3 x {} values, got {}", n, m.size()));
     const std::vector<double> centre = centre_radiance();
+    // The disc's mean colour, M L_mean, in the output gamut (gamut.hpp): its integral over
+    // the disc is then the lamp's colour, gamut_map(M E_dir) / Omega.
+    std::array<double, 3> mean_rgb{};
+    for (int j = 0; j < 3; ++j)
+        for (std::size_t c = 0; c < n; ++c) mean_rgb[j] += m[std::size_t(j) * n + c] * mean_[c];
+    mean_rgb = gamut_map(mean_rgb, luminance);
     Rgb out;
     for (int j = 0; j < 3; ++j) {
-        double lc = 0.0;
-        std::array<double, 6> b{};
+        // Weights w_c of the channel's limb shape (header): M_jc L_centre,c where positive.
+        std::vector<double> w(n, 0.0);
+        double total = 0.0;
         for (std::size_t c = 0; c < n; ++c) {
-            const double w = m[std::size_t(j) * n + c] * centre[c];
-            lc += w;
-            for (int k = 0; k < 6; ++k) b[k] += w * coefficients_[c][k];
+            w[c] = std::max(0.0, m[std::size_t(j) * n + c] * centre[c]);
+            total += w[c];
         }
-        out.centre_radiance[j] = lc;
-        // A channel with no light keeps the coefficients' plain mean shape (any polynomial
-        // times 0 is 0); otherwise b / L_centre (header).
-        for (int k = 0; k < 6; ++k) {
-            double mean_a = 0.0;
-            for (std::size_t c = 0; c < n; ++c) mean_a += coefficients_[c][k] / double(n);
-            out.limb_coefficients[j][k] = lc != 0.0 ? b[k] / lc : mean_a;
+        if (!(total > 0.0)) {  // no light at all: the plain mean shape
+            std::fill(w.begin(), w.end(), 1.0);
+            total = double(n);
         }
+        // b_k = sum_c w_c a_k,c / sum_c w_c; mean of its polynomial over the disc / L_centre
+        // = sum_c w_c (L_mean,c / L_centre,c) / sum_c w_c.
+        std::array<double, 6> b{};
+        double mean_over_centre = 0.0;
+        for (std::size_t c = 0; c < n; ++c) {
+            for (int k = 0; k < 6; ++k) b[k] += w[c] / total * coefficients_[c][k];
+            mean_over_centre += w[c] / total / limb_[c].centre();
+        }
+        out.limb_coefficients[j] = b;
+        out.centre_radiance[j] = mean_rgb[j] / mean_over_centre;
     }
     return out;
 }

@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "welkin/atmosphere/aerosol.hpp"
+
 namespace welkin::cli {
 namespace {
 
@@ -22,8 +24,11 @@ int run_presets(const PresetsArgs& args) {
     }
     for (const std::string& name : names) {
         const Atmosphere a = Atmosphere::preset(name);
-        fmt::print("{:14} ground radius {:.0f} km, atmosphere {:.0f} km thick, Mie g {}\n", name,
-                   a.bottom_radius_m / 1e3, a.atmosphere_thickness_m() / 1e3, a.mie_g);
+        fmt::print(
+            "{:14} aerosol optical depth at 550 nm {:.3f}, ground radius {:.0f} km, atmosphere "
+            "{:.0f} km thick, Mie g {}{}\n",
+            name, aerosol_optical_depth(a, 550.0), a.bottom_radius_m / 1e3, a.atmosphere_thickness_m() / 1e3,
+            a.mie_g, name == kDefaultPreset ? " (default)" : "");
     }
     return 0;
 }

@@ -291,8 +291,9 @@ Command add_sky_command(CLI::App& app) {
                                   "VDB volumes, their lighting) from a scene JSON (the schema "
                                   "`welkin aerial` reads); replaces those options")
                       ->type_name("FILE.json");
-    for (const char* name : {"--preset", "--atmosphere", "--spectral", "--sun-elevation", "--sun-azimuth",
-                             "--altitude", "--method", "--exposure", "--reference-paths", "--seed"})
+    for (const char* name : {"--preset", "--atmosphere", "--spectral", "--aerosol-optical-depth",
+                             "--turbidity", "--sun-elevation", "--sun-azimuth", "--altitude", "--method",
+                             "--exposure", "--reference-paths", "--seed"})
         scene->excludes(sub->get_option(name));
     sub->footer(
         "The image covers the whole sphere: top row the zenith, +X at the centre, +Y a "

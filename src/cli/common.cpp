@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "welkin/aerial/aerial_perspective.hpp"
+#include "welkin/atmosphere/aerosol.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/base/memory.hpp"
@@ -37,7 +38,36 @@ void add_atmosphere_options(CLI::App* app, AtmosphereArgs& args) {
                   "Compute at 48 wavelengths (360-830 nm, 10 nm apart) and convert through "
                   "the CIE 1931 functions, instead of 4 (620, 560, 480, 440 nm) and a "
                   "conversion fitted to the 48-wavelength path; about 12x slower. With --preset only");
+    auto* aod = app->add_option("--aerosol-optical-depth", args.aerosol_optical_depth,
+                                "Vertical aerosol optical depth at 550 nm, in [0, 10]: scales the "
+                                "atmosphere's aerosol to it (0.05 very clear, 0.12 a clear day, "
+                                "0.3 hazy, 0.6 polluted); default: the preset's (`welkin presets`)")
+                    ->type_name("TAU")
+                    ->check(CLI::Range(0.0, 10.0));
+    app->add_option("--turbidity", args.turbidity,
+                    "Preetham's turbidity T in [1, 20] instead of --aerosol-optical-depth: "
+                    "tau_550 = (0.04608 T - 0.04586) 0.55^-1.3 (T 2: 0.10, T 3: 0.20)")
+        ->type_name("T")
+        ->check(CLI::Range(1.0, 20.0))
+        ->excludes(aod);
 }
+
+namespace {
+
+// The atmosphere with the aerosol optical depth the options ask for, if any.
+Atmosphere with_aerosol(Atmosphere atm, const AtmosphereArgs& args) {
+    if (args.turbidity >= 0.0)
+        set_aerosol_optical_depth(atm, preetham_turbidity_to_aerosol_optical_depth(args.turbidity));
+    else if (args.aerosol_optical_depth >= 0.0)
+        try {
+            set_aerosol_optical_depth(atm, args.aerosol_optical_depth);
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument("--aerosol-optical-depth", e.what());
+        }
+    return atm;
+}
+
+}  // namespace
 
 Atmosphere load_atmosphere(const AtmosphereArgs& args) {
     if (!args.file.empty()) {
@@ -47,7 +77,7 @@ Atmosphere load_atmosphere(const AtmosphereArgs& args) {
                                   "\"wavelengths_nm\" (with \"preset\" it resamples that "
                                   "preset)");
         try {
-            return Atmosphere::from_json_file(args.file);
+            return with_aerosol(Atmosphere::from_json_file(args.file), args);
         } catch (const IoError& e) {
             throw InvalidArgument("--atmosphere", e.what());
         } catch (const InvalidArgument& e) {
@@ -59,8 +89,9 @@ Atmosphere load_atmosphere(const AtmosphereArgs& args) {
         }
     }
     try {
-        return args.spectral ? Atmosphere::preset(args.preset, spectral_wavelengths_nm())
-                             : Atmosphere::preset(args.preset);
+        return with_aerosol(args.spectral ? Atmosphere::preset(args.preset, spectral_wavelengths_nm())
+                                          : Atmosphere::preset(args.preset),
+                            args);
     } catch (const InvalidArgument& e) {
         // "preset: unknown preset 'x'; choose one of: ..." -> named after the option.
         const std::string what = e.what();

@@ -37,14 +37,18 @@ Command add_aerial_command(CLI::App& app);
 Command add_plate_command(CLI::App& app);
 Command add_clouds_command(CLI::App& app);
 
-// --preset NAME | --atmosphere FILE.json, and --spectral.
+// --preset NAME | --atmosphere FILE.json, --spectral, and the aerosol's optical depth
+// (--aerosol-optical-depth TAU | --turbidity T; negative: the atmosphere's own).
 struct AtmosphereArgs {
-    std::string preset = "bruneton2017";
+    std::string preset = kDefaultPreset;
     std::string file;
     bool spectral = false;
+    double aerosol_optical_depth = -1.0;
+    double turbidity = -1.0;
 };
 void add_atmosphere_options(CLI::App* app, AtmosphereArgs& args);
-// Throws InvalidArgument naming --preset, --atmosphere or --spectral.
+// Throws InvalidArgument naming --preset, --atmosphere, --spectral, --aerosol-optical-depth
+// or --turbidity.
 Atmosphere load_atmosphere(const AtmosphereArgs& args);
 
 // --sun-elevation DEG, --sun-azimuth DEG, --altitude M.

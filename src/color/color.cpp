@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 namespace {
@@ -76,7 +77,7 @@ constexpr double kFittedSunToRgb[3][4] = {{19.0651092359, -18.9594345412, -26.81
                                           {73.9384629377, 32.8758997524, -8.142372254, -2.4481847796}};
 
 SpectrumToRgb::SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power, ColorSpace space)
-    : channels_(wavelengths_nm.size()), space_(space) {
+    : channels_(wavelengths_nm.size()), space_(space), luminance_(inverse(xyz_to_rgb_matrix(space))[1]) {
     build_rec709(wavelengths_nm, lambda_power);
     if (space == ColorSpace::Rec709) return;
     // The matrix is M_709 X, with X the spectrum's XYZ (each path's integral or fit);
@@ -180,7 +181,7 @@ std::array<double, 3> SpectrumToRgb::convert(std::span<const float> spectrum) co
     for (int j = 0; j < 3; ++j)
         for (std::size_t c = 0; c < channels_; ++c)
             rgb[j] += matrix_[j * channels_ + c] * double(spectrum[c]);
-    return rgb;
+    return gamut_map(rgb, luminance_);
 }
 
 void SpectrumToRgb::convert(std::span<const float> spectra, std::span<float> rgb_out) const {
@@ -203,6 +204,9 @@ void SpectrumToRgb::convert(std::span<const float> spectra, std::span<float> rgb
                                   for (std::size_t c = 0; c < n; ++c) sum += m[j * n + c] * s[c];
                                   rgb_out[3 * i + j] = float(sum);
                               }
+                              float* p = &rgb_out[3 * i];
+                              if (p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f)
+                                  gamut_map(p, 1, luminance_);
                           }
                       });
 }

@@ -13,6 +13,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include "welkin/atmosphere/aerosol.hpp"
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/base/error.hpp"
 
@@ -132,15 +133,18 @@ editing (every computation validates too, raising ValueError naming the field).
                 return Atmosphere::preset(name, to_vector(wavelengths_nm, "wavelengths_nm"));
             },
             py::arg("name"), py::arg("wavelengths_nm") = py::none(), R"doc(
-A built-in atmosphere: one of Atmosphere.preset_names() ("bruneton2017",
-"clear", "hazy", "polluted", "mars"; sources in src/atmosphere/presets.cpp).
+A built-in atmosphere: one of Atmosphere.preset_names() ("clear_day", the
+default, an ordinary clear day; "clear", "hazy", "polluted", "desert_dust",
+"maritime"; "bruneton2017", Bruneton's validation atmosphere; "mars"; sources
+in src/atmosphere/presets.cpp).
 
 wavelengths_nm: None for the default 620, 560, 480, 440 nm, or any sequence of
 wavelengths in [360, 830] nm (e.g. welkin.spectral_wavelengths_nm()) at which
 the preset's spectral models are evaluated.
 Raises ValueError for an unknown name or a wavelength out of range.
 )doc")
-        .def_static("preset_names", &Atmosphere::preset_names, "Names of the built-in presets.")
+        .def_static("preset_names", &Atmosphere::preset_names,
+                    "Names of the built-in presets, the default (clear_day) first.")
         .def_static(
             "from_json",
             [](const std::filesystem::path& path) { return Atmosphere::from_json_file(path.string()); },
@@ -166,6 +170,21 @@ directory or special file (a symlink is written through). Validates
 first (ValueError).
 )doc")
         .def("to_json_string", &Atmosphere::to_json_string, "The JSON text to_json writes.")
+        .def(
+            "aerosol_optical_depth",
+            [](const Atmosphere& a, double wavelength_nm) { return aerosol_optical_depth(a, wavelength_nm); },
+            py::arg("wavelength_nm") = 550.0, R"doc(
+The aerosol's vertical optical depth at a wavelength (default 550 nm), from the
+ground to the top (include/welkin/atmosphere/aerosol.hpp).
+)doc")
+        .def(
+            "set_aerosol_optical_depth",
+            [](Atmosphere& a, double tau_550) { set_aerosol_optical_depth(a, tau_550); }, py::arg("tau_550"),
+            R"doc(
+Scales the aerosol's scattering and extinction alike so that its vertical
+optical depth at 550 nm is tau_550, in [0, 10] (ValueError naming
+aerosol_optical_depth otherwise).
+)doc")
         .def("validate", &Atmosphere::validate,
              "Raises ValueError naming the first invalid field and its accepted range.")
         .def_readwrite("name", &Atmosphere::name)
@@ -232,6 +251,12 @@ first (ValueError).
                 "top {} m>",
                 a.name, a.channels(), a.bottom_radius_m, a.top_radius_m);
         });
+    m.def("preetham_turbidity_to_aerosol_optical_depth", &preetham_turbidity_to_aerosol_optical_depth,
+          py::arg("turbidity"), R"doc(
+The aerosol optical depth at 550 nm of Preetham, Shirley & Smits 1999's
+turbidity T in [1, 20]: (0.04608 T - 0.04586) 0.55^-1.3 (T 2: 0.10).
+ValueError naming turbidity outside the range.
+)doc");
 }
 
 }  // namespace welkin::python

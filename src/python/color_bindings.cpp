@@ -107,8 +107,10 @@ matrices fitted to the 48-wavelength path (lambda_power -3: sky light, 0:
 sunlight); other sets of more than three wavelengths are integrated against the
 colour-matching functions; with exactly three, each sample is extended as the
 solar spectrum times (lambda / lambda_j)^lambda_power (Bruneton 2017's
-approximate conversion): -3 for sky light, 0 for sunlight. This is the
-conversion sky_radiance(output="rgb") uses.
+approximate conversion): -3 for sky light, 0 for sunlight. A colour outside
+Rec.709's gamut is then desaturated toward white at constant luminance until no
+channel is negative (include/welkin/color/gamut.hpp). This is the conversion
+sky_radiance(output="rgb") uses.
 )doc");
 
     m.def(

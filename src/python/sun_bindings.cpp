@@ -30,7 +30,8 @@ py::array_t<double> coefficient_rows(const std::vector<std::array<double, 6>>& r
 }
 
 SunDisc::Rgb disc_rgb(const Sun& sun) {
-    return sun.disc->rgb(SpectrumToRgb(sun.wavelengths_nm, 0.0, sun.color_space).matrix());
+    const SpectrumToRgb to_rgb(sun.wavelengths_nm, 0.0, sun.color_space);
+    return sun.disc->rgb(to_rgb.matrix(), to_rgb.luminance_weights());
 }
 
 // Sunlight in linear RGB of sun.color_space: the three-sample conversion with lambda power 0 (the
@@ -75,7 +76,10 @@ The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
                          mu = sqrt(1 - (sin rho / sin alpha)^2)
   centre_radiance_rgb    (3,) the same in linear RGB of color_space, W m^-2 sr^-1
   limb_coefficients_rgb  (3, 6) so that the RGB disc is exactly
-                         centre_radiance_rgb[j] x sum_k b[j, k] mu^k
+                         centre_radiance_rgb[j] x sum_k b[j, k] mu^k; each
+                         row a convex combination of limb_coefficients' rows
+                         (a positive profile darkening to the limb), the
+                         disc's integral the lamp's colour
 )doc")
         .def_property_readonly("transmittance",
                                [](const Sun& s) { return to_readonly_array(s.radiometry.transmittance); })

@@ -27,6 +27,7 @@
 #include "welkin/base/math.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/color/color.hpp"
+#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 namespace {
@@ -410,6 +411,8 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
             // RGB output: the cloud's term in Rec.709, as the passes' Welkin.Clouds.rgb.
             if (clouds)
                 for (int k = 0; k < 3; ++k) d[k] += clouds->cloud[i * 3 + k];
+            if (to_rgb && (d[0] < 0.0f || d[1] < 0.0f || d[2] < 0.0f))  // into the space's gamut
+                gamut_map(d, 1, to_rgb->luminance_weights());
         }
         std::size_t cur = bad.load();
         while (first < cur && !bad.compare_exchange_weak(cur, first)) {

@@ -51,7 +51,7 @@ scene.world.cycles_visibility.glossy = False
 
 # The lamp's direction at frames 1 and 10 as Blender evaluates the animation; and the
 # handler at work in this session (sky and lamp follow frame_set).
-atm = welkin.Atmosphere.preset("bruneton2017")
+atm = welkin.Atmosphere.preset(welkin.Atmosphere.preset_names()[0])  # the add-on's default
 directions = {}
 for f in (1, 10, 19):
     scene.frame_set(f)

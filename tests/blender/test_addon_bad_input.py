@@ -145,7 +145,7 @@ else:
 
 # --- the real add-on.
 addon, welkin = T.install_addon()
-atm = welkin.Atmosphere.preset("bruneton2017")
+atm = welkin.Atmosphere.preset(welkin.Atmosphere.preset_names()[0])  # the add-on's default
 
 # No sun lamp: refused, nothing changed (no nodes, no images, no world created).
 scene, sun = T.new_scene()

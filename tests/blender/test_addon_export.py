@@ -14,7 +14,7 @@ import numpy as np  # noqa: E402
 addon, welkin = T.install_addon()
 scene, sun = T.new_scene(35.0, 120.0, resolution='256')
 bpy.ops.welkin.update_sky()
-atm = welkin.Atmosphere.preset("bruneton2017")
+atm = welkin.Atmosphere.preset(welkin.Atmosphere.preset_names()[0])  # the add-on's default
 s = tuple(sun.matrix_world.col[2][:3])  # the lamp's own direction, as the add-on reads it
 
 path = T.TMP / "export.exr"

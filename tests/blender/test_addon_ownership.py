@@ -21,7 +21,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
-atm = welkin.Atmosphere.preset("bruneton2017")
+atm = welkin.Atmosphere.preset(welkin.Atmosphere.preset_names()[0])  # the add-on's default
 
 
 def expect_error(fragments, operator):

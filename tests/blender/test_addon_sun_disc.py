@@ -70,7 +70,7 @@ T.check(settings.disc_image is None and not any(i.get("welkin_role") == "disc"
 T.check(not any(n.bl_idname == 'ShaderNodeTexEnvironment' and n.get("welkin_role") != "sky_texture"
                 for n in scene.world.node_tree.nodes), "a second environment texture")
 
-atm = welkin.Atmosphere.preset("bruneton2017")
+atm = welkin.Atmosphere.preset(welkin.Atmosphere.preset_names()[0])  # the add-on's default
 core = welkin.sun(atm, 0.0, s)
 E = np.asarray(core.direct_irradiance_rgb)
 alpha = float(atm.sun_angular_radius_rad)

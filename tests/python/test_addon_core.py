@@ -101,7 +101,7 @@ def disc_energy(model):
 def addon_atm():
     """The add-on's atmosphere for the default request: the preset at the library's default
     wavelengths (not conftest's 680/550/440 nm)."""
-    return welkin.Atmosphere.preset("bruneton2017")
+    return welkin.Atmosphere.preset(sky_request.SkyRequest().preset)
 
 
 def test_compute_is_the_modules_sky_disc_and_sun(addon_atm, sun_direction):
@@ -187,3 +187,22 @@ def test_pixels_written_into_a_kept_buffer():
     b[1, 3] = (4.0, 5.0, 6.0)
     out = pixels.rgba_buffer(4, 2)
     np.testing.assert_array_equal(pixels.to_blender(b, out), pixels.to_blender(b))
+
+
+def test_aerosol_optical_depth_and_turbidity_set_the_column():
+    """The panel's Aerosol Amount: an optical depth at 550 nm, or Preetham's turbidity
+    (converted by the core), sets the preset's aerosol column; the multiplier scales it."""
+    atm = sky_request.build_atmosphere(sky_request.SkyRequest(aerosol_optical_depth=0.3), welkin)
+    assert atm.aerosol_optical_depth() == pytest.approx(0.3, rel=1e-9)
+    atm = sky_request.build_atmosphere(
+        sky_request.SkyRequest(aerosol_optical_depth=0.3, aerosol_density=2.0), welkin)
+    assert atm.aerosol_optical_depth() == pytest.approx(0.6, rel=1e-9)
+    atm = sky_request.build_atmosphere(sky_request.SkyRequest(turbidity=3.0), welkin)
+    want = welkin.preetham_turbidity_to_aerosol_optical_depth(3.0)
+    assert atm.aerosol_optical_depth() == pytest.approx(want, rel=1e-9)
+    assert 0.18 < want < 0.22
+    for bad, name in ((dict(aerosol_optical_depth=11.0), "aerosol_optical_depth"),
+                      (dict(aerosol_optical_depth=math.nan), "aerosol_optical_depth"),
+                      (dict(turbidity=0.5), "turbidity")):
+        with pytest.raises(ValueError, match=name):
+            sky_request.validate(sky_request.SkyRequest(**bad), welkin)

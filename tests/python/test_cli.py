@@ -14,6 +14,7 @@ import os
 import subprocess
 import time
 
+import numpy as np
 import pytest
 
 from cli_testing import CLI, assert_ctrl_c_cancels, children_cpu_seconds, files
@@ -68,7 +69,8 @@ def test_presets_lists_the_builtin_atmospheres():
     r = welkin("presets", "--json")
     assert r.returncode == 0
     names = json.loads(r.stdout)
-    assert {"bruneton2017", "clear", "hazy", "polluted", "mars"} <= set(names)
+    assert {"clear_day", "bruneton2017", "clear", "hazy", "polluted", "desert_dust", "maritime",
+            "mars"} <= set(names)
     text = welkin("presets").stdout
     assert all(n in text for n in names)
 
@@ -436,3 +438,25 @@ def test_second_ctrl_c_during_the_exr_write_leaves_no_temporary(tmp_path):
     rc, err = _interrupt_during_write(tmp_path, 2)
     assert rc in (130, -2), err  # cancelled after the first, or ended by the second
     assert files(tmp_path) == []
+
+
+def test_presets_print_their_aerosol_optical_depth_and_the_option_sets_it(tmp_path):
+    lines = welkin("presets").stdout.splitlines()
+    assert lines[0].startswith("clear_day") and "(default)" in lines[0]
+    for line in lines:
+        if not line.startswith(("mars", "bruneton2017")):
+            tau = float(line.split("aerosol optical depth at 550 nm ")[1].split(",")[0])
+            assert 0.05 <= tau <= 0.7, line
+    base = json.loads(welkin("atmosphere", "--preset", "hazy").stdout)
+    thin = json.loads(welkin("atmosphere", "--preset", "hazy", "--aerosol-optical-depth", "0.0327").stdout)
+    # The default channels bracket 550 nm by 480 and 560 nm, across the kink of OPAC's two
+    # Angstrom exponents at 500 nm: the interpolated column is within 0.2 % of 0.327.
+    np.testing.assert_allclose(np.asarray(thin["mie"]["extinction"]),
+                               0.1 * np.asarray(base["mie"]["extinction"]), rtol=3e-3)
+    t = json.loads(welkin("atmosphere", "--turbidity", "2").stdout)
+    d = json.loads(welkin("atmosphere").stdout)
+    ratio = np.asarray(t["mie"]["extinction"]) / np.asarray(d["mie"]["extinction"])
+    np.testing.assert_allclose(ratio, 0.1007 / 0.12, rtol=2e-3)
+    r = welkin("sky", "--aerosol-optical-depth", "11", "-o", "x.exr", cwd=tmp_path)
+    assert r.returncode == 2 and "--aerosol-optical-depth" in r.stderr
+    assert not (tmp_path / "x.exr").exists()

@@ -332,8 +332,15 @@ def test_the_gil_is_released_while_computing(atm, sun_direction):
 # --- Atmosphere ---------------------------------------------------------------------------
 
 def test_preset_names_and_methods():
-    assert set(welkin.Atmosphere.preset_names()) == {"bruneton2017", "clear", "hazy",
-                                                    "polluted", "mars"}
+    names = welkin.Atmosphere.preset_names()
+    assert set(names) == {"clear_day", "clear", "hazy", "polluted", "desert_dust", "maritime",
+                          "bruneton2017", "mars"}
+    assert names[0] == "clear_day"  # the default, an ordinary clear day
+    # Its aerosol: an optical depth at 550 nm of a clear day (0.08-0.15), the others theirs.
+    assert 0.08 <= welkin.Atmosphere.preset(names[0]).aerosol_optical_depth() <= 0.15
+    hazy = welkin.Atmosphere.preset("hazy", welkin.spectral_wavelengths_nm())  # 550 nm a channel
+    assert hazy.aerosol_optical_depth(550.0) == pytest.approx(0.327)
+    assert welkin.preetham_turbidity_to_aerosol_optical_depth(2.0) == pytest.approx(0.1007, abs=1e-3)
     assert welkin.methods() == ["analytic", "lut", "raymarch", "reference", "auto"]
     for name in welkin.Atmosphere.preset_names():
         a = welkin.Atmosphere.preset(name)

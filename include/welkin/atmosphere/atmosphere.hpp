@@ -67,6 +67,7 @@ struct Atmosphere {
     // [360, 830] nm resamples the preset's spectral models, which is how the spectral
     // mode gets many wavelengths.
     static Atmosphere preset(const std::string& name, const std::vector<double>& wavelengths_nm = {});
+    // The default first (kDefaultPreset), then by the weather.
     static std::vector<std::string> preset_names();
 
     // JSON (the schema is documented in docs/pipelines.md, "Atmosphere JSON", and written by to_json).
@@ -80,6 +81,9 @@ struct Atmosphere {
     // caches of what an atmosphere determines (lut_cache.hpp) use it as their key.
     bool operator==(const Atmosphere&) const = default;
 };
+
+// The preset of an atmosphere nobody chose: an ordinary clear day (presets.cpp).
+inline constexpr const char* kDefaultPreset = "clear_day";
 
 // The default channels: 620, 560, 480 and 440 nm (above).
 const std::vector<double>& default_wavelengths_nm();

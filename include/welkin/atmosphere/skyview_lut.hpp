@@ -4,7 +4,10 @@
 //
 // Latitude: the horizon sits at zenith angle theta_h = pi - beta, cos(beta) = rho / r
 // (rho = sqrt(r^2 - R^2)). Hillaire's non-linear mapping spends texels near it:
-//   above the horizon (v < 1/2):  theta = theta_h (1 - (1 - 2v)^2)
+//   above the horizon (v < 1/2):  theta = theta_h (1 - (1 - s)^2), s = 2v at the texels'
+//                                  edges; the h/2 rows sit evenly in s from the zenith
+//                                  (row 0: s = 0, the zenith itself) to just above the
+//                                  horizon (s = 1 - 1/h), so that the pole is a row
 //   below the horizon (v > 1/2):  theta = theta_h + beta (2v - 1)^2
 // and, since the sky just above the horizon and the ground just below it differ by orders
 // of magnitude, a lookup never interpolates across v = 1/2 (the height must be even).

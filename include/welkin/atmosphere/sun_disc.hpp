@@ -15,13 +15,19 @@
 //
 // Limb darkening as a polynomial. Neckel & Labs write the centre-to-limb variation as
 // I(mu) / I(1) = sum_k a_k mu^k with mu = cos(heliocentric angle) = sqrt(1 - s^2),
-// s = sin rho / sin alpha. L(rho) = L_centre * sum_k a_k mu^k with L_centre =
-// L_mean * LD(0). The RGB disc is a linear map M (3 x C, color.hpp's sunlight conversion)
-// of the spectral one, so it is again a fifth-order polynomial in mu, exactly:
-//     L_rgb,j(mu) = sum_k mu^k sum_c M_jc L_centre,c a_k,c = L_centre,rgb,j sum_k b_jk mu^k,
-//     L_centre,rgb,j = sum_c M_jc L_centre,c (since sum_k a_k,c = 1),
-//     b_jk = sum_c M_jc L_centre,c a_k,c / L_centre,rgb,j.
-// A shader that evaluates this polynomial per RGB channel reproduces the core's disc.
+// s = sin rho / sin alpha; the profile is positive and falls from 1 at the centre to the
+// limb for every wavelength, though the a_k alternate in sign. The RGB disc is
+//     L_rgb,j(mu) = L_centre,rgb,j sum_k b_jk mu^k,   b_jk = sum_c w_jc a_k,c,
+// a convex combination of the per-wavelength profiles (w_jc >= 0, summing to 1), so each
+// channel's profile is again a physical one: positive, 1 at the centre, darkening to the
+// limb. The weights are w_jc ~ max(0, M_jc L_centre,c), with M the 3 x C sunlight matrix
+// (color.hpp): where M's entries are positive this is the exact linear map of the
+// spectral disc (b_jk = sum_c M_jc L_centre,c a_k,c / sum_c M_jc L_centre,c); a fitted
+// matrix's negative entries would otherwise make b_jk the ratio of two small numbers of
+// either sign. L_centre,rgb is set so that the disc's mean radiance is
+// gamut_map(M L_mean) (gamut.hpp): the disc integrates to the lamp's colour and is
+// never negative. A shader that evaluates this polynomial per RGB channel reproduces the
+// core's disc.
 #pragma once
 
 #include <array>
@@ -33,6 +39,7 @@
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/atmosphere/observer.hpp"
 #include "welkin/atmosphere/sun.hpp"
+#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 
@@ -51,13 +58,15 @@ public:
     // Neckel & Labs' a_0..a_5 per channel (summing to 1): L = L_centre sum_k a_k mu^k.
     const std::vector<std::array<double, 6>>& limb_coefficients() const { return coefficients_; }
 
-    // The disc in linear Rec.709 (W m^-2 sr^-1) as L_centre_rgb[j] sum_k b[j][k] mu^k
-    // (header), with `to_rgb` the 3 x C sunlight matrix (SpectrumToRgb(wl, 0).matrix()).
+    // The disc in linear RGB (W m^-2 sr^-1) as L_centre_rgb[j] sum_k b[j][k] mu^k
+    // (header), with `to_rgb` the 3 x C sunlight matrix (SpectrumToRgb(wl, 0).matrix())
+    // and `luminance` the output space's luminance weights (gamut.hpp).
     struct Rgb {
         std::array<double, 3> centre_radiance{};
         std::array<std::array<double, 6>, 3> limb_coefficients{};
     };
-    Rgb rgb(std::span<const double> to_rgb) const;
+    Rgb rgb(std::span<const double> to_rgb,
+            const std::array<double, 3>& luminance = kRec709LuminanceWeights) const;
 
     // Angle from the disc centre; the radiance of channel c there (0 outside the disc).
     // Whether the ray is above the horizon is the caller's test (it knows the ray's origin).

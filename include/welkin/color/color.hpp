@@ -53,19 +53,24 @@ public:
     SpectrumToRgb(std::span<const double> wavelengths_nm, double lambda_power = -3.0,
                   ColorSpace space = ColorSpace::Rec709);
 
+    // gamut_map(M * spectrum) (gamut.hpp): never a negative channel.
     std::array<double, 3> convert(std::span<const float> spectrum) const;
     void convert(std::span<const float> spectra, std::span<float> rgb_out) const;  // (N,C)->(N,3)
 
-    // rgb = M * spectrum: the 3 x C matrix.
+    // rgb = M * spectrum before the gamut mapping: the 3 x C matrix. Whoever applies it
+    // directly applies gamut_map() to what it outputs.
     const std::vector<double>& matrix() const { return matrix_; }
     std::size_t channels() const { return channels_; }
     ColorSpace space() const { return space_; }
+    // The space's luminance weights (the Y row of its RGB -> XYZ), for gamut_map.
+    const std::array<double, 3>& luminance_weights() const { return luminance_; }
 
 private:
     void build_rec709(std::span<const double> wavelengths_nm, double lambda_power);
 
     std::size_t channels_;
     ColorSpace space_;
+    std::array<double, 3> luminance_;
     std::vector<double> matrix_;  // 3 x C, row-major
 };
 

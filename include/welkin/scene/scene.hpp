@@ -34,7 +34,7 @@ struct SceneDescription {
     static constexpr int kVersion = 1;
     int version = kVersion;
 
-    Atmosphere atmosphere = Atmosphere::preset("bruneton2017");
+    Atmosphere atmosphere = Atmosphere::preset(kDefaultPreset);
     double origin_altitude_m = 0.0;                          // the scene origin above the ground, >= 0
     glm::dvec3 sun_direction{0.0, 0.5, 0.8660254037844386};  // towards the sun; normalised
     double exposure = 1.0;                                   // multiplies radiance once, at the output

@@ -36,6 +36,11 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         sub.prop(s, "air_density")
         sub.prop(s, "aerosol_density")
         sub.prop(s, "ozone_density")
+        col.prop(s, "aerosol_input")
+        if s.aerosol_input == 'OPTICAL_DEPTH':
+            col.prop(s, "aerosol_optical_depth")
+        elif s.aerosol_input == 'TURBIDITY':
+            col.prop(s, "turbidity")
         col.prop(s, "use_preset_albedo")
         row = col.row()
         row.active = not s.use_preset_albedo

@@ -43,6 +43,20 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
     aerosol_density: bpy.props.FloatProperty(
         name="Aerosol", default=1.0, min=0.0, max=100.0, soft_max=10.0, update=_changed,
         description="Multiplier of the preset's aerosol (Mie) scattering and extinction")
+    aerosol_input: bpy.props.EnumProperty(
+        name="Aerosol Amount", update=_changed,
+        items=(('PRESET', "Preset", "The preset's aerosol optical depth"),
+               ('OPTICAL_DEPTH', "Optical Depth", "The aerosol's vertical optical depth at 550 nm"),
+               ('TURBIDITY', "Turbidity", "Preetham's turbidity (2: a clear day, 3: light haze)")),
+        description="How the amount of aerosol (haze) is given; the Aerosol multiplier scales it")
+    aerosol_optical_depth: bpy.props.FloatProperty(
+        name="Optical Depth (550 nm)", default=0.12, min=0.0, max=10.0, soft_max=1.0, update=_changed,
+        description="Vertical aerosol optical depth at 550 nm: 0.05 very clear, 0.12 an "
+                    "ordinary clear day, 0.3 hazy, 0.6 polluted")
+    turbidity: bpy.props.FloatProperty(
+        name="Turbidity", default=2.0, min=1.0, max=20.0, soft_max=10.0, update=_changed,
+        description="Preetham's turbidity T: aerosol optical depth at 550 nm "
+                    "(0.04608 T - 0.04586) 0.55^-1.3")
     ozone_density: bpy.props.FloatProperty(
         name="Ozone", default=1.0, min=0.0, max=100.0, soft_max=10.0, update=_changed,
         description="Multiplier of the preset's ozone absorption")

@@ -67,6 +67,9 @@ def request_for(scene, settings, depsgraph=None):
         preset=settings.preset,
         air_density=settings.air_density,
         aerosol_density=settings.aerosol_density,
+        aerosol_optical_depth=(settings.aerosol_optical_depth
+                               if settings.aerosol_input == 'OPTICAL_DEPTH' else -1.0),
+        turbidity=settings.turbidity if settings.aerosol_input == 'TURBIDITY' else -1.0,
         ozone_density=settings.ozone_density,
         ground_albedo=-1.0 if settings.use_preset_albedo else settings.ground_albedo,
         altitude_m=altitude,
