@@ -2,12 +2,12 @@
 does, into a temporary scripts directory (the machine's Blender configuration is never
 touched), and build small scenes.
 
-Run by scripts/test.sh as
+Run by scripts/test_blender.sh as
     blender -b --factory-startup --python-use-system-env --python-exit-code 1 --python T
 The zip is $WELKIN_ADDON_ZIP when set (scripts/test.sh builds it once), else built here
 into the temporary directory by scripts/build_addon.sh.
 
-Blender 4.2 and later (PyPI's bpy 4.5 / 5.0, through tests/blender/bpy_blender.py) install
+Blender 4.2 and later (PyPI's bpy 4.2-5.3, through tests/blender/bpy_blender.py) install
 the Extension instead, $WELKIN_EXTENSION_ZIP (else scripts/build_extension.sh builds it),
 with bpy.ops.extensions.package_install_files as a user installs one from disk. The add-on
 package is then bl_ext.user_default.welkin; the tests' `import welkin` / `from
