@@ -91,10 +91,15 @@ class _AliasFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return None
 
     def create_module(self, spec):
-        return importlib.import_module(EXTENSION_PACKAGE + spec.name[len("welkin"):])
+        module = importlib.import_module(EXTENSION_PACKAGE + spec.name[len("welkin"):])
+        spec.loader_state = module.__spec__
+        return module
 
     def exec_module(self, module):
-        pass
+        # The import system has just set the module's __spec__ to the alias's ("welkin"):
+        # put the module's own back, so that its relative imports still agree with
+        # __package__ (Python 3.12+ warns "__package__ != __spec__.parent" otherwise).
+        module.__spec__ = module.__spec__.loader_state
 
 
 def user_repo_index():
