@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the compiled core as Python wheels, one per Python line Blender runs, and repairs
 # each so that it carries its shared libraries:
-#   dist/welkin-<version>-cp311-cp311-manylinux_<glibc>_x86_64.whl  (Blender 3.4-5.0)
+#   dist/welkin-<version>-cp311-cp311-manylinux_<glibc>_x86_64.whl  (Blender 4.2-5.0)
 #   dist/welkin-<version>-cp313-cp313-manylinux_<glibc>_x86_64.whl  (Blender 5.1 and later)
 # For each line:
 #   1. `pip wheel .` (PEP 517, scikit-build-core from pyproject.toml): only the module, for
