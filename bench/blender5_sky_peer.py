@@ -4,7 +4,9 @@ mean (green channel, linear Rec.709 W m^-2 sr^-1), and the time each takes to pr
 
     PYTHONPATH=build build/venv-bpy-5.0/bin/python bench/blender5_sky_peer.py [--docs]
 
-(PyPI's bpy 5.0 as the Python; the compiled module from build/ on PYTHONPATH.) Prints a
+(PyPI's bpy 5.0 as the Python; the compiled module from build/ on PYTHONPATH. Blender 5.1
+and later run Python 3.13: PYTHONPATH=<a folder with the cp313 wheel's module> and
+build/venv-bpy-5.3/bin/python compare with that Blender's skies.) Prints a
 markdown table, writes bench/results/blender5_sky_peer.csv, and with --docs puts the table
 into docs/validation.md between its "blender5-sky-peer" markers.
 
@@ -36,8 +38,9 @@ import numpy as np  # noqa: E402
 ELEVATIONS = (60.0, 20.0, 5.0, 0.0, -4.0)
 AZIMUTH = 0.0
 W, H = 256, 128
-MODELS = (("MULTIPLE_SCATTERING", "Blender 5.0 Multiple Scattering"),
-          ("SINGLE_SCATTERING", "Blender 5.0 Single Scattering (Nishita)"))
+_BLENDER = f"Blender {bpy.app.version[0]}.{bpy.app.version[1]}"
+MODELS = (("MULTIPLE_SCATTERING", f"{_BLENDER} Multiple Scattering"),
+          ("SINGLE_SCATTERING", f"{_BLENDER} Single Scattering (Nishita)"))
 BEGIN, END = "<!-- blender5-sky-peer:begin -->", "<!-- blender5-sky-peer:end -->"
 
 
@@ -61,8 +64,7 @@ def setup(scene, width, height, samples):
 
 def sky_world(sky_type):
     world = bpy.data.worlds.new(sky_type)
-    world.use_nodes = True
-    tree = world.node_tree
+    tree = world.node_tree  # 5.0+: every world has its tree and uses it
     node = tree.nodes.new('ShaderNodeTexSky')
     node.sky_type = sky_type
     node.sun_disc = False
@@ -100,7 +102,7 @@ def main():
                              else sys.argv[1:])
     welkin = import_welkin()
     if bpy.app.version < (5, 0, 0):
-        raise SystemExit(f"blender5_sky_peer: needs Blender 5.0's bpy, this is "
+        raise SystemExit(f"blender5_sky_peer: needs the bpy of Blender 5.0 or later, this is "
                          f"{bpy.app.version_string}")
     import atexit
     import shutil

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Installs, builds, and runs every test suite: GoogleTest (ctest), the Python module
 # (pytest), the fuzz targets for a bounded time (scripts/fuzz.sh), the headless
-# Blender tests on Blender 3.4, 4.5 and 5.0 (scripts/test_blender.sh), and the farm tests
-# (tests/farm/: Slurm on localhost, the Open Job Description template). Every suite runs
-# even when an earlier one fails; the exit status is non-zero if any failed.
+# Blender tests on Blender 3.4, 4.2, 4.5, 5.0, 5.1, 5.2 and 5.3 (scripts/test_blender.sh),
+# and the farm tests (tests/farm/: Slurm on localhost, the Open Job Description template).
+# Every suite runs even when an earlier one fails; the exit status is non-zero if any failed.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 bash scripts/install_deps.sh
-bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.5 and 5.0, for the Blender tests
+bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.2-5.3, for the Blender tests
 bash scripts/install_openjd.sh  # PyPI's openjd-cli, for the farm tests
 WELKIN_WERROR=ON bash scripts/build.sh  # warnings are errors in CI
 
@@ -30,10 +30,11 @@ echo "=== Fuzz (libFuzzer: the JSON and VDB readers, ${FUZZ_SECONDS:-30} s each)
 bash scripts/fuzz.sh fuzz_json fuzz_vdb || failed+=(fuzz)
 
 if compgen -G "tests/blender/test_*.py" >/dev/null; then
-  echo "=== Blender tests (headless: Debian's Blender 3.4, PyPI's bpy 4.5 and 5.0)"
-  # Every tests/blender/test_*.py on each version, the add-on installed from its package as
-  # a user does: the legacy zip on 3.4, the Extension (with the repaired wheel) on 4.5/5.0.
-  bash scripts/test_blender.sh -v 3.4,4.5,5.0 || failed+=(blender)
+  echo "=== Blender tests (headless: Debian's Blender 3.4, PyPI's bpy 4.2, 4.5, 5.0, 5.1, 5.2, 5.3)"
+  # Every tests/blender/test_*.py on each version, every version a gate, the add-on
+  # installed from its package as a user does: the legacy zip on 3.4, the Extension (with
+  # the repaired cp311 and cp313 wheels) on 4.2-5.3.
+  bash scripts/test_blender.sh -v 3.4,4.2,4.5,5.0,5.1,5.2,5.3 || failed+=(blender)
 fi
 
 echo "=== Farm tests (Slurm on localhost, the Open Job Description template: tests/farm/)"

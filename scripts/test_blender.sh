@@ -1,24 +1,28 @@
 #!/usr/bin/env bash
 # Runs the headless Blender tests (tests/blender/test_*.py) on every Blender Welkin
 # supports, each with the add-on installed from its built package, as a user installs it:
-#   3.4  Debian's `blender`, the legacy add-on zip (scripts/build_addon.sh: the module
-#        built by scripts/build.sh for /usr/bin/python3 in welkin/_native/);
-#   4.5  PyPI's bpy 4.5 LTS in build/venv-bpy-4.5, and
-#   5.0  PyPI's bpy 5.0 in build/venv-bpy-5.0 (scripts/install_blender_venvs.sh), through
-#        tests/blender/bpy_blender.py (Blender's command line over the bpy module); both
-#        install the Extension (scripts/build_extension.sh), which carries the compiled core
-#        as the repaired wheel (scripts/build_wheel.sh), from its zip.
-# The packages are built once, into build/blender_dist/; the wheel is checked outside
-# Blender too (scripts/check_wheel.sh). Every test runs on every version
-# even when one fails; a test that cannot run on a version prints "SKIPPED ... : reason".
-# Prints each suite's time; the exit status is non-zero if any test failed. A test that
-# runs longer than $WELKIN_TEST_TIMEOUT seconds (900) is stopped and fails.
+#   3.4            Debian's `blender`, the legacy add-on zip (scripts/build_addon.sh: the
+#                  module built by scripts/build.sh for /usr/bin/python3 in welkin/_native/);
+#   4.2, 4.5, 5.0  PyPI's bpy (Python 3.11) and
+#   5.1, 5.2, 5.3  PyPI's bpy (Python 3.13), in build/venv-bpy-<version>
+#                  (scripts/install_blender_venvs.sh), through tests/blender/bpy_blender.py
+#                  (Blender's command line over the bpy module); each installs the one
+#                  Extension (scripts/build_extension.sh) from its zip, which carries the
+#                  compiled core as repaired wheels for cp311 and cp313
+#                  (scripts/build_wheel.sh), and Blender takes the wheel of its Python.
+# The packages are built once, into build/blender_dist/; each wheel is checked outside
+# Blender too, in a venv of its own Python (scripts/check_wheel.sh). Every test runs on
+# every version even when one fails; a test that cannot run on a version prints
+# "SKIPPED ... : reason". Prints each suite's time; the exit status is non-zero if any test
+# failed. A test that runs longer than $WELKIN_TEST_TIMEOUT seconds (900) is stopped and
+# fails.
 #
-#   bash scripts/test_blender.sh [-v 3.4,4.5,5.0] [tests/blender/test_<name>.py ...]
+#   bash scripts/test_blender.sh [-v 3.4,4.2,4.5,5.0,5.1,5.2,5.3] [tests/blender/test_<name>.py ...]
 set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-versions=3.4,4.5,5.0
+all_versions=3.4,4.2,4.5,5.0,5.1,5.2,5.3
+versions=$all_versions
 if [[ ${1:-} == -v ]]; then
   versions=$2
   shift 2
@@ -50,8 +54,8 @@ need_extension=0
 for v in "${versions[@]}"; do
   case $v in
     3.4) ;;
-    4.5 | 5.0) need_extension=1 ;;
-    *) echo "test_blender: unknown Blender version $v (3.4, 4.5, 5.0)" >&2; exit 2 ;;
+    4.2 | 4.5 | 5.0 | 5.1 | 5.2 | 5.3) need_extension=1 ;;
+    *) echo "test_blender: unknown Blender version $v ($all_versions)" >&2; exit 2 ;;
   esac
 done
 
@@ -66,15 +70,12 @@ if [[ " ${versions[*]} " == *" 3.4 "* ]]; then
 fi
 if ((need_extension)); then
   rm -f "$dist"/welkin-*.whl "$dist"/welkin-*-linux_x64.zip
-  # The wheel for Blender's Python 3.11, built by the 4.5 venv's interpreter's base Python.
-  wheel_python=$(build/venv-bpy-4.5/bin/python -c 'import sys; print(sys._base_executable)' \
-                 2>/dev/null || echo python3)
-  if WELKIN_WHEEL_PYTHON=$wheel_python bash scripts/build_wheel.sh "$dist" &&
-     WELKIN_WHEEL=$(ls "$dist"/welkin-*manylinux*.whl) bash scripts/build_extension.sh "$dist"; then
+  # The wheels for Blender's Pythons, 3.11 and 3.13 (scripts/find_python.sh finds them).
+  if bash scripts/build_wheel.sh "$dist" &&
+     WELKIN_WHEELS="$(echo "$dist"/welkin-*manylinux*.whl)" bash scripts/build_extension.sh "$dist"; then
     export WELKIN_EXTENSION_ZIP=$dist/welkin-$version-linux_x64.zip
-    echo "--- the wheel outside Blender (scripts/check_wheel.sh)"
-    WELKIN_CHECK_PYTHON=$wheel_python bash scripts/check_wheel.sh "$dist"/welkin-*manylinux*.whl ||
-      failed+=(check_wheel)
+    echo "--- the wheels outside Blender (scripts/check_wheel.sh)"
+    bash scripts/check_wheel.sh "$dist"/welkin-*manylinux*.whl || failed+=(check_wheel)
   else
     failed+=(build_extension)
   fi

@@ -7,7 +7,9 @@ is itself called `welkin`, so the compiled module is imported under the dotted n
 of that name); a top-level `welkin` elsewhere on sys.path is never picked up by mistake.
 
 As a Blender Extension (4.2+) there is no `_native/`: the compiled module comes as the wheel
-(scripts/build_wheel.sh) that Blender installs into the extensions' site-packages, a
+(scripts/build_wheel.sh) that Blender installs into the extensions' site-packages (the
+Extension carries one for Python 3.11, Blender 4.2-5.0, and one for 3.13, Blender 5.1 and
+later; Blender installs the one of its Python), a
 top-level extension module file `welkin<suffix>`. It is found by that file name on
 sys.path, never by `import welkin` (which may give this add-on: Blender 3.x puts the
 add-ons folder on sys.path, where this package is `welkin`). It is loaded as `welkin` when
@@ -28,10 +30,11 @@ import sys
 import types
 
 NATIVE_DIR = pathlib.Path(__file__).resolve().parent / "_native"
-BUILD_HINT = ("Welkin needs Blender 3.4 or later with Python 3.11 on x86-64 Linux: for "
-              "Blender 4.2 and later install the Extension (welkin-<version>-linux_x64.zip, "
-              "scripts/build_extension.sh), for 3.4-4.1 the add-on zip "
-              "(scripts/build_addon.sh)")
+BUILD_HINT = ("Welkin needs Blender 3.4 or later on x86-64 Linux, with Python 3.11 "
+              "(Blender 3.4-5.0) or 3.13 (5.1 and later): for Blender 4.2 and later install "
+              "the Extension (welkin-<version>-linux_x64.zip, scripts/build_extension.sh; "
+              "it carries the module for both), for 3.4-4.1 the add-on zip "
+              "(scripts/build_addon.sh, Python 3.11)")
 
 _cache: dict[str, tuple[types.ModuleType | None, str | None]] = {}
 

@@ -25,6 +25,8 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
+from welkin.blender import compat  # noqa: E402
+
 W, H = 256, 128
 scene, sun = T.new_scene(40.0, 30.0, resolution=str(W))
 T.panoramic_camera(scene, W, H, samples=4)
@@ -39,8 +41,7 @@ bpy.ops.welkin.update_sky()
 ALBEDO = 0.8
 bpy.ops.mesh.primitive_plane_add(size=2000.0, location=(0.0, 0.0, -1.0))
 plane_material = bpy.data.materials.new("White")
-plane_material.use_nodes = True
-nodes = plane_material.node_tree.nodes
+nodes = compat.material_node_tree(plane_material).nodes
 nodes.remove(nodes["Principled BSDF"])
 lambert = nodes.new('ShaderNodeBsdfDiffuse')  # roughness 0: Lambert
 lambert.inputs["Color"].default_value = (ALBEDO, ALBEDO, ALBEDO, 1.0)

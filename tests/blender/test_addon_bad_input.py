@@ -6,6 +6,8 @@ data is lost."""
 import importlib
 import math
 import os
+import pathlib
+import re
 import sys
 import zipfile
 
@@ -44,27 +46,28 @@ def broken_zip(name, rename_module_to=None):
 
 
 def broken_extension(name, python_tag=None):
-    """The Extension zip without its wheel (python_tag None), or with the wheel relabelled
-    as built for another Python (its file name, tags and module file)."""
+    """The Extension zip without its wheels (python_tag None), or with only one wheel,
+    relabelled as built for another Python (its file name, tags and manifest entry)."""
     good = T.extension_zip()
     path = T.TMP / name
     with zipfile.ZipFile(good) as src, zipfile.ZipFile(path, "w") as dst:
-        wheel_name = next(i.filename for i in src.infolist() if i.filename.endswith(".whl"))
+        wheels = [i.filename for i in src.infolist() if i.filename.endswith(".whl")]
+        T.check(len(wheels) == 2, f"the Extension carries {wheels}, not a cp311 and a cp313 wheel")
+        renamed = None
+        if python_tag is not None:
+            renamed = re.sub(r"cp3\d+-cp3\d+", f"{python_tag}-{python_tag}", wheels[0])
         for item in src.infolist():
             data = src.read(item)
-            if item.filename == wheel_name:
-                if python_tag is None:
-                    continue
-                renamed = wheel_name.replace("cp311-cp311", f"{python_tag}-{python_tag}")
-                dst.writestr(renamed, data)
+            if item.filename in wheels:
+                if item.filename == wheels[0] and renamed is not None:
+                    dst.writestr(renamed, data)
             elif item.filename.endswith("blender_manifest.toml"):
-                text = data.decode()
-                lines = text.splitlines(keepends=True)
-                if python_tag is None:
+                lines = data.decode().splitlines(keepends=True)
+                if renamed is None:
                     lines = [line for line in lines if not line.startswith("wheels")]
                 else:
-                    lines = [line.replace("cp311-cp311", f"{python_tag}-{python_tag}")
-                             for line in lines]
+                    lines = [f'wheels = ["./wheels/{pathlib.PurePosixPath(renamed).name}"]\n'
+                             if line.startswith("wheels") else line for line in lines]
                 dst.writestr(item, "".join(lines))
             else:
                 dst.writestr(item, data)
@@ -87,7 +90,8 @@ def check_registered_without_module(label, fragment, hint):
     native = importlib.import_module(package + ".native")
     T.check(native.module() is None and fragment in native.message(),
             f"{label}: message {native.message()!r} lacks {fragment!r}")
-    T.check(hint in native.message() and "Python 3.11" in native.message(),
+    T.check(hint in native.message() and "Python 3.11" in native.message()
+            and "3.13" in native.message(),
             f"{label}: the message does not say which Blender, Python and file to use")
     scene, _sun = T.new_scene()
     shown = T.draw_panel(scene)

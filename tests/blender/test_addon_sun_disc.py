@@ -150,11 +150,15 @@ energy_e, light_e, _zone, sky_e = measure(img, "EEVEE")
 T.check(np.isfinite(img).all(), "EEVEE: non-finite pixels")
 # EEVEE Next (4.2+) renders into half floats: the disc's radiance (~1e7 W m^-2 sr^-1 at
 # exposure 1) is clipped at 65504 there, so its shape is measured with that ceiling and its
-# energy only where it is not clipped (EEVEE of 3.x).
+# energy only where it is not clipped (EEVEE of 3.x). 4.2-5.2 clip each channel there;
+# 5.3 scales the colour as a whole (its hue kept), so that only the brightest channel
+# reaches 65504: the shape is measured on the channel that reaches the ceiling.
 HALF_MAX = 65504.0
-clipped = abs(float(img[..., 1].max()) / HALF_MAX - 1.0) < 0.01
-ceiling = np.minimum(ref, 0.99 * HALF_MAX) if clipped else ref
-area_e = float((np.clip(light_e[..., 1] / ceiling, 0.0, 1.0) * zone * omega).sum())
+c = int(np.argmax(img.reshape(-1, 3).max(axis=0)))
+clipped = abs(float(img[..., c].max()) / HALF_MAX - 1.0) < 0.01
+ref_c = profile(np.minimum(rho, alpha))[..., c]
+ceiling = np.minimum(ref_c, 0.99 * HALF_MAX) if clipped else ref_c
+area_e = float((np.clip(light_e[..., c] / ceiling, 0.0, 1.0) * zone * omega).sum())
 err_e = energy_e / E - 1.0
 print(f"EEVEE ({scene.render.engine}): disc solid angle ratio {area_e / area_ref:.4f}, "
       f"energy {energy_e} W m^-2 ({'clipped at 65504' if clipped else 'error'} "

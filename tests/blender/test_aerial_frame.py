@@ -39,8 +39,7 @@ W, H = 128, 64
 
 def material(name, colour, with_group=False):
     m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    bsdf = m.node_tree.nodes["Principled BSDF"]
+    bsdf = compat.material_node_tree(m).nodes["Principled BSDF"]
     bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
     if with_group:  # a user's node group and a second output
         g = bpy.data.node_groups.new("User Tint", 'ShaderNodeTree')

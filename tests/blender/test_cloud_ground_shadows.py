@@ -49,8 +49,7 @@ ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1600.0, coverage=0.
 bpy.ops.mesh.primitive_plane_add(size=8000.0, location=(0.0, 0.0, 0.0))
 ground = bpy.context.active_object
 material = bpy.data.materials.new("White")
-material.use_nodes = True
-nodes = material.node_tree.nodes
+nodes = compat.material_node_tree(material).nodes
 nodes.remove(nodes["Principled BSDF"])
 diffuse = nodes.new('ShaderNodeBsdfDiffuse')
 diffuse.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)

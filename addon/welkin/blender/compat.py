@@ -1,7 +1,7 @@
 """Differences between the Blender versions Welkin supports (3.4, 4.2 LTS, 4.5 LTS, 5.0-5.3),
 in one place. The rest of the add-on calls these functions and never tests
 bpy.app.version itself, so a new Blender is one edit here. Each function says which
-versions differ and how (checked against the real 3.4, 4.5 and 5.0 by tests/blender/).
+versions differ and how (checked against each of them by tests/blender/).
 """
 import os
 import warnings
@@ -51,6 +51,28 @@ def set_world_uses_nodes(world, value):
     no-op and is left alone."""
     if not at_least(5, 0):
         world.use_nodes = bool(value)
+
+
+def material_node_tree(material):
+    """The material's shader node tree, made to drive the material. 3.4-4.5: a material
+    renders its nodes only with use_nodes on (switching it on creates the tree). 5.0:
+    Material.use_nodes is deprecated (a warning, removed in 6.0), every material has its
+    tree and uses it, so it is not set."""
+    if not at_least(5, 0):
+        material.use_nodes = True
+    elif material.node_tree is None:  # not seen in 5.0-5.3, where new materials carry a tree
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            material.use_nodes = True
+    return material.node_tree
+
+
+def material_uses_nodes(material):
+    """Whether the material renders through its node tree: use_nodes with a tree in
+    3.4-4.5; from 5.0 any material with a tree (reading use_nodes there warns)."""
+    if material.node_tree is None:
+        return False
+    return True if at_least(5, 0) else material.use_nodes
 
 
 def world_sun_threshold(world):

@@ -421,7 +421,7 @@ def shader_group(fetch=None):
 
 def _materials():
     return [m for m in bpy.data.materials
-            if m.library is None and m.node_tree is not None and getattr(m, "use_nodes", True)]
+            if m.library is None and compat.material_uses_nodes(m)]
 
 
 def install_materials():

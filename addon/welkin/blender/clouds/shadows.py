@@ -64,8 +64,8 @@ def _material(world, image, sun_direction):
     if mat is None:
         mat = bpy.data.materials.new(NAME)
         mat[SHADOW_KEY] = world.name_full
-        mat.use_nodes = True
-        nodes, links = mat.node_tree.nodes, mat.node_tree.links
+        tree = compat.material_node_tree(mat)
+        nodes, links = tree.nodes, tree.links
         nodes.clear()
         out = nodes.new("ShaderNodeOutputMaterial")
         bsdf = nodes.new("ShaderNodeBsdfTransparent")
