@@ -8,6 +8,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 bash scripts/install_deps.sh
 bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.5 and 5.0, for the Blender tests
+bash scripts/install_ephemeris_venv.sh  # Skyfield + DE421 from PyPI: the positions tests' reference
 WELKIN_WERROR=ON bash scripts/build.sh  # warnings are errors in CI
 
 failed=()

@@ -1,8 +1,10 @@
 // `welkin sun`: the sun at the observer, as JSON: transmittance, direct irradiance per
 // wavelength and in RGB (what a Blender sun lamp should carry so that sky and sun agree).
 #include <memory>
+#include <optional>
 
 #include "common.hpp"
+#include "place_and_time.hpp"
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -16,9 +18,11 @@ namespace {
 struct SunArgs {
     AtmosphereArgs atmosphere;
     ObserverArgs observer;
+    PlaceTimeArgs place_time;
 };
 
-int run_sun(const SunArgs& args) {
+int run_sun(SunArgs args) {
+    const std::optional<PlaceTime> place_time = resolve_place_time(args.place_time, args.observer);
     const Atmosphere atm = load_atmosphere(args.atmosphere);
     const Observer observer = make_observer(args.observer);
     const SunRadiometry sun = sun_radiometry(atm, observer);
@@ -45,6 +49,7 @@ int run_sun(const SunArgs& args) {
         j["direct_irradiance_rgb_W_m2"] = rgb;
         j["disc_mean_radiance_rgb_W_m2_sr"] = {rgb[0] / omega, rgb[1] / omega, rgb[2] / omega};
     }
+    if (place_time) j["place_and_time"] = place_time->json();
     fmt::print("{}\n", j.dump(2));
     return 0;
 }
@@ -57,10 +62,14 @@ Command add_sun_command(CLI::App& app) {
         "sun", "Print the sun's transmittance and direct irradiance at the observer (JSON)");
     add_atmosphere_options(sub, args->atmosphere);
     add_observer_options(sub, args->observer);
+    add_place_time_options(sub, args->place_time);
     sub->footer(
         "direct_irradiance is the normal-incidence irradiance of the sun's disc at the "
         "observer, E_sun * T * visible fraction (W m^-2 nm^-1 per wavelength; linear "
-        "Rec.709 W m^-2 for the RGB triple): the strength of a matching Blender sun lamp.");
+        "Rec.709 W m^-2 for the RGB triple): the strength of a matching Blender sun lamp. "
+        "With --time, --latitude and --longitude the sun is placed from the place and the moment, and "
+        "place_and_time holds the apparent sun and moon (elevation, "
+        "azimuth clockwise from north) and the moon's illuminated fraction.");
     return {sub, [args] { return run_sun(*args); }};
 }
 
