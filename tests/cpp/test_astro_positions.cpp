@@ -40,7 +40,8 @@ TEST(AstroPositions, SunMatchesSpaPublishedCase) {
     EXPECT_NEAR(r.delta_t_s, 64.184, 1e-6);  // 32 leap seconds + 32.184 s in 2003
     // The sun's distance that day (SPA: R = 0.9965422974 au from the Earth's centre); the
     // observer is nearer by about the Earth's radius times the sine of the sun's elevation.
-    const double geocentric_m = r.sun.distance_m + 6371e3 * std::sin(r.sun.airless_elevation_deg * M_PI / 180.0);
+    const double geocentric_m =
+        r.sun.distance_m + 6371e3 * std::sin(r.sun.airless_elevation_deg * M_PI / 180.0);
     EXPECT_NEAR(geocentric_m / 149597870.7e3, 0.9965422974, 2e-6);
 }
 

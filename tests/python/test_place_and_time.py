@@ -211,3 +211,31 @@ def test_cli_bad_place_or_time_names_the_option(tmp_path, args, option):
         assert done.returncode == 2, done.stderr
         assert option in done.stderr and "\n" not in done.stderr.strip()
         assert not (tmp_path / "x.exr").exists()
+
+
+def test_sky_image_at_is_the_cli_image(tmp_path):
+    out = tmp_path / "night.exr"
+    night = ("--latitude", "48.8566", "--longitude", "2.3522", "--time", "2026-06-30T01:30:00+02:00")
+    _cli("sky", *night, "--width", "64", "--method", "lut", "-o", out)
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    img = welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", 48.8566, 2.3522, 64, method="lut")
+    assert img.shape == (32, 64, 3) and img.dtype == np.float32
+    assert np.isfinite(img).all() and (img >= 0).all()
+    assert np.array_equal(img.astype(np.float64), _read_rgb(out))
+    # Night: the sun 18 degrees down, the full moon up; discs=False removes the moon's disc
+    # and nothing else.
+    no_disc = welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", 48.8566, 2.3522, 64, method="lut",
+                                  discs=False)
+    assert (img >= no_disc).all() and img.sum() > no_disc.sum()
+
+
+def test_sky_image_at_bad_input_names_the_parameter():
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    with pytest.raises(ValueError, match="width"):
+        welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", 48.8, 2.3, 15)
+    with pytest.raises(ValueError, match="latitude_deg"):
+        welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", -95.0, 2.3, 16)
+    with pytest.raises(ValueError, match="time"):
+        welkin.sky_image_at(atm, "yesterday", 48.8, 2.3, 16)
+    with pytest.raises(ValueError, match="method"):
+        welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", 48.8, 2.3, 16, method="magic")
