@@ -44,6 +44,7 @@ nlohmann::ordered_json place_and_time_json(const CivilTime& time, const Place& p
     moon["phase_angle_deg"] = sky.moon_phase_angle_deg;
     moon["illuminated_fraction"] = sky.moon_illuminated_fraction;
     moon["age_angle_deg"] = sky.moon_age_angle_deg;
+    moon["irradiance_ratio"] = sky.moon_irradiance_ratio;
     moon["sun_direction_from_moon"] = sky.sun_from_moon_enu;
     return {{"time", format_iso8601(time)},
             {"utc", format_iso8601_utc(time)},

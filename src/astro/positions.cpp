@@ -8,6 +8,7 @@
 #include <erfa.h>
 #include <erfam.h>
 
+#include "welkin/astro/moonlight.hpp"
 #include "welkin/base/error.hpp"
 
 namespace welkin {
@@ -217,6 +218,8 @@ SunAndMoon sun_and_moon(const Instant& when, const Place& where) {
     const double c = dot(unit(moon_to_sun), unit(moon_to_observer));
     out.moon_phase_angle_deg = std::acos(std::clamp(c, -1.0, 1.0)) * ERFA_DR2D;
     out.moon_illuminated_fraction = 0.5 * (1.0 + c);
+    out.moon_irradiance_ratio = moon_irradiance_ratio(
+        std::min(180.0, out.moon_phase_angle_deg), moon_distance_au * ERFA_DAU, norm(moon_to_sun) * ERFA_DAU);
     // Waxing or waning: the moon's ecliptic longitude minus the sun's, of date.
     const double eps = eraObl06(when.tt1, when.tt2);
     const auto ecliptic_longitude = [&](const Vec& gcrs) {

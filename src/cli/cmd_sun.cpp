@@ -49,7 +49,24 @@ int run_sun(SunArgs args) {
         j["direct_irradiance_rgb_W_m2"] = rgb;
         j["disc_mean_radiance_rgb_W_m2_sr"] = {rgb[0] / omega, rgb[1] / omega, rgb[2] / omega};
     }
-    if (place_time) j["place_and_time"] = place_time->json();
+    if (place_time) {
+        // A moon lamp: the moon's light through the air towards it (a "sun" of the moon's
+        // size there), times its brightness relative to the sun's (astro/moonlight.hpp).
+        Atmosphere moon_atm = atm;
+        moon_atm.sun_angular_radius_rad = place_time->sky.moon.angular_radius_deg * kDegree;
+        Observer lit = observer;
+        const auto& m = place_time->sky.moon.direction_enu;
+        lit.sun_direction = {m[0], m[1], m[2]};
+        const SunRadiometry moon = sun_radiometry(moon_atm, lit.validated());
+        std::vector<double> e(moon.direct_irradiance);
+        for (double& v : e) v *= place_time->sky.moon_irradiance_ratio;
+        j["moon_direct_irradiance_W_m2_nm"] = e;
+        if (atm.channels() >= 3) {
+            const std::vector<float> ef(e.begin(), e.end());
+            j["moon_direct_irradiance_rgb_W_m2"] = SpectrumToRgb(atm.wavelengths_nm, 0.0).convert(ef);
+        }
+        j["place_and_time"] = place_time->json();
+    }
     fmt::print("{}\n", j.dump(2));
     return 0;
 }
@@ -69,7 +86,8 @@ Command add_sun_command(CLI::App& app) {
         "Rec.709 W m^-2 for the RGB triple): the strength of a matching Blender sun lamp. "
         "With --time, --latitude and --longitude the sun is placed from the place and the moment, and "
         "place_and_time holds the apparent sun and moon (elevation, "
-        "azimuth clockwise from north) and the moon's illuminated fraction.");
+        "azimuth clockwise from north) and the moon's illuminated fraction; "
+        "moon_direct_irradiance is then the moon's, the strength of a moon lamp.");
     return {sub, [args] { return run_sun(*args); }};
 }
 

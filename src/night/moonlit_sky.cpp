@@ -147,15 +147,7 @@ Moon moon_at(const SunAndMoon& sky) {
     const auto& s = sky.sun_from_moon_enu;
     moon.sun_from_moon = {s[0], s[1], s[2]};
     moon.angular_radius_rad = sky.moon.angular_radius_deg * kDegree;
-    // The sun's distance from the moon: the observer's vectors to both.
-    const auto& d = sky.sun.direction_enu;
-    double sun_moon2 = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        const double v = d[k] * sky.sun.distance_m - m[k] * sky.moon.distance_m;
-        sun_moon2 += v * v;
-    }
-    moon.irradiance_ratio = moon_irradiance_ratio(std::min(180.0, sky.moon_phase_angle_deg),
-                                                  sky.moon.distance_m, std::sqrt(sun_moon2));
+    moon.irradiance_ratio = sky.moon_irradiance_ratio;
     return moon;
 }
 

@@ -239,3 +239,35 @@ def test_sky_image_at_bad_input_names_the_parameter():
         welkin.sky_image_at(atm, "yesterday", 48.8, 2.3, 16)
     with pytest.raises(ValueError, match="method"):
         welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", 48.8, 2.3, 16, method="magic")
+
+
+def test_cli_sun_gives_the_moon_lamp():
+    j = json.loads(_cli("sun", *PARIS).stdout)
+    moon = j["place_and_time"]["moon"]
+    # Allen's magnitude-phase law at the moon's and (to 0.5 %, the moon's distance from the
+    # observer against the sun's) the sun's distances.
+    alpha = moon["phase_angle_deg"]
+    v = -12.73 + 0.026 * alpha + 4e-9 * alpha ** 4
+    sun_au = j["place_and_time"]["sun"]["distance_m"] / 149597870.7e3
+    expected = 10 ** (-0.4 * (v + 26.74)) * (384400e3 / moon["distance_m"]) ** 2 / sun_au ** 2
+    assert moon["irradiance_ratio"] == pytest.approx(expected, rel=0.01)
+    # The moon lamp is the sunlight a sun at the moon's place would give, times that ratio.
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    lit = welkin.sun(atm, 0.0, tuple(moon["direction"]))
+    assert np.allclose(j["moon_direct_irradiance_W_m2_nm"],
+                       np.asarray(lit.direct_irradiance) * moon["irradiance_ratio"], rtol=1e-6)
+    assert np.allclose(j["moon_direct_irradiance_rgb_W_m2"],
+                       np.asarray(lit.direct_irradiance_rgb) * moon["irradiance_ratio"], rtol=1e-5)
+
+
+def test_sky_image_at_anywhere_anytime_is_finite_and_non_negative():
+    # Poles, the date line, new and full moons, the moon below the horizon, day and night.
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    rng = np.random.default_rng(3)
+    places = [(90.0, 0.0), (-90.0, 180.0), (0.0, -180.0), (69.6, 18.9), (-33.9, 151.2)]
+    for k in range(15):
+        lat, lon = places[k % len(places)]
+        time = f"{int(rng.integers(1900, 2101)):04d}-{int(rng.integers(1, 13)):02d}-" \
+               f"{int(rng.integers(1, 29)):02d}T{int(rng.integers(0, 24)):02d}:00:00Z"
+        img = welkin.sky_image_at(atm, time, lat, lon, 16, method="lut")
+        assert np.isfinite(img).all() and (img >= 0).all(), (time, lat, lon)

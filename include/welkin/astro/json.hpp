@@ -15,7 +15,7 @@ namespace welkin {
 //  "sun":  {"elevation_deg", "azimuth_deg", "airless_elevation_deg", "distance_m",
 //           "angular_radius_deg", "right_ascension_deg", "declination_deg", "direction"},
 //  "moon": {the same, and "phase_angle_deg", "illuminated_fraction", "age_angle_deg",
-//           "sun_direction_from_moon"}}
+//           "irradiance_ratio", "sun_direction_from_moon"}}
 // Directions are unit vectors in the scene frame with north along +Y: x east, y north,
 // z up. `time` is the civil time as given (ISO 8601 with its offset), `utc` the same
 // moment in UTC.

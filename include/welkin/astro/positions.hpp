@@ -69,6 +69,11 @@ struct SunAndMoon {
     // longitude difference, in [0, 360): 0 new, 90 first quarter, 180 full, 270 last
     // quarter (waxing below 180).
     double moon_age_angle_deg = 0.0;
+    // The moon's irradiance at the top of the atmosphere over the sun's at 1 au
+    // (moon_irradiance_ratio of astro/moonlight.hpp for this phase angle and these
+    // distances): a moon lamp's strength is a sun lamp's at 1 au times this, times the air's
+    // transmittance towards the moon.
+    double moon_irradiance_ratio = 0.0;
     // Direction from the moon towards the sun in the local east/north/up frame (unit): what
     // lights the moon's disc (the observer sees the moon's hemisphere facing -moon direction).
     std::array<double, 3> sun_from_moon_enu{0.0, 0.0, 1.0};

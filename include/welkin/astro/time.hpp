@@ -15,8 +15,8 @@
 
 namespace welkin {
 
-// Accepted years: the range over which ERFA's Earth (eraEpv00) and Moon (eraMoon98)
-// series hold their stated accuracy.
+// Accepted years: about the range over which ERFA's planetary (eraPlan94) and lunar
+// (eraMoon98) series hold their stated accuracy.
 inline constexpr int kFirstYear = 1900, kLastYear = 2100;
 
 // Civil date and time with its offset from UTC (local = UTC + offset).
