@@ -171,6 +171,7 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
         sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
                                method, "rgb", sun_disc=False, exposure=request.exposure,
                                ground=request.ground)
+        sky = with_moonlit_sky(native, request, atm, method, sky)
     model = None
     if disc:
         model = disc_model(native, atm, request.altitude_m, request.sun_direction,
@@ -212,6 +213,22 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
         return image
     method = sky_request.resolve_method(request.method, native)
     atm = sky_request.build_atmosphere(request, native)
-    return native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,
-                            "rgb", sun_disc=sun_disc, exposure=request.exposure,
-                            ground=request.ground)
+    sky = native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,
+                           "rgb", sun_disc=sun_disc, exposure=request.exposure,
+                           ground=request.ground)
+    return with_moonlit_sky(native, dataclasses.replace(request, width=width), atm, method, sky)
+
+
+def with_moonlit_sky(native: ModuleType, request: sky_request.SkyRequest,
+                     atm: Any, method: str,  # noqa: ANN401 (welkin.Atmosphere)
+                     sky: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+    """`sky` plus the moon's sky when the request has a moon (Place and Time): the same
+    method's sky for a "sun" in the moon's direction times the moon's irradiance ratio,
+    as the core composes it (night/moonlit_sky.cpp: every method's radiance is linear in
+    the solar irradiance). The moon's disc is not drawn."""
+    if not request.moon_direction or not request.moon_irradiance_ratio > 0.0:
+        return sky
+    moonlit = native.sky_image(atm, request.altitude_m, request.moon_direction, request.width,
+                               method, "rgb", sun_disc=False, exposure=request.exposure,
+                               ground=request.ground)
+    return sky + np.float32(request.moon_irradiance_ratio) * moonlit

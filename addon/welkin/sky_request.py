@@ -38,11 +38,16 @@ class SkyRequest:
     exposure: float = 1.0
     ground: bool = True             # the lit ground below the horizon (False: black)
     spectral: bool = False          # 48 wavelengths (exact colour) instead of the default 4
+    # The moon's light (Place and Time, place_time.py): the sky adds the same method's sky
+    # for a "sun" in the moon's direction times the moon's irradiance ratio; (): no moon.
+    moon_direction: tuple[float, ...] = ()
+    moon_irradiance_ratio: float = 0.0
 
     def key(self) -> str:
         """A string that changes whenever the sky would (sun rounded to 1e-7)."""
         d = dataclasses.asdict(self)
         d["sun_direction"] = tuple(round(float(c), 7) for c in self.sun_direction)
+        d["moon_direction"] = tuple(round(float(c), 7) for c in self.moon_direction)
         return repr(sorted(d.items()))
 
 
@@ -68,6 +73,13 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
     s = request.sun_direction
     if len(s) != 3 or not all(math.isfinite(c) for c in s) or math.hypot(*s) == 0.0:
         raise ValueError(f"sun_direction: must be a finite non-zero vector, got {tuple(s)}")
+    m = request.moon_direction
+    if m and (len(m) != 3 or not all(math.isfinite(c) for c in m) or math.hypot(*m) == 0.0):
+        raise ValueError(f"moon_direction: must be a finite non-zero vector, got {tuple(m)}")
+    if not (math.isfinite(request.moon_irradiance_ratio)
+            and 0.0 <= request.moon_irradiance_ratio <= 1e-3):
+        raise ValueError(f"moon_irradiance_ratio: must be in [0, 1e-3], got "
+                         f"{request.moon_irradiance_ratio}")
     resolve_method(request.method, native)
 
 

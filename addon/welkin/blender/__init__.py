@@ -18,13 +18,15 @@
   cloud_properties.py  World.welkin_clouds (layers, lighting), Object.welkin_cloud
   cloud_scene.py     the scene's clouds as the scene JSON's "clouds" section
   cloud_shadows.py   Ground Shadows: the shadow layer (plane, map, material) above the scene
+  place_time.py      Place and Time (World.welkin_place_time): sun and moon lamps from a
+                     date, a time and a place; its sub-panel
   compat.py          differences between Blender versions
   cloud_operators.py, cloud_panel.py  Welkin Clouds: add/remove layers, mark volumes
 """
 import bpy
 
 from . import (aerial, cloud_operators, cloud_panel, cloud_properties, handlers, operators,
-               panel, properties, render_engine)
+               panel, place_time, properties, render_engine)
 
 classes = (
     properties.WelkinWorldSettings,
@@ -43,6 +45,7 @@ def register():
     for cls in classes:
         bpy.utils.register_class(cls)
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
+    place_time.register()
     handlers.register()
     aerial.register()
     render_engine.register()
@@ -55,6 +58,7 @@ def unregister():
     render_engine.unregister()
     aerial.unregister()
     handlers.unregister()
+    place_time.unregister()
     del bpy.types.World.welkin
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)
