@@ -104,7 +104,28 @@ for name, obj in (("sun", sun), ("moon", moon)):
     print(f"(a) {name} lamp colour x strength {got}, expected {expected}")
     T.check(np.allclose(got, expected, rtol=1e-5, atol=0.0), f"(a) the {name} lamp's light")
 
+
+
+def draw_place_time():
+    import types
+    layout = T.FakeLayout()
+    context = types.SimpleNamespace(world=scene.world, scene=scene)
+    panel = types.SimpleNamespace(layout=layout)
+    bpy.types.WORLD_PT_welkin_place_time.draw_header(panel, context)
+    bpy.types.WORLD_PT_welkin_place_time.draw(panel, context)
+    return layout.log
+
+
+drawn = draw_place_time()
+for name in ("enabled", "year", "month", "day", "hours", "utc_offset_h", "latitude_deg",
+             "longitude_deg", "height_m", "north_deg"):
+    T.check(("prop", name) in drawn, f"(a) the panel lacks {name}: {drawn}")
+T.check(("label", "UTC 2026-06-21T19:30:00Z") in drawn
+        and any(k == "label" and t.startswith("Sun: elevation 3.12, azimuth 303.20")
+                for k, t in drawn), f"(a) the panel's positions: {drawn}")
 settings.day = 31
+T.check(any(k == "label" and "2026-06-31 is not a date" in t for k, t in draw_place_time()),
+        "(a) the panel does not name the bad date")
 try:
     bpy.ops.welkin.update_sky()
 except RuntimeError as error:

@@ -211,7 +211,7 @@ class WORLD_PT_welkin_place_time(bpy.types.Panel):
         if bodies is None:
             return
         p = bodies.place_and_time
-        col.label(text=f"{p['utc']}", icon='TIME')
+        col.label(text=f"UTC {p['utc']}", icon='TIME')
         col.label(text=f"Sun: elevation {p['sun']['elevation_deg']:.2f}, azimuth "
                        f"{p['sun']['azimuth_deg']:.2f}", icon='LIGHT_SUN')
         col.label(text=f"Moon: elevation {p['moon']['elevation_deg']:.2f}, azimuth "
