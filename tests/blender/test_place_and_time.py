@@ -139,6 +139,17 @@ settings.enabled = True
 bpy.ops.welkin.update_sky()
 moon = scene.world.welkin_place_time.moon_object
 T.check(moon is not None and moon.name in scene.objects, "(a) no moon lamp after re-enabling")
+# place_now (what the UI runs before a cloudy sky is computed beside it) turns the lamps
+# at once, without a sky update.
+from welkin.blender import place_time  # noqa: E402
+settings.hours = 6.0
+place_time.place_now(scene)
+morning = welkin.sun_and_moon("2026-06-21T06:00:00+02:00", 48.8566, 2.3522)
+e, a = elevation_azimuth(axis(sun), NORTH)
+T.check(abs(e - morning["sun"]["elevation_deg"]) < 1e-4
+        and angle_diff(a, morning["sun"]["azimuth_deg"]) < 1e-4, "(a) place_now: the sun lamp")
+settings.hours = 21.5
+bpy.ops.welkin.update_sky()
 print("(a) sun and moon lamps where the core puts them, the scene's north respected")
 
 # (b) Day to night in an `-a` render.

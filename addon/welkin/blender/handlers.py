@@ -25,7 +25,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import background, cloud_scene, cloud_shadows, farm, scene_sun, update
+from . import background, cloud_scene, cloud_shadows, farm, place_time, scene_sun, update
 from .scene_sun import UserError
 
 DEBOUNCE_S = 0.15
@@ -80,7 +80,7 @@ def _tick():
     scene = bpy.context.scene
     if scene is not None and _live(scene):
         if cloud_scene.has_clouds(scene, volumes=cloud_scene.volumes_in_world(scene)):
-            _guarded(scene, lambda: background.start(scene))
+            _guarded(scene, lambda: (place_time.place_now(scene), background.start(scene)))
         else:
             background.cancel()  # the clouds were switched off while a cloudy sky computed
             _run(scene, None, pack=False, live=True)

@@ -169,6 +169,16 @@ def place_lamps(scene, request, sun_lamp, depsgraph=None, sync=None):
         sync(moon, values, depsgraph)
 
 
+def place_now(scene):
+    """Places the lamps for the current settings without a sky update: before a cloudy sky
+    is computed beside the interface (handlers._tick), whose result comes seconds later."""
+    from . import update  # (which imports this module)
+    settings = scene.world.welkin
+    request, lamp, _warnings = scene_sun.request_for(scene, settings, None)
+    place_lamps(scene, request, lamp, None,
+                sync=update._sync_lamp if settings.sync_lamp else None)
+
+
 class WORLD_PT_welkin_place_time(bpy.types.Panel):
     bl_label = "Place and Time"
     bl_space_type = 'PROPERTIES'
