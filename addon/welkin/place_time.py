@@ -48,6 +48,7 @@ class Bodies:
     moon_direction: tuple[float, float, float]
     moon_irradiance_ratio: float    # the moon's irradiance over the sun's at 1 au
     moon_angular_radius_rad: float
+    sun_from_moon: tuple[float, float, float]  # lights the moon's disc (its phase)
     place_and_time: dict[str, Any]  # welkin.sun_and_moon's dict, as the core gave it
 
 
@@ -112,7 +113,8 @@ def bodies(native: ModuleType, place_time: PlaceTime) -> Bodies:
     return Bodies(to_scene(result["sun"]["direction"], p.north_deg),
                   to_scene(moon["direction"], p.north_deg),
                   float(moon["irradiance_ratio"]),
-                  math.radians(float(moon["angular_radius_deg"])), result)
+                  math.radians(float(moon["angular_radius_deg"])),
+                  to_scene(moon["sun_direction_from_moon"], p.north_deg), result)
 
 
 def moon_lamp(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401 (welkin.Atmosphere)

@@ -204,7 +204,9 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
     sun_disc is False), for export. `scene_json`: the cloudy sky's scene description (as
     for compute): the HDRI is then the world's cloudy sky, the clouds composited over it
     and the disc dimmed by their transmittance (welkin.scene_sky_image), the sky the world
-    shows; `progress` as for compute."""
+    shows; `progress` as for compute. A request with a moon (Place and Time) and no
+    clouds adds the moonlit sky and, with sun_disc, the moon's disc: the image
+    welkin.sky_image_at renders for that moment, in the scene's frame."""
     sky_request.validate(dataclasses.replace(request, width=sky_request.WIDTHS[0]), native)
     if scene_json is not None:
         image: npt.NDArray[np.float32] = native.scene_sky_image(
@@ -216,7 +218,14 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
     sky = native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,
                            "rgb", sun_disc=sun_disc, exposure=request.exposure,
                            ground=request.ground)
-    return with_moonlit_sky(native, dataclasses.replace(request, width=width), atm, method, sky)
+    sky = with_moonlit_sky(native, dataclasses.replace(request, width=width), atm, method, sky)
+    if sun_disc and request.moon_direction and request.sun_from_moon:
+        # The moon's disc with its phase, energy-exact, as welkin.sky_image_at draws it.
+        sky = sky + native.moon_disc_image(
+            atm, request.altitude_m, request.moon_direction, request.sun_from_moon,
+            request.moon_angular_radius_rad, request.moon_irradiance_ratio, width,
+            exposure=request.exposure)
+    return sky
 
 
 def with_moonlit_sky(native: ModuleType, request: sky_request.SkyRequest,

@@ -42,12 +42,16 @@ class SkyRequest:
     # for a "sun" in the moon's direction times the moon's irradiance ratio; (): no moon.
     moon_direction: tuple[float, ...] = ()
     moon_irradiance_ratio: float = 0.0
+    # The moon's disc (the HDRI export draws it): its radius and the sun's direction from it.
+    moon_angular_radius_rad: float = 0.0
+    sun_from_moon: tuple[float, ...] = ()
 
     def key(self) -> str:
         """A string that changes whenever the sky would (sun rounded to 1e-7)."""
         d = dataclasses.asdict(self)
         d["sun_direction"] = tuple(round(float(c), 7) for c in self.sun_direction)
         d["moon_direction"] = tuple(round(float(c), 7) for c in self.moon_direction)
+        d["sun_from_moon"] = tuple(round(float(c), 7) for c in self.sun_from_moon)
         return repr(sorted(d.items()))
 
 

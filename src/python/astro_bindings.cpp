@@ -1,15 +1,19 @@
 // welkin.sun_and_moon: the apparent sun and moon from a place and a moment
 // (include/welkin/astro/positions.hpp), as the dict `welkin sun --time` prints under
 // "place_and_time" (one schema: include/welkin/astro/json.hpp).
+#include <cmath>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "bindings.hpp"
+#include <fmt/format.h>
 #include <pybind11/stl.h>
 
 #include "welkin/astro/json.hpp"
 #include "welkin/astro/positions.hpp"
 #include "welkin/astro/time.hpp"
+#include "welkin/base/error.hpp"
 #include "welkin/night/moonlit_sky.hpp"
 #include "welkin/sky/method.hpp"
 
@@ -50,6 +54,36 @@ py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, d
         progress);
     const std::size_t channels = image.channels();
     return to_image_array(std::move(image.pixels), image.width, image.height, channels);
+}
+
+py::array_t<float> moon_disc_image(const Atmosphere& atmosphere, double altitude_m,
+                                   const py::object& moon_direction, const py::object& sun_from_moon,
+                                   double angular_radius_rad, double irradiance_ratio, int width,
+                                   const std::string& output, double exposure) {
+    if (!(exposure > 0.0 && exposure <= 1e6))
+        throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+    Moon moon;
+    moon.direction = to_dvec3(moon_direction, "moon_direction");
+    moon.sun_from_moon = to_dvec3(sun_from_moon, "sun_from_moon");
+    moon.angular_radius_rad = angular_radius_rad;
+    moon.irradiance_ratio = irradiance_ratio;
+    for (const auto& [v, name] :
+         {std::pair{moon.direction, "moon_direction"}, std::pair{moon.sun_from_moon, "sun_from_moon"}})
+        if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) ||
+            (v.x == 0.0 && v.y == 0.0 && v.z == 0.0))
+            throw InvalidArgument(name, "must be a finite non-zero vector");
+    moon.validate();  // the radius and the ratio, named moon.<field>
+    const SkyImageOptions::Output out = parse_output(output);
+    std::vector<float> pixels;
+    {
+        py::gil_scoped_release release;
+        atmosphere.validate();
+        const Observer observer = Observer{altitude_m, moon.direction}.validated();
+        pixels = moon_disc_pixels(atmosphere, observer, moon, width, out);
+    }
+    for (float& v : pixels) v *= float(exposure);
+    const std::size_t channels = out == SkyImageOptions::Output::Rgb ? 3 : atmosphere.channels();
+    return to_image_array(std::move(pixels), width, width / 2, channels);
 }
 
 }  // namespace
@@ -93,6 +127,24 @@ phase_angle_deg, illuminated_fraction, age_angle_deg (0 new, 180 full) and
 sun_direction_from_moon. Accuracy: the sun within 0.01 degree, the moon within
 0.05 degree (ERFA; tested against NREL SPA, Meeus and JPL DE421 via Skyfield).
 Raises ValueError naming the parameter for a bad time or place.
+)doc");
+
+    m.def("moon_disc_image", &moon_disc_image, py::arg("atmosphere"), py::arg("altitude_m"),
+          py::arg("moon_direction"), py::arg("sun_from_moon"), py::arg("angular_radius_rad"),
+          py::arg("irradiance_ratio"), py::arg("width"), py::arg("output") = "rgb", py::kw_only(),
+          py::arg("exposure") = 1.0, R"doc(
+The moon's disc alone, as the equirectangular image sky_image_at adds for it
+(include/welkin/night/moonlit_sky.hpp): its phase lit from sun_from_moon
+(Lommel-Seeliger across the disc), energy-exact (its pixels sum, times their
+solid angles, to the moon's irradiance through the air: the sun's at 1 au x
+irradiance_ratio x the transmittance towards the moon), hidden behind the
+ground, times exposure. Directions in any frame (Z up): the scene's, for a
+host that turns the sky. Same layout and units as sky_image.
+
+moon_direction, sun_from_moon  the "direction" and "sun_direction_from_moon" of
+                               sun_and_moon's moon (turned alike)
+angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
+irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
 )doc");
 
     m.def("sky_image_at", &sky_image_at, py::arg("atmosphere"), py::arg("time"), py::arg("latitude_deg"),

@@ -115,9 +115,39 @@ def test_world_sky_is_the_modules_moment_sky(hours):
     moonless = sky_compute.compute(welkin, dataclass_with(request, moon_direction=()),
                                    disc=False)
     assert float(result.sky.mean()) > float(moonless.sky.mean())
-    # The HDRI export adds it the same way (its sun disc off).
+    # The HDRI export adds it the same way (its sun disc off) and, with the discs, is the
+    # module's moment image with both discs (the moon's with its phase).
     hdri = sky_compute.hdri(welkin, request, 256, sun_disc=False)
     assert np.abs(hdri - expected).max() <= 1e-5 * scale
+    request = dataclasses.replace(request, moon_angular_radius_rad=b.moon_angular_radius_rad,
+                                  sun_from_moon=b.sun_from_moon)
+    hdri = sky_compute.hdri(welkin, request, 256)
+    expected = welkin.sky_image_at(atm, place_time.iso_time(p), 48.8566, 2.3522, 256, "lut")
+    assert np.allclose(hdri, expected, rtol=1e-5, atol=1e-5 * scale)
+
+
+
+@pytest.mark.parametrize("width, north", [(256, 0.0), (2048, 30.0)])
+def test_hdri_moon_disc_is_energy_exact(width, north):
+    """At night (sun 12 degrees down: no sun disc) the HDRI's discs are the moon's alone:
+    its pixels times their solid angles sum to the moon lamp's light (colour x strength,
+    the moon being whole above the horizon), at any resolution and north."""
+    b = place_time.bodies(welkin, dataclass_with(PARIS, hours=23.75, north_deg=north))
+    assert b.sun_direction[2] < -0.2 and b.moon_direction[2] > 0.2
+    request = sky_request.SkyRequest(
+        width=256, method="lut", sun_direction=b.sun_direction, moon_direction=b.moon_direction,
+        moon_irradiance_ratio=b.moon_irradiance_ratio,
+        moon_angular_radius_rad=b.moon_angular_radius_rad, sun_from_moon=b.sun_from_moon)
+    disc = (sky_compute.hdri(welkin, request, width)
+            - sky_compute.hdri(welkin, request, width, sun_disc=False)).astype(np.float64)
+    h = width // 2
+    rows = np.arange(h)
+    omega = (2.0 * np.pi / width) * (np.cos(np.pi * rows / h) - np.cos(np.pi * (rows + 1) / h))
+    energy = (disc * omega[:, None, None]).sum(axis=(0, 1))
+    atm = sky_request.build_atmosphere(request, welkin)
+    lamp = place_time.moon_lamp(welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio,
+                                b.moon_angular_radius_rad, 1.0)
+    assert np.allclose(energy, np.asarray(lamp.color) * lamp.strength_w_m2, rtol=1e-5, atol=0.0)
 
 
 def test_request_rejects_a_bad_moon():

@@ -271,3 +271,31 @@ def test_sky_image_at_anywhere_anytime_is_finite_and_non_negative():
                f"{int(rng.integers(1, 29)):02d}T{int(rng.integers(0, 24)):02d}:00:00Z"
         img = welkin.sky_image_at(atm, time, lat, lon, 16, method="lut")
         assert np.isfinite(img).all() and (img >= 0).all(), (time, lat, lon)
+
+
+def test_moon_disc_image_is_sky_image_ats_disc():
+    """welkin.moon_disc_image is the disc sky_image_at adds (same pixels), rotated with its
+    directions, and names its bad parameters."""
+    t = "2026-06-21T23:30:00+02:00"
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    moon = welkin.sun_and_moon(t, 48.8566, 2.3522)["moon"]
+    radius = np.radians(moon["angular_radius_deg"])
+    args = (moon["direction"], moon["sun_direction_from_moon"], radius, moon["irradiance_ratio"])
+    disc = welkin.moon_disc_image(atm, 0.0, *args, 128, exposure=2.0)
+    both = welkin.sky_image_at(atm, t, 48.8566, 2.3522, 128, exposure=2.0)
+    none = welkin.sky_image_at(atm, t, 48.8566, 2.3522, 128, exposure=2.0, discs=False)
+    assert disc.max() > 0.0 and np.array_equal(disc, both - none)
+    # Turned by 180 degrees about +Z: the same disc, half an image to the side.
+    turn = [(-d[0], -d[1], d[2]) for d in args[:2]]
+    turned = welkin.moon_disc_image(atm, 0.0, *turn, radius, moon["irradiance_ratio"], 128,
+                                    exposure=2.0)
+    assert np.allclose(np.roll(turned, 64, axis=1), disc, rtol=1e-5, atol=1e-6 * disc.max())
+    for bad, parameter in (({"exposure": 0.0}, "exposure"), ({"width": 7}, "width")):
+        kwargs = {"width": 128, **bad}
+        width = kwargs.pop("width")
+        with pytest.raises(ValueError, match=parameter):
+            welkin.moon_disc_image(atm, 0.0, *args, width, **kwargs)
+    with pytest.raises(ValueError, match="moon_direction"):
+        welkin.moon_disc_image(atm, 0.0, (0, 0, 0), args[1], radius, 1e-7, 128)
+    with pytest.raises(ValueError, match="irradiance_ratio"):
+        welkin.moon_disc_image(atm, 0.0, args[0], args[1], radius, 1.0, 128)

@@ -189,7 +189,7 @@ class WORLD_PT_welkin_place_time(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return context.world is not None and native.message() is None
+        return context.world is not None and not native.message()
 
     def draw_header(self, context):
         self.layout.prop(context.world.welkin_place_time, "enabled", text="")

@@ -80,5 +80,7 @@ def request_for(scene, settings, depsgraph=None):
         spectral=settings.colour == 'SPECTRAL',
         moon_direction=bodies.moon_direction if bodies else (),
         moon_irradiance_ratio=bodies.moon_irradiance_ratio if bodies else 0.0,
+        moon_angular_radius_rad=bodies.moon_angular_radius_rad if bodies else 0.0,
+        sun_from_moon=bodies.sun_from_moon if bodies else (),
     )
     return request, lamp, warnings
