@@ -20,6 +20,7 @@ day to night in a command-line `-a` render.
     only the moon lights it); and the frames' mean brightness must fall
     monotonically from day to night. The frame rendered in this session (the render
     operator at frame 4, as F12) matches the `-a` frame within 0.1 % in the mean.
+(c) With the moon lamp deleted, a command-line render fails its frame naming the lamp.
 """
 import datetime
 import math
@@ -242,5 +243,23 @@ difference = abs(float(still.mean()) - means[-1]) / means[-1]
 print(f"(b) frame 4 rendered in this session: mean {float(still.mean()):.6g} ({difference:.2e})")
 T.check(difference < 1e-3, "(b) the session's frame 4 differs from the -a render's")
 print("(b) day to night: each -a frame lit by its moment's sun and moon, brightness falling")
+
+# (c) A command-line render cannot add the moon lamp: without it the frame fails, saying
+# so (farm.py), rather than rendering without the moon. Blender binaries only (PyPI's bpy
+# stops -a through the binary's signal handler: see test_addon_farm).
+if not T.is_module_bpy():
+    scene.frame_set(1)
+    bpy.data.objects.remove(scene.world.welkin_place_time.moon_object)
+    scene.render.filepath = str(T.TMP / "no_moon" / "f_####")
+    blend = T.TMP / "no_moon.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons",
+               "welkin", "-s", "1", "-e", "1", "-a"]
+    run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+    log = run.stdout + run.stderr
+    T.check(run.returncode != 0 and "moon lamp is missing" in log,
+            f"(c) rendered without the moon lamp ({run.returncode}):\n{log[-2000:]}")
+    T.check(not (T.TMP / "no_moon" / "f_0001.exr").exists(), "(c) the failed frame was written")
+    print("(c) a render without the moon lamp fails its frame, naming the lamp")
 
 T.done("test_place_and_time")

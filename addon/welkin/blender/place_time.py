@@ -154,10 +154,15 @@ def place_lamps(scene, request, sun_lamp, depsgraph=None, sync=None):
     render = depsgraph is not None and depsgraph.mode == 'RENDER'
     moon = scene.world.welkin_place_time.moon_object
     if moon is None or moon.name not in scene.objects:
+        world = scene.world
+        if world.library is not None or getattr(world, "override_library", None) is not None:
+            raise scene_sun.UserError(f"Place and Time: world '{world.name}' comes from a "
+                                      f"library: its moon lamp cannot be added here; make the "
+                                      f"world local first; nothing was changed")
         if render:
-            raise scene_sun.UserError("Place and Time: the moon lamp is missing; press Update Sky "
-                            "(it adds the lamp), then render")
-        moon = ensure_moon(scene, scene.world)
+            raise scene_sun.UserError("Place and Time: the moon lamp is missing; press Update "
+                                      "Sky (it adds the lamp), then render")
+        moon = ensure_moon(scene, world)
     _aim(sun_lamp, bodies.sun_direction, depsgraph)
     _aim(moon, bodies.moon_direction, depsgraph)
     if sync is not None:
