@@ -9,7 +9,7 @@ set -euo pipefail
 
 packages=(
   cmake g++ make pkg-config ccache clang-format
-  libglm-dev libtbb-dev libopenexr-dev libopenvdb-dev libboost-iostreams-dev
+  libglm-dev libtbb-dev libopenexr-dev libopenvdb-dev libboost-iostreams-dev liberfa-dev
   clang libclang-rt-14-dev
   pybind11-dev nlohmann-json3-dev libcli11-dev libfmt-dev libspdlog-dev libgtest-dev
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-openvdb python3-skimage

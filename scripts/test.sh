@@ -10,6 +10,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/install_deps.sh
 bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.2-5.3, for the Blender tests
 bash scripts/install_openjd.sh  # PyPI's openjd-cli, for the farm tests
+bash scripts/install_ephemeris_venv.sh  # Skyfield + DE421 from PyPI: the positions tests' reference
 WELKIN_WERROR=ON bash scripts/build.sh  # warnings are errors in CI
 
 failed=()

@@ -176,6 +176,7 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
         sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
                                method, "rgb", sun_disc=False, exposure=request.exposure,
                                ground=request.ground, color_space=request.color_space)
+        sky = with_moonlit_sky(native, request, atm, method, sky, request.color_space)
     model = None
     if disc:
         model = disc_model(native, atm, request.altitude_m, request.sun_direction,
@@ -209,8 +210,11 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
     sun_disc is False), for export. `scene_json`: the cloudy sky's scene description (as
     for compute): the HDRI is then the world's cloudy sky, the clouds composited over it
     and the disc dimmed by their transmittance (welkin.scene_sky_image), the sky the world
-    shows; `progress` as for compute. In linear Rec.709 whatever the request's colour space:
-    an EXR carries no colour space, and Rec.709 is what HDRIs are read as."""
+    shows; `progress` as for compute. A request with a moon (Place and Time) and no
+    clouds adds the moonlit sky and, with sun_disc, the moon's disc: the image
+    welkin.sky_image_at renders for that moment, in the scene's frame. In linear Rec.709
+    whatever the request's colour space: an EXR carries no colour space, and Rec.709 is
+    what HDRIs are read as."""
     sky_request.validate(dataclasses.replace(request, width=sky_request.WIDTHS[0]), native)
     if scene_json is not None:
         scene = json.loads(scene_json)
@@ -221,6 +225,29 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
         return image
     method = sky_request.resolve_method(request.method, native)
     atm = sky_request.build_atmosphere(request, native)
-    return native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,
-                            "rgb", sun_disc=sun_disc, exposure=request.exposure,
-                            ground=request.ground)
+    sky = native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,
+                           "rgb", sun_disc=sun_disc, exposure=request.exposure,
+                           ground=request.ground)
+    sky = with_moonlit_sky(native, dataclasses.replace(request, width=width), atm, method, sky, "rec709")
+    if sun_disc and request.moon_direction and request.sun_from_moon:
+        # The moon's disc with its phase, energy-exact, as welkin.sky_image_at draws it.
+        sky = sky + native.moon_disc_image(
+            atm, request.altitude_m, request.moon_direction, request.sun_from_moon,
+            request.moon_angular_radius_rad, request.moon_irradiance_ratio, width,
+            exposure=request.exposure)
+    return sky
+
+
+def with_moonlit_sky(native: ModuleType, request: sky_request.SkyRequest,
+                     atm: Any, method: str,  # noqa: ANN401 (welkin.Atmosphere)
+                     sky: npt.NDArray[np.float32], color_space: str) -> npt.NDArray[np.float32]:
+    """`sky` plus the moon's sky when the request has a moon (Place and Time): the same
+    method's sky, in `color_space`, for a "sun" in the moon's direction times the moon's
+    irradiance ratio, as the core composes it (night/moonlit_sky.cpp: every method's
+    radiance is linear in the solar irradiance). The moon's disc is not drawn."""
+    if not request.moon_direction or not request.moon_irradiance_ratio > 0.0:
+        return sky
+    moonlit = native.sky_image(atm, request.altitude_m, request.moon_direction, request.width,
+                               method, "rgb", sun_disc=False, exposure=request.exposure,
+                               ground=request.ground, color_space=color_space)
+    return sky + np.float32(request.moon_irradiance_ratio) * moonlit

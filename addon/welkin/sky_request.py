@@ -48,11 +48,20 @@ class SkyRequest:
     ground: bool = True             # the lit ground below the horizon (False: black)
     spectral: bool = False          # 48 wavelengths (exact colour) instead of the default 4
     color_space: str = "rec709"     # linear RGB of every colour: rec709, rec2020, acescg
+    # The moon's light (Place and Time, place_time.py): the sky adds the same method's sky
+    # for a "sun" in the moon's direction times the moon's irradiance ratio; (): no moon.
+    moon_direction: tuple[float, ...] = ()
+    moon_irradiance_ratio: float = 0.0
+    # The moon's disc (the HDRI export draws it): its radius and the sun's direction from it.
+    moon_angular_radius_rad: float = 0.0
+    sun_from_moon: tuple[float, ...] = ()
 
     def key(self) -> str:
         """A string that changes whenever the sky would (sun rounded to 1e-7)."""
         d = dataclasses.asdict(self)
         d["sun_direction"] = tuple(round(float(c), 7) for c in self.sun_direction)
+        d["moon_direction"] = tuple(round(float(c), 7) for c in self.moon_direction)
+        d["sun_from_moon"] = tuple(round(float(c), 7) for c in self.sun_from_moon)
         return repr(sorted(d.items()))
 
 
@@ -87,6 +96,13 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
     s = request.sun_direction
     if len(s) != 3 or not all(math.isfinite(c) for c in s) or math.hypot(*s) == 0.0:
         raise ValueError(f"sun_direction: must be a finite non-zero vector, got {tuple(s)}")
+    m = request.moon_direction
+    if m and (len(m) != 3 or not all(math.isfinite(c) for c in m) or math.hypot(*m) == 0.0):
+        raise ValueError(f"moon_direction: must be a finite non-zero vector, got {tuple(m)}")
+    if not (math.isfinite(request.moon_irradiance_ratio)
+            and 0.0 <= request.moon_irradiance_ratio <= 1e-3):
+        raise ValueError(f"moon_irradiance_ratio: must be in [0, 1e-3], got "
+                         f"{request.moon_irradiance_ratio}")
     resolve_method(request.method, native)
 
 

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "common.hpp"
+#include "place_and_time.hpp"
 #include "terminal_progress.hpp"
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -15,6 +16,7 @@
 
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
+#include "welkin/night/moonlit_sky.hpp"
 #include "welkin/render/sky_image.hpp"
 #include "welkin/scene/scene.hpp"
 #include "welkin/sky/auto.hpp"
@@ -40,8 +42,9 @@ struct SkyArgs {
     int threads = 0;
     int reference_paths = SkyOptions{}.reference_paths;
     std::uint64_t seed = SkyOptions{}.seed;
-    std::string scene;        // a scene JSON replaces the atmosphere, sun, method and exposure options
-    std::string color_space;  // empty: the scene's, else rec709
+    std::string scene;         // a scene JSON replaces the atmosphere, sun, method and exposure options
+    std::string color_space;   // empty: the scene's, else rec709
+    PlaceTimeArgs place_time;  // --time, --latitude, --longitude: the sun from a place and a moment
 };
 
 // The sky's settings from --scene: atmosphere, observer at the scene origin, sky method and
@@ -113,9 +116,12 @@ SkySettings settings_from(const SkyArgs& args) {
     }
 }
 
-int run_sky(const SkyArgs& args) {
+int run_sky(SkyArgs args) {
     // Everything that can be refused is refused before the render starts.
     check_output_path(args.output, args.overwrite);
+    if (!args.scene.empty() && args.place_time.app->get_option("--time")->count() > 0)
+        throw InvalidArgument("--time", "cannot be combined with --scene (the scene places the sun)");
+    const std::optional<PlaceTime> place_time = resolve_place_time(args.place_time, args.observer);
     const SkySettings sky = settings_from(args);
     const Atmosphere& atm = sky.atmosphere;
     const Observer& observer = sky.observer;
@@ -154,7 +160,15 @@ int run_sky(const SkyArgs& args) {
     SkyImage image;
     {
         TerminalProgress progress(fmt::format("sky {}x{} ({})", args.width, args.width / 2, method_name));
-        image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
+        if (place_time) {
+            // The moment's sky: the sun's and the moon's (night/moonlit_sky.hpp).
+            Moon moon = moon_at(place_time->sky);
+            moon.disc = image_options.sun_disc;
+            image = render_equirect_sky_with_moon(*method, atm, observer, moon, args.width, image_options,
+                                                  &progress);
+        } else {
+            image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
+        }
         progress.finish();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -186,6 +200,7 @@ int run_sky(const SkyArgs& args) {
         {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
         {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
                                          : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
+    if (place_time) settings["place_and_time"] = place_time->json();
     if (args.scene.empty()) {
         settings["sun_elevation_deg"] = args.observer.sun_elevation_deg;
         settings["sun_azimuth_deg"] = args.observer.sun_azimuth_deg;
@@ -224,6 +239,7 @@ Command add_sky_command(CLI::App& app) {
         "sky", "Render an equirectangular sky HDRI (OpenEXR) for Blender's Environment Texture");
     add_atmosphere_options(sub, args->atmosphere);
     add_observer_options(sub, args->observer);
+    add_place_time_options(sub, args->place_time);
     sub->add_option("--width", args->width,
                     "Image width in pixels, even, in [4, 16384]; the height is width / 2")
         ->type_name("W")

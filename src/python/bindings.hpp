@@ -36,6 +36,7 @@ void register_plate(py::module_& m);
 void register_scene_sky(py::module_& m);
 void register_cloud_passes(py::module_& m);
 void register_cloud_shadow(py::module_& m);
+void register_astro(py::module_& m);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
 // is not one.

@@ -177,4 +177,5 @@ Quick start:
     register_scene_sky(m);
     register_cloud_passes(m);
     register_cloud_shadow(m);
+    register_astro(m);
 }

@@ -6,7 +6,9 @@
              update.py (one sky update: request -> compute -> images, nodes, lamp),
              images.py, world_nodes.py (the add-on's own nodes; the user's stay untouched),
              operators.py (welkin.update_sky, remove_sky, export_hdri), panel.py,
-             background.py (a cloudy sky for the live UI, on a thread beside it)
+             background.py (a cloudy sky for the live UI, on a thread beside it),
+             place_time.py (World.welkin_place_time: sun and moon lamps from a date, a
+             time and a place; its sub-panel)
   clouds/    properties.py (World.welkin_clouds, Object.welkin_cloud), scene.py (the scene
              JSON's "clouds" section), shadows.py (Ground Shadows), operators.py, panel.py
   aerial/    aerial perspective per render (Scene.welkin_aerial): settings.py (its
@@ -26,7 +28,7 @@ from .clouds import operators as cloud_operators
 from .clouds import panel as cloud_panel
 from .clouds import properties as cloud_properties
 from .engine import render_engine
-from .sky import operators, panel, properties
+from .sky import operators, panel, place_time, properties
 
 classes = (
     properties.WelkinWorldSettings,
@@ -45,6 +47,7 @@ def register():
     for cls in classes:
         bpy.utils.register_class(cls)
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
+    place_time.register()
     handlers.register()
     aerial_settings.register()
     render_engine.register()
@@ -57,6 +60,7 @@ def unregister():
     render_engine.unregister()
     aerial_settings.unregister()
     handlers.unregister()
+    place_time.unregister()
     del bpy.types.World.welkin
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

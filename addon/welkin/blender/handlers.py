@@ -25,7 +25,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from .sky import background, scene_sun, update
+from .sky import background, place_time, scene_sun, update
 from .clouds import scene as cloud_scene, shadows as cloud_shadows
 from . import farm
 from .sky.scene_sun import UserError
@@ -82,7 +82,7 @@ def _tick():
     scene = bpy.context.scene
     if scene is not None and _live(scene):
         if cloud_scene.has_clouds(scene, volumes=cloud_scene.volumes_in_world(scene)):
-            _guarded(scene, lambda: background.start(scene))
+            _guarded(scene, lambda: (place_time.place_now(scene), background.start(scene)))
         else:
             background.cancel()  # the clouds were switched off while a cloudy sky computed
             _run(scene, None, pack=False, live=True)

@@ -5,7 +5,8 @@ from ... import native, sky_request
 
 
 def _is_sun_lamp(_settings, obj):
-    return obj.type == 'LIGHT' and obj.data.type == 'SUN'
+    from .place_time import is_moon_lamp
+    return obj.type == 'LIGHT' and obj.data.type == 'SUN' and not is_moon_lamp(obj)
 
 
 _preset_items = []

@@ -4,6 +4,7 @@ import math
 
 from ... import sky_request
 from .. import compat
+from . import place_time
 
 
 class UserError(Exception):
@@ -11,8 +12,8 @@ class UserError(Exception):
 
 
 def sun_lamps(scene):
-    return sorted((o for o in scene.objects if o.type == 'LIGHT' and o.data.type == 'SUN'),
-                  key=lambda o: o.name)
+    return sorted((o for o in scene.objects if o.type == 'LIGHT' and o.data.type == 'SUN'
+                   and not place_time.is_moon_lamp(o)), key=lambda o: o.name)
 
 
 def choose_sun(scene, settings):
@@ -54,8 +55,10 @@ def camera_height_m(scene, settings, depsgraph=None):
 
 
 def request_for(scene, settings, depsgraph=None):
-    """(SkyRequest, sun lamp object, warnings)."""
+    """(SkyRequest, sun lamp object, warnings). With Place and Time on, the sun's direction
+    and the moon are the core's for the world's place and moment (place_time.py)."""
     warnings = []
+    bodies = place_time.bodies_for(scene, depsgraph)
     lamp, warning = choose_sun(scene, settings)
     if warning:
         warnings.append(warning)
@@ -73,12 +76,16 @@ def request_for(scene, settings, depsgraph=None):
         ozone_density=settings.ozone_density,
         ground_albedo=-1.0 if settings.use_preset_albedo else settings.ground_albedo,
         altitude_m=altitude,
-        sun_direction=sun_direction(lamp, depsgraph),
+        sun_direction=bodies.sun_direction if bodies else sun_direction(lamp, depsgraph),
         width=int(settings.resolution),
         method=settings.method,
         exposure=settings.exposure,
         ground=settings.show_ground,
         spectral=settings.colour == 'SPECTRAL',
         color_space=compat.working_color_space(),
+        moon_direction=bodies.moon_direction if bodies else (),
+        moon_irradiance_ratio=bodies.moon_irradiance_ratio if bodies else 0.0,
+        moon_angular_radius_rad=bodies.moon_angular_radius_rad if bodies else 0.0,
+        sun_from_moon=bodies.sun_from_moon if bodies else (),
     )
     return request, lamp, warnings

@@ -13,7 +13,7 @@ import bpy
 
 from ... import native, scene_export, sky_compute, sky_request
 from ..clouds import scene as cloud_scene, shadows as cloud_shadows
-from . import images, scene_sun, world_nodes
+from . import images, place_time, scene_sun, world_nodes
 from .scene_sun import UserError
 
 WORLD_NAME = "Welkin World"
@@ -204,6 +204,8 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     world = _world(scene)
     settings = world.welkin
     request, lamp, outcome.warnings = scene_sun.request_for(scene, settings, depsgraph)
+    place_time.place_lamps(scene, request, lamp, depsgraph,
+                           sync=_sync_lamp if settings.sync_lamp else None)
     clouds = clouds_of(scene, depsgraph)
     key = sky_key(settings, request, clouds)
     render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
@@ -287,6 +289,7 @@ def remove_sky(scene):
     images.remove(settings)
     cloud_shadows.remove(world)
     restore_lamps(scene)
+    place_time.remove_moon(world)
     settings.active = False
     settings.last_key = ""
     settings.status = ""

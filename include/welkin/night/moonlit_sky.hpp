@@ -1,0 +1,59 @@
+// The sky of a moment with the moon: the sun's sky plus the moon's, and the moon's disc
+// with its phase.
+//
+// Moonlight is sunlight reflected by the moon (astro/moonlight.hpp): at the top of the
+// atmosphere its spectrum is the sun's times a constant, the irradiance ratio (Allen's
+// magnitude-phase law). The air scatters and absorbs it as it does sunlight, so the
+// moonlit sky is the sky the same SkyMethod gives for a sun in the moon's direction with
+// the solar irradiance scaled by that ratio (the method's LUTs are reused, nothing is
+// refitted), and the ground below the horizon is lit by it in the same way. Radiance
+// adds: the image is render_equirect_sky for the sun (its disc included) plus the same for
+// that dimmer "sun" without its disc, plus the moon's disc.
+//
+// The moon's disc. Across the disc the radiance follows the Lommel-Seeliger law
+// (moon_disc_relative_radiance: zero beyond the terminator, so the phase shows), times the
+// atmosphere's transmittance towards the moon's centre per wavelength (sun_radiometry for
+// the moon's direction). Like the sun's disc it is not point-sampled: every pixel the
+// disc's bounding cap touches is supersampled at least 8 times across the disc's radius
+// in elevation and azimuth, and the samples are scaled so that the image's integral over
+// the whole lit disc, sum of radiance x pixel solid angle, equals the moon's irradiance at
+// the observer, E_sun(lambda) x ratio x T(lambda), per wavelength; samples behind the
+// ground are dropped (a setting moon loses that part of its light). With clouds its
+// pixels are dimmed by the clouds' transmittance there, as the sun's are.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include "welkin/astro/positions.hpp"
+#include "welkin/render/sky_image.hpp"
+
+namespace welkin {
+
+struct Moon {
+    glm::dvec3 direction{0.0, 0.0, 1.0};      // towards the moon's (apparent) centre, Z up
+    glm::dvec3 sun_from_moon{0.0, 0.0, 1.0};  // from the moon towards the sun (lights the disc)
+    double angular_radius_rad = 0.0045;       // of the disc as seen
+    double irradiance_ratio = 0.0;            // moon / sun irradiance at the top of the air, >= 0
+    bool disc = true;                         // draw the disc (off: a moon lamp lights the scene)
+
+    void validate() const;  // InvalidArgument naming moon.<field>
+};
+
+// The moon of a place and a moment (astro/positions.hpp, +Y north): its apparent
+// direction, the sun's direction from it, its apparent radius and its brightness
+// (moon_irradiance_ratio for its phase angle and its distances from the observer and
+// from the sun).
+Moon moon_at(const SunAndMoon& sky);
+
+// The sun's sky (and disc, per options.sun_disc) plus the moon's sky and disc. Same
+// options, units, exposure and errors as render_equirect_sky.
+SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere& atmosphere,
+                                       const Observer& observer, const Moon& moon, int width,
+                                       const SkyImageOptions& options = {}, Progress* progress = nullptr);
+
+// The moon's disc alone, as the (height, width, channels) values it adds (before the
+// exposure): for tests and for hosts that keep the disc in an image of their own.
+std::vector<float> moon_disc_pixels(const Atmosphere& atmosphere, const Observer& observer, const Moon& moon,
+                                    int width, SkyImageOptions::Output output);
+
+}  // namespace welkin

@@ -1,0 +1,183 @@
+// The sky with the moon (include/welkin/night/moonlit_sky.hpp).
+#include "welkin/night/moonlit_sky.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "welkin/astro/moonlight.hpp"
+#include "welkin/atmosphere/geometry.hpp"
+#include "welkin/atmosphere/sun.hpp"
+#include "welkin/base/equirect.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
+#include "welkin/color/color.hpp"
+
+namespace welkin {
+namespace {
+
+bool finite_nonzero(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) &&
+           (v.x != 0.0 || v.y != 0.0 || v.z != 0.0);
+}
+
+}  // namespace
+
+void Moon::validate() const {
+    if (!finite_nonzero(direction))
+        throw InvalidArgument("moon.direction", "must be a finite non-zero vector");
+    if (!finite_nonzero(sun_from_moon))
+        throw InvalidArgument("moon.sun_from_moon", "must be a finite non-zero vector");
+    require_in_range("moon.angular_radius_rad", angular_radius_rad, 1e-4, 0.05, "rad");
+    require_in_range("moon.irradiance_ratio", irradiance_ratio, 0.0, 1e-3);
+}
+
+std::vector<float> moon_disc_pixels(const Atmosphere& atm, const Observer& observer, const Moon& moon,
+                                    int width, SkyImageOptions::Output output) {
+    moon.validate();
+    if (width < 4 || width > 16384 || width % 2 != 0)
+        throw InvalidArgument("width", fmt::format("must be even and in [4, 16384], got {}", width));
+    const int height = width / 2;
+    const std::size_t nc = atm.channels();
+    const bool rgb = output == SkyImageOptions::Output::Rgb;
+    const std::size_t out_nc = rgb ? 3 : nc;
+    std::vector<float> pixels(std::size_t(width) * std::size_t(height) * out_nc, 0.0f);
+    if (!(moon.irradiance_ratio > 0.0)) return pixels;
+
+    const glm::dvec3 m = glm::normalize(moon.direction), s = glm::normalize(moon.sun_from_moon);
+    const double alpha = moon.angular_radius_rad;
+    // The air towards the moon: sun_radiometry for a "sun" of the moon's size there.
+    Atmosphere moon_atm = atm;
+    moon_atm.sun_angular_radius_rad = alpha;
+    Observer mo = observer;
+    mo.sun_direction = m;
+    const SunRadiometry air = sun_radiometry(moon_atm, mo.validated());
+    std::vector<double> irradiance(nc);  // the whole lit disc's, through the air
+    for (std::size_t c = 0; c < nc; ++c)
+        irradiance[c] = atm.solar_irradiance[c] * moon.irradiance_ratio * air.transmittance[c];
+
+    // The cap's bounding box in elevation and u (as the sun's disc, sky_image.cpp).
+    const double e_m = std::asin(clamp_cosine(m.z));
+    const double dv_angle = kPi / height;
+    const double e_lo = e_m - alpha, e_hi = e_m + alpha;
+    const int j0 = std::max(0, int(std::floor((0.5 * kPi - e_hi) / dv_angle)));
+    const int j1 = std::min(height - 1, int(std::floor((0.5 * kPi - e_lo) / dv_angle)));
+    int i0 = 0, ncols = width;
+    double u_lo = 0.0, u_hi = 1.0;
+    bool all_u = true;
+    if (e_hi < 0.5 * kPi && e_lo > -0.5 * kPi) {
+        const double half = std::asin(std::min(1.0, std::sin(alpha) / std::cos(e_m))) / kTwoPi;
+        const double u_c = direction_to_equirect(m).x;
+        const int a = int(std::floor((u_c - half) * width)), b = int(std::floor((u_c + half) * width));
+        if (b - a + 1 < width) {
+            all_u = false;
+            u_lo = u_c - half;
+            u_hi = u_c + half;
+            i0 = a;
+            ncols = b - a + 1;
+        }
+    }
+    const int nrows = j1 - j0 + 1;
+    const std::size_t npix = std::size_t(std::max(0, nrows)) * std::size_t(ncols);
+    const double r = atm.bottom_radius_m + observer.altitude_m;
+    const std::array<double, 3> ma{m.x, m.y, m.z}, sa{s.x, s.y, s.z};
+    // Per pixel: the Lommel-Seeliger radiance integrated over its part of the disc, in
+    // front of the ground (visible) and in all (the whole disc's normalisation).
+    std::vector<double> visible(npix, 0.0), all(npix, 0.0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, npix), [&](const auto& range) {
+        for (std::size_t q = range.begin(); q != range.end(); ++q) {
+            const int j = j0 + int(q / std::size_t(ncols));
+            const int ii = i0 + int(q % std::size_t(ncols));
+            const double e_top = std::min(0.5 * kPi - dv_angle * j, e_hi);
+            const double e_bot = std::max(0.5 * kPi - dv_angle * (j + 1), e_lo);
+            const double pu0 = double(ii) / width, pu1 = double(ii + 1) / width;
+            const double u0 = all_u ? pu0 : std::max(pu0, u_lo), u1 = all_u ? pu1 : std::min(pu1, u_hi);
+            if (!(e_top > e_bot) || !(u1 > u0)) continue;
+            const double cos_max =
+                (e_top >= 0.0 && e_bot <= 0.0) ? 1.0 : std::max(std::cos(e_top), std::cos(e_bot));
+            const double de = e_top - e_bot, dphi = kTwoPi * (u1 - u0);
+            const int kv = std::clamp(int(std::ceil(8.0 * de / alpha)), 2, 512);
+            const int ku = std::clamp(int(std::ceil(8.0 * cos_max * dphi / alpha)), 2, 512);
+            const double cell = dphi / ku * de / kv;
+            for (int b = 0; b < kv; ++b) {
+                const double e = e_top - de * (b + 0.5) / kv;
+                const double ce = std::cos(e), se = std::sin(e);
+                const bool hidden = ray_hits_ground(r, se, atm.bottom_radius_m);
+                for (int a = 0; a < ku; ++a) {
+                    const double phi = kPi - kTwoPi * (u0 + (u1 - u0) * (a + 0.5) / ku);
+                    const std::array<double, 3> d{ce * std::cos(phi), ce * std::sin(phi), se};
+                    const double w = moon_disc_relative_radiance(d, ma, alpha, sa) * ce * cell;
+                    all[q] += w;
+                    if (!hidden) visible[q] += w;
+                }
+            }
+        }
+    });
+    double total = 0.0;
+    for (double w : all) total += w;
+    if (!(total > 0.0)) return pixels;  // a new moon: no lit part faces the observer
+
+    std::optional<SpectrumToRgb> to_rgb;
+    if (rgb) to_rgb.emplace(atm.wavelengths_nm, 0.0);  // moonlight has the sun's spectrum
+    std::vector<float> spectrum(nc);
+    for (std::size_t q = 0; q < npix; ++q) {
+        if (!(visible[q] > 0.0)) continue;
+        const int j = j0 + int(q / std::size_t(ncols));
+        const int i = ((i0 + int(q % std::size_t(ncols))) % width + width) % width;
+        const double omega = equirect_pixel_solid_angle(j, width, height);
+        for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(irradiance[c] * visible[q] / total / omega);
+        float* dst = pixels.data() + (std::size_t(j) * std::size_t(width) + std::size_t(i)) * out_nc;
+        if (rgb) {
+            const std::array<double, 3> v = to_rgb->convert(spectrum);
+            for (int c = 0; c < 3; ++c) dst[c] += float(v[std::size_t(c)]);
+        } else {
+            for (std::size_t c = 0; c < nc; ++c) dst[c] += spectrum[c];
+        }
+    }
+    return pixels;
+}
+
+Moon moon_at(const SunAndMoon& sky) {
+    Moon moon;
+    const auto& m = sky.moon.direction_enu;
+    moon.direction = {m[0], m[1], m[2]};
+    const auto& s = sky.sun_from_moon_enu;
+    moon.sun_from_moon = {s[0], s[1], s[2]};
+    moon.angular_radius_rad = sky.moon.angular_radius_deg * kDegree;
+    moon.irradiance_ratio = sky.moon_irradiance_ratio;
+    return moon;
+}
+
+SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere& atm,
+                                       const Observer& observer, const Moon& moon, int width,
+                                       const SkyImageOptions& options, Progress* progress) {
+    moon.validate();
+    SkyImage image = render_equirect_sky(method, atm, observer, width, options, progress);
+    if (!(moon.irradiance_ratio > 0.0)) return image;
+    // The moonlit sky: every method's radiance (and the lit ground's) is linear in the
+    // solar irradiance, so the sky for a "sun" in the moon's direction, scaled by the
+    // ratio, is the sky lit by the moon (the same cached LUTs; colour conversion linear).
+    Observer lit_by_moon = observer;
+    lit_by_moon.sun_direction = moon.direction;
+    SkyImageOptions moon_options = options;
+    moon_options.sun_disc = false;
+    const SkyImage moonlit =
+        render_equirect_sky(method, atm, lit_by_moon.validated(), width, moon_options, progress);
+    const float ratio = float(moon.irradiance_ratio);
+    for (std::size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] += ratio * moonlit.pixels[k];
+    if (moon.disc) {
+        const std::vector<float> disc = moon_disc_pixels(atm, observer, moon, width, options.output);
+        const std::size_t nc = image.channels();
+        const float exposure = float(options.exposure);
+        for (std::size_t p = 0; p < disc.size() / nc; ++p) {
+            const float T = image.cloud_transmittance.empty() ? 1.0f : image.cloud_transmittance[p];
+            for (std::size_t c = 0; c < nc; ++c) image.pixels[p * nc + c] += exposure * T * disc[p * nc + c];
+        }
+    }
+    return image;
+}
+
+}  // namespace welkin

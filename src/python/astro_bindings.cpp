@@ -1,0 +1,168 @@
+// welkin.sun_and_moon: the apparent sun and moon from a place and a moment
+// (include/welkin/astro/positions.hpp), as the dict `welkin sun --time` prints under
+// "place_and_time" (one schema: include/welkin/astro/json.hpp).
+#include <cmath>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "bindings.hpp"
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include "welkin/astro/json.hpp"
+#include "welkin/astro/positions.hpp"
+#include "welkin/astro/time.hpp"
+#include "welkin/base/error.hpp"
+#include "welkin/night/moonlit_sky.hpp"
+#include "welkin/sky/method.hpp"
+
+namespace welkin::python {
+namespace {
+
+// A str, or anything with isoformat() (an aware datetime.datetime).
+std::string time_text(const py::object& time) {
+    if (py::isinstance<py::str>(time)) return time.cast<std::string>();
+    if (py::hasattr(time, "isoformat")) return py::str(time.attr("isoformat")()).cast<std::string>();
+    throw InvalidArgument("time", "must be an ISO 8601 string or a timezone-aware datetime");
+}
+
+py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, double latitude_deg,
+                                double longitude_deg, int width, const std::string& method,
+                                const std::string& output, double height_m, double altitude_m, bool discs,
+                                double exposure, bool ground, const py::object& progress) {
+    require_progress_callback(progress);
+    const std::string text = time_text(time);
+    SkyImageOptions options;
+    options.sun_disc = discs;
+    options.ground = ground;
+    options.exposure = exposure;
+    options.output = parse_output(output);
+    const std::unique_ptr<SkyMethod> sky = make_sky_method(method, SkyOptions{});
+    const CivilTime civil = parse_iso8601(text, "time");
+    const Place place{latitude_deg, longitude_deg, height_m};
+    const SunAndMoon positions = sun_and_moon(Instant::from_civil(civil, "time"), place);
+    const auto& d = positions.sun.direction_enu;
+    const Observer observer = Observer{altitude_m, {d[0], d[1], d[2]}}.validated();
+    Moon moon = moon_at(positions);
+    moon.disc = discs;
+    SkyImage image;
+    run_cancellable(
+        [&](Progress* p) {
+            image = render_equirect_sky_with_moon(*sky, atmosphere, observer, moon, width, options, p);
+        },
+        progress);
+    const std::size_t channels = image.channels();
+    return to_image_array(std::move(image.pixels), image.width, image.height, channels);
+}
+
+py::array_t<float> moon_disc_image(const Atmosphere& atmosphere, double altitude_m,
+                                   const py::object& moon_direction, const py::object& sun_from_moon,
+                                   double angular_radius_rad, double irradiance_ratio, int width,
+                                   const std::string& output, double exposure) {
+    if (!(exposure > 0.0 && exposure <= 1e6))
+        throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+    Moon moon;
+    moon.direction = to_dvec3(moon_direction, "moon_direction");
+    moon.sun_from_moon = to_dvec3(sun_from_moon, "sun_from_moon");
+    moon.angular_radius_rad = angular_radius_rad;
+    moon.irradiance_ratio = irradiance_ratio;
+    for (const auto& [v, name] :
+         {std::pair{moon.direction, "moon_direction"}, std::pair{moon.sun_from_moon, "sun_from_moon"}})
+        if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) ||
+            (v.x == 0.0 && v.y == 0.0 && v.z == 0.0))
+            throw InvalidArgument(name, "must be a finite non-zero vector");
+    moon.validate();  // the radius and the ratio, named moon.<field>
+    const SkyImageOptions::Output out = parse_output(output);
+    std::vector<float> pixels;
+    {
+        py::gil_scoped_release release;
+        atmosphere.validate();
+        const Observer observer = Observer{altitude_m, moon.direction}.validated();
+        pixels = moon_disc_pixels(atmosphere, observer, moon, width, out);
+    }
+    for (float& v : pixels) v *= float(exposure);
+    const std::size_t channels = out == SkyImageOptions::Output::Rgb ? 3 : atmosphere.channels();
+    return to_image_array(std::move(pixels), width, width / 2, channels);
+}
+
+}  // namespace
+
+void register_astro(py::module_& m) {
+    m.def(
+        "sun_and_moon",
+        [](py::object time, double latitude_deg, double longitude_deg, double height_m,
+           std::optional<double> pressure_hpa, double temperature_c) {
+            const std::string text = time_text(time);
+            nlohmann::ordered_json j;
+            {
+                py::gil_scoped_release release;
+                const CivilTime civil = parse_iso8601(text, "time");
+                Place place{latitude_deg, longitude_deg, height_m, pressure_hpa.value_or(-1.0),
+                            temperature_c};
+                if (pressure_hpa) require_in_range("pressure_hpa", *pressure_hpa, 0.0, 1100.0, "hPa");
+                const SunAndMoon sky = sun_and_moon(Instant::from_civil(civil, "time"), place);
+                j = place_and_time_json(civil, place, sky);
+            }
+            return py::module_::import("json").attr("loads")(j.dump());
+        },
+        py::arg("time"), py::arg("latitude_deg"), py::arg("longitude_deg"), py::arg("height_m") = 0.0,
+        py::arg("pressure_hpa") = py::none(), py::arg("temperature_c") = 10.0, R"doc(
+The apparent (topocentric, refracted) sun and moon seen from a place at a moment.
+
+time           ISO 8601 with its UTC offset, "2026-06-21T21:30:00+02:00" or
+               "...Z", or a timezone-aware datetime; years 1900-2100
+latitude_deg   geodetic, north positive, [-90, 90]
+longitude_deg  east positive, [-180, 180]
+height_m       above the WGS84 ellipsoid, [-500, 100000]
+pressure_hpa   air pressure for refraction, [0, 1100] (0: no refraction);
+               None: the standard atmosphere's at height_m
+temperature_c  air temperature for refraction, [-90, 60]
+
+Returns a dict, the "place_and_time" object of `welkin sun --time` (docs/reference.md):
+sun/moon each with elevation_deg, azimuth_deg (clockwise from north),
+airless_elevation_deg, distance_m, angular_radius_deg, right_ascension_deg,
+declination_deg and direction (x east, y north, z up); the moon also with
+phase_angle_deg, illuminated_fraction, age_angle_deg (0 new, 180 full) and
+sun_direction_from_moon. Accuracy: the sun within 0.01 degree, the moon within
+0.05 degree (ERFA; tested against NREL SPA, Meeus and JPL DE421 via Skyfield).
+Raises ValueError naming the parameter for a bad time or place.
+)doc");
+
+    m.def("moon_disc_image", &moon_disc_image, py::arg("atmosphere"), py::arg("altitude_m"),
+          py::arg("moon_direction"), py::arg("sun_from_moon"), py::arg("angular_radius_rad"),
+          py::arg("irradiance_ratio"), py::arg("width"), py::arg("output") = "rgb", py::kw_only(),
+          py::arg("exposure") = 1.0, R"doc(
+The moon's disc alone, as the equirectangular image sky_image_at adds for it
+(include/welkin/night/moonlit_sky.hpp): its phase lit from sun_from_moon
+(Lommel-Seeliger across the disc), energy-exact (its pixels sum, times their
+solid angles, to the moon's irradiance through the air: the sun's at 1 au x
+irradiance_ratio x the transmittance towards the moon), hidden behind the
+ground, times exposure. Directions in any frame (Z up): the scene's, for a
+host that turns the sky. Same layout and units as sky_image.
+
+moon_direction, sun_from_moon  the "direction" and "sun_direction_from_moon" of
+                               sun_and_moon's moon (turned alike)
+angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
+irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
+)doc");
+
+    m.def("sky_image_at", &sky_image_at, py::arg("atmosphere"), py::arg("time"), py::arg("latitude_deg"),
+          py::arg("longitude_deg"), py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb",
+          py::kw_only(), py::arg("height_m") = 0.0, py::arg("altitude_m") = 0.0, py::arg("discs") = true,
+          py::arg("exposure") = 1.0, py::arg("ground") = true, py::arg("progress") = py::none(), R"doc(
+The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
+renders it: the sun's sky and disc at the sun's apparent position, plus the
+moon's light (its sky: the same atmosphere lit by the moon, brightness from
+Allen's magnitude-phase law) and its disc with its phase, energy-exact.
+
+    img = welkin.sky_image_at(atm, "2026-06-21T23:30:00+02:00", 48.8566, 2.3522, 2048)
+
+Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
+time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
+observer above the ground (as in sky_image); discs=False leaves both discs out
+(when sun and moon lamps light the scene).
+)doc");
+}
+
+}  // namespace welkin::python
