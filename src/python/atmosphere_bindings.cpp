@@ -56,9 +56,8 @@ std::string layer_repr(const DensityLayer& l) {
         l.width_m, l.exp_term, l.exp_scale_per_m, l.linear_per_m, l.constant);
 }
 
-}  // namespace
-
-void register_atmosphere(py::module_& m) {
+// DensityLayer and DensityProfile: the altitude profiles of the constituents.
+void register_density_profiles(py::module_& m) {
     py::class_<DensityLayer>(m, "DensityLayer", R"doc(
 One layer of a density profile (Bruneton 2017's DensityProfileLayer):
 
@@ -110,7 +109,61 @@ density is 1.
             for (const DensityLayer& l : p.layers()) layers.push_back(layer_repr(l));
             return fmt::format("DensityProfile([{}])", fmt::join(layers, ", "));
         });
+}
 
+// Atmosphere's geometry, phase, density profiles, per-wavelength coefficients at an
+// altitude, copies, pickling and repr.
+void bind_atmosphere_geometry_and_copies(py::class_<Atmosphere>& atmosphere) {
+    atmosphere
+        .def_readwrite("sun_angular_radius_rad", &Atmosphere::sun_angular_radius_rad,
+                       "Angular radius of the sun's disc, rad.")
+        .def_readwrite("bottom_radius_m", &Atmosphere::bottom_radius_m, "Planet (ground) radius, m.")
+        .def_readwrite("top_radius_m", &Atmosphere::top_radius_m, "Radius of the top of the atmosphere, m.")
+        .def_readwrite("mie_g", &Atmosphere::mie_g, "Mie phase asymmetry g, in [-0.999, 0.999].")
+        .def_property(
+            "mie_phase", [](const Atmosphere& a) { return phase_name(a.mie_phase); },
+            [](Atmosphere& a, const std::string& name) { a.mie_phase = phase_model(name); },
+            "Mie phase function: \"cornette_shanks\" or \"henyey_greenstein\".")
+        .def_readwrite("rayleigh_density", &Atmosphere::rayleigh_density,
+                       "DensityProfile of the Rayleigh scatterers.")
+        .def_readwrite("mie_density", &Atmosphere::mie_density, "DensityProfile of the aerosols.")
+        .def_readwrite("absorption_density", &Atmosphere::absorption_density,
+                       "DensityProfile of the absorbing layer (ozone).")
+        .def_property_readonly("atmosphere_thickness_m", &Atmosphere::atmosphere_thickness_m,
+                               "top_radius_m - bottom_radius_m.")
+        .def(
+            "extinction",
+            [](const Atmosphere& a, double altitude_m) {
+                return per_channel(a, [&](std::size_t c) { return a.extinction(c, altitude_m); });
+            },
+            py::arg("altitude_m"),
+            "Total extinction (m^-1) per wavelength at altitude_m (m) above the ground.")
+        .def(
+            "scattering",
+            [](const Atmosphere& a, double altitude_m) {
+                return per_channel(a, [&](std::size_t c) { return a.scattering(c, altitude_m); });
+            },
+            py::arg("altitude_m"), "Scattering (Rayleigh + Mie, m^-1) per wavelength at altitude_m (m).")
+        .def(
+            "copy", [](const Atmosphere& a) { return Atmosphere(a); }, "An independent copy.")
+        .def("__copy__", [](const Atmosphere& a) { return Atmosphere(a); })
+        .def(
+            "__deepcopy__", [](const Atmosphere& a, const py::dict&) { return Atmosphere(a); },
+            py::arg("memo"))
+        .def(py::pickle([](const Atmosphere& a) { return a.to_json_string(); },
+                        [](const std::string& text) { return Atmosphere::from_json_string(text); }))
+        .def("__repr__", [](const Atmosphere& a) {
+            return fmt::format(
+                "<welkin.Atmosphere '{}': {} wavelengths, ground radius {} m, "
+                "top {} m>",
+                a.name, a.channels(), a.bottom_radius_m, a.top_radius_m);
+        });
+}
+
+}  // namespace
+
+void register_atmosphere(py::module_& m) {
+    register_density_profiles(m);
     py::class_<Atmosphere> atmosphere(m, "Atmosphere", R"doc(
 A planet's atmosphere: everything the sky depends on (Bruneton 2017's model).
 
@@ -207,50 +260,7 @@ aerosol_optical_depth otherwise).
     spectrum_property(atmosphere, "ground_albedo", &Atmosphere::ground_albedo,
                       "Lambertian ground albedo, 0..1.");
 
-    atmosphere
-        .def_readwrite("sun_angular_radius_rad", &Atmosphere::sun_angular_radius_rad,
-                       "Angular radius of the sun's disc, rad.")
-        .def_readwrite("bottom_radius_m", &Atmosphere::bottom_radius_m, "Planet (ground) radius, m.")
-        .def_readwrite("top_radius_m", &Atmosphere::top_radius_m, "Radius of the top of the atmosphere, m.")
-        .def_readwrite("mie_g", &Atmosphere::mie_g, "Mie phase asymmetry g, in [-0.999, 0.999].")
-        .def_property(
-            "mie_phase", [](const Atmosphere& a) { return phase_name(a.mie_phase); },
-            [](Atmosphere& a, const std::string& name) { a.mie_phase = phase_model(name); },
-            "Mie phase function: \"cornette_shanks\" or \"henyey_greenstein\".")
-        .def_readwrite("rayleigh_density", &Atmosphere::rayleigh_density,
-                       "DensityProfile of the Rayleigh scatterers.")
-        .def_readwrite("mie_density", &Atmosphere::mie_density, "DensityProfile of the aerosols.")
-        .def_readwrite("absorption_density", &Atmosphere::absorption_density,
-                       "DensityProfile of the absorbing layer (ozone).")
-        .def_property_readonly("atmosphere_thickness_m", &Atmosphere::atmosphere_thickness_m,
-                               "top_radius_m - bottom_radius_m.")
-        .def(
-            "extinction",
-            [](const Atmosphere& a, double altitude_m) {
-                return per_channel(a, [&](std::size_t c) { return a.extinction(c, altitude_m); });
-            },
-            py::arg("altitude_m"),
-            "Total extinction (m^-1) per wavelength at altitude_m (m) above the ground.")
-        .def(
-            "scattering",
-            [](const Atmosphere& a, double altitude_m) {
-                return per_channel(a, [&](std::size_t c) { return a.scattering(c, altitude_m); });
-            },
-            py::arg("altitude_m"), "Scattering (Rayleigh + Mie, m^-1) per wavelength at altitude_m (m).")
-        .def(
-            "copy", [](const Atmosphere& a) { return Atmosphere(a); }, "An independent copy.")
-        .def("__copy__", [](const Atmosphere& a) { return Atmosphere(a); })
-        .def(
-            "__deepcopy__", [](const Atmosphere& a, const py::dict&) { return Atmosphere(a); },
-            py::arg("memo"))
-        .def(py::pickle([](const Atmosphere& a) { return a.to_json_string(); },
-                        [](const std::string& text) { return Atmosphere::from_json_string(text); }))
-        .def("__repr__", [](const Atmosphere& a) {
-            return fmt::format(
-                "<welkin.Atmosphere '{}': {} wavelengths, ground radius {} m, "
-                "top {} m>",
-                a.name, a.channels(), a.bottom_radius_m, a.top_radius_m);
-        });
+    bind_atmosphere_geometry_and_copies(atmosphere);
     m.def("preetham_turbidity_to_aerosol_optical_depth", &preetham_turbidity_to_aerosol_optical_depth,
           py::arg("turbidity"), R"doc(
 The aerosol optical depth at 550 nm of Preetham, Shirley & Smits 1999's
