@@ -18,6 +18,8 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfIO.h>
+#include <ImfTileDescription.h>
+#include <ImfVersion.h>
 #include <ImfInputPart.h>
 #include <ImfMultiPartInputFile.h>
 #include <ImfOutputFile.h>
@@ -159,6 +161,102 @@ private:
     std::uint64_t pos_ = 0;
 };
 
+// Scan lines per chunk of a scan-line part (OpenEXR's file layout, one per compression).
+std::uint64_t lines_per_chunk(Imf::Compression c) {
+    switch (c) {
+        case Imf::ZIP_COMPRESSION:
+        case Imf::PXR24_COMPRESSION: return 16;
+        case Imf::PIZ_COMPRESSION:
+        case Imf::B44_COMPRESSION:
+        case Imf::B44A_COMPRESSION:
+        case Imf::DWAA_COMPRESSION: return 32;
+        case Imf::DWAB_COMPRESSION: return 256;
+        default: return 1;
+    }
+}
+
+// The fewest chunks a part with this header has (a tiled part: its full-resolution level).
+std::uint64_t fewest_chunks(const Imf::Header& h) {
+    const Imath::Box2i& dw = h.dataWindow();
+    const std::uint64_t w = std::uint64_t(std::max<std::int64_t>(0, std::int64_t(dw.max.x) - dw.min.x + 1));
+    const std::uint64_t ht = std::uint64_t(std::max<std::int64_t>(0, std::int64_t(dw.max.y) - dw.min.y + 1));
+    if (h.hasTileDescription()) {
+        const std::uint64_t tx = std::max(1u, h.tileDescription().xSize);
+        const std::uint64_t ty = std::max(1u, h.tileDescription().ySize);
+        return ((w + tx - 1) / tx) * ((ht + ty - 1) / ty);
+    }
+    const std::uint64_t n = lines_per_chunk(h.compression());
+    return (ht + n - 1) / n;
+}
+
+// A null-terminated name of a header (OpenEXR's names are at most 255 bytes).
+std::string read_name(Imf::IStream& in) {
+    std::string name;
+    for (char c = 1; name.size() <= 256;) {
+        in.read(&c, 1);
+        if (c == 0) return name;
+        name.push_back(c);
+    }
+    throw Iex::InputExc("a header attribute's name or type is longer than 255 bytes");
+}
+
+// Walks one header's attributes (name, type, byte count, value) and checks that every
+// value fits in what is left of the file: OpenEXR sizes an attribute's storage from its
+// byte count before reading it (a string of 700 MB declared in a 364-byte file). Leaves
+// `in` where it was.
+void check_attribute_sizes(const std::string& path, Imf::IStream& in, std::uint64_t file_size) {
+    const std::uint64_t start = in.tellg();
+    for (std::string name = read_name(in); !name.empty(); name = read_name(in)) {
+        (void)read_name(in);  // the type
+        unsigned char b[4];
+        in.read(reinterpret_cast<char*>(b), 4);
+        const std::int32_t size = std::int32_t(b[0] | (b[1] << 8) | (b[2] << 16) | (unsigned(b[3]) << 24));
+        const std::uint64_t at = in.tellg();
+        if (size < 0 || std::uint64_t(size) > file_size - std::min(at, file_size))
+            throw IoError(fmt::format("cannot read '{}': its header attribute '{}' declares {} bytes, more "
+                                      "than the {} left in the file: a corrupt or truncated file",
+                                      path, name, size, file_size - std::min(at, file_size)));
+        in.seekg(at + std::uint64_t(size));
+    }
+    in.seekg(start);
+}
+
+// Before OpenEXR sizes anything from a header: every part's chunk offset table (8 bytes a
+// chunk, stored in the file after the headers) must fit in the file. OpenEXR allocates and
+// clears that table from the data window as it opens a file: a few corrupt bytes of a
+// 364-byte file declared 90 million chunks (720 MB). Headers OpenEXR cannot parse are left
+// to its own error.
+void check_chunk_tables(const std::string& path, Imf::IStream& in, std::uint64_t file_size) {
+    char magic[4];
+    in.read(magic, 4);
+    if (!Imf::isImfMagic(magic)) return;
+    unsigned char v[4];
+    in.read(reinterpret_cast<char*>(v), 4);
+    int version = int(v[0] | (v[1] << 8) | (v[2] << 16) | (unsigned(v[3]) << 24));
+    const bool multi = Imf::isMultiPart(version);
+    std::uint64_t chunks = 0;
+    for (int part = 0; part < 1 << 16; ++part) {
+        if (multi) {
+            const std::uint64_t at = in.tellg();
+            char next = 0;
+            in.read(&next, 1);
+            if (next == 0) break;  // the empty header that ends a multi-part file's list
+            in.seekg(at);
+        }
+        check_attribute_sizes(path, in, file_size);
+        Imf::Header header;
+        header.readFrom(in, version);
+        chunks += fewest_chunks(header);
+        if (chunks > file_size / 8)
+            throw IoError(fmt::format("cannot read '{}': its header declares at least {} chunks, whose offset "
+                                      "table alone ({} bytes) is larger than the file ({} bytes): a corrupt "
+                                      "or truncated file",
+                                      path, chunks, chunks * 8, file_size));
+        if (!multi) break;
+    }
+    in.seekg(0);
+}
+
 // An image whose floats would take more than half of this machine's memory (a corrupt or
 // hostile data window: 100000 x 100000 pixels in a file of a few bytes) is refused before
 // its pixels are allocated: OutOfMemory (MemoryError in Python) naming the file.
@@ -250,6 +348,7 @@ template <typename Read>
 auto with_exr_file(const std::string& path, Read read) {
     try {
         InputFileStream stream(path);
+        check_chunk_tables(path, stream, stream.size());
         Imf::MultiPartInputFile file(stream);
         return read(file, file_channels(path, file));
     } catch (const InvalidArgument&) {

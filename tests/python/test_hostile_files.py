@@ -99,6 +99,34 @@ def test_the_cli_refuses_a_fifo_at_once(fifo, tmp_path, args):
     assert not (tmp_path / "out.exr").exists()
 
 
+EXR_CORPUS = ROOT / "tests" / "fuzz" / "corpus" / "exr"
+
+
+@pytest.mark.parametrize("exr", sorted(EXR_CORPUS.glob("*.exr")), ids=lambda p: p.name)
+def test_every_exr_of_the_corpus_reads_or_is_refused_at_once(exr):
+    """An image, or OSError / MemoryError naming the file, within seconds and within a
+    768 MiB address space (attribute_size_huge.exr: a string attribute that declared 721 MB in
+    a 364-byte file, which OpenEXR allocated and cleared before reading it)."""
+    run = run_python("""
+        import resource, sys, time
+        import welkin
+        resource.setrlimit(resource.RLIMIT_AS, (768 << 20, resource.RLIM_INFINITY))
+        t0 = time.monotonic()
+        try:
+            pixels, names = welkin.read_exr(sys.argv[1])
+            print("image", pixels.shape, names)
+        except (OSError, MemoryError) as error:
+            assert sys.argv[1] in str(error), error
+            print(type(error).__name__, error)
+        print(f"{time.monotonic() - t0:.3f}")
+    """, exr, timeout=60)
+    assert run.returncode == 0, f"rc {run.returncode}:\n{run.stdout}\n{run.stderr[-2000:]}"
+    assert float(run.stdout.splitlines()[-1]) < 2.0, run.stdout
+    assert "bad_alloc" not in run.stdout, run.stdout  # a bare std::bad_alloc names nothing
+    if exr.name == "attribute_size_huge.exr":
+        assert "header attribute 'Camera' declares 721420294 bytes" in run.stdout, run.stdout
+
+
 def huge_exr(tmp_path):
     """A 4 x 3 RGB file whose header claims 100000 x 100000 pixels, with room for the chunk
     offset table of such an image (6250 entries of 8 bytes), so that OpenEXR opens it."""
