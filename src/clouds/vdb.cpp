@@ -12,6 +12,7 @@
 #include <sstream>
 #include <vector>
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -20,7 +21,6 @@
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
-#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -334,12 +334,13 @@ std::string run_tree_reader(const std::string& path, const std::string& grid, co
     const char tag = data[0];
     data.erase(0, 1);
     if (tag == 'E')
-        throw IoError(fmt::format("{}: corrupt data: the reader process could not read its tree ({}); refused",
-                                  where, data));
+        throw IoError(fmt::format(
+            "{}: corrupt data: the reader process could not read its tree ({}); refused", where, data));
     if (tag == 'M')
-        throw OutOfMemory(fmt::format("{}: out of memory while reading its tree (a corrupt or very large "
-                                      "grid?); the limit is max_memory_bytes",
-                                      where));
+        throw OutOfMemory(
+            fmt::format("{}: out of memory while reading its tree (a corrupt or very large "
+                        "grid?); the limit is max_memory_bytes",
+                        where));
     if (tag == 'L')
         throw InvalidArgument("max_memory_bytes",
                               fmt::format("{} takes {:.1f} MiB, more than the limit of {:.1f} MiB", where,

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <cstring>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -18,14 +18,14 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfIO.h>
-#include <ImfTileDescription.h>
-#include <ImfVersion.h>
 #include <ImfInputPart.h>
 #include <ImfMultiPartInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfPartType.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
+#include <ImfTileDescription.h>
+#include <ImfVersion.h>
 #include <fmt/format.h>
 #include <half.h>
 #include <unistd.h>
@@ -165,13 +165,17 @@ private:
 std::uint64_t lines_per_chunk(Imf::Compression c) {
     switch (c) {
         case Imf::ZIP_COMPRESSION:
-        case Imf::PXR24_COMPRESSION: return 16;
+        case Imf::PXR24_COMPRESSION:
+            return 16;
         case Imf::PIZ_COMPRESSION:
         case Imf::B44_COMPRESSION:
         case Imf::B44A_COMPRESSION:
-        case Imf::DWAA_COMPRESSION: return 32;
-        case Imf::DWAB_COMPRESSION: return 256;
-        default: return 1;
+        case Imf::DWAA_COMPRESSION:
+            return 32;
+        case Imf::DWAB_COMPRESSION:
+            return 256;
+        default:
+            return 1;
     }
 }
 
@@ -213,9 +217,10 @@ void check_attribute_sizes(const std::string& path, Imf::IStream& in, std::uint6
         const std::int32_t size = std::int32_t(b[0] | (b[1] << 8) | (b[2] << 16) | (unsigned(b[3]) << 24));
         const std::uint64_t at = in.tellg();
         if (size < 0 || std::uint64_t(size) > file_size - std::min(at, file_size))
-            throw IoError(fmt::format("cannot read '{}': its header attribute '{}' declares {} bytes, more "
-                                      "than the {} left in the file: a corrupt or truncated file",
-                                      path, name, size, file_size - std::min(at, file_size)));
+            throw IoError(
+                fmt::format("cannot read '{}': its header attribute '{}' declares {} bytes, more "
+                            "than the {} left in the file: a corrupt or truncated file",
+                            path, name, size, file_size - std::min(at, file_size)));
         in.seekg(at + std::uint64_t(size));
     }
     in.seekg(start);
@@ -248,10 +253,11 @@ void check_chunk_tables(const std::string& path, Imf::IStream& in, std::uint64_t
         header.readFrom(in, version);
         chunks += fewest_chunks(header);
         if (chunks > file_size / 8)
-            throw IoError(fmt::format("cannot read '{}': its header declares at least {} chunks, whose offset "
-                                      "table alone ({} bytes) is larger than the file ({} bytes): a corrupt "
-                                      "or truncated file",
-                                      path, chunks, chunks * 8, file_size));
+            throw IoError(
+                fmt::format("cannot read '{}': its header declares at least {} chunks, whose offset "
+                            "table alone ({} bytes) is larger than the file ({} bytes): a corrupt "
+                            "or truncated file",
+                            path, chunks, chunks * 8, file_size));
         if (!multi) break;
     }
     in.seekg(0);
@@ -265,10 +271,10 @@ void check_pixel_memory(const std::string& path, int width, int height, std::siz
     const double physical = pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
     const double needed = double(width) * double(height) * double(channels) * double(sizeof(float));
     if (physical > 0.0 && needed > 0.5 * physical)
-        throw OutOfMemory(fmt::format("cannot read '{}': its {} x {} pixels of {} channels need {:.1f} GiB as "
-                                      "float, more than half of this machine's {:.1f} GiB of memory",
-                                      path, width, height, channels, needed / double(1 << 30),
-                                      physical / double(1 << 30)));
+        throw OutOfMemory(
+            fmt::format("cannot read '{}': its {} x {} pixels of {} channels need {:.1f} GiB as "
+                        "float, more than half of this machine's {:.1f} GiB of memory",
+                        path, width, height, channels, needed / double(1 << 30), physical / double(1 << 30)));
 }
 
 // One channel of a file: the part that holds it and its name there.
@@ -358,9 +364,10 @@ auto with_exr_file(const std::string& path, Read read) {
     } catch (const OutOfMemory&) {
         throw;
     } catch (const std::bad_alloc&) {
-        throw OutOfMemory(fmt::format("cannot read '{}': out of memory (a corrupt header, or an image "
-                                      "too large for this machine)",
-                                      path));
+        throw OutOfMemory(
+            fmt::format("cannot read '{}': out of memory (a corrupt header, or an image "
+                        "too large for this machine)",
+                        path));
     } catch (const std::exception& e) {
         throw IoError(fmt::format("cannot read '{}': {}", path, e.what()));
     }

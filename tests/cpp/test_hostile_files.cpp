@@ -203,17 +203,17 @@ TEST(WindOffset, IsBoundedAndTheLayerKeepsItsCloudsAtTheBound) {
     EXPECT_GT(home, 0.1);
     EXPECT_GT(far, 0.1);
     EXPECT_NEAR(far, home, 0.1);
-    const std::string json =
-        R"({"version": 1, "clouds": {"layers": [{"wind_offset_m": [1e20, 0]}]}})";
-    EXPECT_TRUE(contains(test::parameter_of([&] { SceneDescription::from_json_string(json); }),
-                         "wind_offset_m[0]"));
+    const std::string json = R"({"version": 1, "clouds": {"layers": [{"wind_offset_m": [1e20, 0]}]}})";
+    EXPECT_TRUE(
+        contains(test::parameter_of([&] { SceneDescription::from_json_string(json); }), "wind_offset_m[0]"));
 }
 
 // A scene JSON camera without "type" is Blender's default camera, a perspective one, as
 // docs/pipelines.md documents; its matrix_world is required.
 TEST(SceneCamera, TypeDefaultsToPerspectiveAndMatrixWorldIsRequired) {
     const std::string m = R"("matrix_world": [[1,0,0,0],[0,1,0,0],[0,0,1,5],[0,0,0,1]])";
-    const SceneDescription plain = SceneDescription::from_json_string(R"({"version": 1, "camera": {)" + m + "}}");
+    const SceneDescription plain =
+        SceneDescription::from_json_string(R"({"version": 1, "camera": {)" + m + "}}");
     const SceneDescription persp =
         SceneDescription::from_json_string(R"({"version": 1, "camera": {"type": "PERSP", )" + m + "}}");
     ASSERT_TRUE(plain.camera.has_value());
@@ -223,11 +223,11 @@ TEST(SceneCamera, TypeDefaultsToPerspectiveAndMatrixWorldIsRequired) {
                   SceneDescription::from_json_string(R"({"version": 1, "camera": {"type": "PERSP"}})");
               }),
               "camera.matrix_world");
-    EXPECT_EQ(test::parameter_of([&] {
-                  SceneDescription::from_json_string(R"({"version": 1, "camera": {"type": "FISHEYE", )" + m +
-                                                     "}}");
-              }),
-              "camera.type");
+    EXPECT_EQ(
+        test::parameter_of([&] {
+            SceneDescription::from_json_string(R"({"version": 1, "camera": {"type": "FISHEYE", )" + m + "}}");
+        }),
+        "camera.type");
 }
 
 // Blender's default camera sees 100 m (Clip End): the direction table's last slice is then
