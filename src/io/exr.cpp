@@ -227,14 +227,17 @@ void check_attribute_sizes(const std::string& path, Imf::IStream& in, std::uint6
 }
 
 // Before OpenEXR sizes anything from a header: every part's chunk offset table (8 bytes a
-// chunk, stored in the file after the headers) must fit in the file. OpenEXR allocates and
-// clears that table from the data window as it opens a file: a few corrupt bytes of a
-// 364-byte file declared 90 million chunks (720 MB). Headers OpenEXR cannot parse are left
-// to its own error.
+// chunk, stored in the file after the headers) must fit in the file. OpenEXR allocates
+// and clears that table from the data window as it opens a file (2^31 lines without
+// compression: 16 GiB). Headers OpenEXR cannot parse are left to its own error. Leaves
+// `in` at the start of the file.
 void check_chunk_tables(const std::string& path, Imf::IStream& in, std::uint64_t file_size) {
     char magic[4];
     in.read(magic, 4);
-    if (!Imf::isImfMagic(magic)) return;
+    if (!Imf::isImfMagic(magic)) {
+        in.seekg(0);
+        return;
+    }
     unsigned char v[4];
     in.read(reinterpret_cast<char*>(v), 4);
     int version = int(v[0] | (v[1] << 8) | (v[2] << 16) | (unsigned(v[3]) << 24));

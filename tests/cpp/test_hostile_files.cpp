@@ -160,8 +160,13 @@ TEST_F(HostileFiles, ExrWithAnAbsurdDataWindowIsOutOfMemoryBeforeAllocating) {
     ASSERT_NE(at, std::string::npos);
     const std::int32_t window[4] = {0, 0, 99999, 99999};  // xmin, ymin, xmax, ymax
     std::memcpy(bytes.data() + at + key.size() + 4, window, sizeof window);
-    // Room for the chunk offset table of such an image (6250 entries of 8 bytes), so that
-    // OpenEXR opens it (without, it stops at the table: "Unexpected end of file").
+    // As it is, the file cannot hold the chunk offset table such a header needs (6250 entries
+    // of 8 bytes for 100000 lines in chunks of 16): refused before OpenEXR allocates it.
+    std::ofstream(path("short.exr"), std::ios::binary) << bytes;
+    const std::string short_error = error_of([&] { read_exr_header(path("short.exr")); });
+    EXPECT_TRUE(contains(short_error, "at least 6250 chunks")) << short_error;
+    EXPECT_TRUE(contains(short_error, path("short.exr"))) << short_error;
+    // With room for the table, OpenEXR opens it.
     bytes.append(std::size_t(64) << 10, '\0');
     std::ofstream(path("huge.exr"), std::ios::binary) << bytes;
 
