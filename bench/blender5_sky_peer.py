@@ -4,11 +4,15 @@ mean (green channel, linear Rec.709 W m^-2 sr^-1), and the time each takes to pr
 
     PYTHONPATH=build build/venv-bpy-5.0/bin/python bench/blender5_sky_peer.py [--docs]
 
-(PyPI's bpy 5.0 as the Python; the compiled module from build/ on PYTHONPATH. Blender 5.1
-and later run Python 3.13: PYTHONPATH=<a folder with the cp313 wheel's module> and
-build/venv-bpy-5.3/bin/python compare with that Blender's skies.) Prints a
-markdown table, writes bench/results/blender5_sky_peer.csv, and with --docs puts the table
-into docs/validation.md between its "blender5-sky-peer" markers.
+(PyPI's bpy 5.0 as the Python; the compiled module from build/ on PYTHONPATH; the add-on
+need not be installed: the version shims come from the source tree's
+addon/welkin/blender/compat.py, which needs bpy alone. Blender 5.1 and later run Python
+3.13: PYTHONPATH=<a folder with the cp313 wheel's module> and build/venv-bpy-5.3/bin/python
+compare with that Blender's skies.) Prints a markdown table, writes
+bench/results/blender5_sky_peer.csv (--csv PATH: elsewhere), and with --docs puts the table
+into docs/validation.md between its "blender5-sky-peer" markers. --quick: one sun elevation
+(--elevation), 32 x 16 pixels, one sample and one repeat: a check that it runs, not a
+measurement.
 
 Radiance: each Blender sky is rendered by Cycles through an equirectangular panoramic
 camera at 256 x 128, 16 samples at the pixel centres (a 0.01-pixel filter), its default
@@ -22,6 +26,7 @@ of 3; Welkin's, welkin.sky_image at 1024 x 512 (the add-on's default world image
 included), median of 3.
 """
 import argparse
+import importlib.util
 import math
 import os
 import pathlib
@@ -53,13 +58,23 @@ def import_welkin():
     return welkin
 
 
+def source_compat():
+    """addon/welkin/blender/compat.py of this tree, by path: `welkin` on PYTHONPATH=build is
+    the compiled module, not the add-on's package."""
+    spec = importlib.util.spec_from_file_location(
+        "welkin_source_compat", ROOT / "addon" / "welkin" / "blender" / "compat.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def setup(scene, width, height, samples):
     import addon_testing as T
     if scene.camera is None:
         cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
         scene.collection.objects.link(cam)
         scene.camera = cam
-    T.panoramic_camera(scene, width, height, samples=samples)
+    T.panoramic_camera(scene, width, height, samples=samples, compat=source_compat())
 
 
 def sky_world(sky_type):
@@ -98,6 +113,10 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--docs", action="store_true", help="write the table into "
                         "docs/validation.md")
+    parser.add_argument("--csv", type=pathlib.Path,
+                        default=ROOT / "bench" / "results" / "blender5_sky_peer.csv")
+    parser.add_argument("--quick", action="store_true", help="a run that checks the script")
+    parser.add_argument("--elevation", type=float, default=20.0, help="--quick's sun, degrees")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv
                              else sys.argv[1:])
     welkin = import_welkin()
@@ -114,30 +133,34 @@ def main():
         bpy.data.objects.remove(obj)
     atm = welkin.Atmosphere.preset("bruneton2017")
     method = "auto" if "auto" in welkin.methods() else "lut"
+    if args.quick and args.docs:
+        raise SystemExit("blender5_sky_peer: --quick measures nothing to put into the docs")
+    elevations, (w, h, samples, repeats, prep_width) = (
+        ((args.elevation,), (32, 16, 1, 1, 64)) if args.quick else (ELEVATIONS, (W, H, 16, 3, 1024)))
 
     rows = []
-    for e in ELEVATIONS:
+    for e in elevations:
         s = (math.cos(math.radians(e)) * math.cos(math.radians(AZIMUTH)),
              math.cos(math.radians(e)) * math.sin(math.radians(AZIMUTH)), math.sin(math.radians(e)))
         times = []
-        for _ in range(3):
+        for _ in range(repeats):
             t0 = time.perf_counter()
-            welkin.sky_image(atm, 0.0, s, 1024, method, sun_disc=False)
+            welkin.sky_image(atm, 0.0, s, prep_width, method, sun_disc=False)
             times.append(time.perf_counter() - t0)
-        ours = welkin.sky_image(atm, 0.0, s, W, method, sun_disc=False)
+        ours = welkin.sky_image(atm, 0.0, s, w, method, sun_disc=False)
         rows.append((e, f"Welkin ({method})", stats(ours), statistics.median(times)))
         for sky_type, label in MODELS:
             world, node = sky_world(sky_type)
             node.sun_elevation = math.radians(e)
             scene.world = world
-            setup(scene, W, H, 16)
+            setup(scene, w, h, samples)
             render(scene, tmp / "sky.exr")
             theirs = stats(read(welkin, tmp / "sky.exr"))
             # Preparation: tiny renders after a change of the sun, minus a constant world.
             setup(scene, 8, 4, 1)
             constant = bpy.data.worlds.new("Constant")
             prep = []
-            for k in range(3):
+            for k in range(repeats):
                 node.sun_elevation = math.radians(e + 0.01 * (k + 1))
                 scene.world = world
                 with_sky = render(scene, tmp / "small.exr")
@@ -161,7 +184,7 @@ def main():
             f"{os.getloadavg()[0]:.1f}; green channel, W m^-2 sr^-1")
     table = "\n".join(lines)
     print(f"\n{note}\n\n{table}")
-    out = ROOT / "bench" / "results" / "blender5_sky_peer.csv"
+    out = args.csv
     out.write_text("\n".join(csv) + "\n")
     print(f"\nwritten: {out}")
     if args.docs:

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of tests/fuzz/ (fuzz_json: the atmosphere and scene JSON
-# readers; fuzz_vdb: the VDB reader) with Debian's clang (-fsanitize=fuzzer,address) and
+# readers; fuzz_vdb: the VDB reader; fuzz_exr: the OpenEXR reader, image and depth inputs)
+# with Debian's clang (-fsanitize=fuzzer,address) and
 # runs each for a bounded time from its seed corpus in tests/fuzz/corpus/<target>/.
 # Fails on any crash, sanitizer report, uncaught exception, leak, timeout or memory blow-up.
 #
 # The sources that read the input (src/io, src/atmosphere/json.cpp, src/scene/json.cpp,
-# src/clouds/vdb.cpp) are compiled instrumented; the rest of the core comes from the
+# src/clouds/vdb.cpp, src/io/exr.cpp) are compiled instrumented; the rest of the core comes from the
 # static libraries of the normal build (scripts/build.sh, in build/ unless BUILD_DIR).
 #
 #   scripts/fuzz.sh                 # 30 s per target (FUZZ_SECONDS), rss limit 3072 MB
@@ -18,7 +19,7 @@ BUILD_DIR=${BUILD_DIR:-build}
 SECONDS_PER_TARGET=${FUZZ_SECONDS:-30}
 CXX_FUZZ=${CXX_FUZZ:-clang++}
 targets=("$@")
-((${#targets[@]})) || targets=(fuzz_json fuzz_vdb)
+((${#targets[@]})) || targets=(fuzz_json fuzz_vdb fuzz_exr)
 
 if ! command -v "$CXX_FUZZ" >/dev/null; then
   echo "fuzz: $CXX_FUZZ not found (apt-get install clang libclang-rt-14-dev)" >&2
@@ -30,20 +31,22 @@ done
 
 out=$BUILD_DIR/fuzz
 mkdir -p "$out/artifacts"
-# The targets' scratch files (fuzz_vdb's input file) go into a folder removed at the end.
+# The targets' scratch files (fuzz_vdb's and fuzz_exr's input files) go into a folder removed at the end.
 scratch=$(mktemp -d "${TMPDIR:-/tmp}/welkin_fuzz.XXXXXX")
 trap 'rm -rf "$scratch"' EXIT
 export TMPDIR=$scratch
-instrumented=(src/io/file.cpp src/io/json.cpp src/atmosphere/json.cpp src/scene/json.cpp src/clouds/vdb.cpp)
+instrumented=(src/io/file.cpp src/io/json.cpp src/io/exr.cpp src/atmosphere/json.cpp src/scene/json.cpp
+              src/clouds/vdb.cpp)
 launcher=()
 command -v ccache >/dev/null && launcher=(ccache)
 libs=()
 for lib in render scene sky reference aerial clouds atmosphere color io base; do libs+=("$BUILD_DIR/libwelkin_$lib.a"); done
 libs+=(-lopenvdb -lboost_iostreams -lfmt -ltbb -lOpenEXR-3_1 -lImath-3_1 -lIlmThread-3_1 -lIex-3_1 -lz -lm)
 
-# Both targets run under AddressSanitizer. fuzz_vdb replaces operator new (see the file):
-# OpenVDB sizes buffers from lengths inside a grid's tree, and ASan's own operator new
-# would abort on such a request where the program gets std::bad_alloc (OutOfMemory).
+# Every target runs under AddressSanitizer. fuzz_vdb and fuzz_exr replace operator new (see
+# the files): OpenVDB sizes buffers from lengths inside a grid's tree, OpenEXR from a
+# header's data window, and ASan's own operator new would abort on such a request where the
+# program gets std::bad_alloc (OutOfMemory).
 sanitizers() { echo fuzzer,address; }
 
 failed=()

@@ -12,6 +12,10 @@ bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.2-5.3, for the Blender tes
 bash scripts/install_openjd.sh  # PyPI's openjd-cli, for the farm tests
 bash scripts/install_ephemeris_venv.sh  # Skyfield + DE421 from PyPI: the positions tests' reference
 WELKIN_WERROR=ON bash scripts/build.sh  # warnings are errors in CI
+# Warnings as errors is a configure flag: after scripts/main.sh's build, the line above
+# rebuilds the module, so the add-on zip main.sh packaged (dist/) is rebuilt from it too;
+# a zip older than the module is refused by the demos (blend/demo_scene.py).
+bash scripts/build_addon.sh
 
 failed=()
 
@@ -26,9 +30,9 @@ echo "=== Python tests (pytest)"
 PYTHONPATH="$(pwd)/build${PYTHONPATH:+:$PYTHONPATH}" \
   /usr/bin/python3 -m pytest tests/python -p no:cacheprovider -ra || failed+=(pytest)
 
-echo "=== Fuzz (libFuzzer: the JSON and VDB readers, ${FUZZ_SECONDS:-30} s each)"
+echo "=== Fuzz (libFuzzer: the JSON, VDB and EXR readers, ${FUZZ_SECONDS:-30} s each)"
 # A crash, sanitizer report, uncaught exception or timeout fails the suite (scripts/fuzz.sh).
-bash scripts/fuzz.sh fuzz_json fuzz_vdb || failed+=(fuzz)
+bash scripts/fuzz.sh fuzz_json fuzz_vdb fuzz_exr || failed+=(fuzz)
 
 if compgen -G "tests/blender/test_*.py" >/dev/null; then
   echo "=== Blender tests (headless: Debian's Blender 3.4, PyPI's bpy 4.2, 4.5, 5.0, 5.1, 5.2, 5.3)"

@@ -18,6 +18,7 @@ used as it is at every frame.
 """
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Iterable, Mapping, Sequence
@@ -27,6 +28,8 @@ from typing import Any
 # CloudLayerParams); planet radius and origin altitude come from the scene.
 # cloud_type is a preset name (CLOUD_TYPES); the others are numbers.
 CLOUD_TYPES = ("cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus")
+# The most cloud layers a scene holds (the core's SceneClouds::kMaxLayers, scene/clouds.hpp).
+MAX_LAYERS = 32
 LAYER_FIELDS = ("cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage",
                 "density_per_m", "base_scale_m", "detail_scale_m", "weather_scale_m",
                 "detail_strength", "weather_variation", "evolution_m")
@@ -100,10 +103,16 @@ def volume_file(filepath_abs: str, is_sequence: bool, frame: float, frame_start:
 def layer_dict(values: Mapping[str, Any], seed: int,
                wind_offset_m: Sequence[float]) -> dict[str, Any]:
     """One procedural layer: `values` maps LAYER_FIELDS to numbers (cloud_type to one of
-    CLOUD_TYPES, any case)."""
+    CLOUD_TYPES, any case). ValueError naming the field for a number that is not finite
+    (JSON has no NaN or infinity; the core checks every range)."""
     d: dict[str, Any] = {k: float(values[k]) for k in LAYER_FIELDS if k != "cloud_type"}
     d["cloud_type"] = str(values["cloud_type"]).lower()
     d["wind_offset_m"] = [float(wind_offset_m[0]), float(wind_offset_m[1])]
+    named = [(k, v) for k, v in d.items() if k != "cloud_type" and k != "wind_offset_m"]
+    named += [(f"wind_offset_m[{i}]", v) for i, v in enumerate(d["wind_offset_m"])]
+    for name, v in named:
+        if not math.isfinite(v):
+            raise ValueError(f"{name}: must be a finite number, got {v}")
     d["seed"] = int(seed)
     return d
 

@@ -635,7 +635,7 @@ void AerialTableLayout::validate(const std::string& parameter) const {
     require_in_range(p + "slices", slices, 2, 1024);
     require_in_range(p + "steps_per_slice", steps_per_slice, 1, 256);
     require_in_range(p + "linear_distance_m", linear_distance_m, 1e-3, 1e9, "m");
-    require_in_range(p + "max_distance_m", max_distance_m, 2.0 * linear_distance_m, 1e9, "m");
+    require_in_range(p + "max_distance_m", max_distance_m, 1e-3, 1e9, "m");
     require_table_entries(parameter.empty() ? "slices" : parameter, azimuths, elevations, slices);
 }
 

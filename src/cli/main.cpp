@@ -64,11 +64,12 @@ int run_guarded(const std::function<int()>& run) {
 }
 
 // What was printed must have reached standard output (a full disk, a closed pipe,
-// /dev/full): flush and close it, and fail with a message if either fails.
-int finish_stdout(int status) {
+// /dev/full): flush and close it, and fail with a message if either fails. `earlier`: the
+// errno of a write that failed before (a flush while printing).
+int finish_stdout(int status, int earlier = 0) {
     errno = 0;
     const bool failed = std::fflush(stdout) != 0 || std::ferror(stdout) != 0;
-    const int err = errno;
+    const int err = errno ? errno : earlier;
     const bool close_failed = std::fclose(stdout) != 0;
     if (failed || close_failed) {
         fmt::print(stderr, "welkin: error: cannot write to standard output: {}\n",
@@ -78,6 +79,14 @@ int finish_stdout(int status) {
         return status == 0 ? 1 : status;
     }
     return status;
+}
+
+// CLI11's help and version text (std::cout, which writes through stdout and flushes it as
+// it goes): printed, then checked as every command's output is.
+int print_and_finish(CLI::App& app, const CLI::Error& e) {
+    errno = 0;
+    const int status = app.exit(e);
+    return finish_stdout(status, std::ferror(stdout) ? errno : 0);
 }
 
 }  // namespace
@@ -98,11 +107,11 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
+        return print_and_finish(app, e);
     } catch (const CLI::CallForAllHelp& e) {
-        return app.exit(e);
+        return print_and_finish(app, e);
     } catch (const CLI::CallForVersion& e) {
-        return app.exit(e);
+        return print_and_finish(app, e);
     } catch (const CLI::ParseError& e) {
         std::string where = "welkin";
         for (const Command& c : commands)

@@ -174,8 +174,10 @@ void CloudLayerParams::validate() const {
     require_in_range("weather_scale_m", weather_scale_m, 10.0, 1e7, "m");
     require_in_range("detail_strength", detail_strength, 0.0, 1.0);
     require_in_range("weather_variation", weather_variation, 0.0, 1.0);
-    require_finite("wind_offset_m[0]", wind_offset_m.x);
-    require_finite("wind_offset_m[1]", wind_offset_m.y);
+    // Beyond 1e9 m the field's coordinates (x - wind) lose the noise's resolution in a
+    // double (1e20 m: every point reads one texel), and the layer vanishes.
+    require_in_range("wind_offset_m[0]", wind_offset_m.x, -1e9, 1e9, "m");
+    require_in_range("wind_offset_m[1]", wind_offset_m.y, -1e9, 1e9, "m");
     if (!(std::abs(evolution_m) <= 1e9))
         throw InvalidArgument("evolution_m",
                               fmt::format("must be finite, in [-1e9, 1e9] m, got {}", evolution_m));

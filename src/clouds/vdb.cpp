@@ -9,13 +9,16 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <sstream>
 #include <vector>
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <signal.h>
@@ -214,55 +217,157 @@ private:
     std::uint64_t size_ = 0, pos_ = 0;
 };
 
-// The active bounding box within the documented limits (docs/limits.md), or an
-// InvalidArgument naming the grid.
-// Reads the grid's tree once in a child process before the host reads it. OpenVDB 10
-// trusts the lengths inside a grid's tree: io::bloscFromStream reads a chunk of the length
-// the file declares into the node's buffer before it compares that length with the
-// buffer's size (io/Compression.h), so a corrupt or hostile tree overwrites the heap of
-// the process that reads it (tests/fuzz/openvdb_findings/). Everything up to the tree is
-// bounded by VdbStructureCheck; the tree itself cannot be checked without reading it. The
-// child reads it with the same code; if that kills the child, the file is refused and the
-// host never reads it. The price is a second read of the file (the child's copy of the
-// host's memory is copy-on-write). A child that outlives kChildSeconds is stopped, so a
-// hostile file cannot hang the host either.
-void read_tree_in_child(const std::string& path, const std::string& grid, const std::string& where) {
-    constexpr unsigned kChildSeconds = 600;
-    constexpr int kExceptionExit = 17;  // the child caught an exception: the host reports it
-    const pid_t pid = ::fork();
-    if (pid < 0)
-        throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
-    if (pid == 0) {
-        // Only async-signal-safe calls are certain after fork in a threaded host; OpenVDB's
-        // reader is serial and the allocator is fork-aware, which is what this relies on.
-        for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGILL, SIGFPE, SIGALRM}) ::signal(sig, SIG_DFL);
-        ::alarm(kChildSeconds);
-        int code = 0;
-        try {
-            openvdb::io::File file(path);
-            file.open(/*delayLoad=*/false);
-            (void)file.readGrid(grid);
-            file.close();
-        } catch (...) {
-            code = kExceptionExit;
-        }
-        ::_exit(code);
+// The grid's tree is parsed only in a child process; the host parses what the child wrote.
+// OpenVDB 10 trusts the lengths inside a grid's tree: io::bloscFromStream (and
+// io::unzipFromStream) copy an uncompressed chunk of the length the file declares into the
+// node's buffer and only then compare that length with the buffer's size (io/Compression.cc),
+// so a corrupt or hostile tree overwrites the heap of the process that parses it before
+// OpenVDB throws (tests/fuzz/corpus/vdb/blosc_heap_buffer_overflow.vdb,
+// tests/fuzz/corpus/vdb/crash_ball_*.vdb). Everything up to the tree is bounded by VdbStructureCheck;
+// the tree itself cannot be checked without parsing it. So the child parses the file's tree
+// and writes the grid back through a pipe with OpenVDB's own writer (uncompressed: every
+// chunk exactly as long as its buffer), and the host reads that stream, never the file's
+// tree. A child that throws (the exception may follow an overwrite of its heap), dies or
+// outlives kChildSeconds only refuses the file; the host's heap is never touched by it. The
+// price: the grid is serialised once more, and the host holds that copy while it reads it.
+constexpr unsigned kChildSeconds = 600;
+
+void write_all_fd(int fd, const char* data, std::size_t size) {
+    while (size > 0) {
+        const ssize_t n = ::write(fd, data, size);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) ::_exit(3);
+        data += n;
+        size -= std::size_t(n);
     }
+}
+
+// The child: one tag byte, then the grid as an OpenVDB stream ('G'), an exception's message
+// ('E'), nothing (out of memory, 'M') or the grid's memory use in bytes (over the limit, 'L').
+[[noreturn]] void tree_reader_child(int fd, const std::string& path, const std::string& grid,
+                                    std::uint64_t max_bytes) {
+    // Only async-signal-safe calls are certain after fork in a threaded host; OpenVDB's
+    // reader and writer are serial and the allocator is fork-aware, which is what this relies on.
+    for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGILL, SIGFPE, SIGALRM, SIGPIPE}) ::signal(sig, SIG_DFL);
+    ::alarm(kChildSeconds);
+    char tag = 'G';
+    std::string message;
+    try {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        const openvdb::GridBase::Ptr g = file.readGrid(grid);
+        file.close();
+        if (g->memUsage() > max_bytes) {
+            tag = 'L';
+            message = std::to_string(g->memUsage());
+        } else {
+            std::ostringstream out(std::ios::binary);
+            openvdb::io::Stream stream(out);
+            stream.setCompression(openvdb::io::COMPRESS_NONE);
+            stream.write(openvdb::GridCPtrVec{g});
+            message = std::move(out).str();
+        }
+    } catch (const std::bad_alloc&) {
+        tag = 'M';
+        message.clear();
+    } catch (const std::exception& e) {
+        tag = 'E';
+        message = e.what();
+    } catch (...) {
+        tag = 'E';
+        message = "unknown exception";
+    }
+    write_all_fd(fd, &tag, 1);
+    write_all_fd(fd, message.data(), message.size());
+    ::_exit(0);
+}
+
+// Everything the child writes, up to `cap` bytes (false beyond it).
+bool read_pipe(int fd, std::string& data, std::uint64_t cap) {
+    char buffer[1 << 16];
+    while (true) {
+        const ssize_t n = ::read(fd, buffer, sizeof buffer);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return true;
+        if (data.size() + std::size_t(n) > cap) return false;
+        data.append(buffer, std::size_t(n));
+    }
+}
+
+// The child's result: the grid's stream (tag stripped) or an exception naming the file.
+std::string run_tree_reader(const std::string& path, const std::string& grid, const std::string& where,
+                            std::uint64_t max_bytes) {
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0)
+        throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+        ::close(fds[0]);
+        tree_reader_child(fds[1], path, grid, max_bytes);
+    }
+    ::close(fds[1]);
+    if (pid < 0) {
+        ::close(fds[0]);
+        throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
+    }
+    std::string data;
+    // The stream of a grid within the limit: its voxels, its topology and some metadata.
+    const bool complete = read_pipe(fds[0], data, 2 * max_bytes + (std::uint64_t(1) << 24));
+    if (!complete) ::kill(pid, SIGKILL);
+    ::close(fds[0]);
     int status = 0;
     while (::waitpid(pid, &status, 0) < 0) {
         if (errno != EINTR)
             throw IoError(fmt::format("{}: lost the reader process: {}", where, std::strerror(errno)));
     }
-    if (WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == kExceptionExit)) return;
+    if (!complete)
+        throw InvalidArgument("max_memory_bytes", fmt::format("{} takes more than the limit of {:.1f} MiB",
+                                                              where, max_bytes / 1048576.0));
     if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM)
         throw IoError(
             fmt::format("{}: reading its tree took longer than {} s; refused", where, kChildSeconds));
-    throw IoError(
-        fmt::format("{}: corrupt data: reading its tree ended the reader process ({}); refused", where,
-                    WIFSIGNALED(status) ? ::strsignal(WTERMSIG(status))
-                                        : fmt::format("exit code {}", WEXITSTATUS(status)).c_str()));
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || data.empty())
+        throw IoError(
+            fmt::format("{}: corrupt data: reading its tree ended the reader process ({}); refused", where,
+                        WIFSIGNALED(status) ? ::strsignal(WTERMSIG(status))
+                                            : fmt::format("exit code {}", WEXITSTATUS(status)).c_str()));
+    const char tag = data[0];
+    data.erase(0, 1);
+    if (tag == 'E')
+        throw IoError(fmt::format(
+            "{}: corrupt data: the reader process could not read its tree ({}); refused", where, data));
+    if (tag == 'M')
+        throw OutOfMemory(
+            fmt::format("{}: out of memory while reading its tree (a corrupt or very large "
+                        "grid?); the limit is max_memory_bytes",
+                        where));
+    if (tag == 'L')
+        throw InvalidArgument("max_memory_bytes",
+                              fmt::format("{} takes {:.1f} MiB, more than the limit of {:.1f} MiB", where,
+                                          std::stod(data) / 1048576.0, max_bytes / 1048576.0));
+    return data;
 }
 
+// The grid, parsed in a child (run_tree_reader) and read here from OpenVDB's own stream of it.
+openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::string& grid,
+                                           const std::string& where, std::uint64_t max_bytes) {
+    std::istringstream in(run_tree_reader(path, grid, where, max_bytes), std::ios::binary);
+    openvdb::GridPtrVecPtr grids;
+    try {
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        grids = stream.getGrids();
+    } catch (const std::bad_alloc&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw IoError(fmt::format("{}: cannot be read back from the reader process: {}", where, e.what()));
+    }
+    if (!grids || grids->size() != 1)
+        throw IoError(fmt::format("{}: the reader process returned no grid", where));
+    return openvdb::gridPtrCast<openvdb::FloatGrid>(grids->front());
+}
+
+// The active bounding box within the documented limits (docs/limits.md), or an
+// InvalidArgument naming the grid.
 void check_extent(const openvdb::Coord& lo, const openvdb::Coord& hi, const std::string& where) {
     for (int a = 0; a < 3; ++a) {
         const std::int64_t l = lo[a], h = hi[a];
@@ -352,15 +457,8 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
             "max_memory_bytes",
             fmt::format("{} needs about {:.1f} MiB ({} active voxels), more than the limit of {:.1f} MiB",
                         m.where(), estimate / 1048576.0, voxels, options.max_memory_bytes / 1048576.0));
-    read_tree_in_child(path, options.grid, m.where());
-    try {
-        m.grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(options.grid));
-        file.close();
-    } catch (const std::bad_alloc&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw IoError(fmt::format("{}: cannot be read (corrupt data?): {}", m.where(), e.what()));
-    }
+    file.close();
+    m.grid = read_grid_isolated(path, options.grid, m.where(), options.max_memory_bytes);
     if (!m.grid) throw InvalidArgument("grid", fmt::format("{} is not a FloatGrid", m.where()));
     m.memory = m.grid->memUsage();
     if (m.memory > options.max_memory_bytes)

@@ -70,28 +70,34 @@ mode_t process_umask() {
 
 }  // namespace
 
-std::string read_file_bounded(const std::string& path, std::size_t max_bytes, const std::string& what) {
+InputFile::InputFile(const std::string& path, const std::string& what) {
     // O_NONBLOCK: opening a FIFO must not wait for a writer; it is refused below.
-    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) throw IoError(fmt::format("cannot read {} '{}': {}", what, path, reason(errno)));
-    struct FdCloser {
-        int fd;
-        ~FdCloser() { ::close(fd); }
-    } closer{fd};
     struct stat st {};
-    if (::fstat(fd, &st) != 0)
-        throw IoError(fmt::format("cannot read {} '{}': {}", what, path, reason(errno)));
-    if (!S_ISREG(st.st_mode))
+    const int err = ::fstat(fd, &st) != 0 ? errno : 0;
+    if (err != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        if (err != 0) throw IoError(fmt::format("cannot read {} '{}': {}", what, path, reason(err)));
         throw IoError(fmt::format("cannot read {} '{}': it is {}, not a regular file", what, path,
                                   kind_of(st.st_mode)));
-    if (std::uint64_t(st.st_size) > max_bytes)
-        throw IoError(
-            fmt::format("cannot read {} '{}': it is {} bytes, more than the limit of {} bytes ({} MiB)", what,
-                        path, std::uint64_t(st.st_size), max_bytes, max_bytes >> 20));
+    }
+    size = std::uint64_t(st.st_size);
     const int flags = ::fcntl(fd, F_GETFL);
     if (flags >= 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+}
+
+InputFile::~InputFile() { ::close(fd); }
+
+std::string read_file_bounded(const std::string& path, std::size_t max_bytes, const std::string& what) {
+    const InputFile file(path, what);
+    const int fd = file.fd;
+    if (file.size > max_bytes)
+        throw IoError(
+            fmt::format("cannot read {} '{}': it is {} bytes, more than the limit of {} bytes ({} MiB)", what,
+                        path, file.size, max_bytes, max_bytes >> 20));
     std::string data;
-    data.resize(std::size_t(st.st_size));
+    data.resize(std::size_t(file.size));
     std::size_t got = 0;
     // Reads at most max_bytes + 1 bytes whatever the size said (a file that grows).
     while (true) {

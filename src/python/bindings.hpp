@@ -57,13 +57,21 @@ std::string shape_string(const py::array& array);
 [[noreturn]] void throw_bad_shape(const std::string& parameter, const std::string& expected,
                                   const std::string& got);
 
+// After a conversion of `values` to an array of `dtype` failed (pybind11's ensure() hides
+// why): raises Python's MemoryError when that was the reason (numpy's message names the
+// size), and returns otherwise.
+void raise_if_out_of_memory(const py::handle& values, const py::dtype& dtype);
+
 template <class T>
 c_array<T> to_c_array(const py::handle& values, const std::string& parameter, py::ssize_t last_dim,
                       int min_ndim, int max_ndim, const std::string& expected) {
     // ensure() converts like numpy.ascontiguousarray(values, dtype=T): it returns the same
     // object when it already is one, and an empty handle when it cannot convert.
     c_array<T> array = c_array<T>::ensure(values);
-    if (!array) throw_bad_shape(parameter, expected, "something that is not an array of numbers");
+    if (!array) {
+        raise_if_out_of_memory(values, py::dtype::of<T>());
+        throw_bad_shape(parameter, expected, "something that is not an array of numbers");
+    }
     if (array.ndim() < min_ndim || array.ndim() > max_ndim ||
         (last_dim >= 0 && array.shape(array.ndim() - 1) != last_dim))
         throw_bad_shape(parameter, expected, "shape " + shape_string(array));

@@ -91,6 +91,14 @@ void throw_bad_shape(const std::string& parameter, const std::string& expected, 
     throw InvalidArgument(parameter, fmt::format("must be {}, got {}", expected, got));
 }
 
+void raise_if_out_of_memory(const py::handle& values, const py::dtype& dtype) {
+    try {
+        (void)py::module_::import("numpy").attr("asarray")(values, dtype);
+    } catch (py::error_already_set& e) {
+        if (e.matches(PyExc_MemoryError)) throw;
+    }
+}
+
 namespace {
 
 // The one place where core errors become Python exceptions: running out of memory

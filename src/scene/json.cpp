@@ -24,7 +24,8 @@
 // layers are CloudLayerParams without planet_radius_m / origin_altitude_m (the scene's),
 // volumes {name, file, grid, matrix_world (by rows), density_scale, negative, placement}, scattering
 // {albedo, g_forward, g_back, w_forward}, lighting CloudLightingOptions' other fields.
-// Every key but "version" is optional on reading (the defaults are scene.hpp's); unknown
+// Every key but "version" (and a camera's "matrix_world") is optional on reading (the
+// defaults are scene.hpp's and camera.hpp's: a camera without "type" is "PERSP"); unknown
 // keys are errors (a typo would otherwise be ignored). matrix_world is written by rows,
 // as Python's [list(row) for row in camera.matrix_world] gives them. Errors name the key
 // path ("camera.lens_mm").
@@ -330,9 +331,8 @@ Camera parse_camera(const json& j) {
         throw InvalidArgument("camera.matrix_world",
                               "is required: Blender's Object.matrix_world, 4 rows of 4 numbers");
     c.matrix_world = matrix_rows(j["matrix_world"], "camera.matrix_world");
-    if (!j.contains("type"))
-        throw InvalidArgument("camera.type", "is required: \"PERSP\", \"ORTHO\" or \"PANO\"");
-    c.type = camera_type_from_name(string(j["type"], "camera.type"), "camera.type");
+    // Absent: a perspective camera, Blender's default (Camera's own default, camera.hpp).
+    if (j.contains("type")) c.type = camera_type_from_name(string(j["type"], "camera.type"), "camera.type");
     if (j.contains("fov_deg") && j.contains("lens_mm"))
         throw InvalidArgument("camera.fov_deg", "give either lens_mm or fov_deg, not both");
     if (j.contains("lens_mm")) c.lens_mm = json_number(j["lens_mm"], "camera.lens_mm");

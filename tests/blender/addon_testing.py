@@ -225,18 +225,20 @@ def done(name):
     print(f"{name}: OK")
 
 
-def panoramic_camera(scene, width, height, samples=2):
+def panoramic_camera(scene, width, height, samples=2, compat=None):
     """Makes the scene camera an equirectangular panorama at the origin looking along +X
     with +Z up, so that its image has Blender's Environment Texture mapping (the image
     centre is +X, +Y to the left), and sets up a fast, exact-as-possible Cycles render:
-    a tiny pixel filter (samples at the pixel centres), no denoising, linear EXR."""
+    a tiny pixel filter (samples at the pixel centres), no denoising, linear EXR.
+    `compat`: the add-on's compat module (default: the installed add-on's)."""
     import math as m
     cam = scene.camera
     cam.location = (0.0, 0.0, cam.location.z)
     cam.rotation_mode = 'XYZ'
     cam.rotation_euler = (m.radians(90.0), 0.0, m.radians(-90.0))
     cam.data.type = 'PANO'
-    from welkin.blender import compat  # the installed add-on's
+    if compat is None:
+        from welkin.blender import compat  # the installed add-on's
     compat.camera_panorama(cam.data).panorama_type = 'EQUIRECTANGULAR'
     scene.render.engine = 'CYCLES'
     scene.cycles.device = 'CPU'

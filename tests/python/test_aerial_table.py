@@ -86,6 +86,29 @@ def test_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth_deg):
     check_far_is_hazed(z[ground], L, T)
 
 
+def test_a_camera_that_sees_100_m_is_hazed():
+    """Blender's default camera (Clip End 100 m) gives a table whose last slice is at 100 m,
+    less than the 200 m of two linear distances: the slices are then about evenly spaced,
+    and the table read as the shader still matches the march at every depth it sees."""
+    desc = welkin.SceneDescription.from_json_string(scene(30.0))
+    d_max = tab.max_distance_m(100.0, 6360e3, 6460e3)
+    assert d_max == 100.0
+    direction, per = rays(desc)
+    # Every surface within the camera's 100 m along its ray (the depth is along the view axis).
+    z0 = depth_image()
+    z = np.where(np.isfinite(z0), np.minimum(z0, d_max / per), np.inf).astype(np.float32)
+    L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
+    t = welkin.aerial_table(desc, azimuths=tab.AZIMUTHS, elevations=tab.ELEVATIONS,
+                            slices=tab.SLICES, max_distance_m=d_max,
+                            steps_per_slice=tab.STEPS_PER_SLICE)
+    atlas = tab.atlas_pixels(t["inscatter"], t["optical_depth"])
+    ground = np.isfinite(z)
+    L, T = tab.lookup(atlas, direction[ground], (z * per)[ground], d_max)
+    check_against_march("clip end 100 m", L, T, L_ref[ground], T_ref[ground])
+    # Not vacuous: 100 m of hazy air dims the surface and adds light.
+    assert T_ref[ground].min() < 0.99 and L[(z * per)[ground] > 90.0].min() > 0.0
+
+
 def test_distance_zero_is_no_air_and_the_layout_is_the_documented_one():
     desc = welkin.SceneDescription.from_json_string(scene(30.0))
     t = welkin.aerial_table(desc, azimuths=8, elevations=5, slices=4, max_distance_m=9000.0)

@@ -61,7 +61,7 @@ namespace welkin {
 
 struct AerialTableLayout {
     int azimuths = 128, elevations = 64, slices = 48;
-    double max_distance_m = 0.0;       // > linear_distance_m
+    double max_distance_m = 0.0;       // in [1e-3, 1e9] m: below linear_distance_m, evenly spaced
     double linear_distance_m = 100.0;  // > 0
     int steps_per_slice = 4;
 

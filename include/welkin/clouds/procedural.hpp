@@ -85,7 +85,7 @@ struct CloudLayerParams {
     double weather_scale_m = 30000.0;    // tile of the weather map, [10, 1e7] m
     double detail_strength = 0.5;        // [0, 1]
     double weather_variation = 0.6;      // [0, 1]
-    glm::dvec2 wind_offset_m{0.0, 0.0};  // shifts the field by this much (finite)
+    glm::dvec2 wind_offset_m{0.0, 0.0};  // shifts the field by this much, each in [-1e9, 1e9] m
     // Moves the base and detail noise through the layer's height by this much (finite, m),
     // the heights of the layer and of its type's gradient staying put: keyed over time the
     // shapes change in place (Schneider's evolving noise) while wind_offset_m carries them;

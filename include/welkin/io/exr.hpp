@@ -62,6 +62,12 @@ struct ExrWriteReport {
 // written.
 ExrWriteReport write_exr(const std::string& path, const ExrImage& image, const ExrWriteOptions& options = {});
 
+// Reading: `path` must be a regular file (a FIFO, device or directory is refused at once,
+// io/file.hpp InputFile). An image whose float pixels would take more than half of this
+// machine's memory (a corrupt or hostile data window) is refused before they are allocated,
+// and running out of memory while reading is too: OutOfMemory naming `path` (MemoryError in
+// Python).
+//
 // Reads every channel as float. Throws IoError naming `path` on failure.
 ExrImage read_exr(const std::string& path);
 

@@ -1,7 +1,7 @@
 // Files in and out, bounded and atomic: the one place where Welkin reads an input file
 // whole and replaces an output file (every writer: EXR, atmosphere and scene JSON).
 //
-// Reading: read_file_bounded refuses what is not a regular file (a directory, a device such
+// Reading: InputFile and read_file_bounded refuse what is not a regular file (a directory, a device such
 // as /dev/zero, a FIFO, a socket) and a file larger than the limit, before reading it.
 //
 // Writing: an output path that is a symlink is written through (the file it points to is
@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -31,6 +32,18 @@ inline constexpr std::size_t kMaxJsonFileBytes = std::size_t(64) << 20;  // 64 M
 // file, or larger than max_bytes.
 std::string read_file_bounded(const std::string& path, std::size_t max_bytes,
                               const std::string& what = "file");
+
+// An open descriptor (read-only, close-on-exec) of the regular file `path`, and its size.
+// IoError naming `path` (and `what`) when it is missing, unreadable, or a directory, device,
+// FIFO or socket: opened with O_NONBLOCK, so a FIFO is refused at once, not waited on.
+struct InputFile {
+    InputFile(const std::string& path, const std::string& what);
+    ~InputFile();
+    InputFile(const InputFile&) = delete;
+    InputFile& operator=(const InputFile&) = delete;
+    int fd = -1;
+    std::uint64_t size = 0;
+};
 
 // An output path that names a directory or another special file (device, FIFO, socket).
 class NotRegularFile : public IoError {

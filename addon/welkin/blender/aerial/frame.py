@@ -596,12 +596,28 @@ def remove_compositor(scene, settings):
 
 # --- all of it ---------------------------------------------------------------------------
 
+def linked_material_warnings(scene):
+    """One line per material of the scene's objects that comes from a library: its nodes
+    are read-only, so our node cannot be added and its surfaces are not hazed."""
+    linked = {}
+    for ob in scene.objects:
+        for slot in getattr(ob, "material_slots", ()):
+            m = slot.material
+            if m is not None and m.library is not None and m.node_tree is not None:
+                linked[m.name_full] = m
+    return [f"material '{m.name}' (on objects of this scene) is linked from the library "
+            f"'{m.library.filepath}': its nodes cannot be changed, so aerial perspective cannot "
+            f"add its node and surfaces with it are not hazed; make it local (Object > Relations "
+            f"> Make Local) to haze them" for _name, m in sorted(linked.items())]
+
+
 def install(scene, settings):
+    """Installs everything the frame's haze needs; returns warnings for the artist."""
     aovs = install_aovs(scene)
     if aovs:
         settings.added_aovs = "\n".join(filter(None, [settings.added_aovs, *aovs]))
     install_materials()
-    return install_compositor(scene, settings)
+    return linked_material_warnings(scene) + list(install_compositor(scene, settings))
 
 
 def remove(scene, settings):

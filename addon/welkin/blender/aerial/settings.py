@@ -290,8 +290,9 @@ def on_frame_change_post(scene, depsgraph=None):
     _at_frame[scene.name] = {scene.frame_current: text}
     if isinstance(text, UserError) and depsgraph.mode == 'RENDER':
         # Known before the frame renders: fail it now, before anything is written.
-        farm.fail_frame(scene, f"aerial perspective not written for frame "
-                               f"{scene.frame_current}: {text}")
+        reason = f"aerial perspective not written for frame {scene.frame_current}: {text}"
+        if not farm.fail_frame(scene, reason):
+            _log(scene, reason)  # where the render cannot be stopped: said, at least
 
 
 def _sync_output_path(scene):

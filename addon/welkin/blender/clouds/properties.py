@@ -69,10 +69,12 @@ class WelkinCloudLayer(bpy.types.PropertyGroup):
         name="Weather Variation", default=0.6, min=0.0, max=1.0, update=_changed,
         description="How much the coverage varies across the weather map")
     wind_offset_m: bpy.props.FloatVectorProperty(
-        name="Wind Offset (m)", size=2, default=(0.0, 0.0), soft_min=-1e6, soft_max=1e6,
+        name="Wind Offset (m)", size=2, default=(0.0, 0.0), min=-1e9, max=1e9, soft_min=-1e6,
+        soft_max=1e6,
         update=_changed, description="Horizontal offset of the layer (animate it for wind), m")
     evolution_m: bpy.props.FloatProperty(
-        name="Evolution (m)", default=0.0, soft_min=-1e5, soft_max=1e5, update=_changed,
+        name="Evolution (m)", default=0.0, min=-1e9, max=1e9, soft_min=-1e5, soft_max=1e5,
+        update=_changed,
         description="Moves the cloud noise through the layer's height: animate it and the shapes "
                     "change in place while the wind offset carries them, m")
     seed: bpy.props.IntProperty(name="Seed", default=1, min=0, update=_changed,

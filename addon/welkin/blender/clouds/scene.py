@@ -64,16 +64,24 @@ def clouds_section(scene, depsgraph=None, frame=None, with_volumes=True):
     """The "clouds" dict for the scene at `frame` (default: the current frame), or None
     for a clear sky: the values `depsgraph` evaluated for that frame when given (keyed
     wind, coverage, density...), else the originals'; `with_volumes`: with the marked volumes.
-    UserError for a marked volume without a file."""
+    UserError for a marked volume without a file, more than MAX_LAYERS enabled layers, or a
+    layer number that is not finite."""
     world = evaluated(scene.world, depsgraph)
     frame = scene.frame_current if frame is None else frame
     settings = world.welkin_clouds if world is not None else None
     layers = []
     if settings is not None:
-        for layer in settings.layers:
-            if layer.enabled:
-                values = {k: getattr(layer, k) for k in cloud_export.LAYER_FIELDS}
+        enabled = [layer for layer in settings.layers if layer.enabled]
+        if len(enabled) > cloud_export.MAX_LAYERS:
+            raise UserError(f"World > Welkin Clouds has {len(enabled)} enabled cloud layers; "
+                            f"Welkin renders at most {cloud_export.MAX_LAYERS}: disable or "
+                            f"remove some")
+        for layer in enabled:
+            values = {k: getattr(layer, k) for k in cloud_export.LAYER_FIELDS}
+            try:
                 layers.append(cloud_export.layer_dict(values, layer.seed, layer.wind_offset_m))
+            except ValueError as error:
+                raise UserError(f"cloud layer '{layer.name}': {error}") from None
     volumes = []
     for ob in marked_volumes(scene) if with_volumes else ():
         ob_eval = evaluated(ob, depsgraph)

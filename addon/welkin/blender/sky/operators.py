@@ -42,6 +42,10 @@ class WELKIN_OT_update_sky(bpy.types.Operator):
             wm.progress_update(fraction)
             return True
 
+        if context.scene.world is not None:
+            # Cloud layers added or removed from Python (layers.add()) do not tag the world
+            # for the depsgraph: its evaluated copy would still hold the old layers.
+            context.scene.world.update_tag()
         try:
             outcome = update.update_sky(context.scene, context.evaluated_depsgraph_get(),
                                         force=True, pack=True, progress=progress)
