@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -111,8 +112,15 @@ int main(int argc, char** argv) {
                    "exact cloudy skies averaged into the converged reference of the upsampling's error")
         ->check(CLI::Range(1, 64));
     app.add_option("--csv", csv, "also write the figures as CSV");
-    bool sky_only = false, cases_only = false;
+    bool sky_only = false, cases_only = false, types_only = false;
     app.add_flag("--sky-only", sky_only, "only the sky timings (for profiling)");
+    app.add_flag("--types-only", types_only, "only every cloud type's sky, side by side");
+    double spread = 0.0;
+    app.add_option("--ray-spread", spread,
+                   "the types' skies: CloudLightingOptions::ray_spread_rad (0: from the grid; 1e-9: "
+                   "the grids' levels by the view step alone)");
+    std::string only_type;
+    app.add_option("--type", only_type, "the types' skies: this type only");
     app.add_flag("--cases-only", cases_only, "only fast vs reference on the three clouds, at the defaults");
     CLI11_PARSE(app, argc, argv);
     std::vector<std::string> rows;
@@ -121,6 +129,45 @@ int main(int argc, char** argv) {
     const Observer obs{0.0, glm::normalize(glm::dvec3(0.6, 0.2, 0.5))};
     fmt::print("Welkin cloud benchmark: {} threads, {}x{} sky\n", tbb::info::default_concurrency(), width,
                width / 2);
+
+    // --- every type side by side ---------------------------------------------------
+    // Each type at its preset, as `welkin sky --scene` renders it: the layer's build (the
+    // coverage calibration; the noise bake, shared by every type of a seed, is timed once
+    // before) and the 2048 x 1024 sky with the default upsampling.
+    {
+        CloudLayerParams clear_layer;  // coverage 0: the noise bake without a calibration
+        clear_layer.coverage = 0.0;
+        const double t_noise = median_s(1, [&] { ProceduralClouds warm(clear_layer); });
+        fmt::print(
+            "\n| type | layer build | sky {}x{} | total | sky's CPU time (all threads) |\n"
+            "|---|---|---|---|---|\n",
+            width, width / 2);
+        fmt::print("| (noise bake, once per seed) | {:.2f} s | | |\n", t_noise);
+        const auto type_lut = make_sky_method("lut");
+        for (std::size_t t = 0; t < kCloudTypeNames.size(); ++t) {
+            if (!only_type.empty() && only_type != kCloudTypeNames[t]) continue;
+            CloudLayerParams p = CloudLayerParams::preset(static_cast<CloudType>(t));
+            std::shared_ptr<const ProceduralClouds> lay;
+            // The calibration's cache keeps one result per parameter set: the first build is
+            // the one timed.
+            const double t_build = median_s(1, [&] { lay = std::make_shared<const ProceduralClouds>(p); });
+            SkyImageOptions o;
+            o.clouds = lay;
+            o.cloud_lighting.ray_spread_rad = spread;
+            const std::clock_t c0 = std::clock();
+            const double t_sky =
+                median_s(repeats, [&] { render_equirect_sky(*type_lut, atm, obs, width, o); });
+            // CPU time of all threads per repeat: on a loaded machine the wall time is not
+            // the work.
+            const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC / repeats;
+            fmt::print("| {} | {:.2f} s | {:.2f} s | {:.2f} s | {:.2f} s |\n", kCloudTypeNames[t], t_build,
+                       t_sky, t_build + t_sky, cpu);
+            rows.push_back(fmt::format("type_sky,{},{}x{},{:.4f},,,,,,,", kCloudTypeNames[t], width,
+                                       width / 2, t_build + t_sky));
+            std::fflush(stdout);
+        }
+    }
+    if (types_only) return write_csv(csv, rows);
 
     // --- the cloudy sky ---------------------------------------------------------------
     // One default layer (the cumulus preset, coverage 0.4), as `welkin sky --scene` renders

@@ -45,6 +45,8 @@ void CloudLightingOptions::validate() const {
         throw InvalidArgument("max_distance_m", fmt::format("must be in (0, 1e8] m, got {}", max_distance_m));
     require_in_range("tail_transmittance", tail_transmittance, 0.0, 1.0);
     require_in_range("shadow_grid_spacing_m", shadow_grid_spacing_m, 0.0, 1e5, "m");
+    require_in_range("ray_spread_rad", ray_spread_rad, 0.0, 1.0, "rad");
+    require_in_range("ray_width_m", ray_width_m, 0.0, 1e6, "m");
 }
 
 CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
@@ -167,8 +169,21 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
             for (const auto& g : segs) total += g.t1 - g.t0;
             if (!(total > 0.0)) return;
             const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
-            const int sun_level = sun_grid ? sun_grid->level_for(dt_target) : 0;
-            const int side_level = std::min(sun_level + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
+            // The grids' levels at distance t: no finer than the view step nor the ray's
+            // footprint (the header); re-read when the footprint has doubled.
+            const bool footprint = sun_grid && (options.ray_spread_rad > 0.0 || options.ray_width_m > 0.0);
+            int sun_level = 0, side_level = 0;
+            double next_level_t = -1.0;  // the footprint's level holds below this t
+            const auto set_levels = [&](double t) {
+                const double w = options.ray_width_m + options.ray_spread_rad * t;
+                sun_level = sun_grid ? sun_grid->level_for(std::max(dt_target, w)) : 0;
+                side_level = std::min(sun_level + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
+                next_level_t =
+                    footprint && options.ray_spread_rad > 0.0
+                        ? (sun_grid->spacing_m(sun_level + 1) - options.ray_width_m) / options.ray_spread_rad
+                        : std::numeric_limits<double>::infinity();
+            };
+            set_levels(0.0);
             PathRng rng(options.seed, first_ray_index + r, 0, 0x636c6f7564ULL);
             const double u = options.jitter ? rng.uniform() : 0.5;
             // Phase values of the octaves: nu = d . s is the same at every sample.
@@ -197,6 +212,7 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
                     const glm::dvec3 x = ray.at(t);
                     const double sigma_t = density.sigma_t(x);
                     if (!(sigma_t > 0.0)) continue;
+                    if (footprint && t >= next_level_t) set_levels(t);
                     // The cloud's optical depth from x along dir: from the grid when there is
                     // one, else by its own march of `steps` steps.
                     const auto depth_along = [&](const std::unique_ptr<OpticalDepthGrid>& grid,
@@ -422,6 +438,12 @@ void CloudGridInterpolation::interpolate(std::span<float> values, std::size_t ch
             values[p * channels + c] = float(v);
         }
     });
+}
+
+double angle_between_rays(const glm::dvec3& a, const glm::dvec3& b) {
+    // 2 asin(|u - v| / 2): accurate for the small angles between neighbouring pixels.
+    const double chord = glm::length(glm::normalize(a) - glm::normalize(b));
+    return 2.0 * std::asin(std::min(1.0, 0.5 * chord));
 }
 
 void CloudUpsampling::validate() const {

@@ -2,10 +2,12 @@
 #include "welkin/base/memory.hpp"
 #include "welkin/render/cloud_passes.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -28,7 +30,7 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
     // the march's radiance, transmittance and depth, the RGB and the passes (40 bytes).
     check_frame_memory(w, h, kAerialPassBytesPerPixel + 96 + 4 * nc, "aerial and cloud passes");
     if (!depth.empty()) validate_depth(depth, w, h);
-    const CloudLightingOptions options = scene.clouds ? scene.clouds->lighting : CloudLightingOptions{};
+    CloudLightingOptions options = scene.clouds ? scene.clouds->lighting : CloudLightingOptions{};
     const RowRange band = rows_in.resolved(h);
     // The band's pixels q0 + q, q in [0, n).
     const std::size_t q0 = std::size_t(band.begin) * std::size_t(w);
@@ -52,6 +54,14 @@ CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensit
                     is_sky_depth(z, scene.aerial.sky_depth_m) ? kInf : double(z) * ray.distance_per_depth;
             }
     });
+    // The rays' footprint (lighting.hpp), unless the scene sets it: the angle and the
+    // distance between the middle pixel's ray and its right-hand neighbour's (a perspective
+    // or panoramic camera's rays diverge, an orthographic camera's are a pixel apart).
+    if (options.ray_spread_rad == 0.0 && options.ray_width_m == 0.0 && w >= 2) {
+        const CameraRays::Ray a = rays.at_pixel(w / 2 - 1, h / 2), b = rays.at_pixel(w / 2, h / 2);
+        options.ray_spread_rad = std::min(1.0, angle_between_rays(a.direction, b.direction));
+        options.ray_width_m = std::min(1e6, glm::length(a.origin - b.origin));
+    }
     ProgressStage lut_stage(progress, 0.0, 0.05);
     if (!lut_stage.report(0.0)) throw Cancelled();
     const AtmosphereIllumination light(scene.atmosphere, scene.origin_observer(), scene.sky_options.luts());

@@ -331,7 +331,13 @@ BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIll
                              Progress* progress) {
     BandClouds b;
     const std::size_t n = dirs.size(), nc = atm.channels();
-    b.march = render_clouds_grid(*options.clouds, light, glm::dvec3(0.0), dirs, width, options.cloud_lighting,
+    // The rays' footprint (lighting.hpp), unless set: the angle between neighbouring
+    // pixels, 2 pi / width (a column's rows and the horizon's columns; the rows' columns
+    // draw closer towards the poles).
+    CloudLightingOptions lighting = options.cloud_lighting;
+    if (lighting.ray_spread_rad == 0.0 && lighting.ray_width_m == 0.0)
+        lighting.ray_spread_rad = std::min(1.0, kTwoPi / double(width));
+    b.march = render_clouds_grid(*options.clouds, light, glm::dvec3(0.0), dirs, width, lighting,
                                  options.cloud_upsampling, progress, first_pixel);
     const CloudGridInterpolation& grid = b.march.interpolation;
     std::vector<double> cloud_d(n, 0.0);  // 0: no cloud, or not marched

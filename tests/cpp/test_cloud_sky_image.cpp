@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "welkin/base/equirect.hpp"
+#include "welkin/base/math.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/clouds/procedural.hpp"
 #include "welkin/color/color.hpp"
@@ -128,7 +129,9 @@ TEST(CloudSkyImage, AirlessIsThePlainOver) {
     for (int j = 0; j < H; ++j)
         for (int i = 0; i < W; ++i) dirs.push_back(equirect_pixel_direction(i, j, W, H));
     const AtmosphereIllumination light(atm, obs);
-    const CloudResult c = render_clouds(*layer, light, glm::dvec3(0.0), dirs, cloudy.cloud_lighting);
+    CloudLightingOptions o = cloudy.cloud_lighting;
+    o.ray_spread_rad = kTwoPi / W;  // the image's rays' footprint (sky_image.hpp)
+    const CloudResult c = render_clouds(*layer, light, glm::dvec3(0.0), dirs, o);
     const std::size_t nc = atm.channels();
     int covered = 0;
     for (std::size_t q = 0; q < dirs.size(); ++q) {

@@ -34,8 +34,14 @@
 //    shadow_grid_spacing_m (by default twice the density's feature size), and a sample
 //    whose view step is dt reads the level of cell h_0 2^L <= max(dt, h_0), so far
 //    samples of a sky, a kilometre apart, share coarse cells. Each vertex march is shared
-//    by every sample around it. The sun's irradiance E(x) comes through the
-//    atmosphere (clouds/illumination.hpp).
+//    by every sample around it. The level is also no finer than the ray's footprint w(t)
+//    (ray_spread_rad, ray_width_m: the distance to the neighbouring rays at the sample):
+//    a cell narrower than that is read by one ray only, and its vertices, each a march of
+//    light_steps lookups, cost more than the rays' own samples (a layer kilometres away,
+//    a cirrus or altocumulus deck seen from the ground, is where that happens); a pixel
+//    cannot show the shadow's detail below its own width (the cone tracing of a pixel's
+//    footprint, Amanatides 1984, "Ray tracing with cones", SIGGRAPH). The sun's irradiance
+//    E(x) comes through the atmosphere (clouds/illumination.hpp).
 //  * Multiple scattering of sun light, by default (multiple_scattering = diffusion) from
 //    the delta-Eddington slab along the sun line (clouds/diffusion.hpp, with its
 //    derivation): tau_line = tau_sun + tau_antisun, the cloud's optical depth along the
@@ -145,9 +151,22 @@ struct CloudLightingOptions {
     // (clouds/depth_grid.hpp) instead of marching a shadow ray per sample.
     bool shadow_grid = true;
     double shadow_grid_spacing_m = 0.0;  // finest cell h_0, [0, 1e5] m; 0: twice the feature size
+    // The footprint of a view ray at distance t, w(t) = ray_width_m + ray_spread_rad t: the
+    // distance between neighbouring rays of the image (a pixel), which its host knows (the
+    // angle between neighbouring rays of a perspective or panoramic image, the width of an
+    // orthographic camera's pixel). The optical-depth grids are read no finer than it (see
+    // the header, "Sun light"). Both 0: unknown (the levels by the view step alone). The
+    // hosts set it: the sky image (sky_image.hpp) and the camera passes (cloud_passes.hpp)
+    // from the angle (angle_between_rays) and distance between two neighbouring pixels' rays.
+    double ray_spread_rad = 0.0;  // [0, 1]
+    double ray_width_m = 0.0;     // [0, 1e6] m
 
     void validate() const;
 };
+
+// The angle between two directions (radians; any length but zero), accurate for the small
+// angles between neighbouring pixels: a host's ray_spread_rad.
+double angle_between_rays(const glm::dvec3& a, const glm::dvec3& b);
 
 // Which rays of a grid (render_clouds_grid) were marched, and how each other ray was
 // interpolated: bilinearly from the four corner rays of the block that owns it. A block
