@@ -1,6 +1,6 @@
 """A frame's SceneDescription (docs/pipelines.md "Scene JSON") as plain data, and the files the
 aerial-perspective handler writes beside a render. Blender-free: the bpy layer
-(blender/aerial/settings.py) reads the scene and hands plain values here.
+(blender/aerial/scene.py and pass_files.py) reads the scene and hands plain values here.
 
 Everything the core takes is in metres: Blender's scene units are scaled by
 `unit_settings.scale_length` (the camera's translation, orthographic scale and clip range

@@ -37,7 +37,7 @@ import cloud_testing as C  # noqa: E402
 import bpy  # noqa: E402
 
 addon, welkin = T.install_addon()
-from welkin.blender.aerial import settings as aerial  # noqa: E402
+from welkin.blender.aerial import scene as aerial  # noqa: E402
 from welkin import scene_export  # noqa: E402
 
 

@@ -30,7 +30,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import addon_testing as at  # noqa: E402
 
 addon, module = at.install_addon()
-from welkin.blender.aerial import frame as aerial_frame, settings as aerial  # noqa: E402
+from welkin.blender.aerial import frame as aerial_frame, scene as aerial  # noqa: E402
 from welkin.blender import compat  # noqa: E402
 
 TOL = 0.02

@@ -115,7 +115,7 @@ def frame_matches_the_core(scene, module, base, what):
 def main():
     addon, module = at.install_addon()
     from welkin import scene_export
-    from welkin.blender.aerial import compositor, frame as aerial_frame, settings as aerial
+    from welkin.blender.aerial import compositor, frame as aerial_frame, handlers as aerial_handlers
     from welkin.blender import compat
     scene = build_scene()
     tree, comp = add_user_nodes(scene)
@@ -261,7 +261,7 @@ def main():
     scene.frame_set(7)
     camera = scene.camera
     scene.camera = None
-    aerial.on_render_post(scene)
+    aerial_handlers.on_render_post(scene)
     at.check("no scene camera" in scene.welkin_aerial.status, scene.welkin_aerial.status)
     scene.camera = camera
     print(f"ok: no camera reported: {scene.welkin_aerial.status}")

@@ -109,7 +109,7 @@ for frame in (1, 2, 3):
 check(len(set(texts)) == 3, "each frame's section names its own file")
 
 # The frame's scene JSON (the aerial handler's, validated by the core) carries the section.
-from welkin.blender.aerial import settings as aerial  # noqa: E402
+from welkin.blender.aerial import scene as aerial  # noqa: E402
 scene.frame_set(2)
 text = aerial.scene_json(scene, native, bpy.context.evaluated_depsgraph_get())
 desc = native.SceneDescription.from_json_string(text)

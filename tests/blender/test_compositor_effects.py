@@ -31,8 +31,10 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import addon_testing as at  # noqa: E402
 
 addon, module = at.install_addon()
-from welkin.blender import aerial, compat  # noqa: E402
+from welkin.blender import compat  # noqa: E402
 from welkin.blender.aerial import compositor, frame as aerial_frame  # noqa: E402
+from welkin.blender.aerial import handlers as aerial_handlers  # noqa: E402
+from welkin.blender.aerial import scene as aerial  # noqa: E402
 
 EFFECTS = hasattr(bpy.types, "SceneCompositorEffect")  # Blender 5.3+
 W, H = 96, 48
@@ -187,7 +189,7 @@ def check_no_deprecation(scene):
     compositor (Scene.compositing_node_group, Scene.use_nodes, Scene.node_tree)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        aerial.on_depsgraph_update(scene)
+        aerial_handlers.on_depsgraph_update(scene)
         at.check(compositor.depth_node(scene) is not None, "no File Output node")
         aerial_frame.install(scene, scene.welkin_aerial)
         scene.frame_set(1)

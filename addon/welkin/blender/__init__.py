@@ -11,9 +11,10 @@
              time and a place; its sub-panel)
   clouds/    properties.py (World.welkin_clouds, Object.welkin_cloud), scene.py (the scene
              JSON's "clouds" section), shadows.py (Ground Shadows), operators.py, panel.py
-  aerial/    aerial perspective per render (Scene.welkin_aerial): settings.py (its
-             properties, panel, handlers and pass files), frame.py (in the frame: material
-             and compositor groups), compositor.py (the Write Pass Files node)
+  aerial/    aerial perspective per render (Scene.welkin_aerial): properties.py, panel.py,
+             scene.py (on, off, the frame's table and scene JSON), frame.py (in the frame:
+             material and compositor groups), pass_files.py and compositor.py (Write Pass
+             Files), handlers.py (the handlers; the feature's registration)
   engine/    the render engine "WELKIN" (render_engine.py) and its viewport preview
              (viewport.py)
   handlers.py  the sky follows the lamp: depsgraph (debounced timer), frame change, save
@@ -23,7 +24,7 @@
 import bpy
 
 from . import handlers
-from .aerial import settings as aerial_settings
+from .aerial import handlers as aerial_handlers
 from .clouds import operators as cloud_operators
 from .clouds import panel as cloud_panel
 from .clouds import properties as cloud_properties
@@ -49,7 +50,7 @@ def register():
     bpy.types.World.welkin = bpy.props.PointerProperty(type=properties.WelkinWorldSettings)
     place_time.register()
     handlers.register()
-    aerial_settings.register()
+    aerial_handlers.register()
     render_engine.register()
     from .. import native
     if native.message():
@@ -58,7 +59,7 @@ def register():
 
 def unregister():
     render_engine.unregister()
-    aerial_settings.unregister()
+    aerial_handlers.unregister()
     handlers.unregister()
     place_time.unregister()
     del bpy.types.World.welkin

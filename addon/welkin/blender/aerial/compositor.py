@@ -2,7 +2,7 @@
 
 "Welkin Aerial Depth", a File Output node writing a multilayer EXR of the render's Image
 and Depth (Z pass) for every frame, <base>welkin_render_<frame>.exr: the only way to read
-the Z pass back in `blender -b` (the Viewer node cannot be read there). blender/aerial/settings.py computes
+the Z pass back in `blender -b` (the Viewer node cannot be read there). blender/aerial/pass_files.py computes
 the pass files and the hazed frame from it in render_post. The frame itself is hazed in the
 compositor by blender/aerial/frame.py's group; this node only writes.
 

@@ -1,0 +1,154 @@
+"""Aerial perspective's handlers: the frame's table baked before each frame renders
+(frame_change_post, with the render's own depsgraph), the compositor kept in step, the
+pass files written after each render, and the tables packed when the file is saved; and
+the feature's registration. A handler never raises: problems are printed, shown in the
+panel and, in a command-line render, fail the frame (farm.py)."""
+import bpy
+from bpy.app.handlers import persistent
+
+from ... import native, scene_export
+from . import compositor, frame as aerial_frame, pass_files
+from . import scene as aerial_scene
+from .. import compat, farm
+from ..sky.scene_sun import UserError
+from .panel import RENDER_PT_welkin_aerial
+from .properties import WelkinAerialSettings
+
+
+@persistent
+def on_frame_change_post(scene, depsgraph=None):
+    """Renders evaluate the frame in their own depsgraph and leave the original objects
+    where they were: an animated camera or lamp is read here, where that depsgraph is
+    handed over (in `-a`, `-f` and F12 alike), and used by render_post."""
+    if depsgraph is None or not scene.welkin_aerial.enabled:
+        return
+    module = native.module()
+    if module is None:
+        return
+    try:
+        aerial_frame.install_materials()
+        text = aerial_scene.scene_json(scene, module, depsgraph)
+        aerial_scene.bake(scene, depsgraph, text)
+    except UserError as error:
+        text = error
+    except Exception as error:
+        text = UserError(f"unexpected {type(error).__name__}: {error}")
+    pass_files.at_frame[scene.name] = {scene.frame_current: text}
+    if isinstance(text, UserError) and depsgraph.mode == 'RENDER':
+        # Known before the frame renders: fail it now, before anything is written.
+        reason = f"aerial perspective not written for frame {scene.frame_current}: {text}"
+        if not farm.fail_frame(scene, reason):
+            aerial_scene.log(scene, reason)  # where the render cannot be stopped: said, at least
+
+
+@persistent
+def on_depsgraph_update(scene, *_args):
+    if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
+        pass_files.sync_output_path(scene)
+
+
+@persistent
+def on_load_post(*_args):
+    aerial_scene.baked.clear()
+    for scene in bpy.data.scenes:
+        if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
+            pass_files.sync_output_path(scene)
+
+
+@persistent
+def on_save_pre(*_args):
+    for scene in bpy.data.scenes:
+        if scene.library is not None:
+            continue
+        if scene.welkin_aerial.enabled:
+            problem = aerial_scene.pack_tables(scene)
+            if problem is not None:
+                aerial_scene.log(scene, problem)
+        sky = scene.world is not None and scene.world.welkin.active
+        if not (sky or scene.welkin_aerial.enabled):
+            continue
+        changing = farm.changing_inputs(scene)
+        if changing:
+            text = (f"saved for farms with the add-on only: {', '.join(changing)} "
+                    f"animated; a Blender without Welkin would render every frame with "
+                    f"frame {scene.frame_current}'s sky and haze")
+            print(f"Welkin: warning: scene '{scene.name}': {text}")
+            if scene.welkin_aerial.enabled:
+                scene.welkin_aerial.status = text
+
+
+@persistent
+def on_render_init(scene, *_args):
+    if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
+        pass_files.sync_output_path(scene)
+
+
+@persistent
+def on_render_pre(scene, *_args):
+    farm.frame_started(scene)
+    s = scene.welkin_aerial
+    if not s.enabled:
+        return
+    try:
+        for warning in aerial_frame.install(scene, s):
+            aerial_scene.log(scene, warning)
+        if not s.side_files:
+            return
+        z_on = all(layer.use_pass_z for layer in scene.view_layers)
+        if not z_on:
+            aerial_scene.log(scene, "the Z pass was off: turned on (takes effect from the next render)")
+        node = compositor.depth_node(scene)
+        wanted = scene_export.file_output_base(aerial_scene.base_of(scene))
+        # Touch the scene only when needed: UI renders call this beside the interface.
+        if not z_on or node is None or compat.file_output_path(node) != wanted:
+            aerial_scene.enable_side_files(scene)  # the File Output node follows the output path
+    except Exception as error:
+        aerial_scene.log(scene, f"aerial perspective: unexpected {type(error).__name__}: {error}")
+
+
+@persistent
+def on_render_post(scene, *_args):
+    if not (scene.welkin_aerial.enabled and scene.welkin_aerial.side_files):
+        return
+    frame = scene.frame_current
+    try:
+        paths = pass_files.write_frame(scene, frame)
+        aerial_scene.log(scene, f"aerial perspective of frame {frame}: {paths['aerial']}")
+        return
+    except UserError as error:
+        text = f"aerial perspective not written for frame {frame}: {error}"
+    except Exception as error:  # a handler must never break Blender's render loop
+        text = (f"aerial perspective not written for frame {frame}: unexpected "
+                f"{type(error).__name__}: {error}")
+    aerial_scene.log(scene, text)
+    # The frame's image is already saved (render_post follows the save): a command-line
+    # render takes it away and stops, so the farm sees no file and a non-zero exit.
+    farm.fail_frame(scene, text, remove_written=True)
+
+
+classes = (WelkinAerialSettings, RENDER_PT_welkin_aerial)
+_HANDLERS = ((bpy.app.handlers.frame_change_post, on_frame_change_post),
+             (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
+             (bpy.app.handlers.load_post, on_load_post),
+             (bpy.app.handlers.save_pre, on_save_pre),
+             (bpy.app.handlers.render_init, on_render_init),
+             (bpy.app.handlers.render_pre, on_render_pre),
+             (bpy.app.handlers.render_post, on_render_post))
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.welkin_aerial = bpy.props.PointerProperty(type=WelkinAerialSettings)
+    for handlers, function in _HANDLERS:
+        if function not in handlers:
+            handlers.append(function)
+
+
+def unregister():
+    for handlers, function in reversed(_HANDLERS):
+        if function in handlers:
+            handlers.remove(function)
+    del bpy.types.Scene.welkin_aerial
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)
