@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Benchmark (not a test): from rotating the sun lamp to the new world image, 2048 x 1024,
 beside the time the same Blender spends preparing its own sky for a render, in one run.
 
@@ -32,6 +33,7 @@ medians of --repeats, each with a new sun elevation:
     (Cycles loads the 2048 x 1024 float image); the preparation cost is (b) - (a) and
     (c) - (a).
 """
+
 import argparse
 import math
 import os
@@ -48,15 +50,19 @@ import bpy  # noqa: E402
 # After `--` on Blender's command line; tests/blender/bpy_blender.py passes them as the
 # script's own arguments.
 if "--" in sys.argv:
-    argv = sys.argv[sys.argv.index("--") + 1:]
+    argv = sys.argv[sys.argv.index("--") + 1 :]
 else:
     argv = sys.argv[1:] if T.is_module_bpy() else []
 parser = argparse.ArgumentParser()
 parser.add_argument("--repeats", type=int, default=7)
 parser.add_argument("--width", type=int, default=2048)
 parser.add_argument("--clouds", action="store_true", help="one cloud layer at the panel's defaults")
-parser.add_argument("--sky", default="auto", help="Blender's sky model (ShaderNodeTexSky.sky_type)"
-                    "; auto: MULTIPLE_SCATTERING where it exists (5.0+), else NISHITA")
+parser.add_argument(
+    "--sky",
+    default="auto",
+    help="Blender's sky model (ShaderNodeTexSky.sky_type)"
+    "; auto: MULTIPLE_SCATTERING where it exists (5.0+), else NISHITA",
+)
 parser.add_argument("--docs", action="store_true", help="put the row into docs/validation.md")
 args = parser.parse_args(argv)
 
@@ -65,12 +71,16 @@ from welkin.blender import compat  # noqa: E402
 from welkin.blender.sky import update  # noqa: E402
 
 sky_types = [i.identifier for i in bpy.types.ShaderNodeTexSky.bl_rna.properties["sky_type"].enum_items]
-sky_type = args.sky if args.sky != "auto" else next(
-    t for t in ("MULTIPLE_SCATTERING", "NISHITA") if t in sky_types)
+sky_type = (
+    args.sky if args.sky != "auto" else next(t for t in ("MULTIPLE_SCATTERING", "NISHITA") if t in sky_types)
+)
 if sky_type not in sky_types:
     raise SystemExit(f"addon_sky_update: --sky {sky_type!r} is not one of this Blender's {sky_types}")
-sky_name = {"MULTIPLE_SCATTERING": "Multiple Scattering", "NISHITA": "Nishita",
-            "SINGLE_SCATTERING": "Single Scattering (Nishita)"}.get(sky_type, sky_type)
+sky_name = {
+    "MULTIPLE_SCATTERING": "Multiple Scattering",
+    "NISHITA": "Nishita",
+    "SINGLE_SCATTERING": "Single Scattering (Nishita)",
+}.get(sky_type, sky_type)
 
 scene, sun = T.new_scene(30.0, 45.0, resolution=str(args.width))
 T.panoramic_camera(scene, 8, 4, samples=1)
@@ -102,10 +112,10 @@ const_world = bpy.data.worlds.new("Constant")
 compat.world_node_tree(const_world)
 nishita_world = bpy.data.worlds.new(sky_name)
 sky_tree = compat.world_node_tree(nishita_world)
-sky_node = sky_tree.nodes.new('ShaderNodeTexSky')
+sky_node = sky_tree.nodes.new("ShaderNodeTexSky")
 sky_node.sky_type = sky_type
-background = next(n for n in sky_tree.nodes if n.bl_idname == 'ShaderNodeBackground')
-sky_tree.links.new(sky_node.outputs['Color'], background.inputs['Color'])
+background = next(n for n in sky_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+sky_tree.links.new(sky_node.outputs["Color"], background.inputs["Color"])
 
 scene.world = const_world
 render_seconds()  # warm-up: kernels, first session
@@ -125,18 +135,24 @@ for e in elevations:
 med = statistics.median
 c = med(constant)
 rows = [
-    (f"welkin: lamp rotation -> new world image {args.width}x{args.width // 2} ({method}"
-     f"{', one cloud layer' if args.clouds else ''})",
-     med(total)),
+    (
+        f"welkin: lamp rotation -> new world image {args.width}x{args.width // 2} ({method}"
+        f"{', one cloud layer' if args.clouds else ''})",
+        med(total),
+    ),
     ("  of which the module (sky + sun and disc model)", med(module_share)),
     ("  of which Blender (pixels into the image, nodes, lamp)", med(total) - med(module_share)),
     ("Cycles 8x4 render, constant world (baseline)", c),
     (f"Cycles: Blender's {sky_name} sky preparation, render - baseline", med(nishita) - c),
-    (f"Cycles: Welkin world preparation (image {args.width}x{args.width // 2}), "
-     f"render - baseline", med(welkin_render) - c),
+    (
+        f"Cycles: Welkin world preparation (image {args.width}x{args.width // 2}), render - baseline",
+        med(welkin_render) - c,
+    ),
 ]
-print(f"\nbench/addon_sky_update.py: medians of {args.repeats}, Blender {bpy.app.version_string}, "
-      f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}")
+print(
+    f"\nbench/addon_sky_update.py: medians of {args.repeats}, Blender {bpy.app.version_string}, "
+    f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}"
+)
 for label, seconds in rows:
     print(f"| {label} | {seconds * 1000:.0f} ms |")
 ratio = med(total) / max(med(nishita) - c, 1e-9)
@@ -145,10 +161,12 @@ print(f"| ratio: welkin update / {sky_name} preparation | {ratio:.2f} |")
 if args.docs:
     BEGIN, END = "<!-- addon-sky-update:begin -->", "<!-- addon-sky-update:end -->"
     version = ".".join(map(str, bpy.app.version))
-    row = (f"| {version} | {sys.version_info.major}.{sys.version_info.minor} | "
-           f"{med(total) * 1000:.0f} ms ({med(module_share) * 1000:.0f} ms module) | "
-           f"{sky_name}: {(med(nishita) - c) * 1000:.0f} ms | {ratio:.2f} | "
-           f"{args.repeats} | {os.getloadavg()[0]:.1f} |")
+    row = (
+        f"| {version} | {sys.version_info.major}.{sys.version_info.minor} | "
+        f"{med(total) * 1000:.0f} ms ({med(module_share) * 1000:.0f} ms module) | "
+        f"{sky_name}: {(med(nishita) - c) * 1000:.0f} ms | {ratio:.2f} | "
+        f"{args.repeats} | {os.getloadavg()[0]:.1f} |"
+    )
     doc = os.path.join(ROOT, "docs", "validation.md")
     with open(doc) as f:
         text = f.read()
@@ -157,8 +175,9 @@ if args.docs:
     head, rest = text.split(BEGIN, 1)
     table, tail = rest.split(END, 1)
     lines = [line for line in table.strip().splitlines() if line.startswith("|")][:2]
-    rows_by_version = {line.split("|")[1].strip(): line
-                       for line in table.strip().splitlines()[2:] if line.startswith("|")}
+    rows_by_version = {
+        line.split("|")[1].strip(): line for line in table.strip().splitlines()[2:] if line.startswith("|")
+    }
     rows_by_version[version] = row
     ordered = sorted(rows_by_version, key=lambda v: tuple(int(x) for x in v.split(".")))
     body = "\n".join(lines + [rows_by_version[v] for v in ordered])

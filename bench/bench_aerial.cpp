@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Aerial perspective at 1920 x 1080, side by side in one run: the froxel
 // volume's build and its per-pixel application against marching every pixel to its
 // depth, with the froxels' error against that march, for a few volume sizes.

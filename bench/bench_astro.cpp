@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Positions of the sun and the moon (welkin/astro/): microseconds per call of
 // sun_and_moon (both bodies, one precession-nutation, one place), over a year of moments.
 //

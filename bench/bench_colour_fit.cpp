@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Data for the default wavelengths' colour conversion (color.cpp) and its validation:
 // 48-wavelength lut skies and direct sunlight over every preset, sun elevations -10..90
 // degrees, observers at 0, 1, 3 and 10 km, 160 directions over the upper hemisphere (a

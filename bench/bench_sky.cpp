@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Speed of the sky pipeline, side by side in one run: each LUT's build time, a
 // full LUT rebuild, a 2048 x 1024 equirectangular sky by lut (all LUTs built in the call,
 // and as a sun change with the atmosphere's LUTs cached), raymarch and reference, with

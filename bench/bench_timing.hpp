@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The benchmarks' timer: the median of repeated runs (robust to a stray slow run on a
 // shared machine), in milliseconds or seconds.
 #pragma once

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Welkin beside Blender 5.0's own sky textures, "Multiple Scattering" and "Single
 Scattering" (Nishita's model), at the same sun: zenith, horizon ring and upper-hemisphere
 mean (green channel, linear Rec.709 W m^-2 sr^-1), and the time each takes to prepare.
@@ -25,6 +26,7 @@ Preparation: Blender's, the Cycles render of an 8 x 4 panorama after a change of
 of 3; Welkin's, welkin.sky_image at 1024 x 512 (the add-on's default world image, LUTs
 included), median of 3.
 """
+
 import argparse
 import importlib.util
 import math
@@ -44,8 +46,10 @@ ELEVATIONS = (60.0, 20.0, 5.0, 0.0, -4.0)
 AZIMUTH = 0.0
 W, H = 256, 128
 _BLENDER = f"Blender {bpy.app.version[0]}.{bpy.app.version[1]}"
-MODELS = (("MULTIPLE_SCATTERING", f"{_BLENDER} Multiple Scattering"),
-          ("SINGLE_SCATTERING", f"{_BLENDER} Single Scattering (Nishita)"))
+MODELS = (
+    ("MULTIPLE_SCATTERING", f"{_BLENDER} Multiple Scattering"),
+    ("SINGLE_SCATTERING", f"{_BLENDER} Single Scattering (Nishita)"),
+)
 BEGIN, END = "<!-- blender5-sky-peer:begin -->", "<!-- blender5-sky-peer:end -->"
 
 
@@ -53,8 +57,9 @@ def import_welkin():
     try:
         import welkin
     except ImportError as error:
-        raise SystemExit(f"blender5_sky_peer: the compiled module is not on PYTHONPATH "
-                         f"(PYTHONPATH=build): {error}") from None
+        raise SystemExit(
+            f"blender5_sky_peer: the compiled module is not on PYTHONPATH (PYTHONPATH=build): {error}"
+        ) from None
     return welkin
 
 
@@ -62,7 +67,8 @@ def source_compat():
     """addon/welkin/blender/compat.py of this tree, by path: `welkin` on PYTHONPATH=build is
     the compiled module, not the add-on's package."""
     spec = importlib.util.spec_from_file_location(
-        "welkin_source_compat", ROOT / "addon" / "welkin" / "blender" / "compat.py")
+        "welkin_source_compat", ROOT / "addon" / "welkin" / "blender" / "compat.py"
+    )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -70,6 +76,7 @@ def source_compat():
 
 def setup(scene, width, height, samples):
     import addon_testing as T
+
     if scene.camera is None:
         cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
         scene.collection.objects.link(cam)
@@ -80,12 +87,12 @@ def setup(scene, width, height, samples):
 def sky_world(sky_type):
     world = bpy.data.worlds.new(sky_type)
     tree = world.node_tree  # 5.0+: every world has its tree and uses it
-    node = tree.nodes.new('ShaderNodeTexSky')
+    node = tree.nodes.new("ShaderNodeTexSky")
     node.sky_type = sky_type
     node.sun_disc = False
     node.sun_rotation = math.radians((90.0 - AZIMUTH) % 360.0)  # sun at 90 deg - rotation
-    background = next(n for n in tree.nodes if n.bl_idname == 'ShaderNodeBackground')
-    tree.links.new(node.outputs['Color'], background.inputs['Color'])
+    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    tree.links.new(node.outputs["Color"], background.inputs["Color"])
     return world, node
 
 
@@ -105,27 +112,31 @@ def stats(img):
     g = img[..., 1].astype(np.float64)
     h = g.shape[0]
     cos_e = np.cos(math.pi * (0.5 - (np.arange(h // 2) + 0.5) / h))
-    return {"zenith": float(g[0].mean()), "horizon ring": float(g[h // 2 - 1].mean()),
-            "hemisphere mean": float((g[:h // 2].mean(axis=1) * cos_e).sum() / cos_e.sum())}
+    return {
+        "zenith": float(g[0].mean()),
+        "horizon ring": float(g[h // 2 - 1].mean()),
+        "hemisphere mean": float((g[: h // 2].mean(axis=1) * cos_e).sum() / cos_e.sum()),
+    }
 
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("--docs", action="store_true", help="write the table into "
-                        "docs/validation.md")
-    parser.add_argument("--csv", type=pathlib.Path,
-                        default=ROOT / "bench" / "results" / "blender5_sky_peer.csv")
+    parser.add_argument("--docs", action="store_true", help="write the table into docs/validation.md")
+    parser.add_argument(
+        "--csv", type=pathlib.Path, default=ROOT / "bench" / "results" / "blender5_sky_peer.csv"
+    )
     parser.add_argument("--quick", action="store_true", help="a run that checks the script")
     parser.add_argument("--elevation", type=float, default=20.0, help="--quick's sun, degrees")
-    args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv
-                             else sys.argv[1:])
+    args = parser.parse_args(sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:])
     welkin = import_welkin()
     if bpy.app.version < (5, 0, 0):
-        raise SystemExit(f"blender5_sky_peer: needs the bpy of Blender 5.0 or later, this is "
-                         f"{bpy.app.version_string}")
+        raise SystemExit(
+            f"blender5_sky_peer: needs the bpy of Blender 5.0 or later, this is {bpy.app.version_string}"
+        )
     import atexit
     import shutil
     import tempfile
+
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="welkin_peer_"))
     atexit.register(shutil.rmtree, tmp, ignore_errors=True)
     scene = bpy.context.scene
@@ -136,12 +147,16 @@ def main():
     if args.quick and args.docs:
         raise SystemExit("blender5_sky_peer: --quick measures nothing to put into the docs")
     elevations, (w, h, samples, repeats, prep_width) = (
-        ((args.elevation,), (32, 16, 1, 1, 64)) if args.quick else (ELEVATIONS, (W, H, 16, 3, 1024)))
+        ((args.elevation,), (32, 16, 1, 1, 64)) if args.quick else (ELEVATIONS, (W, H, 16, 3, 1024))
+    )
 
     rows = []
     for e in elevations:
-        s = (math.cos(math.radians(e)) * math.cos(math.radians(AZIMUTH)),
-             math.cos(math.radians(e)) * math.sin(math.radians(AZIMUTH)), math.sin(math.radians(e)))
+        s = (
+            math.cos(math.radians(e)) * math.cos(math.radians(AZIMUTH)),
+            math.cos(math.radians(e)) * math.sin(math.radians(AZIMUTH)),
+            math.sin(math.radians(e)),
+        )
         times = []
         for _ in range(repeats):
             t0 = time.perf_counter()
@@ -168,20 +183,31 @@ def main():
                 prep.append(with_sky - render(scene, tmp / "small.exr"))
             rows.append((e, label, theirs, statistics.median(prep)))
 
-    header = ("| sun | sky | zenith | horizon ring | hemisphere mean | Welkin / it: zenith, "
-              "horizon, hemisphere | preparation |")
+    header = (
+        "| sun | sky | zenith | horizon ring | hemisphere mean | Welkin / it: zenith, "
+        "horizon, hemisphere | preparation |"
+    )
     lines = [header, "|---|---|---|---|---|---|---|"]
     csv = ["sun_deg,sky,zenith,horizon_ring,hemisphere_mean,prepare_s"]
     for e, label, st, seconds in rows:
         ours = next(r[2] for r in rows if r[0] == e and r[1].startswith("Welkin"))
-        ratio = ("" if label.startswith("Welkin") else
-                 ", ".join(f"{ours[k] / st[k]:.2f}" if st[k] > 0 else "-" for k in st))
-        lines.append(f"| {e:g}° | {label} | {st['zenith']:.4g} | {st['horizon ring']:.4g} | "
-                     f"{st['hemisphere mean']:.4g} | {ratio} | {seconds * 1000:.0f} ms |")
-        csv.append(f"{e},{label},{st['zenith']:.6g},{st['horizon ring']:.6g},"
-                   f"{st['hemisphere mean']:.6g},{seconds:.4f}")
-    note = (f"Blender {bpy.app.version_string} (PyPI bpy), {os.cpu_count()} CPUs, load average "
-            f"{os.getloadavg()[0]:.1f}; green channel, W m^-2 sr^-1")
+        ratio = (
+            ""
+            if label.startswith("Welkin")
+            else ", ".join(f"{ours[k] / st[k]:.2f}" if st[k] > 0 else "-" for k in st)
+        )
+        lines.append(
+            f"| {e:g}° | {label} | {st['zenith']:.4g} | {st['horizon ring']:.4g} | "
+            f"{st['hemisphere mean']:.4g} | {ratio} | {seconds * 1000:.0f} ms |"
+        )
+        csv.append(
+            f"{e},{label},{st['zenith']:.6g},{st['horizon ring']:.6g},"
+            f"{st['hemisphere mean']:.6g},{seconds:.4f}"
+        )
+    note = (
+        f"Blender {bpy.app.version_string} (PyPI bpy), {os.cpu_count()} CPUs, load average "
+        f"{os.getloadavg()[0]:.1f}; green channel, W m^-2 sr^-1"
+    )
     table = "\n".join(lines)
     print(f"\n{note}\n\n{table}")
     out = args.csv

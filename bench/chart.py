@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Speed against accuracy: every sky method and setting against the reference.
 
     PYTHONPATH=build /usr/bin/python3 bench/chart.py            # the full chart (~20 min, 2 cores)
@@ -43,6 +44,7 @@ Outputs (in --out, default bench/results/):
 and (full run only, or with --table) the table `auto` chooses from:
   src/sky/auto_table.cpp  (generated; rerun this script to refresh it, then rebuild)
 """
+
 import argparse
 import csv
 import math
@@ -74,12 +76,27 @@ TWILIGHT_PATH_FACTOR = 4
 TIMING_REPEATS = 4
 
 LUT_SIZES = {
-    "small": dict(transmittance_width=64, transmittance_height=16, multiscattering_size=16,
-                  skyview_width=96, skyview_height=54),
-    "default": dict(transmittance_width=256, transmittance_height=64, multiscattering_size=32,
-                    skyview_width=192, skyview_height=108),
-    "large": dict(transmittance_width=512, transmittance_height=128, multiscattering_size=64,
-                  skyview_width=384, skyview_height=216),
+    "small": dict(
+        transmittance_width=64,
+        transmittance_height=16,
+        multiscattering_size=16,
+        skyview_width=96,
+        skyview_height=54,
+    ),
+    "default": dict(
+        transmittance_width=256,
+        transmittance_height=64,
+        multiscattering_size=32,
+        skyview_width=192,
+        skyview_height=108,
+    ),
+    "large": dict(
+        transmittance_width=512,
+        transmittance_height=128,
+        multiscattering_size=64,
+        skyview_width=384,
+        skyview_height=216,
+    ),
 }
 RAYMARCH_STEPS = [(8, 4), (16, 8), (32, 16), (64, 32), (128, 64)]
 
@@ -90,8 +107,9 @@ def candidate_settings():
     for name, kw in LUT_SIZES.items():
         out.append((f"lut {name}", "lut", False, kw))
     for steps, sun_steps in RAYMARCH_STEPS:
-        out.append((f"raymarch {steps}/{sun_steps}", "raymarch", False,
-                    dict(steps=steps, sun_steps=sun_steps)))
+        out.append(
+            (f"raymarch {steps}/{sun_steps}", "raymarch", False, dict(steps=steps, sun_steps=sun_steps))
+        )
     out.append(("analytic spectral", "analytic", True, {}))
     out.append(("lut default spectral", "lut", True, LUT_SIZES["default"]))
     out.append(("raymarch 64/32 spectral", "raymarch", True, dict(steps=64, sun_steps=32)))
@@ -113,9 +131,7 @@ def sun_direction(elevation_deg, azimuth_deg=90.0):
 
 # --- colour -------------------------------------------------------------------------------
 # Linear Rec.709 (D65) to CIE XYZ (ITU-R BT.709 primaries; the Y row is the luminance).
-RGB_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805],
-                       [0.2126, 0.7152, 0.0722],
-                       [0.0193, 0.1192, 0.9505]])
+RGB_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
 
 
 def luminance(rgb):
@@ -126,12 +142,12 @@ def ciede2000(rgb, rgb_ref):
     """CIEDE2000 between two linear Rec.709 colour sets of one scene, normalised so the
     reference's 95th-percentile luminance is Lab's white."""
     from skimage.color import deltaE_ciede2000, xyz2lab
+
     white = float(np.percentile(luminance(rgb_ref), 95))
     if not white > 0.0:
         return np.zeros(len(rgb))
     lab = xyz2lab((np.clip(rgb, 0, None) @ RGB_TO_XYZ.T / white)[None], illuminant="D65")
-    lab_ref = xyz2lab((np.clip(rgb_ref, 0, None) @ RGB_TO_XYZ.T / white)[None],
-                      illuminant="D65")
+    lab_ref = xyz2lab((np.clip(rgb_ref, 0, None) @ RGB_TO_XYZ.T / white)[None], illuminant="D65")
     return deltaE_ciede2000(lab_ref, lab)[0]
 
 
@@ -140,8 +156,7 @@ def relative_luminance_error(y, y_ref):
     denom = np.maximum(y_ref, floor)
     err = np.abs(y - y_ref)
     with np.errstate(invalid="ignore", divide="ignore"):
-        rel = np.where(denom > 0.0, err / np.where(denom > 0, denom, 1.0),
-                       np.where(err > 0.0, np.inf, 0.0))
+        rel = np.where(denom > 0.0, err / np.where(denom > 0, denom, 1.0), np.where(err > 0.0, np.inf, 0.0))
     return rel
 
 
@@ -160,8 +175,9 @@ class Atmospheres:
 
 def reference_scene(atm, altitude_m, sun, dirs, paths, seed):
     t0 = time.process_time()
-    spectra, se = welkin.sky_radiance(atm, altitude_m, sun, dirs, method="reference",
-                                      paths=paths, seed=seed, return_standard_error=True)
+    spectra, se = welkin.sky_radiance(
+        atm, altitude_m, sun, dirs, method="reference", paths=paths, seed=seed, return_standard_error=True
+    )
     seconds = time.process_time() - t0  # CPU seconds, as for the other methods
     wl = atm.wavelengths_nm
     rgb = welkin.spectrum_to_rgb(spectra, wl, -3.0).astype(np.float64)
@@ -182,8 +198,9 @@ def time_setting(atms, method, spectral, kw, repeats):
     sun = sun_direction(30.0)
     small_n = 256
     # Enough directions that the per-direction cost dominates the fixed one.
-    large_n = (1024 if spectral else 4096) if method == "raymarch" else (
-        262144 if spectral else HDRI_DIRECTIONS)
+    large_n = (
+        (1024 if spectral else 4096) if method == "raymarch" else (262144 if spectral else HDRI_DIRECTIONS)
+    )
     small, large = fibonacci_sphere(small_n), fibonacci_sphere(large_n)
     t_small = [_timed(atm, sun, small, method, kw) for _ in range(repeats)]
     t_large = [_timed(atm, sun, large, method, kw) for _ in range(max(1, repeats - 1))]
@@ -203,27 +220,47 @@ def _timed(atm, sun, dirs, method, kw):
 
 def parse_args():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="reduced scene set and fewer paths (development); does not write "
-                         "the auto table unless --table is given")
-    ap.add_argument("--directions", type=int, default=None,
-                    help="directions on the Fibonacci sphere (default 160, quick 96)")
-    ap.add_argument("--paths", type=int, default=None,
-                    help="reference paths per direction with the sun up (default 2048, "
-                         "quick 1024); TWILIGHT_PATH_FACTOR times more with the sun down")
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="reduced scene set and fewer paths (development); does not write "
+        "the auto table unless --table is given",
+    )
+    ap.add_argument(
+        "--directions",
+        type=int,
+        default=None,
+        help="directions on the Fibonacci sphere (default 160, quick 96)",
+    )
+    ap.add_argument(
+        "--paths",
+        type=int,
+        default=None,
+        help="reference paths per direction with the sun up (default 2048, "
+        "quick 1024); TWILIGHT_PATH_FACTOR times more with the sun down",
+    )
     ap.add_argument("--seed", type=int, default=11)
-    ap.add_argument("--tolerance", type=float, default=0.05,
-                    help="relative luminance error the stability map marks (p95)")
-    ap.add_argument("--out", default=None, help="output folder (default bench/results, "
-                                                 "quick: bench/results/quick)")
-    ap.add_argument("--table", default=None,
-                    help="write the auto table here (full run default: src/sky/auto_table.cpp)")
+    ap.add_argument(
+        "--tolerance", type=float, default=0.05, help="relative luminance error the stability map marks (p95)"
+    )
+    ap.add_argument(
+        "--out", default=None, help="output folder (default bench/results, quick: bench/results/quick)"
+    )
+    ap.add_argument(
+        "--table", default=None, help="write the auto table here (full run default: src/sky/auto_table.cpp)"
+    )
     ap.add_argument("--no-table", action="store_true", help="do not write the auto table")
-    ap.add_argument("--replot", action="store_true",
-                    help="only redraw chart.png and stability.png from the CSV files in --out")
-    ap.add_argument("--retime", action="store_true",
-                    help="only measure the times again (a few minutes), keep the errors in "
-                         "--out's CSV files; rewrites chart.csv, the pictures and the table")
+    ap.add_argument(
+        "--replot",
+        action="store_true",
+        help="only redraw chart.png and stability.png from the CSV files in --out",
+    )
+    ap.add_argument(
+        "--retime",
+        action="store_true",
+        help="only measure the times again (a few minutes), keep the errors in "
+        "--out's CSV files; rewrites chart.csv, the pictures and the table",
+    )
     return ap.parse_args()
 
 
@@ -233,38 +270,46 @@ def measure_scenes(atms, settings, dirs, suns, alts, paths, seed, start):
     CPU seconds per path)."""
     n_dirs = len(dirs)
     scene_rows, noise_rows = [], []
-    per_setting = {label: dict(rel=[], rel_day=[], de=[], nonfinite=0)
-                   for label, *_ in settings}
+    per_setting = {label: dict(rel=[], rel_day=[], de=[], nonfinite=0) for label, *_ in settings}
     ref_seconds, ref_evals = 0.0, 0
     for preset in PRESETS:
         for alt in alts:
             for sun_el in suns:
                 sun = sun_direction(sun_el)
                 scene_paths = paths * (TWILIGHT_PATH_FACTOR if sun_el <= 0 else 1)
-                ref_rgb, ref_se_y, secs = reference_scene(atms.get(preset, True), alt, sun,
-                                                          dirs, scene_paths, seed)
+                ref_rgb, ref_se_y, secs = reference_scene(
+                    atms.get(preset, True), alt, sun, dirs, scene_paths, seed
+                )
                 ref_seconds += secs
                 ref_evals += n_dirs * scene_paths
                 y_ref = luminance(ref_rgb)
                 floor = 1e-3 * float(np.mean(y_ref))
                 noise = ref_se_y / np.maximum(np.maximum(y_ref, floor), 1e-300)
                 noise = np.where(ref_se_y > 0, noise, 0.0)
-                noise_rows.append(dict(preset=preset, altitude_m=alt, sun_elevation_deg=sun_el,
-                                       paths=scene_paths, directions=n_dirs,
-                                       noise_mean=float(np.mean(noise)),
-                                       noise_p95=float(np.percentile(noise, 95)),
-                                       noise_max=float(np.max(noise)),
-                                       reference_seconds=secs))
+                noise_rows.append(
+                    dict(
+                        preset=preset,
+                        altitude_m=alt,
+                        sun_elevation_deg=sun_el,
+                        paths=scene_paths,
+                        directions=n_dirs,
+                        noise_mean=float(np.mean(noise)),
+                        noise_p95=float(np.percentile(noise, 95)),
+                        noise_max=float(np.max(noise)),
+                        reference_seconds=secs,
+                    )
+                )
                 for label, method, spectral, kw in settings:
                     atm = atms.get(preset, spectral)
                     spectra = welkin.sky_radiance(atm, alt, sun, dirs, method=method, **kw)
                     # A failure is a non-finite or negative radiance. (Rec.709 may go
                     # negative for a saturated colour outside its gamut: that is colour,
                     # not failure; the conversion is the one output="rgb" makes.)
-                    bad = int(np.count_nonzero(~np.isfinite(spectra)) +
-                              np.count_nonzero(np.isfinite(spectra) & (spectra < 0)))
-                    rgb = welkin.spectrum_to_rgb(spectra, atm.wavelengths_nm,
-                                                 -3.0).astype(np.float64)
+                    bad = int(
+                        np.count_nonzero(~np.isfinite(spectra))
+                        + np.count_nonzero(np.isfinite(spectra) & (spectra < 0))
+                    )
+                    rgb = welkin.spectrum_to_rgb(spectra, atm.wavelengths_nm, -3.0).astype(np.float64)
                     bad += int(np.count_nonzero(~np.isfinite(rgb)))
                     if bad:
                         rel = np.full(n_dirs, np.inf)
@@ -278,17 +323,28 @@ def measure_scenes(atms, settings, dirs, suns, alts, paths, seed, start):
                         acc["rel_day"].append(rel)
                     acc["de"].append(de)
                     acc["nonfinite"] += bad
-                    scene_rows.append(dict(
-                        setting=label, method=method, spectral=int(spectral), preset=preset,
-                        altitude_m=alt, sun_elevation_deg=sun_el,
-                        rel_lum_mean=float(np.mean(rel)),
-                        rel_lum_p95=float(np.percentile(rel, 95)),
-                        rel_lum_max=float(np.max(rel)),
-                        de2000_mean=float(np.mean(de)), de2000_p95=float(np.percentile(de, 95)),
-                        nonfinite_or_negative=bad))
-                print(f"{preset:12s} alt {alt:8.0f} m sun {sun_el:6.1f} deg: reference "
-                      f"{secs:5.1f} s, noise p95 {noise_rows[-1]['noise_p95']:.4f}; "
-                      f"elapsed {time.perf_counter() - start:6.0f} s", flush=True)
+                    scene_rows.append(
+                        dict(
+                            setting=label,
+                            method=method,
+                            spectral=int(spectral),
+                            preset=preset,
+                            altitude_m=alt,
+                            sun_elevation_deg=sun_el,
+                            rel_lum_mean=float(np.mean(rel)),
+                            rel_lum_p95=float(np.percentile(rel, 95)),
+                            rel_lum_max=float(np.max(rel)),
+                            de2000_mean=float(np.mean(de)),
+                            de2000_p95=float(np.percentile(de, 95)),
+                            nonfinite_or_negative=bad,
+                        )
+                    )
+                print(
+                    f"{preset:12s} alt {alt:8.0f} m sun {sun_el:6.1f} deg: reference "
+                    f"{secs:5.1f} s, noise p95 {noise_rows[-1]['noise_p95']:.4f}; "
+                    f"elapsed {time.perf_counter() - start:6.0f} s",
+                    flush=True,
+                )
 
     return scene_rows, noise_rows, per_setting, ref_seconds / ref_evals
 
@@ -304,35 +360,55 @@ def chart_rows_of(settings, per_setting, timing, wall, noise_rows, paths, ref_pe
         fixed, per_dir = timing[label]
         hdri = fixed + per_dir * HDRI_DIRECTIONS
         wall_fixed, wall_per_dir = wall[label]
-        chart_rows.append(dict(
-            setting=label, method=method, spectral=int(spectral),
-            options=" ".join(f"{k}={v}" for k, v in kw.items()),
-            fixed_cpu_s=fixed, per_direction_cpu_s=per_dir, hdri_2048x1024_cpu_s=hdri,
-            amortised_per_direction_cpu_s=hdri / HDRI_DIRECTIONS,
-            hdri_2048x1024_wall_s=wall_fixed + wall_per_dir * HDRI_DIRECTIONS,
-            rel_lum_mean=float(np.mean(rel)), rel_lum_p95=float(np.percentile(rel, 95)),
-            rel_lum_max=float(np.max(rel)),
-            rel_lum_mean_sun_up=float(np.mean(rel_day)),
-            rel_lum_p95_sun_up=float(np.percentile(rel_day, 95)),
-            rel_lum_max_sun_up=float(np.max(rel_day)),
-            de2000_mean=float(np.mean(de)), de2000_p95=float(np.percentile(de, 95)),
-            de2000_max=float(np.max(de)), nonfinite_or_negative=acc["nonfinite"]))
+        chart_rows.append(
+            dict(
+                setting=label,
+                method=method,
+                spectral=int(spectral),
+                options=" ".join(f"{k}={v}" for k, v in kw.items()),
+                fixed_cpu_s=fixed,
+                per_direction_cpu_s=per_dir,
+                hdri_2048x1024_cpu_s=hdri,
+                amortised_per_direction_cpu_s=hdri / HDRI_DIRECTIONS,
+                hdri_2048x1024_wall_s=wall_fixed + wall_per_dir * HDRI_DIRECTIONS,
+                rel_lum_mean=float(np.mean(rel)),
+                rel_lum_p95=float(np.percentile(rel, 95)),
+                rel_lum_max=float(np.max(rel)),
+                rel_lum_mean_sun_up=float(np.mean(rel_day)),
+                rel_lum_p95_sun_up=float(np.percentile(rel_day, 95)),
+                rel_lum_max_sun_up=float(np.max(rel_day)),
+                de2000_mean=float(np.mean(de)),
+                de2000_p95=float(np.percentile(de, 95)),
+                de2000_max=float(np.max(de)),
+                nonfinite_or_negative=acc["nonfinite"],
+            )
+        )
     noise_all = np.array([r["noise_p95"] for r in noise_rows])
     noise_day = [r for r in noise_rows if r["sun_elevation_deg"] > 0]
     ref_hdri = ref_per_path * paths * HDRI_DIRECTIONS
-    chart_rows.append(dict(
-        setting=f"reference {paths} paths (noise)", method="reference", spectral=1,
-        options=f"paths={paths}", fixed_cpu_s=0.0, per_direction_cpu_s=ref_per_path * paths,
-        hdri_2048x1024_cpu_s=ref_hdri, amortised_per_direction_cpu_s=ref_per_path * paths,
-        hdri_2048x1024_wall_s=float("nan"),
-        rel_lum_mean=float(np.mean([r["noise_mean"] for r in noise_rows])),
-        rel_lum_p95=float(np.percentile(noise_all, 95)),
-        rel_lum_max=float(np.max([r["noise_max"] for r in noise_rows])),
-        rel_lum_mean_sun_up=float(np.mean([r["noise_mean"] for r in noise_day])),
-        rel_lum_p95_sun_up=float(np.percentile([r["noise_p95"] for r in noise_day], 95)),
-        rel_lum_max_sun_up=float(np.max([r["noise_max"] for r in noise_day])),
-        de2000_mean=float("nan"), de2000_p95=float("nan"), de2000_max=float("nan"),
-        nonfinite_or_negative=0))
+    chart_rows.append(
+        dict(
+            setting=f"reference {paths} paths (noise)",
+            method="reference",
+            spectral=1,
+            options=f"paths={paths}",
+            fixed_cpu_s=0.0,
+            per_direction_cpu_s=ref_per_path * paths,
+            hdri_2048x1024_cpu_s=ref_hdri,
+            amortised_per_direction_cpu_s=ref_per_path * paths,
+            hdri_2048x1024_wall_s=float("nan"),
+            rel_lum_mean=float(np.mean([r["noise_mean"] for r in noise_rows])),
+            rel_lum_p95=float(np.percentile(noise_all, 95)),
+            rel_lum_max=float(np.max([r["noise_max"] for r in noise_rows])),
+            rel_lum_mean_sun_up=float(np.mean([r["noise_mean"] for r in noise_day])),
+            rel_lum_p95_sun_up=float(np.percentile([r["noise_p95"] for r in noise_day], 95)),
+            rel_lum_max_sun_up=float(np.max([r["noise_max"] for r in noise_day])),
+            de2000_mean=float("nan"),
+            de2000_p95=float("nan"),
+            de2000_max=float("nan"),
+            nonfinite_or_negative=0,
+        )
+    )
     return chart_rows
 
 
@@ -362,26 +438,43 @@ def main():
     timing, wall = {}, {}
     for label, method, spectral, kw in settings:
         timing[label], wall[label] = time_setting(atms, method, spectral, kw, repeats=TIMING_REPEATS)
-        print(f"time {label:26s} fixed {timing[label][0]*1e3:8.2f} ms, "
-              f"{timing[label][1]*1e6:8.3f} us/direction CPU; wall {wall[label][0]*1e3:8.2f} "
-              f"ms, {wall[label][1]*1e6:8.3f} us/direction", flush=True)
+        print(
+            f"time {label:26s} fixed {timing[label][0] * 1e3:8.2f} ms, "
+            f"{timing[label][1] * 1e6:8.3f} us/direction CPU; wall {wall[label][0] * 1e3:8.2f} "
+            f"ms, {wall[label][1] * 1e6:8.3f} us/direction",
+            flush=True,
+        )
 
     scene_rows, noise_rows, per_setting, ref_per_path = measure_scenes(
-        atms, settings, dirs, suns, alts, paths, args.seed, start)
+        atms, settings, dirs, suns, alts, paths, args.seed, start
+    )
     chart_rows = chart_rows_of(settings, per_setting, timing, wall, noise_rows, paths, ref_per_path)
 
     write_csv(out / "chart.csv", chart_rows)
     write_csv(out / "scenes.csv", scene_rows)
     write_csv(out / "reference_noise.csv", noise_rows)
     draw_chart(out / "chart.png", chart_rows, n_dirs, paths, len(noise_rows))
-    draw_stability(out / "stability.png", scene_rows, noise_rows, [s[0] for s in settings],
-                   suns, alts, args.tolerance)
+    draw_stability(
+        out / "stability.png", scene_rows, noise_rows, [s[0] for s in settings], suns, alts, args.tolerance
+    )
     if table:
-        write_table(pathlib.Path(table), settings, timing, scene_rows, noise_rows, suns, alts,
-                    paths, ref_per_path, n_dirs)
+        write_table(
+            pathlib.Path(table),
+            settings,
+            timing,
+            scene_rows,
+            noise_rows,
+            suns,
+            alts,
+            paths,
+            ref_per_path,
+            n_dirs,
+        )
         print(f"wrote {table}")
-    print(f"wrote {out}/chart.csv, scenes.csv, reference_noise.csv, chart.png, stability_*.png "
-          f"in {time.perf_counter() - start:.0f} s")
+    print(
+        f"wrote {out}/chart.csv, scenes.csv, reference_noise.csv, chart.png, stability_*.png "
+        f"in {time.perf_counter() - start:.0f} s"
+    )
 
 
 def write_csv(path, rows):
@@ -405,6 +498,7 @@ def pareto(points):
 
 def draw_chart(path, rows, n_dirs, paths, n_scenes):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -412,27 +506,47 @@ def draw_chart(path, rows, n_dirs, paths, n_scenes):
     noise = [r for r in rows if r["setting"].startswith("reference")][0]
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.4))
     colours = {"analytic": "tab:green", "lut": "tab:blue", "raymarch": "tab:orange"}
-    for ax, key, name in ((axes[0], "rel_lum_p95_sun_up",
-                           "relative luminance error, p95, sun above the horizon"),
-                          (axes[1], "rel_lum_p95",
-                           "relative luminance error, p95, all scenes (twilight too)")):
+    for ax, key, name in (
+        (axes[0], "rel_lum_p95_sun_up", "relative luminance error, p95, sun above the horizon"),
+        (axes[1], "rel_lum_p95", "relative luminance error, p95, all scenes (twilight too)"),
+    ):
         pts = [(r["hdri_2048x1024_cpu_s"], r[key]) for r in methods]
         front = pareto(pts)
         for r in methods:
-            ax.scatter(r["hdri_2048x1024_cpu_s"], r[key], color=colours[r["method"]],
-                       marker="s" if r["spectral"] else "o", s=46, zorder=3)
-            ax.annotate(r["setting"], (r["hdri_2048x1024_cpu_s"], r[key]), fontsize=7,
-                        xytext=(4, 3), textcoords="offset points")
+            ax.scatter(
+                r["hdri_2048x1024_cpu_s"],
+                r[key],
+                color=colours[r["method"]],
+                marker="s" if r["spectral"] else "o",
+                s=46,
+                zorder=3,
+            )
+            ax.annotate(
+                r["setting"],
+                (r["hdri_2048x1024_cpu_s"], r[key]),
+                fontsize=7,
+                xytext=(4, 3),
+                textcoords="offset points",
+            )
         fx = [pts[i][0] for i in front]
         fy = [pts[i][1] for i in front]
-        ax.step(fx, fy, where="post", color="k", lw=1, ls="--", zorder=2,
-                label="Pareto front")
+        ax.step(fx, fy, where="post", color="k", lw=1, ls="--", zorder=2, label="Pareto front")
         ax.scatter(fx, fy, facecolors="none", edgecolors="k", s=140, zorder=4)
-        ax.axhline(noise[key], color="tab:red", lw=1,
-                   label=f"reference's own noise (standard error), {noise[key]:.2%}")
-        ax.scatter(noise["hdri_2048x1024_cpu_s"], noise[key], color="tab:red", marker="*", s=90,
-                   zorder=3, label=f"reference, {paths} paths (x{TWILIGHT_PATH_FACTOR} "
-                                   f"with the sun down)")
+        ax.axhline(
+            noise[key],
+            color="tab:red",
+            lw=1,
+            label=f"reference's own noise (standard error), {noise[key]:.2%}",
+        )
+        ax.scatter(
+            noise["hdri_2048x1024_cpu_s"],
+            noise[key],
+            color="tab:red",
+            marker="*",
+            s=90,
+            zorder=3,
+            label=f"reference, {paths} paths (x{TWILIGHT_PATH_FACTOR} with the sun down)",
+        )
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("CPU time for a 2048x1024 HDRI, s (all threads summed)")
@@ -440,9 +554,12 @@ def draw_chart(path, rows, n_dirs, paths, n_scenes):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7, loc="lower left")
     dirs_text = f"{n_dirs} directions each" if n_dirs else "directions"
-    fig.suptitle(f"Welkin sky methods against the spectral reference: {n_scenes} scenes, "
-                 f"{dirs_text} over the whole sphere (circles the default 4 wavelengths, "
-                 f"squares spectral)", fontsize=9)
+    fig.suptitle(
+        f"Welkin sky methods against the spectral reference: {n_scenes} scenes, "
+        f"{dirs_text} over the whole sphere (circles the default 4 wavelengths, "
+        f"squares spectral)",
+        fontsize=9,
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -479,16 +596,21 @@ def retime(out, args):
     atms = Atmospheres()
     timing = {}
     for label, method, spectral, kw in settings:
-        (fixed, per_dir), (wall_fixed, wall_per_dir) = time_setting(atms, method, spectral, kw,
-                                                                    TIMING_REPEATS)
+        (fixed, per_dir), (wall_fixed, wall_per_dir) = time_setting(
+            atms, method, spectral, kw, TIMING_REPEATS
+        )
         timing[label] = (fixed, per_dir)
         hdri = fixed + per_dir * HDRI_DIRECTIONS
-        by_label[label].update(fixed_cpu_s=fixed, per_direction_cpu_s=per_dir,
-                               hdri_2048x1024_cpu_s=hdri,
-                               amortised_per_direction_cpu_s=hdri / HDRI_DIRECTIONS,
-                               hdri_2048x1024_wall_s=wall_fixed + wall_per_dir * HDRI_DIRECTIONS)
-        print(f"time {label:26s} fixed {fixed*1e3:8.2f} ms, {per_dir*1e6:8.3f} us/direction CPU",
-              flush=True)
+        by_label[label].update(
+            fixed_cpu_s=fixed,
+            per_direction_cpu_s=per_dir,
+            hdri_2048x1024_cpu_s=hdri,
+            amortised_per_direction_cpu_s=hdri / HDRI_DIRECTIONS,
+            hdri_2048x1024_wall_s=wall_fixed + wall_per_dir * HDRI_DIRECTIONS,
+        )
+        print(
+            f"time {label:26s} fixed {fixed * 1e3:8.2f} ms, {per_dir * 1e6:8.3f} us/direction CPU", flush=True
+        )
     write_csv(out / "chart.csv", chart_rows)
     replot(out, args.tolerance)
     if not args.no_table:
@@ -497,8 +619,18 @@ def retime(out, args):
         suns = sorted({r["sun_elevation_deg"] for r in noise_rows})
         alts = sorted({r["altitude_m"] for r in noise_rows})
         table = pathlib.Path(args.table or (ROOT / "src/sky/auto_table.cpp"))
-        write_table(table, settings, timing, scene_rows, noise_rows, suns, alts, paths,
-                    ref["per_direction_cpu_s"] / paths, args.directions or 160)
+        write_table(
+            table,
+            settings,
+            timing,
+            scene_rows,
+            noise_rows,
+            suns,
+            alts,
+            paths,
+            ref["per_direction_cpu_s"] / paths,
+            args.directions or 160,
+        )
         print(f"wrote {table}")
 
 
@@ -521,14 +653,21 @@ def replot(out, tolerance):
 def draw_stability(path, scene_rows, noise_rows, labels, suns, alts, tolerance):
     """One map per preset: stability_<preset>.png next to `path`."""
     for preset in PRESETS:
-        draw_stability_preset(path.with_name(f"{path.stem}_{preset}{path.suffix}"),
-                              [r for r in scene_rows if r["preset"] == preset],
-                              [r for r in noise_rows if r["preset"] == preset], labels, suns,
-                              alts, tolerance, preset)
+        draw_stability_preset(
+            path.with_name(f"{path.stem}_{preset}{path.suffix}"),
+            [r for r in scene_rows if r["preset"] == preset],
+            [r for r in noise_rows if r["preset"] == preset],
+            labels,
+            suns,
+            alts,
+            tolerance,
+            preset,
+        )
 
 
 def draw_stability_preset(path, scene_rows, noise_rows, labels, suns, alts, tolerance, preset):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
@@ -558,21 +697,21 @@ def draw_stability_preset(path, scene_rows, noise_rows, labels, suns, alts, tole
         for i in range(len(alts)):
             for j in range(len(suns)):
                 if bad[i, j]:
-                    ax.text(j, i, "X", ha="center", va="center", color="red", fontsize=11,
-                            weight="bold")
+                    ax.text(j, i, "X", ha="center", va="center", color="red", fontsize=11, weight="bold")
                     continue
                 if grid[i, j] > tolerance:
-                    ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 0.96, 0.96, fill=False,
-                                               edgecolor="red", lw=1.2))
+                    ax.add_patch(
+                        plt.Rectangle((j - 0.5, i - 0.5), 0.96, 0.96, fill=False, edgecolor="red", lw=1.2)
+                    )
                 v = grid[i, j]
                 text = ">999%" if v >= 10 else (f"{v:.0%}" if v >= 0.01 else f"{v:.1%}")
-                ax.text(j, i, text, ha="center",
-                        va="center", fontsize=5,
-                        color="black" if v > 0.03 else "white")
+                ax.text(
+                    j, i, text, ha="center", va="center", fontsize=5, color="black" if v > 0.03 else "white"
+                )
         ax.set_xticks(range(len(suns)))
         ax.set_xticklabels([f"{s:g}" for s in suns], fontsize=6)
         ax.set_yticks(range(len(alts)))
-        ax.set_yticklabels([f"{a/1e3:g} km" for a in alts], fontsize=6)
+        ax.set_yticklabels([f"{a / 1e3:g} km" for a in alts], fontsize=6)
         ax.set_title(label, fontsize=8)
         if k % cols == 0:
             ax.set_ylabel("altitude")
@@ -580,18 +719,20 @@ def draw_stability_preset(path, scene_rows, noise_rows, labels, suns, alts, tole
             ax.set_xlabel("sun elevation, deg")
     for k in range(len(panels), rows_n * cols):
         axes[k // cols][k % cols].axis("off")
-    fig.colorbar(im, ax=axes, shrink=0.8,
-                 label="relative luminance error, p95 over the sphere")
-    fig.suptitle(f"Stability map, preset {preset}: red frame = p95 error above "
-                 f"{tolerance:.0%}, red X = a non-finite or negative value", fontsize=9)
+    fig.colorbar(im, ax=axes, shrink=0.8, label="relative luminance error, p95 over the sphere")
+    fig.suptitle(
+        f"Stability map, preset {preset}: red frame = p95 error above "
+        f"{tolerance:.0%}, red X = a non-finite or negative value",
+        fontsize=9,
+    )
     fig.savefig(path, dpi=100)
     plt.close(fig)
 
 
-def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, paths,
-                ref_per_path, n_dirs):
+def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, paths, ref_per_path, n_dirs):
     """The C++ table `auto` chooses from (src/sky/auto.cpp reads it through
     include/welkin/sky/auto_table.hpp)."""
+
     def opt(kw, key, default):
         return int(kw.get(key, default))
 
@@ -600,14 +741,14 @@ def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, path
         "// Regenerate: PYTHONPATH=build /usr/bin/python3 bench/chart.py (then rebuild).",
         f"// {len(noise_rows)} scenes x {n_dirs} directions, reference {paths} paths at "
         f"{SPECTRAL_STEP_NM:g} nm; measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.",
-        "#include \"welkin/sky/auto_table.hpp\"",
+        '#include "welkin/sky/auto_table.hpp"',
         "",
         "namespace welkin::auto_table {",
         "namespace {",
         "",
         "constexpr double kAltitudes[] = {" + ", ".join(f"{a:.1f}" for a in alts) + "};",
         "constexpr double kSunElevations[] = {" + ", ".join(f"{s:.1f}" for s in suns) + "};",
-        "constexpr const char* kPresets[] = {" + ", ".join(f"\"{p}\"" for p in PRESETS) + "};",
+        "constexpr const char* kPresets[] = {" + ", ".join(f'"{p}"' for p in PRESETS) + "};",
         "",
         "// method, spectral, transmittance w/h, multiscattering, sky-view w/h, raymarch",
         "// steps/sun steps, fixed CPU s, CPU s per direction",
@@ -617,21 +758,23 @@ def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, path
     for label, method, spectral, kw in settings:
         fixed, per_dir = timing[label]
         lines.append(
-            f"    {{\"{method}\", {str(spectral).lower()}, "
+            f'    {{"{method}", {str(spectral).lower()}, '
             f"{opt(kw, 'transmittance_width', d['transmittance_width'])}, "
             f"{opt(kw, 'transmittance_height', d['transmittance_height'])}, "
             f"{opt(kw, 'multiscattering_size', d['multiscattering_size'])}, "
             f"{opt(kw, 'skyview_width', d['skyview_width'])}, "
             f"{opt(kw, 'skyview_height', d['skyview_height'])}, "
             f"{opt(kw, 'steps', 64)}, {opt(kw, 'sun_steps', 32)}, "
-            f"{fixed:.6g}, {per_dir:.6g}}},  // {label}")
-    lines += ["};", "",
-              "// p95 relative luminance error over the sphere, [preset][setting][altitude]"
-              "[sun elevation]; infinity where a value was non-finite or negative.",
-              f"constexpr double kP95[{len(PRESETS)}][{len(settings)}][{len(alts)}]"
-              f"[{len(suns)}] = {{"]
-    index = {(r["preset"], r["setting"], r["altitude_m"], r["sun_elevation_deg"]): r
-             for r in scene_rows}
+            f"{fixed:.6g}, {per_dir:.6g}}},  // {label}"
+        )
+    lines += [
+        "};",
+        "",
+        "// p95 relative luminance error over the sphere, [preset][setting][altitude]"
+        "[sun elevation]; infinity where a value was non-finite or negative.",
+        f"constexpr double kP95[{len(PRESETS)}][{len(settings)}][{len(alts)}][{len(suns)}] = {{",
+    ]
+    index = {(r["preset"], r["setting"], r["altitude_m"], r["sun_elevation_deg"]): r for r in scene_rows}
 
     def num(v):
         return "kInf" if not math.isfinite(v) or v > 1e30 else f"{v:.4g}"
@@ -649,16 +792,18 @@ def write_table(path, settings, timing, scene_rows, noise_rows, suns, alts, path
                 lines.append("            {" + ", ".join(vals) + "},")
             lines.append("        },")
         lines.append("    },")
-    lines += ["};", "",
-              "// The reference's p95 relative standard error at kReferencePaths paths, "
-              "[preset][altitude][sun elevation].",
-              f"constexpr double kReferenceNoise[{len(PRESETS)}][{len(alts)}][{len(suns)}] = {{"]
+    lines += [
+        "};",
+        "",
+        "// The reference's p95 relative standard error at kReferencePaths paths, "
+        "[preset][altitude][sun elevation].",
+        f"constexpr double kReferenceNoise[{len(PRESETS)}][{len(alts)}][{len(suns)}] = {{",
+    ]
     nindex = {(r["preset"], r["altitude_m"], r["sun_elevation_deg"]): r for r in noise_rows}
     for p in PRESETS:
         lines.append("    {")
         for a in alts:
-            lines.append("        {" + ", ".join(num(nindex[(p, a, s)]["noise_p95"])
-                                                 for s in suns) + "},")
+            lines.append("        {" + ", ".join(num(nindex[(p, a, s)]["noise_p95"]) for s in suns) + "},")
         lines.append("    },")
     lines += [
         "};",

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The aerial demo frame at 1920 x 1080: Cycles against Welkin's aerial passes and
 against Welkin's own plate of the same world, one Blender process, one run.
 
@@ -23,6 +24,7 @@ against Welkin's own plate of the same world, one Blender process, one run.
 All times are the median of --repeats whole calls (1 by default) on this shared 2-core
 machine, measured in the same run; the ratios are the figures.
 """
+
 import argparse
 import atexit
 import os
@@ -38,7 +40,7 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 p = argparse.ArgumentParser()
 p.add_argument("--size", type=int, default=1920)
 p.add_argument("--samples", type=int, default=16, help="the demo's Cycles samples")
@@ -97,8 +99,21 @@ row("cycles_frame", t_cycles, f"{args.samples} spp, aerial off")
 # 2. the aerial passes of the same frame.
 passes = os.path.join(out, "passes.exr")
 for method in ("froxel", "raymarch"):
-    cmd = [args.cli, "aerial", "--scene", scene_json, "--depth", render_exr, "--depth-channel", "Depth.V",
-           "--method", method, "-o", passes, "--overwrite"]
+    cmd = [
+        args.cli,
+        "aerial",
+        "--scene",
+        scene_json,
+        "--depth",
+        render_exr,
+        "--depth-channel",
+        "Depth.V",
+        "--method",
+        method,
+        "-o",
+        passes,
+        "--overwrite",
+    ]
     t = timed(lambda: subprocess.run(cmd, check=True, capture_output=True))
     row(f"cli_aerial_{method}", t, "whole CLI call: LUTs, EXR read, passes, EXR write")
 desc = welkin.SceneDescription.from_json(scene_json)
@@ -111,8 +126,13 @@ t_froxel = [r[1] for r in rows if r[0] == "module_aerial_froxel"][0]
 row("cycles_over_aerial_froxel", t_cycles / t_froxel, "ratio (x), Cycles frame / module froxel passes")
 
 # 3. the plate against Cycles on the same world.
-t = timed(lambda: subprocess.run([args.cli, "plate", "--scene", scene_json, "-o", os.path.join(out, "plate.exr"),
-                                  "--overwrite"], check=True, capture_output=True))
+t = timed(
+    lambda: subprocess.run(
+        [args.cli, "plate", "--scene", scene_json, "-o", os.path.join(out, "plate.exr"), "--overwrite"],
+        check=True,
+        capture_output=True,
+    )
+)
 row("cli_plate", t, "welkin plate: LUTs, plate, EXR write")
 scene.render.engine = "WELKIN"
 t_engine = timed(render_once)
@@ -131,5 +151,5 @@ os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)
 with open(args.csv, "w") as f:
     f.write("name,value,note\n")
     for r in rows:
-        f.write(f"{r[0]},{r[1]:.5g},\"{r[2]} ({size}, load {os.getloadavg()[0]:.1f})\"\n")
+        f.write(f'{r[0]},{r[1]:.5g},"{r[2]} ({size}, load {os.getloadavg()[0]:.1f})"\n')
 print(f"cycles_aerial: wrote {args.csv}")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What aerial perspective in the frame costs a Cycles render of the aerial demo: the same
 frame rendered with Scene.welkin_aerial off and on, alternately, in one Blender process.
 
@@ -36,6 +37,7 @@ turns bounces off, so that what is left of a render is its camera rays and the m
 group: the group's own cost, reported per camera sample (pixels x samples) in ns, as the
 CPU time the cached state adds.
 """
+
 import argparse
 import atexit
 import os
@@ -50,16 +52,19 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 p = argparse.ArgumentParser()
 p.add_argument("--size", type=int, default=480)
 p.add_argument("--samples", type=int, default=16)
 p.add_argument("--repeats", type=int, default=3)
 p.add_argument("--csv")
 p.add_argument("--group-only", action="store_true")
-p.add_argument("--markers", action="store_true",
-               help="print a line per render (repeat, state, wall and CPU time) for "
-                    "bench/cycles_log_split.py to pair with Cycles' own timings")
+p.add_argument(
+    "--markers",
+    action="store_true",
+    help="print a line per render (repeat, state, wall and CPU time) for "
+    "bench/cycles_log_split.py to pair with Cycles' own timings",
+)
 args = p.parse_args(argv)
 
 out = tempfile.mkdtemp(prefix="welkin_bench_aerial_frame_")
@@ -76,8 +81,10 @@ if args.group_only:
         tree = material.node_tree
         if tree is None or "Principled BSDF" not in tree.nodes:
             continue
-        emission = tree.nodes.new('ShaderNodeEmission')
-        emission.inputs["Color"].default_value = tree.nodes["Principled BSDF"].inputs["Base Color"].default_value
+        emission = tree.nodes.new("ShaderNodeEmission")
+        emission.inputs["Color"].default_value = (
+            tree.nodes["Principled BSDF"].inputs["Base Color"].default_value
+        )
         tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
 
 times = {"off": [], "on": [], "on_cached": [], "bake": []}
@@ -97,8 +104,11 @@ for repeat in range(args.repeats):
         times[state].append(time.perf_counter() - t0)
         cpu[state].append(time.process_time() - c0)
         if args.markers:
-            print(f"cycles_aerial_frame: render {repeat} {state} wall {times[state][-1]:.4f} "
-                  f"cpu {cpu[state][-1]:.4f}", flush=True)
+            print(
+                f"cycles_aerial_frame: render {repeat} {state} wall {times[state][-1]:.4f} "
+                f"cpu {cpu[state][-1]:.4f}",
+                flush=True,
+            )
     aerial._baked.clear()
     t0 = time.perf_counter()
     aerial.bake(scene)
@@ -125,26 +135,34 @@ c = {k: statistics.median(v) for k, v in cpu.items()}
 r = {k: ratio(times, k) for k in ("on", "on_cached")}
 ci = {k: ratio_interval(times, k) for k in ("on", "on_cached")}
 rc = {k: ratio(cpu, k) for k in ("on", "on_cached")}
-print(f"cycles_aerial_frame: {args.size} px wide, {args.samples} samples, {args.repeats} repeats "
-      f"(medians; ratios: the median of each repeat's ratio): off {m['off']:.2f} s, on "
-      f"{m['on']:.2f} s (ratio {r['on']:.3f}, 90 % interval {ci['on'][0]:.3f}-{ci['on'][1]:.3f}, "
-      f"target <= 1.10), on with the table already baked {m['on_cached']:.2f} s (ratio "
-      f"{r['on_cached']:.3f}, {ci['on_cached'][0]:.3f}-{ci['on_cached'][1]:.3f}); the bake alone "
-      f"{m['bake']:.3f} s; "
-      f"CPU time: off {c['off']:.2f} s, on {c['on']:.2f} s (ratio {rc['on']:.3f}), cached "
-      f"{c['on_cached']:.2f} s (ratio {rc['on_cached']:.3f}); least CPU time: off {low['off']:.2f} s, on "
-      f"{low['on']:.2f} s (ratio {low['on'] / low['off']:.3f}), cached {low['on_cached']:.2f} s (ratio "
-      f"{low['on_cached'] / low['off']:.3f})")
+print(
+    f"cycles_aerial_frame: {args.size} px wide, {args.samples} samples, {args.repeats} repeats "
+    f"(medians; ratios: the median of each repeat's ratio): off {m['off']:.2f} s, on "
+    f"{m['on']:.2f} s (ratio {r['on']:.3f}, 90 % interval {ci['on'][0]:.3f}-{ci['on'][1]:.3f}, "
+    f"target <= 1.10), on with the table already baked {m['on_cached']:.2f} s (ratio "
+    f"{r['on_cached']:.3f}, {ci['on_cached'][0]:.3f}-{ci['on_cached'][1]:.3f}); the bake alone "
+    f"{m['bake']:.3f} s; "
+    f"CPU time: off {c['off']:.2f} s, on {c['on']:.2f} s (ratio {rc['on']:.3f}), cached "
+    f"{c['on_cached']:.2f} s (ratio {rc['on_cached']:.3f}); least CPU time: off {low['off']:.2f} s, on "
+    f"{low['on']:.2f} s (ratio {low['on'] / low['off']:.3f}), cached {low['on_cached']:.2f} s (ratio "
+    f"{low['on_cached'] / low['off']:.3f})"
+)
 if args.group_only:
     samples = scene.render.resolution_x * scene.render.resolution_y * scene.cycles.samples
     per_sample = (c["on_cached"] - c["off"]) / samples * 1e9
-    print(f"cycles_aerial_frame: --group-only: the group adds {per_sample:.0f} ns of CPU time per "
-          f"camera sample ({samples} samples)")
+    print(
+        f"cycles_aerial_frame: --group-only: the group adds {per_sample:.0f} ns of CPU time per "
+        f"camera sample ({samples} samples)"
+    )
 if args.csv:
     with open(args.csv, "w") as f:
-        f.write("size,samples,repeats,off_s,on_s,on_cached_s,bake_s,ratio,ratio_lo90,ratio_hi90,"
-                "off_cpu_s,on_cpu_s,on_cached_cpu_s,cpu_ratio,least_cpu_ratio\n")
-        f.write(f"{args.size},{args.samples},{args.repeats},{m['off']:.3f},{m['on']:.3f},"
-                f"{m['on_cached']:.3f},{m['bake']:.3f},{r['on']:.4f},{ci['on'][0]:.4f},"
-                f"{ci['on'][1]:.4f},{c['off']:.3f},"
-                f"{c['on']:.3f},{c['on_cached']:.3f},{rc['on']:.4f},{low['on'] / low['off']:.4f}\n")
+        f.write(
+            "size,samples,repeats,off_s,on_s,on_cached_s,bake_s,ratio,ratio_lo90,ratio_hi90,"
+            "off_cpu_s,on_cpu_s,on_cached_cpu_s,cpu_ratio,least_cpu_ratio\n"
+        )
+        f.write(
+            f"{args.size},{args.samples},{args.repeats},{m['off']:.3f},{m['on']:.3f},"
+            f"{m['on_cached']:.3f},{m['bake']:.3f},{r['on']:.4f},{ci['on'][0]:.4f},"
+            f"{ci['on'][1]:.4f},{c['off']:.3f},"
+            f"{c['on']:.3f},{c['on_cached']:.3f},{rc['on']:.4f},{low['on'] / low['off']:.4f}\n"
+        )

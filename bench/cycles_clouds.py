@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Welkin's cloud lighting against Cycles on one VDB cumulus: accuracy and speed.
 
     PYTHONPATH=build blender -b --factory-startup --python-use-system-env \
@@ -21,6 +22,7 @@ bench/cycles_volume.py. Two stages, one run:
    (the VDB loaded and the rays made inside the timing). Both times are whole calls in the
    same process on the same (shared) machine; the ratio is the figure.
 """
+
 import argparse
 import atexit
 import math
@@ -37,7 +39,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 import cycles_volume as cv  # noqa: E402
 
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 p = argparse.ArgumentParser()
 p.add_argument("--small", type=int, nargs=2, default=(160, 90))
 p.add_argument("--samples", type=int, default=1024, help="Cycles samples per pixel at --small")
@@ -63,8 +65,11 @@ def row(stage, name, value, unit="", note=""):
 
 def rel_stats(x, ref, mask):
     e = (x - ref)[mask] / ref[mask]
-    return (float(np.median(np.abs(e))), float(np.percentile(np.abs(e), 95)),
-            float((x - ref)[mask].sum() / ref[mask].sum()))
+    return (
+        float(np.median(np.abs(e))),
+        float(np.percentile(np.abs(e), 95)),
+        float((x - ref)[mask].sum() / ref[mask].sum()),
+    )
 
 
 def report(stage, name, x, ref, mask, note=""):
@@ -83,8 +88,17 @@ light = dict(density_scale=SIGMA, sun_direction=SUN, sun_irradiance=E_SUN, sky_r
 
 
 def scene_at(size, samples, seed):
-    return cv.build_scene(vdb, camera_location=CAM, camera_target=TARGET, width=size[0], height=size[1],
-                          samples=samples, seed=seed, step_rate=args.step_rate, **light)
+    return cv.build_scene(
+        vdb,
+        camera_location=CAM,
+        camera_target=TARGET,
+        width=size[0],
+        height=size[1],
+        samples=samples,
+        seed=seed,
+        step_rate=args.step_rate,
+        **light,
+    )
 
 
 def timed(f):
@@ -103,7 +117,9 @@ for seed in (1, 2):
     t_cyc += t
 ref, t_ref = [], 0.0
 for seed in (1, 2):
-    out, t = timed(lambda: cv.welkin_render(scene, vdb, method="reference", paths=args.paths, seed=seed, **light))
+    out, t = timed(
+        lambda: cv.welkin_render(scene, vdb, method="reference", paths=args.paths, seed=seed, **light)
+    )
     ref.append(out)
     t_ref += t
 (fast_L, fast_T), t_fast = timed(lambda: cv.welkin_render(scene, vdb, method="fast", **light))
@@ -123,8 +139,13 @@ noise = 0.5 * (c1 - c2) - 0.5 * (r1 - r2)
 report(st, "noise_floor", rm + noise, rm, mask, "(c1-c2)/2-(r1-r2)/2: the same statistics from noise alone")
 bias_se = float(np.sqrt((noise[mask] ** 2).sum()) / rm[mask].sum())
 row(st, "cycles_vs_reference_bias_se", bias_se, "", "standard error of the mean bias")
-row(st, "alpha_max_abs_diff", float(np.abs(0.5 * (cyc[0][..., 3] + cyc[1][..., 3]) - (1.0 - t_refm)).max()), "",
-    "Cycles alpha vs reference 1 - T, all pixels")
+row(
+    st,
+    "alpha_max_abs_diff",
+    float(np.abs(0.5 * (cyc[0][..., 3] + cyc[1][..., 3]) - (1.0 - t_refm)).max()),
+    "",
+    "Cycles alpha vs reference 1 - T, all pixels",
+)
 row(st, "fast_vs_reference_T_max_abs_diff", float(np.abs(fast_T - t_refm).max()), "")
 e_fast = report(st, "fast_vs_reference", fast_L, rm, mask)
 report(st, "fast_vs_cycles", fast_L, cm, mask)
@@ -157,5 +178,5 @@ os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)
 with open(args.csv, "w") as f:
     f.write("stage,name,value,unit,note\n")
     for r in rows:
-        f.write(f"{r[0]},{r[1]},{r[2]:.6g},{r[3]},\"{r[4]}\"\n")
+        f.write(f'{r[0]},{r[1]},{r[2]:.6g},{r[3]},"{r[4]}"\n')
 print(f"cycles_clouds: wrote {args.csv}")

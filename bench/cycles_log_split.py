@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Where the in-frame haze's cost lies: splits each render of bench/cycles_aerial_frame.py
 into Cycles' path tracing, the rest of Cycles' render (scene, shader and image sync, the
 background's importance map) and what lies outside Cycles (the frame-change handlers with
@@ -17,6 +18,7 @@ share of that render's whole time, and the median ratio with a bootstrap 90 % in
 bench/cycles_aerial_frame.py computes it; over pooled runs it sees the repeats' noise, and
 the runs' own medians are printed beside it for the noise between runs).
 """
+
 import argparse
 import re
 import statistics
@@ -39,10 +41,11 @@ def renders(lines):
             total = float(m.group(1))
         elif m := MARKER.match(line):
             if path is None or total is None:
-                raise SystemExit(f"line {number}: a render without Cycles' timings before it "
-                                 f"(was Blender run with --debug-cycles?)")
-            out[int(m.group(1)), m.group(2)] = {"path": path, "cycles": total,
-                                                "wall": float(m.group(3))}
+                raise SystemExit(
+                    f"line {number}: a render without Cycles' timings before it "
+                    f"(was Blender run with --debug-cycles?)"
+                )
+            out[int(m.group(1)), m.group(2)] = {"path": path, "cycles": total, "wall": float(m.group(3))}
             path = total = None
     return out
 
@@ -55,9 +58,12 @@ def bootstrap_interval(ratios, level=0.90, resamples=4000):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("log", nargs="+",
-                   help="Blender's output of the bench with --markers and --debug-cycles "
-                        "(several: runs of the same code, pooled)")
+    p.add_argument(
+        "log",
+        nargs="+",
+        help="Blender's output of the bench with --markers and --debug-cycles "
+        "(several: runs of the same code, pooled)",
+    )
     p.add_argument("--baseline", default="off", help="the state the others are compared with")
     args = p.parse_args()
     base = args.baseline
@@ -71,28 +77,33 @@ def main():
     repeats = sorted({(run, k) for run, k, s in r if s == base})
     states = sorted({s for _run, _k, s in r if s != base})
     if not repeats or not states:
-        raise SystemExit(f"{' '.join(args.log)}: no '{base}' render and other state to compare "
-                         f"(was the bench run with --markers?)")
+        raise SystemExit(
+            f"{' '.join(args.log)}: no '{base}' render and other state to compare "
+            f"(was the bench run with --markers?)"
+        )
     for state in states:
         keys = [(run, k) for run, k in repeats if (run, k, state) in r]
         pairs = [(r[run, k, state], r[run, k, base]) for run, k in keys]
         parts = {
             "path tracing": [a["path"] - b["path"] for a, b in pairs],
-            "rest of Cycles' render": [(a["cycles"] - a["path"]) - (b["cycles"] - b["path"])
-                                       for a, b in pairs],
-            "outside Cycles": [(a["wall"] - a["cycles"]) - (b["wall"] - b["cycles"])
-                               for a, b in pairs],
+            "rest of Cycles' render": [
+                (a["cycles"] - a["path"]) - (b["cycles"] - b["path"]) for a, b in pairs
+            ],
+            "outside Cycles": [(a["wall"] - a["cycles"]) - (b["wall"] - b["cycles"]) for a, b in pairs],
             "whole render": [a["wall"] - b["wall"] for a, b in pairs],
         }
         whole = statistics.median(b["wall"] for _a, b in pairs)
         ratios = np.array([a["wall"] / b["wall"] for a, b in pairs])
         lo, hi = bootstrap_interval(ratios)
-        print(f"{state} against {base}, {len(pairs)} repeats (medians; {base}'s whole render "
-              f"{whole:.3f} s, the median ratio {np.median(ratios):.3f}, 90 % interval "
-              f"{lo:.3f}-{hi:.3f}):")
+        print(
+            f"{state} against {base}, {len(pairs)} repeats (medians; {base}'s whole render "
+            f"{whole:.3f} s, the median ratio {np.median(ratios):.3f}, 90 % interval "
+            f"{lo:.3f}-{hi:.3f}):"
+        )
         if len(args.log) > 1:
-            runs = [np.median([x for (run, _k), x in zip(keys, ratios) if run == n])
-                    for n in range(len(args.log))]
+            runs = [
+                np.median([x for (run, _k), x in zip(keys, ratios) if run == n]) for n in range(len(args.log))
+            ]
             print("  the runs' own median ratios: " + ", ".join(f"{x:.3f}" for x in runs))
         for name, diffs in parts.items():
             d = statistics.median(diffs)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A 1920 x 1080 plate with a VDB cloud: `welkin plate` against Cycles rendering the same
 world and volume, one Blender process.
 
@@ -17,6 +18,7 @@ lights the same cloud from the atmosphere (same phase): the same work for both, 
 light, so only times are compared. Both whole calls (Cycles: sync, volume, render; the CLI:
 process, LUTs, VDB, plate, EXR write), the same run.
 """
+
 import argparse
 import atexit
 import json
@@ -32,7 +34,7 @@ import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 p = argparse.ArgumentParser()
 p.add_argument("--samples", type=int, default=11)
 p.add_argument("--width", type=int, default=1920)
@@ -81,8 +83,15 @@ c.volume_step_rate = 1.0
 
 desc["resolution"] = {"x": W, "y": H, "percentage": 100}
 desc["clouds"] = {
-    "volumes": [{"name": "Cloud", "file": vdb, "grid": "density",
-                 "matrix_world": [list(row) for row in vol_obj.matrix_world], "density_scale": SIGMA}],
+    "volumes": [
+        {
+            "name": "Cloud",
+            "file": vdb,
+            "grid": "density",
+            "matrix_world": [list(row) for row in vol_obj.matrix_world],
+            "density_scale": SIGMA,
+        }
+    ],
     "scattering": {"albedo": 1.0, "g_forward": cv.G, "w_forward": 1.0},
 }
 scene_json = os.path.join(out, "plate_clouds.json")
@@ -99,8 +108,9 @@ def row(name, value, note=""):
 
 plate = os.path.join(out, "plate.exr")
 t = time.perf_counter()
-run = subprocess.run([args.cli, "plate", "--scene", scene_json, "-o", plate, "--overwrite"], capture_output=True,
-                     text=True)
+run = subprocess.run(
+    [args.cli, "plate", "--scene", scene_json, "-o", plate, "--overwrite"], capture_output=True, text=True
+)
 t_plate = time.perf_counter() - t
 assert run.returncode == 0, run.stderr
 px, names = welkin.read_exr(plate)
@@ -121,5 +131,5 @@ os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)
 with open(args.csv, "w") as f:
     f.write("name,value,note\n")
     for name, value, note in rows:
-        f.write(f"{name},{value:.5g},\"{note}\"\n")
+        f.write(f'{name},{value:.5g},"{note}"\n')
 print(f"cycles_plate_clouds: wrote {args.csv}")

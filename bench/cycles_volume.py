@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """One VDB cloud, rendered by Cycles and by Welkin for the same camera rays and the same light.
 
 Used inside Blender (bench/cycles_clouds.py, tests/blender/test_cycles_clouds.py). What is
@@ -35,6 +36,7 @@ matched, and why it is the same problem for both renderers:
   no adaptive sampling; heterogeneous volumes are ray-marched by Cycles (step_rate x voxel),
   which is Cycles' one approximation here.
 """
+
 import math
 import os
 import sys
@@ -90,6 +92,7 @@ def _write_dense(path, d, n, voxel_m):
     # pyopenvdb, in this Python or in Debian's (vdb_dense.py).
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from vdb_dense import write_density
+
     write_density(path, d, (-n, -n, -n), voxel_m, tolerance=0.0, prune=True)
 
 
@@ -98,9 +101,24 @@ def look_at(obj, target):
     obj.rotation_euler = d.to_track_quat("-Z", "Y").to_euler()
 
 
-def build_scene(vdb_path, *, density_scale, sun_direction, sun_irradiance, sky_radiance, camera_location,
-                camera_target, width, height, samples, bounces=1024, step_rate=1.0, seed=0, lens_mm=50.0,
-                lobes=((G, 1.0),)):
+def build_scene(
+    vdb_path,
+    *,
+    density_scale,
+    sun_direction,
+    sun_irradiance,
+    sky_radiance,
+    camera_location,
+    camera_target,
+    width,
+    height,
+    samples,
+    bounces=1024,
+    step_rate=1.0,
+    seed=0,
+    lens_mm=50.0,
+    lobes=((G, 1.0),),
+):
     """Replaces the current scene's objects with the VDB volume, a sun lamp, a camera and a
     uniform world, all set for the comparison above. Returns the scene."""
     for obj in list(bpy.data.objects):
@@ -230,8 +248,17 @@ def render(scene, path):
     return np.stack([pixels[..., names.index(c)] for c in "RGBA"], axis=-1)
 
 
-def welkin_render(scene, vdb_path, density_scale, sun_direction, sun_irradiance, sky_radiance, method,
-                  placement="blender", **kw):
+def welkin_render(
+    scene,
+    vdb_path,
+    density_scale,
+    sun_direction,
+    sun_irradiance,
+    sky_radiance,
+    method,
+    placement="blender",
+    **kw,
+):
     """Welkin's cloud_radiance for the scene camera's pixel rays: (H, W) radiance and
     transmittance, rows top first; the voxels placed by `placement` (VdbClouds' default,
     "blender", is where Cycles 3.4 renders them)."""
@@ -240,9 +267,22 @@ def welkin_render(scene, vdb_path, density_scale, sun_direction, sun_irradiance,
     r = scene.render
     h, w = r.resolution_y, r.resolution_x
     origin, dirs = camera_rays(scene)
-    clouds = welkin.VdbClouds(str(vdb_path), density_scale=density_scale, matrix_world=np.eye(4), placement=placement)
+    clouds = welkin.VdbClouds(
+        str(vdb_path), density_scale=density_scale, matrix_world=np.eye(4), placement=placement
+    )
     atm = welkin.Atmosphere.preset("bruneton2017")  # does not light the cloud here
-    L, T, _ = welkin.cloud_radiance(clouds, atm, 0.0, tuple(sun_direction), dirs, origin=origin, method=method,
-                                    sun_irradiance=[float(sun_irradiance)],
-                                    ambient_radiance=[float(sky_radiance)], g_forward=G, w_forward=1.0, **kw)
+    L, T, _ = welkin.cloud_radiance(
+        clouds,
+        atm,
+        0.0,
+        tuple(sun_direction),
+        dirs,
+        origin=origin,
+        method=method,
+        sun_irradiance=[float(sun_irradiance)],
+        ambient_radiance=[float(sky_radiance)],
+        g_forward=G,
+        w_forward=1.0,
+        **kw,
+    )
     return L[:, 0].reshape(h, w), T.reshape(h, w)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Welkin's clear skies against the CIE standard general sky's clear types: how the
 brightness is spread over the sky (the aureole, the horizon, the dark point opposite).
 
@@ -25,6 +26,7 @@ the zenith; and the median over the upper hemisphere (a 10-degree grid, excludin
 around the sun) of |log(L_welkin / L_cie)| for the nearest CIE type, as a percentage.
 With --docs the table goes into docs/validation.md between its "measured-sky" markers.
 """
+
 import argparse
 import math
 import pathlib
@@ -34,8 +36,11 @@ import numpy as np
 import welkin
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-CIE_TYPES = {11: (-1.0, -0.55, 10.0, -3.0, 0.45), 12: (-1.0, -0.32, 10.0, -3.0, 0.45),
-             13: (-1.0, -0.32, 16.0, -3.0, 0.30)}
+CIE_TYPES = {
+    11: (-1.0, -0.55, 10.0, -3.0, 0.45),
+    12: (-1.0, -0.32, 10.0, -3.0, 0.45),
+    13: (-1.0, -0.32, 16.0, -3.0, 0.30),
+}
 PRESETS = ("clear", "clear_day", "hazy", "bruneton2017")
 ELEVATIONS = (60.0, 40.0, 20.0, 10.0, 5.0)
 LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -51,8 +56,9 @@ def cie_relative(kind, zenith, chi, sun_zenith):
 
 
 def direction(elevation, azimuth):
-    return np.stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
-                     np.sin(elevation)], axis=-1)
+    return np.stack(
+        [np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth), np.sin(elevation)], axis=-1
+    )
 
 
 def probes(sun_el):
@@ -63,8 +69,13 @@ def probes(sun_el):
         c = (math.cos(math.radians(chi_deg)) - math.sin(s) ** 2) / math.cos(s) ** 2
         return math.acos(max(-1.0, min(1.0, c)))
 
-    named = {"zenith": (math.pi / 2, 0.0), "near": (s, almucantar(5.0)), "far": (s, almucantar(50.0)),
-             "horizon": (math.radians(0.5), 0.0), "anti": (math.radians(0.5), math.pi)}
+    named = {
+        "zenith": (math.pi / 2, 0.0),
+        "near": (s, almucantar(5.0)),
+        "far": (s, almucantar(50.0)),
+        "horizon": (math.radians(0.5), 0.0),
+        "anti": (math.radians(0.5), math.pi),
+    }
     el, az = np.meshgrid(np.radians(np.arange(5.0, 90.0, 10.0)), np.radians(np.arange(0.0, 360.0, 10.0)))
     grid = np.stack([el.ravel(), az.ravel()], axis=1)
     return named, grid
@@ -94,21 +105,26 @@ def row(preset, sun_el):
     for kind in CIE_TYPES:
         cie = cie_relative(kind, zen, chi, math.pi / 2 - math.radians(sun_el))
         cie_named = dict(zip(named, cie[: len(named)]))
-        mask = chi[len(named):] > math.radians(5.0)
-        dev = np.median(np.abs(np.log((y[len(named):] / lum["zenith"]) / cie[len(named):]))[mask])
+        mask = chi[len(named) :] > math.radians(5.0)
+        dev = np.median(np.abs(np.log((y[len(named) :] / lum["zenith"]) / cie[len(named) :]))[mask])
         if best is None or dev < best[1]:
             best = (kind, dev, ratios(cie_named))
     return ratios(lum), best
 
 
 def table():
-    lines = ["| preset | sun | Welkin aureole / horizon / anti | nearest CIE type | its aureole / horizon / anti | "
-             "median deviation |", "|---|---|---|---|---|---|"]
+    lines = [
+        "| preset | sun | Welkin aureole / horizon / anti | nearest CIE type | its aureole / horizon / anti | "
+        "median deviation |",
+        "|---|---|---|---|---|---|",
+    ]
     for preset in PRESETS:
         for sun_el in ELEVATIONS:
             w, (kind, dev, c) = row(preset, sun_el)
-            lines.append(f"| {preset} | {sun_el:g}° | {w[0]:.1f} / {w[1]:.2f} / {w[2]:.2f} | {kind} | "
-                         f"{c[0]:.1f} / {c[1]:.2f} / {c[2]:.2f} | {100 * (math.exp(dev) - 1):.0f} % |")
+            lines.append(
+                f"| {preset} | {sun_el:g}° | {w[0]:.1f} / {w[1]:.2f} / {w[2]:.2f} | {kind} | "
+                f"{c[0]:.1f} / {c[1]:.2f} / {c[2]:.2f} | {100 * (math.exp(dev) - 1):.0f} % |"
+            )
     return "\n".join(lines)
 
 

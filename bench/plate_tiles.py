@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The camera plate whole against in tiles, side by side in one run: camera_plate(scene)
 for the whole frame, CameraPlateRenderer(scene) + render(rows=...) for each band of
 --rows rows (what the render engine does), and camera_plate(scene, rows=...) per band
@@ -6,6 +7,7 @@ prepared bands equal the whole frame exactly. Median of --repeats.
 
     PYTHONPATH=build /usr/bin/python3 bench/plate_tiles.py [--width 1920 --height 1080 --rows 64]
 """
+
 import argparse
 import json
 import statistics
@@ -24,13 +26,23 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--method", default="auto")
     args = ap.parse_args()
-    scene = welkin.SceneDescription.from_json_string(json.dumps({
-        "version": 1, "atmosphere": "bruneton2017", "method": args.method,
-        "sun": {"elevation_deg": 12, "azimuth_deg": 40},
-        # 30 m up, looking along +X at the horizon: half sky, half aerial ground.
-        "camera": {"matrix_world": [[0, 0, -1, 0], [-1, 0, 0, 0], [0, 1, 0, 30], [0, 0, 0, 1]],
-                   "type": "PERSP", "lens_mm": 30},
-        "resolution": {"x": args.width, "y": args.height, "percentage": 100}}))
+    scene = welkin.SceneDescription.from_json_string(
+        json.dumps(
+            {
+                "version": 1,
+                "atmosphere": "bruneton2017",
+                "method": args.method,
+                "sun": {"elevation_deg": 12, "azimuth_deg": 40},
+                # 30 m up, looking along +X at the horizon: half sky, half aerial ground.
+                "camera": {
+                    "matrix_world": [[0, 0, -1, 0], [-1, 0, 0, 0], [0, 1, 0, 30], [0, 0, 0, 1]],
+                    "type": "PERSP",
+                    "lens_mm": 30,
+                },
+                "resolution": {"x": args.width, "y": args.height, "percentage": 100},
+            }
+        )
+    )
     bands = [(r, min(r + args.rows, args.height)) for r in range(0, args.height, args.rows)]
 
     def whole():
@@ -56,8 +68,10 @@ def main():
                 for key in ("combined", "sky", "inscatter", "transmittance", "depth"):
                     assert np.array_equal(np.concatenate([b[key] for b in out]), full[key]), key
     base = statistics.median(times["whole"])
-    print(f"{args.width} x {args.height}, {len(bands)} bands of {args.rows} rows, method "
-          f"{full['method']}, median of {args.repeats}:")
+    print(
+        f"{args.width} x {args.height}, {len(bands)} bands of {args.rows} rows, method "
+        f"{full['method']}, median of {args.repeats}:"
+    )
     for name, ts in times.items():
         m = statistics.median(ts)
         print(f"  {name:15s} {m:7.3f} s  ({m / base:.2f} x whole)")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Speed-accuracy chart of the aerial-perspective passes, from `welkin_bench_aerial --csv`.
 
     build/welkin_bench_aerial --csv aerial.csv
@@ -7,6 +8,7 @@ One point per froxel volume size: time of the whole froxel call (x) against its
 in-scattering error relative to the per-pixel march (y: median and 99th percentile), with
 the march's own time as a vertical line. Both axes logarithmic.
 """
+
 import csv
 import sys
 
@@ -23,8 +25,9 @@ def main(src, dst):
     for key, label, marker in (("median_rel_L", "median", "o"), ("p99_rel_L", "99th percentile", "s")):
         ax.plot(t, [100 * float(r[key]) for r in rows], marker=marker, label=f"froxels, {label}")
     for r, x in zip(rows, t):
-        ax.annotate(f"{r['froxels']}³", (x, 100 * float(r["p99_rel_L"])), textcoords="offset points",
-                    xytext=(6, 4))
+        ax.annotate(
+            f"{r['froxels']}³", (x, 100 * float(r["p99_rel_L"])), textcoords="offset points", xytext=(6, 4)
+        )
     march = float(rows[0]["march_ms"])
     ax.axvline(march, color="grey", linestyle="--", label=f"per-pixel march ({march / 1e3:.1f} s)")
     ax.set_xscale("log")

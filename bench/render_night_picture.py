@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Renders the README's night picture: Paris (48.8566 N, 2.3522 E) on the full-moon night
 of 2026-06-29/30, from welkin.sky_image_at (the sun and the moon at their positions, the
 moonlit sky and the moon's disc), equirectangular upper hemisphere, +Y (north) a quarter
@@ -7,6 +8,7 @@ about a thousand times darker than the twilight one in physical units.
 
     PYTHONPATH=build /usr/bin/python3 bench/render_night_picture.py docs/night.png
 """
+
 import sys
 
 import matplotlib.pyplot as plt

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Two builds of the Python module side by side: the LUT rebuild and the 2048 x 1024 `lut`
 sky image, for each build's default preset (a build without `clear_day` uses bruneton2017, its
 default) and for bruneton2017 in both, run alternately so that both see the same load.
@@ -14,6 +15,7 @@ turns), disc and ground on. Times are the process's CPU time (all threads), whic
 shared, loaded machine disturbs less than the wall clock. Prints the medians and the ratio
 (this build / baseline).
 """
+
 import argparse
 import json
 import os
@@ -48,8 +50,9 @@ print(json.dumps(out))
 
 def measure(build, preset, k):
     env = dict(os.environ, PYTHONPATH=str(build))
-    r = subprocess.run([sys.executable, "-c", CHILD, preset, str(k)], env=env, capture_output=True,
-                       text=True, check=True)
+    r = subprocess.run(
+        [sys.executable, "-c", CHILD, preset, str(k)], env=env, capture_output=True, text=True, check=True
+    )
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A time-of-day contact sheet: Welkin beside Blender's own skies, sun 60, 20, 5, 1, -2, -6
 and -12 degrees, one row each, the same camera and exposure across a row.
 
@@ -15,6 +16,7 @@ columns (0.18 over Welkin's median sky luminance in that row's tile, shown as EV
 x / (1 + x) per channel, then sRGB. The add-on is installed from its zip as in the tests
 (a temporary scripts directory; the machine's Blender configuration is untouched).
 """
+
 import argparse
 import atexit
 import math
@@ -42,38 +44,38 @@ def setup_camera(scene):
         scene.camera = cam
     cam = scene.camera
     cam.location = (0.0, 0.0, 0.0)
-    cam.rotation_mode = 'XYZ'
+    cam.rotation_mode = "XYZ"
     cam.rotation_euler = (math.radians(90.0), 0.0, math.radians(AZIMUTH - 90.0))
-    cam.data.type = 'PANO'
+    cam.data.type = "PANO"
     pano = cam.data if hasattr(cam.data, "panorama_type") else cam.data.cycles
-    pano.panorama_type = 'EQUIRECTANGULAR'
+    pano.panorama_type = "EQUIRECTANGULAR"
     pano.longitude_min, pano.longitude_max = math.radians(-LON_HALF), math.radians(LON_HALF)
     pano.latitude_min, pano.latitude_max = math.radians(LAT_MIN), math.radians(LAT_MAX)
-    scene.render.engine = 'CYCLES'
-    scene.cycles.device = 'CPU'
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
     scene.cycles.samples = SAMPLES
     scene.cycles.use_adaptive_sampling = False
     scene.cycles.use_denoising = False
     scene.render.resolution_x, scene.render.resolution_y = TILE_W, TILE_H
     scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = 'OPEN_EXR'
-    scene.render.image_settings.color_depth = '32'
-    scene.render.image_settings.color_mode = 'RGB'
-    scene.view_settings.view_transform = 'Standard'
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.view_settings.view_transform = "Standard"
 
 
 def blender_sky_world(sky_type):
     world = bpy.data.worlds.new(sky_type.title())
     world.use_nodes = True
     tree = world.node_tree
-    node = tree.nodes.new('ShaderNodeTexSky')
+    node = tree.nodes.new("ShaderNodeTexSky")
     node.sky_type = sky_type
     node.sun_disc = True
     # Blender's sky puts the sun at azimuth 90 degrees - sun_rotation from +X
     # (counter-clockwise; its rotation is kept within [0, 360) degrees).
     node.sun_rotation = math.radians((90.0 - AZIMUTH) % 360.0)
-    background = next(n for n in tree.nodes if n.bl_idname == 'ShaderNodeBackground')
-    tree.links.new(node.outputs['Color'], background.inputs['Color'])
+    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    tree.links.new(node.outputs["Color"], background.inputs["Color"])
     return world, node
 
 
@@ -92,11 +94,12 @@ def blender5_main(out_dir):
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj)
     setup_camera(scene)
-    render_blender_sky(scene, 'MULTIPLE_SCATTERING', out_dir, "multiple")
+    render_blender_sky(scene, "MULTIPLE_SCATTERING", out_dir, "multiple")
 
 
 def read_exr(path):
     import numpy as np
+
     image = bpy.data.images.load(str(path))
     w, h = image.size
     flat = np.empty(w * h * 4, dtype=np.float32)
@@ -108,13 +111,15 @@ def read_exr(path):
 def main(out_png):
     import numpy as np
     from PIL import Image, ImageDraw
+
     sys.path.insert(0, str(ROOT / "tests" / "blender"))
     import addon_testing as T
+
     T.install_addon()
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="welkin_sheet_"))
     atexit.register(shutil.rmtree, tmp, ignore_errors=True)
 
-    scene, sun = T.new_scene(ELEVATIONS[0], AZIMUTH, resolution='1024')
+    scene, sun = T.new_scene(ELEVATIONS[0], AZIMUTH, resolution="1024")
     setup_camera(scene)
     for e in ELEVATIONS:
         T.aim_sun(sun, e, AZIMUTH)
@@ -123,13 +128,16 @@ def main(out_png):
         scene.render.filepath = str(tmp / f"welkin_{e:+05.1f}.exr")
         bpy.ops.render.render(write_still=True)
     version = bpy.app.version_string.split()[0]
-    render_blender_sky(scene, 'NISHITA', tmp, "nishita")
+    render_blender_sky(scene, "NISHITA", tmp, "nishita")
     columns = [("welkin", "Welkin (add-on world)"), ("nishita", f"Blender {version} Nishita")]
 
     python5 = ROOT / "build" / "venv-bpy-5.0" / "bin" / "python"
     if python5.exists():
-        run = subprocess.run([str(python5), str(pathlib.Path(__file__).resolve()),
-                              "--blender5", str(tmp)], capture_output=True, text=True)
+        run = subprocess.run(
+            [str(python5), str(pathlib.Path(__file__).resolve()), "--blender5", str(tmp)],
+            capture_output=True,
+            text=True,
+        )
         if run.returncode == 0:
             columns.append(("multiple", "Blender 5.0 Multiple Scattering"))
         else:
@@ -138,8 +146,9 @@ def main(out_png):
         print(f"Blender 5.0's sky not rendered: no {python5}")
 
     label_w, head_h = 92, 22
-    sheet = Image.new("RGB", (label_w + TILE_W * len(columns), head_h + TILE_H * len(ELEVATIONS)),
-                      (24, 24, 24))
+    sheet = Image.new(
+        "RGB", (label_w + TILE_W * len(columns), head_h + TILE_H * len(ELEVATIONS)), (24, 24, 24)
+    )
     draw = ImageDraw.Draw(sheet)
     for c, (_key, title) in enumerate(columns):
         draw.text((label_w + c * TILE_W + 6, 5), title, fill=(230, 230, 230))
@@ -155,19 +164,23 @@ def main(out_png):
             x = np.clip(np.nan_to_num(tile * k), 0.0, None)
             x = x / (1.0 + x)
             srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-            sheet.paste(Image.fromarray((np.clip(srgb, 0, 1) * 255 + 0.5).astype(np.uint8)),
-                        (label_w + c * TILE_W, head_h + r * TILE_H))
+            sheet.paste(
+                Image.fromarray((np.clip(srgb, 0, 1) * 255 + 0.5).astype(np.uint8)),
+                (label_w + c * TILE_W, head_h + r * TILE_H),
+            )
         y = head_h + r * TILE_H
         draw.text((6, y + 6), f"sun {e:+g} deg", fill=(230, 230, 230))
         draw.text((6, y + 22), f"EV {math.log2(1.0 / k):+.1f}", fill=(170, 170, 170))
         draw.line([(label_w, y), (sheet.width, y)], fill=(24, 24, 24))
     out_png.parent.mkdir(parents=True, exist_ok=True)
     sheet.save(out_png, optimize=True)
-    print(f"time-of-day sheet: {out_png} ({out_png.stat().st_size // 1024} KB), columns: "
-          + ", ".join(title for _key, title in columns))
+    print(
+        f"time-of-day sheet: {out_png} ({out_png.stat().st_size // 1024} KB), columns: "
+        + ", ".join(title for _key, title in columns)
+    )
 
 
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:]
 parser = argparse.ArgumentParser()
 parser.add_argument("--out", default=str(ROOT / "docs" / "time_of_day.png"))
 parser.add_argument("--blender5", default=None, help=argparse.SUPPRESS)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Writes a dense density array as an OpenVDB file (a FloatGrid named "density") with
 OpenVDB's own Python module, pyopenvdb (Debian's python3-openvdb).
 
@@ -8,6 +9,7 @@ script; the file written is the same either way.
 
     write_density(path, density, ijk, voxel_m, tolerance=None, prune=False)
 """
+
 import os
 import pathlib
 import subprocess
@@ -46,24 +48,40 @@ def write_density(path, density, ijk, voxel_m, tolerance=None, prune=False):
     with tempfile.TemporaryDirectory(prefix="welkin_vdb_") as tmp:
         array = pathlib.Path(tmp) / "density.npy"
         np.save(array, density)
-        args = [SYSTEM_PYTHON, str(pathlib.Path(__file__).resolve()), str(path), str(array),
-                ",".join(str(int(i)) for i in ijk), repr(float(voxel_m)),
-                "" if tolerance is None else repr(float(tolerance)), "1" if prune else "0"]
+        args = [
+            SYSTEM_PYTHON,
+            str(pathlib.Path(__file__).resolve()),
+            str(path),
+            str(array),
+            ",".join(str(int(i)) for i in ijk),
+            repr(float(voxel_m)),
+            "" if tolerance is None else repr(float(tolerance)),
+            "1" if prune else "0",
+        ]
         # The child's environment without this Python's venv and paths: Debian's python3
         # with its own numpy and pyopenvdb.
-        env = {k: v for k, v in os.environ.items()
-               if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
+        env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
         result = subprocess.run(args, env=env, capture_output=True, text=True)
         if result.returncode != 0:
-            raise RuntimeError(f"writing {path} with {SYSTEM_PYTHON} and pyopenvdb "
-                               f"(python3-openvdb) failed: {result.stderr.strip()}")
+            raise RuntimeError(
+                f"writing {path} with {SYSTEM_PYTHON} and pyopenvdb "
+                f"(python3-openvdb) failed: {result.stderr.strip()}"
+            )
 
 
 def _main(argv):
     import pyopenvdb as vdb
+
     path, array, ijk, voxel_m, tolerance, prune = argv
-    _write(vdb, path, np.load(array), [int(i) for i in ijk.split(",")], float(voxel_m),
-           float(tolerance) if tolerance else None, prune == "1")
+    _write(
+        vdb,
+        path,
+        np.load(array),
+        [int(i) for i in ijk.split(",")],
+        float(voxel_m),
+        float(tolerance) if tolerance else None,
+        prune == "1",
+    )
 
 
 if __name__ == "__main__":

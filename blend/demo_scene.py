@@ -1,7 +1,9 @@
+# SPDX-License-Identifier: Apache-2.0
 """What the demo scenes (make_demo.py, make_aerial_demo.py) build alike, in Blender.
 
 Imported by those scripts with blend/ on sys.path; nothing here runs on its own.
 """
+
 import math
 import os
 import sys
@@ -14,7 +16,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 def script_args(parser):
     """Parses the arguments after Blender's `--`."""
-    return parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
+    return parser.parse_args(sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else [])
 
 
 def enable_welkin():
@@ -25,6 +27,7 @@ def enable_welkin():
     import glob
 
     import addon_utils
+
     names = [m.__name__ for m in addon_utils.modules() if m.__name__.split(".")[-1] == "welkin"]
     for name in names:
         if addon_utils.check(name)[1]:
@@ -35,14 +38,19 @@ def enable_welkin():
     zips = sorted(glob.glob(os.path.join(ROOT, "dist", "welkin-*.zip")))
     zips = [z for z in zips if not z.endswith("linux_x64.zip")]  # the Extension: 4.2+
     if not zips:
-        raise SystemExit("demo: the Welkin add-on is not installed and dist/ holds no "
-                         "welkin-<version>.zip; run bash scripts/build_addon.sh first")
-    sources = [f for f in glob.glob(os.path.join(ROOT, "addon", "**", "*"), recursive=True)
-               if "__pycache__" not in f]
+        raise SystemExit(
+            "demo: the Welkin add-on is not installed and dist/ holds no "
+            "welkin-<version>.zip; run bash scripts/build_addon.sh first"
+        )
+    sources = [
+        f for f in glob.glob(os.path.join(ROOT, "addon", "**", "*"), recursive=True) if "__pycache__" not in f
+    ]
     sources += glob.glob(os.path.join(ROOT, "build", "welkin.cpython*"))
     if os.path.getmtime(zips[-1]) < max(map(os.path.getmtime, sources), default=0.0):
-        raise SystemExit(f"demo: {zips[-1]} is older than addon/ or build/'s compiled module; "
-                         "run bash scripts/build_addon.sh first")
+        raise SystemExit(
+            f"demo: {zips[-1]} is older than addon/ or build/'s compiled module; "
+            "run bash scripts/build_addon.sh first"
+        )
     bpy.ops.preferences.addon_install(filepath=zips[-1])
     bpy.ops.preferences.addon_enable(module="welkin")
     return "welkin"
@@ -81,9 +89,9 @@ def add_camera(scene, location, pitch_deg, lens_mm, clip_end_m=None):
 
 def add_sun(scene):
     """A sun lamp, rotated by quaternion (see aim_sun)."""
-    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
     scene.collection.objects.link(sun)
-    sun.rotation_mode = 'QUATERNION'
+    sun.rotation_mode = "QUATERNION"
     return sun
 
 
@@ -97,7 +105,7 @@ def aim_sun(sun, elevation_deg, azimuth_deg):
 
 def cycles(scene, samples, width):
     """Cycles at `samples` per pixel, no denoising, `width` x 9/16 pixels."""
-    scene.render.engine = 'CYCLES'
+    scene.render.engine = "CYCLES"
     scene.cycles.samples = samples
     scene.cycles.use_denoising = False
     scene.render.resolution_x, scene.render.resolution_y = width, width * 9 // 16
@@ -107,9 +115,10 @@ def cycles(scene, samples, width):
 def save_png(rgba, path):
     """An (h, w, 4) float array, bottom row first as Blender keeps images, to a PNG."""
     import numpy as np
+
     out = bpy.data.images.new("sheet", rgba.shape[1], rgba.shape[0], alpha=True)
     out.pixels.foreach_set(np.ascontiguousarray(rgba, dtype=np.float32).ravel())
     out.filepath_raw = os.path.abspath(path)
-    out.file_format = 'PNG'
+    out.file_format = "PNG"
     out.save()
     bpy.data.images.remove(out)

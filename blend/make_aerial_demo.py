@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Makes the aerial-perspective demo scene and renders it headless:
 
     blender -b --factory-startup --python-use-system-env --python blend/make_aerial_demo.py \
@@ -13,6 +14,7 @@ one PNG (exposure 2^-3.5, x / (1 + x), sRGB). --frames N makes a sequence, frame
 sun rising one degree a frame (the farm tests render it, tests/farm/); --no-render saves
 the .blend only.
 """
+
 import argparse
 import math
 import os
@@ -58,11 +60,11 @@ if args.frames > 1:
 
 settings = scene.world.welkin
 settings.preset = "hazy"
-settings.resolution = '1024'
+settings.resolution = "1024"
 bpy.ops.welkin.update_sky()
 
 ds.cycles(scene, args.samples, args.size)
-scene.render.image_settings.file_format = 'OPEN_EXR'
+scene.render.image_settings.file_format = "OPEN_EXR"
 scene.render.filepath = os.path.join(args.out, "frame_")
 scene.frame_set(1)
 # The frame itself is hazed; the pass files (the render's Image and Z pass, the passes, the
@@ -79,6 +81,7 @@ if args.sheet:
     import importlib
 
     import numpy as np
+
     native = importlib.import_module(f"{addon_name}.native")
     scene_export = importlib.import_module(f"{addon_name}.scene_export")
     module = native.module()
@@ -90,7 +93,7 @@ if args.sheet:
     after = np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1)
 
     def display(x):
-        x = np.maximum(x * 2.0 ** -3.5, 0.0)
+        x = np.maximum(x * 2.0**-3.5, 0.0)
         x = x / (1.0 + x)
         return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Makes the demo scene and renders a short time-of-day sequence, headless:
 
     blender -b --factory-startup --python-use-system-env --python blend/make_demo.py \
@@ -16,6 +17,7 @@ and re-renders headless on any machine with the add-on installed:
 Frames go to OUT/frame_####.png (Filmic, exposure -5 for the physical W m^-2 sr^-1
 radiance scale, as with Blender's Nishita sky).
 """
+
 import argparse
 import os
 import sys
@@ -42,8 +44,9 @@ material = ds.material
 bpy.ops.mesh.primitive_plane_add(size=400.0)
 ground = bpy.context.active_object
 ground.data.materials.append(material("Ground", (0.18, 0.17, 0.15), 0.9))
-for i, (x, y, r, rgb) in enumerate(((6, -2, 1.0, (0.8, 0.8, 0.8)), (9, 2, 1.5, (0.7, 0.3, 0.2)),
-                                    (13, -4, 2.0, (0.2, 0.4, 0.7)))):
+for i, (x, y, r, rgb) in enumerate(
+    ((6, -2, 1.0, (0.8, 0.8, 0.8)), (9, 2, 1.5, (0.7, 0.3, 0.2)), (13, -4, 2.0, (0.2, 0.4, 0.7)))
+):
     bpy.ops.mesh.primitive_uv_sphere_add(radius=r, location=(x, y, r), segments=48, ring_count=24)
     bpy.ops.object.shade_smooth()
     bpy.context.active_object.data.materials.append(material(f"Ball {i}", rgb, 0.3))
@@ -59,13 +62,13 @@ for f in range(1, args.frames + 1):
     sun.keyframe_insert("rotation_quaternion", frame=f)
 
 settings = scene.world.welkin
-settings.resolution = '1024'
+settings.resolution = "1024"
 scene.frame_set(1)
 bpy.ops.welkin.update_sky()
 
 ds.cycles(scene, args.samples, args.size)
-scene.render.image_settings.file_format = 'PNG'
-scene.view_settings.view_transform = 'Filmic'
+scene.render.image_settings.file_format = "PNG"
+scene.view_settings.view_transform = "Filmic"
 scene.view_settings.exposure = -4.0
 scene.render.filepath = os.path.join(args.out, "frame_####")
 blend = os.path.join(args.out, "welkin_demo.blend")
@@ -76,6 +79,7 @@ if not args.no_render:
     print(f"make_demo: rendered frames 1-{args.frames} to {args.out}")
     if args.sheet:
         import numpy as np
+
         frames = []
         for f in range(1, args.frames + 1):
             image = bpy.data.images.load(os.path.join(args.out, f"frame_{f:04d}.png"))

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # welkin_layer(NAME [DEPENDENCIES...]) makes the static library welkin_NAME from
 # src/NAME/*.cpp, with the public headers in include/welkin/NAME/, linked publicly to the
 # layers it builds on. welkin_check_layers() then reads every #include "welkin/X/..." in

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Configures and builds everything (core, Python module, CLI, tests) in build/, Release,
 # with the Python module built for /usr/bin/python3 (Blender's Python). WELKIN_WERROR=ON
 # (what scripts/test.sh sets, so CI) turns compiler warnings into errors.

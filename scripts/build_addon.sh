@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the installable Blender add-on: dist/welkin-<version>.zip, holding addon/welkin/
 # and, in welkin/_native/, the compiled module built by scripts/build.sh for
 # /usr/bin/python3 (Blender 3.4's Python 3.11). Install the zip in Blender with

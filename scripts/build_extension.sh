@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the Blender Extension (Blender 4.2 and later): dist/welkin-<version>-linux_x64.zip,
 # holding addon/welkin/ with its blender_manifest.toml and, in wheels/, the compiled core
 # as the repaired wheels of scripts/build_wheel.sh, one per Python Blender runs: cp311

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the compiled core as Python wheels, one per Python line Blender runs, and repairs
 # each so that it carries its shared libraries:
 #   dist/welkin-<version>-cp311-cp311-manylinux_<glibc>_x86_64.whl  (Blender 4.2-5.0)

@@ -26,8 +26,11 @@ ALLOWED: dict[tuple[str, str], str] = {}
 
 def main() -> int:
     out = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, check=True, capture_output=True)
-    files = [p for p in out.stdout.decode().split("\0")
-             if Path(p).suffix in LIMITS and not p.startswith("tests/data/") and (ROOT / p).is_file()]
+    files = [
+        p
+        for p in out.stdout.decode().split("\0")
+        if Path(p).suffix in LIMITS and not p.startswith("tests/data/") and (ROOT / p).is_file()
+    ]
     problems: list[str] = []
     for path in sorted(files):
         limit = LIMITS[Path(path).suffix]
@@ -37,8 +40,10 @@ def main() -> int:
     for msg in problems:
         print(msg)
     if problems:
-        print(f"check_length: {len(problems)} function(s) too long: split them into named steps",
-              file=sys.stderr)
+        print(
+            f"check_length: {len(problems)} function(s) too long: split them into named steps",
+            file=sys.stderr,
+        )
         return 1
     print(f"check_length: every function within its limit ({len(files)} files)")
     return 0

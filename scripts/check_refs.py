@@ -34,14 +34,29 @@ ROOT = Path(__file__).resolve().parent.parent
 # The files read, by suffix, and the extensions whose bare names count as references.
 READ_SUFFIXES = {".hpp", ".cpp", ".py", ".pyi", ".sh", ".md", ".toml", ".txt", ".ini", ".cmake", ".json"}
 SOURCE_EXTENSIONS = ("hpp", "cpp", "py", "pyi", "sh", "md", "cmake", "sbatch")
-TOP_FOLDERS = ("src", "include", "addon", "tests", "docs", "bench", "scripts", "blend", "cmake", "farm", ".ci")
+TOP_FOLDERS = (
+    "src",
+    "include",
+    "addon",
+    "tests",
+    "docs",
+    "bench",
+    "scripts",
+    "blend",
+    "cmake",
+    "farm",
+    ".ci",
+)
 
 PATH_RE = re.compile(
     r"(?<![\w./\-<\\$])((?:\.\./)*(?:[\w\-]+/)*[\w\-]+\.(?:" + "|".join(SOURCE_EXTENSIONS) + r"))"
     r"(#[\w\-]+)?(?![\w\-/])"
 )
-SLASHED_RE = re.compile(r"(?<![\w./\-<\\])((?:" + "|".join(re.escape(t) for t in TOP_FOLDERS)
-                        + r")/[\w./\-]*[\w\-])(#[\w\-]+)?(?![\w*{<$])")
+SLASHED_RE = re.compile(
+    r"(?<![\w./\-<\\])((?:"
+    + "|".join(re.escape(t) for t in TOP_FOLDERS)
+    + r")/[\w./\-]*[\w\-])(#[\w\-]+)?(?![\w*{<$])"
+)
 MD_LINK_RE = re.compile(r"\]\(([^)\s]+)\)")
 ISSUE_RE = re.compile(r"\bissue #\d+|(?:^|(?<=[\s(]))#\d+\b(?=[:)])", re.IGNORECASE)
 OUTSIDE_RE = re.compile(r"\.\./shared/|\bDESIGN\.md\b")
@@ -102,8 +117,14 @@ class Repo:
     def resolve(self, name: str, where: str) -> str | None:
         """The tracked file or folder that `name`, written in file `where`, names."""
         name = name.rstrip("/")
-        candidates = [name, str(Path(where).parent / name), f"include/{name}", f"include/welkin/{name}", f"src/{name}",
-                      f"addon/welkin/{name}"]
+        candidates = [
+            name,
+            str(Path(where).parent / name),
+            f"include/{name}",
+            f"include/welkin/{name}",
+            f"src/{name}",
+            f"addon/welkin/{name}",
+        ]
         stem, dot, _ = name.rpartition(".")
         if dot and "/" in stem:  # a Python module's symbol: package/module.function
             candidates.append(stem + ".py")
@@ -176,13 +197,16 @@ def scan(repo: Repo, path: str) -> list[str]:
             md = m.group(1) if m.group(1).endswith(".md") else "README.md"
             msg = check_target(repo, md, "#" + slug(m.group(2)), path)
             if msg:
-                problems.append(f"{path}:{number}: section \"{m.group(2)}\": {msg}")
+                problems.append(f'{path}:{number}: section "{m.group(2)}": {msg}')
         if is_code and ISSUE_RE.search(line):
-            problems.append(f"{path}:{number}: cites '{ISSUE_RE.search(line).group(0)}' of a tracker "
-                            "outside the repository (history belongs in the git log)")
+            problems.append(
+                f"{path}:{number}: cites '{ISSUE_RE.search(line).group(0)}' of a tracker "
+                "outside the repository (history belongs in the git log)"
+            )
         if OUTSIDE_RE.search(line) and path != "scripts/check_refs.py":
-            problems.append(f"{path}:{number}: names a file outside the repository "
-                            f"({OUTSIDE_RE.search(line).group(0)})")
+            problems.append(
+                f"{path}:{number}: names a file outside the repository ({OUTSIDE_RE.search(line).group(0)})"
+            )
     return problems
 
 

@@ -17,8 +17,16 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-COMMENT = {".cpp": "//", ".hpp": "//", ".py": "#", ".pyi": "#", ".sh": "#", ".cmake": "#",
-           ".sbatch": "#", "CMakeLists.txt": "#"}
+COMMENT = {
+    ".cpp": "//",
+    ".hpp": "//",
+    ".py": "#",
+    ".pyi": "#",
+    ".sh": "#",
+    ".cmake": "#",
+    ".sbatch": "#",
+    "CMakeLists.txt": "#",
+}
 TAG = "SPDX-License-Identifier:"
 
 
@@ -59,8 +67,11 @@ def main() -> int:
     for msg in problems:
         print(msg)
     if problems:
-        print(f"check_spdx: {len(problems)} file(s) without their licence line "
-              "(python3 scripts/check_spdx.py --fix adds them)", file=sys.stderr)
+        print(
+            f"check_spdx: {len(problems)} file(s) without their licence line "
+            "(python3 scripts/check_spdx.py --fix adds them)",
+            file=sys.stderr,
+        )
         return 1
     print("check_spdx: every source file names its licence")
     return 0

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Checks each repaired wheel (scripts/build_wheel.sh) as a Python user outside Blender gets
 # it: `pip install` into a fresh virtual environment of the wheel's own Python (cp311: 3.11,
 # cp313: 3.13, found by scripts/find_python.sh), not the one the module in build/ was built

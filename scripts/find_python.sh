@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Finds the interpreter of one Python line (3.11 for Blender 3.4-5.0, 3.13 for Blender
 # 5.1 and later): sourced by build_wheel.sh, check_wheel.sh, install_blender_venvs.sh and
 # test_blender.sh, or run as `bash scripts/find_python.sh 3.13 [--headers]`, which prints

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Fits and validates the default wavelengths' RGB conversion (src/color/color.cpp).
 
     build/welkin_bench_colour_fit --out DIR
@@ -12,15 +13,16 @@ matrices (rows R, G, B; columns the wavelengths ascending) that color.cpp carrie
 --search also ranks every set of four wavelengths in 400..700 nm, 20 nm apart, by the
 fit's worst xy error (minutes).
 """
+
 import itertools
 import sys
 
 import numpy as np
 
 # XYZ <-> linear Rec.709 (IEC 61966-2-1), as color.cpp.
-RGB_TO_XYZ = np.array([[0.4124564, 0.3575761, 0.1804375],
-                       [0.2126729, 0.7151522, 0.0721750],
-                       [0.0193339, 0.1191920, 0.9503041]])
+RGB_TO_XYZ = np.array(
+    [[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750], [0.0193339, 0.1191920, 0.9503041]]
+)
 WL = np.arange(360.0, 831.0, 10.0)
 DEFAULT = (440, 480, 560, 620)
 
@@ -46,8 +48,10 @@ def fit(samples, xyz):
 
 
 def errors(xyz_fit, xyz):
-    return (np.linalg.norm(chromaticity(xyz_fit) - chromaticity(xyz), axis=1),
-            np.abs(xyz_fit[:, 1] / xyz[:, 1] - 1.0))
+    return (
+        np.linalg.norm(chromaticity(xyz_fit) - chromaticity(xyz), axis=1),
+        np.abs(xyz_fit[:, 1] / xyz[:, 1] - 1.0),
+    )
 
 
 def main():
@@ -92,23 +96,29 @@ def main():
     print("|---|---|---|---|---|---|")
     bruneton = RGB_TO_XYZ @ np.loadtxt(f"{folder}/bruneton3.txt").reshape(3, 3)
     e, ly = errors(columns((680, 550, 440)) @ bruneton.T, xyz)
-    print(f"| 3 wavelengths 680/550/440, Bruneton 2017's conversion (the former default) | 3 (1) | "
-          f"{np.median(e):.4f} | {e.max():.4f} | {np.median(ly):.4f} | {np.percentile(ly, 99):.4f} |")
-    rows = [("3 wavelengths 680/550/440, linear interpolation", (440, 550, 680), None),
-            ("3 wavelengths 680/550/440, fitted", (440, 550, 680), "fit"),
-            ("4 wavelengths 440/480/560/620, linear interpolation", DEFAULT, None),
-            ("4 wavelengths 440/480/560/620, fitted (default)", DEFAULT, "fit"),
-            ("6 wavelengths 420..670, linear interpolation", (420, 470, 520, 570, 620, 670), None),
-            ("8 wavelengths 400..680, linear interpolation", tuple(range(400, 681, 40)), None),
-            ("8 wavelengths 400..680, fitted", tuple(range(400, 681, 40)), "fit")]
+    print(
+        f"| 3 wavelengths 680/550/440, Bruneton 2017's conversion (the former default) | 3 (1) | "
+        f"{np.median(e):.4f} | {e.max():.4f} | {np.median(ly):.4f} | {np.percentile(ly, 99):.4f} |"
+    )
+    rows = [
+        ("3 wavelengths 680/550/440, linear interpolation", (440, 550, 680), None),
+        ("3 wavelengths 680/550/440, fitted", (440, 550, 680), "fit"),
+        ("4 wavelengths 440/480/560/620, linear interpolation", DEFAULT, None),
+        ("4 wavelengths 440/480/560/620, fitted (default)", DEFAULT, "fit"),
+        ("6 wavelengths 420..670, linear interpolation", (420, 470, 520, 570, 620, 670), None),
+        ("8 wavelengths 400..680, linear interpolation", tuple(range(400, 681, 40)), None),
+        ("8 wavelengths 400..680, fitted", tuple(range(400, 681, 40)), "fit"),
+    ]
     for label, ws, kind in rows:
         if kind == "fit":
             m = fit(columns(ws)[half], xyz[half])
             e, ly = errors(columns(ws)[~half] @ m.T, xyz[~half])
         else:
             e, ly = errors(columns(ws) @ tent_matrix(ws).T, xyz)
-        print(f"| {label} | {len(ws)} ({-(-len(ws) // 4)}) | {np.median(e):.4f} | {e.max():.4f} | "
-              f"{np.median(ly):.4f} | {np.percentile(ly, 99):.4f} |")
+        print(
+            f"| {label} | {len(ws)} ({-(-len(ws) // 4)}) | {np.median(e):.4f} | {e.max():.4f} | "
+            f"{np.median(ly):.4f} | {np.percentile(ly, 99):.4f} |"
+        )
     print()
 
     m_sky = fit(columns(DEFAULT), xyz)
@@ -118,8 +128,10 @@ def main():
     for p, name in enumerate(presets):
         for alt in (0.0, 1000.0, 3000.0, 10000.0):
             s = (cases[case, 0] == p) & (cases[case, 2] == alt)
-            print(f"| {name} | {alt / 1000:g} km | {np.median(e[s]):.4f} | {e[s].max():.4f} | "
-                  f"{np.median(ly[s]):.4f} | {ly[s].max():.4f} |")
+            print(
+                f"| {name} | {alt / 1000:g} km | {np.median(e[s]):.4f} | {e[s].max():.4f} | "
+                f"{np.median(ly[s]):.4f} | {ly[s].max():.4f} |"
+            )
     print()
 
     xyz_sun = sun @ to_xyz.T
@@ -127,8 +139,10 @@ def main():
     sun_cols = sun[lit][:, [index[w] for w in DEFAULT]]
     m_sun = fit(sun_cols, xyz_sun[lit])
     es, ls = errors(sun_cols @ m_sun.T, xyz_sun[lit])
-    print(f"Direct sunlight ({lit.sum()} spectra): xy median {np.median(es):.4f}, worst {es.max():.4f}; "
-          f"luminance median {np.median(ls):.4f}, worst {ls.max():.4f}.\n")
+    print(
+        f"Direct sunlight ({lit.sum()} spectra): xy median {np.median(es):.4f}, worst {es.max():.4f}; "
+        f"luminance median {np.median(ls):.4f}, worst {ls.max():.4f}.\n"
+    )
     xyz_to_rgb = np.linalg.inv(RGB_TO_XYZ)
     np.set_printoptions(precision=10, suppress=True)
     print("kFittedSkyToRgb (columns 440, 480, 560, 620 nm):\n", xyz_to_rgb @ m_sky)

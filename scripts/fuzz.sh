@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the libFuzzer targets of tests/fuzz/ (fuzz_json: the atmosphere and scene JSON
 # readers; fuzz_vdb: the VDB reader; fuzz_exr: the OpenEXR reader, image and depth inputs)
 # with Debian's clang (-fsanitize=fuzzer,address) and

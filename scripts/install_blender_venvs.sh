@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs the Blenders the tests run against besides Debian's 3.4: PyPI's `bpy` (Blender
 # as a Python module) in one virtual environment per version, made from the Python that
 # version runs (scripts/find_python.sh finds it: python3 on PATH, pyenv's installs, ...;

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs the Debian 12 packages Welkin needs to build, test and render (xvfb: the
 # viewport preview's windowed Blender test, tests/blender/test_viewport_window.py; clang
 # and its runtime: the fuzz targets, scripts/fuzz.sh; munge and slurm-wlm: the Slurm farm

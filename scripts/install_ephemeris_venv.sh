@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs the independent ephemeris the position tests compare against
 # (tests/python/test_place_and_time.py): Skyfield with JPL's DE421 planetary ephemeris and
 # the IERS finals2000A table as PyPI's `skyfield-data` ships them (MIT; DE421 is a public

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs PyPI's openjd-cli (Open Job Description's reference runner: `openjd check`,
 # `openjd run`) into build/venv-openjd, for tests/farm/test_openjd.sh, which runs the
 # Deadline Cloud job template farm/openjd/welkin_render.yaml locally. Idempotent and quick

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # One way to format and lint: clang-format (.clang-format) on the C++ of src/, include/,
 # tests/ and bench/; ruff's formatter and linter (ruff.toml) and mypy (mypy.ini) on the
 # Python; and the house's own checks: every path, section and anchor a comment or doc

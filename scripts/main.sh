@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The main job: install what is needed, build, render a sky HDRI from the default preset to
 # out/welkin_sky.exr, and package the Blender add-on both ways, into dist/:
 #   dist/welkin-<version>-linux_x64.zip  the Extension, for Blender 4.2 and later (what most

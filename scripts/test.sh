@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs, builds, and runs every test suite: GoogleTest (ctest), the Python module
 # (pytest), the fuzz targets for a bounded time (scripts/fuzz.sh), the headless
 # Blender tests on Blender 3.4, 4.2, 4.5, 5.0, 5.1, 5.2 and 5.3 (scripts/test_blender.sh),

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs the headless Blender tests (tests/blender/test_*.py) on every Blender Welkin
 # supports, each with the add-on installed from its built package, as a user installs it:
 #   3.4            Debian's `blender`, the legacy add-on zip (scripts/build_addon.sh: the

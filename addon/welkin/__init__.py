@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Welkin for Blender: a physically based sky that follows the scene's sun lamp.
 
 The add-on is two layers (as glTF-Blender-IO is):
@@ -19,7 +20,7 @@ bl_info = {
     "blender": (3, 4, 0),
     "location": "Properties > World > Welkin Sky",
     "description": "Physically based sky from the scene's sun lamp: world texture, "
-                   "sun lamp sync, HDRI export",
+    "sun lamp sync, HDRI export",
     "category": "Lighting",
 }
 
@@ -31,12 +32,16 @@ _registered = False
 def register():
     global _registered
     import bpy
+
     if bpy.app.version < MINIMUM_BLENDER:
-        print(f"Welkin: Blender {bpy.app.version_string} is not supported: Welkin needs "
-              f"Blender {'.'.join(map(str, MINIMUM_BLENDER))} or later (4.2 and later: "
-              "install the Extension); nothing was registered")
+        print(
+            f"Welkin: Blender {bpy.app.version_string} is not supported: Welkin needs "
+            f"Blender {'.'.join(map(str, MINIMUM_BLENDER))} or later (4.2 and later: "
+            "install the Extension); nothing was registered"
+        )
         return
     from . import blender
+
     blender.register()
     _registered = True
 
@@ -46,6 +51,7 @@ def unregister():
     if not _registered:
         return
     from . import blender
+
     blender.unregister()
     _registered = False
 
@@ -56,6 +62,7 @@ def __getattr__(name):
     still get `welkin.Atmosphere.preset(...)`, `welkin.sky_radiance(...)` (native.py)."""
     import importlib
     import pathlib
+
     here = pathlib.Path(__file__).parent
     # Our own submodules are imported, never forwarded (the import system asks for them
     # here before it imports them).
@@ -64,6 +71,8 @@ def __getattr__(name):
     native = importlib.import_module(__name__ + ".native")
     module = native.module()
     if module is None or not hasattr(module, name):
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}"
-                             + (f" ({native.message()})" if module is None else ""))
+        raise AttributeError(
+            f"module {__name__!r} has no attribute {name!r}"
+            + (f" ({native.message()})" if module is None else "")
+        )
     return getattr(module, name)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The aerial-perspective table as the image the add-on's material node group samples
 (bpy-free, so pytest checks it against the core).
 
@@ -11,6 +12,7 @@ tile of ELEVATIONS rows is one distance slice. lookup() reads it the way the nod
 (texel centres, bilinear, the two slices around the distance mixed linearly in distance);
 the shader's nodes are built from the same formulas (blender/aerial/frame.py).
 """
+
 from __future__ import annotations
 
 import math
@@ -26,7 +28,7 @@ WIDTH, HEIGHT = AZIMUTHS, 2 * ELEVATIONS * SLICES
 def max_distance_m(clip_end_m: float, bottom_radius_m: float, top_radius_m: float) -> float:
     """The last slice's distance: the camera's clip end, and no more than the longest path
     through the air above the ground (two tangent rays from the ground to the top)."""
-    air = 2.0 * math.sqrt(max(top_radius_m ** 2 - bottom_radius_m ** 2, 1.0))
+    air = 2.0 * math.sqrt(max(top_radius_m**2 - bottom_radius_m**2, 1.0))
     return float(max(min(clip_end_m, air), 1.0))
 
 
@@ -35,17 +37,21 @@ def atlas_pixels(inscatter: np.ndarray, optical_depth: np.ndarray) -> np.ndarray
     azimuths, 3) arrays."""
     shape = (SLICES, ELEVATIONS, AZIMUTHS, 3)
     if inscatter.shape != shape or optical_depth.shape != shape:
-        raise ValueError(f"aerial table: arrays of shape {shape} expected, got "
-                         f"{inscatter.shape} and {optical_depth.shape}")
+        raise ValueError(
+            f"aerial table: arrays of shape {shape} expected, got {inscatter.shape} and {optical_depth.shape}"
+        )
     atlas = np.ones((2, SLICES * ELEVATIONS, AZIMUTHS, 4), np.float32)
     atlas[0, ..., :3] = inscatter.reshape(SLICES * ELEVATIONS, AZIMUTHS, 3)
     atlas[1, ..., :3] = optical_depth.reshape(SLICES * ELEVATIONS, AZIMUTHS, 3)
     return atlas.reshape(HEIGHT, WIDTH, 4)
 
 
-def coordinates(direction: np.ndarray, distance: np.ndarray, max_distance: float,
-                linear_distance: float = LINEAR_DISTANCE_M
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def coordinates(
+    direction: np.ndarray,
+    distance: np.ndarray,
+    max_distance: float,
+    linear_distance: float = LINEAR_DISTANCE_M,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(u, v of the L texel of the nearer slice, w): the shader's arithmetic, per point.
     direction: (..., 3) unit vectors from the camera; distance: (...) in the same unit as
     max_distance and linear_distance. The other three texels are at v + ELEVATIONS / HEIGHT (the farther
@@ -71,12 +77,18 @@ def _bilinear(atlas: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     x1, y1 = (x0 + 1) % WIDTH, np.minimum(y0 + 1, HEIGHT - 1)
     x0, y0 = x0 % WIDTH, np.maximum(y0, 0)
     rgb = atlas[..., :3]
-    return ((1 - ay) * ((1 - ax) * rgb[y0, x0] + ax * rgb[y0, x1])
-            + ay * ((1 - ax) * rgb[y1, x0] + ax * rgb[y1, x1]))
+    return (1 - ay) * ((1 - ax) * rgb[y0, x0] + ax * rgb[y0, x1]) + ay * (
+        (1 - ax) * rgb[y1, x0] + ax * rgb[y1, x1]
+    )
 
 
-def lookup(atlas: np.ndarray, direction: np.ndarray, distance: np.ndarray, max_distance: float,
-           linear_distance: float = LINEAR_DISTANCE_M) -> tuple[np.ndarray, np.ndarray]:
+def lookup(
+    atlas: np.ndarray,
+    direction: np.ndarray,
+    distance: np.ndarray,
+    max_distance: float,
+    linear_distance: float = LINEAR_DISTANCE_M,
+) -> tuple[np.ndarray, np.ndarray]:
     """(L, T), (..., 3) each, as the material node group computes them."""
     u, v, w = coordinates(direction, distance, max_distance, linear_distance)
     w = w[..., None]
@@ -129,7 +141,7 @@ class ScreenLattice:
 
     @property
     def log_base(self) -> float:
-        return self.ratio ** self.slices
+        return self.ratio**self.slices
 
     @property
     def snap(self) -> tuple[float, float, float]:
@@ -137,19 +149,18 @@ class ScreenLattice:
 
     @property
     def scale(self) -> tuple[float, float, float]:
-        return (1.0 / (self.columns * self.spacing_x),
-                1.0 / (self.slices * self.rows * self.spacing_y), 0.0)
+        return (1.0 / (self.columns * self.spacing_x), 1.0 / (self.slices * self.rows * self.spacing_y), 0.0)
 
 
-def screen_coordinates(lattice: ScreenLattice, x: np.ndarray, y: np.ndarray, distance: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def screen_coordinates(
+    lattice: ScreenLattice, x: np.ndarray, y: np.ndarray, distance: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(u, v, tau) as the material node group computes them (x, y: the lattice's
     coordinate; distance: scene units, > 0)."""
     tau = np.log(distance) / math.log(lattice.log_base)
     snap_x, snap_y, _ = lattice.snap
     scale_x, scale_y, _ = lattice.scale
-    return (x * scale_x + np.floor(tau / snap_x) * snap_x,
-            y * scale_y + np.floor(tau / snap_y) * snap_y, tau)
+    return (x * scale_x + np.floor(tau / snap_x) * snap_x, y * scale_y + np.floor(tau / snap_y) * snap_y, tau)
 
 
 def _bilinear_repeat(image: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -159,12 +170,14 @@ def _bilinear_repeat(image: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndar
     ax, ay = (fx - x0)[..., None], (fy - y0)[..., None]
     xa, xb, ya, yb = x0 % W, (x0 + 1) % W, y0 % H, (y0 + 1) % H
     rgba = image.astype(np.float64)
-    return ((1 - ay) * ((1 - ax) * rgba[ya, xa] + ax * rgba[ya, xb])
-            + ay * ((1 - ax) * rgba[yb, xa] + ax * rgba[yb, xb]))
+    return (1 - ay) * ((1 - ax) * rgba[ya, xa] + ax * rgba[ya, xb]) + ay * (
+        (1 - ax) * rgba[yb, xa] + ax * rgba[yb, xb]
+    )
 
 
-def screen_lookup(lattice: ScreenLattice, textures: np.ndarray, x: np.ndarray, y: np.ndarray,
-                  distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def screen_lookup(
+    lattice: ScreenLattice, textures: np.ndarray, x: np.ndarray, y: np.ndarray, distance: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(L, T), (..., 3) each, as the material node group computes them from the core's three
     textures ('Linear' fetches with 'Repeat', then the two mixes by tau)."""
     u, v, tau = screen_coordinates(lattice, x, y, distance)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The scene JSON's "clouds" section (docs/artists.md "Clouds in Blender", /work notes' schema) as
 plain data, and the frame rule of Blender's VDB sequences. Blender-free: the bpy layer
 (blender/clouds/scene.py) reads the world's cloud layers and the marked volume objects and
@@ -16,6 +17,7 @@ and the last run of digits in the file name is replaced by n, zero-padded to tha
 width (`cloud.0001.vdb` -> `cloud.0007.vdb`). A file without digits, or no sequence, is
 used as it is at every frame.
 """
+
 from __future__ import annotations
 
 import math
@@ -30,9 +32,19 @@ from typing import Any
 CLOUD_TYPES = ("cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus")
 # The most cloud layers a scene holds (the core's SceneClouds::kMaxLayers, scene/clouds.hpp).
 MAX_LAYERS = 32
-LAYER_FIELDS = ("cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage",
-                "density_per_m", "base_scale_m", "detail_scale_m", "weather_scale_m",
-                "detail_strength", "weather_variation", "evolution_m")
+LAYER_FIELDS = (
+    "cloud_type",
+    "bottom_altitude_m",
+    "top_altitude_m",
+    "coverage",
+    "density_per_m",
+    "base_scale_m",
+    "detail_scale_m",
+    "weather_scale_m",
+    "detail_strength",
+    "weather_variation",
+    "evolution_m",
+)
 # The lighting fields the panel offers (clouds/lighting.hpp, CloudLightingOptions).
 LIGHTING_FIELDS = ("max_steps", "light_steps", "ambient_steps", "octaves")
 
@@ -44,13 +56,13 @@ class MissingVolume(Exception):
     """A marked volume object whose file for the frame is absent; names object and path."""
 
 
-def sequence_frame(frame: float, frame_start: float, frame_offset: float, frame_duration: float,
-                   mode: str) -> int | None:
+def sequence_frame(
+    frame: float, frame_start: float, frame_offset: float, frame_duration: float, mode: str
+) -> int | None:
     """The file frame number for scene `frame`, or None when the sequence shows nothing
     there (CLIP outside its range, or a duration of 0)."""
     if mode not in SEQUENCE_MODES:
-        raise ValueError(f"sequence_mode: must be one of {', '.join(SEQUENCE_MODES)}, "
-                         f"got {mode!r}")
+        raise ValueError(f"sequence_mode: must be one of {', '.join(SEQUENCE_MODES)}, got {mode!r}")
     d = int(frame_duration)
     if d <= 0:
         return None
@@ -86,12 +98,18 @@ def frame_filepath(filepath: str, n: int) -> str:
         return filepath
     width = len(match.group(1))
     digits = f"{n:0{width}d}" if n >= 0 else f"-{-n:0{width}d}"
-    return os.path.join(directory, name[:match.start(1)] + digits + name[match.end(1):])
+    return os.path.join(directory, name[: match.start(1)] + digits + name[match.end(1) :])
 
 
-def volume_file(filepath_abs: str, is_sequence: bool, frame: float, frame_start: float = 1,
-                frame_offset: float = 0, frame_duration: float = 0,
-                mode: str = "CLIP") -> str | None:
+def volume_file(
+    filepath_abs: str,
+    is_sequence: bool,
+    frame: float,
+    frame_start: float = 1,
+    frame_offset: float = 0,
+    frame_duration: float = 0,
+    mode: str = "CLIP",
+) -> str | None:
     """The VDB file a volume shows at scene `frame`, or None where its sequence shows
     nothing."""
     if not is_sequence:
@@ -100,8 +118,7 @@ def volume_file(filepath_abs: str, is_sequence: bool, frame: float, frame_start:
     return None if n is None else frame_filepath(filepath_abs, n)
 
 
-def layer_dict(values: Mapping[str, Any], seed: int,
-               wind_offset_m: Sequence[float]) -> dict[str, Any]:
+def layer_dict(values: Mapping[str, Any], seed: int, wind_offset_m: Sequence[float]) -> dict[str, Any]:
     """One procedural layer: `values` maps LAYER_FIELDS to numbers (cloud_type to one of
     CLOUD_TYPES, any case). ValueError naming the field for a number that is not finite
     (JSON has no NaN or infinity; the core checks every range)."""
@@ -117,29 +134,48 @@ def layer_dict(values: Mapping[str, Any], seed: int,
     return d
 
 
-def volume_dict(name: str, path: str, grid: str, matrix_world: Iterable[Iterable[float]],
-                density_scale: float, scale_length: float = 1.0,
-                placement: str = "blender") -> dict[str, Any]:
+def volume_dict(
+    name: str,
+    path: str,
+    grid: str,
+    matrix_world: Iterable[Iterable[float]],
+    density_scale: float,
+    scale_length: float = 1.0,
+    placement: str = "blender",
+) -> dict[str, Any]:
     """One VDB volume. `matrix_world` by rows in scene units (its translation is scaled to
     metres); `placement`: where the Blender that shows it puts voxel ijk ("blender",
     "openvdb": VdbClouds); raises MissingVolume when the file is absent."""
     if not os.path.isfile(path):
-        raise MissingVolume(f"volume object '{name}': its VDB file for this frame is missing: "
-                            f"{path}")
+        raise MissingVolume(f"volume object '{name}': its VDB file for this frame is missing: {path}")
     s = float(scale_length)
     m = [[float(v) for v in row] for row in matrix_world]
     for r in range(3):
         for c in range(4):
             m[r][c] *= s  # the whole placement (voxel size too) from scene units to metres
-    return {"name": name, "file": path, "grid": grid, "matrix_world": m,
-            "density_scale": float(density_scale), "negative": "clamp", "placement": placement}
+    return {
+        "name": name,
+        "file": path,
+        "grid": grid,
+        "matrix_world": m,
+        "density_scale": float(density_scale),
+        "negative": "clamp",
+        "placement": placement,
+    }
 
 
-def clouds_dict(layers: Iterable[Mapping[str, Any]], volumes: Iterable[Mapping[str, Any]],
-                albedo: float, lighting: Mapping[str, float]) -> dict[str, Any] | None:
+def clouds_dict(
+    layers: Iterable[Mapping[str, Any]],
+    volumes: Iterable[Mapping[str, Any]],
+    albedo: float,
+    lighting: Mapping[str, float],
+) -> dict[str, Any] | None:
     """The "clouds" section, or None when there is nothing to render (a clear sky)."""
     if not layers and not volumes:
         return None
-    return {"layers": list(layers), "volumes": list(volumes),
-            "scattering": {"albedo": float(albedo)},
-            "lighting": {k: int(lighting[k]) for k in LIGHTING_FIELDS}}
+    return {
+        "layers": list(layers),
+        "volumes": list(volumes),
+        "scattering": {"albedo": float(albedo)},
+        "lighting": {k: int(lighting[k]) for k in LIGHTING_FIELDS},
+    }

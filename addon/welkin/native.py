@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Finding and loading Welkin's compiled module, shipped inside the add-on.
 
 The add-on zip carries the module built by scripts/build.sh in `_native/`
@@ -23,6 +24,7 @@ Loading never raises: `load()` returns the module, or None and a message that sa
 wrong and how to fix it (missing, built for another Python, failing to load), for the
 panel and for operator reports.
 """
+
 import importlib.machinery
 import importlib.util
 import pathlib
@@ -30,11 +32,13 @@ import sys
 import types
 
 NATIVE_DIR = pathlib.Path(__file__).resolve().parent / "_native"
-BUILD_HINT = ("Welkin needs Blender 3.4 or later on x86-64 Linux, with Python 3.11 "
-              "(Blender 3.4-5.0) or 3.13 (5.1 and later): for Blender 4.2 and later install "
-              "the Extension (welkin-<version>-linux_x64.zip, scripts/build_extension.sh; "
-              "it carries the module for both), for 3.4-4.1 the add-on zip "
-              "(scripts/build_addon.sh, Python 3.11)")
+BUILD_HINT = (
+    "Welkin needs Blender 3.4 or later on x86-64 Linux, with Python 3.11 "
+    "(Blender 3.4-5.0) or 3.13 (5.1 and later): for Blender 4.2 and later install "
+    "the Extension (welkin-<version>-linux_x64.zip, scripts/build_extension.sh; "
+    "it carries the module for both), for 3.4-4.1 the add-on zip "
+    "(scripts/build_addon.sh, Python 3.11)"
+)
 
 _cache: dict[str, tuple[types.ModuleType | None, str | None]] = {}
 
@@ -58,8 +62,11 @@ def _installed_elsewhere() -> list[str]:
     names: set[str] = set()
     for entry in sys.path:
         try:
-            names.update(p.name for p in pathlib.Path(entry or ".").glob("welkin.*")
-                         if p.suffix in (".so", ".pyd") and p.is_file())
+            names.update(
+                p.name
+                for p in pathlib.Path(entry or ".").glob("welkin.*")
+                if p.suffix in (".so", ".pyd") and p.is_file()
+            )
         except OSError:
             pass
     return sorted(names)
@@ -75,21 +82,27 @@ def find(directory: str | pathlib.Path = NATIVE_DIR) -> tuple[pathlib.Path | Non
             return path, None
         candidates = [pathlib.Path(n) for n in _installed_elsewhere()]
     if not candidates:
-        where = (f"nothing in {directory}, nor the Extension's wheel on sys.path"
-                 if directory == NATIVE_DIR else f"nothing in {directory}")
+        where = (
+            f"nothing in {directory}, nor the Extension's wheel on sys.path"
+            if directory == NATIVE_DIR
+            else f"nothing in {directory}"
+        )
         return None, f"Welkin's compiled module is missing ({where}); " + BUILD_HINT
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
         for path in candidates:
             if path.name == "welkin" + suffix:
                 return path, None
     names = ", ".join(p.name for p in candidates)
-    return None, (f"Welkin's compiled module ({names}) was built for another Python: this "
-                  f"Blender runs {_python_tag()} and loads welkin"
-                  f"{importlib.machinery.EXTENSION_SUFFIXES[0]}; " + BUILD_HINT)
+    return None, (
+        f"Welkin's compiled module ({names}) was built for another Python: this "
+        f"Blender runs {_python_tag()} and loads welkin"
+        f"{importlib.machinery.EXTENSION_SUFFIXES[0]}; " + BUILD_HINT
+    )
 
 
-def load(directory: str | pathlib.Path = NATIVE_DIR,
-         package: str | None = None) -> tuple[types.ModuleType | None, str | None]:
+def load(
+    directory: str | pathlib.Path = NATIVE_DIR, package: str | None = None
+) -> tuple[types.ModuleType | None, str | None]:
     """(module or None, message or None). Cached per directory."""
     directory = pathlib.Path(directory)
     key = str(directory)
@@ -114,8 +127,10 @@ def load(directory: str | pathlib.Path = NATIVE_DIR,
                 sys.modules[name] = module
         except (ImportError, OSError) as error:
             module = None
-            message = (f"Welkin's compiled module {path.name} could not be loaded in "
-                       f"{_python_tag()}: {error}; " + BUILD_HINT)
+            message = (
+                f"Welkin's compiled module {path.name} could not be loaded in "
+                f"{_python_tag()}: {error}; " + BUILD_HINT
+            )
     _cache[key] = (module, message)
     return module, message
 

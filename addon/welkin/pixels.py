@@ -1,9 +1,11 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Pixel layouts: the core and EXR files store images top row first (row 0 at the
 zenith); Blender's Image.pixels are bottom row first, RGBA. The flip happens here, once.
 
 Live updates at 2048 x 1024 move 8 M floats per image, so the RGBA buffers can be kept and
 reused (`out`): a fresh 32 MiB array costs its page faults every time.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -17,8 +19,9 @@ def rgba_buffer(width: int, height: int) -> npt.NDArray[np.float32]:
     return out
 
 
-def to_blender(image: npt.NDArray[np.floating],
-               out: npt.NDArray[np.float32] | None = None) -> npt.NDArray[np.float32]:
+def to_blender(
+    image: npt.NDArray[np.floating], out: npt.NDArray[np.float32] | None = None
+) -> npt.NDArray[np.float32]:
     """(H, W, 3) top-row-first -> flat float32 RGBA, bottom row first (alpha 1). Writes
     into `out` ((H, W, 4) float32, alpha already 1) when given."""
     h, w, _ = image.shape

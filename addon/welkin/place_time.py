@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Place and Time: the sun and the moon seen from a place at a moment, in the scene's frame.
 
 The Blender layer (blender/sky/place_time.py) fills a PlaceTime from World.welkin_place_time;
@@ -14,6 +15,7 @@ The time is local: the date's midnight plus `hours` (a float, so it can be keyfr
 beyond [0, 24) carry into the following or previous days, so an animation may cross
 midnight), at `utc_offset_h` hours from UTC (2 for central European summer time).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -33,20 +35,21 @@ class PlaceTime:
     year: int = 2026
     month: int = 6
     day: int = 21
-    hours: float = 12.0         # local time since the date's midnight, h
-    utc_offset_h: float = 0.0   # local time minus UTC, h (whole minutes)
-    latitude_deg: float = 0.0   # north positive
+    hours: float = 12.0  # local time since the date's midnight, h
+    utc_offset_h: float = 0.0  # local time minus UTC, h (whole minutes)
+    latitude_deg: float = 0.0  # north positive
     longitude_deg: float = 0.0  # east positive
-    height_m: float = 0.0       # above sea level
-    north_deg: float = 0.0      # the scene's north, counter-clockwise from +Y about +Z
+    height_m: float = 0.0  # above sea level
+    north_deg: float = 0.0  # the scene's north, counter-clockwise from +Y about +Z
 
 
 @dataclasses.dataclass(frozen=True)
 class Bodies:
     """Where the sun and the moon are, in the scene's frame (unit vectors, +Z up)."""
+
     sun_direction: tuple[float, float, float]
     moon_direction: tuple[float, float, float]
-    moon_irradiance_ratio: float    # the moon's irradiance over the sun's at 1 au
+    moon_irradiance_ratio: float  # the moon's irradiance over the sun's at 1 au
     moon_angular_radius_rad: float
     sun_from_moon: tuple[float, float, float]  # lights the moon's disc (its phase)
     place_and_time: dict[str, Any]  # welkin.sun_and_moon's dict, as the core gave it
@@ -59,19 +62,16 @@ def iso_time(place_time: PlaceTime) -> str:
     try:
         midnight = datetime.datetime(p.year, p.month, p.day)
     except ValueError as error:
-        raise ValueError(f"date: {p.year:04d}-{p.month:02d}-{p.day:02d} is not a date "
-                         f"({error})") from None
+        raise ValueError(f"date: {p.year:04d}-{p.month:02d}-{p.day:02d} is not a date ({error})") from None
     if not (math.isfinite(p.hours) and abs(p.hours) <= MAX_ABS_HOURS):
-        raise ValueError(f"hours: must be in [{-MAX_ABS_HOURS:g}, {MAX_ABS_HOURS:g}], got "
-                         f"{p.hours}")
+        raise ValueError(f"hours: must be in [{-MAX_ABS_HOURS:g}, {MAX_ABS_HOURS:g}], got {p.hours}")
     if not (math.isfinite(p.utc_offset_h) and abs(p.utc_offset_h) <= MAX_ABS_OFFSET_H):
         raise ValueError(f"utc_offset_h: must be in [-14, 14] h, got {p.utc_offset_h}")
     offset = datetime.timedelta(minutes=round(p.utc_offset_h * 60.0))
     try:
         local = midnight + datetime.timedelta(hours=p.hours)
     except OverflowError:
-        raise ValueError(f"hours: {p.hours} h from {midnight.date()} leaves the calendar") \
-            from None
+        raise ValueError(f"hours: {p.hours} h from {midnight.date()} leaves the calendar") from None
     return local.replace(tzinfo=datetime.timezone(offset)).isoformat(timespec="microseconds")
 
 
@@ -110,21 +110,29 @@ def bodies(native: ModuleType, place_time: PlaceTime) -> Bodies:
     p = place_time
     result = native.sun_and_moon(iso_time(p), p.latitude_deg, p.longitude_deg, p.height_m)
     moon = result["moon"]
-    return Bodies(to_scene(result["sun"]["direction"], p.north_deg),
-                  to_scene(moon["direction"], p.north_deg),
-                  float(moon["irradiance_ratio"]),
-                  math.radians(float(moon["angular_radius_deg"])),
-                  to_scene(moon["sun_direction_from_moon"], p.north_deg), result)
+    return Bodies(
+        to_scene(result["sun"]["direction"], p.north_deg),
+        to_scene(moon["direction"], p.north_deg),
+        float(moon["irradiance_ratio"]),
+        math.radians(float(moon["angular_radius_deg"])),
+        to_scene(moon["sun_direction_from_moon"], p.north_deg),
+        result,
+    )
 
 
-def moon_lamp(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401 (welkin.Atmosphere)
-              moon_direction: Any, irradiance_ratio: float, angular_radius_rad: float,  # noqa: ANN401
-              exposure: float) -> sky_compute.LampValues:
+def moon_lamp(
+    native: ModuleType,
+    atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
+    altitude_m: float,
+    moon_direction: Any,  # noqa: ANN401
+    irradiance_ratio: float,
+    angular_radius_rad: float,
+    exposure: float,
+) -> sky_compute.LampValues:
     """A moon lamp's values, as the sun lamp's (sky_compute.lamp_values) for a "sun" of the
     moon's size in the moon's direction, times the moon's irradiance ratio: the moon's
     light through the air (`welkin sun --time`'s moon_direct_irradiance_rgb_W_m2; the
     moonlight has the sun's spectrum). `atm` is changed: its sun's radius is the moon's."""
     atm.sun_angular_radius_rad = angular_radius_rad
-    lamp = sky_compute.lamp_values(native, atm, altitude_m, moon_direction,
-                                   exposure * irradiance_ratio)
+    lamp = sky_compute.lamp_values(native, atm, altitude_m, moon_direction, exposure * irradiance_ratio)
     return dataclasses.replace(lamp, angle_rad=2.0 * angular_radius_rad)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The render engine's plate, Blender-free: the scene description it renders, and the
 passes as Blender's render result wants them.
 
@@ -7,6 +8,7 @@ sky, sun disc and aerial perspective over the ground, no meshes. The core comput
 (docs/pipelines.md "Scene JSON") from plain values read off bpy, and reshapes the core's arrays
 (top row first, RGB) into Blender's pass rectangles (bottom row first, RGBA or RGB).
 """
+
 from __future__ import annotations
 
 import json
@@ -37,8 +39,9 @@ NO_CLOUD_DEPTH = 1e10
 PASS_NAMES = tuple(p[0] for p in PASSES)
 
 
-def camera_dict(matrix_rows: Iterable[Iterable[float]], data: Mapping[str, Any],
-                scale_length: float = 1.0) -> dict[str, Any]:
+def camera_dict(
+    matrix_rows: Iterable[Iterable[float]], data: Mapping[str, Any], scale_length: float = 1.0
+) -> dict[str, Any]:
     """The scene JSON's "camera" from an object's matrix_world (4 rows) and a dict of the
     Camera data's values (type, lens, sensor_*, ortho_scale, shift_*, clip_*, and for
     panoramas panorama_type and the latitude/longitude range in radians); the JSON itself
@@ -49,25 +52,54 @@ def camera_dict(matrix_rows: Iterable[Iterable[float]], data: Mapping[str, Any],
         for key in ("latitude_min", "latitude_max", "longitude_min", "longitude_max"):
             panorama[key + "_deg"] = math.degrees(float(data[key]))
     return scene_export.camera_dict(
-        matrix_rows, data["type"], data["lens"], data["sensor_width"], data["sensor_height"],
-        data["sensor_fit"], data["ortho_scale"], data["shift_x"], data["shift_y"],
-        data["clip_start"], data["clip_end"], scale_length=scale_length, panorama=panorama)
+        matrix_rows,
+        data["type"],
+        data["lens"],
+        data["sensor_width"],
+        data["sensor_height"],
+        data["sensor_fit"],
+        data["ortho_scale"],
+        data["shift_x"],
+        data["shift_y"],
+        data["clip_start"],
+        data["clip_end"],
+        scale_length=scale_length,
+        panorama=panorama,
+    )
 
 
-def scene_json(atmosphere_json: str, origin_altitude_m: float, sun_direction: Iterable[float],
-               exposure: float, method: str, camera: dict[str, Any],
-               resolution: Sequence[int], clouds: dict[str, Any] | None = None,
-               color_space: str = "rec709") -> str:
+def scene_json(
+    atmosphere_json: str,
+    origin_altitude_m: float,
+    sun_direction: Iterable[float],
+    exposure: float,
+    method: str,
+    camera: dict[str, Any],
+    resolution: Sequence[int],
+    clouds: dict[str, Any] | None = None,
+    color_space: str = "rec709",
+) -> str:
     """The scene description's JSON text (scene_export.scene_dict's). `atmosphere_json`:
     Atmosphere.to_json_string() (written in full, so the file reproduces the frame);
     `resolution`: (x, y, percentage); `color_space`: of the passes (the working space)."""
-    return json.dumps(scene_export.scene_dict(json.loads(atmosphere_json), origin_altitude_m,
-                                              sun_direction, exposure, method, camera,
-                                              resolution, clouds=clouds, color_space=color_space))
+    return json.dumps(
+        scene_export.scene_dict(
+            json.loads(atmosphere_json),
+            origin_altitude_m,
+            sun_direction,
+            exposure,
+            method,
+            camera,
+            resolution,
+            clouds=clouds,
+            color_space=color_space,
+        )
+    )
 
 
-def pass_rect(np: ModuleType, plate: Mapping[str, Any], source: str, channels: int,
-              rows: Sequence[int] | None = None) -> npt.NDArray[numpy.float32]:
+def pass_rect(
+    np: ModuleType, plate: Mapping[str, Any], source: str, channels: int, rows: Sequence[int] | None = None
+) -> npt.NDArray[numpy.float32]:
     """One pass as Blender's rect: (n, channels) float32, bottom row first, for the plate's
     rows [r0, r1) counted from the top (`rows`, default all). A `source` the plate lacks
     (the cloud passes of a clear sky): 0 colour and alpha; depth NO_CLOUD_DEPTH."""

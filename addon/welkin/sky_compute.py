@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Turning a SkyRequest into the world's images and the sun lamp's values, by calling the
 compiled module (never by computing physics here).
 
@@ -14,6 +15,7 @@ direct irradiance of the sun's disc at the observer, welkin.sun(...).direct_irra
 the irradiance divided by that (so the colour stays within [0, 1]); its angle is the sun's
 angular diameter.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -34,7 +36,7 @@ from . import sky_request
 class LampValues:
     color: tuple[float, ...]  # linear RGB of the request's colour space, max channel 1
     strength_w_m2: float  # Blender sun strength (irradiance), W m^-2
-    angle_rad: float      # angular diameter of the sun's disc
+    angle_rad: float  # angular diameter of the sun's disc
 
 
 @dataclasses.dataclass
@@ -45,20 +47,21 @@ class DiscModel:
     (mu: the cosine of the heliocentric angle, sun.hpp), linear RGB (the request's colour
     space) W m^-2 sr^-1 times
     the exposure; its integral over the visible disc is the lamp's direct irradiance."""
+
     direction: tuple[float, float, float]  # unit vector towards the disc's centre
-    radius_rad: float                       # angular radius of the disc
-    horizon_z: float                        # z of the horizon's direction (0 on the ground)
-    coefficients: npt.NDArray[np.float64]   # (DEGREE + 1, 3)
+    radius_rad: float  # angular radius of the disc
+    horizon_z: float  # z of the horizon's direction (0 on the ground)
+    coefficients: npt.NDArray[np.float64]  # (DEGREE + 1, 3)
 
     DEGREE = 5
 
 
 @dataclasses.dataclass
 class SkyResult:
-    sky: npt.NDArray[np.float32]   # (H, W, 3) float32, top row first, no disc, x exposure
-    disc: DiscModel | None         # None: no disc shown (or the sun below the horizon)
+    sky: npt.NDArray[np.float32]  # (H, W, 3) float32, top row first, no disc, x exposure
+    disc: DiscModel | None  # None: no disc shown (or the sun below the horizon)
     lamp: LampValues
-    method: str           # the module method that computed it
+    method: str  # the module method that computed it
     sun_elevation_rad: float
     seconds: float
     warnings: list[str]
@@ -66,9 +69,14 @@ class SkyResult:
     shadow_map: npt.NDArray[np.float32] | None = None  # (n, n) T, rows bottom first
 
 
-def lamp_values(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401 (welkin.Atmosphere)
-                sun_direction: Sequence[float], exposure: float,
-                color_space: str = "rec709") -> LampValues:
+def lamp_values(
+    native: ModuleType,
+    atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
+    altitude_m: float,
+    sun_direction: Sequence[float],
+    exposure: float,
+    color_space: str = "rec709",
+) -> LampValues:
     sun = native.sun(atm, altitude_m, sun_direction, color_space=color_space)
     rgb = np.asarray(sun.direct_irradiance_rgb, dtype=np.float64) * exposure
     strength = float(rgb.max()) if rgb.size else 0.0
@@ -84,9 +92,14 @@ def horizon_z(atm: Any, altitude_m: float) -> float:  # noqa: ANN401 (welkin.Atm
     return -math.sqrt(max(0.0, (r - radius) * (r + radius))) / r
 
 
-def disc_model(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401
-               sun_direction: Sequence[float], exposure: float,
-               color_space: str = "rec709") -> DiscModel | None:
+def disc_model(
+    native: ModuleType,
+    atm: Any,  # noqa: ANN401
+    altitude_m: float,
+    sun_direction: Sequence[float],
+    exposure: float,
+    color_space: str = "rec709",
+) -> DiscModel | None:
     """The disc for the world's nodes, or None when none of it is above the horizon."""
     x, y, z = (float(c) for c in sun_direction)
     norm = math.sqrt(x * x + y * y + z * z)
@@ -99,8 +112,7 @@ def disc_model(native: ModuleType, atm: Any, altitude_m: float,  # noqa: ANN401
     # limb-darkened by Neckel & Labs 1994, its integral over the visible disc the direct
     # irradiance.
     centre = np.asarray(sun.centre_radiance_rgb, dtype=np.float64) * exposure
-    coefficients = (np.asarray(sun.limb_coefficients_rgb, dtype=np.float64)
-                    * centre[:, None]).T.copy()
+    coefficients = (np.asarray(sun.limb_coefficients_rgb, dtype=np.float64) * centre[:, None]).T.copy()
     return DiscModel(direction, alpha, horizon_z(atm, altitude_m), coefficients)
 
 
@@ -114,12 +126,14 @@ def shaded_lamp(lamp: LampValues, transmittance: float) -> LampValues:
     return dataclasses.replace(lamp, strength_w_m2=lamp.strength_w_m2 * t)
 
 
-def lamp_transmittance(native: ModuleType, shadow_json: str,
-                       progress: Callable[[float], bool] | None = None) -> float:
+def lamp_transmittance(
+    native: ModuleType, shadow_json: str, progress: Callable[[float], bool] | None = None
+) -> float:
     """The clouds' transmittance towards the sun at the origin of `shadow_json` (a scene
     description whose origin is the scene's: update.shadow_scene_json)."""
-    t = native.cloud_transmittance(native.SceneDescription.from_json_string(shadow_json),
-                                   np.zeros((1, 3)), progress=progress)
+    t = native.cloud_transmittance(
+        native.SceneDescription.from_json_string(shadow_json), np.zeros((1, 3)), progress=progress
+    )
     return float(t[0])
 
 
@@ -127,8 +141,9 @@ def lamp_for(native: ModuleType, request: sky_request.SkyRequest) -> LampValues:
     """The lamp's values alone for `request` (no images): cheap."""
     sky_request.validate(request, native)
     atm = sky_request.build_atmosphere(request, native)
-    return lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure,
-                       request.color_space)
+    return lamp_values(
+        native, atm, request.altitude_m, request.sun_direction, request.exposure, request.color_space
+    )
 
 
 def sun_elevation_rad(sun_direction: Sequence[float]) -> float:
@@ -136,20 +151,30 @@ def sun_elevation_rad(sun_direction: Sequence[float]) -> float:
     return math.atan2(z, math.hypot(x, y))
 
 
-def _warnings(atm: Any,  # noqa: ANN401 (welkin.Atmosphere: the compiled module has no stub)
-              request: sky_request.SkyRequest) -> tuple[float, list[str]]:
+def _warnings(
+    atm: Any,  # noqa: ANN401 (welkin.Atmosphere: the compiled module has no stub)
+    request: sky_request.SkyRequest,
+) -> tuple[float, list[str]]:
     elevation = sun_elevation_rad(request.sun_direction)
     if elevation < -float(atm.sun_angular_radius_rad):
-        return elevation, [f"the sun is {math.degrees(-elevation):.1f} degrees below the horizon: "
-                           f"the sun lamp gets strength 0 and the sky shows twilight"]
+        return elevation, [
+            f"the sun is {math.degrees(-elevation):.1f} degrees below the horizon: "
+            f"the sun lamp gets strength 0 and the sky shows twilight"
+        ]
     return elevation, []
 
 
-def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool = True,
-            scene_json: str | None = None, shadow_json: str | None = None,
-            shade_lamp: bool = True,
-            shadow_map: Callable[[str], npt.NDArray[np.float32]] | None = None,
-            progress: Callable[[float], bool] | None = None) -> SkyResult:
+def compute(
+    native: ModuleType,
+    request: sky_request.SkyRequest,
+    *,
+    disc: bool = True,
+    scene_json: str | None = None,
+    shadow_json: str | None = None,
+    shade_lamp: bool = True,
+    shadow_map: Callable[[str], npt.NDArray[np.float32]] | None = None,
+    progress: Callable[[float], bool] | None = None,
+) -> SkyResult:
     """SkyResult for `request`; ValueError naming the parameter for bad input.
 
     `scene_json`: the scene description of the sky with its clouds (its origin at the
@@ -170,42 +195,64 @@ def compute(native: ModuleType, request: sky_request.SkyRequest, *, disc: bool =
     transmittance = None
     if scene_json is not None:
         sky, transmittance = native.scene_sky_image(
-            native.SceneDescription.from_json_string(scene_json), request.width, sun_disc=False,
-            return_transmittance=True, progress=progress, ground=request.ground)
+            native.SceneDescription.from_json_string(scene_json),
+            request.width,
+            sun_disc=False,
+            return_transmittance=True,
+            progress=progress,
+            ground=request.ground,
+        )
     else:
-        sky = native.sky_image(atm, request.altitude_m, request.sun_direction, request.width,
-                               method, "rgb", sun_disc=False, exposure=request.exposure,
-                               ground=request.ground, color_space=request.color_space)
+        sky = native.sky_image(
+            atm,
+            request.altitude_m,
+            request.sun_direction,
+            request.width,
+            method,
+            "rgb",
+            sun_disc=False,
+            exposure=request.exposure,
+            ground=request.ground,
+            color_space=request.color_space,
+        )
         sky = with_moonlit_sky(native, request, atm, method, sky, request.color_space)
     model = None
     if disc:
-        model = disc_model(native, atm, request.altitude_m, request.sun_direction,
-                           request.exposure, request.color_space)
+        model = disc_model(
+            native, atm, request.altitude_m, request.sun_direction, request.exposure, request.color_space
+        )
         if model is not None and transmittance is not None:
             model.coefficients *= _pixel_at(native, transmittance, model.direction)
-    lamp = lamp_values(native, atm, request.altitude_m, request.sun_direction, request.exposure,
-                       request.color_space)
+    lamp = lamp_values(
+        native, atm, request.altitude_m, request.sun_direction, request.exposure, request.color_space
+    )
     shade, ground = 1.0, None
     if shadow_json is not None and shade_lamp:
         shade = lamp_transmittance(native, shadow_json)
         lamp = shaded_lamp(lamp, shade)
     if shadow_json is not None and shadow_map is not None:
         ground = shadow_map(shadow_json)
-    return SkyResult(sky, model, lamp, method, elevation, time.perf_counter() - start,
-                     warnings, shade, ground)
+    return SkyResult(
+        sky, model, lamp, method, elevation, time.perf_counter() - start, warnings, shade, ground
+    )
 
 
-def _pixel_at(native: ModuleType, image: npt.NDArray[np.float32],
-              direction: Sequence[float]) -> float:
+def _pixel_at(native: ModuleType, image: npt.NDArray[np.float32], direction: Sequence[float]) -> float:
     """The value of an (H, W) top-row-first equirectangular image at `direction`."""
     h, w = image.shape[:2]
     u, v = native.direction_to_equirect(np.asarray(direction, dtype=np.float64))
     return float(image[min(h - 1, int((1.0 - v) * h)), min(w - 1, int(u * w) % w)])
 
 
-def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
-         sun_disc: bool = True, scene_json: str | None = None,
-         progress: Callable[[float], bool] | None = None) -> npt.NDArray[np.float32]:
+def hdri(
+    native: ModuleType,
+    request: sky_request.SkyRequest,
+    width: int,
+    *,
+    sun_disc: bool = True,
+    scene_json: str | None = None,
+    progress: Callable[[float], bool] | None = None,
+) -> npt.NDArray[np.float32]:
     """(H, W, 3) float32, top row first: the whole sky as an HDRI (with the disc unless
     sun_disc is False), for export. `scene_json`: the cloudy sky's scene description (as
     for compute): the HDRI is then the world's cloudy sky, the clouds composited over it
@@ -220,34 +267,65 @@ def hdri(native: ModuleType, request: sky_request.SkyRequest, width: int, *,
         scene = json.loads(scene_json)
         scene["color_space"] = "rec709"
         image: npt.NDArray[np.float32] = native.scene_sky_image(
-            native.SceneDescription.from_json_string(json.dumps(scene)), width, sun_disc=sun_disc,
-            progress=progress)
+            native.SceneDescription.from_json_string(json.dumps(scene)),
+            width,
+            sun_disc=sun_disc,
+            progress=progress,
+        )
         return image
     method = sky_request.resolve_method(request.method, native)
     atm = sky_request.build_atmosphere(request, native)
-    sky = native.sky_image(atm, request.altitude_m, request.sun_direction, width, method,
-                           "rgb", sun_disc=sun_disc, exposure=request.exposure,
-                           ground=request.ground)
+    sky = native.sky_image(
+        atm,
+        request.altitude_m,
+        request.sun_direction,
+        width,
+        method,
+        "rgb",
+        sun_disc=sun_disc,
+        exposure=request.exposure,
+        ground=request.ground,
+    )
     sky = with_moonlit_sky(native, dataclasses.replace(request, width=width), atm, method, sky, "rec709")
     if sun_disc and request.moon_direction and request.sun_from_moon:
         # The moon's disc with its phase, energy-exact, as welkin.sky_image_at draws it.
         sky = sky + native.moon_disc_image(
-            atm, request.altitude_m, request.moon_direction, request.sun_from_moon,
-            request.moon_angular_radius_rad, request.moon_irradiance_ratio, width,
-            exposure=request.exposure)
+            atm,
+            request.altitude_m,
+            request.moon_direction,
+            request.sun_from_moon,
+            request.moon_angular_radius_rad,
+            request.moon_irradiance_ratio,
+            width,
+            exposure=request.exposure,
+        )
     return sky
 
 
-def with_moonlit_sky(native: ModuleType, request: sky_request.SkyRequest,
-                     atm: Any, method: str,  # noqa: ANN401 (welkin.Atmosphere)
-                     sky: npt.NDArray[np.float32], color_space: str) -> npt.NDArray[np.float32]:
+def with_moonlit_sky(
+    native: ModuleType,
+    request: sky_request.SkyRequest,
+    atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
+    method: str,
+    sky: npt.NDArray[np.float32],
+    color_space: str,
+) -> npt.NDArray[np.float32]:
     """`sky` plus the moon's sky when the request has a moon (Place and Time): the same
     method's sky, in `color_space`, for a "sun" in the moon's direction times the moon's
     irradiance ratio, as the core composes it (night/moonlit_sky.cpp: every method's
     radiance is linear in the solar irradiance). The moon's disc is not drawn."""
     if not request.moon_direction or not request.moon_irradiance_ratio > 0.0:
         return sky
-    moonlit = native.sky_image(atm, request.altitude_m, request.moon_direction, request.width,
-                               method, "rgb", sun_disc=False, exposure=request.exposure,
-                               ground=request.ground, color_space=color_space)
+    moonlit = native.sky_image(
+        atm,
+        request.altitude_m,
+        request.moon_direction,
+        request.width,
+        method,
+        "rgb",
+        sun_disc=False,
+        exposure=request.exposure,
+        ground=request.ground,
+        color_space=color_space,
+    )
     return sky + np.float32(request.moon_irradiance_ratio) * moonlit

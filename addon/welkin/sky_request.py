@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A sky request: everything that decides the world image, as plain data.
 
 The Blender layer fills a SkyRequest from the world's Welkin settings and the scene (the
@@ -12,6 +13,7 @@ be given as its optical depth at 550 nm, or as Preetham's turbidity (the core co
 it); the aerosol multiplier then scales that. Scaling a coefficient is not new physics:
 the core still computes every number.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -19,8 +21,16 @@ import math
 from types import ModuleType
 from typing import Any
 
-FALLBACK_PRESETS = ("clear_day", "clear", "hazy", "polluted", "desert_dust", "maritime", "mars",
-                    "bruneton2017")
+FALLBACK_PRESETS = (
+    "clear_day",
+    "clear",
+    "hazy",
+    "polluted",
+    "desert_dust",
+    "maritime",
+    "mars",
+    "bruneton2017",
+)
 # Methods the add-on offers. "reference" (Monte-Carlo, hours at 2048 wide) is left to the
 # CLI and the module: a live sky must not freeze Blender.
 LIVE_METHODS = ("auto", "analytic", "lut", "raymarch")
@@ -34,20 +44,20 @@ COLOR_SPACES = ("rec709", "rec2020", "acescg")
 @dataclasses.dataclass(frozen=True)
 class SkyRequest:
     preset: str = "clear_day"
-    air_density: float = 1.0        # x Rayleigh scattering
-    aerosol_density: float = 1.0    # x Mie scattering and extinction
+    air_density: float = 1.0  # x Rayleigh scattering
+    aerosol_density: float = 1.0  # x Mie scattering and extinction
     aerosol_optical_depth: float = -1.0  # at 550 nm, in [0, 10]; < 0: the preset's
-    turbidity: float = -1.0         # Preetham's T in [1, 20], instead; < 0: not used
-    ozone_density: float = 1.0      # x ozone absorption
-    ground_albedo: float = -1.0     # < 0: the preset's
-    altitude_m: float = 0.0         # observer above the ground, m (>= 0)
+    turbidity: float = -1.0  # Preetham's T in [1, 20], instead; < 0: not used
+    ozone_density: float = 1.0  # x ozone absorption
+    ground_albedo: float = -1.0  # < 0: the preset's
+    altitude_m: float = 0.0  # observer above the ground, m (>= 0)
     sun_direction: tuple[float, ...] = (0.0, 0.0, 1.0)  # towards the sun, Z up
-    width: int = 1024               # equirect width; height = width / 2
+    width: int = 1024  # equirect width; height = width / 2
     method: str = "auto"
     exposure: float = 1.0
-    ground: bool = True             # the lit ground below the horizon (False: black)
-    spectral: bool = False          # 48 wavelengths (exact colour) instead of the default 4
-    color_space: str = "rec709"     # linear RGB of every colour: rec709, rec2020, acescg
+    ground: bool = True  # the lit ground below the horizon (False: black)
+    spectral: bool = False  # 48 wavelengths (exact colour) instead of the default 4
+    color_space: str = "rec709"  # linear RGB of every colour: rec709, rec2020, acescg
     # The moon's light (Place and Time, place_time.py): the sky adds the same method's sky
     # for a "sun" in the moon's direction times the moon's irradiance ratio; (): no moon.
     moon_direction: tuple[float, ...] = ()
@@ -76,21 +86,21 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
             raise ValueError(f"{name}: must be in [0, 100], got {value}")
     aod, turbidity = request.aerosol_optical_depth, request.turbidity
     if not (math.isfinite(aod) and aod <= 10.0):
-        raise ValueError(f"aerosol_optical_depth: must be in [0, 10] (or < 0 for the preset's), "
-                         f"got {aod}")
+        raise ValueError(f"aerosol_optical_depth: must be in [0, 10] (or < 0 for the preset's), got {aod}")
     if not (math.isfinite(turbidity) and (turbidity < 0.0 or 1.0 <= turbidity <= 20.0)):
         raise ValueError(f"turbidity: must be in [1, 20] (or < 0: not used), got {turbidity}")
     if not (request.ground_albedo < 0.0 or request.ground_albedo <= 1.0):
-        raise ValueError(f"ground_albedo: must be in [0, 1] (or < 0 for the preset's), got "
-                         f"{request.ground_albedo}")
+        raise ValueError(
+            f"ground_albedo: must be in [0, 1] (or < 0 for the preset's), got {request.ground_albedo}"
+        )
     if not (math.isfinite(request.altitude_m) and request.altitude_m >= 0.0):
         raise ValueError(f"altitude_m: must be >= 0 m, got {request.altitude_m}")
     if request.width not in WIDTHS:
-        raise ValueError(f"width: must be one of {', '.join(map(str, WIDTHS))}, got "
-                         f"{request.width}")
+        raise ValueError(f"width: must be one of {', '.join(map(str, WIDTHS))}, got {request.width}")
     if request.color_space not in COLOR_SPACES:
-        raise ValueError(f"color_space: must be one of {', '.join(COLOR_SPACES)}, got "
-                         f"{request.color_space!r}")
+        raise ValueError(
+            f"color_space: must be one of {', '.join(COLOR_SPACES)}, got {request.color_space!r}"
+        )
     if not (math.isfinite(request.exposure) and 0.0 < request.exposure <= 1e6):
         raise ValueError(f"exposure: must be in (0, 1e6], got {request.exposure}")
     s = request.sun_direction
@@ -99,10 +109,8 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
     m = request.moon_direction
     if m and (len(m) != 3 or not all(math.isfinite(c) for c in m) or math.hypot(*m) == 0.0):
         raise ValueError(f"moon_direction: must be a finite non-zero vector, got {tuple(m)}")
-    if not (math.isfinite(request.moon_irradiance_ratio)
-            and 0.0 <= request.moon_irradiance_ratio <= 1e-3):
-        raise ValueError(f"moon_irradiance_ratio: must be in [0, 1e-3], got "
-                         f"{request.moon_irradiance_ratio}")
+    if not (math.isfinite(request.moon_irradiance_ratio) and 0.0 <= request.moon_irradiance_ratio <= 1e-3):
+        raise ValueError(f"moon_irradiance_ratio: must be in [0, 1e-3], got {request.moon_irradiance_ratio}")
     resolve_method(request.method, native)
 
 
@@ -123,11 +131,13 @@ def build_atmosphere(request: SkyRequest, native: ModuleType) -> Any:  # noqa: A
     applied (validated by the core), at the
     default four wavelengths or, `spectral`, at 360..830 nm every 10 nm (48; the colour the
     default's fitted conversion approximates, at several times the cost)."""
-    atm = (native.Atmosphere.preset(request.preset, native.spectral_wavelengths_nm())
-           if request.spectral else native.Atmosphere.preset(request.preset))
+    atm = (
+        native.Atmosphere.preset(request.preset, native.spectral_wavelengths_nm())
+        if request.spectral
+        else native.Atmosphere.preset(request.preset)
+    )
     if request.turbidity >= 0.0:
-        atm.set_aerosol_optical_depth(
-            native.preetham_turbidity_to_aerosol_optical_depth(request.turbidity))
+        atm.set_aerosol_optical_depth(native.preetham_turbidity_to_aerosol_optical_depth(request.turbidity))
     elif request.aerosol_optical_depth >= 0.0:
         atm.set_aerosol_optical_depth(request.aerosol_optical_depth)
     if request.air_density != 1.0:
@@ -149,7 +159,9 @@ def observer_altitude(origin_altitude_m: float, camera_z_m: float) -> tuple[floa
     None); an observer below the ground is put on it, with a warning."""
     altitude = float(origin_altitude_m) + float(camera_z_m)
     if altitude < 0.0:
-        return 0.0, (f"the camera is {-altitude:.3g} m below the ground (origin altitude "
-                     f"{origin_altitude_m:.6g} m + camera height {camera_z_m:.6g} m): the sky "
-                     f"is computed for an observer on the ground (0 m)")
+        return 0.0, (
+            f"the camera is {-altitude:.3g} m below the ground (origin altitude "
+            f"{origin_altitude_m:.6g} m + camera height {camera_z_m:.6g} m): the sky "
+            f"is computed for an observer on the ground (0 m)"
+        )
     return altitude, None

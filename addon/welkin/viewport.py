@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The viewport preview's camera and schedule, Blender-free (blender/engine/viewport.py
 draws it).
 
@@ -29,6 +30,7 @@ widened to the region, its frame inside), whose pixels in the frame are the scen
 camera's. Nothing here is physics: the plate comes from the core (welkin.
 CameraPlateRenderer), the add-on only says which camera looks.
 """
+
 from __future__ import annotations
 
 import math
@@ -51,9 +53,14 @@ def _rigid_inverse(m: list[list[float]]) -> list[list[float]]:
     return out + [[0.0, 0.0, 0.0, 1.0]]
 
 
-def camera_from_view(view_matrix: Iterable[Iterable[float]],
-                     window_matrix: Iterable[Iterable[float]], is_perspective: bool,
-                     width: int, height: int, scale_length: float = 1.0) -> dict[str, Any]:
+def camera_from_view(
+    view_matrix: Iterable[Iterable[float]],
+    window_matrix: Iterable[Iterable[float]],
+    is_perspective: bool,
+    width: int,
+    height: int,
+    scale_length: float = 1.0,
+) -> dict[str, Any]:
     """The scene JSON's "camera" (docs/pipelines.md "Scene JSON") that sees what a viewport region of
     width x height pixels sees, from its view_matrix and window_matrix (4 rows each, in
     scene units; see the module's docstring). ValueError naming the matrix when it is not
@@ -65,8 +72,10 @@ def camera_from_view(view_matrix: Iterable[Iterable[float]],
     if not all(math.isfinite(x) for row in p + v for x in row):
         raise ValueError("window_matrix / view_matrix: must be finite")
     if not (p[0][0] > 0.0 and p[1][1] > 0.0):
-        raise ValueError(f"window_matrix: expected a projection with positive scales, got "
-                         f"P00 = {p[0][0]:g}, P11 = {p[1][1]:g}")
+        raise ValueError(
+            f"window_matrix: expected a projection with positive scales, got "
+            f"P00 = {p[0][0]:g}, P11 = {p[1][1]:g}"
+        )
     s = float(scale_length)
     world = _rigid_inverse(v)
     aspect = height / width
@@ -74,23 +83,39 @@ def camera_from_view(view_matrix: Iterable[Iterable[float]],
         n = p[2][3] / (p[2][2] - 1.0)
         f = p[2][3] / (p[2][2] + 1.0)
         cam: dict[str, Any] = {
-            "type": "PERSP", "lens_mm": p[0][0] * SENSOR_WIDTH_MM / 2.0,
-            "ortho_scale": 1.0, "shift_x": p[0][2] / 2.0, "shift_y": p[1][2] * aspect / 2.0}
+            "type": "PERSP",
+            "lens_mm": p[0][0] * SENSOR_WIDTH_MM / 2.0,
+            "ortho_scale": 1.0,
+            "shift_x": p[0][2] / 2.0,
+            "shift_y": p[1][2] * aspect / 2.0,
+        }
     else:
         # Blender's viewport clips orthographic views from -clip_end / 2 (behind the eye):
         # the rays start on the view's plane (camera.hpp), so only a valid range is kept.
         n = (p[2][3] + 1.0) / p[2][2]
         f = (p[2][3] - 1.0) / p[2][2]
-        cam = {"type": "ORTHO", "lens_mm": 50.0, "ortho_scale": 2.0 / p[0][0] * s,
-               "shift_x": -p[0][3] / 2.0, "shift_y": -p[1][3] * aspect / 2.0}
+        cam = {
+            "type": "ORTHO",
+            "lens_mm": 50.0,
+            "ortho_scale": 2.0 / p[0][0] * s,
+            "shift_x": -p[0][3] / 2.0,
+            "shift_y": -p[1][3] * aspect / 2.0,
+        }
     n, f = n * s, f * s
     if not (0.0 < n < f):
         n, f = 1e-3, max(f, 1.0)
     for r in range(3):
         world[r][3] *= s
-    cam.update({"matrix_world": world, "sensor_width_mm": SENSOR_WIDTH_MM,
-                "sensor_height_mm": SENSOR_WIDTH_MM * aspect, "sensor_fit": "HORIZONTAL",
-                "clip_start_m": n, "clip_end_m": f})
+    cam.update(
+        {
+            "matrix_world": world,
+            "sensor_width_mm": SENSOR_WIDTH_MM,
+            "sensor_height_mm": SENSOR_WIDTH_MM * aspect,
+            "sensor_fit": "HORIZONTAL",
+            "clip_start_m": n,
+            "clip_end_m": f,
+        }
+    )
     return cam
 
 

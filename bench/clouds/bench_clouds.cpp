@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Speed and accuracy of the cloud lighting, side by side in one run:
 //  * a 2048 x 1024 equirectangular sky (lut) clear and with a procedural cumulus layer;
 //  * the fast march against the path-tracing reference on three clouds (a thin wispy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Error against time for the fast cloud lighting, against the path-tracing reference.
 
     build/welkin_bench_clouds --csv /tmp/clouds.csv          # the figures (a few minutes)
@@ -14,6 +15,7 @@ march before the grid ("legacy", octaves), and the reference at
 1/64, 1/16 and 1/4 of its paths (its own noise for its time). The dotted line is the
 full reference's standard error: errors below it are not resolved.
 """
+
 import argparse
 import csv
 import pathlib
@@ -36,8 +38,10 @@ def main() -> int:
     rows = list(csv.DictReader(open(args.csv)))
     cases = [r["name"] for r in rows if r["kind"] == "truth"]
     if not cases:
-        print(f"{args.csv}: no reference rows (kind 'truth'); run welkin_bench_clouds without --sky-only",
-              file=sys.stderr)
+        print(
+            f"{args.csv}: no reference rows (kind 'truth'); run welkin_bench_clouds without --sky-only",
+            file=sys.stderr,
+        )
         return 1
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -54,12 +58,19 @@ def main() -> int:
         e = lambda rs: [100 * float(r["mean_abs_error"]) for r in rs]  # noqa: E731
         ax.plot(t(fast), e(fast), "o-", color="tab:blue", label="fast march (grid)")
         for r in fast:
-            ax.annotate(r["variant"].replace("fast ", ""), (float(r["time_s"]), 100 * float(r["mean_abs_error"])),
-                        textcoords="offset points", xytext=(4, 4), fontsize=7)
+            ax.annotate(
+                r["variant"].replace("fast ", ""),
+                (float(r["time_s"]), 100 * float(r["mean_abs_error"])),
+                textcoords="offset points",
+                xytext=(4, 4),
+                fontsize=7,
+            )
         ax.plot(t(octaves), e(octaves), "D", color="tab:green", label="fast march 96+8, Wrenninge octaves")
         ax.plot(t(legacy), e(legacy), "s", color="tab:gray", label="legacy (octaves, shadow ray per sample)")
         ax.plot(t(ref), e(ref), "^-", color="tab:red", label="reference, fewer paths")
-        ax.axhline(100 * float(truth["mean_abs_error"]), ls=":", color="tab:red", label="reference standard error")
+        ax.axhline(
+            100 * float(truth["mean_abs_error"]), ls=":", color="tab:red", label="reference standard error"
+        )
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("time per million rays (s, 2 cores)")

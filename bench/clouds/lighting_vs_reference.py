@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The fast cloud march against Welkin's path tracer under the add-on's own default lighting:
 the sun and sky of the `bruneton2017` atmosphere (the default preset, four wavelengths) at
 sun elevation 35 degrees, not a constant light.
@@ -24,6 +25,7 @@ per view, the same two over the shadow-side views, and the reference's own stand
 (from its paths, as a relative error of the mean). Tolerances from the issue: mean within
 10 %, shadow side within 15 %.
 """
+
 import argparse
 import csv
 import math
@@ -54,6 +56,7 @@ def write_vdb_cumulus(path, voxel_m=12.0):
     """Three overlapping Gaussian blobs (a flat-bottomed heap), FloatGrid "density" in 1/m,
     the grid's origin at the heap's centre. Returns its centre (0, 0, 0) in index space."""
     import pyopenvdb as vdb
+
     n = 64
     i = (np.arange(n) - (n - 1) / 2.0) * voxel_m
     x, y, z = np.meshgrid(i, i, i, indexing="ij")
@@ -81,12 +84,10 @@ def compare(name, clouds, atm, sun, views, shadow, paths):
     fast, _, _ = welkin.cloud_radiance(clouds, atm, 0.0, sun, views)
     t_fast = time.process_time() - t0
     t0 = time.process_time()
-    ref, _, _ = welkin.cloud_radiance(clouds, atm, 0.0, sun, views, method="reference", paths=paths,
-                                      seed=7)
+    ref, _, _ = welkin.cloud_radiance(clouds, atm, 0.0, sun, views, method="reference", paths=paths, seed=7)
     t_ref = time.process_time() - t0
     # A second, independent reference run: its difference from the first estimates the noise.
-    ref2, _, _ = welkin.cloud_radiance(clouds, atm, 0.0, sun, views, method="reference", paths=paths,
-                                       seed=8)
+    ref2, _, _ = welkin.cloud_radiance(clouds, atm, 0.0, sun, views, method="reference", paths=paths, seed=8)
     f, r, r2 = (np.asarray(a, np.float64)[:, GREEN] for a in (fast, ref, ref2))
     rel = f / r - 1.0
     noise_view = np.abs(r2 / r - 1.0) / math.sqrt(2.0)  # per view, one run's relative error
@@ -98,14 +99,26 @@ def compare(name, clouds, atm, sun, views, shadow, paths):
 
     bias, mae = stats(np.ones_like(f, bool))
     s_bias, s_mae = stats(shadow)
-    row = dict(case=name, views=len(f), shadow_views=int(shadow.sum()), bias=bias, mean_abs_error=mae,
-               shadow_bias=s_bias, shadow_mean_abs_error=s_mae,
-               reference_noise_per_view=float(np.median(noise_view)), paths=paths,
-               fast_cpu_s=t_fast, reference_cpu_s=t_ref)
-    print(f"{name}: {len(f)} views ({int(shadow.sum())} on the shadow side): bias {100 * bias:+.1f} %, "
-          f"mean |err| {100 * mae:.1f} %; shadow side bias {100 * s_bias:+.1f} %, mean |err| "
-          f"{100 * s_mae:.1f} %; reference noise per view (median) {100 * row['reference_noise_per_view']:.1f} %; "
-          f"CPU fast {t_fast:.2f} s, reference {t_ref:.1f} s", flush=True)
+    row = dict(
+        case=name,
+        views=len(f),
+        shadow_views=int(shadow.sum()),
+        bias=bias,
+        mean_abs_error=mae,
+        shadow_bias=s_bias,
+        shadow_mean_abs_error=s_mae,
+        reference_noise_per_view=float(np.median(noise_view)),
+        paths=paths,
+        fast_cpu_s=t_fast,
+        reference_cpu_s=t_ref,
+    )
+    print(
+        f"{name}: {len(f)} views ({int(shadow.sum())} on the shadow side): bias {100 * bias:+.1f} %, "
+        f"mean |err| {100 * mae:.1f} %; shadow side bias {100 * s_bias:+.1f} %, mean |err| "
+        f"{100 * s_mae:.1f} %; reference noise per view (median) {100 * row['reference_noise_per_view']:.1f} %; "
+        f"CPU fast {t_fast:.2f} s, reference {t_ref:.1f} s",
+        flush=True,
+    )
     return row, f, r, shadow
 
 
@@ -120,10 +133,12 @@ def main():
     rows, plots = [], []
 
     layer = welkin.CloudLayer()
-    views, _depth = case_views(layer, atm, sun, directions(np.arange(0.0, 360.0, 15.0),
-                                                           np.arange(12.0, 61.0, 6.0)))
-    row, f, r, shadow = compare("cumulus layer (from below)", layer, atm, sun, views,
-                                np.ones(len(views), bool), args.paths)
+    views, _depth = case_views(
+        layer, atm, sun, directions(np.arange(0.0, 360.0, 15.0), np.arange(12.0, 61.0, 6.0))
+    )
+    row, f, r, shadow = compare(
+        "cumulus layer (from below)", layer, atm, sun, views, np.ones(len(views), bool), args.paths
+    )
     rows.append(row)
     plots.append((row["case"], f, r, shadow))
 
@@ -145,8 +160,7 @@ def main():
         views, depth = case_views(vdb_cloud, atm, sun, grid)
         seen = views * depth[:, None]  # the point each view sees, from the origin
         shadow = (seen - centre) @ sun < 0.0
-        row, f, r, shadow = compare("VDB cumulus (side view)", vdb_cloud, atm, sun, views, shadow,
-                                    args.paths)
+        row, f, r, shadow = compare("VDB cumulus (side view)", vdb_cloud, atm, sun, views, shadow, args.paths)
         rows.append(row)
         plots.append((row["case"], f, r, shadow))
 
@@ -157,14 +171,17 @@ def main():
             w.writerows(rows)
     if args.plot:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+
         fig, axes = plt.subplots(1, len(plots), figsize=(5.2 * len(plots), 4.6))
         for ax, (name, f, r, shadow) in zip(np.atleast_1d(axes), plots):
             lim = [0.0, 1.05 * max(f.max(), r.max())]
             ax.plot(lim, lim, "k-", lw=0.8, label="equal")
-            ax.fill_between(lim, [0.85 * v for v in lim], [1.15 * v for v in lim], color="0.9",
-                            label="within 15 %")
+            ax.fill_between(
+                lim, [0.85 * v for v in lim], [1.15 * v for v in lim], color="0.9", label="within 15 %"
+            )
             ax.scatter(r[~shadow], f[~shadow], s=14, label="sunlit side")
             ax.scatter(r[shadow], f[shadow], s=14, marker="s", label="shadow side")
             ax.set_xlim(lim)
@@ -173,8 +190,11 @@ def main():
             ax.set_ylabel("fast march")
             ax.set_title(name, fontsize=10)
             ax.legend(fontsize=8)
-        fig.suptitle(f"Cloud lighting under the atmosphere's sun and sky (bruneton2017, sun "
-                     f"{SUN_ELEVATION_DEG:.0f} deg up), per view", fontsize=10)
+        fig.suptitle(
+            f"Cloud lighting under the atmosphere's sun and sky (bruneton2017, sun "
+            f"{SUN_ELEVATION_DEG:.0f} deg up), per view",
+            fontsize=10,
+        )
         fig.tight_layout()
         fig.savefig(args.plot, dpi=110)
         print(f"wrote {args.plot}")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Speed against error of the cloudy sky's upsampled cloud pass (bench/clouds/bench_clouds.cpp,
 "the cloudy sky"): time of a 2048 x 1024 `lut` sky with one default cumulus layer, with every
 ray marched (exact) and with the cloud pass upsampled at several settings (CloudUpsampling,
@@ -8,6 +9,7 @@ include/welkin/clouds/lighting.hpp), against the error of each against a converg
     /usr/bin/python3 bench/clouds/sky_speed_chart.py /tmp/sky.csv
         # -> bench/results/clouds_sky_speed.png + .csv   (Debian's python3-matplotlib)
 """
+
 import csv
 import pathlib
 import shutil
@@ -24,15 +26,24 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 def short(name):
     """A setting's label from its CSV name, cumulus_stride{s}_finest{f}_dT{t}_dL{l}_block{b}."""
-    fields = dict(part.split("=") for part in
-                  name.removeprefix("cumulus_").replace("stride", "stride=").replace("_finest", ",finest=")
-                  .replace("_dT", ",dT=").replace("_dL", ",dL=").replace("_block", ",block=").split(","))
+    fields = dict(
+        part.split("=")
+        for part in name.removeprefix("cumulus_")
+        .replace("stride", "stride=")
+        .replace("_finest", ",finest=")
+        .replace("_dT", ",dT=")
+        .replace("_dL", ",dL=")
+        .replace("_block", ",block=")
+        .split(",")
+    )
     if fields["stride"] == "1":
         return "exact"
     if fields["dT"] == "1" and fields["dL"] == "1":
         return "no refinement"
-    return (f"stride {fields['stride'] if fields['stride'] != '0' else 'auto'}, finest {fields['finest']}, "
-            f"dT {fields['dT']}, block {float(fields['block']):g} m")
+    return (
+        f"stride {fields['stride'] if fields['stride'] != '0' else 'auto'}, finest {fields['finest']}, "
+        f"dT {fields['dT']}, block {float(fields['block']):g} m"
+    )
 
 
 def main():

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The contact sheet of the cloud types (docs/clouds_types.png): each preset seen from the
 ground (looking 15 degrees up) and from above (12 km up, looking 30 degrees down), through
 the scene camera's plate (welkin.camera_plate, the WELKIN render engine's picture), tone
@@ -8,6 +9,7 @@ mapped (exposure per type, x / (1 + x), sRGB gamma); the march at 48 view steps 
 (needs numpy and Pillow: scripts/install_deps.sh installs Debian's python3-numpy, and
 python3-matplotlib brings python3-pil.)
 """
+
 import argparse
 import json
 import math
@@ -27,8 +29,13 @@ def camera(height_m, pitch_deg, fov_deg=70.0):
     # 90 + pitch degrees looks towards +Y, pitched up by `pitch`.
     a = math.radians(90.0 + pitch_deg)
     c, s = math.cos(a), math.sin(a)
-    return {"matrix_world": [[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, height_m], [0, 0, 0, 1]],
-            "type": "PERSP", "fov_deg": fov_deg, "sensor_width_mm": 36, "sensor_height_mm": 24}
+    return {
+        "matrix_world": [[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, height_m], [0, 0, 0, 1]],
+        "type": "PERSP",
+        "fov_deg": fov_deg,
+        "sensor_width_mm": 36,
+        "sensor_height_mm": 24,
+    }
 
 
 def render(cloud_type, view, width, coverage=None, detail=None):
@@ -39,10 +46,14 @@ def render(cloud_type, view, width, coverage=None, detail=None):
     if detail is not None:
         layer["detail_strength"] = detail
     cam = camera(20.0, 15.0) if view == "ground" else camera(12000.0, -30.0)
-    scene = {"version": 1, "atmosphere": "bruneton2017",
-             "sun": {"direction": [0.55, 0.35, 0.6]},
-             "camera": cam, "resolution": {"x": width, "y": height, "percentage": 100},
-             "clouds": {"layers": [layer], "lighting": {"max_steps": 48, "light_steps": 6}}}
+    scene = {
+        "version": 1,
+        "atmosphere": "bruneton2017",
+        "sun": {"direction": [0.55, 0.35, 0.6]},
+        "camera": cam,
+        "resolution": {"x": width, "y": height, "percentage": 100},
+        "clouds": {"layers": [layer], "lighting": {"max_steps": 48, "light_steps": 6}},
+    }
     plate = welkin.camera_plate(json.dumps(scene))
     return plate["combined"]
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Aerial perspective: Hillaire 2020's camera volume and the per-pixel march; see
 // aerial_perspective.hpp for what the passes mean.
 //

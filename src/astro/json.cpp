@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // place_and_time JSON (include/welkin/astro/json.hpp).
 #include "welkin/astro/json.hpp"
 

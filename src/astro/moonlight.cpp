@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Moonlight at the top of the atmosphere (include/welkin/astro/moonlight.hpp).
 #include "welkin/astro/moonlight.hpp"
 

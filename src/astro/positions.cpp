@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Apparent topocentric sun and moon (include/welkin/astro/positions.hpp has the method and
 // its sources).
 #include "welkin/astro/positions.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Civil time -> TT and UT1 (include/welkin/astro/time.hpp), with ERFA's calendar and
 // leap-second functions.
 #include "welkin/astro/time.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Aerosol optical depth and turbidity; see aerosol.hpp.
 #include "welkin/atmosphere/aerosol.hpp"
 

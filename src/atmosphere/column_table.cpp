@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Column densities for the reference path tracer; see the header for the two kinds of
 // constituent, the table's parametrisation and storage, and the accuracy.
 #include "welkin/atmosphere/column_table.hpp"

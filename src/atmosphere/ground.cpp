@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lit ground below the horizon; see ground.hpp.
 #include "welkin/atmosphere/ground.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON form of an Atmosphere.
 //
 // Schema (every key optional when "preset" is given; the preset fills what is missing):

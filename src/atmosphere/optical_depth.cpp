@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Accurate optical depth along a straight ray.
 //
 // The altitude along a ray from radius r with zenith cosine mu is

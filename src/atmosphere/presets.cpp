@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Built-in atmospheres. Each preset is a set of spectral models evaluated at the requested
 // wavelengths, so the same preset serves the three-channel and the spectral paths.
 //

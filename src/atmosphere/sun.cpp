@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun seen from the observer; see sun.hpp.
 #include "welkin/atmosphere/sun.hpp"
 

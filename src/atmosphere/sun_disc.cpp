@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun's disc as a radiance distribution; see sun_disc.hpp.
 #include "welkin/atmosphere/sun_disc.hpp"
 

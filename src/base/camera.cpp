@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera rays from Blender's camera description; see camera.hpp.
 //
 // The view plane is Blender's (BKE_camera_params_compute_viewplane): with the fitted

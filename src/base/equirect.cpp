@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Blender's equirectangular mapping; see equirect.hpp.
 //
 // Cycles (intern/cycles/kernel/camera/projection.h) writes it as

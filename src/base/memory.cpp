@@ -18,11 +18,11 @@ void check_frame_memory(int width, int height, double bytes_per_pixel, const std
     const double physical = physical_memory_bytes();
     const double needed = double(width) * double(height) * bytes_per_pixel;
     if (physical > 0.0 && needed > 0.5 * physical)
-        throw MemoryLimit("resolution",
-                          fmt::format("a {} x {} render needs {:.1f} GiB for its {}, more than half of "
-                                      "this machine's {:.1f} GiB of memory; lower resolution.percentage",
-                                      width, height, needed / double(1 << 30), what,
-                                      physical / double(1 << 30)));
+        throw MemoryLimit(
+            "resolution",
+            fmt::format("a {} x {} render needs {:.1f} GiB for its {}, more than half of "
+                        "this machine's {:.1f} GiB of memory; lower resolution.percentage",
+                        width, height, needed / double(1 << 30), what, physical / double(1 << 30)));
 }
 
 }  // namespace welkin

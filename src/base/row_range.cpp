@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // See row_range.hpp.
 #include "welkin/base/row_range.hpp"
 

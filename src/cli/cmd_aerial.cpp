@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `welkin aerial`: aerial-perspective passes for a rendered frame, from its scene
 // description and its depth (Blender's Z pass), as a multilayer OpenEXR with the layers
 // Welkin.AerialInscatter and Welkin.AerialTransmittance (R, G, B each).
@@ -46,7 +47,8 @@ int run_aerial(const AerialArgs& args) {
     const int width = scene.resolution.width(), height = scene.resolution.height();
     try {
         // Besides the core's buffers: the EXR image (6 floats a pixel), and its half copy.
-        check_frame_memory(width, height, kAerialPassBytesPerPixel + 6 * sizeof(float) + (args.half ? 6 * 2 : 0),
+        check_frame_memory(width, height,
+                           kAerialPassBytesPerPixel + 6 * sizeof(float) + (args.half ? 6 * 2 : 0),
                            "depth, aerial passes and EXR image");
     } catch (const InvalidArgument& e) {
         rethrow_as("--scene", e, args.scene);

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `welkin presets` and `welkin atmosphere`: list the built-in atmospheres, write one (or a
 // normalised JSON file) as JSON.
 #include <filesystem>

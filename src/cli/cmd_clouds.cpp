@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `welkin clouds`: the scene camera's cloud passes (cloud_passes.hpp) from a scene JSON with
 // "clouds", and optionally the render's depth (rays end at the geometry), as a multilayer
 // OpenEXR with Welkin.Clouds (R, G, B, A) and Welkin.CloudDepth (Z).

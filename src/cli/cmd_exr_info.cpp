@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `welkin exr-info`: what an EXR file holds, as JSON (size, channels and their statistics),
 // so that scripts and tests can check a render without an OpenEXR binding.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `welkin plate`: the scene camera's plate (camera_plate.hpp) from a scene JSON, as a
 // multilayer OpenEXR: RGB (Combined) plus the layers Welkin.Sky, Welkin.AerialInscatter,
 // Welkin.AerialTransmittance (R, G, B each), Welkin.Clouds (R, G, B, A), Welkin.CloudDepth

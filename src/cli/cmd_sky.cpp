@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `welkin sky`: render an equirectangular sky HDRI to OpenEXR.
 #include <algorithm>
 #include <charconv>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `welkin sun`: the sun at the observer, as JSON: transmittance, direct irradiance per
 // wavelength and in RGB (what a Blender sun lamp should carry so that sky and sun agree).
 #include <memory>

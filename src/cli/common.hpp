@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Pieces the `welkin` subcommands share: choosing an atmosphere, placing the sun, checking
 // an output path before any work, and the command registry.
 //

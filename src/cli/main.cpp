@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `welkin` command-line tool: sky HDRIs, sun radiometry and atmospheres without
 // Blender. Thin by design: it parses, calls the core, and reports.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Place-and-time options of `welkin sun` and `welkin sky` (place_and_time.hpp).
 #include "place_and_time.hpp"
 

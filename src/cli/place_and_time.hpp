@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // --time, --latitude, --longitude, --height: the sun's (and the moon's) position from a
 // place and a moment (welkin/astro/), for `welkin sun` and `welkin sky`.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Progress bar on stderr, and Ctrl-C as cancellation.
 //
 // TerminalProgress implements welkin::Progress for the CLI: it draws a bar on stderr once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cloud density sources: shared geometry; see clouds/density.hpp.
 #include "welkin/clouds/density.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A lazily filled grid of cloud optical depth; see clouds/depth_grid.hpp.
 #include "welkin/clouds/depth_grid.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The delta-Eddington slab along the sun line; see clouds/diffusion.hpp.
 #include "welkin/clouds/diffusion.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What lights a cloud; see clouds/illumination.hpp.
 #include "welkin/clouds/illumination.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fast cloud lighting; see clouds/lighting.hpp.
 #include "welkin/clouds/lighting.hpp"
 

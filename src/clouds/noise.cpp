@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tileable cloud noise; see clouds/noise.hpp.
 #include "welkin/clouds/noise.hpp"
 

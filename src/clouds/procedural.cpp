@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A procedural cloud layer; see procedural.hpp.
 #include "welkin/clouds/procedural.hpp"
 

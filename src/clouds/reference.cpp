@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reference cloud lighting by path tracing; see clouds/reference.hpp.
 #include "welkin/clouds/reference.hpp"
 

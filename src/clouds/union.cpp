@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The union of cloud density sources; see clouds/union.hpp.
 #include "welkin/clouds/union.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clouds from an OpenVDB file; see clouds/vdb.hpp.
 #include "welkin/clouds/vdb.hpp"
 

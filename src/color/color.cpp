@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Spectral radiance to linear RGB; see color.hpp for the two paths and their units.
 #include "welkin/color/color.hpp"
 
@@ -205,8 +206,7 @@ void SpectrumToRgb::convert(std::span<const float> spectra, std::span<float> rgb
                                   rgb_out[3 * i + j] = float(sum);
                               }
                               float* p = &rgb_out[3 * i];
-                              if (p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f)
-                                  gamut_map(p, 1, luminance_);
+                              if (p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f) gamut_map(p, 1, luminance_);
                           }
                       });
 }

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // XYZ -> linear RGB of the output colour spaces; sources and derivations in color_space.hpp.
 #include "welkin/color/color_space.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Gamut mapping at constant luminance toward the white point; see gamut.hpp.
 #include "welkin/color/gamut.hpp"
 

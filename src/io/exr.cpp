@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // OpenEXR reading and atomic writing; see io/exr.hpp.
 #include "welkin/io/exr.hpp"
 

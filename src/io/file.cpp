@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Bounded reads and atomic writes; see file.hpp.
 #include "welkin/io/file.hpp"
 

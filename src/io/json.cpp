@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON parsing with the key path of a failure, bounded file reads, atomic writes; see json.hpp.
 #include "welkin/io/json.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sky with the moon (include/welkin/night/moonlit_sky.hpp).
 #include "welkin/night/moonlit_sky.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.SceneDescription and welkin.aerial_perspective (include/welkin/scene/scene.hpp,
 // aerial_perspective.hpp): what the Blender add-on needs to turn a rendered frame's depth
 // into its aerial-perspective passes (EXR files in and out: exr_bindings.cpp). Thin: the

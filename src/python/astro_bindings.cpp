@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.sun_and_moon: the apparent sun and moon from a place and a moment
 // (include/welkin/astro/positions.hpp), as the dict `welkin sun --time` prints under
 // "place_and_time" (one schema: include/welkin/astro/json.hpp).

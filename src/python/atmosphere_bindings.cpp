@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.Atmosphere, welkin.DensityProfile and welkin.DensityLayer.
 //
 // An Atmosphere is plain data (include/welkin/atmosphere/atmosphere.hpp). Python reads and writes its

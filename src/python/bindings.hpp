@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal to the Python module: each bindings file registers one part of the `welkin`
 // module, and shares the few conversions they all need.
 //

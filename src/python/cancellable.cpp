@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Long core computations from Python: GIL released, Ctrl-C and progress callbacks live.
 //
 // The obvious design — a welkin::Progress whose report() takes the GIL and calls

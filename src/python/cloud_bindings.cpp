@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.CloudLayer, welkin.VdbClouds, welkin.cloud_radiance and welkin.sky_image: the cloud
 // density sources (include/welkin/clouds/procedural.hpp, clouds/vdb.hpp), their lighting
 // (clouds/lighting.hpp, clouds/reference.hpp) and the equirect sky with clouds (sky_image.hpp).

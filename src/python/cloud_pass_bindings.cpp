@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.cloud_passes: the scene camera's Welkin.Clouds and Welkin.CloudDepth passes
 // (include/welkin/render/cloud_passes.hpp) as numpy arrays. Thin: converts, releases the GIL,
 // calls the core.

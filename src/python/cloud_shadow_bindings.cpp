@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.cloud_transmittance: the clouds of a scene description, their transmittance
 // towards a distant light from many points (clouds/shadow.hpp). Thin: converts, releases
 // the GIL, calls the core.

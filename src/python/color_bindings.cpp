@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Conversions at the module's edges: spectra to RGB (color.hpp), the spectral-mode
 // wavelengths (atmosphere.hpp) and Blender's equirectangular mapping (equirect.hpp),
 // vectorised over numpy arrays.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.write_exr, welkin.read_exr: the core's OpenEXR files (include/welkin/io/exr.hpp)
 // from and to numpy arrays, top row first. Thin: the core's writer is atomic and never
 // replaces a file unless asked.

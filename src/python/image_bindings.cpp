@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.sky_image, welkin.sun_disc_image: the core's equirectangular sky images
 // (include/welkin/render/sky_image.hpp) as numpy arrays, for the Blender add-on and scripts.
 //

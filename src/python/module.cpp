@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `welkin` Python module: the module object, its error mapping and the small helpers
 // the other bindings files share. Each part of the API registers itself from its own file:
 //   atmosphere_bindings.cpp  welkin.Atmosphere, DensityProfile, DensityLayer

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.camera_plate: the scene camera's plate (camera_plate.hpp) as numpy arrays.
 #include <memory>
 #include <optional>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.scene_sky_image: the equirectangular sky of a scene description, its clouds
 // included, as `welkin sky --scene` renders it (sky_image.hpp): the scene's atmosphere, sun,
 // observer at the scene origin, sky method and options, exposure, and its clouds (layers and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.sky_radiance and welkin.methods: the sky methods of include/welkin/sky/method.hpp.
 //
 // The hot path copies nothing it does not have to: a C-contiguous float64 (N, 3) array

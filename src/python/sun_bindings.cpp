@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // welkin.sun: the sun as seen from the observer (include/welkin/atmosphere/sun.hpp), so that a sun
 // lamp and the sky agree.
 #include <memory>

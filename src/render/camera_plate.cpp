@@ -1,6 +1,6 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camera plate: sky, sun disc and aerial perspective over the ground; see
 // camera_plate.hpp.
-#include "welkin/base/memory.hpp"
 #include "welkin/render/camera_plate.hpp"
 
 #include <algorithm>
@@ -19,6 +19,7 @@
 #include "welkin/atmosphere/sun_disc.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/base/memory.hpp"
 #include "welkin/color/color.hpp"
 #include "welkin/render/cloud_passes.hpp"
 #include "welkin/sky/auto.hpp"

@@ -1,5 +1,5 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera cloud passes; see cloud_passes.hpp.
-#include "welkin/base/memory.hpp"
 #include "welkin/render/cloud_passes.hpp"
 
 #include <algorithm>
@@ -14,6 +14,7 @@
 #include "welkin/aerial/aerial_perspective.hpp"
 #include "welkin/base/camera.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/base/memory.hpp"
 #include "welkin/clouds/illumination.hpp"
 #include "welkin/clouds/lighting.hpp"
 #include "welkin/color/color.hpp"

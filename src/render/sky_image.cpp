@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Equirectangular sky images with the sun's disc; see sky_image.hpp.
 #include "welkin/render/sky_image.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A scene's clouds; see scene/clouds.hpp.
 #include "welkin/scene/clouds.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON form of a SceneDescription (schema in docs/pipelines.md, "Scene JSON").
 //
 //   {

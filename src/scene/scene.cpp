@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The scene description's checks and small conversions; see scene.hpp. The JSON form is
 // in src/scene/json.cpp.
 #include "welkin/scene/scene.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "analytic" method: single scattering in closed form, no marching per direction.
 //
 // 1. Columns by the Chapman function. For an exponential layer of scale height H, the

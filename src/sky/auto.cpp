@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "auto" sky method; the rules are in include/welkin/sky/auto.hpp, the numbers in the
 // generated src/sky/auto_table.cpp (bench/chart.py).
 #include "welkin/sky/auto.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "lut" method: Hillaire 2020's pipeline. Per atmosphere, the transmittance and
 // multiple-scattering LUTs (atmosphere/luts.hpp), kept between calls by a cache
 // (lut_cache.hpp); per observer and sun, the sky-view LUT (skyview_lut.hpp); per

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "raymarch" method: for every direction, the single-scattering integral of
 // inscattering.hpp with `raymarch_steps` samples along the view ray and, at each of them,
 // a nested march of `raymarch_sun_steps` samples towards the sun for its transmittance

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reference sky: Monte-Carlo path tracing through a spherical atmosphere.
 //
 // What it computes. For an observer at x looking along v, the sky (path) radiance is the
@@ -110,13 +111,13 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "welkin/atmosphere/column_table.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/phase.hpp"
+#include "welkin/atmosphere/phase_sampling.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/quadrature.hpp"
 #include "welkin/base/rng.hpp"
-#include "welkin/atmosphere/column_table.hpp"
-#include "welkin/atmosphere/phase_sampling.hpp"
 
 namespace welkin {
 namespace {

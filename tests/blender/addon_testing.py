@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared by the headless Blender tests: install the add-on from its zip the way a user
 does, into a temporary scripts directory (the machine's Blender configuration is never
 touched), and build small scenes.
@@ -13,6 +14,7 @@ with bpy.ops.extensions.package_install_files as a user installs one from disk. 
 package is then bl_ext.user_default.welkin; the tests' `import welkin` / `from
 welkin.blender import ...` are pointed at it (an alias kept to these tests).
 """
+
 import atexit
 import importlib
 import importlib.abc
@@ -44,8 +46,11 @@ def addon_zip():
     path = os.environ.get("WELKIN_ADDON_ZIP")
     if path:
         return pathlib.Path(path)
-    subprocess.run(["bash", str(ROOT / "scripts" / "build_addon.sh"), str(TMP / "dist")],
-                   check=True, stdout=subprocess.DEVNULL)
+    subprocess.run(
+        ["bash", str(ROOT / "scripts" / "build_addon.sh"), str(TMP / "dist")],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
     return next((TMP / "dist").glob("welkin-*.zip"))
 
 
@@ -77,8 +82,11 @@ def extension_zip():
     path = os.environ.get("WELKIN_EXTENSION_ZIP")
     if path:
         return pathlib.Path(path)
-    subprocess.run(["bash", str(ROOT / "scripts" / "build_extension.sh"), str(TMP / "dist")],
-                   check=True, stdout=subprocess.DEVNULL)
+    subprocess.run(
+        ["bash", str(ROOT / "scripts" / "build_extension.sh"), str(TMP / "dist")],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
     return next((TMP / "dist").glob("welkin-*-linux_x64.zip"))
 
 
@@ -91,7 +99,7 @@ class _AliasFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return None
 
     def create_module(self, spec):
-        module = importlib.import_module(EXTENSION_PACKAGE + spec.name[len("welkin"):])
+        module = importlib.import_module(EXTENSION_PACKAGE + spec.name[len("welkin") :])
         spec.loader_state = module.__spec__
         return module
 
@@ -112,12 +120,14 @@ def _install_extension():
     prefs = bpy.context.preferences
     prefs.use_preferences_save = False
     result = bpy.ops.extensions.package_install_files(
-        filepath=str(extension_zip()), repo="user_default", enable_on_install=True)
-    check(result == {'FINISHED'}, f"installing the extension: {result}")
+        filepath=str(extension_zip()), repo="user_default", enable_on_install=True
+    )
+    check(result == {"FINISHED"}, f"installing the extension: {result}")
     package = importlib.import_module(EXTENSION_PACKAGE)
     sys.modules.pop("welkin", None)
     sys.meta_path.insert(0, _AliasFinder())
     import welkin
+
     check(welkin is package, f"`welkin` is not the extension: {welkin}")
     module = package.native.module()
     check(module is not None, package.native.message())
@@ -127,9 +137,11 @@ def _install_extension():
 def _drop_compiled_module_from_path():
     # The add-on package is called `welkin`, like the compiled module on PYTHONPATH
     # (scripts/test.sh puts build/ there): keep the latter from shadowing the add-on.
-    sys.path[:] = [p for p in sys.path
-                   if not (os.path.isdir(p) and any(n.startswith("welkin.cpython")
-                                                    for n in os.listdir(p)))]
+    sys.path[:] = [
+        p
+        for p in sys.path
+        if not (os.path.isdir(p) and any(n.startswith("welkin.cpython") for n in os.listdir(p)))
+    ]
     sys.modules.pop("welkin", None)
 
 
@@ -152,12 +164,14 @@ def install_addon():
     else:
         filepaths.script_directory = str(scripts_dir())
     bpy.utils.refresh_script_paths()
-    bpy.ops.preferences.addon_install(filepath=str(addon_zip()), target='PREFS')
+    bpy.ops.preferences.addon_install(filepath=str(addon_zip()), target="PREFS")
     bpy.ops.preferences.addon_enable(module="welkin")
     import welkin
+
     assert hasattr(welkin, "bl_info"), f"`welkin` is not the add-on: {welkin}"
     assert pathlib.Path(welkin.__file__).is_relative_to(scripts_dir()), welkin.__file__
     from welkin import native
+
     module = native.module()
     assert module is not None, native.message()
     return welkin, module
@@ -169,9 +183,10 @@ def installed_in_temp(package):
     where = pathlib.Path(package.__file__).resolve()
     homes = [scripts_dir()]
     if EXTENSION:
-        homes.append(pathlib.Path(bpy.utils.user_resource('EXTENSIONS')))
-    return any(where.is_relative_to(h.resolve()) for h in homes) and \
-        not str(where).startswith(os.path.expanduser("~/.config/blender"))
+        homes.append(pathlib.Path(bpy.utils.user_resource("EXTENSIONS")))
+    return any(where.is_relative_to(h.resolve()) for h in homes) and not str(where).startswith(
+        os.path.expanduser("~/.config/blender")
+    )
 
 
 def sun_direction(elevation_deg, azimuth_deg):
@@ -183,18 +198,20 @@ def aim_sun(obj, elevation_deg, azimuth_deg):
     """Rotates a sun lamp so that its local +Z (towards the sun) points at the given
     elevation and azimuth (counter-clockwise from +X)."""
     from mathutils import Vector
-    obj.rotation_mode = 'QUATERNION'
+
+    obj.rotation_mode = "QUATERNION"
     obj.rotation_quaternion = Vector((0, 0, 1)).rotation_difference(
-        Vector(sun_direction(elevation_deg, azimuth_deg)))
+        Vector(sun_direction(elevation_deg, azimuth_deg))
+    )
 
 
-def new_scene(sun_elevation_deg=30.0, sun_azimuth_deg=60.0, resolution='256', camera_z=0.0):
+def new_scene(sun_elevation_deg=30.0, sun_azimuth_deg=60.0, resolution="256", camera_z=0.0):
     """An empty scene (the factory objects removed) with one sun lamp and a camera at the
     origin's height camera_z. Returns (scene, sun object)."""
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj)
     scene = bpy.context.scene
-    data = bpy.data.lights.new("Sun", 'SUN')
+    data = bpy.data.lights.new("Sun", "SUN")
     sun = bpy.data.objects.new("Sun", data)
     scene.collection.objects.link(sun)
     aim_sun(sun, sun_elevation_deg, sun_azimuth_deg)
@@ -210,6 +227,7 @@ def new_scene(sun_elevation_deg=30.0, sun_azimuth_deg=60.0, resolution='256', ca
 def world_pixels(image):
     """The Blender image as (H, W, 3), top row first."""
     import numpy as np
+
     w, h = image.size
     flat = np.empty(w * h * 4, dtype=np.float32)
     image.pixels.foreach_get(flat)
@@ -232,33 +250,35 @@ def panoramic_camera(scene, width, height, samples=2, compat=None):
     a tiny pixel filter (samples at the pixel centres), no denoising, linear EXR.
     `compat`: the add-on's compat module (default: the installed add-on's)."""
     import math as m
+
     cam = scene.camera
     cam.location = (0.0, 0.0, cam.location.z)
-    cam.rotation_mode = 'XYZ'
+    cam.rotation_mode = "XYZ"
     cam.rotation_euler = (m.radians(90.0), 0.0, m.radians(-90.0))
-    cam.data.type = 'PANO'
+    cam.data.type = "PANO"
     if compat is None:
         from welkin.blender import compat  # the installed add-on's
-    compat.camera_panorama(cam.data).panorama_type = 'EQUIRECTANGULAR'
-    scene.render.engine = 'CYCLES'
-    scene.cycles.device = 'CPU'
+    compat.camera_panorama(cam.data).panorama_type = "EQUIRECTANGULAR"
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
     scene.cycles.samples = samples
     scene.cycles.use_adaptive_sampling = False
     scene.cycles.use_denoising = False
-    scene.cycles.pixel_filter_type = 'BLACKMAN_HARRIS'
+    scene.cycles.pixel_filter_type = "BLACKMAN_HARRIS"
     scene.cycles.filter_width = 0.01
     scene.render.resolution_x, scene.render.resolution_y = width, height
     scene.render.resolution_percentage = 100
     scene.render.film_transparent = False
-    compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
-    scene.render.image_settings.color_depth = '32'
-    scene.render.image_settings.color_mode = 'RGB'
-    scene.view_settings.view_transform = 'Standard'
+    compat.set_file_format(scene.render.image_settings, "OPEN_EXR")
+    scene.render.image_settings.color_depth = "32"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.view_settings.view_transform = "Standard"
 
 
 def read_rgb_exr(welkin, path):
     """(H, W, 3) float32, top row first, R G B in that order (read by the core)."""
     import numpy as np
+
     pixels, names = welkin.read_exr(str(path))
     return np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1)
 
@@ -302,6 +322,7 @@ class FakeLayout:
 def draw_panel(scene):
     """What Properties > World > Welkin Sky shows for `scene`: a list of (kind, text)."""
     import types
+
     panel_class = bpy.types.WORLD_PT_welkin_sky
     layout = FakeLayout()
     context = types.SimpleNamespace(world=scene.world, scene=scene)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The `blender` command line, for Blender as a Python module (PyPI's `bpy`, 4.2-5.3).
 
 scripts/test_blender.sh runs each headless test under a bpy venv as
@@ -16,6 +17,7 @@ environment names them, so the machine's Blender settings are never touched; it 
 at exit, with whatever the script registered with atexit (the tests' own temporary folders)
 and Blender's session temporary folder.
 """
+
 import atexit
 import os
 import pathlib
@@ -37,19 +39,28 @@ import bpy  # noqa: E402
 
 # As in addon_testing.py: a DeprecationWarning from Welkin's own modules is an error, here
 # for the renders and add-on runs the tests start through this script.
-warnings.filterwarnings("error", category=DeprecationWarning,
-                        module=r"(bl_ext\.[^.]+\.)?welkin(\.|$)")
+warnings.filterwarnings("error", category=DeprecationWarning, module=r"(bl_ext\.[^.]+\.)?welkin(\.|$)")
 
-FLAGS = {"-b", "--background", "--factory-startup", "--python-use-system-env",
-         "--disable-autoexec", "-noaudio"}
+FLAGS = {
+    "-b",
+    "--background",
+    "--factory-startup",
+    "--python-use-system-env",
+    "--disable-autoexec",
+    "-noaudio",
+}
 
 
 def enable_addon(name):
     import addon_utils
+
     candidates = [name]
     if not any(m.__name__ == name for m in addon_utils.modules()):
-        candidates = [m.__name__ for m in addon_utils.modules()
-                      if m.__name__.startswith("bl_ext.") and m.__name__.split(".")[-1] == name]
+        candidates = [
+            m.__name__
+            for m in addon_utils.modules()
+            if m.__name__.startswith("bl_ext.") and m.__name__.split(".")[-1] == name
+        ]
     if not candidates:
         raise SystemExit(f"bpy_blender: add-on {name!r} is not installed")
     module = addon_utils.enable(candidates[0], default_set=True, handle_error=None)
@@ -123,7 +134,7 @@ def main(argv):
         if arg == "--python-exit-code":
             exit_code = int(value)
         elif arg in ("-P", "--python"):
-            sys.argv = [value] + argv[argv.index("--") + 1:] if "--" in argv else [value]
+            sys.argv = [value] + argv[argv.index("--") + 1 :] if "--" in argv else [value]
             try:
                 runpy.run_path(value, run_name="__main__")
             except SystemExit as stop:
@@ -143,8 +154,9 @@ def main(argv):
         elif arg in ("-F", "--render-format"):
             settings = scene.render.image_settings
             if hasattr(settings, "media_type"):  # 5.0: the media type first, as -F does
-                settings.media_type = {'OPEN_EXR_MULTILAYER': 'MULTI_LAYER_IMAGE',
-                                       'FFMPEG': 'VIDEO'}.get(value, 'IMAGE')
+                settings.media_type = {"OPEN_EXR_MULTILAYER": "MULTI_LAYER_IMAGE", "FFMPEG": "VIDEO"}.get(
+                    value, "IMAGE"
+                )
             settings.file_format = value
         elif arg in ("-x", "--use-extension"):
             scene.render.use_file_extension = bool(int(value))

@@ -1,7 +1,9 @@
+# SPDX-License-Identifier: Apache-2.0
 """Cloud scenes for the headless Blender tests: a VDB sequence written with pyopenvdb
 (python3-openvdb: in Blender 3.4's system Python, or Debian's python3 in a subprocess for
 PyPI's bpy, bench/vdb_dense.py), a Volume object showing it, and a small procedural
 layer."""
+
 import pathlib
 import sys
 
@@ -12,8 +14,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "bench"))
 from vdb_dense import write_density  # noqa: E402
 
 
-def write_vdb_sequence(directory, stem="cloud", frames=(1, 2, 3), size=16, voxel_m=50.0,
-                       value=None):
+def write_vdb_sequence(directory, stem="cloud", frames=(1, 2, 3), size=16, voxel_m=50.0, value=None):
     """Writes <stem>.NNNN.vdb for each frame: a ball of density (FloatGrid "density") of
     `size` voxels of `voxel_m` metres, centred on the grid's origin, its value growing with
     the frame (frame f: f x value, default 1), so frames differ. Returns the paths."""
@@ -25,8 +26,7 @@ def write_vdb_sequence(directory, stem="cloud", frames=(1, 2, 3), size=16, voxel
     paths = []
     for f in frames:
         path = directory / f"{stem}.{f:04d}.vdb"
-        write_density(path, (ball * f * (value or 1.0)).astype(np.float32),
-                      (-(size // 2),) * 3, voxel_m)
+        write_density(path, (ball * f * (value or 1.0)).astype(np.float32), (-(size // 2),) * 3, voxel_m)
         paths.append(path)
     return paths
 
@@ -52,8 +52,8 @@ def quick_cloudy_world(world):
     """The world's sky at the tests' quick settings: lut, 256 wide, a short cloud march
     (24 steps, 3 light steps, 1 ambient step, all scattering orders). Returns the world's
     cloud settings."""
-    world.welkin.method = 'lut'
-    world.welkin.resolution = '256'
+    world.welkin.method = "lut"
+    world.welkin.resolution = "256"
     c = world.welkin_clouds
     c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 24, 3, 1, 2
     return c

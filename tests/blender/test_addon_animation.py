@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """(d) An animated sun gives a different sky on frames 1 and 10 of an `-a` render: the
 file is saved with the add-on's live sky, then rendered by a separate headless Blender
 (`blender -b file.blend --addons welkin -s 1 -e 19 -j 9 -a`: frames 1, 10, 19; the sun moves
@@ -13,6 +14,7 @@ that frame; asserted within 2 % (Monte-Carlo noise of 4 samples on a shadow-free
 far smaller; the previous frame's lamp would miss by tens of percent).
 In this session the same handler runs on frame_set, which also syncs the lamp.
 """
+
 import math
 import os
 import subprocess
@@ -43,7 +45,7 @@ bpy.ops.mesh.primitive_plane_add(size=2000.0, location=(0.0, 0.0, -1.0))
 plane_material = bpy.data.materials.new("White")
 nodes = compat.material_node_tree(plane_material).nodes
 nodes.remove(nodes["Principled BSDF"])
-lambert = nodes.new('ShaderNodeBsdfDiffuse')  # roughness 0: Lambert
+lambert = nodes.new("ShaderNodeBsdfDiffuse")  # roughness 0: Lambert
 lambert.inputs["Color"].default_value = (ALBEDO, ALBEDO, ALBEDO, 1.0)
 plane_material.node_tree.links.new(lambert.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
 bpy.context.active_object.data.materials.append(plane_material)
@@ -59,8 +61,10 @@ for f in (1, 10, 19):
     z = sun.matrix_world.col[2]
     directions[f] = (z[0], z[1], z[2])
     expected = max(welkin.sun(atm, 0.0, directions[f]).direct_irradiance_rgb)
-    T.check(math.isclose(sun.data.energy, expected, rel_tol=1e-5),
-            f"frame {f}: lamp {sun.data.energy} W/m^2, expected {expected}")
+    T.check(
+        math.isclose(sun.data.energy, expected, rel_tol=1e-5),
+        f"frame {f}: lamp {sun.data.energy} W/m^2, expected {expected}",
+    )
 scene.frame_set(1)
 
 scene.render.filepath = str(T.TMP / "frames" / "f_####")
@@ -70,8 +74,21 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin",
-           "-s", "1", "-e", "19", "-j", "9", "-a"]
+command = [
+    *T.blender_command(),
+    "-b",
+    "--factory-startup",
+    str(blend),
+    "--addons",
+    "welkin",
+    "-s",
+    "1",
+    "-e",
+    "19",
+    "-j",
+    "9",
+    "-a",
+]
 print("running:", " ".join(command))
 run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
 log = run.stdout + run.stderr
@@ -95,8 +112,10 @@ def compare(render, f):
 
 for f in (1, 10, 19):
     median, p995 = compare(frames[f], f)
-    print(f"(d) frame {f}: render vs module sky for the lamp at frame {f}: median {median:.4%}, "
-          f"99.5th percentile {p995:.4%}")
+    print(
+        f"(d) frame {f}: render vs module sky for the lamp at frame {f}: median {median:.4%}, "
+        f"99.5th percentile {p995:.4%}"
+    )
     T.check(median < 0.001 and p995 < 0.01, f"frame {f} does not show its sun's sky")
     other = 1 if f > 1 else 19
     median, _ = compare(frames[other], f)
@@ -108,7 +127,7 @@ for f in (1, 10, 19):
     rgb = np.asarray(welkin.sun(atm, 0.0, directions[f]).direct_irradiance_rgb)
     sin_e = directions[f][2] / np.linalg.norm(directions[f])
     expected = ALBEDO / math.pi * rgb * sin_e
-    ground = frames[f][H - H // 8:].reshape(-1, 3).mean(axis=0)
+    ground = frames[f][H - H // 8 :].reshape(-1, 3).mean(axis=0)
     print(f"(d) frame {f}: ground below {ground}, lamp-lit expectation {expected}")
     T.check(np.allclose(ground, expected, rtol=0.02), f"frame {f}: the lamp is not this frame's")
 

@@ -1,8 +1,10 @@
+# SPDX-License-Identifier: Apache-2.0
 """Bad input: the compiled module missing or built for another Python, no sun lamp,
 several sun lamps, the sun below the horizon, the camera below the ground. Each ends in a
 clear message (an operator report, which bpy.ops raises as RuntimeError in scripts; a
 warning where the sky can still be made), never a traceback from the add-on, and no user
 data is lost."""
+
 import importlib
 import math
 import os
@@ -66,8 +68,12 @@ def broken_extension(name, python_tag=None):
                 if renamed is None:
                     lines = [line for line in lines if not line.startswith("wheels")]
                 else:
-                    lines = [f'wheels = ["./wheels/{pathlib.PurePosixPath(renamed).name}"]\n'
-                             if line.startswith("wheels") else line for line in lines]
+                    lines = [
+                        f'wheels = ["./wheels/{pathlib.PurePosixPath(renamed).name}"]\n'
+                        if line.startswith("wheels")
+                        else line
+                        for line in lines
+                    ]
                 dst.writestr(item, "".join(lines))
             else:
                 dst.writestr(item, data)
@@ -75,7 +81,7 @@ def broken_extension(name, python_tag=None):
 
 
 def install(zip_path):
-    bpy.ops.preferences.addon_install(filepath=str(zip_path), target='PREFS', overwrite=True)
+    bpy.ops.preferences.addon_install(filepath=str(zip_path), target="PREFS", overwrite=True)
     bpy.ops.preferences.addon_enable(module="welkin")
 
 
@@ -88,16 +94,21 @@ def uninstall():
 def check_registered_without_module(label, fragment, hint):
     T.check(hasattr(bpy.types, "WORLD_PT_welkin_sky"), f"{label}: no panel registered")
     native = importlib.import_module(package + ".native")
-    T.check(native.module() is None and fragment in native.message(),
-            f"{label}: message {native.message()!r} lacks {fragment!r}")
-    T.check(hint in native.message() and "Python 3.11" in native.message()
-            and "3.13" in native.message(),
-            f"{label}: the message does not say which Blender, Python and file to use")
+    T.check(
+        native.module() is None and fragment in native.message(),
+        f"{label}: message {native.message()!r} lacks {fragment!r}",
+    )
+    T.check(
+        hint in native.message() and "Python 3.11" in native.message() and "3.13" in native.message(),
+        f"{label}: the message does not say which Blender, Python and file to use",
+    )
     scene, _sun = T.new_scene()
     shown = T.draw_panel(scene)
     shown_text = " ".join(text for kind, text in shown if kind == "label")
-    T.check(fragment in shown_text and hint in shown_text,
-            f"{label}: the panel does not show the message: {shown}")
+    T.check(
+        fragment in shown_text and hint in shown_text,
+        f"{label}: the panel does not show the message: {shown}",
+    )
     T.check(not any(kind == "operator" for kind, _ in shown), "operators offered without module")
     nodes_before = len(scene.world.node_tree.nodes)
     expect_error(bpy.ops.welkin.update_sky, fragment)
@@ -114,9 +125,9 @@ if not T.EXTENSION:
     prefs.filepaths.script_directory = str(T.scripts_dir())
     bpy.utils.refresh_script_paths()
     for zip_name, rename, fragment in (
-            ("no_module.zip", None, "compiled module is missing"),
-            ("other_python.zip", "welkin.cpython-310-x86_64-linux-gnu.so",
-             "built for another Python")):
+        ("no_module.zip", None, "compiled module is missing"),
+        ("other_python.zip", "welkin.cpython-310-x86_64-linux-gnu.so", "built for another Python"),
+    ):
         install(broken_zip(zip_name, rename))
         T.check(addon_utils.check("welkin")[1], f"{zip_name}: the add-on did not register")
         check_registered_without_module(zip_name, fragment, "build_addon.sh")
@@ -126,24 +137,25 @@ else:
     # wheel is for another Python is refused by Blender's installer, naming the versions.
     package = T.EXTENSION_PACKAGE
     result = bpy.ops.extensions.package_install_files(
-        filepath=str(broken_extension("no_wheel.zip")), repo="user_default",
-        enable_on_install=True)
-    T.check(result == {'FINISHED'}, f"the Extension without its wheel: {result}")
+        filepath=str(broken_extension("no_wheel.zip")), repo="user_default", enable_on_install=True
+    )
+    T.check(result == {"FINISHED"}, f"the Extension without its wheel: {result}")
     T.check(addon_utils.check(package)[1], "the Extension without its wheel did not register")
-    check_registered_without_module("no wheel", "compiled module is missing",
-                                    "build_extension.sh")
+    check_registered_without_module("no wheel", "compiled module is missing", "build_extension.sh")
     bpy.ops.extensions.package_uninstall(repo_index=T.user_repo_index(), pkg_id="welkin")
     for name in [n for n in sys.modules if n == package or n.startswith(package + ".")]:
         del sys.modules[name]
     try:
         result = bpy.ops.extensions.package_install_files(
-            filepath=str(broken_extension("cp310.zip", "cp310")), repo="user_default",
-            enable_on_install=True)
-        refusal = None if result == {'FINISHED'} else str(result)
+            filepath=str(broken_extension("cp310.zip", "cp310")), repo="user_default", enable_on_install=True
+        )
+        refusal = None if result == {"FINISHED"} else str(result)
     except RuntimeError as error:
         refusal = str(error)
-    T.check(refusal is not None and "Python" in refusal and "3.10" in refusal,
-            f"a wheel for Python 3.10 was not refused with a message: {refusal!r}")
+    T.check(
+        refusal is not None and "Python" in refusal and "3.10" in refusal,
+        f"a wheel for Python 3.10 was not refused with a message: {refusal!r}",
+    )
     T.check(not addon_utils.check(package)[1], "the cp310 Extension was enabled")
     print(f"refused by Blender: {refusal.strip()}")
 
@@ -169,15 +181,17 @@ expect_error(bpy.ops.welkin.remove_sky, "no Welkin sky")
 # Several sun lamps: the first by name, with a warning; a chosen one without.
 scene, sun_b = T.new_scene(30.0, 0.0)
 sun_b.name = "B sun"
-data = bpy.data.lights.new("A sun", 'SUN')
+data = bpy.data.lights.new("A sun", "SUN")
 sun_a = bpy.data.objects.new("A sun", data)
 scene.collection.objects.link(sun_a)
 T.aim_sun(sun_a, 60.0, 90.0)
 bpy.context.view_layer.update()
 bpy.ops.welkin.update_sky()
 settings = scene.world.welkin
-T.check("2 sun lamps" in settings.warnings and "'A sun'" in settings.warnings,
-        f"no several-lamps warning: {settings.warnings!r}")
+T.check(
+    "2 sun lamps" in settings.warnings and "'A sun'" in settings.warnings,
+    f"no several-lamps warning: {settings.warnings!r}",
+)
 expected = welkin.sun(atm, 0.0, T.sun_direction(60.0, 90.0)).direct_irradiance_rgb
 T.check(math.isclose(sun_a.data.energy, max(expected), rel_tol=1e-5), "not the first lamp")
 settings.sun_object = sun_b
@@ -212,8 +226,10 @@ bpy.context.view_layer.update()
 bpy.ops.welkin.update_sky()
 T.check(settings.warnings == "", settings.warnings)
 ref = welkin.sky_radiance(atm, 3000.0, T.sun_direction(30.0, 30.0), dirs[0, :1], output="rgb")[0]
-T.check(np.allclose(T.world_pixels(settings.sky_image)[0, 0], ref, rtol=0.02),
-        "camera height not added to the observer altitude")
+T.check(
+    np.allclose(T.world_pixels(settings.sky_image)[0, 0], ref, rtol=0.02),
+    "camera height not added to the observer altitude",
+)
 print("camera below the ground: ground sky with a warning; camera height is used")
 
 # A handler hitting bad input (the lamp deleted under an animated, live sky) logs, no raise.
@@ -239,8 +255,10 @@ try:
 finally:
     bpy.app = real_app
 lines = printed.getvalue().strip().splitlines()
-T.check(len(lines) == 1 and "3.3.0" in lines[0] and "3.4" in lines[0]
-        and "not supported" in lines[0], f"unsupported Blender: printed {lines!r}")
+T.check(
+    len(lines) == 1 and "3.3.0" in lines[0] and "3.4" in lines[0] and "not supported" in lines[0],
+    f"unsupported Blender: printed {lines!r}",
+)
 T.check(not hasattr(bpy.types, "WORLD_PT_welkin_sky"), "registered on an unsupported Blender")
 print(f"unsupported Blender: {lines[0]}")
 addon.register()

@@ -1,7 +1,9 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.export_hdri: the EXR holds the module's HDRI for the scene's sun (float exactly;
 half within half precision, 2^-11 relative, with the disc clamped to 65504 and reported),
 the world's resolution by default, and an existing file is never replaced unless
 overwrite=True; bad widths and paths are refused with a report."""
+
 import os
 import sys
 
@@ -12,7 +14,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
-scene, sun = T.new_scene(35.0, 120.0, resolution='256')
+scene, sun = T.new_scene(35.0, 120.0, resolution="256")
 bpy.ops.welkin.update_sky()
 atm = welkin.Atmosphere.preset(welkin.Atmosphere.preset_names()[0])  # the add-on's default
 s = tuple(sun.matrix_world.col[2][:3])  # the lamp's own direction, as the add-on reads it
@@ -39,13 +41,18 @@ img = T.read_rgb_exr(welkin, path)
 ref = welkin.sky_image(atm, 0.0, s, 64, "auto")
 T.check(img.shape == (32, 64, 3), f"shape {img.shape}")
 unclamped = ref < 65504.0
-T.check(np.allclose(img[unclamped], ref[unclamped], rtol=2.0 ** -11, atol=0.0),
-        "half HDRI differs beyond half precision")
+T.check(
+    np.allclose(img[unclamped], ref[unclamped], rtol=2.0**-11, atol=0.0),
+    "half HDRI differs beyond half precision",
+)
 T.check(np.all(img[~unclamped] == 65504.0), "disc values not clamped to 65504")
 print(f"half HDRI within half precision; {np.count_nonzero(~unclamped)} disc values clamped")
 
-for kwargs, fragment in (({"width": 7}, "width"), ({"width": 0, "filepath": ""}, "filepath"),
-                         ({"filepath": str(T.TMP / "no_such_dir" / "x.exr")}, "no_such_dir")):
+for kwargs, fragment in (
+    ({"width": 7}, "width"),
+    ({"width": 0, "filepath": ""}, "filepath"),
+    ({"filepath": str(T.TMP / "no_such_dir" / "x.exr")}, "no_such_dir"),
+):
     args = {"filepath": str(T.TMP / "bad.exr"), **kwargs}
     try:
         bpy.ops.welkin.export_hdri(**args)

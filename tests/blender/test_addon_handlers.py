@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The sky follows the lamp in the UI: depsgraph_update_post arms one debounced timer,
 which brings the sky up to date once the changes stop; a panel setting does the same;
 save_pre packs what the live updates changed; the handlers survive loading a file.
@@ -7,6 +8,7 @@ headless script calls update_sky; renders get frame changes). So this test stand
 the UI: it makes handlers._headless() return False and calls the timer's function itself
 once its deadline has passed. Everything else is Blender's own machinery: the depsgraph
 handler is called by Blender after view_layer.update()."""
+
 import os
 import sys
 import time
@@ -21,7 +23,7 @@ addon, welkin = T.install_addon()
 from welkin.blender import handlers as H  # noqa: E402
 
 H._headless = lambda: False
-scene, sun = T.new_scene(30.0, 0.0, resolution='256')
+scene, sun = T.new_scene(30.0, 0.0, resolution="256")
 bpy.ops.welkin.update_sky()
 settings = scene.world.welkin
 key0 = settings.last_key
@@ -39,8 +41,10 @@ T.check(not H._state["armed"], "moving an unrelated object armed the sky update"
 for elevation in (31.0, 33.0, 35.0):
     T.aim_sun(sun, elevation, 10.0)
     bpy.context.view_layer.update()
-T.check(H._state["armed"] and bpy.app.timers.is_registered(H._tick),
-        "rotating the lamp did not arm the update timer")
+T.check(
+    H._state["armed"] and bpy.app.timers.is_registered(H._tick),
+    "rotating the lamp did not arm the update timer",
+)
 T.check(settings.last_key == key0, "the sky updated before the debounce delay")
 T.check(H._tick() > 0.0, "the timer did not wait for the changes to stop")
 T.check(settings.last_key == key0, "the sky updated before the debounce delay")
@@ -63,9 +67,11 @@ settings.exposure = 0.5
 T.check(H._state["armed"], "changing the exposure did not arm the update")
 H._state["due"] = 0.0
 H._tick()
-np.testing.assert_allclose(T.world_pixels(settings.sky_image),
-                           welkin.sky_image(atm, 0.0, s, 256, "auto", sun_disc=False, exposure=0.5),
-                           rtol=1e-6)
+np.testing.assert_allclose(
+    T.world_pixels(settings.sky_image),
+    welkin.sky_image(atm, 0.0, s, 256, "auto", sun_disc=False, exposure=0.5),
+    rtol=1e-6,
+)
 print("a settings change -> an update")
 
 # The live updates do not pack (that costs an EXR encode); save_pre does, so the file

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender: settings and scenes a careful user (or a script) makes that the add-on
 must handle, each the way Blender's own tools would.
 
@@ -17,6 +18,7 @@ must handle, each the way Blender's own tools would.
     -f 1`: a console line naming the frame and why, and (the Blender binary) a non-zero
     exit with no image written.
 """
+
 import math
 import os
 import pathlib
@@ -42,9 +44,9 @@ def update_sky_error():
     return None
 
 
-scene, sun = T.new_scene(30.0, 40.0, resolution='256')
+scene, sun = T.new_scene(30.0, 40.0, resolution="256")
 world = scene.world
-world.welkin.method = 'lut'
+world.welkin.method = "lut"
 c = world.welkin_clouds
 c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 16, 2, 1, 1
 
@@ -54,19 +56,25 @@ T.check(update_sky_error() is None, world.welkin.status)
 T.check('"cirrus"' not in world.welkin.last_key, "a cirrus layer before one was added")
 second = c.layers.add()
 second.name = "High"
-second.cloud_type = 'cirrus'
+second.cloud_type = "cirrus"
 second.bottom_altitude_m, second.top_altitude_m = 8000.0, 9000.0
 T.check(update_sky_error() is None, world.welkin.status)
-T.check('"cirrus"' in world.welkin.last_key,
-        f"Update Sky ignored the layer added with layers.add(): {world.welkin.last_key[-400:]}")
+T.check(
+    '"cirrus"' in world.welkin.last_key,
+    f"Update Sky ignored the layer added with layers.add(): {world.welkin.last_key[-400:]}",
+)
 key, status = world.welkin.last_key, world.welkin.status
 for _ in range(1000):
     c.layers.add()
 error = update_sky_error()
-T.check(error is not None and "1002 enabled cloud layers" in error and "at most 32" in error,
-        f"Update Sky with 1002 layers: {error!r}, status {world.welkin.status!r}")
-T.check(world.welkin.last_key == key and world.welkin.status == status,
-        "the refused update changed the sky on screen")
+T.check(
+    error is not None and "1002 enabled cloud layers" in error and "at most 32" in error,
+    f"Update Sky with 1002 layers: {error!r}, status {world.welkin.status!r}",
+)
+T.check(
+    world.welkin.last_key == key and world.welkin.status == status,
+    "the refused update changed the sky on screen",
+)
 while len(c.layers) > 2:
     c.layers.remove(len(c.layers) - 1)
 second = c.layers[1]  # the collection grew: earlier references to its items are stale
@@ -81,8 +89,13 @@ for name in ("wind_offset_m", "evolution_m"):
         second.evolution_m = math.nan
     error = update_sky_error()
     field = "wind_offset_m[0]" if name == "wind_offset_m" else name
-    T.check(error is not None and "'High'" in error and f"{field}: must be a finite number" in error
-            and "JSON" not in error, f"NaN {name}: {error!r}")
+    T.check(
+        error is not None
+        and "'High'" in error
+        and f"{field}: must be a finite number" in error
+        and "JSON" not in error,
+        f"NaN {name}: {error!r}",
+    )
     second.wind_offset_m, second.evolution_m = (0.0, 0.0), 0.0
 second.wind_offset_m = (1e20, -math.inf)
 T.check(tuple(second.wind_offset_m) == (1e9, -1e9), f"wind offset held {tuple(second.wind_offset_m)}")
@@ -126,8 +139,14 @@ scene.collection.objects.link(plane)
 scene.welkin_aerial.enabled = False
 scene.welkin_aerial.enabled = True
 warnings = aerial_frame.linked_material_warnings(scene)
-T.check(len(warnings) == 1 and "LibraryMarble" in warnings[0] and "linked" in warnings[0]
-        and str(lib_path) in warnings[0] and "not hazed" in warnings[0], f"warnings: {warnings}")
+T.check(
+    len(warnings) == 1
+    and "LibraryMarble" in warnings[0]
+    and "linked" in warnings[0]
+    and str(lib_path) in warnings[0]
+    and "not hazed" in warnings[0],
+    f"warnings: {warnings}",
+)
 T.check("LibraryMarble" in scene.welkin_aerial.status, f"status: {scene.welkin_aerial.status!r}")
 T.check(linked.node_tree.nodes.get(aerial_frame.SHADER_NODE) is None, "the linked material changed")
 bpy.data.objects.remove(plane)
@@ -136,7 +155,7 @@ print("(d) a linked material is reported by name:", warnings[0][:80], "...")
 
 # (e) A frame whose haze cannot be made, in a command-line render.
 bpy.data.objects.remove(sun)
-scene.render.image_settings.file_format = 'PNG'
+scene.render.image_settings.file_format = "PNG"
 out = T.TMP / "e"
 scene.render.filepath = str(out / "f_####")
 scene.welkin_aerial.enabled = True
@@ -145,12 +164,13 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin",
-           "-f", "1"]
+command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin", "-f", "1"]
 run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=400)
 log = run.stdout + run.stderr
-T.check("aerial perspective not written for frame 1" in log and "sun" in log,
-        f"no console line for the failed frame:\n{log[-3000:]}")
+T.check(
+    "aerial perspective not written for frame 1" in log and "sun" in log,
+    f"no console line for the failed frame:\n{log[-3000:]}",
+)
 if not T.is_module_bpy():  # the bpy module cannot stop a render (farm.py): said, not stopped
     T.check(run.returncode != 0, f"the -f 1 render exited {run.returncode}:\n{log[-3000:]}")
     T.check(not list(pathlib.Path(out).glob("f_*.png")), "an image was written for the failed frame")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Cycles renders of the world, through an equirectangular panoramic camera at the origin.
 
 (b) The world rendered by Cycles reproduces the HDRI that welkin.export_hdri writes for the
@@ -31,6 +32,7 @@
     Welkin / Nishita), lut 1.41 / 1.94 / 1.21. A unit error (pi, 4 pi, 683 lm/W, a kilo)
     is a factor of 3 or more and fails every band.
 """
+
 import math
 import os
 import sys
@@ -43,6 +45,7 @@ import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
 from welkin.blender import compat  # noqa: E402
+
 W, H = 256, 128
 ELEVATION, AZIMUTH = 20.0, 60.0
 scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution=str(W))
@@ -77,28 +80,39 @@ median, p995, worst = errors(render, hdri)
 # render reproduces it there too, and it is neither black nor the sky mirrored.
 lower = (jj > H // 2 + 1) & (jj < H - 1)
 e_ground = (np.abs(render - hdri) / (hdri + floor)).max(axis=2)[lower]
-print(f"(b) below the horizon: render vs HDRI median {float(np.median(e_ground)):.4%}, "
-      f"ground mean {float(render[lower].mean()):.4g} vs sky mean {float(render[upper_sky].mean()):.4g}")
-T.check(float(np.median(e_ground)) < 0.001 and float(np.percentile(e_ground, 99.5)) < 0.01,
-        "the render does not reproduce the HDRI's ground below the horizon")
-T.check(float(render[lower].min()) > floor, f"the ground below the horizon is black somewhere "
-        f"({render[lower].min()})")
-print(f"(b) render vs HDRI away from the sun: median {median:.4%}, 99.5th percentile "
-      f"{p995:.4%}, worst {worst:.3%}")
+print(
+    f"(b) below the horizon: render vs HDRI median {float(np.median(e_ground)):.4%}, "
+    f"ground mean {float(render[lower].mean()):.4g} vs sky mean {float(render[upper_sky].mean()):.4g}"
+)
+T.check(
+    float(np.median(e_ground)) < 0.001 and float(np.percentile(e_ground, 99.5)) < 0.01,
+    "the render does not reproduce the HDRI's ground below the horizon",
+)
+T.check(
+    float(render[lower].min()) > floor,
+    f"the ground below the horizon is black somewhere ({render[lower].min()})",
+)
+print(
+    f"(b) render vs HDRI away from the sun: median {median:.4%}, 99.5th percentile "
+    f"{p995:.4%}, worst {worst:.3%}"
+)
 T.check(median < 0.001 and p995 < 0.01, "the render does not reproduce the HDRI")
-for name, wrong in (("upside down", hdri[::-1]), ("mirrored", hdri[:, ::-1]),
-                    ("rotated 90 degrees", np.roll(hdri, W // 4, axis=1))):
+for name, wrong in (
+    ("upside down", hdri[::-1]),
+    ("mirrored", hdri[:, ::-1]),
+    ("rotated 90 degrees", np.roll(hdri, W // 4, axis=1)),
+):
     m, p, _ = errors(render, wrong)
     T.check(m > 0.01 and p > 0.1, f"the test cannot tell a {name} world ({m:.2%}, {p:.2%})")
 
 # (e) Nishita beside it, same sun elevation, its default air/dust/ozone, no disc.
 world = bpy.data.worlds.new("Nishita")
 tree = compat.world_node_tree(world)
-sky_node = tree.nodes.new('ShaderNodeTexSky')
+sky_node = tree.nodes.new("ShaderNodeTexSky")
 sky_node.sky_type = compat.sky_type_nishita()  # 5.0: SINGLE_SCATTERING
 sky_node.sun_elevation = math.radians(ELEVATION)
 sky_node.sun_disc = False
-tree.links.new(sky_node.outputs['Color'], tree.nodes['Background'].inputs['Color'])
+tree.links.new(sky_node.outputs["Color"], tree.nodes["Background"].inputs["Color"])
 welkin_world = scene.world
 scene.world = world
 nishita_path = T.TMP / "nishita.exr"
@@ -113,31 +127,41 @@ cos_e = omega[:, None] * np.ones((1, W))
 
 def stats(img):
     g = img[..., 1]
-    return {"zenith": float(g[0].mean()),
-            "horizon ring": float(g[H // 2 - 1].mean()),
-            "upper-hemisphere mean": float((g * cos_e)[upper].sum() / cos_e[upper].sum())}
+    return {
+        "zenith": float(g[0].mean()),
+        "horizon ring": float(g[H // 2 - 1].mean()),
+        "upper-hemisphere mean": float((g * cos_e)[upper].sum() / cos_e[upper].sum()),
+    }
 
 
 theirs = stats(nishita)
-bands = {"analytic": {"zenith": 1.25, "horizon ring": 2.0, "upper-hemisphere mean": 1.25},
-         "lut": {"zenith": 1.6, "horizon ring": 2.5, "upper-hemisphere mean": 1.6}}
+bands = {
+    "analytic": {"zenith": 1.25, "horizon ring": 2.0, "upper-hemisphere mean": 1.25},
+    "lut": {"zenith": 1.6, "horizon ring": 2.5, "upper-hemisphere mean": 1.6},
+}
 settings = welkin_world.welkin
 # Bruneton's air, the bands' (Nishita's default dust is near its thin aerosol; the add-on's
 # default clear_day carries twenty times more, which brightens the zenith by half).
-settings.preset = 'bruneton2017'
+settings.preset = "bruneton2017"
 for method, band in bands.items():
     settings.method = method
     path = T.TMP / f"welkin_{method}.exr"
     bpy.ops.welkin.export_hdri(filepath=str(path), width=W, sun_disc=False)
     ours = stats(T.read_rgb_exr(welkin, path))
-    print(f"(e) Welkin bruneton2017 ({method}) vs Blender Nishita, sun {ELEVATION} degrees, "
-          f"green, W m^-2 sr^-1:")
+    print(
+        f"(e) Welkin bruneton2017 ({method}) vs Blender Nishita, sun {ELEVATION} degrees, "
+        f"green, W m^-2 sr^-1:"
+    )
     for key in ours:
         ratio = ours[key] / theirs[key]
-        print(f"    {key:22s} Welkin {ours[key]:8.4g}  Nishita {theirs[key]:8.4g}  "
-              f"ratio {ratio:.3f}  (band x/ {band[key]})")
-        T.check(1 / band[key] < ratio < band[key],
-                f"{method} {key}: Welkin/Nishita = {ratio:.3f}, outside x/ {band[key]}")
+        print(
+            f"    {key:22s} Welkin {ours[key]:8.4g}  Nishita {theirs[key]:8.4g}  "
+            f"ratio {ratio:.3f}  (band x/ {band[key]})"
+        )
+        T.check(
+            1 / band[key] < ratio < band[key],
+            f"{method} {key}: Welkin/Nishita = {ratio:.3f}, outside x/ {band[key]}",
+        )
 print("(e) RGB at the zenith: Welkin", hdri[0].mean(axis=0), "Nishita", nishita[0].mean(axis=0))
 
 T.done("test_addon_render")

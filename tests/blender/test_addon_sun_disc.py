@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The world's sun disc, drawn by shader nodes from the view direction: a 1000 mm lens aimed
 at the sun, with the world image at 256 x 128 (one texel is 3 times the disc's diameter),
 renders (Cycles, 160 x 160, 16 samples) a round disc of the sun's angular size,
@@ -21,6 +22,7 @@ Measured on the Cycles render, with the pixel solid angle of a perspective camer
   - limb darkening: the mean radiance within 0.3 alpha over the mean at 0.8-0.9 alpha,
     against the same ratio of the profile averaged over the same pixels: within 3 %.
 """
+
 import math
 import os
 import subprocess
@@ -39,16 +41,16 @@ from welkin.blender import compat  # noqa: E402
 ELEVATION, AZIMUTH = 30.0, 60.0
 N = 160  # pixels across
 LENS_MM, SENSOR_MM = 1000.0, 36.0
-scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution='256')
+scene, sun = T.new_scene(ELEVATION, AZIMUTH, resolution="256")
 T.panoramic_camera(scene, N, N, samples=16)  # the render settings; the camera follows
 cam = scene.camera
-cam.data.type = 'PERSP'
+cam.data.type = "PERSP"
 cam.data.lens = LENS_MM
 cam.data.sensor_width = SENSOR_MM
-cam.data.sensor_fit = 'HORIZONTAL'
+cam.data.sensor_fit = "HORIZONTAL"
 cam.data.clip_end = 1e6
 s = np.array(T.sun_direction(ELEVATION, AZIMUTH))
-cam.rotation_mode = 'QUATERNION'
+cam.rotation_mode = "QUATERNION"
 cam.rotation_quaternion = Vector((0.0, 0.0, -1.0)).rotation_difference(Vector(s))
 scene.cycles.filter_width = 1.5  # a normal pixel filter: it keeps the energy's sum
 bpy.context.view_layer.update()
@@ -59,24 +61,29 @@ settings = scene.world.welkin
 old_image = bpy.data.images.new("Welkin Sun Disc", 8, 4, float_buffer=True)
 old_image["welkin_role"] = "disc"
 settings.disc_image = old_image
-old_node = scene.world.node_tree.nodes.new('ShaderNodeTexEnvironment')
+old_node = scene.world.node_tree.nodes.new("ShaderNodeTexEnvironment")
 old_node["welkin_role"] = "disc_texture"
 old_node.image = old_image
 settings.last_key = ""
 bpy.ops.welkin.update_sky()
-T.check(settings.disc_image is None and not any(i.get("welkin_role") == "disc"
-                                                for i in bpy.data.images),
-        "a sun-disc image is still in the file")
-T.check(not any(n.bl_idname == 'ShaderNodeTexEnvironment' and n.get("welkin_role") != "sky_texture"
-                for n in scene.world.node_tree.nodes), "a second environment texture")
+T.check(
+    settings.disc_image is None and not any(i.get("welkin_role") == "disc" for i in bpy.data.images),
+    "a sun-disc image is still in the file",
+)
+T.check(
+    not any(
+        n.bl_idname == "ShaderNodeTexEnvironment" and n.get("welkin_role") != "sky_texture"
+        for n in scene.world.node_tree.nodes
+    ),
+    "a second environment texture",
+)
 
 atm = welkin.Atmosphere.preset(welkin.Atmosphere.preset_names()[0])  # the add-on's default
 core = welkin.sun(atm, 0.0, s)
 E = np.asarray(core.direct_irradiance_rgb)
 alpha = float(atm.sun_angular_radius_rad)
 # The core's disc: L_j(mu) = centre_radiance_rgb[j] sum_k b[j, k] mu^k.
-core_coefficients = (np.asarray(core.limb_coefficients_rgb)
-                     * np.asarray(core.centre_radiance_rgb)[:, None]).T
+core_coefficients = (np.asarray(core.limb_coefficients_rgb) * np.asarray(core.centre_radiance_rgb)[:, None]).T
 
 # Every pixel's direction and solid angle (top row first, as the EXR is read).
 R = np.array(cam.matrix_world.to_3x3())
@@ -86,7 +93,7 @@ x = (ii + 0.5 - N / 2) * pitch
 y = (N / 2 - jj - 0.5) * pitch
 d = np.stack([x, y, np.full_like(x, -LENS_MM)], axis=-1) @ R.T
 d /= np.linalg.norm(d, axis=-1, keepdims=True)
-omega = pitch ** 2 * LENS_MM / (LENS_MM ** 2 + x ** 2 + y ** 2) ** 1.5
+omega = pitch**2 * LENS_MM / (LENS_MM**2 + x**2 + y**2) ** 1.5
 rho = np.arcsin(np.clip(np.linalg.norm(np.cross(d, s), axis=-1), 0.0, 1.0))
 
 
@@ -111,8 +118,10 @@ img = T.read_rgb_exr(welkin, path)
 T.check(np.isfinite(img).all(), "Cycles: non-finite pixels")
 energy, light, zone, sky = measure(img, "Cycles")
 err = energy / E - 1.0
-print(f"Cycles: disc energy {energy} W m^-2, welkin.sun direct irradiance {E}, "
-      f"error {np.round(100 * err, 3)} %  (sky beside the disc {sky})")
+print(
+    f"Cycles: disc energy {energy} W m^-2, welkin.sun direct irradiance {E}, "
+    f"error {np.round(100 * err, 3)} %  (sky beside the disc {sky})"
+)
 T.check(np.all(np.abs(err) < 0.01), f"disc energy off by {err}")
 
 g = light[..., 1]
@@ -120,14 +129,13 @@ ref = profile(np.minimum(rho, alpha))[..., 1]
 coverage = np.clip(g / ref, 0.0, 1.0) * zone
 area = float((coverage * omega).sum())
 area_ref = 2.0 * math.pi * (1.0 - math.cos(alpha))
-print(f"Cycles: disc solid angle {area:.4e} sr, the sun's {area_ref:.4e} sr, "
-      f"ratio {area / area_ref:.4f}")
+print(f"Cycles: disc solid angle {area:.4e} sr, the sun's {area_ref:.4e} sr, ratio {area / area_ref:.4f}")
 T.check(abs(area / area_ref - 1.0) < 0.03, f"disc solid angle ratio {area / area_ref:.4f}")
 w = g * zone * omega
 centroid = (d * w[..., None]).sum(axis=(0, 1)) / w.sum()
 off = math.acos(min(1.0, float(np.dot(centroid / np.linalg.norm(centroid), s))))
-mx = (w * x ** 2).sum() / w.sum() - ((w * x).sum() / w.sum()) ** 2
-my = (w * y ** 2).sum() / w.sum() - ((w * y).sum() / w.sum()) ** 2
+mx = (w * x**2).sum() / w.sum() - ((w * x).sum() / w.sum()) ** 2
+my = (w * y**2).sum() / w.sum() - ((w * y).sum() / w.sum()) ** 2
 print(f"Cycles: centroid {off / alpha:.4f} alpha from the sun; second moments x/y {mx / my:.4f}")
 T.check(off < 0.05 * alpha, f"disc centre {off / alpha:.3f} alpha off the sun's direction")
 T.check(abs(mx / my - 1.0) < 0.03, f"disc not round: second moments x/y {mx / my:.4f}")
@@ -136,8 +144,10 @@ centre, ring = rho < 0.3 * alpha, (rho > 0.8 * alpha) & (rho < 0.9 * alpha)
 measured = light[centre].mean(axis=0) / light[ring].mean(axis=0)
 expected = profile(rho[centre]).mean(axis=0) / profile(rho[ring]).mean(axis=0)
 print(f"Cycles: limb darkening centre / 0.8-0.9 alpha: rendered {measured}, model {expected}")
-T.check(np.all(np.abs(measured / expected - 1.0) < 0.03) and np.all(expected > 1.2),
-        f"limb darkening {measured} against the model's {expected}")
+T.check(
+    np.all(np.abs(measured / expected - 1.0) < 0.03) and np.all(expected > 1.2),
+    f"limb darkening {measured} against the model's {expected}",
+)
 
 # EEVEE: the same view shows the disc (a world shader evaluated per pixel).
 scene.render.engine = compat.eevee_engine_id()
@@ -160,9 +170,11 @@ ref_c = profile(np.minimum(rho, alpha))[..., c]
 ceiling = np.minimum(ref_c, 0.99 * HALF_MAX) if clipped else ref_c
 area_e = float((np.clip(light_e[..., c] / ceiling, 0.0, 1.0) * zone * omega).sum())
 err_e = energy_e / E - 1.0
-print(f"EEVEE ({scene.render.engine}): disc solid angle ratio {area_e / area_ref:.4f}, "
-      f"energy {energy_e} W m^-2 ({'clipped at 65504' if clipped else 'error'} "
-      f"{np.round(100 * err_e, 3)} %)")
+print(
+    f"EEVEE ({scene.render.engine}): disc solid angle ratio {area_e / area_ref:.4f}, "
+    f"energy {energy_e} W m^-2 ({'clipped at 65504' if clipped else 'error'} "
+    f"{np.round(100 * err_e, 3)} %)"
+)
 T.check(abs(area_e / area_ref - 1.0) < 0.05, f"EEVEE: disc solid angle ratio {area_e / area_ref}")
 T.check(clipped or np.all(np.abs(err_e) < 0.01), f"EEVEE: disc energy off by {err_e}")
 
@@ -183,9 +195,9 @@ def plane_radiance(show, gated=True):
     if not gated:
         tree = scene.world.node_tree
         bg = next(n for n in tree.nodes if n.get("welkin_role") == "disc_background")
-        for link in list(bg.inputs['Strength'].links):
+        for link in list(bg.inputs["Strength"].links):
             tree.links.remove(link)
-        bg.inputs['Strength'].default_value = 1.0
+        bg.inputs["Strength"].default_value = 1.0
     path = T.TMP / f"plane_{show}_{gated}.exr"
     T.render_still(scene, path)
     return float(T.read_rgb_exr(welkin, path)[..., 1].mean())
@@ -202,7 +214,7 @@ settings.sync_lamp = True
 # An animated sun in a separate `blender -b file.blend -a`: each frame's disc is where that
 # frame's lamp points (the frame handler writes the disc's numbers into the nodes), within
 # 0.1 alpha. A 200 mm lens (10 degrees) at 96 x 96 sees the sun at 30 and then 32 degrees.
-scene.render.engine = 'CYCLES'
+scene.render.engine = "CYCLES"
 cam.data.lens = 200.0
 N = 96
 scene.render.resolution_x = scene.render.resolution_y = N
@@ -221,15 +233,21 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-run = subprocess.run([*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons",
-                      "welkin", "-a"], env=env, capture_output=True, text=True, timeout=300)
-T.check(run.returncode == 0 and "Traceback" not in run.stdout + run.stderr,
-        f"-a render failed:\n{(run.stdout + run.stderr)[-3000:]}")
+run = subprocess.run(
+    [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin", "-a"],
+    env=env,
+    capture_output=True,
+    text=True,
+    timeout=300,
+)
+T.check(
+    run.returncode == 0 and "Traceback" not in run.stdout + run.stderr,
+    f"-a render failed:\n{(run.stdout + run.stderr)[-3000:]}",
+)
 R = np.array(cam.matrix_world.to_3x3())
 pitch = SENSOR_MM / N
 jj, ii = np.mgrid[0:N, 0:N]
-d = np.stack([(ii + 0.5 - N / 2) * pitch, (N / 2 - jj - 0.5) * pitch,
-              np.full((N, N), -200.0)], axis=-1) @ R.T
+d = np.stack([(ii + 0.5 - N / 2) * pitch, (N / 2 - jj - 0.5) * pitch, np.full((N, N), -200.0)], axis=-1) @ R.T
 d /= np.linalg.norm(d, axis=-1, keepdims=True)
 for f, e in ((1, 30.0), (2, 32.0)):
     img = T.read_rgb_exr(welkin, T.TMP / "anim" / f"f_{f:04d}.exr")[..., 1]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender: aerial perspective in the rendered frame itself, Cycles and EEVEE.
 
 The aerial demo's layout, small: a ground plane and blocks from 300 m to 40 km, the camera
@@ -17,6 +18,7 @@ The aerial demo's layout, small: a ground plane and blocks from 300 m to 40 km, 
     the Render Layers) are exactly as before after enable + disable, and the view layers'
     AOVs too.
 """
+
 import math
 import os
 import pathlib
@@ -42,17 +44,17 @@ def material(name, colour, with_group=False):
     bsdf = compat.material_node_tree(m).nodes["Principled BSDF"]
     bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
     if with_group:  # a user's node group and a second output
-        g = bpy.data.node_groups.new("User Tint", 'ShaderNodeTree')
-        compat.new_group_socket(g, "Color", 'OUTPUT', 'NodeSocketColor')
-        rgb = g.nodes.new('ShaderNodeRGB')
+        g = bpy.data.node_groups.new("User Tint", "ShaderNodeTree")
+        compat.new_group_socket(g, "Color", "OUTPUT", "NodeSocketColor")
+        rgb = g.nodes.new("ShaderNodeRGB")
         rgb.outputs[0].default_value = (*colour, 1.0)
-        out = g.nodes.new('NodeGroupOutput')
+        out = g.nodes.new("NodeGroupOutput")
         g.links.new(rgb.outputs[0], out.inputs[0])
-        node = m.node_tree.nodes.new('ShaderNodeGroup')
+        node = m.node_tree.nodes.new("ShaderNodeGroup")
         node.node_tree = g
         m.node_tree.links.new(node.outputs[0], bsdf.inputs["Base Color"])
-        out2 = m.node_tree.nodes.new('ShaderNodeOutputMaterial')
-        out2.target = 'EEVEE'
+        out2 = m.node_tree.nodes.new("ShaderNodeOutputMaterial")
+        out2.target = "EEVEE"
         m.node_tree.links.new(bsdf.outputs[0], out2.inputs["Surface"])
     return m
 
@@ -79,16 +81,16 @@ def build_scene():
     scene.world.welkin.preset = "hazy"
     scene.render.resolution_x, scene.render.resolution_y = W, H
     scene.render.resolution_percentage = 100
-    scene.cycles.device = 'CPU'
+    scene.cycles.device = "CPU"
     scene.cycles.samples = 4
     scene.cycles.use_denoising = False
     scene.frame_start, scene.frame_end = 1, 2
     # The user's compositor: a node after the Render Layers that changes nothing (a reroute,
     # which every Blender's compositor has).
     tree, _undo = compat.ensure_scene_compositor(scene, "User Compositing")
-    rl = next((n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers'), None)
+    rl = next((n for n in tree.nodes if n.bl_idname == "CompositorNodeRLayers"), None)
     frame = compat.compositor_frame(tree, rl)  # 5.3: an effect's Group Input
-    user = tree.nodes.new('NodeReroute')
+    user = tree.nodes.new("NodeReroute")
     user.name = "User Reroute"
     link = next(l for l in tree.links if l.from_socket == frame)
     target = link.to_socket
@@ -100,19 +102,31 @@ def build_scene():
 def snapshot(scene):
     """Everything the user owns that the add-on touches: material trees, the compositor,
     the view layers' AOVs, node groups."""
+
     def tree_state(tree):
-        nodes = sorted((n.name, n.bl_idname, tuple(n.location),
-                        tuple(str(getattr(s, "default_value", None)) for s in n.inputs))
-                       for n in tree.nodes)
-        links = sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name,
-                        l.to_socket.identifier) for l in tree.links)
+        nodes = sorted(
+            (
+                n.name,
+                n.bl_idname,
+                tuple(n.location),
+                tuple(str(getattr(s, "default_value", None)) for s in n.inputs),
+            )
+            for n in tree.nodes
+        )
+        links = sorted(
+            (l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+            for l in tree.links
+        )
         return nodes, links
+
     comp = compat.scene_compositor(scene)
-    return {"materials": {m.name: tree_state(m.node_tree) for m in bpy.data.materials if m.node_tree},
-            "compositor": tree_state(comp) if comp else None,
-            "aovs": [[(a.name, a.type) for a in layer.aovs] for layer in scene.view_layers],
-            "groups": sorted(g.name for g in bpy.data.node_groups),
-            "images": sorted(i.name for i in bpy.data.images)}
+    return {
+        "materials": {m.name: tree_state(m.node_tree) for m in bpy.data.materials if m.node_tree},
+        "compositor": tree_state(comp) if comp else None,
+        "aovs": [[(a.name, a.type) for a in layer.aovs] for layer in scene.view_layers],
+        "groups": sorted(g.name for g in bpy.data.node_groups),
+        "images": sorted(i.name for i in bpy.data.images),
+    }
 
 
 def read(path, prefix=""):
@@ -160,12 +174,16 @@ def expected(scene, frame, image, z, method=None):
 def compare(name, got, want, off, mask):
     rel = np.abs(got - want)[mask] / np.maximum(want[mask], 1e-6)
     change = (np.abs(got - off)[mask] / np.maximum(off[mask], 1e-6)).mean()
-    print(f"{name}: {mask.sum()} far pixels, error vs Image x T + Inscatter: max {rel.max():.4f} "
-          f"mean {rel.mean():.5f}; differs from the unhazed frame by {change:.3f} (mean)")
-    worst = np.unravel_index(np.argmax(np.where(mask[..., None], np.abs(got - want) / np.maximum(want, 1e-6), 0)), got.shape)
+    print(
+        f"{name}: {mask.sum()} far pixels, error vs Image x T + Inscatter: max {rel.max():.4f} "
+        f"mean {rel.mean():.5f}; differs from the unhazed frame by {change:.3f} (mean)"
+    )
+    worst = np.unravel_index(
+        np.argmax(np.where(mask[..., None], np.abs(got - want) / np.maximum(want, 1e-6), 0)), got.shape
+    )
     print(f"  worst pixel (x {worst[1]}, y {worst[0]}): got {got[worst[:2]]}, want {want[worst[:2]]}")
     if os.environ.get("WELKIN_DEBUG"):
-        for j, i in list(zip(*np.nonzero(mask)))[::max(1, mask.sum() // 8)]:
+        for j, i in list(zip(*np.nonzero(mask)))[:: max(1, mask.sum() // 8)]:
             print(f"  pixel ({i}, {j}): got {got[j, i]} want {want[j, i]} off {off[j, i]}")
     at.check(mask.sum() >= 15, f"{name}: only {mask.sum()} far pixels")
     at.check(rel.max() < TOL, f"{name}: the frame is {rel.max():.4f} from Image x T + Inscatter")
@@ -183,7 +201,7 @@ def cycles_depth(scene, tmp):
     depth."""
     if not _depth:
         engine, samples = scene.render.engine, scene.cycles.samples
-        scene.render.engine = 'CYCLES'
+        scene.render.engine = "CYCLES"
         scene.cycles.samples = 1
         scene.render.filepath = str(tmp / "depth_")
         bpy.ops.render.render(animation=True)
@@ -203,7 +221,7 @@ def run_engine(scene, engine, tmp):
     for layer in scene.view_layers:
         layer.use_pass_z = True
     compat.set_exr(scene.render.image_settings, multilayer=True)
-    scene.render.image_settings.color_depth = '32'
+    scene.render.image_settings.color_depth = "32"
     scene.render.filepath = str(tmp / "off_")
     bpy.ops.render.render(animation=True)
     off = {f: read(scene.render.frame_path(frame=f), "ViewLayer.Combined.")[0] for f in (1, 2)}
@@ -223,13 +241,24 @@ def run_engine(scene, engine, tmp):
     blend = tmp / f"aerial_{engine}.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
     elsewhere = tmp / "elsewhere"
-    cmd = [*at.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin",
-           "-o", str(elsewhere / "f_####"), "-a"]
+    cmd = [
+        *at.blender_command(),
+        "-b",
+        "--factory-startup",
+        str(blend),
+        "--addons",
+        "welkin",
+        "-o",
+        str(elsewhere / "f_####"),
+        "-a",
+    ]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env["BLENDER_USER_SCRIPTS"] = str(at.scripts_dir())
     env["BLENDER_USER_CONFIG"] = str(at.TMP / "config")
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=900, env=env)
-    at.check(r.returncode == 0, f"{engine}: -a exited {r.returncode}:\n{r.stdout[-3000:]}\n{r.stderr[-2000:]}")
+    at.check(
+        r.returncode == 0, f"{engine}: -a exited {r.returncode}:\n{r.stdout[-3000:]}\n{r.stderr[-2000:]}"
+    )
     at.check(not (tmp / "nowhere").exists(), "the render wrote to the saved output path, not -o")
     for f in (1, 2):
         got, _ = read(elsewhere / f"f_{f:04d}.exr")
@@ -241,10 +270,12 @@ def run_engine(scene, engine, tmp):
     scene.frame_set(1)
     text1 = aerial.scene_json(scene, module)
     import json
+
     d = json.loads(text1)
     d["resolution"] = {"x": W, "y": H, "percentage": 100}
-    L1, T1 = module.aerial_perspective(module.SceneDescription.from_json_string(json.dumps(d)),
-                                       np.ascontiguousarray(depth[2]))
+    L1, T1 = module.aerial_perspective(
+        module.SceneDescription.from_json_string(json.dumps(d)), np.ascontiguousarray(depth[2])
+    )
     stale = off[2] * T1 + L1
     rel_stale = (np.abs(got2 - stale)[mask] / np.maximum(stale[mask], 1e-6)).mean()
     at.check(rel_stale > 0.03, f"{engine}: frame 2 is as close to frame 1's haze ({rel_stale:.3f})")
@@ -258,28 +289,46 @@ def run_engine(scene, engine, tmp):
     # linear fetches in Cycles, the direction table in sixteen nearest-texel fetches filtered
     # by its own nodes in EEVEE.
     group = bpy.data.node_groups[aerial_frame.SHADER_GROUP]
-    fetches = {n.interpolation for n in group.nodes if n.bl_idname == 'ShaderNodeTexImage'}
-    count = sum(n.bl_idname == 'ShaderNodeTexImage' for n in group.nodes)
-    cycles = engine == 'CYCLES'
-    at.check((fetches, count) == (({'Linear'}, 3) if cycles else ({'Closest'}, 16)),
-             f"{engine}: the group fetches {count} texels, {fetches}")
+    fetches = {n.interpolation for n in group.nodes if n.bl_idname == "ShaderNodeTexImage"}
+    count = sum(n.bl_idname == "ShaderNodeTexImage" for n in group.nodes)
+    cycles = engine == "CYCLES"
+    at.check(
+        (fetches, count) == (({"Linear"}, 3) if cycles else ({"Closest"}, 16)),
+        f"{engine}: the group fetches {count} texels, {fetches}",
+    )
     # Cycles evaluates the group at every camera-ray sample: the screen form's 12 nodes that
     # a perspective camera's group links (the View Vector's: Texture Coordinate is left out),
     # each of the kinds that take the fewest of Cycles' instructions (docs/design.md), are
     # what keeps aerial perspective within 10 % of a render (docs/validation.md).
     if cycles:
-        used = sorted(n.bl_idname for n in group.nodes
-                      if n.bl_idname == 'ShaderNodeOutputAOV' or any(o.is_linked for o in n.outputs))
-        want = sorted(['ShaderNodeCameraData', 'ShaderNodeMath', 'ShaderNodeVectorMath',
-                       'ShaderNodeVectorMath', *['ShaderNodeTexImage'] * 3, 'ShaderNodeCombineColor',
-                       'ShaderNodeMix', 'ShaderNodeMix', 'ShaderNodeOutputAOV', 'ShaderNodeOutputAOV'])
+        used = sorted(
+            n.bl_idname
+            for n in group.nodes
+            if n.bl_idname == "ShaderNodeOutputAOV" or any(o.is_linked for o in n.outputs)
+        )
+        want = sorted(
+            [
+                "ShaderNodeCameraData",
+                "ShaderNodeMath",
+                "ShaderNodeVectorMath",
+                "ShaderNodeVectorMath",
+                *["ShaderNodeTexImage"] * 3,
+                "ShaderNodeCombineColor",
+                "ShaderNodeMix",
+                "ShaderNodeMix",
+                "ShaderNodeOutputAOV",
+                "ShaderNodeOutputAOV",
+            ]
+        )
         at.check(used == want, f"the Cycles group evaluates {used}, not {want}")
     # Removable exactly.
     scene.welkin_aerial.enabled = False
     after = snapshot(scene)
     for key in before:
-        at.check(before[key] == after[key], f"{engine}: {key} changed by enable + disable:\n"
-                                            f"{before[key]}\n{after[key]}")
+        at.check(
+            before[key] == after[key],
+            f"{engine}: {key} changed by enable + disable:\n{before[key]}\n{after[key]}",
+        )
     print(f"{engine}: user's materials, compositor, AOVs, groups and images restored exactly")
 
 

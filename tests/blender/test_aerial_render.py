@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender + Cycles: the add-on's aerial perspective, end to end.
 
 A ground plane and cubes out to 30 km, camera 20 m up looking along +X, `hazy` air; with
@@ -16,6 +17,7 @@ depth.
 Bad input: no camera, a fisheye camera, the Z pass turned off, and a user's file where the
 passes would go: a clear status line, no pass written (or the user's file left alone).
 """
+
 import json
 import math
 import os
@@ -44,14 +46,15 @@ def build_scene():
     for d, y in ((300.0, -40.0), (3000.0, 0.0), (30000.0, 4000.0)):
         bpy.ops.mesh.primitive_cube_add(size=0.06 * d, location=(d, y, 0.03 * d))
     scene.world.welkin.preset = "hazy"
-    scene.render.engine = 'CYCLES'
-    scene.cycles.device = 'CPU'
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
     scene.cycles.samples = 4
     scene.cycles.use_denoising = False
     scene.render.resolution_x, scene.render.resolution_y = 96, 48
     scene.render.resolution_percentage = 100
     from welkin.blender import compat
-    compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
+
+    compat.set_file_format(scene.render.image_settings, "OPEN_EXR")
     scene.frame_start, scene.frame_end = 1, 2
     scene.render.filepath = str(at.TMP / "out" / "frame_")
     return scene
@@ -62,10 +65,11 @@ def add_user_nodes(scene):
     "User Curves" -> the output (Composite, or 5.0's Group Output). Returns the output
     node."""
     from welkin.blender import compat
+
     tree, _undo = compat.ensure_scene_compositor(scene, "User Compositor")
-    rl = next((n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers'), None)
+    rl = next((n for n in tree.nodes if n.bl_idname == "CompositorNodeRLayers"), None)
     comp = compat.compositor_output(tree)
-    curves = tree.nodes.new('CompositorNodeCurveRGB')
+    curves = tree.nodes.new("CompositorNodeCurveRGB")
     curves.name = "User Curves"
     tree.links.new(compat.compositor_frame(tree, rl), curves.inputs["Image"])
     tree.links.new(curves.outputs["Image"], comp.inputs[0])
@@ -86,6 +90,7 @@ def frame_matches_the_core(scene, module, base, what):
     the core's composite where every sample of a pixel meets the same surface at the same
     depth (the depths within two pixels agree within 1 %) and the air shows (T < 0.95): 2 %."""
     from welkin import scene_export
+
     bpy.ops.render.render(write_still=True)
     frame_no = scene.frame_current
     path = scene_export.frame_path(base, "aerial", frame_no)
@@ -99,15 +104,22 @@ def frame_matches_the_core(scene, module, base, what):
     z = np.where(z < 1e8, z, np.nan)
     # Within two pixels: a pixel filter reaches past a pixel's neighbours' centres, and
     # Blender 4.x's Z pass is one sample's, not the pixel's mean.
-    with np.errstate(invalid='ignore'):
-        smooth = np.all([np.abs(np.roll(np.roll(z, dy, 0), dx, 1) - z) <= 0.01 * z
-                         for dy in range(-2, 3) for dx in range(-2, 3)], axis=0)
+    with np.errstate(invalid="ignore"):
+        smooth = np.all(
+            [
+                np.abs(np.roll(np.roll(z, dy, 0), dx, 1) - z) <= 0.01 * z
+                for dy in range(-2, 3)
+                for dx in range(-2, 3)
+            ],
+            axis=0,
+        )
     smooth[[0, 1, -2, -1], :] = smooth[:, [0, 1, -2, -1]] = False
     hazed = smooth & (tr.mean(-1) < 0.95)
     at.check(hazed.sum() > 20, f"{what}: only {hazed.sum()} hazed pixels to compare")
     err = np.abs(frame - composite)[hazed] / np.maximum(composite[hazed], 1e-6)
-    print(f"{what} frame vs the core's composite: {hazed.sum()} px, max {err.max():.4f}, "
-          f"mean {err.mean():.5f}")
+    print(
+        f"{what} frame vs the core's composite: {hazed.sum()} px, max {err.max():.4f}, mean {err.mean():.5f}"
+    )
     at.check(err.max() < 0.02, f"{what}: the frame differs from the core's composite by {err.max()}")
     print(f"ok: {what} camera")
 
@@ -117,6 +129,7 @@ def main():
     from welkin import scene_export
     from welkin.blender.aerial import compositor, frame as aerial_frame, handlers as aerial_handlers
     from welkin.blender import compat
+
     scene = build_scene()
     tree, comp = add_user_nodes(scene)
     names_before = {n.name for n in tree.nodes}
@@ -127,21 +140,26 @@ def main():
     at.check(names_before <= {n.name for n in tree.nodes}, "enable removed a user node")
     at.check(feeder(comp) == "User Curves", "the output is no longer fed by the user's node")
     depth = compositor.depth_node(scene)  # in the user's tree, or (5.3+) Welkin's effect
-    at.check(depth.inputs["Depth"].is_linked and depth.inputs["Image"].is_linked,
-             "the depth node's inputs are not linked")
-    at.check(depth.inputs["Image"].links[0].from_node.bl_idname == 'CompositorNodeRLayers',
-             "the depth node does not take the render layer's own (un-hazed) Image")
+    at.check(
+        depth.inputs["Depth"].is_linked and depth.inputs["Image"].is_linked,
+        "the depth node's inputs are not linked",
+    )
+    at.check(
+        depth.inputs["Image"].links[0].from_node.bl_idname == "CompositorNodeRLayers",
+        "the depth node does not take the render layer's own (un-hazed) Image",
+    )
     at.check(scene.view_layers[0].use_pass_z, "enabling did not turn the Z pass on")
 
     bpy.ops.render.render(animation=True)
     base = scene_export.file_base(bpy.path.abspath(scene.render.filepath))
     cli = ROOT / "build" / "welkin"
     for frame in (1, 2):
-        paths = {k: pathlib.Path(scene_export.frame_path(base, k, frame))
-                 for k in scene_export.KINDS}
+        paths = {k: pathlib.Path(scene_export.frame_path(base, k, frame)) for k in scene_export.KINDS}
         for kind, path in paths.items():
-            at.check(path.is_file(), f"frame {frame}: {kind} file {path} missing "
-                                     f"(status: {scene.welkin_aerial.status})")
+            at.check(
+                path.is_file(),
+                f"frame {frame}: {kind} file {path} missing (status: {scene.welkin_aerial.status})",
+            )
         cam_z = json.loads(paths["scene"].read_text())["camera"]["matrix_world"][2][3]
         at.check(abs(cam_z - 40.0 * frame + 20.0) < 1e-3, f"frame {frame}: camera z {cam_z}")
         pixels, names = module.read_exr(str(paths["render"]))
@@ -150,12 +168,15 @@ def main():
         ins = rgb(module, paths["aerial"], [f"Welkin.AerialInscatter.{c}" for c in "RGB"])
         tr = rgb(module, paths["aerial"], [f"Welkin.AerialTransmittance.{c}" for c in "RGB"])
         near, far = depth < 1000.0, (depth > 10000.0) & (depth < 1e8)
-        at.check(near.sum() > 20 and far.sum() > 5, f"frame {frame}: too few near/far pixels "
-                                                    f"({near.sum()}, {far.sum()})")
+        at.check(
+            near.sum() > 20 and far.sum() > 5,
+            f"frame {frame}: too few near/far pixels ({near.sum()}, {far.sum()})",
+        )
         t_near, t_far = tr[near].mean(), tr[far].mean()
         i_near, i_far = ins[near].mean(), ins[far].mean()
-        print(f"frame {frame}: T near {t_near:.4f} far {t_far:.4f}; "
-              f"inscatter near {i_near:.5f} far {i_far:.5f}")
+        print(
+            f"frame {frame}: T near {t_near:.4f} far {t_far:.4f}; inscatter near {i_near:.5f} far {i_far:.5f}"
+        )
         at.check(t_far < t_near - 0.05, f"frame {frame}: far T {t_far} not below near {t_near}")
         at.check(i_far > 2.0 * i_near, f"frame {frame}: far inscatter {i_far} not above {i_near}")
         composite = rgb(module, paths["composite"], "RGB")
@@ -163,14 +184,25 @@ def main():
         err = np.abs(composite - expect) / np.maximum(np.abs(expect), 1e-6)
         at.check(err.max() < 1e-6, f"frame {frame}: composite differs by {err.max()}")
         out = at.TMP / f"cli_{frame}.exr"
-        subprocess.run([str(cli), "aerial", "--scene", str(paths["scene"]), "--depth",
-                        str(paths["render"]), "--depth-channel", "Depth.V", "-o", str(out)],
-                       check=True)
+        subprocess.run(
+            [
+                str(cli),
+                "aerial",
+                "--scene",
+                str(paths["scene"]),
+                "--depth",
+                str(paths["render"]),
+                "--depth-channel",
+                "Depth.V",
+                "-o",
+                str(out),
+            ],
+            check=True,
+        )
         cli_pix, cli_names = module.read_exr(str(out))
         ours, our_names = module.read_exr(str(paths["aerial"]))
         for n in scene_export.PASS_CHANNELS:
-            diff = np.abs(cli_pix[..., cli_names.index(n)]
-                          - ours[..., our_names.index(n)]).max()
+            diff = np.abs(cli_pix[..., cli_names.index(n)] - ours[..., our_names.index(n)]).max()
             at.check(diff < 1e-5, f"frame {frame}: CLI {n} differs by {diff}")
     print("ok: 2 frames, passes + JSON + composite, CLI reproduces")
 
@@ -192,12 +224,14 @@ def main():
     at.check(scene.view_layers[0].use_pass_z, "the Z pass was not turned on again")
     wrote = pathlib.Path(scene_export.frame_path(base, "aerial", 4)).is_file()
     if wrote:  # then from the frame's real depth, not the File Output's constant 0
-        tr = rgb(module, scene_export.frame_path(base, "aerial", 4),
-                 [f"Welkin.AerialTransmittance.{c}" for c in "RGB"])
+        tr = rgb(
+            module,
+            scene_export.frame_path(base, "aerial", 4),
+            [f"Welkin.AerialTransmittance.{c}" for c in "RGB"],
+        )
         at.check(tr.min() < 0.5, f"Z pass off: passes computed without depth (T min {tr.min()})")
     at.check(wrote or "Z pass" in scene.welkin_aerial.status, scene.welkin_aerial.status)
-    print(f"ok: Z pass off -> {'computed' if wrote else 'reported'}: "
-          f"{scene.welkin_aerial.status}")
+    print(f"ok: Z pass off -> {'computed' if wrote else 'reported'}: {scene.welkin_aerial.status}")
 
     # The Depth link to our File Output node removed: no depth written, reported.
     scene.frame_set(9)
@@ -205,24 +239,30 @@ def main():
     out_node.id_data.links.remove(out_node.inputs["Depth"].links[0])
     bpy.ops.render.render(write_still=True)
     # (3.4 leaves the unlinked input out of the file, 4.5 and 5.0 write it as zeros)
-    at.check("no Z pass" in scene.welkin_aerial.status
-             or "Z pass is empty" in scene.welkin_aerial.status, scene.welkin_aerial.status)
-    at.check(not pathlib.Path(scene_export.frame_path(base, "aerial", 9)).exists(),
-             "passes written without a Z pass")
+    at.check(
+        "no Z pass" in scene.welkin_aerial.status or "Z pass is empty" in scene.welkin_aerial.status,
+        scene.welkin_aerial.status,
+    )
+    at.check(
+        not pathlib.Path(scene_export.frame_path(base, "aerial", 9)).exists(),
+        "passes written without a Z pass",
+    )
     scene.welkin_aerial.enabled = False
     scene.welkin_aerial.enabled = True  # relinks
-    at.check(compositor.depth_node(scene).inputs["Depth"].is_linked,
-             "toggling did not relink the Depth input")
+    at.check(
+        compositor.depth_node(scene).inputs["Depth"].is_linked, "toggling did not relink the Depth input"
+    )
     print(f"ok: unlinked Z pass reported: {scene.welkin_aerial.status}")
 
     # A fisheye camera: a clear report, no passes.
     scene.frame_set(5)
-    scene.camera.data.type = 'PANO'
-    compat.camera_panorama(scene.camera.data).panorama_type = 'FISHEYE_EQUIDISTANT'
+    scene.camera.data.type = "PANO"
+    compat.camera_panorama(scene.camera.data).panorama_type = "FISHEYE_EQUIDISTANT"
     bpy.ops.render.render(write_still=True)
     at.check("FISHEYE" in scene.welkin_aerial.status, scene.welkin_aerial.status)
-    at.check(not pathlib.Path(scene_export.frame_path(base, "aerial", 5)).exists(),
-             "a fisheye frame got passes")
+    at.check(
+        not pathlib.Path(scene_export.frame_path(base, "aerial", 5)).exists(), "a fisheye frame got passes"
+    )
     print(f"ok: fisheye reported: {scene.welkin_aerial.status}")
 
     # Orthographic and equirectangular frames: supported by the core; passes finite, T in
@@ -231,30 +271,36 @@ def main():
     ground = bpy.data.materials.new("Ground")  # a material added late gets the group too
     ground.use_nodes = True
     for ob in scene.objects:
-        if ob.type == 'MESH' and not ob.data.materials:
+        if ob.type == "MESH" and not ob.data.materials:
             ob.data.materials.append(ground)
     scene.frame_set(6)
     scene.camera.rotation_euler.x = math.radians(90.0)  # level: the 3 km cube's face
-    scene.camera.data.type = 'ORTHO'
+    scene.camera.data.type = "ORTHO"
     scene.camera.data.ortho_scale = 200.0
     frame_matches_the_core(scene, module, base, "ortho")
     # Its distance is the depth (View Distance would measure from the camera's centre, which
     # differs from the depth by up to 100 m across this 200 m wide view).
     slice_input = bpy.data.node_groups[aerial_frame.SHADER_GROUP].nodes[aerial_frame.SLICE_NODE].inputs[0]
-    at.check(slice_input.links[0].from_socket.name == "View Z Depth",
-             f"ortho: the group reads {slice_input.links[0].from_socket.name}")
+    at.check(
+        slice_input.links[0].from_socket.name == "View Z Depth",
+        f"ortho: the group reads {slice_input.links[0].from_socket.name}",
+    )
     # Its lattice lies over the Window coordinate (the View Vector is one for the whole frame).
     screen_input = bpy.data.node_groups[aerial_frame.SHADER_GROUP].nodes[aerial_frame.SCREEN_NODE].inputs[0]
-    at.check(screen_input.links[0].from_socket.name == "Window",
-             f"ortho: the group's lattice is over {screen_input.links[0].from_socket.name}")
-    scene.camera.data.type = 'PANO'
+    at.check(
+        screen_input.links[0].from_socket.name == "Window",
+        f"ortho: the group's lattice is over {screen_input.links[0].from_socket.name}",
+    )
+    scene.camera.data.type = "PANO"
     pano = compat.camera_panorama(scene.camera.data)
-    pano.panorama_type = 'EQUIRECTANGULAR'
+    pano.panorama_type = "EQUIRECTANGULAR"
     pano.longitude_min, pano.longitude_max = math.radians(-6.0), math.radians(6.0)
     pano.latitude_min, pano.latitude_max = math.radians(-3.0), math.radians(3.0)
     frame_matches_the_core(scene, module, base, "equirectangular")
-    at.check(slice_input.links[0].from_socket.name == "View Distance",
-             f"equirectangular: the group reads {slice_input.links[0].from_socket.name}")
+    at.check(
+        slice_input.links[0].from_socket.name == "View Distance",
+        f"equirectangular: the group reads {slice_input.links[0].from_socket.name}",
+    )
     scene.camera.rotation_euler.x = math.radians(88.0)
 
     # No camera: the handler reports, never raises.
@@ -267,7 +313,7 @@ def main():
     print(f"ok: no camera reported: {scene.welkin_aerial.status}")
 
     scene.frame_set(8)
-    scene.camera.data.type = 'PERSP'
+    scene.camera.data.type = "PERSP"
 
     # The same from a saved file, `blender -b file.blend --addons welkin -a` in a fresh
     # process: the setting is saved, the handlers load with the add-on.
@@ -280,16 +326,21 @@ def main():
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env["BLENDER_USER_SCRIPTS"] = str(at.scripts_dir())
     env["BLENDER_USER_CONFIG"] = str(at.TMP / "config")
-    run = subprocess.run([*at.blender_command(), "-b", "--factory-startup", str(blend),
-                          "--addons", "welkin", "-a"], env=env, capture_output=True, text=True,
-                         timeout=300)
+    run = subprocess.run(
+        [*at.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin", "-a"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     at.check(run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:])
     base2 = scene_export.file_base(str(at.TMP / "out2" / "shot_"))
     for frame in (1, 2):
         for kind in scene_export.KINDS:
-            at.check(pathlib.Path(scene_export.frame_path(base2, kind, frame)).is_file(),
-                     f"blender -a: frame {frame} has no {kind} file:\n"
-                     f"{run.stdout[-3000:]}{run.stderr[-2000:]}")
+            at.check(
+                pathlib.Path(scene_export.frame_path(base2, kind, frame)).is_file(),
+                f"blender -a: frame {frame} has no {kind} file:\n{run.stdout[-3000:]}{run.stderr[-2000:]}",
+            )
         text = pathlib.Path(scene_export.frame_path(base2, "scene", frame)).read_text()
         cam_z = json.loads(text)["camera"]["matrix_world"][2][3]
         at.check(abs(cam_z - (40.0 * frame - 20.0)) < 1e-3, f"blender -a: frame {frame} z {cam_z}")
@@ -301,9 +352,10 @@ def main():
     at.check(names == names_before, f"after disable: {sorted(names ^ names_before)}")
     at.check(feeder(comp) == "User Curves", "disable did not restore the user's link")
     curves = tree.nodes["User Curves"]
-    at.check(curves.inputs["Image"].links[0].from_node.bl_idname in ('CompositorNodeRLayers',
-                                                                      'NodeGroupInput'),
-             "disable did not relink the frame to the user's node")
+    at.check(
+        curves.inputs["Image"].links[0].from_node.bl_idname in ("CompositorNodeRLayers", "NodeGroupInput"),
+        "disable did not relink the frame to the user's node",
+    )
     print("ok: user nodes survive enable/disable")
     at.done("test_aerial_render")
 

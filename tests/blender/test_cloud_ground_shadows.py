@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Ground Shadows: the clouds' shadows fall on the ground in Cycles, through the add-on's
 shadow layer, which is removed exactly.
 
@@ -21,6 +22,7 @@ orthographic camera 3 km wide, 32 x 32:
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_ground_shadows.py
 """
+
 import pathlib
 import sys
 
@@ -40,18 +42,25 @@ check = t.check
 N = 32
 scene, sun = t.new_scene(sun_elevation_deg=50.0, sun_azimuth_deg=20.0, camera_z=1000.0)
 world = scene.world
-world.welkin.method = 'lut'
-world.welkin.resolution = '256'
+world.welkin.method = "lut"
+world.welkin.resolution = "256"
 c = world.welkin_clouds
 c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 16, 2, 1, 1
-ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1600.0, coverage=0.4,
-             density_per_m=0.02, base_scale_m=3000.0, weather_scale_m=6000.0)
+ct.add_layer(
+    world,
+    bottom_altitude_m=1000.0,
+    top_altitude_m=1600.0,
+    coverage=0.4,
+    density_per_m=0.02,
+    base_scale_m=3000.0,
+    weather_scale_m=6000.0,
+)
 bpy.ops.mesh.primitive_plane_add(size=8000.0, location=(0.0, 0.0, 0.0))
 ground = bpy.context.active_object
 material = bpy.data.materials.new("White")
 nodes = compat.material_node_tree(material).nodes
 nodes.remove(nodes["Principled BSDF"])
-diffuse = nodes.new('ShaderNodeBsdfDiffuse')
+diffuse = nodes.new("ShaderNodeBsdfDiffuse")
 diffuse.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)
 material.node_tree.links.new(diffuse.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
 ground.data.materials.append(material)
@@ -59,33 +68,34 @@ world.cycles_visibility.diffuse = False
 world.cycles_visibility.glossy = False
 cam = scene.camera
 cam.rotation_euler = (0.0, 0.0, 0.0)
-cam.data.type = 'ORTHO'
+cam.data.type = "ORTHO"
 cam.data.ortho_scale = 3000.0
 cam.data.clip_end = 5000.0
-scene.render.engine = 'CYCLES'
-scene.cycles.device = 'CPU'
+scene.render.engine = "CYCLES"
+scene.cycles.device = "CPU"
 scene.cycles.samples = 4
 scene.cycles.use_denoising = False
-scene.cycles.pixel_filter_type = 'BLACKMAN_HARRIS'
+scene.cycles.pixel_filter_type = "BLACKMAN_HARRIS"
 scene.cycles.filter_width = 0.01
 scene.render.resolution_x = scene.render.resolution_y = N
 scene.render.resolution_percentage = 100
-compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
-scene.render.image_settings.color_depth = '32'
-scene.view_settings.view_transform = 'Standard'
+compat.set_file_format(scene.render.image_settings, "OPEN_EXR")
+scene.render.image_settings.color_depth = "32"
+scene.view_settings.view_transform = "Standard"
 
 c.shadows = False
 bpy.ops.welkin.update_sky()
-before = {k: {i.name for i in getattr(bpy.data, k)}
-          for k in ("objects", "meshes", "materials", "images")}
+before = {k: {i.name for i in getattr(bpy.data, k)} for k in ("objects", "meshes", "materials", "images")}
 c.ground_shadows = True
 c.shadow_extent_m, c.shadow_height_m, c.shadow_resolution = 4000.0, 200.0, 128
 bpy.ops.welkin.update_sky()
 layer = cloud_shadows.find(world)
 check(layer is not None, "Ground Shadows made no shadow layer")
-check(layer.visible_shadow and not any(getattr(layer, f"visible_{r}") for r in
-                                       ("camera", "diffuse", "glossy", "transmission")),
-      "the shadow layer must be visible to shadow rays only")
+check(
+    layer.visible_shadow
+    and not any(getattr(layer, f"visible_{r}") for r in ("camera", "diffuse", "glossy", "transmission")),
+    "the shadow layer must be visible to shadow rays only",
+)
 
 
 def shot(name):
@@ -107,13 +117,19 @@ request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
 text = update.shadow_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
 T = np.asarray(native.cloud_transmittance(text, points)).reshape(N, N)
 diff = np.abs(ratio - T)
-print(f"ground shadows: |ratio - T| median {np.median(diff):.4f}, 95th percentile "
-      f"{np.percentile(diff, 95):.4f}, max {diff.max():.4f}; shadowed (T < 0.7) "
-      f"{(T < 0.7).mean():.1%}, open (T > 0.95) {(T > 0.95).mean():.1%}")
-check((T < 0.7).mean() > 0.05 and (T > 0.95).mean() > 0.05,
-      f"the test wants shadowed and open ground: {(T < 0.7).mean():.2f}, {(T > 0.95).mean():.2f}")
-check(np.median(diff) < 0.02 and np.percentile(diff, 95) < 0.1,
-      f"the shadows on the ground are not the clouds' transmittance: median {np.median(diff):.3f}")
+print(
+    f"ground shadows: |ratio - T| median {np.median(diff):.4f}, 95th percentile "
+    f"{np.percentile(diff, 95):.4f}, max {diff.max():.4f}; shadowed (T < 0.7) "
+    f"{(T < 0.7).mean():.1%}, open (T > 0.95) {(T > 0.95).mean():.1%}"
+)
+check(
+    (T < 0.7).mean() > 0.05 and (T > 0.95).mean() > 0.05,
+    f"the test wants shadowed and open ground: {(T < 0.7).mean():.2f}, {(T > 0.95).mean():.2f}",
+)
+check(
+    np.median(diff) < 0.02 and np.percentile(diff, 95) < 0.1,
+    f"the shadows on the ground are not the clouds' transmittance: median {np.median(diff):.3f}",
+)
 
 c.ground_shadows = False
 bpy.ops.welkin.update_sky()

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Export HDRI writes the sky the world shows, its clouds included.
 
 A world with a procedural cloud layer (Update Sky, 256 x 128, the camera 2 m up); then
@@ -16,6 +17,7 @@ welkin.export_hdri at the world's width:
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_hdri.py
 """
+
 import math
 import pathlib
 import sys
@@ -34,21 +36,38 @@ check = t.check
 scene, sun = t.new_scene(sun_elevation_deg=25.0, sun_azimuth_deg=30.0, camera_z=2.0)
 world = scene.world
 c = ct.quick_cloudy_world(world)
-layer = ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1800.0, coverage=0.6,
-                     density_per_m=0.02, base_scale_m=3000.0, weather_scale_m=12000.0)
+layer = ct.add_layer(
+    world,
+    bottom_altitude_m=1000.0,
+    top_altitude_m=1800.0,
+    coverage=0.6,
+    density_per_m=0.02,
+    base_scale_m=3000.0,
+    weather_scale_m=12000.0,
+)
 bpy.ops.welkin.update_sky()
 check("with clouds" in world.welkin.status, world.welkin.status)
 sky = t.world_pixels(world.welkin.sky_image).copy()
 # The world draws the disc with nodes; the HDRI holds it as pixels: the core's disc image
 # for this sun, dimmed by the clouds' transmittance of each pixel (as the core composites).
 from welkin import sky_request  # noqa: E402
+
 request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
 text = update.cloudy_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
-_img, T = native.scene_sky_image(native.SceneDescription.from_json_string(text), sky.shape[1],
-                                 sun_disc=False, return_transmittance=True)
-disc = native.sun_disc_image(sky_request.build_atmosphere(request, native), request.altitude_m,
-                             request.sun_direction, sky.shape[1], "rgb",
-                             exposure=request.exposure) * T[..., None]
+_img, T = native.scene_sky_image(
+    native.SceneDescription.from_json_string(text), sky.shape[1], sun_disc=False, return_transmittance=True
+)
+disc = (
+    native.sun_disc_image(
+        sky_request.build_atmosphere(request, native),
+        request.altitude_m,
+        request.sun_direction,
+        sky.shape[1],
+        "rgb",
+        exposure=request.exposure,
+    )
+    * T[..., None]
+)
 
 
 def export(name, **kwargs):
@@ -77,20 +96,23 @@ h = sky.shape[0]
 weight = np.cos((np.arange(h) + 0.5) / h * math.pi - math.pi / 2.0)[:, None, None]
 total_hdri, total_world = float((with_disc * weight).sum()), float((world_total * weight).sum())
 rel = abs(total_hdri / total_world - 1.0)
-print(f"HDRI with disc vs the world's sky + disc: total {rel:.2e} relative, away from the "
-      f"sun {err:.2e}")
+print(f"HDRI with disc vs the world's sky + disc: total {rel:.2e} relative, away from the sun {err:.2e}")
 check(rel < 1e-3, f"the HDRI's total differs from the world's (sky + disc) by {rel:.3g}")
 
 # The clouds are in it: against the clear sky, where the core sees clouds.
 layer.enabled = False
 clear = export("clear_nodisc.exr", sun_disc=False)
 cloud, free = T < 0.9, T >= 1.0 - 1e-7
-check(cloud.sum() > 0.05 * T.size and free.sum() > 0.1 * T.size,
-      f"the test wants cloudy and clear pixels: {cloud.mean():.2f} cloudy, {free.mean():.2f} free")
+check(
+    cloud.sum() > 0.05 * T.size and free.sum() > 0.1 * T.size,
+    f"the test wants cloudy and clear pixels: {cloud.mean():.2f} cloudy, {free.mean():.2f} free",
+)
 changed = float((relative(no_disc, clear).max(axis=-1)[cloud] > 0.01).mean())
 same = float(relative(no_disc, clear).max(axis=-1)[free].max())
-print(f"cloudy HDRI vs clear HDRI: {cloud.mean():.1%} of the sphere clouded (T < 0.9), "
-      f"{changed:.1%} of it changed by over 1 %; cloud-free pixels agree to {same:.1e}")
+print(
+    f"cloudy HDRI vs clear HDRI: {cloud.mean():.1%} of the sphere clouded (T < 0.9), "
+    f"{changed:.1%} of it changed by over 1 %; cloud-free pixels agree to {same:.1e}"
+)
 check(changed > 0.9, f"only {changed:.1%} of the clouded pixels differ from the clear sky")
 check(same < 1e-5, f"cloud-free pixels differ from the clear sky by {same:.3g}")
 t.done("test_cloud_hdri")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shade Sun Lamp: the sun lamp follows the clouds' transmittance towards the sun at the
 scene origin; under a total overcast it dims and the props' shadows soften.
 
@@ -19,6 +20,7 @@ One cloud layer over a sun 40 degrees up; Update Sky each time:
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_lamp_shadow.py
 """
+
 import pathlib
 import sys
 
@@ -38,8 +40,14 @@ scene, sun = t.new_scene(sun_elevation_deg=40.0, sun_azimuth_deg=0.0, camera_z=2
 world = scene.world
 c = ct.quick_cloudy_world(world)
 check(c.shadows, "Shade Sun Lamp must be on by default")
-layer = ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1800.0, coverage=1.0,
-                     weather_variation=0.0, density_per_m=0.0004)
+layer = ct.add_layer(
+    world,
+    bottom_altitude_m=1000.0,
+    top_altitude_m=1800.0,
+    coverage=1.0,
+    weather_variation=0.0,
+    density_per_m=0.0004,
+)
 
 
 def lamp_after_update():
@@ -49,8 +57,7 @@ def lamp_after_update():
 
 def core_transmittance():
     request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
-    text = update.shadow_scene_json(scene, world.welkin, request, update.clouds_of(scene),
-                                    native)
+    text = update.shadow_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
     return float(native.cloud_transmittance(text, np.zeros((1, 3)))[0])
 
 
@@ -59,8 +66,10 @@ e0, colour0 = lamp_after_update()
 layer.enabled = True
 T = core_transmittance()
 e1, colour1 = lamp_after_update()
-print(f"thin layer: T towards the sun {T:.4f}; lamp {e1:.4f} W/m2 vs clear {e0:.4f} "
-      f"({e1 / e0:.4f}); status: {world.welkin.status}")
+print(
+    f"thin layer: T towards the sun {T:.4f}; lamp {e1:.4f} W/m2 vs clear {e0:.4f} "
+    f"({e1 / e0:.4f}); status: {world.welkin.status}"
+)
 check(0.05 < T < 0.95, f"the thin layer's T {T} is not in (0.05, 0.95)")
 check(abs(e1 / (e0 * T) - 1.0) < 1e-5, f"lamp {e1} != clear {e0} x T {T}")
 check(max(abs(a - b) for a, b in zip(colour0, colour1)) < 1e-6, f"colour {colour1} vs {colour0}")
@@ -83,18 +92,18 @@ cube = bpy.context.active_object
 cam = scene.camera
 cam.location = (0.0, 0.0, 20.0)
 cam.rotation_euler = (0.0, 0.0, 0.0)
-cam.data.type = 'ORTHO'
+cam.data.type = "ORTHO"
 cam.data.ortho_scale = 12.0
-scene.render.engine = 'CYCLES'
-scene.cycles.device = 'CPU'
+scene.render.engine = "CYCLES"
+scene.cycles.device = "CPU"
 scene.cycles.samples = 16
 scene.cycles.use_denoising = False
 scene.cycles.seed = 1
 scene.render.resolution_x = scene.render.resolution_y = 48
 scene.render.resolution_percentage = 100
-compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
-scene.render.image_settings.color_depth = '32'
-scene.view_settings.view_transform = 'Standard'
+compat.set_file_format(scene.render.image_settings, "OPEN_EXR")
+scene.render.image_settings.color_depth = "32"
+scene.view_settings.view_transform = "Standard"
 
 
 def shot(name):
@@ -123,8 +132,12 @@ check(shadow.sum() > 10, f"the clear sky's shadow covers {shadow.sum()} pixels")
 layer.enabled = True
 overcast = ratios()
 hard, soft = float(clear[shadow].mean()), float(overcast[shadow].mean())
-print(f"the shadow's brightness relative to the open ground: clear {hard:.3f}, "
-      f"overcast {soft:.3f} ({shadow.sum()} pixels); lamp {sun.data.energy:.3g} W/m2")
-check(1.0 - soft < 0.5 * (1.0 - hard),
-      f"the overcast shadow is not soft: {soft:.3f} of the open ground vs {hard:.3f} clear")
+print(
+    f"the shadow's brightness relative to the open ground: clear {hard:.3f}, "
+    f"overcast {soft:.3f} ({shadow.sum()} pixels); lamp {sun.data.energy:.3g} W/m2"
+)
+check(
+    1.0 - soft < 0.5 * (1.0 - hard),
+    f"the overcast shadow is not soft: {soft:.3f} of the open ground vs {hard:.3f} clear",
+)
 t.done("test_cloud_lamp_shadow")

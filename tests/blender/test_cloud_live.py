@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A cloudy sky in the live UI is computed beside the interface (background.py).
 
 Timers never fire in `blender -b`; as in test_addon_handlers.py this test stands in for the
@@ -17,6 +18,7 @@ debounce tick, then background.poll) itself. Checked:
 Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_live.py
 """
+
 import pathlib
 import sys
 import time
@@ -37,15 +39,13 @@ check = t.check
 H._headless = lambda: False
 TIMEOUT_S = 300.0
 
-scene, sun = t.new_scene(sun_elevation_deg=25.0, sun_azimuth_deg=30.0, resolution='512',
-                         camera_z=20.0)
+scene, sun = t.new_scene(sun_elevation_deg=25.0, sun_azimuth_deg=30.0, resolution="512", camera_z=20.0)
 world = scene.world
 settings = world.welkin
-settings.method = 'lut'
+settings.method = "lut"
 c = world.welkin_clouds
 c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 32, 4, 2, 2
-ct.add_layer(world, bottom_altitude_m=900.0, top_altitude_m=1600.0, coverage=0.45,
-             density_per_m=0.02)
+ct.add_layer(world, bottom_altitude_m=900.0, top_altitude_m=1600.0, coverage=0.45, density_per_m=0.02)
 bpy.ops.welkin.update_sky()
 check("with clouds" in settings.status, settings.status)
 key0 = settings.last_key
@@ -91,22 +91,33 @@ check(job.result is not None and not job.cancelled, f"the job did not finish: {j
 check(settings.last_key != key0, "the finished job's sky was not applied")
 check(any(s.endswith(" %") for s in seen), f"no progress in the status line: {seen[:3]}")
 live_sky = t.world_pixels(settings.sky_image).copy()
-live_disc = [tuple(n.inputs[2].default_value) for n in scene.world.node_tree.nodes
-             if n.get("welkin_role") == "disc_horner_0"]
+live_disc = [
+    tuple(n.inputs[2].default_value)
+    for n in scene.world.node_tree.nodes
+    if n.get("welkin_role") == "disc_horner_0"
+]
 live_key = settings.last_key
 check("with clouds" in settings.status, settings.status)
 update.update_sky(scene, None, force=True, pack=False)
 check(settings.last_key == live_key, "the synchronous update computed another state")
 np.testing.assert_allclose(live_sky, t.world_pixels(settings.sky_image), rtol=1e-6, atol=0)
-np.testing.assert_allclose(live_disc, [tuple(n.inputs[2].default_value)
-                                       for n in scene.world.node_tree.nodes
-                                       if n.get("welkin_role") == "disc_horner_0"], rtol=1e-6)
+np.testing.assert_allclose(
+    live_disc,
+    [
+        tuple(n.inputs[2].default_value)
+        for n in scene.world.node_tree.nodes
+        if n.get("welkin_role") == "disc_horner_0"
+    ],
+    rtol=1e-6,
+)
 check(np.isfinite(live_sky).all(), "the live cloudy sky is not finite")
-print(f"live: lamp turned -> background job, {len(seen)} polls, progress shown, "
-      f"= the synchronous sky ({settings.status})")
+print(
+    f"live: lamp turned -> background job, {len(seen)} polls, progress shown, "
+    f"= the synchronous sky ({settings.status})"
+)
 
 # --- A newer change replaces a running job (at 2048 a job runs for seconds).
-settings.resolution = '2048'
+settings.resolution = "2048"
 bpy.context.view_layer.update()
 tick_now()
 first = B.current()
@@ -117,14 +128,12 @@ second = B.current()
 check(second is not None and second is not first, "the newer change did not start a new job")
 check(first.cancelled, "the older job was not cancelled")
 first.thread.join(30.0)
-check(not first.thread.is_alive() and first.result is None,
-      "the cancelled job's core run did not stop")
+check(not first.thread.is_alive() and first.result is None, "the cancelled job's core run did not stop")
 B.cancel()
 second.thread.join(30.0)
 check(not second.thread.is_alive() and second.result is None, "cancel() did not stop the job")
-check(B.poll() is None and settings.last_key == live_key,
-      "a cancelled job changed the world's sky")
-settings.resolution = '512'
+check(B.poll() is None and settings.last_key == live_key, "a cancelled job changed the world's sky")
+settings.resolution = "512"
 bpy.context.view_layer.update()
 tick_now()
 wait_for_job()

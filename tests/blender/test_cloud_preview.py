@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The live UI shows a quick, low-resolution cloudy sky first and then refines it
 (background.py).
 
@@ -16,6 +17,7 @@ layer; the lamp turns; the tick starts a job; poll() is called as Blender's time
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_preview.py
 """
+
 import pathlib
 import sys
 import time
@@ -36,17 +38,15 @@ check = t.check
 H._headless = lambda: False
 TIMEOUT_S = 300.0
 
-scene, sun = t.new_scene(sun_elevation_deg=25.0, sun_azimuth_deg=30.0, resolution='256',
-                         camera_z=20.0)
+scene, sun = t.new_scene(sun_elevation_deg=25.0, sun_azimuth_deg=30.0, resolution="256", camera_z=20.0)
 world = scene.world
 settings = world.welkin
-settings.method = 'lut'
+settings.method = "lut"
 c = world.welkin_clouds
 c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 24, 3, 1, 2
-ct.add_layer(world, bottom_altitude_m=900.0, top_altitude_m=1600.0, coverage=0.5,
-             density_per_m=0.02)
+ct.add_layer(world, bottom_altitude_m=900.0, top_altitude_m=1600.0, coverage=0.5, density_per_m=0.02)
 bpy.ops.welkin.update_sky()
-settings.resolution = '1024'
+settings.resolution = "1024"
 
 
 def current_key():
@@ -70,8 +70,7 @@ previews, start = [], time.monotonic()
 while B.poll() is not None:
     if not job.done.is_set() and job.preview_shown:
         image = settings.sky_image
-        previews.append((tuple(image.size), t.world_pixels(image).copy(), settings.status,
-                         settings.last_key))
+        previews.append((tuple(image.size), t.world_pixels(image).copy(), settings.status, settings.last_key))
     bpy.context.view_layer.update()
     check(not H._state["armed"], "the preview re-armed the tick")
     check(time.monotonic() - start < TIMEOUT_S, "the background sky never finished")
@@ -85,8 +84,7 @@ check("refining" in status, f"the status does not say refining: {status}")
 check(key != current_key(), "the preview's key is the full sky's")
 request, _lamp, _w = scene_sun.request_for(scene, settings, None)
 text = update.cloudy_scene_json(scene, settings, request, update.clouds_of(scene), native)
-ref = native.scene_sky_image(native.SceneDescription.from_json_string(text), 256,
-                             sun_disc=False)
+ref = native.scene_sky_image(native.SceneDescription.from_json_string(text), 256, sun_disc=False)
 err = float((np.abs(pixels - ref) / np.maximum(np.abs(ref), 1e-9)).max())
 check(err < 1e-6, f"the preview differs from the core's 256-wide cloudy sky by {err:.3g}")
 
@@ -97,7 +95,7 @@ update.update_sky(scene, None, force=True, pack=False)
 np.testing.assert_allclose(live, t.world_pixels(settings.sky_image), rtol=1e-6, atol=0)
 print(f"full: 1024 x 512 = the synchronous sky; preview = the core's 256 sky to {err:.1e}")
 
-settings.resolution = '256'
+settings.resolution = "256"
 bpy.context.view_layer.update()
 job = turn_lamp_and_tick(31.0)
 check(job.preview_request() is None, "a 256-wide world got a preview")

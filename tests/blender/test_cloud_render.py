@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Clouds in Blender, end to end (headless): a procedural layer and a marked VDB volume
 (a 3-frame sequence written by the test with pyopenvdb).
 
@@ -13,6 +14,7 @@
   * A marked volume whose VDB file is missing: Update Sky fails with a report naming the
     object and the path, the aerial frame is reported and not written.
 """
+
 import json
 import math
 import pathlib
@@ -39,12 +41,11 @@ def cloud_scene():
     cam.rotation_euler = (math.radians(95.0), 0.0, math.radians(-90.0))  # +X, 5 deg up
     cam.data.clip_end = 1e6
     world = scene.world
-    world.welkin.method = 'lut'
+    world.welkin.method = "lut"
     c = world.welkin_clouds
     c.max_steps, c.light_steps, c.ambient_steps, c.octaves = 32, 4, 2, 2
     c.volumes_in_world = True  # the world texture holds the volume too
-    ct.add_layer(world, bottom_altitude_m=900.0, top_altitude_m=1600.0, coverage=0.45,
-                 density_per_m=0.02)
+    ct.add_layer(world, bottom_altitude_m=900.0, top_altitude_m=1600.0, coverage=0.45, density_per_m=0.02)
     paths = ct.write_vdb_sequence(t.TMP / "vdb", frames=(1, 2, 3), value=1.0)
     vol = ct.add_volume(scene, paths[0], location=(2500.0, 0.0, 450.0))
     vol.welkin_cloud.density_scale = 0.01
@@ -69,41 +70,45 @@ cloudy = t.world_pixels(world.welkin.sky_image).copy()
 check(np.isfinite(cloudy).all(), "the cloudy world texture is not finite")
 # Where the clouds are: their transmittance per pixel for the same scene (the core's).
 from welkin.blender.sky import scene_sun  # noqa: E402
+
 request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
 text = update.cloudy_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
 _img, T = native.scene_sky_image(text, request.width, sun_disc=False, return_transmittance=True)
 rel = (np.abs(cloudy - clear) / np.maximum(np.abs(clear), 1e-9)).max(axis=-1)
 free, cloud = T > 1.0 - 1e-6, T < 0.9
-check(free.sum() > 0.3 * T.size and cloud.sum() > 0.05 * T.size,
-      f"the test wants clear and cloudy pixels: {free.mean():.2f} free, {cloud.mean():.2f} cloud")
+check(
+    free.sum() > 0.3 * T.size and cloud.sum() > 0.05 * T.size,
+    f"the test wants clear and cloudy pixels: {free.mean():.2f} free, {cloud.mean():.2f} cloud",
+)
 check(rel[free].max() < 1e-5, f"where there is no cloud the sky changed: {rel[free].max()}")
 frac = float((rel[cloud] > 0.01).mean())
-print(f"world: {cloud.mean():.1%} of the sphere clouded (T < 0.9), {frac:.1%} of it changed "
-      f"by over 1 %; cloud-free pixels unchanged to {rel[free].max():.1e} ({world.welkin.status})")
+print(
+    f"world: {cloud.mean():.1%} of the sphere clouded (T < 0.9), {frac:.1%} of it changed "
+    f"by over 1 %; cloud-free pixels unchanged to {rel[free].max():.1e} ({world.welkin.status})"
+)
 check(frac > 0.9, f"only {frac:.1%} of the clouded pixels changed")
 # A live (timer) update leaves a cloudy sky alone and says why.
 key = world.welkin.last_key
 sun.rotation_quaternion.w += 0.01
 bpy.context.view_layer.update()
 update.update_sky(scene, None, live=True)
-check(world.welkin.last_key == key and "Update Sky" in world.welkin.status,
-      world.welkin.status)
+check(world.welkin.last_key == key and "Update Sky" in world.welkin.status, world.welkin.status)
 t.aim_sun(sun, 25.0, 30.0)
 bpy.context.view_layer.update()
 
 # --- Aerial perspective with clouds (Cycles).
-scene.render.engine = 'CYCLES'
-scene.cycles.device = 'CPU'
+scene.render.engine = "CYCLES"
+scene.cycles.device = "CPU"
 scene.cycles.samples = 4
 scene.cycles.use_denoising = False
 scene.render.resolution_x, scene.render.resolution_y = 64, 32
 scene.render.resolution_percentage = 100
-compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
+compat.set_file_format(scene.render.image_settings, "OPEN_EXR")
 scene.render.filepath = str(t.TMP / "out" / "frame_")
 tree, _undo = compat.ensure_scene_compositor(scene, f"{scene.name} Compositing")
-rl = next((n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers'), None)
+rl = next((n for n in tree.nodes if n.bl_idname == "CompositorNodeRLayers"), None)
 comp = compat.compositor_output(tree)  # 5.0: the tree's Group Output
-user = tree.nodes.new('CompositorNodeCurveRGB')  # (5.0 has no compositor Gamma node)
+user = tree.nodes.new("CompositorNodeCurveRGB")  # (5.0 has no compositor Gamma node)
 user.name = "User Curves"
 tree.links.new(compat.compositor_frame(tree, rl), user.inputs["Image"])  # 5.3: Group Input
 tree.links.new(user.outputs["Image"], comp.inputs["Image"])
@@ -111,8 +116,10 @@ names_before = {n.name for n in tree.nodes}
 scene.welkin_aerial.side_files = True  # the pass files beside the render
 scene.welkin_aerial.enabled = True
 check(names_before <= {n.name for n in tree.nodes}, "enable removed a user node")
-check(comp.inputs["Image"].links[0].from_node.name == "User Curves",
-      "enable relinked the output away from the user's node")
+check(
+    comp.inputs["Image"].links[0].from_node.name == "User Curves",
+    "enable relinked the output away from the user's node",
+)
 
 scene.frame_set(1)
 bpy.ops.render.render(write_still=True)
@@ -137,8 +144,10 @@ a = clouds[..., 3]
 check(((a >= 0) & (a <= 1)).all(), f"alpha outside [0, 1]: {a.min()} {a.max()}")
 check((a > 0.05).mean() > 0.05, f"hardly any cloud in view: {(a > 0.05).mean():.3f}")
 check((cdepth[a == 0] == 1e10).all(), "CloudDepth is not 1e10 where there is no cloud")
-print(f"aerial: cloud cover {(a > 0.05).mean():.1%}, alpha max {a.max():.3f}, "
-      f"cloud depth {cdepth[a > 0.05].min():.0f}..{cdepth[a > 0.05].max():.0f} m")
+print(
+    f"aerial: cloud cover {(a > 0.05).mean():.1%}, alpha max {a.max():.3f}, "
+    f"cloud depth {cdepth[a > 0.05].min():.0f}..{cdepth[a > 0.05].max():.0f} m"
+)
 render = native.read_exr(scene_export.frame_path(base, "render", 1))
 image = chans(render[0], render[1], [f"Image.{c}" for c in "RGB"])
 composite = chans(*native.read_exr(scene_export.frame_path(base, "composite", 1)), "RGB")
@@ -160,8 +169,10 @@ except RuntimeError as error:
 t.render_still(scene, t.TMP / "out" / "frame_0003.exr")
 status = scene.welkin_aerial.status
 check("not written" in status and "gone.0003.vdb" in status, status)
-check(not pathlib.Path(scene_export.frame_path(base, "aerial", 3)).exists(),
-      "a passes file was written for a frame with a missing VDB")
+check(
+    not pathlib.Path(scene_export.frame_path(base, "aerial", 3)).exists(),
+    "a passes file was written for a frame with a missing VDB",
+)
 print(f"missing VDB: {status}")
 vol.data.filepath = str(paths[0])
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A VDB volume marked as a Welkin cloud is not baked into the world by default: Cycles and
 EEVEE render the volume object itself, and a world that held it too would show it twice.
 Volumes in World Sky (World.welkin_clouds.volumes_in_world) puts it there on request.
@@ -17,6 +18,7 @@ A ball of cloud (a real VDB file) 2.5 km ahead of the camera, marked, and no clo
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_volume_world.py
 """
+
 import json
 import math
 import pathlib
@@ -63,8 +65,9 @@ err = float(relative(default, clear).max())
 print(f"default: world sky vs clear sky {err:.1e}; status: {status}")
 check(err < 1e-6, f"the marked volume is in the world by default (sky differs by {err:.3g})")
 check("with clouds" not in status, f"default status says clouds: {status}")
-engine = json.loads(render_engine.scene_description_json(
-    scene, bpy.context.evaluated_depsgraph_get(), native))
+engine = json.loads(
+    render_engine.scene_description_json(scene, bpy.context.evaluated_depsgraph_get(), native)
+)
 check(len(engine["clouds"]["volumes"]) == 1, "the Welkin engine's scene lost the volume")
 
 c.volumes_in_world = True
@@ -72,12 +75,12 @@ cloudy, status = sky_after_update()
 check("with clouds" in status, f"with Volumes in World Sky: {status}")
 request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
 text = update.cloudy_scene_json(scene, world.welkin, request, update.clouds_of(scene), native)
-_img, T = native.scene_sky_image(native.SceneDescription.from_json_string(text), 256,
-                                 sun_disc=False, return_transmittance=True)
+_img, T = native.scene_sky_image(
+    native.SceneDescription.from_json_string(text), 256, sun_disc=False, return_transmittance=True
+)
 cloud = T < 0.9
 changed = float((relative(cloudy, clear).max(axis=-1)[cloud] > 0.01).mean())
-print(f"Volumes in World Sky: {cloud.sum()} pixels with T < 0.9, {changed:.1%} of them changed "
-      f"by over 1 %")
+print(f"Volumes in World Sky: {cloud.sum()} pixels with T < 0.9, {changed:.1%} of them changed by over 1 %")
 check(cloud.sum() > 20, f"the volume covers {cloud.sum()} pixels of the world")
 check(changed > 0.9, f"only {changed:.1%} of the volume's pixels changed")
 

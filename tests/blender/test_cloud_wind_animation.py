@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A keyed wind offset and evolution move and reshape the clouds in command-line animation
 renders (`blender -b file.blend -a`), in the Cycles world and in the Welkin engine.
 
@@ -22,6 +23,7 @@ frame's clouds:
 Run: PYTHONPATH=$PWD/build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cloud_wind_animation.py
 """
+
 import math
 import os
 import pathlib
@@ -45,8 +47,15 @@ W, H = 64, 32
 scene, sun = t.new_scene(sun_elevation_deg=30.0, sun_azimuth_deg=40.0, camera_z=2.0)
 world = scene.world
 c = ct.quick_cloudy_world(world)
-layer = ct.add_layer(world, bottom_altitude_m=1000.0, top_altitude_m=1800.0, coverage=0.6,
-                     density_per_m=0.02, base_scale_m=3000.0, weather_scale_m=12000.0)
+layer = ct.add_layer(
+    world,
+    bottom_altitude_m=1000.0,
+    top_altitude_m=1800.0,
+    coverage=0.6,
+    density_per_m=0.02,
+    base_scale_m=3000.0,
+    weather_scale_m=12000.0,
+)
 layer.wind_offset_m = (0.0, 0.0)
 layer.keyframe_insert("wind_offset_m", frame=1)
 layer.wind_offset_m = (3000.0, 0.0)
@@ -70,8 +79,13 @@ env.pop("PYTHONPATH", None)
 
 def render_anim(stem, extra):
     cmd = t.blender_command() + ["-b", str(blend), "--addons", "welkin"]
-    run = subprocess.run(cmd + extra + ["-o", str(t.TMP / f"{stem}_####"), "-a"],
-                         env=env, capture_output=True, text=True, timeout=600)
+    run = subprocess.run(
+        cmd + extra + ["-o", str(t.TMP / f"{stem}_####"), "-a"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     print(run.stdout[-800:], run.stderr[-400:])
     check(run.returncode == 0, f"{stem}: blender -a exited {run.returncode}")
     return [t.read_rgb_exr(native, t.TMP / f"{stem}_{f:04d}.exr") for f in (1, 2)]
@@ -84,8 +98,11 @@ def relative(a, ref):
 def distinct(frames, what):
     d = float(np.abs(frames[0] - frames[1]).max() / np.abs(frames[1]).max())
     print(f"{what}: frames 1 and 2 differ by {d:.3f} of the peak")
-    check(d > 0.05, f"{what}: frames 1 and 2 are alike (max difference {d:.2e} of the peak): "
-                    f"the keyed wind did not move the clouds")
+    check(
+        d > 0.05,
+        f"{what}: frames 1 and 2 are alike (max difference {d:.2e} of the peak): "
+        f"the keyed wind did not move the clouds",
+    )
 
 
 # --- Cycles: the world's cloudy sky.
@@ -98,8 +115,10 @@ for f, img in zip((1, 2), cycles):
     ref = t.read_rgb_exr(native, t.TMP / f"cycles_ref_{f}.exr")
     err = relative(img, ref)
     print(f"Cycles frame {f}: max relative difference from the per-frame render {err.max():.2e}")
-    check(np.isfinite(img).all() and err.max() < 1e-3,
-          f"Cycles frame {f}: differs from the frame_set render by {err.max():.3g}")
+    check(
+        np.isfinite(img).all() and err.max() < 1e-3,
+        f"Cycles frame {f}: differs from the frame_set render by {err.max():.3g}",
+    )
 
 # The evolution's share: frame 2 without its evolution key (the wind alone).
 layer.keyframe_delete("evolution_m", frame=2)
@@ -116,23 +135,24 @@ layer.keyframe_insert("evolution_m", frame=2)
 
 # --- The Welkin engine: the camera plate with the clouds.
 cam = scene.camera
-cam.data.type = 'PERSP'
+cam.data.type = "PERSP"
 cam.rotation_euler = (math.radians(98.0), 0.0, math.radians(-90.0))  # +X, 8 degrees up
 cam.data.clip_end = 1e6
-scene.render.engine = 'WELKIN'
+scene.render.engine = "WELKIN"
 scene.render.resolution_x, scene.render.resolution_y = 48, 32
-compat.set_file_format(scene.render.image_settings, 'OPEN_EXR')
+compat.set_file_format(scene.render.image_settings, "OPEN_EXR")
 scene.frame_set(1)
 bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 plates = render_anim("welkin", ["-E", "WELKIN"])
 distinct(plates, "Welkin engine -a")
 for f, img in zip((1, 2), plates):
     scene.frame_set(f)
-    text = render_engine.scene_description_json(scene, bpy.context.evaluated_depsgraph_get(),
-                                                native)
+    text = render_engine.scene_description_json(scene, bpy.context.evaluated_depsgraph_get(), native)
     ref = native.camera_plate(text)["combined"][..., :3]
     err = relative(img, ref)
     print(f"Welkin frame {f}: max relative difference from its plate {err.max():.2e}")
-    check(np.isfinite(img).all() and err.max() < 0.01,
-          f"Welkin frame {f}: differs from the plate by {err.max():.3g}")
+    check(
+        np.isfinite(img).all() and err.max() < 0.01,
+        f"Welkin frame {f}: differs from the plate by {err.max():.3g}",
+    )
 t.done("test_cloud_wind_animation")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender: Aerial Perspective in the compositor beside the user's own compositing.
 
 Blender 5.3 composites through a stack of effects (Scene.compositor_effects), each with
@@ -18,6 +19,7 @@ same for a scene with no compositing at all. Reading the compositor on a depsgra
 (Write Pass Files follows the output path) raises no DeprecationWarning from Welkin's
 code (5.3 deprecates Scene.compositing_node_group).
 """
+
 import json
 import math
 import pathlib
@@ -44,7 +46,7 @@ TOL = 0.02
 
 def multiply(tree, source, gain):
     """A Multiply node after `source` by a constant `gain`; returns its output."""
-    node, a, b, out = compat.compositor_mix(tree, 'MULTIPLY')
+    node, a, b, out = compat.compositor_mix(tree, "MULTIPLY")
     node.name = f"User x{gain:g}"
     b.default_value = (gain, gain, gain, 1.0)
     tree.links.new(source, a)
@@ -54,10 +56,10 @@ def multiply(tree, source, gain):
 def user_effect(scene, name, gain):
     """5.3+: an effect of the user's own that multiplies the frame by `gain`."""
     effect = scene.compositor_effects.new(name=name)
-    group = bpy.data.node_groups.new(f"{name} Group", 'CompositorNodeTree')
-    compat.new_group_socket(group, "Image", 'INPUT', 'NodeSocketColor')
-    compat.new_group_socket(group, "Image", 'OUTPUT', 'NodeSocketColor')
-    gin, gout = group.nodes.new('NodeGroupInput'), group.nodes.new('NodeGroupOutput')
+    group = bpy.data.node_groups.new(f"{name} Group", "CompositorNodeTree")
+    compat.new_group_socket(group, "Image", "INPUT", "NodeSocketColor")
+    compat.new_group_socket(group, "Image", "OUTPUT", "NodeSocketColor")
+    gin, gout = group.nodes.new("NodeGroupInput"), group.nodes.new("NodeGroupOutput")
     group.links.new(multiply(group, gin.outputs["Image"], gain), gout.inputs["Image"])
     effect.node_group = group
     return effect
@@ -72,18 +74,26 @@ def user_compositing(scene):
         scene.compositor_effects.active = scene.compositor_effects["User Grade"]
         return
     tree, _undo = compat.ensure_scene_compositor(scene, "User Compositing")
-    rl = next(n for n in tree.nodes if n.bl_idname == 'CompositorNodeRLayers')
+    rl = next(n for n in tree.nodes if n.bl_idname == "CompositorNodeRLayers")
     link = next(l for l in tree.links if l.from_node == rl and l.from_socket.name == "Image")
     target = link.to_socket
     tree.links.new(multiply(tree, multiply(tree, rl.outputs["Image"], GAIN[0]), GAIN[1]), target)
 
 
 def tree_state(tree):
-    nodes = sorted((n.name, n.bl_idname, tuple(n.location),
-                    tuple(str(getattr(s, "default_value", None)) for s in n.inputs))
-                   for n in tree.nodes)
-    links = sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name,
-                    l.to_socket.identifier) for l in tree.links)
+    nodes = sorted(
+        (
+            n.name,
+            n.bl_idname,
+            tuple(n.location),
+            tuple(str(getattr(s, "default_value", None)) for s in n.inputs),
+        )
+        for n in tree.nodes
+    )
+    links = sorted(
+        (l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+        for l in tree.links
+    )
     return nodes, links
 
 
@@ -92,10 +102,16 @@ def snapshot(scene):
     state = {"groups": sorted(g.name for g in bpy.data.node_groups)}
     if EFFECTS:
         effects = scene.compositor_effects
-        state["effects"] = [(e.name, e.node_group.name if e.node_group else None,
-                             e.enable_for_render, e.enable_for_preview,
-                             tree_state(e.node_group) if e.node_group else None)
-                            for e in effects]
+        state["effects"] = [
+            (
+                e.name,
+                e.node_group.name if e.node_group else None,
+                e.enable_for_render,
+                e.enable_for_preview,
+                tree_state(e.node_group) if e.node_group else None,
+            )
+            for e in effects
+        ]
         state["active"] = effects.active.name if effects.active is not None else None
     else:
         tree = compat.scene_compositor(scene)
@@ -120,17 +136,17 @@ def build_scene():
         bpy.ops.mesh.primitive_cube_add(size=s, location=(d, (k % 2 - 0.5) * 0.4 * d, 0.5 * s))
         bpy.context.active_object.data.materials.append(grey)
     scene.world.welkin.preset = "hazy"
-    scene.render.engine = 'CYCLES'
+    scene.render.engine = "CYCLES"
     scene.render.resolution_x, scene.render.resolution_y = W, H
     scene.render.resolution_percentage = 100
-    scene.cycles.device = 'CPU'
+    scene.cycles.device = "CPU"
     scene.cycles.samples = 4
     scene.cycles.use_denoising = False
-    scene.view_settings.view_transform = 'Standard'
+    scene.view_settings.view_transform = "Standard"
     for layer in scene.view_layers:
         layer.use_pass_z = True
     compat.set_exr(scene.render.image_settings, multilayer=False)
-    scene.render.image_settings.color_depth = '32'
+    scene.render.image_settings.color_depth = "32"
     return scene
 
 
@@ -156,6 +172,7 @@ def check_render(scene, tmp):
 
     def channel(part):  # the depth channel is Depth.V in 3.4, Depth.Z later
         return pixels[..., names.index(next(n for n in names if part in n))]
+
     image = np.stack([channel(f"Image.{c}") for c in "RGB"], axis=-1)
     z = channel("Depth.")
     d = json.loads(aerial.scene_json(scene, module))
@@ -166,19 +183,22 @@ def check_render(scene, tmp):
     mask = far_mask(z)
     rel = np.abs(got - want)[mask] / np.maximum(want[mask], 1e-6)
     rel_after = np.abs(after - want)[mask] / np.maximum(want[mask], 1e-6)
-    print(f"{mask.sum()} far pixels: F12 vs x6 (Image x T + Inscatter): max {rel.max():.4f} "
-          f"mean {rel.mean():.5f}; haze after the user's x6 would be {rel_after.mean():.3f} off")
+    print(
+        f"{mask.sum()} far pixels: F12 vs x6 (Image x T + Inscatter): max {rel.max():.4f} "
+        f"mean {rel.mean():.5f}; haze after the user's x6 would be {rel_after.mean():.3f} off"
+    )
     at.check(mask.sum() >= 30, f"only {mask.sum()} pixels beyond 1.5 km")
     at.check(rel.max() < TOL, f"the frame is {rel.max():.4f} from the user's x6 of the hazed frame")
-    at.check(rel_after.mean() > 3 * TOL, "the test cannot tell haze before from after the "
-                                         f"user's compositing ({rel_after.mean():.4f})")
+    at.check(
+        rel_after.mean() > 3 * TOL,
+        f"the test cannot tell haze before from after the user's compositing ({rel_after.mean():.4f})",
+    )
 
 
 def welkin_left(scene):
     names = [g.name for g in bpy.data.node_groups if g.name.startswith("Welkin Compositing")]
     if EFFECTS:
-        names += [e.name for e in scene.compositor_effects
-                  if e.name.startswith(("Welkin", "Scene Effect"))]
+        names += [e.name for e in scene.compositor_effects if e.name.startswith(("Welkin", "Scene Effect"))]
     return names
 
 
@@ -193,9 +213,13 @@ def check_no_deprecation(scene):
         at.check(compositor.depth_node(scene) is not None, "no File Output node")
         aerial_frame.install(scene, scene.welkin_aerial)
         scene.frame_set(1)
-    ours = [f"{w.filename}:{w.lineno}: {w.message}" for w in caught
-            if issubclass(w.category, DeprecationWarning) and "welkin" in w.filename
-            and "'Scene." in str(w.message)]  # the compositor's: the scene's properties
+    ours = [
+        f"{w.filename}:{w.lineno}: {w.message}"
+        for w in caught
+        if issubclass(w.category, DeprecationWarning)
+        and "welkin" in w.filename
+        and "'Scene." in str(w.message)
+    ]  # the compositor's: the scene's properties
     at.check(not ours, "deprecated API used:\n" + "\n".join(ours))
 
 
@@ -207,20 +231,25 @@ def enable_disable(scene, tmp, render):
     if EFFECTS:
         effects = scene.compositor_effects
         names = [e.name for e in effects]
-        at.check(names == ["Welkin Compositing", *[e[0] for e in before["effects"]]],
-                 f"the effects are {names}: Welkin's first, then the user's in their order")
+        at.check(
+            names == ["Welkin Compositing", *[e[0] for e in before["effects"]]],
+            f"the effects are {names}: Welkin's first, then the user's in their order",
+        )
         # (an empty stack's only effect is its active one: Blender has no "none active")
         want_active = before["active"] or "Welkin Compositing"
-        at.check(effects.active.name == want_active,
-                 f"the active effect is {effects.active.name}, not {want_active}")
+        at.check(
+            effects.active.name == want_active,
+            f"the active effect is {effects.active.name}, not {want_active}",
+        )
     check_no_deprecation(scene)
     if render:
         check_render(scene, tmp)
     scene.welkin_aerial.enabled = False
     after = snapshot(scene)
     for key in before:
-        at.check(before[key] == after[key], f"{key} changed by enable + disable:\n"
-                                            f"{before[key]}\n{after[key]}")
+        at.check(
+            before[key] == after[key], f"{key} changed by enable + disable:\n{before[key]}\n{after[key]}"
+        )
     at.check(not welkin_left(scene), f"left behind: {welkin_left(scene)}")
 
 
@@ -230,8 +259,11 @@ def main():
     print("no compositing: restored exactly, nothing of Welkin's left")
     user_compositing(scene)
     enable_disable(scene, at.TMP / "user", render=True)
-    print("the user's compositing " + ("effects" if EFFECTS else "tree") +
-          " untouched, restored exactly, nothing of Welkin's left")
+    print(
+        "the user's compositing "
+        + ("effects" if EFFECTS else "tree")
+        + " untouched, restored exactly, nothing of Welkin's left"
+    )
     at.done("test_compositor_effects")
 
 

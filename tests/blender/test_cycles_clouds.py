@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender + Cycles: Cycles and Welkin's reference path tracer light the same VDB
 cloud alike (the reference validated against an independent renderer).
 
@@ -33,6 +34,7 @@ test (3.4, placement="openvdb": measured RMS 0.150 vs noise
 Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_cycles_clouds.py
 """
+
 import atexit
 import os
 import pathlib
@@ -68,26 +70,42 @@ def main():
     light = dict(density_scale=0.03, sun_direction=(-0.5, -0.6, 0.62), sun_irradiance=3.0, sky_radiance=0.3)
     cyc, ref, off = [], [], []
     for seed in (1, 2):
-        scene = cv.build_scene(vdb, camera_location=(0.0, -450.0, 0.0), camera_target=(0.0, 0.0, 0.0), width=SIZE,
-                               height=SIZE, samples=SAMPLES, seed=seed, **light)
+        scene = cv.build_scene(
+            vdb,
+            camera_location=(0.0, -450.0, 0.0),
+            camera_target=(0.0, 0.0, 0.0),
+            width=SIZE,
+            height=SIZE,
+            samples=SAMPLES,
+            seed=seed,
+            **light,
+        )
         cyc.append(cv.render(scene, os.path.join(tmp, f"cycles_{seed}.exr")))
-        ref.append(cv.welkin_render(scene, vdb, method="reference", paths=PATHS, seed=seed, placement=PLACEMENT,
-                                    **light))
-        off.append(cv.welkin_render(scene, vdb, method="reference", paths=PATHS, seed=seed, placement=OTHER,
-                                    **light))
+        ref.append(
+            cv.welkin_render(
+                scene, vdb, method="reference", paths=PATHS, seed=seed, placement=PLACEMENT, **light
+            )
+        )
+        off.append(
+            cv.welkin_render(scene, vdb, method="reference", paths=PATHS, seed=seed, placement=OTHER, **light)
+        )
     c1, c2 = cyc[0][..., 0], cyc[1][..., 0]
     r1, r2 = ref[0][0], ref[1][0]
     cm, rm = 0.5 * (c1 + c2), 0.5 * (r1 + r2)
     alpha_ref = 1.0 - 0.5 * (ref[0][1] + ref[1][1])
     mask = (alpha_ref > 0.05) & (rm > 0.0)
     assert mask.sum() > 0.2 * SIZE * SIZE, f"the cloud covers too few pixels ({mask.sum()})"
-    assert np.allclose(cyc[0][..., 0], cyc[0][..., 1]) and np.allclose(cyc[0][..., 0], cyc[0][..., 2]), "grey light"
+    assert np.allclose(cyc[0][..., 0], cyc[0][..., 1]) and np.allclose(cyc[0][..., 0], cyc[0][..., 2]), (
+        "grey light"
+    )
 
     noise = 0.5 * (c1 - c2) - 0.5 * (r1 - r2)
     bias = (cm - rm)[mask].sum() / rm[mask].sum()
     bias_se = np.sqrt((noise[mask] ** 2).sum()) / rm[mask].sum()
     print(f"test_cycles_clouds: radiance bias {bias:+.4f} (se {bias_se:.4f}), pixels {mask.sum()}")
-    assert abs(bias) < 4.0 * bias_se + 0.01, f"Cycles vs reference: mean radiance bias {bias:+.4f}, se {bias_se:.4f}"
+    assert abs(bias) < 4.0 * bias_se + 0.01, (
+        f"Cycles vs reference: mean radiance bias {bias:+.4f}, se {bias_se:.4f}"
+    )
 
     med = np.median(np.abs(cm - rm)[mask] / rm[mask])
     med_noise = np.median(np.abs(noise)[mask] / rm[mask])
@@ -106,13 +124,19 @@ def main():
         alphas[name] = a
         edge = (a > 0.01) | (ca > 0.01)
         rms, rms_noise = np.sqrt(((ca - a)[edge] ** 2).mean()), np.sqrt((n[edge] ** 2).mean())
-        print(f"test_cycles_clouds: placement {name}: alpha RMS difference {rms:.4f}, from noise alone "
-              f"{rms_noise:.4f} ({edge.sum()} pixels)")
+        print(
+            f"test_cycles_clouds: placement {name}: alpha RMS difference {rms:.4f}, from noise alone "
+            f"{rms_noise:.4f} ({edge.sum()} pixels)"
+        )
         if name == PLACEMENT:
-            assert rms < 1.5 * rms_noise, f"Cycles alpha vs 1 - T per pixel: RMS {rms:.4f} vs noise {rms_noise:.4f}"
+            assert rms < 1.5 * rms_noise, (
+                f"Cycles alpha vs 1 - T per pixel: RMS {rms:.4f} vs noise {rms_noise:.4f}"
+            )
         else:
-            assert rms > 1.5 * rms_noise, (f"placement={OTHER!r} passes the per-pixel alpha test (RMS {rms:.4f}, "
-                                           f"noise {rms_noise:.4f}): the test cannot see a half-voxel shift")
+            assert rms > 1.5 * rms_noise, (
+                f"placement={OTHER!r} passes the per-pixel alpha test (RMS {rms:.4f}, "
+                f"noise {rms_noise:.4f}): the test cannot see a half-voxel shift"
+            )
     o1, o2 = off[0][0], off[1][0]
     om = 0.5 * (o1 + o2)
     mo = mask & (om > 0.0)

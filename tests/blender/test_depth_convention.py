@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender + Cycles: Welkin reads Blender's Z pass as Blender writes it.
 
 A small scene (a ground plane and a wall standing on one side only, so that a mirrored
@@ -14,6 +15,7 @@ welkin.read_exr, and the channel is the one `welkin aerial` finds by default
 
 Run: bash scripts/test_blender.sh tests/blender/test_depth_convention.py
 """
+
 import json
 import math
 import os
@@ -35,8 +37,7 @@ from camera_testing import camera_json  # noqa: E402
 _addon, welkin = addon_testing.install_addon()
 from welkin.blender import compat  # noqa: E402
 
-CLI = os.environ.get("WELKIN_CLI",
-                     str(pathlib.Path(__file__).resolve().parents[2] / "build" / "welkin"))
+CLI = os.environ.get("WELKIN_CLI", str(pathlib.Path(__file__).resolve().parents[2] / "build" / "welkin"))
 WALL_Y = 30.0  # the wall's plane, y = WALL_Y, for |x| < 40, 0 < z < 25
 
 
@@ -52,8 +53,7 @@ def build_scene():
     scene.render.film_transparent = False
     scene.view_layers[0].use_pass_z = True
     bpy.ops.mesh.primitive_plane_add(size=400.0, location=(0, 0, 0))
-    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0, WALL_Y, 12.5),
-                                     rotation=(math.radians(90), 0, 0))
+    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0, WALL_Y, 12.5), rotation=(math.radians(90), 0, 0))
     wall = bpy.context.active_object
     wall.scale = (80.0, 25.0, 1.0)
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
@@ -87,10 +87,19 @@ def check(scene, cam, label, tmp):
     bpy.ops.render.render(write_still=True)
     pixels, names = welkin.read_exr(path)
     z = pixels[..., names.index("ViewLayer.Depth.Z")]
-    desc = welkin.SceneDescription.from_json_string(json.dumps(
-        {"version": 1, "camera": camera_json(cam),
-         "resolution": {"x": r.resolution_x, "y": r.resolution_y,
-                        "percentage": r.resolution_percentage}}))
+    desc = welkin.SceneDescription.from_json_string(
+        json.dumps(
+            {
+                "version": 1,
+                "camera": camera_json(cam),
+                "resolution": {
+                    "x": r.resolution_x,
+                    "y": r.resolution_y,
+                    "percentage": r.resolution_percentage,
+                },
+            }
+        )
+    )
     H, W = z.shape
     assert (W, H) == (desc.width, desc.height), (W, H, desc.width, desc.height)
     expect = np.full((H, W), np.inf)
@@ -106,7 +115,7 @@ def check(scene, cam, label, tmp):
     smooth = np.ones_like(finite)
     for dj in (-1, 0, 1):
         for di in (-1, 0, 1):
-            nb = pad[1 + dj:1 + dj + H, 1 + di:1 + di + W]
+            nb = pad[1 + dj : 1 + dj + H, 1 + di : 1 + di + W]
             smooth &= np.abs(nb - np.where(finite, expect, 1e30)) <= 0.02 * np.abs(nb)
     use = finite & smooth
     assert use.sum() > 0.05 * W * H, f"{label}: too few pixels to compare ({use.sum()})"
@@ -118,8 +127,10 @@ def check(scene, cam, label, tmp):
     sky = ~finite & smooth
     if sky.any():
         assert (z[sky] >= 1e9).all(), f"{label}: background depth {z[sky].min()}"
-    print(f"ok: {label}: {use.sum()} pixels ({(use & on_wall).sum()} on the wall), "
-          f"worst {100 * rel.max():.3f} %")
+    print(
+        f"ok: {label}: {use.sum()} pixels ({(use & on_wall).sum()} on the wall), "
+        f"worst {100 * rel.max():.3f} %"
+    )
     return path, z, use
 
 
@@ -129,13 +140,27 @@ def aerial_from_cycles_render(scene, cam, path, z, use, tmp):
     r = scene.render
     frame = os.path.join(tmp, "frame.json")
     with open(frame, "w") as f:
-        json.dump({"version": 1, "atmosphere": "hazy", "camera": camera_json(cam),
-                   "sun": {"elevation_deg": 20, "azimuth_deg": 40},
-                   "resolution": {"x": r.resolution_x, "y": r.resolution_y,
-                                  "percentage": r.resolution_percentage}}, f)
+        json.dump(
+            {
+                "version": 1,
+                "atmosphere": "hazy",
+                "camera": camera_json(cam),
+                "sun": {"elevation_deg": 20, "azimuth_deg": 40},
+                "resolution": {
+                    "x": r.resolution_x,
+                    "y": r.resolution_y,
+                    "percentage": r.resolution_percentage,
+                },
+            },
+            f,
+        )
     out = os.path.join(tmp, "passes.exr")
-    run = subprocess.run([CLI, "aerial", "--scene", frame, "--depth", path, "-o", out],
-                         capture_output=True, text=True, timeout=120)
+    run = subprocess.run(
+        [CLI, "aerial", "--scene", frame, "--depth", path, "-o", out],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 0, run.stderr
     pixels, names = welkin.read_exr(out)
     T = pixels[..., names.index("Welkin.AerialTransmittance.G")]
@@ -145,8 +170,10 @@ def aerial_from_cycles_render(scene, cam, path, z, use, tmp):
     assert T.flat[far] < T.flat[near] and L.flat[far] > L.flat[near], (z.flat[near], z.flat[far])
     sky = z >= 1e9
     assert (T[sky] == 1).all() and (L[sky] == 0).all()
-    print(f"ok: welkin aerial on the Cycles render: T {T.flat[near]:.4f} at {z.flat[near]:.1f} m, "
-          f"{T.flat[far]:.4f} at {z.flat[far]:.1f} m")
+    print(
+        f"ok: welkin aerial on the Cycles render: T {T.flat[near]:.4f} at {z.flat[near]:.1f} m, "
+        f"{T.flat[far]:.4f} at {z.flat[far]:.1f} m"
+    )
 
 
 def main():

@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: Apache-2.0
 """The render engine "WELKIN" refuses what it cannot render with a clear report and
 writes no frame: no camera, a camera below the ground, a render region. Rendered headless
 (`blender -b scene.blend -E WELKIN -f 1`, the add-on enabled with --addons)."""
+
 import os
 import pathlib
 import subprocess
@@ -18,8 +20,21 @@ check = t.check
 def render_headless(blend, out_stem):
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(t.scripts_dir()))
     env.pop("PYTHONPATH", None)
-    cmd = [*t.blender_command(), "-b", str(blend), "--addons", "welkin", "-E", "WELKIN", "-o",
-           str(out_stem) + "_####", "-F", "OPEN_EXR_MULTILAYER", "-f", "1"]
+    cmd = [
+        *t.blender_command(),
+        "-b",
+        str(blend),
+        "--addons",
+        "welkin",
+        "-E",
+        "WELKIN",
+        "-o",
+        str(out_stem) + "_####",
+        "-F",
+        "OPEN_EXR_MULTILAYER",
+        "-f",
+        "1",
+    ]
     run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     print(run.stdout[-1200:], run.stderr[-800:])
     return pathlib.Path(str(out_stem) + "_0001.exr"), run.stdout + run.stderr
@@ -35,7 +50,7 @@ def expect_refusal(name, words):
 
 
 scene, _sun = t.new_scene(camera_z=-20.0)
-scene.render.engine = 'WELKIN'
+scene.render.engine = "WELKIN"
 scene.render.resolution_x, scene.render.resolution_y = 32, 16
 expect_refusal("below_ground", ("camera.matrix_world", "below the ground"))
 

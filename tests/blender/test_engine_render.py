@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The render engine "WELKIN" renders headless (`blender -b scene.blend -E WELKIN -f 1`)
 the same plate as the CLI (`welkin plate --scene`), with its passes; a panoramic camera
 renders the exported HDRI; without the add-on Blender silently falls back and the test
@@ -12,6 +13,7 @@ directions); the disc and the ground are printed, not asserted: the HDRI splats 
 per equirect pixel and gives ground pixels the sky method's path radiance, the plate
 point-samples the disc and shows the ground through the froxel aerial perspective.
 """
+
 import math
 import os
 import pathlib
@@ -39,11 +41,9 @@ def read_layers(path):
     pixels, names = native.read_exr(str(path))
     out = {}
     for name in PASSES + ("Depth",):
-        chans = [c for c in ("R", "G", "B", "A", "Z", "V")
-                 if f"ViewLayer.{name}.{c}" in names]
+        chans = [c for c in ("R", "G", "B", "A", "Z", "V") if f"ViewLayer.{name}.{c}" in names]
         if chans:
-            out[name] = np.stack([pixels[..., names.index(f"ViewLayer.{name}.{c}")]
-                                  for c in chans], axis=-1)
+            out[name] = np.stack([pixels[..., names.index(f"ViewLayer.{name}.{c}")] for c in chans], axis=-1)
     return out, names
 
 
@@ -73,8 +73,10 @@ def cli_plate(scene_json_text, path):
     scene_path.write_text(scene_json_text)
     subprocess.run([str(CLI), "plate", "--scene", str(scene_path), "-o", str(path)], check=True)
     pixels, names = native.read_exr(str(path))
-    return {"Combined": np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1),
-            "Welkin.Sky": np.stack([pixels[..., names.index(f"Welkin.Sky.{c}")] for c in "RGB"], -1)}
+    return {
+        "Combined": np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1),
+        "Welkin.Sky": np.stack([pixels[..., names.index(f"Welkin.Sky.{c}")] for c in "RGB"], -1),
+    }
 
 
 def relative_error(a, b):
@@ -83,18 +85,17 @@ def relative_error(a, b):
 
 
 def setup(scene):
-    scene.render.engine = 'WELKIN'
+    scene.render.engine = "WELKIN"
     scene.render.resolution_x, scene.render.resolution_y = 96, 64
     scene.render.resolution_percentage = 100
     settings = scene.render.image_settings
-    compat.set_file_format(settings, 'OPEN_EXR_MULTILAYER')
-    settings.color_depth = '32'
-    scene.world.welkin.method = 'lut'
+    compat.set_file_format(settings, "OPEN_EXR_MULTILAYER")
+    settings.color_depth = "32"
+    scene.world.welkin.method = "lut"
 
 
 def scene_json(scene):
-    return render_engine.scene_description_json(scene, bpy.context.evaluated_depsgraph_get(),
-                                                native)
+    return render_engine.scene_description_json(scene, bpy.context.evaluated_depsgraph_get(), native)
 
 
 # A perspective camera 50 m up looking along +X, 2 degrees down: ground and sky, with the
@@ -102,7 +103,7 @@ def scene_json(scene):
 scene, sun = t.new_scene(sun_elevation_deg=6.0, sun_azimuth_deg=5.0, camera_z=50.0)
 setup(scene)
 cam = scene.camera
-cam.rotation_mode = 'XYZ'
+cam.rotation_mode = "XYZ"
 cam.rotation_euler = (math.radians(88.0), 0.0, math.radians(-90.0))
 bpy.context.view_layer.update()
 blend = t.TMP / "engine_persp.blend"
@@ -112,8 +113,9 @@ layers, names = read_layers(exr)
 check(is_welkin_render(names), f"not a Welkin render; channels: {names}")
 for name in PASSES:
     check(name in layers, f"pass {name} missing; channels: {names}")
-    check(np.all(np.isfinite(layers[name][..., :3])) or name == "Welkin.CloudDepth",
-          f"pass {name} not finite")
+    check(
+        np.all(np.isfinite(layers[name][..., :3])) or name == "Welkin.CloudDepth", f"pass {name} not finite"
+    )
 check(layers["Combined"].shape == (64, 96, 4), f"Combined shape {layers['Combined'].shape}")
 ref = cli_plate(scene_json(scene), t.TMP / "persp_cli.exr")
 err = relative_error(layers["Combined"][..., :3], ref["Combined"])
@@ -126,36 +128,40 @@ check(np.all((T >= 0) & (T <= 1)), "transmittance outside [0, 1]")
 # Combined = Sky + Inscatter + T x G: on sky pixels Sky alone (T = 1, no inscatter); on the
 # ground, the lit ground G (albedo / pi x irradiance, camera_plate.hpp) seen through the air.
 depth = layers["Depth"][..., 0] if "Depth" in layers else None
-rest = (layers["Combined"][..., :3] - layers["Welkin.Sky"][..., :3]
-        - layers["Welkin.AerialInscatter"])
+rest = layers["Combined"][..., :3] - layers["Welkin.Sky"][..., :3] - layers["Welkin.AerialInscatter"]
 ground_px = np.isfinite(depth) & (depth < 1e9) if depth is not None else (T[..., 0] < 1.0)
-check(np.allclose(rest[~ground_px], 0.0, atol=1e-6 * float(np.abs(layers["Combined"]).max())),
-      "Combined != Sky + AerialInscatter on sky pixels")
-check(float((rest[ground_px] / np.maximum(T[ground_px], 1e-12)).min()) > 0.0,
-      "the ground below the horizon is not lit (Combined - Sky - Inscatter <= 0)")
+check(
+    np.allclose(rest[~ground_px], 0.0, atol=1e-6 * float(np.abs(layers["Combined"]).max())),
+    "Combined != Sky + AerialInscatter on sky pixels",
+)
+check(
+    float((rest[ground_px] / np.maximum(T[ground_px], 1e-12)).min()) > 0.0,
+    "the ground below the horizon is not lit (Combined - Sky - Inscatter <= 0)",
+)
 peak = float(layers["Welkin.Sky"][..., 1].max())
 check(peak > 100 * float(np.median(layers["Welkin.Sky"][..., 1])), "no sun disc in view")
 
 # Without the add-on, a .blend saved with Welkin as its engine renders with Blender's
 # fallback engine and exits 0 (Blender 3.4 prints only "Engine 'WELKIN' not available"):
 # the output lacks Welkin's passes, which is how a farm script must tell.
-exr_off, run_off = render_headless(blend, t.TMP / "fallback", addon_enabled=False,
-                                   engine_flag=False, expect_rc=0)
+exr_off, run_off = render_headless(
+    blend, t.TMP / "fallback", addon_enabled=False, engine_flag=False, expect_rc=0
+)
 check(exr_off.exists(), "the fallback render wrote nothing")
 _l, names_off = read_layers(exr_off)
 check(not is_welkin_render(names_off), f"fallback render has Welkin's passes? {names_off}")
 print(f"fallback without the add-on: exit 0, channels {names_off}: detected (no Welkin passes)")
 # With `-E WELKIN` and no add-on, Blender 3.4 refuses ("engine not found") and renders
 # nothing.
-exr_off2, run_off2 = render_headless(blend, t.TMP / "fallback_e", addon_enabled=False,
-                                     expect_rc=None)
-check(not (exr_off2.exists() and is_welkin_render(read_layers(exr_off2)[1])),
-      "-E WELKIN without the add-on wrote a Welkin frame?")
-print(f"-E WELKIN without the add-on: exit {run_off2.returncode}, frame written: "
-      f"{exr_off2.exists()}")
+exr_off2, run_off2 = render_headless(blend, t.TMP / "fallback_e", addon_enabled=False, expect_rc=None)
+check(
+    not (exr_off2.exists() and is_welkin_render(read_layers(exr_off2)[1])),
+    "-E WELKIN without the add-on wrote a Welkin frame?",
+)
+print(f"-E WELKIN without the add-on: exit {run_off2.returncode}, frame written: {exr_off2.exists()}")
 
 # Orthographic, in this Blender: the same plate as the CLI.
-cam.data.type = 'ORTHO'
+cam.data.type = "ORTHO"
 cam.data.ortho_scale = 40.0
 bpy.context.view_layer.update()
 scene.render.filepath = str(t.TMP / "ortho.exr")
@@ -189,9 +195,11 @@ s = np.array(t.sun_direction(6.0, 5.0))
 away = np.degrees(np.arccos(np.clip(dirs @ s, -1, 1))) > 2.0
 sky = np.isinf(native.camera_plate(scene_json(scene))["depth"])
 err_p = relative_error(pano["Combined"][..., :3], hdri)
-print(f"panorama vs HDRI: sky pixels away from the sun max relative error "
-      f"{err_p[sky & away].max():.3g}; ground pixels median {np.median(err_p[~sky]):.3g} "
-      f"max {err_p[~sky].max():.3g}")
+print(
+    f"panorama vs HDRI: sky pixels away from the sun max relative error "
+    f"{err_p[sky & away].max():.3g}; ground pixels median {np.median(err_p[~sky]):.3g} "
+    f"max {err_p[~sky].max():.3g}"
+)
 check(err_p[sky & away].max() < 0.01, f"panorama differs from the HDRI by {err_p[sky & away].max():.3g}")
 omega = (2 * math.pi / 128) * (math.pi / 64) * np.cos(lat)
 disc = ~away & sky

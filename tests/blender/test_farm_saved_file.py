@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A saved file with Aerial Perspective on renders right in a Blender without the add-on
 (docs/pipelines.md#saved-files-without-the-add-on): saving bakes the frame's table and
 packs its images, so a farm's stock Blender (add-on not installed, Python scripts of the
@@ -20,6 +21,7 @@ sample count, CPU).
 Runs on every Blender of scripts/test_blender.sh (the binary's command line, or
 tests/blender/bpy_blender.py for PyPI's bpy).
 """
+
 import os
 import subprocess
 import sys
@@ -40,7 +42,8 @@ NO_WELKIN.write_text(
     " and m.split('.')[-1] == 'welkin']\n"
     "names = [m.__name__ for m in addon_utils.modules() if m.__name__.split('.')[-1] == 'welkin']\n"
     "assert not loaded and not names, f'Welkin is installed here: {loaded} {names}'\n"
-    "print('no_welkin: the add-on is not installed')\n")
+    "print('no_welkin: the add-on is not installed')\n"
+)
 
 
 def render(blend, out, frame, *, with_addon):
@@ -58,8 +61,17 @@ def render(blend, out, frame, *, with_addon):
         env["BLENDER_USER_CONFIG"] = str(home / "config")
         env["BLENDER_USER_EXTENSIONS"] = str(home / "extensions")
         extra = ["--python-exit-code", "1", "--python", str(NO_WELKIN)]
-    command = [*T.blender_command(), "-b", "--factory-startup", str(blend), *extra,
-               "-o", str(out / "f_####"), "-f", str(frame)]
+    command = [
+        *T.blender_command(),
+        "-b",
+        "--factory-startup",
+        str(blend),
+        *extra,
+        "-o",
+        str(out / "f_####"),
+        "-f",
+        str(frame),
+    ]
     print("running:", " ".join(command))
     run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=400)
     log = run.stdout + run.stderr
@@ -73,16 +85,16 @@ def render(blend, out, frame, *, with_addon):
     return np.stack([pixels[..., names.index(c)] for c in "RGB"], axis=-1)
 
 
-scene, sun = T.new_scene(12.0, 60.0, resolution='256', camera_z=30.0)
-scene.render.engine = 'CYCLES'
-scene.cycles.device = 'CPU'
+scene, sun = T.new_scene(12.0, 60.0, resolution="256", camera_z=30.0)
+scene.render.engine = "CYCLES"
+scene.cycles.device = "CPU"
 scene.cycles.samples = 2
 scene.cycles.seed = 7
 scene.cycles.use_denoising = False
 scene.render.resolution_x, scene.render.resolution_y = 24, 12
 scene.render.resolution_percentage = 100
-scene.render.image_settings.file_format = 'OPEN_EXR'
-scene.render.image_settings.color_depth = '32'
+scene.render.image_settings.file_format = "OPEN_EXR"
+scene.render.image_settings.color_depth = "32"
 scene.frame_start, scene.frame_end = 1, 3
 bpy.ops.mesh.primitive_plane_add(size=200000.0)
 ground = bpy.data.materials.new("Ground")
@@ -97,8 +109,10 @@ scene.welkin_aerial.enabled = True
 
 blend = T.TMP / "static.blend"
 bpy.ops.wm.save_as_mainfile(filepath=str(blend))
-T.check("farms with the add-on only" not in scene.welkin_aerial.status,
-        f"a static scene saved with a warning: {scene.welkin_aerial.status}")
+T.check(
+    "farms with the add-on only" not in scene.welkin_aerial.status,
+    f"a static scene saved with a warning: {scene.welkin_aerial.status}",
+)
 
 # (b) The images in the file: packed float EXR at the table's size.
 names = aerial_frame.SCREEN_IMAGES
@@ -108,8 +122,10 @@ for name in names:
     image = bpy.data.images.get(name)
     T.check(image is not None, f"no image {name} in the saved file")
     T.check(image.packed_file is not None, f"{name} is not packed in the file")
-    T.check(tuple(image.size) == sizes[name] and image.size[0] > 1,
-            f"{name}: {tuple(image.size)} in the file, {sizes[name]} baked")
+    T.check(
+        tuple(image.size) == sizes[name] and image.size[0] > 1,
+        f"{name}: {tuple(image.size)} in the file, {sizes[name]} baked",
+    )
     T.check(image.is_float, f"{name} reloads as 8-bit")
 print(f"(b) the table's images are packed: {sizes}")
 
@@ -134,8 +150,11 @@ print(f"(a) hazed vs not: max |diff| {haze:.3g}")
 T.check(haze > 0.01 * float(with_addon.max()), f"the haze is missing: max |diff| {haze}")
 # The sky alone (aerial perspective off): the packed sky renders as the add-on's.
 plain_addon = render(plain_blend, T.TMP / "plain_addon", 1, with_addon=True)
-T.check(np.array_equal(plain, plain_addon), "the sky-only file renders differently without "
-        f"the add-on: max |diff| {float(np.abs(plain - plain_addon).max())}")
+T.check(
+    np.array_equal(plain, plain_addon),
+    "the sky-only file renders differently without "
+    f"the add-on: max |diff| {float(np.abs(plain - plain_addon).max())}",
+)
 print("(a) a stock Blender renders the saved file as the add-on does, bit for bit")
 
 # (c) An animated sun: saving says the file needs the add-on on the farm.
@@ -148,8 +167,10 @@ sun.keyframe_insert("rotation_quaternion", frame=3)
 scene.frame_set(1)
 bpy.ops.wm.save_as_mainfile(filepath=str(T.TMP / "animated.blend"))
 status = scene.welkin_aerial.status
-T.check("farms with the add-on only" in status and "sun lamp 'Sun'" in status,
-        f"saving an animated sun does not say it needs the add-on: {status!r}")
+T.check(
+    "farms with the add-on only" in status and "sun lamp 'Sun'" in status,
+    f"saving an animated sun does not say it needs the add-on: {status!r}",
+)
 print(f"(c) saving an animated scene: {status}")
 
 # (d) Write Pass Files follows -o: the depth file and the passes go beside the frames of
@@ -166,8 +187,11 @@ written = sorted(p.name for p in elsewhere.iterdir())
 for name in ("f_welkin_render_0001.exr", "f_welkin_aerial_0001.exr", "f_welkin_scene_0001.json"):
     T.check(name in written, f"{name} is not beside the frame of -o: {written}")
 saved = T.TMP / "saved"
-T.check(not saved.exists(), "files were written at the saved output path: "
-        f"{sorted(p.name for p in saved.iterdir()) if saved.exists() else []}")
+T.check(
+    not saved.exists(),
+    "files were written at the saved output path: "
+    f"{sorted(p.name for p in saved.iterdir()) if saved.exists() else []}",
+)
 print(f"(d) Write Pass Files follows -o: {written}")
 
 T.done("test_farm_saved_file")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Place and Time (World > Welkin Sky > Place and Time): the sun lamp and the add-on's moon
 lamp placed from a date, a time and a place by the core, and a keyframed Time that renders
 day to night in a command-line `-a` render.
@@ -22,6 +23,7 @@ day to night in a command-line `-a` render.
     operator at frame 4, as F12) matches the `-a` frame within 0.1 % in the mean.
 (c) With the moon lamp deleted, a command-line render fails its frame naming the lamp.
 """
+
 import datetime
 import math
 import os
@@ -37,7 +39,7 @@ import numpy as np  # noqa: E402
 addon, welkin = T.install_addon()
 W, H = 128, 64
 NORTH = 30.0
-scene, sun = T.new_scene(40.0, 30.0, resolution='256')
+scene, sun = T.new_scene(40.0, 30.0, resolution="256")
 settings = scene.world.welkin_place_time
 settings.enabled = True
 settings.year, settings.month, settings.day = 2026, 6, 21
@@ -68,17 +70,22 @@ def angle_diff(a, b):
 
 
 core = welkin.sun_and_moon("2026-06-21T21:30:00+02:00", 48.8566, 2.3522)
-moons = [o for o in scene.objects if o.type == 'LIGHT' and o.get("welkin_moon_of")]
-T.check(len(moons) == 1 and moons[0].data.type == 'SUN', f"moon lamps: {moons}")
+moons = [o for o in scene.objects if o.type == "LIGHT" and o.get("welkin_moon_of")]
+T.check(len(moons) == 1 and moons[0].data.type == "SUN", f"moon lamps: {moons}")
 moon = moons[0]
 for name, obj in (("sun", sun), ("moon", moon)):
     e, a = elevation_azimuth(axis(obj), NORTH)
-    print(f"(a) {name} lamp: elevation {e:.6f}, azimuth {a:.6f}; core "
-          f"{core[name]['elevation_deg']:.6f}, {core[name]['azimuth_deg']:.6f}")
-    T.check(abs(e - core[name]["elevation_deg"]) < 1e-4
-            and angle_diff(a, core[name]["azimuth_deg"]) < 1e-4, f"(a) the {name} lamp is misplaced")
+    print(
+        f"(a) {name} lamp: elevation {e:.6f}, azimuth {a:.6f}; core "
+        f"{core[name]['elevation_deg']:.6f}, {core[name]['azimuth_deg']:.6f}"
+    )
+    T.check(
+        abs(e - core[name]["elevation_deg"]) < 1e-4 and angle_diff(a, core[name]["azimuth_deg"]) < 1e-4,
+        f"(a) the {name} lamp is misplaced",
+    )
 
 from welkin.blender.sky import scene_sun  # noqa: E402 (the installed add-on's)
+
 T.check(scene_sun.sun_lamps(scene) == [sun], "the moon lamp is taken for a sun lamp")
 T.check(not scene.world.welkin.warnings, f"warnings: {scene.world.welkin.warnings}")
 
@@ -106,9 +113,9 @@ for name, obj in (("sun", sun), ("moon", moon)):
     T.check(np.allclose(got, expected, rtol=1e-5, atol=0.0), f"(a) the {name} lamp's light")
 
 
-
 def draw_place_time():
     import types
+
     layout = T.FakeLayout()
     context = types.SimpleNamespace(world=scene.world, scene=scene)
     panel = types.SimpleNamespace(layout=layout)
@@ -118,15 +125,29 @@ def draw_place_time():
 
 
 drawn = draw_place_time()
-for name in ("enabled", "year", "month", "day", "hours", "utc_offset_h", "latitude_deg",
-             "longitude_deg", "height_m", "north_deg"):
+for name in (
+    "enabled",
+    "year",
+    "month",
+    "day",
+    "hours",
+    "utc_offset_h",
+    "latitude_deg",
+    "longitude_deg",
+    "height_m",
+    "north_deg",
+):
     T.check(("prop", name) in drawn, f"(a) the panel lacks {name}: {drawn}")
-T.check(("label", "UTC 2026-06-21T19:30:00Z") in drawn
-        and any(k == "label" and t.startswith("Sun: elevation 3.12, azimuth 303.20")
-                for k, t in drawn), f"(a) the panel's positions: {drawn}")
+T.check(
+    ("label", "UTC 2026-06-21T19:30:00Z") in drawn
+    and any(k == "label" and t.startswith("Sun: elevation 3.12, azimuth 303.20") for k, t in drawn),
+    f"(a) the panel's positions: {drawn}",
+)
 settings.day = 31
-T.check(any(k == "label" and "2026-06-31 is not a date" in t for k, t in draw_place_time()),
-        "(a) the panel does not name the bad date")
+T.check(
+    any(k == "label" and "2026-06-31 is not a date" in t for k, t in draw_place_time()),
+    "(a) the panel does not name the bad date",
+)
 try:
     bpy.ops.welkin.update_sky()
 except RuntimeError as error:
@@ -143,12 +164,15 @@ T.check(moon is not None and moon.name in scene.objects, "(a) no moon lamp after
 # place_now (what the UI runs before a cloudy sky is computed beside it) turns the lamps
 # at once, without a sky update.
 from welkin.blender.sky import place_time  # noqa: E402
+
 settings.hours = 6.0
 place_time.place_now(scene)
 morning = welkin.sun_and_moon("2026-06-21T06:00:00+02:00", 48.8566, 2.3522)
 e, a = elevation_azimuth(axis(sun), NORTH)
-T.check(abs(e - morning["sun"]["elevation_deg"]) < 1e-4
-        and angle_diff(a, morning["sun"]["azimuth_deg"]) < 1e-4, "(a) place_now: the sun lamp")
+T.check(
+    abs(e - morning["sun"]["elevation_deg"]) < 1e-4 and angle_diff(a, morning["sun"]["azimuth_deg"]) < 1e-4,
+    "(a) place_now: the sun lamp",
+)
 settings.hours = 21.5
 bpy.ops.welkin.update_sky()
 print("(a) sun and moon lamps where the core puts them, the scene's north respected")
@@ -167,7 +191,7 @@ material = bpy.data.materials.new("White")
 material.use_nodes = True
 nodes = material.node_tree.nodes
 nodes.remove(nodes["Principled BSDF"])
-lambert = nodes.new('ShaderNodeBsdfDiffuse')
+lambert = nodes.new("ShaderNodeBsdfDiffuse")
 lambert.inputs["Color"].default_value = (ALBEDO, ALBEDO, ALBEDO, 1.0)
 material.node_tree.links.new(lambert.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
 bpy.context.active_object.data.materials.append(material)
@@ -179,7 +203,7 @@ FRAMES = (1, 2, 3, 4)
 scene.frame_start, scene.frame_end = 1, 4
 for f, h in HOURS.items():
     settings.hours = h
-    scene.world.keyframe_insert('welkin_place_time.hours', frame=f)
+    scene.world.keyframe_insert("welkin_place_time.hours", frame=f)
 scene.frame_set(1)
 bpy.ops.welkin.update_sky()
 
@@ -187,8 +211,9 @@ expected_ground = {}
 for f in FRAMES:
     scene.frame_set(f)  # the handler places the lamps in this session too
     hours = settings.hours  # as Blender animates it at this frame
-    when = (datetime.datetime(2026, 6, 21, tzinfo=datetime.timezone(datetime.timedelta(hours=2)))
-            + datetime.timedelta(hours=hours))
+    when = datetime.datetime(
+        2026, 6, 21, tzinfo=datetime.timezone(datetime.timedelta(hours=2))
+    ) + datetime.timedelta(hours=hours)
     c = welkin.sun_and_moon(when, 48.8566, 2.3522)
     total = np.zeros(3)
     for name in ("sun", "moon"):
@@ -197,8 +222,10 @@ for f in FRAMES:
         # at the horizon, slightly out of the Rec.709 gamut, lights with blue 0.
         total += np.maximum(lamp_rgb(name, d, c), 0.0) * max(0.0, d[2])
     expected_ground[f] = ALBEDO / math.pi * total
-    print(f"(b) frame {f}: {when}: sun {c['sun']['elevation_deg']:.2f} deg, moon "
-          f"{c['moon']['elevation_deg']:.2f} deg; ground {expected_ground[f]}")
+    print(
+        f"(b) frame {f}: {when}: sun {c['sun']['elevation_deg']:.2f} deg, moon "
+        f"{c['moon']['elevation_deg']:.2f} deg; ground {expected_ground[f]}"
+    )
     e, _a = elevation_azimuth(axis(sun), NORTH)
     T.check(abs(e - c["sun"]["elevation_deg"]) < 1e-4, f"(b) frame {f}: sun lamp at {e}")
 
@@ -211,8 +238,19 @@ bpy.ops.wm.save_as_mainfile(filepath=str(blend))
 env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
 env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin",
-           "-s", "1", "-e", "4", "-a"]
+command = [
+    *T.blender_command(),
+    "-b",
+    "--factory-startup",
+    str(blend),
+    "--addons",
+    "welkin",
+    "-s",
+    "1",
+    "-e",
+    "4",
+    "-a",
+]
 print("running:", " ".join(command))
 run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
 log = run.stdout + run.stderr
@@ -224,15 +262,18 @@ means = []
 for f in FRAMES:
     image = frames[f]
     T.check(bool(np.isfinite(image).all()) and float(image.min()) >= 0.0, f"frame {f}: bad pixels")
-    ground = image[H - H // 4:].reshape(-1, 3).mean(axis=0)
+    ground = image[H - H // 4 :].reshape(-1, 3).mean(axis=0)
     means.append(float(image.mean()))
-    print(f"(b) frame {f}: mean {means[-1]:.6g}; ground below {ground}, lamps' expectation "
-          f"{expected_ground[f]}")
+    print(
+        f"(b) frame {f}: mean {means[-1]:.6g}; ground below {ground}, lamps' expectation {expected_ground[f]}"
+    )
     # 2 %, and a floor of 1e-4 of the brightest channel: Blender's colour management
     # mixes channels at ~6e-5 (seen: a lamp of blue 0 gives blue 6e-5 of its red).
     floor = 1e-4 * float(expected_ground[f].max())
-    T.check(np.allclose(ground, expected_ground[f], rtol=0.02, atol=floor),
-            f"(b) frame {f}: the lamps are not this moment's")
+    T.check(
+        np.allclose(ground, expected_ground[f], rtol=0.02, atol=floor),
+        f"(b) frame {f}: the lamps are not this moment's",
+    )
 T.check(all(a > b for a, b in zip(means, means[1:])), f"(b) brightness not falling: {means}")
 
 # As F12: the render operator at frame 4 in this session.
@@ -253,12 +294,25 @@ if not T.is_module_bpy():
     scene.render.filepath = str(T.TMP / "no_moon" / "f_####")
     blend = T.TMP / "no_moon.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
-    command = [*T.blender_command(), "-b", "--factory-startup", str(blend), "--addons",
-               "welkin", "-s", "1", "-e", "1", "-a"]
+    command = [
+        *T.blender_command(),
+        "-b",
+        "--factory-startup",
+        str(blend),
+        "--addons",
+        "welkin",
+        "-s",
+        "1",
+        "-e",
+        "1",
+        "-a",
+    ]
     run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
     log = run.stdout + run.stderr
-    T.check(run.returncode != 0 and "moon lamp is missing" in log,
-            f"(c) rendered without the moon lamp ({run.returncode}):\n{log[-2000:]}")
+    T.check(
+        run.returncode != 0 and "moon lamp is missing" in log,
+        f"(c) rendered without the moon lamp ({run.returncode}):\n{log[-2000:]}",
+    )
     T.check(not (T.TMP / "no_moon" / "f_0001.exr").exists(), "(c) the failed frame was written")
     print("(c) a render without the moon lamp fails its frame, naming the lamp")
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender: the scene description's camera is Blender's camera.
 
 For cameras of every supported kind (perspective with each sensor fit, portrait and
@@ -11,6 +12,7 @@ mapping puts each pixel. The sun lamp's direction is its local +Z.
 Run: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
      --python-exit-code 1 --python tests/blender/test_scene_camera.py
 """
+
 import json
 import math
 import pathlib
@@ -31,10 +33,14 @@ from welkin.blender import compat  # noqa: E402
 
 def scene_json(ob, scene, sun_ob):
     r = scene.render
-    return json.dumps({"version": 1, "camera": camera_json(ob),
-                       "sun": {"direction": list(sun_ob.matrix_world.to_3x3().col[2])},
-                       "resolution": {"x": r.resolution_x, "y": r.resolution_y,
-                                      "percentage": r.resolution_percentage}})
+    return json.dumps(
+        {
+            "version": 1,
+            "camera": camera_json(ob),
+            "sun": {"direction": list(sun_ob.matrix_world.to_3x3().col[2])},
+            "resolution": {"x": r.resolution_x, "y": r.resolution_y, "percentage": r.resolution_percentage},
+        }
+    )
 
 
 def close(a, b, tol=2e-5):  # mathutils works in float32
@@ -77,12 +83,13 @@ def main():
     bpy.context.view_layer.update()
 
     cases = []
-    for (x, y) in ((1920, 1080), (1080, 1920), (1000, 1000)):
+    for x, y in ((1920, 1080), (1080, 1920), (1000, 1000)):
         for fit in ("AUTO", "HORIZONTAL", "VERTICAL"):
             for shift in ((0.0, 0.0), (0.2, -0.1)):
                 cases.append(dict(type="PERSP", x=x, y=y, fit=fit, shift=shift, lens=35.0))
-    cases.append(dict(type="PERSP", x=640, y=480, fit="AUTO", shift=(0, 0), lens=None,
-                      angle=math.radians(70)))
+    cases.append(
+        dict(type="PERSP", x=640, y=480, fit="AUTO", shift=(0, 0), lens=None, angle=math.radians(70))
+    )
     for fit in ("AUTO", "VERTICAL"):
         cases.append(dict(type="ORTHO", x=800, y=600, fit=fit, shift=(0.1, 0.05), lens=50.0))
     for c in cases:

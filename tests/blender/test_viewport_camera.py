@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The viewport preview's camera against F12's, headless: a viewport looking through the
 scene camera has that camera's inverse as its view_matrix and its projection
 (Object.calc_matrix_camera, Blender's own) as its window_matrix; viewport.camera_from_view
@@ -6,6 +7,7 @@ float32) and the same low-resolution plate (within 1e-4 relative per pixel, of
 max(value, 1e-3 x the image mean)), for a perspective camera with lens shift (sensor fit
 AUTO), a portrait one fitted VERTICAL, and an orthographic one with shift.
 """
+
 import math
 import pathlib
 import sys
@@ -21,17 +23,29 @@ from welkin import plate, viewport  # noqa: E402
 from welkin.blender.engine import render_engine  # noqa: E402
 
 scene, sun = t.new_scene(sun_elevation_deg=8, sun_azimuth_deg=20, camera_z=3.0)
-scene.render.engine = 'WELKIN'
+scene.render.engine = "WELKIN"
 cam = scene.camera
 cam.rotation_euler = (math.radians(88), 0.0, math.radians(-70))
 
 CASES = [
-    ("persp-shift-auto", 64, 36, dict(type='PERSP', lens=28.0, shift_x=0.12, shift_y=-0.07,
-                                      sensor_fit='AUTO')),
-    ("persp-vertical-portrait", 30, 54, dict(type='PERSP', lens=40.0, shift_x=-0.05, shift_y=0.1,
-                                             sensor_fit='VERTICAL', sensor_height=24.0)),
-    ("ortho-shift", 48, 32, dict(type='ORTHO', ortho_scale=30.0, shift_x=0.2, shift_y=0.05,
-                                 sensor_fit='AUTO')),
+    (
+        "persp-shift-auto",
+        64,
+        36,
+        dict(type="PERSP", lens=28.0, shift_x=0.12, shift_y=-0.07, sensor_fit="AUTO"),
+    ),
+    (
+        "persp-vertical-portrait",
+        30,
+        54,
+        dict(type="PERSP", lens=40.0, shift_x=-0.05, shift_y=0.1, sensor_fit="VERTICAL", sensor_height=24.0),
+    ),
+    (
+        "ortho-shift",
+        48,
+        32,
+        dict(type="ORTHO", ortho_scale=30.0, shift_x=0.2, shift_y=0.05, sensor_fit="AUTO"),
+    ),
 ]
 for name, w, h, settings in CASES:
     for key, value in settings.items():
@@ -43,11 +57,13 @@ for name, w, h, settings in CASES:
     evaluated = cam.evaluated_get(depsgraph)
     window = evaluated.calc_matrix_camera(depsgraph, x=w, y=h)
     view = evaluated.matrix_world.inverted()
-    camera = viewport.camera_from_view(view, window, cam.data.type != 'ORTHO', w, h,
-                                       scene.unit_settings.scale_length)
+    camera = viewport.camera_from_view(
+        view, window, cam.data.type != "ORTHO", w, h, scene.unit_settings.scale_length
+    )
     f12_text = render_engine.scene_description_json(scene, depsgraph, native)
-    vp_text = plate.scene_json(camera=camera, resolution=(w, h, 100),
-                               **render_engine.scene_world(scene, depsgraph, native))
+    vp_text = plate.scene_json(
+        camera=camera, resolution=(w, h, 100), **render_engine.scene_world(scene, depsgraph, native)
+    )
     f12 = native.SceneDescription.from_json_string(f12_text)
     vp = native.SceneDescription.from_json_string(vp_text)
     worst = 0.0

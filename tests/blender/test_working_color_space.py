@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Headless Blender 5.0+: the same scene renders the same in every working colour space.
 
 Blender 5.0 stores a file's colours in its working space (bpy.data.colorspace.working_space:
@@ -26,6 +27,7 @@ per channel) is the same within 0.5 % in every pixel.
 Finally the ACEScg file, saved and rendered in a fresh process (`blender -b file -f 1`),
 gives the same frame as in this process.
 """
+
 import math
 import os
 import pathlib
@@ -46,7 +48,7 @@ from welkin.blender import compat  # noqa: E402
 from welkin.blender.sky import update  # noqa: E402
 
 W, H = 96, 48
-SPACES = (('Linear Rec.709', "rec709"), ('Linear Rec.2020', "rec2020"), ('ACEScg', "acescg"))
+SPACES = (("Linear Rec.709", "rec709"), ("Linear Rec.2020", "rec2020"), ("ACEScg", "acescg"))
 
 
 def grey(name, value):
@@ -72,16 +74,16 @@ def build_scene():
         bpy.context.active_object.data.materials.append(grey(f"Block {k}", 0.5))
     scene.world.welkin.preset = "hazy"
     scene.world.welkin.sync_lamp = True
-    scene.render.engine = 'CYCLES'
+    scene.render.engine = "CYCLES"
     scene.render.resolution_x, scene.render.resolution_y = W, H
     scene.render.resolution_percentage = 100
-    scene.cycles.device = 'CPU'
+    scene.cycles.device = "CPU"
     scene.cycles.samples = 8
     scene.cycles.seed = 3
     scene.cycles.use_denoising = False
-    scene.view_settings.view_transform = 'Standard'
+    scene.view_settings.view_transform = "Standard"
     compat.set_exr(scene.render.image_settings, multilayer=False)
-    scene.render.image_settings.color_depth = '32'
+    scene.render.image_settings.color_depth = "32"
     scene.welkin_aerial.enabled = True
     return scene, sun
 
@@ -95,11 +97,11 @@ def render(scene, path):
 def engine_frame(scene, path):
     """The same frame from the Welkin render engine (the core's camera plate: sky, lit
     ground, haze; no noise)."""
-    scene.render.engine = 'WELKIN'
+    scene.render.engine = "WELKIN"
     try:
         return render(scene, path)
     finally:
-        scene.render.engine = 'CYCLES'
+        scene.render.engine = "CYCLES"
 
 
 def to_rec709(rgb, space):
@@ -114,8 +116,10 @@ def switch(scene, working_space):
     scene.welkin_aerial.enabled = False
     bpy.ops.wm.save_as_mainfile(filepath=str(at.TMP / "switching.blend"))  # packs the sky
     result = bpy.ops.wm.set_working_color_space(working_space=working_space)
-    at.check(bpy.data.colorspace.working_space == working_space,
-             f"the operator did not switch to {working_space}: {result}")
+    at.check(
+        bpy.data.colorspace.working_space == working_space,
+        f"the operator did not switch to {working_space}: {result}",
+    )
     scene.welkin_aerial.enabled = True
     update.update_sky(scene)  # what the depsgraph handler does in the interface
 
@@ -127,9 +131,9 @@ def block_means(rgb, mask, n=8):
     out = []
     for y in range(0, h - n + 1, n):
         for x in range(0, w - n + 1, n):
-            m = mask[y:y + n, x:x + n]
+            m = mask[y : y + n, x : x + n]
             if m.sum() >= n * n // 2:
-                out.append(rgb[y:y + n, x:x + n][m].mean(axis=0))
+                out.append(rgb[y : y + n, x : x + n][m].mean(axis=0))
     return np.asarray(out)
 
 
@@ -139,25 +143,27 @@ def compare(name, got, want, sky):
     g, w = block_means(got, ~sky), block_means(want, ~sky)
     rel = np.abs(g - w) / np.maximum(np.abs(w), 1e-4)
     p = np.percentile((np.abs(got - want) / np.maximum(np.abs(want), 1e-4))[~sky], [50, 90, 99])
-    print(f"{name}: sky max {s:.5f}; ground and blocks over {len(g)} blocks of 8 x 8: "
-          f"mean {rel.mean():.5f} max {rel.max():.5f} (per pixel: median {p[0]:.4f}, "
-          f"90 % {p[1]:.4f}, 99 % {p[2]:.4f})")
+    print(
+        f"{name}: sky max {s:.5f}; ground and blocks over {len(g)} blocks of 8 x 8: "
+        f"mean {rel.mean():.5f} max {rel.max():.5f} (per pixel: median {p[0]:.4f}, "
+        f"90 % {p[1]:.4f}, 99 % {p[2]:.4f})"
+    )
     return s, rel.mean(), rel.max()
 
 
 def main():
     scene, sun = build_scene()
     tmp = at.TMP
-    switch(scene, 'Linear Rec.709')
+    switch(scene, "Linear Rec.709")
     want = render(scene, tmp / "rec709.exr")
     # Sky pixels (the camera ray meets no geometry): where the world alone, every object
     # hidden from the camera, gives the same frame.
     for obj in scene.objects:
-        if obj.type == 'MESH':
+        if obj.type == "MESH":
             obj.visible_camera = False
     world_only = render(scene, tmp / "world.exr")
     for obj in scene.objects:
-        if obj.type == 'MESH':
+        if obj.type == "MESH":
             obj.visible_camera = True
     sky = np.all(np.abs(world_only - want) <= 1e-6 * np.abs(want) + 1e-9, axis=-1)
     at.check(10 < sky.sum() < sky.size - 10, f"{sky.sum()} sky pixels of {sky.size}: no horizon")
@@ -168,8 +174,10 @@ def main():
         got = to_rec709(render(scene, tmp / f"{space}.exr"), space)
         s, mean, worst = compare(space, got, want, sky)
         at.check(s < 0.002, f"{space}: the sky is {s:.4f} from the Rec.709 file's")
-        at.check(mean < 0.01 and worst < 0.03, f"{space}: the ground is {mean:.4f} (mean), "
-                                               f"{worst:.4f} (worst block) from the Rec.709 file's")
+        at.check(
+            mean < 0.01 and worst < 0.03,
+            f"{space}: the ground is {mean:.4f} (mean), {worst:.4f} (worst block) from the Rec.709 file's",
+        )
         plate = to_rec709(engine_frame(scene, tmp / f"plate_{space}.exr"), space)
         d = (np.abs(plate - plate709) / np.maximum(np.abs(plate709), 1e-4)).max()
         print(f"{space}: the Welkin engine's frame is {d:.2e} from the Rec.709 file's")
@@ -177,8 +185,10 @@ def main():
         lamp = np.asarray(sun.data.color)
         m = np.asarray(module.color_space_matrix("rec709", space))
         want_lamp = m @ np.asarray(lamp709)
-        at.check(np.allclose(lamp / lamp.max(), want_lamp / want_lamp.max(), atol=2e-3),
-                 f"{space}: lamp colour {lamp} is not the Rec.709 file's {lamp709} in {space}")
+        at.check(
+            np.allclose(lamp / lamp.max(), want_lamp / want_lamp.max(), atol=2e-3),
+            f"{space}: lamp colour {lamp} is not the Rec.709 file's {lamp709} in {space}",
+        )
     # Rec.709 numbers read as ACEScg (what Welkin gave Blender before): far outside.
     _s, mean, _worst = compare("Rec.709 numbers read as ACEScg", to_rec709(want, "acescg"), want, sky)
     at.check(mean > 0.03, f"relabelling is only {mean:.4f} off: the test cannot tell")
@@ -186,8 +196,20 @@ def main():
     blend = tmp / "acescg.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
     out = tmp / "fresh_"
-    cmd = [*at.blender_command(), "-b", "--factory-startup", str(blend), "--addons", "welkin",
-           "-o", str(out) + "####", "-F", "OPEN_EXR", "-f", "1"]
+    cmd = [
+        *at.blender_command(),
+        "-b",
+        "--factory-startup",
+        str(blend),
+        "--addons",
+        "welkin",
+        "-o",
+        str(out) + "####",
+        "-F",
+        "OPEN_EXR",
+        "-f",
+        "1",
+    ]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env["BLENDER_USER_SCRIPTS"] = str(at.scripts_dir())
     env["BLENDER_USER_CONFIG"] = str(at.TMP / "config")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Run by test_viewport_window.py inside a windowed Blender (Xvfb, Mesa llvmpipe):
     xvfb-run -a blender --factory-startup --python-use-system-env --python THIS
 with $WELKIN_VIEWPORT_RESULT the JSON file to write. Not a test_* file: it needs a window.
@@ -19,6 +20,7 @@ while a preview runs. Checked for each (viewport_preview.LAST):
 The draw latency (the longest view_draw, and the texture uploads) and the levels' times
 are written to the result, not asserted (speed is measured, not tested).
 """
+
 import json
 import math
 import os
@@ -57,16 +59,16 @@ try:
     from welkin.blender.engine import render_engine, viewport as vp  # noqa: E402
 
     scene, sun = t.new_scene(sun_elevation_deg=12, sun_azimuth_deg=40, camera_z=2.0)
-    scene.render.engine = 'WELKIN'
+    scene.render.engine = "WELKIN"
     scene.render.resolution_x, scene.render.resolution_y = 320, 180
     cam = scene.camera
     cam.rotation_euler = (math.radians(85), 0.0, math.radians(-60))
     cam.data.shift_x = 0.1
     win = bpy.context.window_manager.windows[0]
-    area = max((a for a in win.screen.areas if a.type == 'VIEW_3D'), key=lambda a: a.width * a.height)
-    region = next(r for r in area.regions if r.type == 'WINDOW')
+    area = max((a for a in win.screen.areas if a.type == "VIEW_3D"), key=lambda a: a.width * a.height)
+    region = next(r for r in area.regions if r.type == "WINDOW")
     space = area.spaces.active
-    space.shading.type = 'RENDERED'
+    space.shading.type = "RENDERED"
     rv3d = space.region_3d
     space.overlay.show_overlays = False  # the readback sees the engine's pixels only
     space.show_gizmo = False
@@ -77,7 +79,7 @@ except Exception:
 
 def set_view(kind):
     if kind == "CAMERA":
-        rv3d.view_perspective = 'CAMERA'
+        rv3d.view_perspective = "CAMERA"
         return
     rv3d.view_perspective = kind
     rv3d.view_rotation = Euler((math.radians(80), 0.0, math.radians(-50))).to_quaternion()
@@ -89,8 +91,9 @@ def core_plate(w, h):
     """The core's plate for the region's view at w x h (what the preview must show)."""
     depsgraph = bpy.context.evaluated_depsgraph_get()
     world = render_engine.scene_world(scene, depsgraph, native)
-    camera = viewport.camera_from_view(rv3d.view_matrix, rv3d.window_matrix, rv3d.is_perspective,
-                                       w, h, scene.unit_settings.scale_length)
+    camera = viewport.camera_from_view(
+        rv3d.view_matrix, rv3d.window_matrix, rv3d.is_perspective, w, h, scene.unit_settings.scale_length
+    )
     text = plate.scene_json(camera=camera, resolution=(w, h, 100), **world)
     return native.camera_plate(text), native.SceneDescription.from_json_string(text)
 
@@ -99,7 +102,8 @@ def frame_rays_match():
     """Camera view: rays at points of the camera's frame, the preview's against F12's."""
     depsgraph = bpy.context.evaluated_depsgraph_get()
     f12 = native.SceneDescription.from_json_string(
-        render_engine.scene_description_json(scene, depsgraph, native))
+        render_engine.scene_description_json(scene, depsgraph, native)
+    )
     _plate, view = core_plate(region.width, region.height)
     corners = [cam.matrix_world @ v for v in cam.data.view_frame(scene=scene)]
     # view_frame: top-right, bottom-right, bottom-left, top-left; project to region pixels.
@@ -123,8 +127,10 @@ def frame_rays_match():
 def check_final(kind):
     L = vp.LAST
     key, w, h, pixels = L["image"]
-    expect((w, h) == (region.width, region.height), f"{kind}: last level {w} x {h}, region "
-           f"{region.width} x {region.height}")
+    expect(
+        (w, h) == (region.width, region.height),
+        f"{kind}: last level {w} x {h}, region {region.width} x {region.height}",
+    )
     img = np.asarray(pixels, dtype=np.float32).reshape(h, w, 4)[::-1]  # top row first
     expect(np.isfinite(img).all() and (img >= 0).all(), f"{kind}: non-finite or negative pixels")
     expect(float(img[..., :3].max()) > 0.0, f"{kind}: a black preview")
@@ -135,7 +141,7 @@ def check_final(kind):
     if "readback" in L:
         x, y, bw, bh = vp.READBACK
         fb = np.asarray(L["readback"], dtype=np.float32).reshape(bh, bw, 4)
-        ref = img[::-1][y:y + bh, x:x + bw]  # bottom row first, as the framebuffer
+        ref = img[::-1][y : y + bh, x : x + bw]  # bottom row first, as the framebuffer
         rel = float((np.abs(fb[..., :3] - ref[..., :3]) / np.maximum(ref[..., :3], 1e-6)).max())
         notes[f"{kind}_framebuffer_rel_diff"] = rel
         notes[f"{kind}_framebuffer_sample"] = [fb[0, 0].tolist(), ref[0, 0].tolist()]
@@ -176,9 +182,14 @@ def tick():
             state["changed"] = True
             return 0.02
         current = L.get("job")
-        if current is not None and current.done and L.get("image") is not None \
-                and L["image"][0] == current.key and L["image"][1] == region.width \
-                and (kind != "CHANGE" or current is not state["old_job"]):
+        if (
+            current is not None
+            and current.done
+            and L.get("image") is not None
+            and L["image"][0] == current.key
+            and L["image"][1] == region.width
+            and (kind != "CHANGE" or current is not state["old_job"])
+        ):
             check_final(kind)
             if kind == "CAMERA":
                 frame_rays_match()
@@ -190,8 +201,10 @@ def tick():
             notes[f"{kind}_seconds_to_final"] = time.time() - state["t_step"]
             state.update(step=state["step"] + 1, started=False)
         elif time.time() - state["t0"] > TIMEOUT_S:
-            failures.append(f"{kind}: no final preview after {TIMEOUT_S} s; LAST = "
-                            f"{ {k: v for k, v in L.items() if k not in ('image', 'readback')} }")
+            failures.append(
+                f"{kind}: no final preview after {TIMEOUT_S} s; LAST = "
+                f"{ {k: v for k, v in L.items() if k not in ('image', 'readback')} }"
+            )
             finish()
         return 0.05
     except Exception:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How the froxel aerial passes are compared with the per-pixel march, in the
 // tests (which assert on it) and the benchmark (which reports it): over the non-sky pixels,
 // the in-scattering relative to the march's value where that exceeds 1e-3 of the frame's

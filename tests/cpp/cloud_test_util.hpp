@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared by the cloud tests: a homogeneous box of cloud (closed forms), an airless
 // atmosphere, and small VDB files written with OpenVDB into a temporary folder.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // For the bad-input tests: which parameter a welkin::InvalidArgument names.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Second-order sky radiance (light scattered exactly twice, a ground reflection counting
 // as one scattering) by deterministic quadrature, with the peer's rules or with converged
 // ones, so that the peer's quadrature error in its orders >= 2 can be measured instead of
@@ -46,11 +47,11 @@
 #include <glm/vec3.hpp>
 
 #include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/phase.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/base/quadrature.hpp"
-#include "welkin/atmosphere/column_table.hpp"
 
 namespace welkin::test {
 

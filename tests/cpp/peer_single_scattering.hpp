@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Single scattering for a row of the peer table by direct quadrature along the view ray,
 // with exact (double-precision quadrature) transmittances: the trapezoid rule on
 // `intervals` equal intervals, as Bruneton 2017's reference ComputeSingleScattering does

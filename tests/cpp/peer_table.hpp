@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reads tests/data/bruneton2017_sky_subset.csv: comment lines start with '#',
 // then a header row naming the columns, then one row per geometry.
 #pragma once

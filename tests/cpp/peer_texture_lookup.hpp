@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Bruneton 2017's 4D scattering-texture lookup for a camera on the ground, emulated: which
 // texels GetSkyRadiance reads, with which weights, and the geometry each texel stands for.
 // (precomputed_atmospheric_scattering, atmosphere/functions.glsl,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Aerial perspective: closed forms (no air, exact optical depth along a horizontal ray),
 // invariants (monotone in depth, sky pixels), bad input, and the froxel volume against the
 // per-pixel ray march with stated tolerances in strong haze out to 80 km.
@@ -187,7 +188,10 @@ TEST(AerialPerspective, BadInputNamesTheParameter) {
               "depth");
     SceneDescription huge = s;
     huge.resolution = {65536, 65536, 32767};
-    EXPECT_EQ(parameter_of([&] { check_frame_memory(huge.resolution.width(), huge.resolution.height(), kAerialPassBytesPerPixel, "passes"); }),
+    EXPECT_EQ(parameter_of([&] {
+                  check_frame_memory(huge.resolution.width(), huge.resolution.height(),
+                                     kAerialPassBytesPerPixel, "passes");
+              }),
               "resolution");
     SceneDescription none = s;
     none.camera.reset();

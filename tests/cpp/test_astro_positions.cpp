@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun and the moon from a place and a moment (welkin/astro/): against the published
 // worked cases, the refraction formula against Bennett's independent fit, the time
 // scales, and bad input. The comparison over many dates and places with an independent

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Atmosphere parameters: presets, validation, JSON round trip.
 #include <cmath>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The density table of AtmosphereBatch (atmosphere/batch.hpp): kTableSize entries evenly
 // spaced in s = r^2 - R^2, interpolated linearly in s. For f(s) = exp(-h(s) / H) with
 // h(s) = sqrt(R^2 + s) - R, linear interpolation on nodes ds apart errs by at most

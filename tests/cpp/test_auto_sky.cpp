@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rules by which method="auto" chooses (include/welkin/sky/auto.hpp), on small
 // synthetic tables whose answer is known: cheapest that meets the tolerance, the cost
 // depending on the number of directions; the worst grid corner around an off-grid scene;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camera plate (camera_plate.hpp) with and without clouds: Combined is the sky plus
 // the air's in-scattering, and with clouds exactly the cloud passes' composite over it;
 // the ground hides the clouds below the horizon; the sun's disc is dimmed by the cloud's

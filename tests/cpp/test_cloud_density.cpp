@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cloud density sources: the procedural layer (determinism, tiling, bounds, majorants) and
 // OpenVDB volumes (sampling, transforms, empty-space skipping, and every bad input).
 #include <cmath>

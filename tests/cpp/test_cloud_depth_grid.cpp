@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lazily filled optical-depth grid (clouds/depth_grid.hpp) and the march through it.
 #include <cmath>
 #include <cstdio>

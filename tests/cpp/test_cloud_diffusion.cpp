@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The delta-Eddington slab of clouds/diffusion.hpp: its closed form against its own
 // equations and energy balance, and the fast march's multiple scattering built on it
 // against the path-tracing reference on a thick conservative slab.

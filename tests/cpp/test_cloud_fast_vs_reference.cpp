@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fast cloud march (clouds/lighting.hpp, defaults) against the path-tracing reference
 // (clouds/reference.hpp, all orders) on three clouds: a thin wispy layer, a dense cumulus
 // layer, and a VDB volume written here with OpenVDB. The same density, phase, albedo and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cloud lighting: the fast march and the path-tracing reference against closed forms, and
 // the fast march against the reference on three clouds (a thin wispy layer, a dense
 // cumulus layer, a VDB written here), with the tolerance stated per case.

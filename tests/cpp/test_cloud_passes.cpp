@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera cloud passes (cloud_passes.hpp): closed forms for a constant slab in airless
 // skies (opacity, radiance of single scattering, the transmittance-weighted depth in
 // Blender's Z convention), geometry in front hiding the cloud, pixels without cloud, the

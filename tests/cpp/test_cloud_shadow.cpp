@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The clouds' transmittance towards a distant light (clouds/shadow.hpp).
 #include <cmath>
 #include <limits>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clouds in the equirectangular sky (sky_image.hpp): the cloudy HDRI is a panoramic
 // camera's cloud passes (cloud_passes.hpp: the cloud with the air in front of it)
 // composited over the clear HDRI, pixel for pixel; pixels without cloud are the clear

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The upsampled cloud pass (render_clouds_grid, CloudUpsampling in lighting.hpp): the rays
 // it marches are the plain march's rays bit for bit; every other ray is the bilinear
 // combination of the four marched corners of the one block that owns it; zero tolerances

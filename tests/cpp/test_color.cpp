@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Colour conversion: the CIE fit against the CIE table, closed-form consistency of the two
 // conversion paths, and the three-sample conversion against the peer's spectral RGB.
 #include <algorithm>

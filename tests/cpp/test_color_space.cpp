@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The output colour spaces (color_space.hpp): their matrices against published ones,
 // white to white, primaries to unit vectors, and the spectrum conversion in each space.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The default fast path's colour against the 48-wavelength spectral path: the default
 // four wavelengths with their fitted conversion (color.cpp) and the spectral path at
 // 360..830 nm through the CIE functions, both computed here by the lut method, over the

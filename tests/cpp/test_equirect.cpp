@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Blender's equirectangular mapping: landmarks, round trips, pixel centres, solid angles.
 #include <cmath>
 #include <random>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // EXR I/O: round trips (float, half, multilayer names), atomic and careful writing.
 #include <cmath>
 #include <filesystem>

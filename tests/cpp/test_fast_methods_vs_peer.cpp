@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fast methods against the peer table (Bruneton 2017's double-precision spectral
 // reference, 4 scattering orders): views above the horizon, 680/550/440 nm.
 //

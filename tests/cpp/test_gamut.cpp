@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Gamut mapping (color/gamut.hpp) against its definition: luminance kept, the chromaticity
 // on the line from the white point through the input (the dominant wavelength kept), the
 // nearest channel brought exactly to 0, in-gamut colours untouched; and the aerosol's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lit ground below the horizon (ground.hpp, sky_image.hpp "The ground"): the closed
 // form without air, the switch, and the horizon.
 #include <cmath>

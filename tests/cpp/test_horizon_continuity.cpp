@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Every method is continuous at and around the exact horizon, from the ground up: views a
 // hair above the horizon, exactly on it, and (from above the ground, where a view below the
 // horizon crosses air before it meets the ground) a hair below it. The horizon seen from

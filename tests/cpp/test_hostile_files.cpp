@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Hostile files and unbounded settings: a corrupt VDB whose tree overwrites the heap of the
 // process that parses it, an EXR input that is a FIFO or declares an absurd size, a wind
 // offset beyond the noise's resolution; and the defaults a user expects (a camera without a

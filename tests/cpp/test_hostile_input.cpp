@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Hostile input and careful output (issue 18, items 4-7; issue 14): every writer writes
 // through symlinks and refuses special files; every reader is bounded; JSON errors name
 // the file, the key path and the failure; temporaries are unique and never left behind.

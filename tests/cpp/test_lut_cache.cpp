@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lut method's cache of atmosphere LUTs (lut_cache.hpp): a sun change reuses the
 // tables, any change of the atmosphere or of the LUT sizes rebuilds them, cached results
 // are identical to fresh ones, and concurrent callers get correct tables. Also: the lut

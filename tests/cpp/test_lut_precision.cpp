@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The LUT builds look the sun's transmittance up in float from per-radius constants
 // formed in double (TransmittanceLut::AtRadius). Planet-scale geometry is where float
 // loses digits (r^2 - R^2 near the ground), so these tests hold the float lookup to the

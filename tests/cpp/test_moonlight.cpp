@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The moon as a light source (astro/moonlight.hpp, night/moonlit_sky.hpp): its
 // illuminance on the ground against Krisciunas & Schaefer 1991, its disc's energy in the
 // sky image against its irradiance at any resolution, the phase's shape, and the moonlit

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The multiple-scattering term of the fast methods, and the lut method as a whole, against
 // the reference path tracer (all scattering orders, split into single scattering and the
 // rest with max_scattering_order = 1). Geometry: the peer table's 90 views above the horizon

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Optical depth: optical_depth.hpp's exact quadrature against closed forms and brute
 // force, and the reference path tracer's column table (atmosphere/column_table.hpp)
 // against optical_depth.hpp.
@@ -8,10 +9,10 @@
 #include <gtest/gtest.h>
 
 #include "welkin/atmosphere/atmosphere.hpp"
+#include "welkin/atmosphere/column_table.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/optical_depth.hpp"
 #include "welkin/base/rng.hpp"
-#include "welkin/atmosphere/column_table.hpp"
 
 using namespace welkin;
 

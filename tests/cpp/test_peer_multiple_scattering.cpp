@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Why the peer's orders 2-4 differ from ours, shown rather than assumed, and the
 // comparisons with the peer made like for like.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where the peer table itself is inexact, shown rather than assumed.
 //
 // Bruneton 2017's reference ComputeSingleScattering integrates along the view ray with the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Phase functions (phase.hpp) and the reference path tracer's sampling routines
 // (atmosphere/phase_sampling.hpp, base/rng.hpp).
 #include <algorithm>
@@ -10,8 +11,8 @@
 #include <gtest/gtest.h>
 
 #include "welkin/atmosphere/phase.hpp"
-#include "welkin/base/rng.hpp"
 #include "welkin/atmosphere/phase_sampling.hpp"
+#include "welkin/base/rng.hpp"
 
 using namespace welkin;
 

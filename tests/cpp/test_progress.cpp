@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ProgressTracker: what a host (CLI bar, Blender status, Python callback) may rely on.
 #include <algorithm>
 #include <atomic>

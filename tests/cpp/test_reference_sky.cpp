@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reference sky (Monte-Carlo path tracing): against the peer table
 // (tests/data/bruneton2017_sky_subset.csv, Bruneton 2017's reference model),
 // against closed forms and an independent deterministic quadrature, energy conservation,
@@ -22,11 +23,11 @@
 #include <gtest/gtest.h>
 #include <oneapi/tbb/global_control.h>
 
+#include "welkin/atmosphere/column_table.hpp"
 #include "welkin/atmosphere/geometry.hpp"
 #include "welkin/atmosphere/phase.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/quadrature.hpp"
-#include "welkin/atmosphere/column_table.hpp"
 #include "welkin/sky/reference.hpp"
 
 using namespace welkin;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The scene description (JSON round trip, errors naming the key) and the camera rays
 // (Blender's view plane, sensor fit, shift, orthographic and equirectangular cameras).
 #include <cmath>

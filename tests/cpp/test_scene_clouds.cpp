@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A scene's clouds: the "clouds" key of the scene JSON (round trip, defaults, errors naming
 // the key, VDB paths relative to the file), and the union of density sources (sum of
 // sigma_t, merged majorant segments, a closed form for two constant slabs).

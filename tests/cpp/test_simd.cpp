@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // simd.hpp: the four-lane exponential used for the transmittance LUT's texels, against
 // std::exp in double over the range of arguments it is stated for.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Equirect sky images: layout, the single method call, colour conversion, the sun disc's
 // energy and shape, exposure, no NaN, cancellation, bad input.
 #include <algorithm>

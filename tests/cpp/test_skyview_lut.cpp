@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SkyViewLut's lookups (skyview_lut.hpp): the branch-free zenith angle against std::acos,
 // and the block lookup of many views against one call per view.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun: limb darkening (normalisation, Neckel & Labs' own mean/centre ratios), the
 // visible fraction at the horizon, transmittance against the peer.
 #include <cmath>

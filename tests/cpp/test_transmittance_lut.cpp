@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The transmittance LUT's texels against exact optical depths (the column table of
 // atmosphere/column_table.hpp: closed forms for the piecewise-linear ozone tent, 1e-5
 // relative for the exponentials), every preset, every texel of the default 256 x 64 LUT
@@ -15,8 +16,8 @@
 
 #include <gtest/gtest.h>
 
-#include "welkin/atmosphere/transmittance_lut.hpp"
 #include "welkin/atmosphere/column_table.hpp"
+#include "welkin/atmosphere/transmittance_lut.hpp"
 
 using namespace welkin;
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Shared by the farm tests (tests/farm/test_*.sh); sourced from the repository root with
 # $scratch set: the add-on installed headless into a shared scripts folder, the aerial
 # demo as a short sequence, its local reference render, and the comparison of frames.

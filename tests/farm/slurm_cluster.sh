@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # A one-node Slurm cluster on localhost for the farm tests, in a scratch folder; sourced.
 #
 #   source tests/farm/slurm_cluster.sh

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The Open Job Description template for Deadline Cloud (farm/openjd/welkin_render.yaml),
 # run locally by PyPI's openjd-cli (build/venv-openjd, scripts/install_openjd.sh) with
 # Debian's Blender 3.4 and the legacy add-on installed headless into a shared scripts

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Welkin on a real Slurm scheduler (farm/slurm/): a one-node cluster on localhost
 # (tests/farm/slurm_cluster.sh: Debian's munge and slurm-wlm, started here and stopped at
 # the end whatever happens), Debian's Blender 3.4 on the worker with the legacy add-on

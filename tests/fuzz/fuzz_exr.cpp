@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the OpenEXR reader (io/exr) on arbitrary bytes, written to a file as a
 // user's render or depth file would be, and read the ways Welkin reads one: as an image
 // (read_exr: the add-on's renders, `welkin exr-info`) and as a depth input (the header, then

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the atmosphere and scene JSON readers (io/json, atmosphere/json,
 // scene/json) on arbitrary bytes. Any outcome but a value or a welkin error is a bug: a
 // crash, a sanitizer report, an uncaught exception (std::terminate), a leak, a hang.

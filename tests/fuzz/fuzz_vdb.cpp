@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the VDB reader (clouds/vdb) on arbitrary bytes, written to a file as
 // a user's .vdb would be. Any outcome but a valid grid or a welkin error (IoError,
 // InvalidArgument, OutOfMemory naming the file) is a bug. The memory limit is small, so a

@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: Apache-2.0
 """Running the `welkin` CLI from the tests: where it is, and how a Ctrl-C is checked.
 
 The CLI is build/welkin unless WELKIN_CLI names another (an installed one)."""
+
 import os
 import pathlib
 import resource
@@ -30,8 +32,9 @@ def assert_ctrl_c_cancels(args, cwd, after_s=1.5):
     stops promptly (< 5 s) with exit code 130, says "cancelled", and leaves `cwd` as it
     found it: no output, no temporary file. Skips if the command finished first."""
     before = files(cwd)
-    p = subprocess.Popen([CLI, *map(str, args)], cwd=cwd, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(
+        [CLI, *map(str, args)], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     time.sleep(after_s)
     if p.poll() is not None:
         _, err = p.communicate()

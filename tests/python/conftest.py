@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared fixtures for the tests of the `welkin` Python module.
 
 The module is the one built in build/ (scripts/test.sh sets PYTHONPATH=build); when
@@ -9,6 +10,7 @@ The add-on's bpy-free modules (addon/welkin, without its blender/ subpackage) ar
 here as the package `welkin_addon` (its name would clash with the compiled `welkin`), so
 tests import them as `from welkin_addon import scene_export`.
 """
+
 import importlib.util
 import pathlib
 import sys
@@ -25,7 +27,8 @@ import welkin  # noqa: E402
 _ADDON = pathlib.Path(__file__).resolve().parents[2] / "addon" / "welkin"
 if "welkin_addon" not in sys.modules:
     _spec = importlib.util.spec_from_file_location(
-        "welkin_addon", _ADDON / "__init__.py", submodule_search_locations=[str(_ADDON)])
+        "welkin_addon", _ADDON / "__init__.py", submodule_search_locations=[str(_ADDON)]
+    )
     _package = importlib.util.module_from_spec(_spec)
     sys.modules["welkin_addon"] = _package
     _spec.loader.exec_module(_package)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The independent ephemeris for tests/python/test_place_and_time.py: JPL's DE421 through
 Skyfield, run in build/venv-ephemeris (scripts/install_ephemeris_venv.sh), never in the
 Python that imports welkin.
@@ -9,6 +10,7 @@ prints a JSON list: per case the sun's and the moon's apparent topocentric eleva
 north), and the moon's topocentric phase angle (the angle at the moon between the sun and
 the observer) and illuminated fraction. Reads only the files skyfield-data installed.
 """
+
 import json
 import sys
 import warnings
@@ -30,18 +32,23 @@ def main() -> None:
     out = []
     for case in json.load(sys.stdin):
         t = (ts.utc if case["scale"] == "utc" else ts.ut1)(*case["time"])
-        observer = earth + wgs84.latlon(case["latitude_deg"], case["longitude_deg"],
-                                        elevation_m=case["height_m"])
+        observer = earth + wgs84.latlon(
+            case["latitude_deg"], case["longitude_deg"], elevation_m=case["height_m"]
+        )
         here = observer.at(t)
         result = {}
         vectors = {}
         for name, body in (("sun", sun), ("moon", moon)):
             apparent = here.observe(body).apparent()
-            alt, az, _ = apparent.altaz(temperature_C=case["temperature_c"],
-                                        pressure_mbar=case["pressure_hpa"])
+            alt, az, _ = apparent.altaz(
+                temperature_C=case["temperature_c"], pressure_mbar=case["pressure_hpa"]
+            )
             alt0, _, _ = apparent.altaz()
-            result[name] = {"elevation_deg": alt.degrees, "airless_elevation_deg": alt0.degrees,
-                            "azimuth_deg": az.degrees}
+            result[name] = {
+                "elevation_deg": alt.degrees,
+                "airless_elevation_deg": alt0.degrees,
+                "azimuth_deg": az.degrees,
+            }
             vectors[name] = (body - observer).at(t).position.au  # geometric, ICRS
         to_sun = vectors["sun"] - vectors["moon"]
         to_observer = -vectors["moon"]

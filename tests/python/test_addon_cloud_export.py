@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The add-on's Blender-free clouds section (addon/welkin/cloud_export.py): Blender's VDB
 sequence rule written out by hand from its definition (frame n = f - start + 1, then the
 mode, then the offset; the last digits of the name replaced, zero-padded), the volume's
@@ -9,12 +10,15 @@ import pytest
 from welkin_addon import cloud_export
 
 
-@pytest.mark.parametrize("mode,frames", [
-    ("CLIP", [None, None, 1, 2, 3, 4, None, None]),
-    ("EXTEND", [1, 1, 1, 2, 3, 4, 4, 4]),
-    ("REPEAT", [3, 4, 1, 2, 3, 4, 1, 2]),      # period 4, scene frame 3 -> 1
-    ("PING_PONG", [3, 2, 1, 2, 3, 4, 3, 2]),   # period 6: 1 2 3 4 3 2
-])
+@pytest.mark.parametrize(
+    "mode,frames",
+    [
+        ("CLIP", [None, None, 1, 2, 3, 4, None, None]),
+        ("EXTEND", [1, 1, 1, 2, 3, 4, 4, 4]),
+        ("REPEAT", [3, 4, 1, 2, 3, 4, 1, 2]),  # period 4, scene frame 3 -> 1
+        ("PING_PONG", [3, 2, 1, 2, 3, 4, 3, 2]),  # period 6: 1 2 3 4 3 2
+    ],
+)
 def test_sequence_modes(mode, frames):
     # Start at scene frame 3, 4 files: scene frames 1..8.
     got = [cloud_export.sequence_frame(f, 3, 0, 4, mode) for f in range(1, 9)]

@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: Apache-2.0
 """The add-on's Blender-free modules (addon/welkin/*.py, no bpy): loaded here as the
 package `welkin_addon` (the add-on's own name, `welkin`, is the compiled module's in this
 process) and driven with the module from build/."""
+
 import dataclasses
 import math
 import pathlib
@@ -20,7 +22,8 @@ from welkin_addon import native, pixels, sky_compute, sky_request  # noqa: E402 
 def test_addon_package_imports_without_bpy():
     assert "bpy" not in sys.modules
     assert sys.modules["welkin_addon"].bl_info["version"] == tuple(
-        int(x) for x in welkin.__version__.split("."))
+        int(x) for x in welkin.__version__.split(".")
+    )
 
 
 def test_native_missing_and_other_python(tmp_path):
@@ -42,12 +45,16 @@ def test_native_finds_the_module_for_this_python():
 def test_request_validation_names_the_parameter():
     good = sky_request.SkyRequest(width=256)
     sky_request.validate(good, welkin)
-    for change, parameter in (({"preset": "venus"}, "preset"), ({"width": 300}, "width"),
-                              ({"air_density": -1.0}, "air_density"),
-                              ({"exposure": 0.0}, "exposure"), ({"altitude_m": -5.0}, "altitude_m"),
-                              ({"ground_albedo": 1.5}, "ground_albedo"),
-                              ({"sun_direction": (0.0, 0.0, 0.0)}, "sun_direction"),
-                              ({"method": "reference"}, "method")):
+    for change, parameter in (
+        ({"preset": "venus"}, "preset"),
+        ({"width": 300}, "width"),
+        ({"air_density": -1.0}, "air_density"),
+        ({"exposure": 0.0}, "exposure"),
+        ({"altitude_m": -5.0}, "altitude_m"),
+        ({"ground_albedo": 1.5}, "ground_albedo"),
+        ({"sun_direction": (0.0, 0.0, 0.0)}, "sun_direction"),
+        ({"method": "reference"}, "method"),
+    ):
         with pytest.raises(ValueError, match=parameter):
             sky_request.validate(dataclasses.replace(good, **change), welkin)
 
@@ -60,8 +67,9 @@ def test_auto_method_falls_back_to_lut_without_the_modules_own():
 
 def test_atmosphere_multipliers_scale_the_presets_coefficients():
     base = welkin.Atmosphere.preset("hazy")
-    req = sky_request.SkyRequest(preset="hazy", air_density=2.0, aerosol_density=0.5,
-                                 ozone_density=0.0, ground_albedo=0.3)
+    req = sky_request.SkyRequest(
+        preset="hazy", air_density=2.0, aerosol_density=0.5, ozone_density=0.0, ground_albedo=0.3
+    )
     atm = sky_request.build_atmosphere(req, welkin)
     np.testing.assert_allclose(atm.rayleigh_scattering, 2.0 * base.rayleigh_scattering)
     np.testing.assert_allclose(atm.mie_scattering, 0.5 * base.mie_scattering)
@@ -106,12 +114,14 @@ def addon_atm():
 
 def test_compute_is_the_modules_sky_disc_and_sun(addon_atm, sun_direction):
     atm = addon_atm
-    req = sky_request.SkyRequest(sun_direction=tuple(sun_direction), width=256, exposure=0.5,
-                                 altitude_m=250.0)
+    req = sky_request.SkyRequest(
+        sun_direction=tuple(sun_direction), width=256, exposure=0.5, altitude_m=250.0
+    )
     result = sky_compute.compute(welkin, req)
     np.testing.assert_array_equal(
-        result.sky, welkin.sky_image(atm, 250.0, sun_direction, 256, result.method,
-                                     sun_disc=False, exposure=0.5))
+        result.sky,
+        welkin.sky_image(atm, 250.0, sun_direction, 256, result.method, sun_disc=False, exposure=0.5),
+    )
     rgb = 0.5 * np.asarray(welkin.sun(atm, 250.0, sun_direction).direct_irradiance_rgb)
     # The disc the world's nodes draw: the sun's direction and radius, the horizon of the
     # observer 250 m up, and the direct irradiance as its integral over the disc (to 1e-4:
@@ -129,8 +139,7 @@ def test_compute_is_the_modules_sky_disc_and_sun(addon_atm, sun_direction):
     centre = disc.coefficients.sum(axis=0)
     mean = rgb / (2.0 * math.pi * (1.0 - math.cos(disc.radius_rad)))
     assert np.all(centre / mean > 1.15), centre / mean
-    np.testing.assert_allclose(np.array(result.lamp.color) * result.lamp.strength_w_m2, rgb,
-                               rtol=1e-12)
+    np.testing.assert_allclose(np.array(result.lamp.color) * result.lamp.strength_w_m2, rgb, rtol=1e-12)
     assert max(result.lamp.color) == 1.0
     assert result.lamp.angle_rad == pytest.approx(2 * atm.sun_angular_radius_rad)
     assert result.warnings == []
@@ -149,12 +158,18 @@ def test_spectral_colour_is_the_48_wavelength_sky():
     assert len(atm.wavelengths_nm) == 48
     result = sky_compute.compute(welkin, exact)
     np.testing.assert_array_equal(
-        result.sky, welkin.sky_image(atm, 0.0, sun, 256, result.method, sun_disc=False))
+        result.sky, welkin.sky_image(atm, 0.0, sun, 256, result.method, sun_disc=False)
+    )
 
     def xy(image):
         rgb = image[: image.shape[0] // 2].reshape(-1, 3).mean(axis=0)  # upper hemisphere
-        m = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750],
-                      [0.0193339, 0.1191920, 0.9503041]])
+        m = np.array(
+            [
+                [0.4124564, 0.3575761, 0.1804375],
+                [0.2126729, 0.7151522, 0.0721750],
+                [0.0193339, 0.1191920, 0.9503041],
+            ]
+        )
         x = m @ rgb
         return x[:2] / x.sum()
 
@@ -195,14 +210,17 @@ def test_aerosol_optical_depth_and_turbidity_set_the_column():
     atm = sky_request.build_atmosphere(sky_request.SkyRequest(aerosol_optical_depth=0.3), welkin)
     assert atm.aerosol_optical_depth() == pytest.approx(0.3, rel=1e-9)
     atm = sky_request.build_atmosphere(
-        sky_request.SkyRequest(aerosol_optical_depth=0.3, aerosol_density=2.0), welkin)
+        sky_request.SkyRequest(aerosol_optical_depth=0.3, aerosol_density=2.0), welkin
+    )
     assert atm.aerosol_optical_depth() == pytest.approx(0.6, rel=1e-9)
     atm = sky_request.build_atmosphere(sky_request.SkyRequest(turbidity=3.0), welkin)
     want = welkin.preetham_turbidity_to_aerosol_optical_depth(3.0)
     assert atm.aerosol_optical_depth() == pytest.approx(want, rel=1e-9)
     assert 0.18 < want < 0.22
-    for bad, name in ((dict(aerosol_optical_depth=11.0), "aerosol_optical_depth"),
-                      (dict(aerosol_optical_depth=math.nan), "aerosol_optical_depth"),
-                      (dict(turbidity=0.5), "turbidity")):
+    for bad, name in (
+        (dict(aerosol_optical_depth=11.0), "aerosol_optical_depth"),
+        (dict(aerosol_optical_depth=math.nan), "aerosol_optical_depth"),
+        (dict(turbidity=0.5), "turbidity"),
+    ):
         with pytest.raises(ValueError, match=name):
             sky_request.validate(sky_request.SkyRequest(**bad), welkin)

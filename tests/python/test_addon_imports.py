@@ -8,6 +8,7 @@ every add-on file's `from .x import y` and `import` statements (and the Blender 
 import, or an absolute one under the add-on's package name `welkin`, must name a module
 (or a package with that submodule, or a name a module defines at its top level).
 """
+
 import ast
 import pathlib
 
@@ -73,8 +74,9 @@ def _files() -> list[tuple[pathlib.Path, list[str] | None]]:
     return files
 
 
-@pytest.mark.parametrize("path,package", _files(),
-                         ids=lambda v: str(v.relative_to(ROOT)) if isinstance(v, pathlib.Path) else "")
+@pytest.mark.parametrize(
+    "path,package", _files(), ids=lambda v: str(v.relative_to(ROOT)) if isinstance(v, pathlib.Path) else ""
+)
 def test_addon_imports_resolve(path, package):
     assert _problems(path, package) == []
 

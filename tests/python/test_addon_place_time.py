@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: Apache-2.0
 """The add-on's Place and Time, Blender-free (addon/welkin/place_time.py): the moment from a
 date and a keyable time, the scene's north, the lamp's rotation, and the moon lamp and the
 world's moonlit sky against the CLI and the module's own moment image."""
+
 import dataclasses
 import datetime
 import json
@@ -28,12 +30,19 @@ def test_iso_time_carries_hours_across_midnight_and_keeps_the_offset():
     assert datetime.datetime.fromisoformat(t).microsecond == 500000
 
 
-@pytest.mark.parametrize("changes, parameter", [
-    ({"day": 31}, "date"), ({"month": 13}, "date"), ({"hours": math.nan}, "hours"),
-    ({"hours": 1e6}, "hours"), ({"utc_offset_h": 15.0}, "utc_offset_h"),
-    ({"north_deg": math.inf}, "north_deg"), ({"latitude_deg": 91.0}, "latitude"),
-    ({"year": 1850}, "time"),
-])
+@pytest.mark.parametrize(
+    "changes, parameter",
+    [
+        ({"day": 31}, "date"),
+        ({"month": 13}, "date"),
+        ({"hours": math.nan}, "hours"),
+        ({"hours": 1e6}, "hours"),
+        ({"utc_offset_h": 15.0}, "utc_offset_h"),
+        ({"north_deg": math.inf}, "north_deg"),
+        ({"latitude_deg": 91.0}, "latitude"),
+        ({"year": 1850}, "time"),
+    ],
+)
 def test_bad_settings_name_the_parameter(changes, parameter):
     with pytest.raises(ValueError, match=parameter):
         place_time.bodies(welkin, dataclass_with(PARIS, **changes))
@@ -48,18 +57,21 @@ def test_bodies_are_the_cores_turned_to_the_scenes_north(north):
         # Independently: north is (-sin N, cos N, 0), east (cos N, sin N, 0) in the scene.
         n = math.radians(north)
         d = np.asarray(d)
-        azimuth = math.degrees(math.atan2(d @ [math.cos(n), math.sin(n), 0.0],
-                                          d @ [-math.sin(n), math.cos(n), 0.0])) % 360.0
+        azimuth = (
+            math.degrees(
+                math.atan2(d @ [math.cos(n), math.sin(n), 0.0], d @ [-math.sin(n), math.cos(n), 0.0])
+            )
+            % 360.0
+        )
         assert abs((azimuth - core[name]["azimuth_deg"] + 180.0) % 360.0 - 180.0) < 1e-9
-        assert place_time.azimuth_deg(d, north) == pytest.approx(core[name]["azimuth_deg"],
-                                                                 abs=1e-9)
-        assert math.degrees(math.asin(d[2])) == pytest.approx(core[name]["elevation_deg"],
-                                                               abs=1e-9)
+        assert place_time.azimuth_deg(d, north) == pytest.approx(core[name]["azimuth_deg"], abs=1e-9)
+        assert math.degrees(math.asin(d[2])) == pytest.approx(core[name]["elevation_deg"], abs=1e-9)
     assert b.moon_irradiance_ratio == core["moon"]["irradiance_ratio"]
 
 
-@pytest.mark.parametrize("direction", [(0.3, -0.5, 0.8), (-1.0, 0.0, 0.0), (0.0, 0.0, 1.0),
-                                       (0.0, 0.0, -1.0), (0.2, 0.9, -0.1)])
+@pytest.mark.parametrize(
+    "direction", [(0.3, -0.5, 0.8), (-1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, -1.0), (0.2, 0.9, -0.1)]
+)
 def test_lamp_euler_points_local_z_at_the_direction(direction):
     a, b, g = place_time.lamp_euler(direction)
     # Blender's XYZ Euler: R = Rz(g) Ry(b) Rx(a); the lamp's +Z is R's third column.
@@ -74,23 +86,34 @@ def test_lamp_euler_points_local_z_at_the_direction(direction):
 
 def test_moon_lamp_is_the_clis_moon_light():
     from cli_testing import CLI
-    done = subprocess.run([CLI, "sun", "--latitude", "48.8566", "--longitude", "2.3522", "--time",
-                           "2026-06-21T21:30:00+02:00"], capture_output=True, text=True,
-                          timeout=120)
+
+    done = subprocess.run(
+        [CLI, "sun", "--latitude", "48.8566", "--longitude", "2.3522", "--time", "2026-06-21T21:30:00+02:00"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     cli = json.loads(done.stdout)
     b = place_time.bodies(welkin, PARIS)
     atm = sky_request.build_atmosphere(sky_request.SkyRequest(), welkin)
-    lamp = place_time.moon_lamp(welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio,
-                                b.moon_angular_radius_rad, 1.0)
-    assert np.allclose(np.asarray(lamp.color) * lamp.strength_w_m2,
-                       cli["moon_direct_irradiance_rgb_W_m2"], rtol=1e-5, atol=0.0)
-    assert lamp.angle_rad == pytest.approx(2.0 * math.radians(
-        cli["place_and_time"]["moon"]["angular_radius_deg"]), rel=1e-12)
+    lamp = place_time.moon_lamp(
+        welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio, b.moon_angular_radius_rad, 1.0
+    )
+    assert np.allclose(
+        np.asarray(lamp.color) * lamp.strength_w_m2,
+        cli["moon_direct_irradiance_rgb_W_m2"],
+        rtol=1e-5,
+        atol=0.0,
+    )
+    assert lamp.angle_rad == pytest.approx(
+        2.0 * math.radians(cli["place_and_time"]["moon"]["angular_radius_deg"]), rel=1e-12
+    )
     # Exposure scales it as the sun lamp's.
     atm = sky_request.build_atmosphere(sky_request.SkyRequest(), welkin)
-    bright = place_time.moon_lamp(welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio,
-                                  b.moon_angular_radius_rad, 8.0)
+    bright = place_time.moon_lamp(
+        welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio, b.moon_angular_radius_rad, 8.0
+    )
     assert bright.strength_w_m2 == pytest.approx(8.0 * lamp.strength_w_m2, rel=1e-6)
 
 
@@ -100,31 +123,33 @@ def test_world_sky_is_the_modules_moment_sky(hours):
     core's) is welkin.sky_image_at's without the discs, to float rounding."""
     p = dataclass_with(PARIS, hours=hours)
     b = place_time.bodies(welkin, p)
-    request = sky_request.SkyRequest(preset="bruneton2017", width=256, method="lut",
-                                     sun_direction=b.sun_direction,
-                                     moon_direction=b.moon_direction,
-                                     moon_irradiance_ratio=b.moon_irradiance_ratio)
+    request = sky_request.SkyRequest(
+        preset="bruneton2017",
+        width=256,
+        method="lut",
+        sun_direction=b.sun_direction,
+        moon_direction=b.moon_direction,
+        moon_irradiance_ratio=b.moon_irradiance_ratio,
+    )
     result = sky_compute.compute(welkin, request, disc=False)
     atm = sky_request.build_atmosphere(request, welkin)
-    expected = welkin.sky_image_at(atm, place_time.iso_time(p), 48.8566, 2.3522, 256, "lut",
-                                   discs=False)
+    expected = welkin.sky_image_at(atm, place_time.iso_time(p), 48.8566, 2.3522, 256, "lut", discs=False)
     scale = float(expected.max())
     assert scale > 0.0
     assert np.abs(result.sky - expected).max() <= 1e-5 * scale
     # And the moon's part is there: without it the night sky is darker.
-    moonless = sky_compute.compute(welkin, dataclass_with(request, moon_direction=()),
-                                   disc=False)
+    moonless = sky_compute.compute(welkin, dataclass_with(request, moon_direction=()), disc=False)
     assert float(result.sky.mean()) > float(moonless.sky.mean())
     # The HDRI export adds it the same way (its sun disc off) and, with the discs, is the
     # module's moment image with both discs (the moon's with its phase).
     hdri = sky_compute.hdri(welkin, request, 256, sun_disc=False)
     assert np.abs(hdri - expected).max() <= 1e-5 * scale
-    request = dataclasses.replace(request, moon_angular_radius_rad=b.moon_angular_radius_rad,
-                                  sun_from_moon=b.sun_from_moon)
+    request = dataclasses.replace(
+        request, moon_angular_radius_rad=b.moon_angular_radius_rad, sun_from_moon=b.sun_from_moon
+    )
     hdri = sky_compute.hdri(welkin, request, 256)
     expected = welkin.sky_image_at(atm, place_time.iso_time(p), 48.8566, 2.3522, 256, "lut")
     assert np.allclose(hdri, expected, rtol=1e-5, atol=1e-5 * scale)
-
 
 
 @pytest.mark.parametrize("width, north", [(256, 0.0), (2048, 30.0)])
@@ -135,25 +160,34 @@ def test_hdri_moon_disc_is_energy_exact(width, north):
     b = place_time.bodies(welkin, dataclass_with(PARIS, hours=23.75, north_deg=north))
     assert b.sun_direction[2] < -0.2 and b.moon_direction[2] > 0.2
     request = sky_request.SkyRequest(
-        width=256, method="lut", sun_direction=b.sun_direction, moon_direction=b.moon_direction,
+        width=256,
+        method="lut",
+        sun_direction=b.sun_direction,
+        moon_direction=b.moon_direction,
         moon_irradiance_ratio=b.moon_irradiance_ratio,
-        moon_angular_radius_rad=b.moon_angular_radius_rad, sun_from_moon=b.sun_from_moon)
-    disc = (sky_compute.hdri(welkin, request, width)
-            - sky_compute.hdri(welkin, request, width, sun_disc=False)).astype(np.float64)
+        moon_angular_radius_rad=b.moon_angular_radius_rad,
+        sun_from_moon=b.sun_from_moon,
+    )
+    disc = (
+        sky_compute.hdri(welkin, request, width) - sky_compute.hdri(welkin, request, width, sun_disc=False)
+    ).astype(np.float64)
     h = width // 2
     rows = np.arange(h)
     omega = (2.0 * np.pi / width) * (np.cos(np.pi * rows / h) - np.cos(np.pi * (rows + 1) / h))
     energy = (disc * omega[:, None, None]).sum(axis=(0, 1))
     atm = sky_request.build_atmosphere(request, welkin)
-    lamp = place_time.moon_lamp(welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio,
-                                b.moon_angular_radius_rad, 1.0)
+    lamp = place_time.moon_lamp(
+        welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio, b.moon_angular_radius_rad, 1.0
+    )
     assert np.allclose(energy, np.asarray(lamp.color) * lamp.strength_w_m2, rtol=1e-5, atol=0.0)
 
 
 def test_request_rejects_a_bad_moon():
     with pytest.raises(ValueError, match="moon_direction"):
-        sky_request.validate(sky_request.SkyRequest(moon_direction=(0.0, 0.0, 0.0),
-                                                    moon_irradiance_ratio=1e-7), welkin)
+        sky_request.validate(
+            sky_request.SkyRequest(moon_direction=(0.0, 0.0, 0.0), moon_irradiance_ratio=1e-7), welkin
+        )
     with pytest.raises(ValueError, match="moon_irradiance_ratio"):
-        sky_request.validate(sky_request.SkyRequest(moon_direction=(0.0, 0.0, 1.0),
-                                                    moon_irradiance_ratio=-1.0), welkin)
+        sky_request.validate(
+            sky_request.SkyRequest(moon_direction=(0.0, 0.0, 1.0), moon_irradiance_ratio=-1.0), welkin
+        )

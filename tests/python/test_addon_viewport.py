@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The viewport preview's camera (addon/welkin/viewport.py): a viewport's view_matrix and
 window_matrix become a scene camera whose rays, through the core (SceneDescription.
 camera_ray), are the closed-form rays of the frustum: perspective, the ray through the
@@ -5,6 +6,7 @@ near-plane point (l + sx (r - l), t - sy (t - b), -n) from the eye; orthographic
 view axis from the point (l + sx (r - l), t - sy (t - b), 0) of the view's plane; both
 turned by the view's rotation. Off-axis frusta (lens shift, Blender's camera view) too.
 The preview's levels and drawn size."""
+
 import json
 import math
 
@@ -19,6 +21,7 @@ from welkin_addon import viewport
 def rotation(yaw, pitch, roll):
     """A camera-to-world rotation: Z-up world, the view first looking down -Z, then
     tilted to the horizon (pitch), turned about Z (yaw) and rolled."""
+
     def rx(a):
         c, s = math.cos(a), math.sin(a)
         return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
@@ -26,6 +29,7 @@ def rotation(yaw, pitch, roll):
     def rz(a):
         c, s = math.cos(a), math.sin(a)
         return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
     return rz(yaw) @ rx(pitch) @ rz(roll)
 
 
@@ -54,26 +58,38 @@ def orthographic(l, r, b, t, n, f):
 
 
 def scene_for(camera, w, h):
-    return welkin.SceneDescription.from_json_string(json.dumps({
-        "version": 1, "atmosphere": "bruneton2017", "sun": {"elevation_deg": 20, "azimuth_deg": 0},
-        "camera": camera, "resolution": {"x": w, "y": h, "percentage": 100}}))
+    return welkin.SceneDescription.from_json_string(
+        json.dumps(
+            {
+                "version": 1,
+                "atmosphere": "bruneton2017",
+                "sun": {"elevation_deg": 20, "azimuth_deg": 0},
+                "camera": camera,
+                "resolution": {"x": w, "y": h, "percentage": 100},
+            }
+        )
+    )
 
 
 SCREEN = [(0.5, 0.5), (0.0, 0.0), (1.0, 1.0), (0.1, 0.9), (0.77, 0.31)]
 
 
-@pytest.mark.parametrize("w,h,frustum", [
-    (160, 90, (-0.6, 0.6, -0.3375, 0.3375)),    # centred, 16:9
-    (90, 160, (-0.2, 0.5, -0.4, 0.844)),        # off-axis, portrait (a camera view)
-    (101, 77, (-1.3, 0.2, -0.5, 0.6431683)),    # odd size, wide off-axis
-])
+@pytest.mark.parametrize(
+    "w,h,frustum",
+    [
+        (160, 90, (-0.6, 0.6, -0.3375, 0.3375)),  # centred, 16:9
+        (90, 160, (-0.2, 0.5, -0.4, 0.844)),  # off-axis, portrait (a camera view)
+        (101, 77, (-1.3, 0.2, -0.5, 0.6431683)),  # odd size, wide off-axis
+    ],
+)
 def test_perspective_rays_closed_form(w, h, frustum):
     l, r, b, t = frustum
     t = b + (r - l) * h / w  # square pixels: the region's aspect
     n, f = 0.05, 800.0
     rot, eye = rotation(0.7, 1.4, 0.1), np.array([3.0, -2.0, 12.0])
-    cam = viewport.camera_from_view(view_matrix(rot, eye), perspective(l * n, r * n, b * n, t * n, n, f),
-                                    True, w, h)
+    cam = viewport.camera_from_view(
+        view_matrix(rot, eye), perspective(l * n, r * n, b * n, t * n, n, f), True, w, h
+    )
     assert cam["type"] == "PERSP" and cam["clip_start_m"] == pytest.approx(n)
     assert cam["clip_end_m"] == pytest.approx(f)
     s = scene_for(cam, w, h)
@@ -91,16 +107,18 @@ def test_orthographic_rays_closed_form():
     t = b + (r - l) * h / w
     rot, eye = rotation(-0.4, 0.9, 0.0), np.array([1.0, 2.0, 40.0])
     # Blender's viewport clips orthographic views from behind the eye (-clip_end / 2).
-    cam = viewport.camera_from_view(view_matrix(rot, eye), orthographic(l, r, b, t, -500.0, 500.0),
-                                    False, w, h)
+    cam = viewport.camera_from_view(
+        view_matrix(rot, eye), orthographic(l, r, b, t, -500.0, 500.0), False, w, h
+    )
     assert cam["type"] == "ORTHO" and cam["ortho_scale"] == pytest.approx(r - l)
     assert 0 < cam["clip_start_m"] < cam["clip_end_m"]
     s = scene_for(cam, w, h)
     for sx, sy in SCREEN:
         origin, direction, _ = s.camera_ray(sx, sy)
         np.testing.assert_allclose(direction, rot @ np.array([0, 0, -1.0]), atol=1e-12)
-        np.testing.assert_allclose(origin, eye + rot @ np.array([l + sx * (r - l), t - sy * (t - b), 0]),
-                                   atol=1e-9)
+        np.testing.assert_allclose(
+            origin, eye + rot @ np.array([l + sx * (r - l), t - sy * (t - b), 0]), atol=1e-9
+        )
 
 
 def test_scale_length_and_bad_matrices():

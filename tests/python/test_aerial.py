@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Aerial perspective end to end: `welkin aerial`, `welkin sky --scene`, and the module's
 welkin.aerial_perspective and SceneDescription.
 
@@ -10,6 +11,7 @@ one-line error naming the option, a non-zero exit and no file.
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_aerial.py.
 """
+
 import json
 import math
 import os
@@ -30,8 +32,9 @@ W, H = 96, 54
 def write_channels(path, channels):
     """{channel name: (height, width) array} -> an EXR file (welkin.write_exr)."""
     names = list(channels)
-    welkin.write_exr(str(path), np.stack([np.asarray(channels[n], np.float32) for n in names],
-                                         axis=-1), names)
+    welkin.write_exr(
+        str(path), np.stack([np.asarray(channels[n], np.float32) for n in names], axis=-1), names
+    )
 
 
 def read_channels(path):
@@ -41,9 +44,7 @@ def read_channels(path):
 
 
 def run(*args, cwd=None, timeout=120):
-    return subprocess.run([CLI, *map(str, args)], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout)
-
+    return subprocess.run([CLI, *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=timeout)
 
 
 def assert_one_line_error(r, *needles):
@@ -69,8 +70,13 @@ def camera_along_x(height_m=200.0, pitch_deg=2.0, **fields):
 
 
 def scene_dict(camera=None, width=W, height=H, percentage=100, **extra):
-    s = {"version": 1, "atmosphere": "hazy", "sun": {"elevation_deg": 10, "azimuth_deg": 30},
-         "resolution": {"x": width, "y": height, "percentage": percentage}, **extra}
+    s = {
+        "version": 1,
+        "atmosphere": "hazy",
+        "sun": {"elevation_deg": 10, "azimuth_deg": 30},
+        "resolution": {"x": width, "y": height, "percentage": percentage},
+        **extra,
+    }
     if camera is not False:
         s["camera"] = camera or camera_along_x()
     return s
@@ -92,8 +98,9 @@ def frame(tmp_path):
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps(scene_dict()))
     z = depth_image()
-    write_channels(tmp_path / "render.exr",
-                     {"ViewLayer.Combined.R": np.zeros_like(z), "ViewLayer.Depth.Z": z})
+    write_channels(
+        tmp_path / "render.exr", {"ViewLayer.Combined.R": np.zeros_like(z), "ViewLayer.Depth.Z": z}
+    )
     return tmp_path, scene, z
 
 
@@ -144,12 +151,21 @@ def test_depth_channel_option_picks_one_of_several_layers(tmp_path):
     r = run("aerial", "--scene", "s.json", "--depth", "d.exr", "-o", "p.exr", cwd=tmp_path)
     assert_one_line_error(r, "--depth-channel", "A.Depth.Z", "B.Depth.Z")
     assert files(tmp_path) == ["d.exr", "s.json"]
-    r = run("aerial", "--scene", "s.json", "--depth", "d.exr", "--depth-channel", "B.Depth.Z",
-            "-o", "p.exr", cwd=tmp_path)
+    r = run(
+        "aerial",
+        "--scene",
+        "s.json",
+        "--depth",
+        "d.exr",
+        "--depth-channel",
+        "B.Depth.Z",
+        "-o",
+        "p.exr",
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     Lm, _ = welkin.aerial_perspective((tmp_path / "s.json").read_text(), z * 2)
-    np.testing.assert_array_equal(read_channels(tmp_path / "p.exr")["Welkin.AerialInscatter.G"],
-                                  Lm[..., 1])
+    np.testing.assert_array_equal(read_channels(tmp_path / "p.exr")["Welkin.AerialInscatter.G"], Lm[..., 1])
 
 
 def test_methods_agree_and_orthographic_and_panoramic_cameras_run(tmp_path):
@@ -162,8 +178,10 @@ def test_methods_agree_and_orthographic_and_panoramic_cameras_run(tmp_path):
     rel = np.abs(Lf - Lr)[big & ground[..., None]] / Lr[big & ground[..., None]]
     assert np.median(rel) < 0.01  # the tolerance of the C++ froxel-vs-march test
     assert np.abs(Tf - Tr).max() < 0.02
-    for camera in (camera_along_x(type="ORTHO", ortho_scale=50.0),
-                   camera_along_x(type="PANO", panorama_type="EQUIRECTANGULAR")):
+    for camera in (
+        camera_along_x(type="ORTHO", ortho_scale=50.0),
+        camera_along_x(type="PANO", panorama_type="EQUIRECTANGULAR"),
+    ):
         camera.pop("lens_mm")
         for method in ("froxel", "raymarch"):
             L, T = welkin.aerial_perspective(json.dumps(scene_dict(camera)), z, method)
@@ -195,8 +213,24 @@ def test_sky_from_a_scene_matches_the_same_options(tmp_path):
     (tmp_path / "s.json").write_text(json.dumps(s))
     r = run("sky", "--scene", "s.json", "--width", 32, "-o", "a.exr", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    r = run("sky", "--preset", "hazy", "--sun-elevation", 10, "--sun-azimuth", 30, "--altitude",
-            500, "--width", 32, "--method", "lut", "-o", "b.exr", cwd=tmp_path)
+    r = run(
+        "sky",
+        "--preset",
+        "hazy",
+        "--sun-elevation",
+        10,
+        "--sun-azimuth",
+        30,
+        "--altitude",
+        500,
+        "--width",
+        32,
+        "--method",
+        "lut",
+        "-o",
+        "b.exr",
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     a = read_channels(tmp_path / "a.exr")
     b = read_channels(tmp_path / "b.exr")
@@ -235,32 +269,45 @@ def bad_case(tmp_path, case):
         return ["--scene", "good.json", "--depth", "nope.exr"], ["--depth", "nope.exr"]
     if case == "missing_depth_channel":
         write_channels(tmp_path / "d.exr", {"ViewLayer.Combined.R": z})
-        return ["--scene", "good.json", "--depth", "d.exr"], ["--depth-channel", "Z pass",
-                                                              "ViewLayer.Combined.R"]
+        return ["--scene", "good.json", "--depth", "d.exr"], [
+            "--depth-channel",
+            "Z pass",
+            "ViewLayer.Combined.R",
+        ]
     if case == "unknown_depth_channel":
         return base + ["--depth-channel", "Q"], ["--depth-channel", "'Q'"]
     if case in ("depth_nan", "depth_negative", "depth_minus_inf"):
         bad = z.copy()
-        bad[40, 7] = {"depth_nan": np.nan, "depth_negative": -3.0,
-                      "depth_minus_inf": -np.inf}[case]
+        bad[40, 7] = {"depth_nan": np.nan, "depth_negative": -3.0, "depth_minus_inf": -np.inf}[case]
         write_channels(tmp_path / "d.exr", {"Z": bad})
         return ["--scene", "good.json", "--depth", "d.exr"], ["--depth", "x 7, y 40"]
     if case == "wrong_size":
         write_channels(tmp_path / "d.exr", {"Z": z[:, :-1]})
-        return ["--scene", "good.json", "--depth", "d.exr"], ["--depth", f"{W - 1} x {H}",
-                                                              f"{W} x {H}"]
+        return ["--scene", "good.json", "--depth", "d.exr"], ["--depth", f"{W - 1} x {H}", f"{W} x {H}"]
     if case == "huge_render":
-        (tmp_path / "s.json").write_text(json.dumps(scene_dict(width=65536, height=65536,
-                                                               percentage=1000)))
+        (tmp_path / "s.json").write_text(json.dumps(scene_dict(width=65536, height=65536, percentage=1000)))
         return ["--scene", "s.json", "--depth", "good.exr"], ["--scene", "resolution", "GiB"]
     if case == "bad_method":
         return base + ["--method", "fast"], ["--method"]
     raise AssertionError(case)
 
 
-BAD_CASES = ["no_camera", "bad_camera", "fisheye", "malformed_scene", "missing_scene",
-             "missing_depth_file", "missing_depth_channel", "unknown_depth_channel", "depth_nan",
-             "depth_negative", "depth_minus_inf", "wrong_size", "huge_render", "bad_method"]
+BAD_CASES = [
+    "no_camera",
+    "bad_camera",
+    "fisheye",
+    "malformed_scene",
+    "missing_scene",
+    "missing_depth_file",
+    "missing_depth_channel",
+    "unknown_depth_channel",
+    "depth_nan",
+    "depth_negative",
+    "depth_minus_inf",
+    "wrong_size",
+    "huge_render",
+    "bad_method",
+]
 
 
 @pytest.mark.parametrize("case", BAD_CASES)
@@ -273,8 +320,9 @@ def test_bad_input_is_refused_and_nothing_written(tmp_path, case):
     assert files(tmp_path) == before
 
 
-@pytest.mark.parametrize("target", ["/proc/welkin_aerial_test.exr", "no/such/dir/p.exr",
-                                    "afile/p.exr", "adir"])
+@pytest.mark.parametrize(
+    "target", ["/proc/welkin_aerial_test.exr", "no/such/dir/p.exr", "afile/p.exr", "adir"]
+)
 def test_unwritable_output_is_refused(tmp_path, target):
     args, _ = bad_case(tmp_path, "bad_method")
     (tmp_path / "afile").write_text("x")
@@ -294,8 +342,7 @@ def test_existing_output_is_kept_unless_overwrite(frame):
     r = run("aerial", "--scene", scene, "--depth", "render.exr", "-o", "passes.exr", cwd=d)
     assert_one_line_error(r, "passes.exr", "--overwrite")
     assert (d / "passes.exr").read_bytes() == b"precious"
-    r = run("aerial", "--scene", scene, "--depth", "render.exr", "-o", "passes.exr",
-            "--overwrite", cwd=d)
+    r = run("aerial", "--scene", scene, "--depth", "render.exr", "-o", "passes.exr", "--overwrite", cwd=d)
     assert r.returncode == 0, r.stderr
     assert sorted(read_channels(d / "passes.exr")) == sorted(PASS_CHANNELS)
     assert files(d) == ["passes.exr", "render.exr", "scene.json"]
@@ -315,11 +362,11 @@ def test_module_bad_input_raises_value_error_naming_the_parameter():
         welkin.aerial_perspective(s, depth_image(), "fast")
     # More than this machine's memory: MemoryError naming the parameter (issue 18).
     with pytest.raises(MemoryError, match="resolution"):
-        welkin.aerial_perspective(json.dumps(scene_dict(width=65536, height=65536,
-                                                        percentage=1000)), depth_image())
+        welkin.aerial_perspective(
+            json.dumps(scene_dict(width=65536, height=65536, percentage=1000)), depth_image()
+        )
     with pytest.raises(ValueError, match="camera.sensor_fit"):
-        welkin.SceneDescription.from_json_string(
-            json.dumps(scene_dict(camera_along_x(sensor_fit="auto"))))
+        welkin.SceneDescription.from_json_string(json.dumps(scene_dict(camera_along_x(sensor_fit="auto"))))
 
 
 def test_ctrl_c_cancels_cleanly(tmp_path):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.aerial_table, welkin.aerial_screen_table and the add-on's images of them
 (addon/welkin/aerial_table.py).
 
@@ -13,6 +14,7 @@ distance 0 gives L = 0, T = 1 exactly; bad parameters get ValueError naming them
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_aerial_table.py.
 """
+
 import json
 import math
 
@@ -31,9 +33,15 @@ def scene(sun_azimuth_deg, height_m=30.0, pitch_deg=1.5):
     cols = [right, up, tuple(-v for v in fwd), (0.0, 0.0, height_m)]
     rows = [[cols[c][r] for c in range(4)] for r in range(3)] + [[0.0, 0.0, 0.0, 1.0]]
     camera = {"matrix_world": rows, "type": "PERSP", "lens_mm": 30.0, "clip_end_m": 1e6}
-    return json.dumps({"version": 1, "atmosphere": "hazy",
-                       "sun": {"elevation_deg": 8, "azimuth_deg": sun_azimuth_deg},
-                       "resolution": {"x": W, "y": H, "percentage": 100}, "camera": camera})
+    return json.dumps(
+        {
+            "version": 1,
+            "atmosphere": "hazy",
+            "sun": {"elevation_deg": 8, "azimuth_deg": sun_azimuth_deg},
+            "resolution": {"x": W, "y": H, "percentage": 100},
+            "camera": camera,
+        }
+    )
 
 
 def depth_image():
@@ -57,8 +65,9 @@ def rays(desc):
 def check_against_march(label, L, T, L_ref, T_ref):
     """L within 1 % of the march (relative, above 1e-3), T within 0.005."""
     rel = np.abs(L - L_ref) / np.maximum(L_ref, 1e-3)
-    print(f"{label}: L max rel {rel.max():.4f} mean {rel.mean():.5f}, "
-          f"T max abs {np.abs(T - T_ref).max():.5f}")
+    print(
+        f"{label}: L max rel {rel.max():.4f} mean {rel.mean():.5f}, T max abs {np.abs(T - T_ref).max():.5f}"
+    )
     assert rel.max() < 0.01
     assert np.abs(T - T_ref).max() < 0.005
 
@@ -75,9 +84,14 @@ def test_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth_deg):
     z = depth_image()
     L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
     d_max = tab.max_distance_m(1e6, 6360e3, 6460e3)
-    t = welkin.aerial_table(desc, azimuths=tab.AZIMUTHS, elevations=tab.ELEVATIONS,
-                            slices=tab.SLICES, max_distance_m=d_max,
-                            steps_per_slice=tab.STEPS_PER_SLICE)
+    t = welkin.aerial_table(
+        desc,
+        azimuths=tab.AZIMUTHS,
+        elevations=tab.ELEVATIONS,
+        slices=tab.SLICES,
+        max_distance_m=d_max,
+        steps_per_slice=tab.STEPS_PER_SLICE,
+    )
     atlas = tab.atlas_pixels(t["inscatter"], t["optical_depth"])
     direction, per = rays(desc)
     ground = np.isfinite(z)
@@ -98,9 +112,14 @@ def test_a_camera_that_sees_100_m_is_hazed():
     z0 = depth_image()
     z = np.where(np.isfinite(z0), np.minimum(z0, d_max / per), np.inf).astype(np.float32)
     L_ref, T_ref = welkin.aerial_perspective(desc, z, method="raymarch")
-    t = welkin.aerial_table(desc, azimuths=tab.AZIMUTHS, elevations=tab.ELEVATIONS,
-                            slices=tab.SLICES, max_distance_m=d_max,
-                            steps_per_slice=tab.STEPS_PER_SLICE)
+    t = welkin.aerial_table(
+        desc,
+        azimuths=tab.AZIMUTHS,
+        elevations=tab.ELEVATIONS,
+        slices=tab.SLICES,
+        max_distance_m=d_max,
+        steps_per_slice=tab.STEPS_PER_SLICE,
+    )
     atlas = tab.atlas_pixels(t["inscatter"], t["optical_depth"])
     ground = np.isfinite(z)
     L, T = tab.lookup(atlas, direction[ground], (z * per)[ground], d_max)
@@ -121,9 +140,17 @@ def test_distance_zero_is_no_air_and_the_layout_is_the_documented_one():
     assert (t["optical_depth"][1:, 0] > t["optical_depth"][1:, -1]).all()
 
 
-@pytest.mark.parametrize("field,value", [("azimuths", 2), ("elevations", 1), ("slices", 1),
-                                         ("max_distance_m", 0.0), ("steps_per_slice", 0),
-                                         ("max_distance_m", float("nan"))])
+@pytest.mark.parametrize(
+    "field,value",
+    [
+        ("azimuths", 2),
+        ("elevations", 1),
+        ("slices", 1),
+        ("max_distance_m", 0.0),
+        ("steps_per_slice", 0),
+        ("max_distance_m", float("nan")),
+    ],
+)
 def test_bad_parameters_name_themselves(field, value):
     desc = welkin.SceneDescription.from_json_string(scene(30.0))
     kw = dict(azimuths=8, elevations=5, slices=4, max_distance_m=9000.0)
@@ -134,18 +161,26 @@ def test_bad_parameters_name_themselves(field, value):
 
 # --- the screen table (Cycles' form) ----------------------------------------------------------
 
+
 def screen_table(desc, coordinate, width=W, height=H, **kw):
     margin_x, margin_y = tab.screen_margins(width, height, 1.5)
-    t = welkin.aerial_screen_table(desc, coordinate=coordinate, columns=tab.SCREEN_COLUMNS,
-                                   rows=tab.SCREEN_ROWS, margin_x=margin_x, margin_y=margin_y,
-                                   ratio=tab.SCREEN_RATIO, steps_per_slice=tab.SCREEN_STEPS_PER_SLICE,
-                                   **kw)
+    t = welkin.aerial_screen_table(
+        desc,
+        coordinate=coordinate,
+        columns=tab.SCREEN_COLUMNS,
+        rows=tab.SCREEN_ROWS,
+        margin_x=margin_x,
+        margin_y=margin_y,
+        ratio=tab.SCREEN_RATIO,
+        steps_per_slice=tab.SCREEN_STEPS_PER_SLICE,
+        **kw,
+    )
     return tab.ScreenLattice(t["lattice"]), t["textures"], t
 
 
 def window(shape_hw):
     """Blender's Window coordinate of every pixel centre: u left to right, v bottom to top."""
-    j, i = np.mgrid[0:shape_hw[0], 0:shape_hw[1]]
+    j, i = np.mgrid[0 : shape_hw[0], 0 : shape_hw[1]]
     return (i + 0.5) / shape_hw[1], 1.0 - (j + 0.5) / shape_hw[0]
 
 
@@ -178,8 +213,13 @@ def test_screen_table_read_as_the_shader_matches_the_per_pixel_march(sun_azimuth
     x, y = coordinate_of(coordinate, text, direction, z.shape)
     ground = np.isfinite(z)
     L, T = tab.screen_lookup(lattice, images, x[ground], y[ground], (z * per)[ground])
-    check_against_march(f"screen table ({coordinate}, {lattice.slices} slices), sun azimuth "
-                        f"{sun_azimuth_deg}", L, T, L_ref[ground], T_ref[ground])
+    check_against_march(
+        f"screen table ({coordinate}, {lattice.slices} slices), sun azimuth {sun_azimuth_deg}",
+        L,
+        T,
+        L_ref[ground],
+        T_ref[ground],
+    )
     check_far_is_hazed(z[ground], L, T)
 
 
@@ -212,8 +252,9 @@ def test_screen_lattice_closed_forms(coordinate):
     # The lattice covers the frame widened by the margins with C - 2 and R - 2 spacings, the
     # first point at or before the widened frame's first edge.
     margin_x, margin_y = tab.screen_margins(W, H, 1.5)
-    edge_x, edge_y = np.meshgrid(np.linspace(-margin_x, 1 + margin_x, 65),
-                                 np.linspace(-margin_y, 1 + margin_y, 65))
+    edge_x, edge_y = np.meshgrid(
+        np.linspace(-margin_x, 1 + margin_x, 65), np.linspace(-margin_y, 1 + margin_y, 65)
+    )
     if coordinate == "window":
         xs, ys = edge_x, edge_y
     else:
@@ -274,10 +315,20 @@ def test_screen_table_ends_read_their_own_slices():
             assert (np.abs(L[0] - L_ref[-1, -1]) < 0.02 * L_ref[-1, -1]).all(), (L, L_ref[-1, -1])
 
 
-@pytest.mark.parametrize("field,value", [("columns", 3), ("rows", 3), ("unit_m", 0.0),
-                                         ("ratio", 1.0), ("margin_x", -0.1), ("steps_per_slice", 0),
-                                         ("max_slices", 4), ("unit_m", float("nan")),
-                                         ("coordinate", "screen")])
+@pytest.mark.parametrize(
+    "field,value",
+    [
+        ("columns", 3),
+        ("rows", 3),
+        ("unit_m", 0.0),
+        ("ratio", 1.0),
+        ("margin_x", -0.1),
+        ("steps_per_slice", 0),
+        ("max_slices", 4),
+        ("unit_m", float("nan")),
+        ("coordinate", "screen"),
+    ],
+)
 def test_screen_table_bad_parameters_name_themselves(field, value):
     desc = welkin.SceneDescription.from_json_string(scene(30.0))
     kw = dict(columns=4, rows=4)

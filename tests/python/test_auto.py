@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """method="auto": the cheapest charted method that meets a tolerance, on scenes the chart
 never saw.
 
@@ -12,6 +13,7 @@ means something. Cost is compared on the chart's measured cost model (speed is m
 in bench/, never in timed tests): the choice must be cheaper than raymarch at its
 default steps and than the reference at its default paths.
 """
+
 import importlib.util
 import pathlib
 
@@ -21,7 +23,8 @@ import pytest
 import welkin
 
 _spec = importlib.util.spec_from_file_location(
-    "chart", pathlib.Path(__file__).resolve().parents[2] / "bench" / "chart.py")
+    "chart", pathlib.Path(__file__).resolve().parents[2] / "bench" / "chart.py"
+)
 chart = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(chart)
 
@@ -56,15 +59,15 @@ def test_held_out_scenes_are_off_the_chart_grid():
 
 
 @pytest.mark.parametrize("preset, altitude_m, sun_elevation_deg, tolerance", HELD_OUT)
-def test_auto_meets_its_tolerance_off_the_chart_and_costs_less(preset, altitude_m,
-                                                               sun_elevation_deg, tolerance):
+def test_auto_meets_its_tolerance_off_the_chart_and_costs_less(
+    preset, altitude_m, sun_elevation_deg, tolerance
+):
     atm = welkin.Atmosphere.preset(preset)
     sun = chart.sun_direction(sun_elevation_deg)
     dirs = chart.fibonacci_sphere(DIRECTIONS)
 
     spectral = welkin.Atmosphere.preset(preset, welkin.spectral_wavelengths_nm(10.0))
-    ref_rgb, ref_se_y, _ = chart.reference_scene(spectral, altitude_m, sun, dirs,
-                                                 REFERENCE_PATHS, seed=23)
+    ref_rgb, ref_se_y, _ = chart.reference_scene(spectral, altitude_m, sun, dirs, REFERENCE_PATHS, seed=23)
     y_ref = chart.luminance(ref_rgb)
     noise = np.percentile(chart.relative_luminance_error(y_ref + ref_se_y, y_ref), 95)
     assert noise < tolerance / 3, f"reference noise {noise:.3f} too high to judge"
@@ -73,13 +76,13 @@ def test_auto_meets_its_tolerance_off_the_chart_and_costs_less(preset, altitude_
     hdri_choice = welkin.auto_choice(atm, altitude_m, sun, HDRI, tolerance)
     assert hdri_choice["meets_tolerance"], hdri_choice
     runs = {
-        f"HDRI choice {hdri_choice['setting']}":
-            welkin.sky_radiance(atm, altitude_m, sun, dirs, method=hdri_choice["method"],
-                                output="rgb", **hdri_choice["options"]),
+        f"HDRI choice {hdri_choice['setting']}": welkin.sky_radiance(
+            atm, altitude_m, sun, dirs, method=hdri_choice["method"], output="rgb", **hdri_choice["options"]
+        ),
         f"auto on {DIRECTIONS} directions "
-        f"({welkin.auto_choice(atm, altitude_m, sun, DIRECTIONS, tolerance)['setting']})":
-            welkin.sky_radiance(atm, altitude_m, sun, dirs, method="auto", output="rgb",
-                                tolerance=tolerance),
+        f"({welkin.auto_choice(atm, altitude_m, sun, DIRECTIONS, tolerance)['setting']})": welkin.sky_radiance(
+            atm, altitude_m, sun, dirs, method="auto", output="rgb", tolerance=tolerance
+        ),
     }
     for label, rgb in runs.items():
         err = chart.relative_luminance_error(chart.luminance(rgb.astype(np.float64)), y_ref)
@@ -88,9 +91,14 @@ def test_auto_meets_its_tolerance_off_the_chart_and_costs_less(preset, altitude_
 
     # Cost, on the chart's measured model, for the HDRI.
     t = welkin.chart_table()
-    raymarch_default = [s for s in t["settings"]
-                        if s["method"] == "raymarch" and not s["spectral"]
-                        and s["options"]["steps"] == 64 and s["options"]["sun_steps"] == 32]
+    raymarch_default = [
+        s
+        for s in t["settings"]
+        if s["method"] == "raymarch"
+        and not s["spectral"]
+        and s["options"]["steps"] == 64
+        and s["options"]["sun_steps"] == 32
+    ]
     assert len(raymarch_default) == 1
     reference_seconds = t["reference_seconds_per_path"] * 4096 * HDRI
     chosen = hdri_choice["predicted_seconds"]
@@ -108,9 +116,13 @@ def test_more_directions_never_make_a_cheaper_choice_more_expensive_per_directio
     many = welkin.auto_choice(atm, 0.0, sun, HDRI, TOLERANCE)
     assert few["predicted_seconds"] <= many["predicted_seconds"]
     t = welkin.chart_table()
-    few_setting = [s for s in t["settings"] if s["method"] == few["method"]
-                   and s["options"] == few["options"]
-                   and s["spectral"] == few["setting"].endswith("spectral")][0]
+    few_setting = [
+        s
+        for s in t["settings"]
+        if s["method"] == few["method"]
+        and s["options"] == few["options"]
+        and s["spectral"] == few["setting"].endswith("spectral")
+    ][0]
     assert many["predicted_seconds"] <= predicted_seconds(few_setting, HDRI) + 1e-12
 
 
@@ -122,8 +134,7 @@ def test_falls_back_and_says_so():
     choice = welkin.auto_choice(atm, 0.0, sun, HDRI, 0.001)
     assert not choice["meets_tolerance"]
     assert choice["predicted_error"] > 0.001
-    L = welkin.sky_radiance(atm, 0.0, sun, chart.fibonacci_sphere(32), method="auto",
-                            tolerance=0.001)
+    L = welkin.sky_radiance(atm, 0.0, sun, chart.fibonacci_sphere(32), method="auto", tolerance=0.001)
     assert np.all(np.isfinite(L)) and np.all(L >= 0)
 
 
@@ -131,8 +142,10 @@ def test_spectral_atmosphere_uses_spectral_rows():
     atm = welkin.Atmosphere.preset("bruneton2017", welkin.spectral_wavelengths_nm(10.0))
     choice = welkin.auto_choice(atm, 0.0, chart.sun_direction(30.0), HDRI, 0.5)
     t = welkin.chart_table()
-    assert any(s["spectral"] and s["method"] == choice["method"]
-               and s["options"] == choice["options"] for s in t["settings"])
+    assert any(
+        s["spectral"] and s["method"] == choice["method"] and s["options"] == choice["options"]
+        for s in t["settings"]
+    )
 
 
 @pytest.mark.parametrize("bad", [0.0, -1.0, 1e-4, 11.0, float("nan"), float("inf")])
@@ -147,13 +160,16 @@ def test_bad_tolerance_names_parameter_and_range(bad):
 
 def test_auto_is_listed_and_is_the_cli_default(tmp_path):
     import subprocess
+
     assert "auto" in welkin.methods()
     exe = pathlib.Path(__file__).resolve().parents[2] / "build" / "welkin"
     out = tmp_path / "sky.exr"
-    r = subprocess.run([str(exe), "sky", "--width", "32", "-o", str(out)],
-                       capture_output=True, text=True)
+    r = subprocess.run([str(exe), "sky", "--width", "32", "-o", str(out)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert "auto:" in r.stdout and out.exists()
-    r = subprocess.run([str(exe), "sky", "--width", "32", "-o", str(tmp_path / "b.exr"),
-                        "--tolerance", "0"], capture_output=True, text=True)
+    r = subprocess.run(
+        [str(exe), "sky", "--width", "32", "-o", str(tmp_path / "b.exr"), "--tolerance", "0"],
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode != 0 and "tolerance" in r.stderr and "[0.001, 10]" in r.stderr

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.camera_plate (camera_plate.hpp) and `welkin plate`: the scene camera's plate.
 
 Checks: on an equirectangular panorama the sky pixels equal welkin.sky_image's (the same
@@ -10,6 +11,7 @@ field; a progress callback returning False cancels.
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_camera_plate.py.
 """
+
 import json
 import math
 import pathlib
@@ -29,10 +31,15 @@ LOOK_X = [[0, 0, -1, 0], [-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, 1]]
 def scene(camera, resolution=(128, 64), z=2.0, method="lut"):
     m = [row[:] for row in LOOK_X]
     m[2][3] = z
-    return json.dumps({"version": 1, "method": method,
-                       "sun": {"elevation_deg": SUN[0], "azimuth_deg": SUN[1]},
-                       "camera": {"matrix_world": m, **camera},
-                       "resolution": {"x": resolution[0], "y": resolution[1], "percentage": 100}})
+    return json.dumps(
+        {
+            "version": 1,
+            "method": method,
+            "sun": {"elevation_deg": SUN[0], "azimuth_deg": SUN[1]},
+            "camera": {"matrix_world": m, **camera},
+            "resolution": {"x": resolution[0], "y": resolution[1], "percentage": 100},
+        }
+    )
 
 
 def sun_vector():
@@ -63,8 +70,9 @@ def test_panorama_is_the_hdri():
     assert abs(disc_plate / disc_hdri - 1) < 0.02, (disc_plate, disc_hdri)
 
 
-@pytest.mark.parametrize("camera", [{"type": "PERSP"}, {"type": "ORTHO", "ortho_scale": 40},
-                                    {"type": "PANO"}])
+@pytest.mark.parametrize(
+    "camera", [{"type": "PERSP"}, {"type": "ORTHO", "ortho_scale": 40}, {"type": "PANO"}]
+)
 def test_passes_compose(camera):
     # 50 m up, looking along +X 2 degrees down: local -Z = (cos, 0, -sin), +Y = (sin, 0, cos).
     m = json.loads(scene(camera))
@@ -87,18 +95,27 @@ def test_cli_writes_the_same_plate(tmp_path):
     text = scene({"type": "PERSP"}, resolution=(48, 32))
     (tmp_path / "s.json").write_text(text)
     out = tmp_path / "plate.exr"
-    subprocess.run([str(CLI), "plate", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [str(CLI), "plate", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
+        check=True,
+        capture_output=True,
+    )
     pixels, names = welkin.read_exr(str(out))
     plate = welkin.camera_plate(text)
     got = np.stack([pixels[..., names.index(c)] for c in "RGB"], -1)
     np.testing.assert_array_equal(got, plate["combined"])
-    for layer, key in (("Welkin.Sky", "sky"), ("Welkin.AerialInscatter", "inscatter"),
-                       ("Welkin.AerialTransmittance", "transmittance")):
+    for layer, key in (
+        ("Welkin.Sky", "sky"),
+        ("Welkin.AerialInscatter", "inscatter"),
+        ("Welkin.AerialTransmittance", "transmittance"),
+    ):
         got = np.stack([pixels[..., names.index(f"{layer}.{c}")] for c in "RGB"], -1)
         np.testing.assert_array_equal(got, plate[key])
-    run = subprocess.run([str(CLI), "plate", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
-                         capture_output=True, text=True)
+    run = subprocess.run(
+        [str(CLI), "plate", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
+        capture_output=True,
+        text=True,
+    )
     assert run.returncode != 0  # never replaces a file without --overwrite
 
 

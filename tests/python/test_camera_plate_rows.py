@@ -1,7 +1,9 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.camera_plate(scene, rows=(begin, end)): a band of the frame (the render engine's
 tiles) has exactly the whole frame's values in those rows, for both aerial methods and for
 the automatic sky method (chosen for the whole frame, not the band); bad ranges are
 refused naming "rows"."""
+
 import json
 
 import numpy as np
@@ -11,11 +13,19 @@ import welkin
 
 
 def scene(method, aerial):
-    d = {"version": 1, "atmosphere": "hazy", "sun": {"elevation_deg": 6, "azimuth_deg": 5},
-         "method": method,
-         "camera": {"matrix_world": [[0, 0, -1, 0], [-1, 0, 0, 0], [0, 1, 0, 50], [0, 0, 0, 1]],
-                    "type": "PERSP", "lens_mm": 30},
-         "resolution": {"x": 96, "y": 70, "percentage": 100}, "aerial": {"method": aerial}}
+    d = {
+        "version": 1,
+        "atmosphere": "hazy",
+        "sun": {"elevation_deg": 6, "azimuth_deg": 5},
+        "method": method,
+        "camera": {
+            "matrix_world": [[0, 0, -1, 0], [-1, 0, 0, 0], [0, 1, 0, 50], [0, 0, 0, 1]],
+            "type": "PERSP",
+            "lens_mm": 30,
+        },
+        "resolution": {"x": 96, "y": 70, "percentage": 100},
+        "aerial": {"method": aerial},
+    }
     return welkin.SceneDescription.from_json_string(json.dumps(d))
 
 
@@ -50,8 +60,11 @@ def cloudy_scene():
 KEYS = ("combined", "sky", "inscatter", "transmittance", "depth", "clouds", "cloud_depth")
 
 
-@pytest.mark.parametrize("make", [lambda: scene("auto", "froxel"), lambda: scene("lut", "raymarch"),
-                                  cloudy_scene], ids=["auto-froxel", "lut-raymarch", "clouds"])
+@pytest.mark.parametrize(
+    "make",
+    [lambda: scene("auto", "froxel"), lambda: scene("lut", "raymarch"), cloudy_scene],
+    ids=["auto-froxel", "lut-raymarch", "clouds"],
+)
 def test_prepared_bands_tile_the_whole_frame_exactly(make):
     """CameraPlateRenderer: the frame-wide part once, bands of uneven sizes (1 row, 7, the
     rest) rendered in any order concatenate to exactly camera_plate's whole frame."""

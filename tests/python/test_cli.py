@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """End-to-end tests of the `welkin` command-line tool.
 
 Runs the built binary: $WELKIN_CLI, or build/welkin from the repository root. Checks that
@@ -9,6 +10,7 @@ right (size, channels, no NaN, and the sun disc carrying exactly the direct irra
 
 Run with /usr/bin/python3 -m pytest tests/python/test_cli.py.
 """
+
 import json
 import os
 import subprocess
@@ -24,8 +26,7 @@ pytestmark = pytest.mark.skipif(not os.access(CLI, os.X_OK), reason=f"no CLI bin
 
 
 def welkin(*args, cwd=None, timeout=120):
-    return subprocess.run([CLI, *map(str, args)], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run([CLI, *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=timeout)
 
 
 def exr_info(path, integral=False):
@@ -56,9 +57,23 @@ def test_help_explains_every_option_with_units():
     r = welkin("sky", "--help")
     assert r.returncode == 0
     text = " ".join(r.stdout.split())
-    for option in ("--preset", "--atmosphere", "--sun-elevation", "--sun-azimuth", "--altitude",
-                   "--width", "--method", "--exposure", "--spectral", "--half", "--float",
-                   "--no-sun-disc", "--overwrite", "--output", "--threads"):
+    for option in (
+        "--preset",
+        "--atmosphere",
+        "--sun-elevation",
+        "--sun-azimuth",
+        "--altitude",
+        "--width",
+        "--method",
+        "--exposure",
+        "--spectral",
+        "--half",
+        "--float",
+        "--no-sun-disc",
+        "--overwrite",
+        "--output",
+        "--threads",
+    ):
         assert option in text, option
     for unit in ("degrees", "metres", "pixels", "W m^-2 sr^-1", "counter-clockwise from +X"):
         assert unit in text, unit
@@ -69,8 +84,16 @@ def test_presets_lists_the_builtin_atmospheres():
     r = welkin("presets", "--json")
     assert r.returncode == 0
     names = json.loads(r.stdout)
-    assert {"clear_day", "bruneton2017", "clear", "hazy", "polluted", "desert_dust", "maritime",
-            "mars"} <= set(names)
+    assert {
+        "clear_day",
+        "bruneton2017",
+        "clear",
+        "hazy",
+        "polluted",
+        "desert_dust",
+        "maritime",
+        "mars",
+    } <= set(names)
     text = welkin("presets").stdout
     assert all(n in text for n in names)
 
@@ -92,8 +115,7 @@ def test_atmosphere_writes_json_that_round_trips(tmp_path):
     # The file drives `welkin sun` exactly like the preset.
     a = json.loads(welkin("sun", "--atmosphere", out, "--sun-elevation", 25).stdout)
     b = json.loads(welkin("sun", "--preset", "bruneton2017", "--sun-elevation", 25).stdout)
-    assert a["direct_irradiance_W_m2_nm"] == pytest.approx(b["direct_irradiance_W_m2_nm"],
-                                                           rel=1e-12)
+    assert a["direct_irradiance_W_m2_nm"] == pytest.approx(b["direct_irradiance_W_m2_nm"], rel=1e-12)
     # Without -o: standard output.
     assert json.loads(welkin("atmosphere", "--preset", "mars").stdout)["bottom_radius_m"] > 1e6
 
@@ -102,16 +124,14 @@ def test_sun_reports_transmittance_and_direct_irradiance():
     s = json.loads(welkin("sun", "--sun-elevation", 30, "--sun-azimuth", 90).stdout)
     assert s["visible_fraction"] == 1.0
     assert s["sun_direction"] == pytest.approx([0.0, 0.8660254, 0.5], abs=1e-7)
-    for e, t, d in zip(s["solar_irradiance_W_m2_nm"], s["transmittance"],
-                       s["direct_irradiance_W_m2_nm"]):
+    for e, t, d in zip(s["solar_irradiance_W_m2_nm"], s["transmittance"], s["direct_irradiance_W_m2_nm"]):
         assert 0.0 < t < 1.0
         assert d == pytest.approx(e * t, rel=1e-12)
     # Blue is dimmed most (Rayleigh), so the 440 nm transmittance is the lowest.
     assert s["transmittance"][2] < s["transmittance"][1] < s["transmittance"][0]
     assert all(v > 0 for v in s["direct_irradiance_rgb_W_m2"])
     # Sun on the horizon: half the disc; below: nothing, and no NaN anywhere.
-    assert json.loads(welkin("sun", "--sun-elevation", 0).stdout)["visible_fraction"] == \
-        pytest.approx(0.5)
+    assert json.loads(welkin("sun", "--sun-elevation", 0).stdout)["visible_fraction"] == pytest.approx(0.5)
     night = json.loads(welkin("sun", "--sun-elevation", -10).stdout)
     assert night["direct_irradiance_W_m2_nm"] == [0.0] * len(night["solar_irradiance_W_m2_nm"])
     assert night["direct_irradiance_rgb_W_m2"] == [0.0, 0.0, 0.0]
@@ -128,11 +148,14 @@ def _write(path, text):
 
 
 BAD_JSON = {
-    "negative_radius": ('{"preset": "bruneton2017", "bottom_radius_m": -5}',
-                        ["--atmosphere", "bottom_radius_m", "[1000, 1000000000]", "-5"]),
-    "inverted_radii": ('{"preset": "bruneton2017", "bottom_radius_m": 6420000, '
-                       '"top_radius_m": 6360000}',
-                       ["--atmosphere", "top_radius_m", "greater than bottom_radius_m"]),
+    "negative_radius": (
+        '{"preset": "bruneton2017", "bottom_radius_m": -5}',
+        ["--atmosphere", "bottom_radius_m", "[1000, 1000000000]", "-5"],
+    ),
+    "inverted_radii": (
+        '{"preset": "bruneton2017", "bottom_radius_m": 6420000, "top_radius_m": 6360000}',
+        ["--atmosphere", "top_radius_m", "greater than bottom_radius_m"],
+    ),
     "malformed": ('{"preset": "bruneton2017",', ["--atmosphere", "malformed"]),
     "unknown_key": ('{"preset": "bruneton2017", "rayleih": {}}', ["--atmosphere", "rayleih"]),
 }
@@ -182,8 +205,9 @@ def test_bad_sky_arguments_are_refused(tmp_path, case):
     assert files(tmp_path) == before
 
 
-@pytest.mark.parametrize("target", ["/proc/welkin_cli_test.exr", "no/such/dir/sky.exr",
-                                    "afile/sky.exr", "adir"])
+@pytest.mark.parametrize(
+    "target", ["/proc/welkin_cli_test.exr", "no/such/dir/sky.exr", "afile/sky.exr", "adir"]
+)
 def test_unwritable_output_is_refused_before_rendering(tmp_path, target):
     (tmp_path / "afile").write_text("x")
     (tmp_path / "adir").mkdir()
@@ -212,8 +236,20 @@ def test_existing_output_is_never_overwritten_without_overwrite(tmp_path):
 
 
 def test_good_render_writes_a_complete_hdri(tmp_path):
-    r = welkin("sky", "--method", "lut", "--width", 256, "--sun-elevation", 25,
-               "--sun-azimuth", 60, "-o", "sky.exr", cwd=tmp_path)
+    r = welkin(
+        "sky",
+        "--method",
+        "lut",
+        "--width",
+        256,
+        "--sun-elevation",
+        25,
+        "--sun-azimuth",
+        60,
+        "-o",
+        "sky.exr",
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     out = tmp_path / "sky.exr"
     assert f"wrote {out}" in r.stdout
@@ -226,8 +262,19 @@ def test_good_render_writes_a_complete_hdri(tmp_path):
         assert c["min"] >= 0.0
         assert c["max"] > 1e5  # the sun's disc (~3e6 W m^-2 sr^-1 in R)
     # Daylight sky without the (reddish-white, very bright) disc: blue on average.
-    r = welkin("sky", "--method", "lut", "--width", 256, "--sun-elevation", 25, "--no-sun-disc",
-               "-o", "nodisc.exr", cwd=tmp_path)
+    r = welkin(
+        "sky",
+        "--method",
+        "lut",
+        "--width",
+        256,
+        "--sun-elevation",
+        25,
+        "--no-sun-disc",
+        "-o",
+        "nodisc.exr",
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     sky = exr_info(tmp_path / "nodisc.exr")["by_name"]
     assert sky["B"]["mean"] > sky["G"]["mean"] > sky["R"]["mean"] > 0.0
@@ -255,12 +302,12 @@ def test_render_variants(tmp_path):
     assert welkin("sky", *base, "--exposure", 0.5, "-o", "e2.exr", cwd=tmp_path).returncode == 0
     e1, e2 = exr_info(tmp_path / "e1.exr"), exr_info(tmp_path / "e2.exr")
     for name in "RGB":
-        assert e2["by_name"][name]["mean"] == pytest.approx(0.5 * e1["by_name"][name]["mean"],
-                                                            rel=1e-5)
+        assert e2["by_name"][name]["mean"] == pytest.approx(0.5 * e1["by_name"][name]["mean"], rel=1e-5)
     # Multilayer names, half floats (the disc is clamped, with a warning), spectral.
     # (512 wide: the disc's pixels, ~3e6 W m^-2 sr^-1, exceed the half range.)
-    r = welkin("sky", "--method", "lut", "--width", 512, "--multilayer", "--half", "-o", "m.exr",
-               cwd=tmp_path)
+    r = welkin(
+        "sky", "--method", "lut", "--width", 512, "--multilayer", "--half", "-o", "m.exr", cwd=tmp_path
+    )
     assert r.returncode == 0, r.stderr
     assert "clamped" in r.stderr
     m = exr_info(tmp_path / "m.exr")
@@ -276,11 +323,13 @@ def test_render_variants(tmp_path):
     r = welkin("sky", *base, "--exposure", 2, "--overwrite", "-o", "e1.exr", cwd=tmp_path)
     assert r.returncode == 0
     assert exr_info(tmp_path / "e1.exr")["by_name"]["G"]["mean"] == pytest.approx(
-        2 * e1["by_name"]["G"]["mean"], rel=1e-5)
+        2 * e1["by_name"]["G"]["mean"], rel=1e-5
+    )
     # Extreme but valid: sun below the horizon, observer in space; no NaN.
     for extra in (["--sun-elevation", -30], ["--altitude", 1e7, "--sun-elevation", -80]):
-        r = welkin("sky", "--method", "lut", "--width", 64, *extra, "--overwrite", "-o", "x.exr",
-                   cwd=tmp_path)
+        r = welkin(
+            "sky", "--method", "lut", "--width", 64, *extra, "--overwrite", "-o", "x.exr", cwd=tmp_path
+        )
         assert r.returncode == 0, r.stderr
         assert all(c["non_finite"] == 0 for c in exr_info(tmp_path / "x.exr")["channels"])
 
@@ -338,8 +387,11 @@ def test_overwrite_refuses_a_device_fifo_or_directory(tmp_path, kind, command):
 def test_atmosphere_from_a_device_fifo_or_directory_is_refused_at_once(tmp_path, command):
     os.mkfifo(tmp_path / "fifo")
     (tmp_path / "adir").mkdir()
-    for source, needle in [("/dev/zero", "character device"), (tmp_path / "fifo", "FIFO"),
-                           (tmp_path / "adir", "is a directory")]:
+    for source, needle in [
+        ("/dev/zero", "character device"),
+        (tmp_path / "fifo", "FIFO"),
+        (tmp_path / "adir", "is a directory"),
+    ]:
         t0 = time.monotonic()
         r = welkin(*command, "--atmosphere", source, cwd=tmp_path, timeout=30)
         assert time.monotonic() - t0 < 5.0
@@ -360,8 +412,9 @@ def test_json_number_overflow_names_the_file_and_the_key(tmp_path):
 
 def test_too_many_density_or_cloud_layers_are_refused_at_validation(tmp_path):
     layer = {"width_m": 1000, "constant": 1}
-    (tmp_path / "atm.json").write_text(json.dumps(
-        {"preset": "clear", "rayleigh": {"density": {"layers": [layer] * 100000}}}))
+    (tmp_path / "atm.json").write_text(
+        json.dumps({"preset": "clear", "rayleigh": {"density": {"layers": [layer] * 100000}}})
+    )
     cpu0 = children_cpu_seconds()
     r = welkin("sun", "--atmosphere", tmp_path / "atm.json")
     assert_one_line_error(r, "rayleigh.density.layers", "32")
@@ -395,9 +448,16 @@ def test_a_full_standard_output_is_an_error(command):
 
 
 def test_concurrent_json_writers_to_one_path_all_succeed(tmp_path):
-    procs = [subprocess.Popen([CLI, "atmosphere", "--preset", "clear", "-o", "atm.json", "--overwrite"],
-                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for _ in range(8)]
+    procs = [
+        subprocess.Popen(
+            [CLI, "atmosphere", "--preset", "clear", "-o", "atm.json", "--overwrite"],
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for _ in range(8)
+    ]
     for p in procs:
         _, err = p.communicate(timeout=60)
         assert p.returncode == 0, err
@@ -409,9 +469,14 @@ def _interrupt_during_write(tmp_path, signals):
     """Starts a big EXR write, waits for its temporary file, then sends SIGINT `signals`
     times. Returns the process's exit status; skips if no write was caught."""
     import signal
-    p = subprocess.Popen([CLI, "sky", "--method", "lut", "--width", "8192", "--threads", "1",
-                          "-o", "big.exr"], cwd=tmp_path, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)
+
+    p = subprocess.Popen(
+        [CLI, "sky", "--method", "lut", "--width", "8192", "--threads", "1", "-o", "big.exr"],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and p.poll() is None:
         if any(".welkin-" in f for f in files(tmp_path)):
@@ -451,8 +516,9 @@ def test_presets_print_their_aerosol_optical_depth_and_the_option_sets_it(tmp_pa
     thin = json.loads(welkin("atmosphere", "--preset", "hazy", "--aerosol-optical-depth", "0.0327").stdout)
     # The default channels bracket 550 nm by 480 and 560 nm, across the kink of OPAC's two
     # Angstrom exponents at 500 nm: the interpolated column is within 0.2 % of 0.327.
-    np.testing.assert_allclose(np.asarray(thin["mie"]["extinction"]),
-                               0.1 * np.asarray(base["mie"]["extinction"]), rtol=3e-3)
+    np.testing.assert_allclose(
+        np.asarray(thin["mie"]["extinction"]), 0.1 * np.asarray(base["mie"]["extinction"]), rtol=3e-3
+    )
     t = json.loads(welkin("atmosphere", "--turbidity", "2").stdout)
     d = json.loads(welkin("atmosphere").stdout)
     ratio = np.asarray(t["mie"]["extinction"]) / np.asarray(d["mie"]["extinction"])

@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.cloud_radiance with a constant light (sun_irradiance, ambient_radiance): the
 light a Cycles sun lamp and a uniform world give, so that Cycles can be compared with
 both integrators (bench/cycles_clouds.py, tests/blender/test_cycles_clouds.py)."""
+
 import math
 
 import numpy as np
@@ -51,14 +53,24 @@ def test_uniform_sky_invariant(ball):
     atm = welkin.Atmosphere.preset("bruneton2017")
     amb = np.array([2.0, 0.5])
     d = views()
-    L, T, _ = welkin.cloud_radiance(ball, atm, 0.0, (0.3, 0.2, 0.9), d, sun_irradiance=[0.0, 0.0],
-                                    ambient_radiance=amb)
+    L, T, _ = welkin.cloud_radiance(
+        ball, atm, 0.0, (0.3, 0.2, 0.9), d, sun_irradiance=[0.0, 0.0], ambient_radiance=amb
+    )
     assert L.shape == (len(d), 2)
     assert 0.01 < T.min() and T.max() < 1.0 and T.min() < 0.6
     np.testing.assert_allclose(L, (1.0 - T)[:, None] * amb, rtol=1e-3, atol=1e-6)
     paths = 2048
-    L, T, _ = welkin.cloud_radiance(ball, atm, 0.0, (0.3, 0.2, 0.9), d, method="reference", paths=paths,
-                                    sun_irradiance=[0.0, 0.0], ambient_radiance=amb)
+    L, T, _ = welkin.cloud_radiance(
+        ball,
+        atm,
+        0.0,
+        (0.3, 0.2, 0.9),
+        d,
+        method="reference",
+        paths=paths,
+        sun_irradiance=[0.0, 0.0],
+        ambient_radiance=amb,
+    )
     se = np.sqrt(np.maximum((1.0 - T) * T, 1e-4) / paths)
     for c in range(2):
         assert np.all(np.abs(L[:, c] / amb[c] - (1.0 - T)) < 5.0 * se)
@@ -67,16 +79,31 @@ def test_uniform_sky_invariant(ball):
 def test_constant_light_is_linear_and_independent_of_the_atmosphere(ball):
     d = views()
     sun = (0.3, -0.5, 0.8)
-    a = welkin.cloud_radiance(ball, welkin.Atmosphere.preset("bruneton2017"), 0.0, sun, d,
-                              sun_irradiance=[1.0], ambient_radiance=[0.1])
-    b = welkin.cloud_radiance(ball, welkin.Atmosphere.preset("hazy"), 3000.0, sun, d,
-                              sun_irradiance=[3.0], ambient_radiance=[0.3])
+    a = welkin.cloud_radiance(
+        ball,
+        welkin.Atmosphere.preset("bruneton2017"),
+        0.0,
+        sun,
+        d,
+        sun_irradiance=[1.0],
+        ambient_radiance=[0.1],
+    )
+    b = welkin.cloud_radiance(
+        ball, welkin.Atmosphere.preset("hazy"), 3000.0, sun, d, sun_irradiance=[3.0], ambient_radiance=[0.3]
+    )
     assert a[0].shape == (len(d), 1)
     np.testing.assert_allclose(b[0], 3.0 * a[0], rtol=1e-5, atol=1e-7)
     np.testing.assert_array_equal(a[1], b[1])
     # The sun alone lights the cloud: more light than the sky alone gives here.
-    s = welkin.cloud_radiance(ball, welkin.Atmosphere.preset("bruneton2017"), 0.0, sun, d,
-                              sun_irradiance=[1.0], ambient_radiance=[0.0])
+    s = welkin.cloud_radiance(
+        ball,
+        welkin.Atmosphere.preset("bruneton2017"),
+        0.0,
+        sun,
+        d,
+        sun_irradiance=[1.0],
+        ambient_radiance=[0.0],
+    )
     assert np.all(s[0] > 0.0) and np.all(s[0] <= a[0] + 1e-7)
 
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Clouds in scenes: the scene JSON's "clouds" through the module, welkin.cloud_passes
 (Welkin.Clouds / Welkin.CloudDepth for the scene camera), camera_plate's cloud passes,
 and `welkin clouds` / `welkin aerial` / `welkin plate` / `welkin sky --scene` with clouds.
@@ -10,6 +11,7 @@ rc != 0 and no file; progress returning False cancels.
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_cloud_passes.py.
 """
+
 import json
 import pathlib
 import subprocess
@@ -38,22 +40,35 @@ def write_cube(path):
 
 def scene_json(vdb_file, camera=None, resolution=(8, 4), atmosphere="bruneton2017"):
     cam = camera or {"type": "ORTHO", "ortho_scale": 400.0}
-    return json.dumps({
-        "version": 1, "method": "lut", "atmosphere": atmosphere,
-        "sun": {"elevation_deg": 30, "azimuth_deg": 20},
-        "camera": {"matrix_world": LOOK_X, **cam},
-        "resolution": {"x": resolution[0], "y": resolution[1], "percentage": 100},
-        "clouds": {"volumes": [{"name": "Cube", "file": str(vdb_file), "density_scale": SCALE,
-                                "matrix_world": [[1, 0, 0, CUBE_X], [0, 1, 0, 0],
-                                                 [0, 0, 1, 50], [0, 0, 0, 1]]}],
-                   "lighting": {"max_steps": 128, "min_transmittance": 0.0}}})
+    return json.dumps(
+        {
+            "version": 1,
+            "method": "lut",
+            "atmosphere": atmosphere,
+            "sun": {"elevation_deg": 30, "azimuth_deg": 20},
+            "camera": {"matrix_world": LOOK_X, **cam},
+            "resolution": {"x": resolution[0], "y": resolution[1], "percentage": 100},
+            "clouds": {
+                "volumes": [
+                    {
+                        "name": "Cube",
+                        "file": str(vdb_file),
+                        "density_scale": SCALE,
+                        "matrix_world": [[1, 0, 0, CUBE_X], [0, 1, 0, 0], [0, 0, 1, 50], [0, 0, 0, 1]],
+                    }
+                ],
+                "lighting": {"max_steps": 128, "min_transmittance": 0.0},
+            },
+        }
+    )
 
 
 def test_scene_json_clouds(tmp_path):
     s = welkin.SceneDescription.from_json_string(json.dumps({"version": 1}))
     assert not s.has_clouds
-    text = json.dumps({"version": 1, "clouds": {"layers": [{"coverage": 0.3}],
-                                                "volumes": [{"file": "cache/c.vdb"}]}})
+    text = json.dumps(
+        {"version": 1, "clouds": {"layers": [{"coverage": 0.3}], "volumes": [{"file": "cache/c.vdb"}]}}
+    )
     s = welkin.SceneDescription.from_json_string(text, base_directory=str(tmp_path))
     assert s.has_clouds
     written = json.loads(s.to_json_string())["clouds"]
@@ -64,10 +79,13 @@ def test_scene_json_clouds(tmp_path):
     s = welkin.SceneDescription.from_json(str(tmp_path / "s.json"))
     assert json.loads(s.to_json_string())["clouds"]["volumes"][0]["file"] == str(tmp_path / "cache" / "c.vdb")
     with pytest.raises(ValueError, match=r"clouds\.layers\[0\]\.coverage: must be in \[0, 1\]"):
-        welkin.SceneDescription.from_json_string(json.dumps({"version": 1, "clouds": {"layers": [{"coverage": 2}]}}))
+        welkin.SceneDescription.from_json_string(
+            json.dumps({"version": 1, "clouds": {"layers": [{"coverage": 2}]}})
+        )
     with pytest.raises(ValueError, match=r"clouds\.volumes\[0\]\.grd"):
         welkin.SceneDescription.from_json_string(
-            json.dumps({"version": 1, "clouds": {"volumes": [{"file": "a.vdb", "grd": "density"}]}}))
+            json.dumps({"version": 1, "clouds": {"volumes": [{"file": "a.vdb", "grd": "density"}]}})
+        )
 
 
 def test_constant_cube_closed_form(tmp_path):
@@ -134,20 +152,37 @@ def test_cli_cloud_passes(tmp_path):
     (tmp_path / "s.json").write_text(text)
     passes = welkin.cloud_passes(scene_json(tmp_path / "cube.vdb"))
     out = tmp_path / "clouds.exr"
-    subprocess.run([str(CLI), "clouds", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [str(CLI), "clouds", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
+        check=True,
+        capture_output=True,
+    )
     pixels, names = welkin.read_exr(str(out))
     got = np.stack([pixels[..., names.index(f"Welkin.Clouds.{c}")] for c in "RGBA"], -1)
     np.testing.assert_array_equal(got, passes["Welkin.Clouds"])
-    np.testing.assert_array_equal(pixels[..., names.index("Welkin.CloudDepth.Z")], passes["Welkin.CloudDepth"])
+    np.testing.assert_array_equal(
+        pixels[..., names.index("Welkin.CloudDepth.Z")], passes["Welkin.CloudDepth"]
+    )
 
     # aerial with a depth: the aerial layers plus the cloud layers, the clouds ending at it.
     depth = np.full((4, 8), 1e10, np.float32)
     depth[:, 3] = 500.0
     welkin.write_exr(str(tmp_path / "depth.exr"), depth[..., None], ["Z"])
     out = tmp_path / "aerial.exr"
-    subprocess.run([str(CLI), "aerial", "--scene", str(tmp_path / "s.json"), "--depth",
-                    str(tmp_path / "depth.exr"), "-o", str(out)], check=True, capture_output=True)
+    subprocess.run(
+        [
+            str(CLI),
+            "aerial",
+            "--scene",
+            str(tmp_path / "s.json"),
+            "--depth",
+            str(tmp_path / "depth.exr"),
+            "-o",
+            str(out),
+        ],
+        check=True,
+        capture_output=True,
+    )
     pixels, names = welkin.read_exr(str(out))
     hidden = welkin.cloud_passes(scene_json(tmp_path / "cube.vdb"), depth)
     got = np.stack([pixels[..., names.index(f"Welkin.Clouds.{c}")] for c in "RGBA"], -1)
@@ -156,8 +191,11 @@ def test_cli_cloud_passes(tmp_path):
 
     # plate: the cloud layers always (alpha 0 without clouds).
     out = tmp_path / "plate.exr"
-    subprocess.run([str(CLI), "plate", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [str(CLI), "plate", "--scene", str(tmp_path / "s.json"), "-o", str(out)],
+        check=True,
+        capture_output=True,
+    )
     pixels, names = welkin.read_exr(str(out))
     got = np.stack([pixels[..., names.index(f"Welkin.Clouds.{c}")] for c in "RGBA"], -1)
     np.testing.assert_array_equal(got, welkin.camera_plate(scene_json(tmp_path / "cube.vdb"))["clouds"])
@@ -167,8 +205,11 @@ def test_cli_missing_vdb_names_the_key(tmp_path):
     (tmp_path / "s.json").write_text(scene_json("missing.vdb"))
     for command in (["clouds"], ["plate"], ["sky", "--width", "16"]):
         out = tmp_path / "out.exr"
-        run = subprocess.run([str(CLI), *command, "--scene", str(tmp_path / "s.json"), "-o", str(out)],
-                             capture_output=True, text=True)
+        run = subprocess.run(
+            [str(CLI), *command, "--scene", str(tmp_path / "s.json"), "-o", str(out)],
+            capture_output=True,
+            text=True,
+        )
         assert run.returncode != 0, command
         assert "clouds.volumes[0].file" in run.stderr and "missing.vdb" in run.stderr, run.stderr
         assert not out.exists()
@@ -180,12 +221,31 @@ def test_cli_sky_scene_has_its_clouds(tmp_path):
     # A cloud deck over the whole sky: the scene's sky with clouds differs from the clear one
     # above the horizon, and is the same as the clear one below it (no cloud there).
     base = {"version": 1, "method": "lut", "sun": {"elevation_deg": 30, "azimuth_deg": 0}}
-    cloudy = dict(base, clouds={"layers": [{"bottom_altitude_m": 1000, "top_altitude_m": 2000,
-                                             "coverage": 1.0, "weather_variation": 0.0}]})
+    cloudy = dict(
+        base,
+        clouds={
+            "layers": [
+                {"bottom_altitude_m": 1000, "top_altitude_m": 2000, "coverage": 1.0, "weather_variation": 0.0}
+            ]
+        },
+    )
     for name, s in (("clear", base), ("cloudy", cloudy)):
         (tmp_path / f"{name}.json").write_text(json.dumps(s))
-        subprocess.run([str(CLI), "sky", "--scene", str(tmp_path / f"{name}.json"), "--width", "32",
-                        "--no-sun-disc", "-o", str(tmp_path / f"{name}.exr")], check=True, capture_output=True)
+        subprocess.run(
+            [
+                str(CLI),
+                "sky",
+                "--scene",
+                str(tmp_path / f"{name}.json"),
+                "--width",
+                "32",
+                "--no-sun-disc",
+                "-o",
+                str(tmp_path / f"{name}.exr"),
+            ],
+            check=True,
+            capture_output=True,
+        )
     clear, _ = welkin.read_exr(str(tmp_path / "clear.exr"))
     cloud, _ = welkin.read_exr(str(tmp_path / "cloudy.exr"))
     assert np.abs(cloud[:6] - clear[:6]).max() > 0.05 * clear[:6].max()

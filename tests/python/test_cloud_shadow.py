@@ -1,8 +1,10 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.cloud_transmittance: the clouds' transmittance towards the sun from many points
 (the add-on's Shade Sun Lamp and Ground Shadows). The march itself is checked against
 Beer-Lambert in tests/cpp/test_cloud_shadow.cpp; here the binding: a layer shadows the
 ground below it and not the air above it, the default direction is the scene's sun, a
 clear scene gives ones, bad input names the parameter."""
+
 import json
 
 import numpy as np
@@ -10,8 +12,13 @@ import pytest
 
 import welkin
 
-LAYER = {"bottom_altitude_m": 1000.0, "top_altitude_m": 1800.0, "coverage": 1.0,
-         "weather_variation": 0.0, "density_per_m": 0.002}
+LAYER = {
+    "bottom_altitude_m": 1000.0,
+    "top_altitude_m": 1800.0,
+    "coverage": 1.0,
+    "weather_variation": 0.0,
+    "density_per_m": 0.002,
+}
 
 
 def scene(sun=(0.0, 0.5, 0.8660254037844386), layers=(LAYER,)):

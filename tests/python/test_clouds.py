@@ -1,5 +1,7 @@
+# SPDX-License-Identifier: Apache-2.0
 """The cloud bindings: welkin.CloudLayer, welkin.VdbClouds (with a VDB written by
 pyopenvdb), welkin.cloud_radiance and welkin.sky_image(clouds=...)."""
+
 import math
 
 import numpy as np
@@ -98,8 +100,9 @@ def test_cloud_layer_and_cloudy_sky_image():
     atm = welkin.Atmosphere.preset("bruneton2017")
     sun = (0.6, 0.2, 0.5)
     clear = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False, ground=False)
-    cloudy = welkin.sky_image(atm, 0.0, sun, 32, output="spectral", sun_disc=False, clouds=layer,
-                             ground=False)
+    cloudy = welkin.sky_image(
+        atm, 0.0, sun, 32, output="spectral", sun_disc=False, clouds=layer, ground=False
+    )
     assert clear.shape == cloudy.shape == (16, 32, len(atm.wavelengths_nm))
     assert np.all(np.isfinite(cloudy))
     # The lower half looks at the ground below the layer: unchanged; the upper half changes.

@@ -1,7 +1,9 @@
+# SPDX-License-Identifier: Apache-2.0
 """The output colour spaces through the module and the CLI (color_space.hpp): each writes
 the spectrum's XYZ through the space's matrix, so a Rec.2020 or ACEScg output is the
 Rec.709 one times the published space-to-space matrix (nothing clamped on the way), and
 bad names are refused naming color_space."""
+
 import json
 import subprocess
 
@@ -13,9 +15,9 @@ from cli_testing import CLI
 
 # Linear sRGB -> ACEScg (Bradford D65 -> ACES white), as the ACES OpenColorIO configs and
 # colour-science publish it; and BT.2020 RGB -> XYZ (ITU-R BT.2087-0), with BT.709's.
-REC709_TO_ACESCG = np.array([[0.6130974, 0.3395231, 0.0473794],
-                             [0.0701937, 0.9163539, 0.0134523],
-                             [0.0206156, 0.1095698, 0.8698151]])
+REC709_TO_ACESCG = np.array(
+    [[0.6130974, 0.3395231, 0.0473794], [0.0701937, 0.9163539, 0.0134523], [0.0206156, 0.1095698, 0.8698151]]
+)
 BT2020_TO_XYZ = np.array([[0.6370, 0.1446, 0.1689], [0.2627, 0.6780, 0.0593], [0.0, 0.0281, 1.0610]])
 BT709_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
 SPACES = ("rec709", "rec2020", "acescg")
@@ -54,15 +56,18 @@ def test_spectrum_to_rgb_and_a_saturated_spectrum():
     rgb = {s: welkin.spectrum_to_rgb(band, wl, color_space=s) for s in SPACES}
     assert rgb["rec709"][0] < 0
     assert (rgb["rec2020"] > 0).all() and (rgb["acescg"] > 0).all()
-    np.testing.assert_allclose(rgb["acescg"], welkin.color_space_matrix("rec709", "acescg") @ rgb["rec709"],
-                               rtol=1e-5)
+    np.testing.assert_allclose(
+        rgb["acescg"], welkin.color_space_matrix("rec709", "acescg") @ rgb["rec709"], rtol=1e-5
+    )
 
 
 def test_bad_color_space_is_refused():
     atm = welkin.Atmosphere.preset("clear")
-    for call in (lambda: welkin.sun(atm, 0.0, [0, 0, 1], color_space="srgb"),
-                 lambda: welkin.sky_image(atm, 0.0, [0, 0, 1], 8, color_space="ACEScg"),
-                 lambda: welkin.color_space_matrix("rec709", "p3")):
+    for call in (
+        lambda: welkin.sun(atm, 0.0, [0, 0, 1], color_space="srgb"),
+        lambda: welkin.sky_image(atm, 0.0, [0, 0, 1], 8, color_space="ACEScg"),
+        lambda: welkin.color_space_matrix("rec709", "p3"),
+    ):
         with pytest.raises(ValueError, match="color_space"):
             call()
     scene = {"version": 1, "color_space": "xyz"}
@@ -77,14 +82,21 @@ def test_scene_json_keeps_the_space():
 
 def test_cli_sun_color_space():
     def sun(*extra):
-        r = subprocess.run([CLI, "sun", "--preset", "hazy", "--sun-elevation", "5", *extra],
-                           capture_output=True, text=True, check=True)
+        r = subprocess.run(
+            [CLI, "sun", "--preset", "hazy", "--sun-elevation", "5", *extra],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         return json.loads(r.stdout)
+
     rec709, acescg = sun(), sun("--color-space", "acescg")
     assert acescg["color_space"] == "acescg"
-    np.testing.assert_allclose(acescg["direct_irradiance_rgb_W_m2"],
-                               welkin.color_space_matrix("rec709", "acescg") @ rec709["direct_irradiance_rgb_W_m2"],
-                               rtol=1e-9)
+    np.testing.assert_allclose(
+        acescg["direct_irradiance_rgb_W_m2"],
+        welkin.color_space_matrix("rec709", "acescg") @ rec709["direct_irradiance_rgb_W_m2"],
+        rtol=1e-9,
+    )
     r = subprocess.run([CLI, "sun", "--color-space", "srgb"], capture_output=True, text=True)
     assert r.returncode != 0 and "--color-space" in r.stderr
 

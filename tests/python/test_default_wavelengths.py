@@ -1,13 +1,15 @@
+# SPDX-License-Identifier: Apache-2.0
 """The default wavelengths (620/560/480/440 nm) through the Python module: the preset's
 channels, and sky_radiance(output="rgb") at the default against the 48-wavelength
 spectral path in deep twilight (CIE xy within the tolerance of docs/validation.md)."""
+
 import numpy as np
 
 import welkin
 
-RGB_TO_XYZ = np.array([[0.4124564, 0.3575761, 0.1804375],
-                       [0.2126729, 0.7151522, 0.0721750],
-                       [0.0193339, 0.1191920, 0.9503041]])
+RGB_TO_XYZ = np.array(
+    [[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750], [0.0193339, 0.1191920, 0.9503041]]
+)
 
 
 def chromaticity(rgb):

@@ -1,5 +1,7 @@
+# SPDX-License-Identifier: Apache-2.0
 """scripts/find_python.sh, which finds the interpreter of each Python line Blender runs
 (3.11 for Blender 3.4-5.0, 3.13 for 5.1 and later) for the wheels and the bpy venvs."""
+
 import os
 import pathlib
 import subprocess
@@ -9,8 +11,9 @@ SCRIPT = pathlib.Path(__file__).resolve().parents[2] / "scripts" / "find_python.
 
 
 def run(*args, **env):
-    return subprocess.run(["bash", str(SCRIPT), *args], capture_output=True, text=True,
-                          env={**os.environ, **env})
+    return subprocess.run(
+        ["bash", str(SCRIPT), *args], capture_output=True, text=True, env={**os.environ, **env}
+    )
 
 
 def test_finds_a_python_of_the_line_asked_for():
@@ -19,8 +22,9 @@ def test_finds_a_python_of_the_line_asked_for():
     found = run(line, "--headers")
     assert found.returncode == 0, found.stderr
     path = found.stdout.strip()
-    version = subprocess.run([path, "-c", "import sys; print(sys.version_info[:2])"],
-                             capture_output=True, text=True, check=True).stdout.strip()
+    version = subprocess.run(
+        [path, "-c", "import sys; print(sys.version_info[:2])"], capture_output=True, text=True, check=True
+    ).stdout.strip()
     assert version == str(sys.version_info[:2]), (path, version)
 
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Hostile files and unbounded settings through the Python module and the CLI: every VDB of
 the fuzz corpus (the seeds, the fuzzer's findings and three byte-flipped copies of a ball
 VDB that corrupted the host's heap) loaded by welkin.VdbClouds in a fresh interpreter that
@@ -7,6 +8,7 @@ cloud layer's numbers and of the number of layers; `--help` and `--version` to a
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_hostile_files.py.
 """
+
 import math
 import os
 import pathlib
@@ -30,8 +32,13 @@ ENV = {**os.environ, "PYTHONPATH": str(ROOT / "build")}
 def run_python(code, *args, timeout=120):
     """`code` in a fresh /usr/bin/python3 with the module on its path (the host process a
     crash would take down: Blender loads the module in its own)."""
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code), *map(str, args)],
-                          env=ENV, capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code), *map(str, args)],
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 LOAD_VDB = """
@@ -76,23 +83,29 @@ def fifo(tmp_path):
 
 
 def test_read_exr_refuses_a_fifo_at_once(fifo):
-    run = run_python("""
+    run = run_python(
+        """
         import sys, welkin
         try:
             welkin.read_exr(sys.argv[1])
         except OSError as error:
             print(error)
-    """, fifo, timeout=60)
+    """,
+        fifo,
+        timeout=60,
+    )
     assert run.returncode == 0 and "FIFO" in run.stdout and str(fifo) in run.stdout, run
 
 
-@pytest.mark.parametrize("args", [["exr-info", "{fifo}"],
-                                  ["aerial", "--scene", "{scene}", "--depth", "{fifo}", "-o",
-                                   "{out}"]])
+@pytest.mark.parametrize(
+    "args", [["exr-info", "{fifo}"], ["aerial", "--scene", "{scene}", "--depth", "{fifo}", "-o", "{out}"]]
+)
 def test_the_cli_refuses_a_fifo_at_once(fifo, tmp_path, args):
     scene = tmp_path / "scene.json"
-    scene.write_text('{"version": 1, "camera": {"matrix_world": [[1,0,0,0],[0,1,0,0],'
-                     '[0,0,1,2],[0,0,0,1]]}, "resolution": {"x": 8, "y": 4}}')
+    scene.write_text(
+        '{"version": 1, "camera": {"matrix_world": [[1,0,0,0],[0,1,0,0],'
+        '[0,0,1,2],[0,0,0,1]]}, "resolution": {"x": 8, "y": 4}}'
+    )
     argv = [a.format(fifo=fifo, scene=scene, out=tmp_path / "out.exr") for a in args]
     run = subprocess.run([CLI, *argv], capture_output=True, text=True, timeout=60)
     assert run.returncode != 0 and "FIFO" in run.stderr, run
@@ -107,7 +120,8 @@ def test_every_exr_of_the_corpus_reads_or_is_refused_at_once(exr):
     """An image, or OSError / MemoryError naming the file, within seconds and within a
     768 MiB address space (attribute_size_huge.exr: a string attribute that declared 721 MB in
     a 364-byte file, which OpenEXR allocated and cleared before reading it)."""
-    run = run_python("""
+    run = run_python(
+        """
         import resource, sys, time
         import welkin
         resource.setrlimit(resource.RLIMIT_AS, (768 << 20, resource.RLIM_INFINITY))
@@ -119,7 +133,10 @@ def test_every_exr_of_the_corpus_reads_or_is_refused_at_once(exr):
             assert sys.argv[1] in str(error), error
             print(type(error).__name__, error)
         print(f"{time.monotonic() - t0:.3f}")
-    """, exr, timeout=60)
+    """,
+        exr,
+        timeout=60,
+    )
     assert run.returncode == 0, f"rc {run.returncode}:\n{run.stdout}\n{run.stderr[-2000:]}"
     assert float(run.stdout.splitlines()[-1]) < 2.0, run.stdout
     assert "bad_alloc" not in run.stdout, run.stdout  # a bare std::bad_alloc names nothing
@@ -134,7 +151,7 @@ def huge_exr(tmp_path):
     welkin.write_exr(str(small), np.full((3, 4, 3), 0.5, np.float32))
     data = bytearray(small.read_bytes())
     at = data.index(b"dataWindow\0box2i\0") + len(b"dataWindow\0box2i\0") + 4
-    data[at:at + 16] = np.array([0, 0, 99999, 99999], "<i4").tobytes()
+    data[at : at + 16] = np.array([0, 0, 99999, 99999], "<i4").tobytes()
     path = tmp_path / "huge.exr"
     path.write_bytes(bytes(data) + bytes(64 << 10))
     return path
@@ -150,7 +167,8 @@ def test_read_exr_of_an_absurd_header_is_a_memory_error_naming_the_file(tmp_path
 def test_running_out_of_memory_converting_an_array_is_a_memory_error():
     """float32 (6e7, 3) directions need a 1.4 GB float64 copy: under a 2.5 GB address-space
     limit numpy cannot make it, and that is MemoryError, not "not an array of numbers"."""
-    run = run_python("""
+    run = run_python(
+        """
         import resource
         import numpy as np
         import welkin
@@ -165,7 +183,9 @@ def test_running_out_of_memory_converting_an_array_is_a_memory_error():
             print("MemoryError", error)
         except ValueError as error:
             print("ValueError", error)
-    """, timeout=300)
+    """,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     assert run.stdout.startswith("MemoryError"), run.stdout
 
@@ -177,8 +197,7 @@ def test_the_wind_offset_has_a_range(wind):
     welkin.CloudLayer(cloud_type="cumulus", wind_offset_m=(1e9, -1e9))  # the bounds themselves
 
 
-@pytest.mark.parametrize("field", ["wind_offset_m[0]", "wind_offset_m[1]", "evolution_m",
-                                   "coverage"])
+@pytest.mark.parametrize("field", ["wind_offset_m[0]", "wind_offset_m[1]", "evolution_m", "coverage"])
 def test_a_layer_number_that_is_not_finite_is_named(field):
     """The add-on's layer (Blender allows NaN in a float property): named, not the JSON
     parser's "invalid literal" at some byte."""
@@ -198,6 +217,7 @@ def test_the_add_ons_layer_limit_is_the_cores():
 
     def scene(n):
         return f'{{"version": 1, "clouds": {{"layers": [{", ".join([layer] * n)}]}}}}'
+
     welkin.SceneDescription.from_json_string(scene(cloud_export.MAX_LAYERS))
     with pytest.raises(ValueError, match=f"at most {cloud_export.MAX_LAYERS}"):
         welkin.SceneDescription.from_json_string(scene(cloud_export.MAX_LAYERS + 1))
@@ -207,8 +227,7 @@ def test_the_add_ons_layer_limit_is_the_cores():
 def test_help_and_version_to_a_full_disk_fail(args):
     """As coreutils do (`ls --help > /dev/full`: exit 1 and a line on stderr)."""
     with open("/dev/full", "w") as full:
-        run = subprocess.run([CLI, *args], stdout=full, stderr=subprocess.PIPE, text=True,
-                             timeout=60)
+        run = subprocess.run([CLI, *args], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
     assert run.returncode != 0 and "No space left on device" in run.stderr, run
     ok = subprocess.run([CLI, *args], capture_output=True, text=True, timeout=60)
     assert ok.returncode == 0 and ok.stdout and not ok.stderr

@@ -1,7 +1,9 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.sky_image, sun_disc_image, write_exr, read_exr: the thin bindings of the core's
 equirect sky images and EXR I/O. Tolerances: float32 rounding (1e-5 relative) where two
 paths compute the same numbers; the disc's energy to 1e-4 (the core makes it exact, the
 sum here is in float64 over float32 pixels)."""
+
 import math
 
 import numpy as np
@@ -12,8 +14,9 @@ import welkin
 
 def solid_angles(width, height):
     rows = np.arange(height)
-    return (2 * math.pi / width) * (np.sin(math.pi * (0.5 - rows / height))
-                                    - np.sin(math.pi * (0.5 - (rows + 1) / height)))
+    return (2 * math.pi / width) * (
+        np.sin(math.pi * (0.5 - rows / height)) - np.sin(math.pi * (0.5 - (rows + 1) / height))
+    )
 
 
 def test_sky_image_is_sky_radiance_over_the_pixel_directions(atm, sun_direction):
@@ -46,10 +49,18 @@ def test_spectral_output_has_one_channel_per_wavelength(atm, sun_direction):
     assert img.shape == (8, 16, len(atm.wavelengths_nm))
 
 
-@pytest.mark.parametrize("kwargs, parameter", [
-    ({"width": 7}, "width"), ({"width": 2}, "width"), ({"method": "nope"}, "method"),
-    ({"output": "xyz"}, "output"), ({"exposure": 0.0}, "exposure"),
-    ({"altitude_m": -1.0}, "altitude"), ({"sun_direction": (0, 0, 0)}, "sun_direction")])
+@pytest.mark.parametrize(
+    "kwargs, parameter",
+    [
+        ({"width": 7}, "width"),
+        ({"width": 2}, "width"),
+        ({"method": "nope"}, "method"),
+        ({"output": "xyz"}, "output"),
+        ({"exposure": 0.0}, "exposure"),
+        ({"altitude_m": -1.0}, "altitude"),
+        ({"sun_direction": (0, 0, 0)}, "sun_direction"),
+    ],
+)
 def test_sky_image_bad_input_names_the_parameter(atm, sun_direction, kwargs, parameter):
     args = {"atmosphere": atm, "altitude_m": 0.0, "sun_direction": sun_direction, "width": 16}
     args.update(kwargs)

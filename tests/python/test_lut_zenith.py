@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The `lut` method at the zenith is as close to `raymarch` as elsewhere in the sky.
 
 The sky-view LUT's first row is the zenith itself (include/welkin/atmosphere/skyview_lut.hpp);
@@ -6,6 +7,7 @@ ring in the sun's azimuth: 3.7 % brighter than `raymarch` at 680 nm with the sun
 degrees, where the median over the sky was 0.1 %. Both methods share the multiple-scattering
 LUT, so their difference is the sky-view table's alone.
 """
+
 import math
 
 import numpy as np

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tests of the `welkin` Python module: the bindings' contract, not the physics.
 
 What the module promises (src/python/): the documented call works and returns arrays
@@ -10,6 +11,7 @@ pass a core result through (sun transmittance, equirect mapping, density profile
 Deterministic plumbing tests use method="reference" with few paths and a fixed seed
 (the same seed gives the same numbers, so two calls can be compared exactly).
 """
+
 import _thread
 import copy
 import json
@@ -30,16 +32,22 @@ FEW_PATHS = dict(method="reference", paths=16, seed=3)
 def radiance(atm, sun_direction, dirs, **kw):
     args = dict(FEW_PATHS)
     args.update(kw)
-    return welkin.sky_radiance(atm, altitude_m=0.0, sun_direction=sun_direction,
-                               view_directions=dirs, **args)
+    return welkin.sky_radiance(atm, altitude_m=0.0, sun_direction=sun_direction, view_directions=dirs, **args)
 
 
 # --- the documented call --------------------------------------------------------------
 
+
 @pytest.mark.parametrize("output, columns", [("spectral", 3), ("rgb", 3)])
 def test_documented_call_shapes_and_dtype(atm, sun_direction, view_directions, output, columns):
-    L = welkin.sky_radiance(atm, altitude_m=0.0, sun_direction=sun_direction,
-                            view_directions=view_directions, method="lut", output=output)
+    L = welkin.sky_radiance(
+        atm,
+        altitude_m=0.0,
+        sun_direction=sun_direction,
+        view_directions=view_directions,
+        method="lut",
+        output=output,
+    )
     assert isinstance(L, np.ndarray)
     assert L.dtype == np.float32
     assert L.shape == (len(view_directions), columns)
@@ -52,8 +60,7 @@ def test_documented_call_shapes_and_dtype(atm, sun_direction, view_directions, o
 
 @pytest.mark.parametrize("method", welkin.methods())
 def test_every_method_runs_and_is_finite(atm, sun_direction, view_directions, method):
-    L = welkin.sky_radiance(atm, 0.0, sun_direction, view_directions, method, "spectral",
-                            paths=16, steps=16)
+    L = welkin.sky_radiance(atm, 0.0, sun_direction, view_directions, method, "spectral", paths=16, steps=16)
     assert L.shape == (len(view_directions), atm.channels)
     assert np.all(np.isfinite(L)) and np.all(L >= 0.0)
 
@@ -67,8 +74,7 @@ def test_spectral_wavelengths_give_one_column_each(sun_direction, view_direction
     assert rgb.shape == (len(view_directions), 3)
 
 
-def test_rgb_output_is_the_documented_conversion_of_the_spectral_output(atm, sun_direction,
-                                                                       view_directions):
+def test_rgb_output_is_the_documented_conversion_of_the_spectral_output(atm, sun_direction, view_directions):
     spectral = radiance(atm, sun_direction, view_directions)
     rgb = radiance(atm, sun_direction, view_directions, output="rgb")
     expected = welkin.spectrum_to_rgb(spectral, atm.wavelengths_nm, lambda_power=-3)
@@ -87,8 +93,7 @@ def test_return_standard_error(atm, sun_direction, view_directions):
 
 
 def test_deterministic_methods_report_zero_standard_error(atm, sun_direction, view_directions):
-    _, se = welkin.sky_radiance(atm, 0.0, sun_direction, view_directions, "lut",
-                                return_standard_error=True)
+    _, se = welkin.sky_radiance(atm, 0.0, sun_direction, view_directions, "lut", return_standard_error=True)
     np.testing.assert_array_equal(se, 0.0)
 
 
@@ -98,6 +103,7 @@ def test_no_directions_give_an_empty_result(atm, sun_direction):
 
 
 # --- input buffers: in place or converted, never modified, never aliased ----------------
+
 
 def _misaligned(a):
     """A C-contiguous float64 copy of `a` whose buffer starts at an odd byte address."""
@@ -127,8 +133,9 @@ def test_any_array_like_gives_the_same_answer(atm, sun_direction, view_direction
 
 def test_float32_directions_are_converted(atm, sun_direction, view_directions):
     d32 = view_directions.astype(np.float32)
-    np.testing.assert_array_equal(radiance(atm, sun_direction, d32),
-                                  radiance(atm, sun_direction, d32.astype(np.float64)))
+    np.testing.assert_array_equal(
+        radiance(atm, sun_direction, d32), radiance(atm, sun_direction, d32.astype(np.float64))
+    )
 
 
 def test_inputs_are_not_modified_and_outputs_not_aliased(atm, sun_direction, view_directions):
@@ -151,6 +158,7 @@ def test_the_atmosphere_is_not_modified(atm, sun_direction, view_directions):
 
 # --- bad input: ValueError naming the parameter -----------------------------------------
 
+
 def _raises_naming(exc, parameter, fn, *args, **kwargs):
     with pytest.raises(exc) as info:
         fn(*args, **kwargs)
@@ -163,19 +171,22 @@ def test_unknown_preset():
 
 
 def test_preset_wavelength_out_of_range():
-    _raises_naming(ValueError, "wavelengths_nm[1]", welkin.Atmosphere.preset, "clear",
-                   wavelengths_nm=[550.0, 100.0, 440.0])
+    _raises_naming(
+        ValueError,
+        "wavelengths_nm[1]",
+        welkin.Atmosphere.preset,
+        "clear",
+        wavelengths_nm=[550.0, 100.0, 440.0],
+    )
 
 
 def test_unknown_method(atm, sun_direction, view_directions):
-    e = _raises_naming(ValueError, "method", radiance, atm, sun_direction, view_directions,
-                       method="magic")
+    e = _raises_naming(ValueError, "method", radiance, atm, sun_direction, view_directions, method="magic")
     assert "reference" in str(e)  # the message lists the accepted names
 
 
 def test_unknown_output(atm, sun_direction, view_directions):
-    _raises_naming(ValueError, "output", radiance, atm, sun_direction, view_directions,
-                   output="xyz")
+    _raises_naming(ValueError, "output", radiance, atm, sun_direction, view_directions, output="xyz")
 
 
 @pytest.mark.parametrize("bad", [(0.0, 0.0, 0.0), (np.nan, 0.0, 1.0), (np.inf, 0.0, 0.0)])
@@ -185,14 +196,17 @@ def test_bad_view_direction_is_named_by_index(atm, sun_direction, view_direction
     _raises_naming(ValueError, "view_directions[5]", radiance, atm, sun_direction, dirs)
 
 
-@pytest.mark.parametrize("dirs", [
-    np.zeros((4, 2)),            # not 3 columns
-    np.zeros(3),                 # one direction without the N axis
-    np.zeros((2, 4, 3)),         # too many axes
-    np.float64(1.0),             # a scalar
-    [[0.0, 0.0, 1.0], [1.0]],    # ragged
-    [["a", "b", "c"]],           # not numbers
-])
+@pytest.mark.parametrize(
+    "dirs",
+    [
+        np.zeros((4, 2)),  # not 3 columns
+        np.zeros(3),  # one direction without the N axis
+        np.zeros((2, 4, 3)),  # too many axes
+        np.float64(1.0),  # a scalar
+        [[0.0, 0.0, 1.0], [1.0]],  # ragged
+        [["a", "b", "c"]],  # not numbers
+    ],
+)
 def test_view_directions_of_the_wrong_shape(atm, sun_direction, dirs):
     _raises_naming(ValueError, "view_directions", radiance, atm, sun_direction, dirs)
 
@@ -204,30 +218,47 @@ def test_bad_sun_direction(atm, view_directions, sun):
 
 @pytest.mark.parametrize("altitude", [-1.0, np.nan, np.inf])
 def test_bad_altitude(atm, sun_direction, view_directions, altitude):
-    _raises_naming(ValueError, "altitude_m", welkin.sky_radiance, atm, altitude, sun_direction,
-                   view_directions, **FEW_PATHS)
+    _raises_naming(
+        ValueError,
+        "altitude_m",
+        welkin.sky_radiance,
+        atm,
+        altitude,
+        sun_direction,
+        view_directions,
+        **FEW_PATHS,
+    )
 
 
-@pytest.mark.parametrize("option, value, parameter", [
-    ("steps", 0, "raymarch_steps"),
-    ("sun_steps", 0, "raymarch_sun_steps"),
-    ("paths", 0, "reference_paths"),
-    ("skyview_width", 1, "skyview_width"),
-    ("transmittance_height", 100000, "transmittance_height"),
-])
+@pytest.mark.parametrize(
+    "option, value, parameter",
+    [
+        ("steps", 0, "raymarch_steps"),
+        ("sun_steps", 0, "raymarch_sun_steps"),
+        ("paths", 0, "reference_paths"),
+        ("skyview_width", 1, "skyview_width"),
+        ("transmittance_height", 100000, "transmittance_height"),
+    ],
+)
 def test_bad_options(atm, sun_direction, view_directions, option, value, parameter):
-    _raises_naming(ValueError, parameter, radiance, atm, sun_direction, view_directions,
-                   **{option: value})
+    _raises_naming(ValueError, parameter, radiance, atm, sun_direction, view_directions, **{option: value})
 
 
 def test_standard_error_needs_spectral_output(atm, sun_direction, view_directions):
-    _raises_naming(ValueError, "return_standard_error", radiance, atm, sun_direction,
-                   view_directions, output="rgb", return_standard_error=True)
+    _raises_naming(
+        ValueError,
+        "return_standard_error",
+        radiance,
+        atm,
+        sun_direction,
+        view_directions,
+        output="rgb",
+        return_standard_error=True,
+    )
 
 
 def test_progress_must_be_callable(atm, sun_direction, view_directions):
-    _raises_naming(TypeError, "progress", radiance, atm, sun_direction, view_directions,
-                   progress=42)
+    _raises_naming(TypeError, "progress", radiance, atm, sun_direction, view_directions, progress=42)
 
 
 def test_an_invalid_atmosphere_is_refused_before_computing(atm, sun_direction, view_directions):
@@ -288,8 +319,7 @@ def test_ctrl_c_cancels_a_long_computation(atm, sun_direction):
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
-            welkin.sky_radiance(atm, 0.0, sun_direction, LONG_DIRECTIONS, progress=seen.append,
-                                **LONG_WORK)
+            welkin.sky_radiance(atm, 0.0, sun_direction, LONG_DIRECTIONS, progress=seen.append, **LONG_WORK)
     finally:
         timer.cancel()
         timer.join()
@@ -331,10 +361,19 @@ def test_the_gil_is_released_while_computing(atm, sun_direction):
 
 # --- Atmosphere ---------------------------------------------------------------------------
 
+
 def test_preset_names_and_methods():
     names = welkin.Atmosphere.preset_names()
-    assert set(names) == {"clear_day", "clear", "hazy", "polluted", "desert_dust", "maritime",
-                          "bruneton2017", "mars"}
+    assert set(names) == {
+        "clear_day",
+        "clear",
+        "hazy",
+        "polluted",
+        "desert_dust",
+        "maritime",
+        "bruneton2017",
+        "mars",
+    }
     assert names[0] == "clear_day"  # the default, an ordinary clear day
     # Its aerosol: an optical depth at 550 nm of a clear day (0.08-0.15), the others theirs.
     assert 0.08 <= welkin.Atmosphere.preset(names[0]).aerosol_optical_depth() <= 0.15
@@ -355,8 +394,15 @@ def test_atmosphere_attributes(atm):
     assert atm.atmosphere_thickness_m == 60e3
     assert atm.mie_g == 0.8 and atm.mie_phase == "cornette_shanks"
     np.testing.assert_array_equal(atm.ground_albedo, [0.1, 0.1, 0.1])
-    for name in ("wavelengths_nm", "solar_irradiance", "rayleigh_scattering", "mie_scattering",
-                 "mie_extinction", "absorption_extinction", "ground_albedo"):
+    for name in (
+        "wavelengths_nm",
+        "solar_irradiance",
+        "rayleigh_scattering",
+        "mie_scattering",
+        "mie_extinction",
+        "absorption_extinction",
+        "ground_albedo",
+    ):
         value = getattr(atm, name)
         assert value.dtype == np.float64 and value.shape == (3,), name
         with pytest.raises(ValueError):  # read-only copy: edits must not vanish silently
@@ -385,14 +431,15 @@ def test_atmosphere_attributes_are_writable_and_validated(atm):
 
 def test_extinction_and_scattering_at_the_ground(atm):
     # At h = 0: Rayleigh and Mie densities are 1, the ozone tent is 0.
-    np.testing.assert_allclose(atm.extinction(0.0), atm.rayleigh_scattering + atm.mie_extinction,
-                               rtol=1e-15)
-    np.testing.assert_allclose(atm.scattering(0.0), atm.rayleigh_scattering + atm.mie_scattering,
-                               rtol=1e-15)
+    np.testing.assert_allclose(atm.extinction(0.0), atm.rayleigh_scattering + atm.mie_extinction, rtol=1e-15)
+    np.testing.assert_allclose(atm.scattering(0.0), atm.rayleigh_scattering + atm.mie_scattering, rtol=1e-15)
     # At the ozone peak (25 km) every term contributes.
     h = 25e3
-    expected = (atm.rayleigh_scattering * np.exp(-h / 8000.0)
-                + atm.mie_extinction * np.exp(-h / 1200.0) + atm.absorption_extinction)
+    expected = (
+        atm.rayleigh_scattering * np.exp(-h / 8000.0)
+        + atm.mie_extinction * np.exp(-h / 1200.0)
+        + atm.absorption_extinction
+    )
     np.testing.assert_allclose(atm.extinction(h), expected, rtol=1e-12)
 
 
@@ -402,8 +449,11 @@ def test_density_profiles():
     h = np.array([[0.0, 4000.0], [8000.0, 16000.0]])
     np.testing.assert_allclose(p.density(h), np.exp(-h / 8000.0), rtol=1e-15)
     tent = welkin.DensityProfile.tent(10e3, 25e3, 40e3)
-    np.testing.assert_allclose(tent.density(np.array([5e3, 10e3, 17.5e3, 25e3, 32.5e3, 45e3])),
-                               [0.0, 0.0, 0.5, 1.0, 0.5, 0.0], atol=1e-12)
+    np.testing.assert_allclose(
+        tent.density(np.array([5e3, 10e3, 17.5e3, 25e3, 32.5e3, 45e3])),
+        [0.0, 0.0, 0.5, 1.0, 0.5, 0.0],
+        atol=1e-12,
+    )
     assert tent.exponential_scale_height_m is None
     layers = [welkin.DensityLayer(width_m=1000.0, constant=1.0), welkin.DensityLayer()]
     step = welkin.DensityProfile(layers)
@@ -420,6 +470,7 @@ def test_copy_and_pickle_are_independent(atm):
 
 
 # --- JSON ---------------------------------------------------------------------------------
+
 
 def test_json_round_trip_is_exact(tmp_path):
     a = welkin.Atmosphere.preset("mars", wavelengths_nm=[700.0, 600.0, 500.0, 400.0])
@@ -486,6 +537,7 @@ def test_missing_json_file(tmp_path):
 
 # --- the sun ------------------------------------------------------------------------------
 
+
 def test_sun_at_zenith_matches_the_vertical_optical_depth(atm):
     """Closed form: straight up, every constituent's column is its profile's integral."""
     sun = welkin.sun(atm, 0.0, (0.0, 0.0, 1.0))
@@ -493,18 +545,20 @@ def test_sun_at_zenith_matches_the_vertical_optical_depth(atm):
     column_rayleigh = 8000.0 * (1.0 - np.exp(-top / 8000.0))
     column_mie = 1200.0 * (1.0 - np.exp(-top / 1200.0))
     column_ozone = 15e3  # tent 10-25-40 km of height 1
-    tau = (atm.rayleigh_scattering * column_rayleigh + atm.mie_extinction * column_mie
-           + atm.absorption_extinction * column_ozone)
+    tau = (
+        atm.rayleigh_scattering * column_rayleigh
+        + atm.mie_extinction * column_mie
+        + atm.absorption_extinction * column_ozone
+    )
     np.testing.assert_allclose(sun.transmittance, np.exp(-tau), rtol=1e-6)
     assert sun.visible_fraction == 1.0
-    np.testing.assert_allclose(sun.direct_irradiance, atm.solar_irradiance * np.exp(-tau),
-                               rtol=1e-5)
+    np.testing.assert_allclose(sun.direct_irradiance, atm.solar_irradiance * np.exp(-tau), rtol=1e-5)
     np.testing.assert_array_equal(sun.wavelengths_nm, atm.wavelengths_nm)
     rgb = sun.direct_irradiance_rgb
     assert rgb.shape == (3,) and np.all(rgb > 0.0)
     np.testing.assert_allclose(
-        rgb, welkin.spectrum_to_rgb(sun.direct_irradiance, atm.wavelengths_nm, lambda_power=0),
-        rtol=1e-6)
+        rgb, welkin.spectrum_to_rgb(sun.direct_irradiance, atm.wavelengths_nm, lambda_power=0), rtol=1e-6
+    )
 
 
 def test_sun_below_the_horizon_delivers_nothing(atm):
@@ -521,6 +575,7 @@ def test_sun_bad_input(atm):
 
 
 # --- colour and equirect ------------------------------------------------------------------
+
 
 def test_spectral_wavelengths():
     w = welkin.spectral_wavelengths_nm()
@@ -543,18 +598,24 @@ def test_spectrum_to_rgb_shapes_and_linearity():
 
 
 def test_spectrum_to_rgb_bad_input():
-    _raises_naming(ValueError, "spectra", welkin.spectrum_to_rgb, np.ones((2, 4)),
-                   [680.0, 550.0, 440.0])
+    _raises_naming(ValueError, "spectra", welkin.spectrum_to_rgb, np.ones((2, 4)), [680.0, 550.0, 440.0])
     with pytest.raises(ValueError):
         welkin.spectrum_to_rgb(np.ones(2), [680.0, 550.0])  # fewer than 3 wavelengths
 
 
 def test_equirect_matches_blenders_mapping():
     # u = -atan2(y, x) / 2pi + 1/2, v = atan2(z, hypot(x, y)) / pi + 1/2 (docs/design.md).
-    dirs = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0],
-                     [0.0, 0.0, 1.0], [0.0, 0.0, -2.0], [1.0, 1.0, np.sqrt(2.0)]])
-    expected = np.array([[0.5, 0.5], [0.25, 0.5], [0.75, 0.5],
-                         [0.5, 1.0], [0.5, 0.0], [0.375, 0.75]])
+    dirs = np.array(
+        [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -2.0],
+            [1.0, 1.0, np.sqrt(2.0)],
+        ]
+    )
+    expected = np.array([[0.5, 0.5], [0.25, 0.5], [0.75, 0.5], [0.5, 1.0], [0.5, 0.0], [0.375, 0.75]])
     np.testing.assert_allclose(welkin.direction_to_equirect(dirs), expected, atol=1e-12)
     assert welkin.direction_to_equirect(dirs[1]).shape == (2,)
 
@@ -580,8 +641,9 @@ def test_equirect_pixel_directions_are_pixel_centres_top_row_first():
 
 
 def test_equirect_bad_input():
-    _raises_naming(ValueError, "view_directions[1]", welkin.direction_to_equirect,
-                   [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])
+    _raises_naming(
+        ValueError, "view_directions[1]", welkin.direction_to_equirect, [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]
+    )
     _raises_naming(ValueError, "view_directions", welkin.direction_to_equirect, [1.0, 2.0])
     _raises_naming(ValueError, "uv[0][1]", welkin.equirect_to_direction, [[0.5, np.nan]])
     _raises_naming(ValueError, "uv", welkin.equirect_to_direction, np.zeros((2, 3)))
@@ -589,17 +651,34 @@ def test_equirect_bad_input():
 
 # --- the module ---------------------------------------------------------------------------
 
+
 def test_version_and_docstrings():
     assert re.fullmatch(r"\d+\.\d+\.\d+", welkin.__version__)
     doc = welkin.sky_radiance.__doc__
-    for phrase in ("W m^-2 sr^-1 nm^-1", "Z up", "view_directions", "sun_direction",
-                   "altitude_m", "KeyboardInterrupt"):
+    for phrase in (
+        "W m^-2 sr^-1 nm^-1",
+        "Z up",
+        "view_directions",
+        "sun_direction",
+        "altitude_m",
+        "KeyboardInterrupt",
+    ):
         assert phrase in doc, phrase
-    for obj in (welkin, welkin.Atmosphere, welkin.Atmosphere.preset, welkin.Atmosphere.from_json,
-                welkin.Atmosphere.to_json, welkin.sun, welkin.SunRadiometry, welkin.methods,
-                welkin.spectrum_to_rgb, welkin.direction_to_equirect,
-                welkin.equirect_to_direction, welkin.spectral_wavelengths_nm,
-                welkin.DensityProfile):
+    for obj in (
+        welkin,
+        welkin.Atmosphere,
+        welkin.Atmosphere.preset,
+        welkin.Atmosphere.from_json,
+        welkin.Atmosphere.to_json,
+        welkin.sun,
+        welkin.SunRadiometry,
+        welkin.methods,
+        welkin.spectrum_to_rgb,
+        welkin.direction_to_equirect,
+        welkin.equirect_to_direction,
+        welkin.spectral_wavelengths_nm,
+        welkin.DensityProfile,
+    ):
         assert obj.__doc__ and len(obj.__doc__.strip()) > 20, obj
 
 
@@ -619,11 +698,19 @@ def test_json_number_overflow_names_the_key_path_and_the_file(tmp_path):
 
 
 def test_a_render_larger_than_memory_is_a_memory_error_not_a_value_error():
-    scene = welkin.SceneDescription.from_json_string(json.dumps({
-        "version": 1,
-        "camera": {"matrix_world": [[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 2], [0, 0, 0, 1]],
-                   "type": "PERSP", "lens_mm": 50},
-        "resolution": {"x": 65536, "y": 65536, "percentage": 100}}))
+    scene = welkin.SceneDescription.from_json_string(
+        json.dumps(
+            {
+                "version": 1,
+                "camera": {
+                    "matrix_world": [[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 2], [0, 0, 0, 1]],
+                    "type": "PERSP",
+                    "lens_mm": 50,
+                },
+                "resolution": {"x": 65536, "y": 65536, "percentage": 100},
+            }
+        )
+    )
     depth = np.zeros((1, 1), np.float32)
     with pytest.raises(MemoryError, match="resolution"):
         welkin.aerial_perspective(scene, depth)
@@ -635,13 +722,21 @@ def _python_with_numpy_2():
     import shutil
     import subprocess
     import sys
+
     for name in ("python3", "python3.11"):
         path = shutil.which(name)
         if path is None or pathlib.Path(path).resolve() == pathlib.Path(sys.executable).resolve():
             continue
-        r = subprocess.run([path, "-c", "import sys, numpy; print(sys.version_info[:2] == (3, 11)"
-                            " and numpy.__version__.split('.')[0], sys.executable)"],
-                           capture_output=True, text=True)
+        r = subprocess.run(
+            [
+                path,
+                "-c",
+                "import sys, numpy; print(sys.version_info[:2] == (3, 11)"
+                " and numpy.__version__.split('.')[0], sys.executable)",
+            ],
+            capture_output=True,
+            text=True,
+        )
         if r.returncode == 0 and r.stdout.split()[0] not in ("False", "1"):
             return r.stdout.split()[1]
     return None
@@ -651,21 +746,32 @@ def test_a_module_that_cannot_read_numpy_2_arrays_refuses_numpy_2_at_import():
     # Debian's pybind11 2.10 (this build) reads every row of a NumPy 2 array as its first:
     # the module must refuse to load beside NumPy 2 rather than return wrong radiance.
     import subprocess
+
     python = _python_with_numpy_2()
     if python is None:
         pytest.skip("no Python 3.11 with NumPy 2 on this machine besides the module's own")
     build = pathlib.Path(welkin.__file__).parent
-    r = subprocess.run([python, "-c", "import welkin"], capture_output=True, text=True,
-                       env={"PYTHONPATH": str(build), "PATH": "/usr/bin:/bin"})
+    r = subprocess.run(
+        [python, "-c", "import welkin"],
+        capture_output=True,
+        text=True,
+        env={"PYTHONPATH": str(build), "PATH": "/usr/bin:/bin"},
+    )
     if "pybind11 2.1" in r.stderr and "reads NumPy 1.x arrays only" in r.stderr:
         assert r.returncode != 0
         return
     # A module built with pybind11 >= 2.12 loads, and reads every row.
     assert r.returncode == 0, r.stderr
-    probe = ("import numpy as np, welkin; a = welkin.Atmosphere.preset('clear'); "
-             "d = np.array([[0, 0, 1.0], [1, 0, 0.05]]); "
-             "L = welkin.sky_radiance(a, 0.0, np.array([0.5, 0.2, 0.6]), d, output='rgb'); "
-             "assert abs(L[0][2] - L[1][2]) > 1e-3 * abs(L[0][2]), L")
-    r = subprocess.run([python, "-c", probe], capture_output=True, text=True,
-                       env={"PYTHONPATH": str(build), "PATH": "/usr/bin:/bin"})
+    probe = (
+        "import numpy as np, welkin; a = welkin.Atmosphere.preset('clear'); "
+        "d = np.array([[0, 0, 1.0], [1, 0, 0.05]]); "
+        "L = welkin.sky_radiance(a, 0.0, np.array([0.5, 0.2, 0.6]), d, output='rgb'); "
+        "assert abs(L[0][2] - L[1][2]) > 1e-3 * abs(L[0][2]), L"
+    )
+    r = subprocess.run(
+        [python, "-c", probe],
+        capture_output=True,
+        text=True,
+        env={"PYTHONPATH": str(build), "PATH": "/usr/bin:/bin"},
+    )
     assert r.returncode == 0, r.stderr

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What a newcomer runs first, as the README gives it.
 
 * The two commands in order (`scripts/main.sh`, then `scripts/test.sh`): the test command
@@ -13,6 +14,7 @@
 
 Run with PYTHONPATH=build /usr/bin/python3 -m pytest tests/python/test_newcomer.py.
 """
+
 import os
 import pathlib
 import subprocess
@@ -26,8 +28,11 @@ VENV_50 = ROOT / "build" / "venv-bpy-5.0" / "bin" / "python"
 
 def commands(script):
     """The script's top-level command lines, comments and blank lines left out."""
-    return [line.strip() for line in (ROOT / "scripts" / script).read_text().splitlines()
-            if line.strip() and not line.strip().startswith("#")]
+    return [
+        line.strip()
+        for line in (ROOT / "scripts" / script).read_text().splitlines()
+        if line.strip() and not line.strip().startswith("#")
+    ]
 
 
 def test_the_test_command_packages_the_add_on_again_after_its_build():
@@ -35,14 +40,19 @@ def test_the_test_command_packages_the_add_on_again_after_its_build():
     last_build = max(i for i, line in enumerate(lines) if "scripts/build.sh" in line)
     first_suite = next(i for i, line in enumerate(lines) if line.startswith('echo "==='))
     packaging = [i for i, line in enumerate(lines) if line.startswith("bash scripts/build_addon.sh")]
-    assert packaging and last_build < packaging[0] < first_suite, lines[:first_suite + 1]
+    assert packaging and last_build < packaging[0] < first_suite, lines[: first_suite + 1]
     # main.sh packages into the same place (dist/) with the same command.
     assert "bash scripts/build_addon.sh" in commands("main.sh")
 
 
 def test_the_add_on_zip_holds_the_module_as_built(tmp_path):
-    run = subprocess.run(["bash", "scripts/build_addon.sh", str(tmp_path)], cwd=ROOT,
-                         capture_output=True, text=True, timeout=1200)
+    run = subprocess.run(
+        ["bash", "scripts/build_addon.sh", str(tmp_path)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=1200,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     (zip_path,) = tmp_path.glob("welkin-*.zip")
     (module,) = (ROOT / "build").glob("welkin.cpython-311-*.so")
@@ -53,8 +63,10 @@ def test_the_add_on_zip_holds_the_module_as_built(tmp_path):
     assert zip_path.stat().st_mtime >= module.stat().st_mtime
 
 
-@pytest.mark.skipif(not VENV_50.exists(), reason="build/venv-bpy-5.0 is made by "
-                    "scripts/install_blender_venvs.sh (scripts/test.sh runs it)")
+@pytest.mark.skipif(
+    not VENV_50.exists(),
+    reason="build/venv-bpy-5.0 is made by scripts/install_blender_venvs.sh (scripts/test.sh runs it)",
+)
 def test_the_readme_blender_5_peer_command_runs_on_a_fresh_checkout(tmp_path):
     readme = (ROOT / "README.md").read_text()
     command = "PYTHONPATH=build build/venv-bpy-5.0/bin/python bench/blender5_sky_peer.py"
@@ -63,8 +75,14 @@ def test_the_readme_blender_5_peer_command_runs_on_a_fresh_checkout(tmp_path):
     env["PYTHONPATH"] = "build"
     env["BLENDER_USER_RESOURCES"] = str(tmp_path / "home")  # no add-on installed
     csv = tmp_path / "peer.csv"
-    run = subprocess.run([str(VENV_50), "bench/blender5_sky_peer.py", "--quick", "--csv", str(csv)],
-                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=900)
+    run = subprocess.run(
+        [str(VENV_50), "bench/blender5_sky_peer.py", "--quick", "--csv", str(csv)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
     rows = csv.read_text().splitlines()
     assert rows[0].startswith("sun_deg,sky,zenith") and len(rows) == 4, rows

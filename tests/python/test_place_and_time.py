@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.sun_and_moon against an independent ephemeris: JPL DE421 through Skyfield
 (tests/python/ephemeris_reference.py, run in build/venv-ephemeris, which
 scripts/install_ephemeris_venv.sh makes from PyPI's skyfield and skyfield-data; nothing is
@@ -10,6 +11,7 @@ uses Saemundsson's formula, Skyfield Bennett's inverse; they agree within 0.2' a
 horizon (tests/cpp/test_astro_positions.cpp), so refracted elevations are compared only for
 bodies above the horizon, with the airless ones everywhere.
 """
+
 import json
 import pathlib
 import subprocess
@@ -38,16 +40,34 @@ def _cases():
     # degree, by 2048. Nobody knows the Earth's rotation then; docs/validation.md.)
     for _ in range(120):
         year = int(rng.integers(1972, 2026))
-        cases.append({"scale": "utc",
-                      "time": [year, int(rng.integers(1, 13)), int(rng.integers(1, 29)),
-                               int(rng.integers(0, 24)), int(rng.integers(0, 60)),
-                               float(np.round(rng.uniform(0, 59.9), 3))]})
+        cases.append(
+            {
+                "scale": "utc",
+                "time": [
+                    year,
+                    int(rng.integers(1, 13)),
+                    int(rng.integers(1, 29)),
+                    int(rng.integers(0, 24)),
+                    int(rng.integers(0, 60)),
+                    float(np.round(rng.uniform(0, 59.9), 3)),
+                ],
+            }
+        )
     # Before 1960 the given time is UT1.
     for _ in range(10):
-        cases.append({"scale": "ut1",
-                      "time": [int(rng.integers(1900, 1960)), int(rng.integers(1, 13)),
-                               int(rng.integers(1, 29)), int(rng.integers(0, 24)),
-                               int(rng.integers(0, 60)), 0.0]})
+        cases.append(
+            {
+                "scale": "ut1",
+                "time": [
+                    int(rng.integers(1900, 1960)),
+                    int(rng.integers(1, 13)),
+                    int(rng.integers(1, 29)),
+                    int(rng.integers(0, 24)),
+                    int(rng.integers(0, 60)),
+                    0.0,
+                ],
+            }
+        )
     for c in cases:
         c["latitude_deg"] = float(np.degrees(np.arcsin(rng.uniform(-1.0, 1.0))))
         c["longitude_deg"] = float(rng.uniform(-180.0, 180.0))
@@ -60,28 +80,49 @@ def _cases():
 @pytest.fixture(scope="module")
 def comparison():
     if not VENV_PYTHON.exists():
-        pytest.fail(f"{VENV_PYTHON} is missing: run scripts/install_ephemeris_venv.sh "
-                    "(Skyfield and DE421 from PyPI) before the tests")
+        pytest.fail(
+            f"{VENV_PYTHON} is missing: run scripts/install_ephemeris_venv.sh "
+            "(Skyfield and DE421 from PyPI) before the tests"
+        )
     cases = _cases()
-    done = subprocess.run([str(VENV_PYTHON), str(SCRIPT)], input=json.dumps(cases), text=True,
-                          capture_output=True, timeout=300, check=True)
+    done = subprocess.run(
+        [str(VENV_PYTHON), str(SCRIPT)],
+        input=json.dumps(cases),
+        text=True,
+        capture_output=True,
+        timeout=300,
+        check=True,
+    )
     reference = json.loads(done.stdout)
     ours = []
     for c in cases:
         y, mo, d, h, mi, s = c["time"]
         time = f"{y:04d}-{mo:02d}-{d:02d}T{h:02d}:{mi:02d}:{s:06.3f}Z"
-        ours.append(welkin.sun_and_moon(time, c["latitude_deg"], c["longitude_deg"],
-                                        height_m=c["height_m"], pressure_hpa=c["pressure_hpa"],
-                                        temperature_c=c["temperature_c"]))
+        ours.append(
+            welkin.sun_and_moon(
+                time,
+                c["latitude_deg"],
+                c["longitude_deg"],
+                height_m=c["height_m"],
+                pressure_hpa=c["pressure_hpa"],
+                temperature_c=c["temperature_c"],
+            )
+        )
     return cases, ours, reference
 
 
 @pytest.mark.parametrize("body, bound_deg", [("sun", 0.01), ("moon", 0.05)])
 def test_airless_direction_matches_de421(comparison, body, bound_deg):
     _, ours, reference = comparison
-    worst = max(_separation_deg(o[body]["airless_elevation_deg"], o[body]["azimuth_deg"],
-                                r[body]["airless_elevation_deg"], r[body]["azimuth_deg"])
-                for o, r in zip(ours, reference))
+    worst = max(
+        _separation_deg(
+            o[body]["airless_elevation_deg"],
+            o[body]["azimuth_deg"],
+            r[body]["airless_elevation_deg"],
+            r[body]["azimuth_deg"],
+        )
+        for o, r in zip(ours, reference)
+    )
     assert worst < bound_deg, f"{body}: worst separation {worst:.5f} deg"
 
 
@@ -122,6 +163,7 @@ def test_bad_input_names_the_parameter():
 
 def test_aware_datetime_is_accepted():
     import datetime as dt
+
     when = dt.datetime(2026, 6, 21, 21, 30, tzinfo=dt.timezone(dt.timedelta(hours=2)))
     a = welkin.sun_and_moon(when, 48.8566, 2.3522)
     b = welkin.sun_and_moon("2026-06-21T19:30:00Z", 48.8566, 2.3522)
@@ -131,8 +173,10 @@ def test_aware_datetime_is_accepted():
 
 # --- the command line: `welkin sun` and `welkin sky` with --time --latitude --longitude ---
 
+
 def _cli(*args, check=True):
     from cli_testing import CLI
+
     done = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True, timeout=300)
     if check:
         assert done.returncode == 0, done.stderr
@@ -155,8 +199,15 @@ def test_cli_sun_prints_place_and_time_as_the_module_does():
     assert (j["sun_azimuth_deg"] - (90.0 - pt["sun"]["azimuth_deg"])) % 360.0 == pytest.approx(0.0, abs=1e-9)
     assert j["sun_direction"] == pytest.approx(pt["sun"]["direction"], abs=1e-12)
     # The same sun given by hand gives the same radiometry.
-    by_hand = json.loads(_cli("sun", "--sun-elevation", repr(j["sun_elevation_deg"]),
-                              "--sun-azimuth", repr(j["sun_azimuth_deg"])).stdout)
+    by_hand = json.loads(
+        _cli(
+            "sun",
+            "--sun-elevation",
+            repr(j["sun_elevation_deg"]),
+            "--sun-azimuth",
+            repr(j["sun_azimuth_deg"]),
+        ).stdout
+    )
     assert by_hand["direct_irradiance_W_m2_nm"] == j["direct_irradiance_W_m2_nm"]
 
 
@@ -178,9 +229,19 @@ def test_cli_sky_renders_the_moment(tmp_path):
     assert np.degrees(np.arccos(np.clip(d @ sun, -1, 1))) < 6.0  # within a 64-px image's pixel
     by_hand = tmp_path / "by_hand.exr"
     azimuth = 90.0 - pt["sun"]["azimuth_deg"]
-    _cli("sky", "--sun-elevation", repr(pt["sun"]["elevation_deg"]), "--sun-azimuth",
-         repr(azimuth if azimuth > -180 else azimuth + 360), "--width", "64", "--method", "lut",
-         "-o", by_hand)
+    _cli(
+        "sky",
+        "--sun-elevation",
+        repr(pt["sun"]["elevation_deg"]),
+        "--sun-azimuth",
+        repr(azimuth if azimuth > -180 else azimuth + 360),
+        "--width",
+        "64",
+        "--method",
+        "lut",
+        "-o",
+        by_hand,
+    )
     # The same sun by hand gives the sun's sky; the moment adds the moon's light on top:
     # its sky (about 1e-6 of the sun's here, 33 degrees up, near first quarter) and its
     # disc, brightest where the position says.
@@ -193,18 +254,26 @@ def test_cli_sky_renders_the_moment(tmp_path):
     assert np.degrees(np.arccos(np.clip(d @ moon, -1, 1))) < 6.0
 
 
-@pytest.mark.parametrize("args, option", [
-    (("--latitude", "91", "--longitude", "0", "--time", "2026-06-21T12:00Z"), "--latitude"),
-    (("--latitude", "0", "--longitude", "-181", "--time", "2026-06-21T12:00Z"), "--longitude"),
-    (("--latitude", "0", "--longitude", "0", "--time", "2026-06-21T12:00"), "--time"),
-    (("--latitude", "0", "--longitude", "0", "--time", "2026-02-29T12:00Z"), "--time"),
-    (("--latitude", "0", "--longitude", "0", "--time", "2201-01-01T12:00Z"), "--time"),
-    (("--latitude", "0", "--time", "2026-06-21T12:00Z"), "--longitude"),
-    (("--latitude", "0", "--longitude", "0"), "--time"),
-    (("--latitude", "0", "--longitude", "0", "--time", "2026-06-21T12:00Z", "--height", "1e6"), "--height"),
-    (("--latitude", "0", "--longitude", "0", "--time", "2026-06-21T12:00Z", "--sun-azimuth", "10"),
-     "--sun-azimuth"),
-])
+@pytest.mark.parametrize(
+    "args, option",
+    [
+        (("--latitude", "91", "--longitude", "0", "--time", "2026-06-21T12:00Z"), "--latitude"),
+        (("--latitude", "0", "--longitude", "-181", "--time", "2026-06-21T12:00Z"), "--longitude"),
+        (("--latitude", "0", "--longitude", "0", "--time", "2026-06-21T12:00"), "--time"),
+        (("--latitude", "0", "--longitude", "0", "--time", "2026-02-29T12:00Z"), "--time"),
+        (("--latitude", "0", "--longitude", "0", "--time", "2201-01-01T12:00Z"), "--time"),
+        (("--latitude", "0", "--time", "2026-06-21T12:00Z"), "--longitude"),
+        (("--latitude", "0", "--longitude", "0"), "--time"),
+        (
+            ("--latitude", "0", "--longitude", "0", "--time", "2026-06-21T12:00Z", "--height", "1e6"),
+            "--height",
+        ),
+        (
+            ("--latitude", "0", "--longitude", "0", "--time", "2026-06-21T12:00Z", "--sun-azimuth", "10"),
+            "--sun-azimuth",
+        ),
+    ],
+)
 def test_cli_bad_place_or_time_names_the_option(tmp_path, args, option):
     for command in (("sun",), ("sky", "--width", "16", "-o", tmp_path / "x.exr")):
         done = _cli(*command, *args, check=False)
@@ -224,8 +293,9 @@ def test_sky_image_at_is_the_cli_image(tmp_path):
     assert np.array_equal(img.astype(np.float64), _read_rgb(out))
     # Night: the sun 18 degrees down, the full moon up; discs=False removes the moon's disc
     # and nothing else.
-    no_disc = welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", 48.8566, 2.3522, 64, method="lut",
-                                  discs=False)
+    no_disc = welkin.sky_image_at(
+        atm, "2026-06-30T01:30:00+02:00", 48.8566, 2.3522, 64, method="lut", discs=False
+    )
     assert (img >= no_disc).all() and img.sum() > no_disc.sum()
 
 
@@ -247,17 +317,23 @@ def test_cli_sun_gives_the_moon_lamp():
     # Allen's magnitude-phase law at the moon's and (to 0.5 %, the moon's distance from the
     # observer against the sun's) the sun's distances.
     alpha = moon["phase_angle_deg"]
-    v = -12.73 + 0.026 * alpha + 4e-9 * alpha ** 4
+    v = -12.73 + 0.026 * alpha + 4e-9 * alpha**4
     sun_au = j["place_and_time"]["sun"]["distance_m"] / 149597870.7e3
-    expected = 10 ** (-0.4 * (v + 26.74)) * (384400e3 / moon["distance_m"]) ** 2 / sun_au ** 2
+    expected = 10 ** (-0.4 * (v + 26.74)) * (384400e3 / moon["distance_m"]) ** 2 / sun_au**2
     assert moon["irradiance_ratio"] == pytest.approx(expected, rel=0.01)
     # The moon lamp is the sunlight a sun at the moon's place would give, times that ratio.
     atm = welkin.Atmosphere.preset("bruneton2017")
     lit = welkin.sun(atm, 0.0, tuple(moon["direction"]))
-    assert np.allclose(j["moon_direct_irradiance_W_m2_nm"],
-                       np.asarray(lit.direct_irradiance) * moon["irradiance_ratio"], rtol=1e-6)
-    assert np.allclose(j["moon_direct_irradiance_rgb_W_m2"],
-                       np.asarray(lit.direct_irradiance_rgb) * moon["irradiance_ratio"], rtol=1e-5)
+    assert np.allclose(
+        j["moon_direct_irradiance_W_m2_nm"],
+        np.asarray(lit.direct_irradiance) * moon["irradiance_ratio"],
+        rtol=1e-6,
+    )
+    assert np.allclose(
+        j["moon_direct_irradiance_rgb_W_m2"],
+        np.asarray(lit.direct_irradiance_rgb) * moon["irradiance_ratio"],
+        rtol=1e-5,
+    )
 
 
 def test_sky_image_at_anywhere_anytime_is_finite_and_non_negative():
@@ -267,8 +343,10 @@ def test_sky_image_at_anywhere_anytime_is_finite_and_non_negative():
     places = [(90.0, 0.0), (-90.0, 180.0), (0.0, -180.0), (69.6, 18.9), (-33.9, 151.2)]
     for k in range(15):
         lat, lon = places[k % len(places)]
-        time = f"{int(rng.integers(1900, 2101)):04d}-{int(rng.integers(1, 13)):02d}-" \
-               f"{int(rng.integers(1, 29)):02d}T{int(rng.integers(0, 24)):02d}:00:00Z"
+        time = (
+            f"{int(rng.integers(1900, 2101)):04d}-{int(rng.integers(1, 13)):02d}-"
+            f"{int(rng.integers(1, 29)):02d}T{int(rng.integers(0, 24)):02d}:00:00Z"
+        )
         img = welkin.sky_image_at(atm, time, lat, lon, 16, method="lut")
         assert np.isfinite(img).all() and (img >= 0).all(), (time, lat, lon)
 
@@ -287,8 +365,7 @@ def test_moon_disc_image_is_sky_image_ats_disc():
     assert disc.max() > 0.0 and np.array_equal(disc, both - none)
     # Turned by 180 degrees about +Z: the same disc, half an image to the side.
     turn = [(-d[0], -d[1], d[2]) for d in args[:2]]
-    turned = welkin.moon_disc_image(atm, 0.0, *turn, radius, moon["irradiance_ratio"], 128,
-                                    exposure=2.0)
+    turned = welkin.moon_disc_image(atm, 0.0, *turn, radius, moon["irradiance_ratio"], 128, exposure=2.0)
     assert np.allclose(np.roll(turned, 64, axis=1), disc, rtol=1e-5, atol=1e-6 * disc.max())
     for bad, parameter in (({"exposure": 0.0}, "exposure"), ({"width": 7}, "width")):
         kwargs = {"width": 128, **bad}

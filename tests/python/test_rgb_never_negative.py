@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Never negative or non-finite light in RGB, for any preset, method, altitude or sun.
 
 The spectral sweep (test_stability.py) checks the methods' radiance per wavelength; this one
@@ -9,6 +10,7 @@ one of them into Rec.709's gamut. Every method x preset x sun from -18 to 90 deg
 observer from the ground to 100 km; the reference method runs with few paths (only finiteness
 and sign matter here) on a thinner sweep.
 """
+
 import math
 
 import numpy as np
@@ -47,7 +49,9 @@ def assert_light(rgb, what):
     rgb = np.asarray(rgb)
     assert np.all(np.isfinite(rgb)), f"{what}: non-finite RGB"
     worst = float(rgb.min())
-    assert worst >= 0.0, f"{what}: negative RGB, down to {worst:.4g} at {np.argmin(rgb.min(-1) if rgb.ndim > 1 else rgb)}"
+    assert worst >= 0.0, (
+        f"{what}: negative RGB, down to {worst:.4g} at {np.argmin(rgb.min(-1) if rgb.ndim > 1 else rgb)}"
+    )
 
 
 @pytest.mark.parametrize("preset", PRESETS)
@@ -65,8 +69,9 @@ def test_reference_rgb(preset):
     atm = welkin.Atmosphere.preset(preset)
     for altitude in (0.0, 100e3):
         for elevation in (-18.0, -4.0, 1.0, 30.0):
-            rgb = welkin.sky_radiance(atm, altitude, sun_direction(elevation), DIRS[::8], "reference",
-                                      "rgb", paths=4, seed=3)
+            rgb = welkin.sky_radiance(
+                atm, altitude, sun_direction(elevation), DIRS[::8], "reference", "rgb", paths=4, seed=3
+            )
             assert_light(rgb, f"{preset} reference {altitude} m sun {elevation} deg")
 
 
@@ -102,6 +107,6 @@ def check_limb(b, a, what):
     np.testing.assert_allclose(b.sum(1), 1.0, atol=3e-4, err_msg=what)
     assert np.all(b >= a.min(0) - 1e-9) and np.all(b <= a.max(0) + 1e-9), f"{what}: {b}"
     mu = np.linspace(0.0, 1.0, 201)
-    profile = sum(b[:, k, None] * mu ** k for k in range(6))
+    profile = sum(b[:, k, None] * mu**k for k in range(6))
     assert np.all(profile > 0.0), f"{what}: limb profile not positive"
     assert np.all(np.diff(profile, axis=1) > 0.0), f"{what}: limb profile not darkening to the limb"

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Stability sweep: no sky method ever returns NaN, Inf or negative radiance.
 
 docs/design.md names the places where sky methods are known to break: the camera above the
@@ -12,6 +13,7 @@ It checks stability only; accuracy is measured by the chart (bench/chart.py) aga
 reference method. The reference runs with few paths: noise does not matter here, only
 that every estimate is a finite non-negative number.
 """
+
 import math
 
 import numpy as np
@@ -57,6 +59,7 @@ def probe_directions(atm, altitude_m, sun_dir):
 
 # --- the atmospheres -------------------------------------------------------------------
 
+
 def _earth():
     return welkin.Atmosphere.preset("bruneton2017")
 
@@ -67,6 +70,7 @@ def _g999(phase):
         a.mie_phase = phase
         a.mie_g = 0.999
         return a
+
     return make
 
 
@@ -86,6 +90,7 @@ def _dense(factor):
         a.mie_extinction = np.asarray(a.mie_extinction) * factor
         a.absorption_extinction = np.asarray(a.absorption_extinction) * factor
         return a
+
     return make
 
 
@@ -123,8 +128,7 @@ ATMOSPHERES = {
     "thick_half_radius": _thick,
     "tiny_planet": _tiny_planet,
     "mars": lambda: welkin.Atmosphere.preset("mars"),
-    "spectral_20nm": lambda: welkin.Atmosphere.preset("bruneton2017",
-                                                      welkin.spectral_wavelengths_nm(20.0)),
+    "spectral_20nm": lambda: welkin.Atmosphere.preset("bruneton2017", welkin.spectral_wavelengths_nm(20.0)),
 }
 # Many wavelengths cost many times more: a smaller grid for them.
 SPECTRAL_GRID = ([0.0, 4e5], [-8.0, 0.0, 30.0])
@@ -138,8 +142,16 @@ SMALL_SUN_ELEVATIONS_DEG = [-18.0, -8.0, -0.5, 0.0, 10.0, 90.0]
 # Each method with a cheap and a default-ish setting; lut also with tiny textures.
 METHOD_SETTINGS = {
     "analytic": [{}],
-    "lut": [{}, dict(transmittance_width=8, transmittance_height=4, multiscattering_size=4,
-                     skyview_width=8, skyview_height=6)],
+    "lut": [
+        {},
+        dict(
+            transmittance_width=8,
+            transmittance_height=4,
+            multiscattering_size=4,
+            skyview_width=8,
+            skyview_height=6,
+        ),
+    ],
     "raymarch": [dict(steps=64, sun_steps=32), dict(steps=1, sun_steps=1)],
     "reference": [dict(paths=8, seed=5)],
 }
@@ -169,15 +181,19 @@ def sweep(method, make_atmosphere, altitudes, sun_elevations):
                             f"{method} {settings} altitude {alt} m, sun {sun_el} deg, "
                             f"{output}: {int(bad_nonfinite.sum())} non-finite, "
                             f"{int(bad_negative.sum())} negative values, e.g. direction "
-                            f"{dirs[rows[0]].tolist()} -> {L[rows[0]].tolist()}")
+                            f"{dirs[rows[0]].tolist()} -> {L[rows[0]].tolist()}"
+                        )
     return failures
 
 
 @pytest.mark.parametrize("method", sorted(METHOD_SETTINGS))
 def test_earth_full_grid_is_finite_and_non_negative(method):
     # auto runs one of the methods swept here: the small grid checks its choosing.
-    grid = ((SMALL_ALTITUDES_M, SMALL_SUN_ELEVATIONS_DEG) if method == "auto"
-            else (FULL_ALTITUDES_M, FULL_SUN_ELEVATIONS_DEG))
+    grid = (
+        (SMALL_ALTITUDES_M, SMALL_SUN_ELEVATIONS_DEG)
+        if method == "auto"
+        else (FULL_ALTITUDES_M, FULL_SUN_ELEVATIONS_DEG)
+    )
     failures = sweep(method, _earth, *grid)
     assert not failures, "\n".join(failures[:20])
 
@@ -185,8 +201,9 @@ def test_earth_full_grid_is_finite_and_non_negative(method):
 @pytest.mark.parametrize("atmosphere", [k for k in ATMOSPHERES if k != "earth"])
 @pytest.mark.parametrize("method", sorted(METHOD_SETTINGS))
 def test_odd_atmospheres_are_finite_and_non_negative(method, atmosphere):
-    grid = SPECTRAL_GRID if atmosphere.startswith("spectral") else (SMALL_ALTITUDES_M,
-                                                                     SMALL_SUN_ELEVATIONS_DEG)
+    grid = (
+        SPECTRAL_GRID if atmosphere.startswith("spectral") else (SMALL_ALTITUDES_M, SMALL_SUN_ELEVATIONS_DEG)
+    )
     failures = sweep(method, ATMOSPHERES[atmosphere], *grid)
     assert not failures, "\n".join(failures[:20])
 

@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: Apache-2.0
 """welkin.sun()'s disc model (include/welkin/atmosphere/sun_disc.hpp), as a shader uses it:
 the RGB limb-darkening polynomial integrated over the disc gives the direct irradiance
 in RGB, and the spectral one gives direct_irradiance per wavelength."""
+
 import numpy as np
 import pytest
 
@@ -12,7 +14,7 @@ def disc_integral(centre, coefficients, alpha, n=20000):
     rho = (np.arange(n) + 0.5) * alpha / n
     s = np.sin(rho) / np.sin(alpha)
     mu = np.sqrt(np.clip(1.0 - s * s, 0.0, 1.0))
-    poly = sum(coefficients[..., k, None] * mu ** k for k in range(6))
+    poly = sum(coefficients[..., k, None] * mu**k for k in range(6))
     return 2 * np.pi * (np.sin(rho) * centre[..., None] * poly).sum(-1) * alpha / n
 
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The bpy layer of the add-on, one folder per feature; classes registered from one tuple
 (in order) and unregistered in reverse.
 
@@ -21,6 +22,7 @@
   farm.py      a frame the add-on could not prepare fails a command-line render (-a, -f)
   compat.py    every difference between Blender versions
 """
+
 import bpy
 
 from . import handlers
@@ -53,6 +55,7 @@ def register():
     aerial_handlers.register()
     render_engine.register()
     from .. import native
+
     if native.message():
         print(f"Welkin: {native.message()}")
 

@@ -1,8 +1,10 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Differences between the Blender versions Welkin supports (3.4, 4.2 LTS, 4.5 LTS, 5.0-5.3),
 in one place. The rest of the add-on calls these functions and never tests
 bpy.app.version itself, so a new Blender is one edit here. Each function says which
 versions differ and how (checked against each of them by tests/blender/).
 """
+
 import os
 import warnings
 
@@ -17,12 +19,12 @@ def at_least(major, minor=0, patch=0):
 def eevee_engine_id():
     """The render engine id of EEVEE: 'BLENDER_EEVEE' in 3.x-4.1 (legacy EEVEE) and again
     from 5.0, 'BLENDER_EEVEE_NEXT' in 4.2-4.5 (EEVEE Next)."""
-    return 'BLENDER_EEVEE_NEXT' if at_least(4, 2) and not at_least(5, 0) else 'BLENDER_EEVEE'
+    return "BLENDER_EEVEE_NEXT" if at_least(4, 2) and not at_least(5, 0) else "BLENDER_EEVEE"
 
 
 def eevee_engine_ids():
     """Every id EEVEE has had (for COMPAT_ENGINES look-ups that must work everywhere)."""
-    return ('BLENDER_EEVEE', 'BLENDER_EEVEE_NEXT')
+    return ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")
 
 
 def world_node_tree(world):
@@ -104,12 +106,12 @@ def set_file_format(image_settings, file_format):
     media_type 'MULTI_LAYER_IMAGE' (file_format 'OPEN_EXR_MULTILAYER' is not accepted
     while the media type is 'IMAGE'). 3.4-4.5: file_format alone."""
     if hasattr(image_settings, "media_type"):
-        if file_format == 'OPEN_EXR_MULTILAYER':
-            image_settings.media_type = 'MULTI_LAYER_IMAGE'
-        elif file_format == 'FFMPEG':
-            image_settings.media_type = 'VIDEO'
+        if file_format == "OPEN_EXR_MULTILAYER":
+            image_settings.media_type = "MULTI_LAYER_IMAGE"
+        elif file_format == "FFMPEG":
+            image_settings.media_type = "VIDEO"
         else:
-            image_settings.media_type = 'IMAGE'
+            image_settings.media_type = "IMAGE"
     image_settings.file_format = file_format
 
 
@@ -122,24 +124,24 @@ def is_movie_output(render):
     settings = render.image_settings
     media = getattr(settings, "media_type", None)
     if media is not None:
-        return media == 'VIDEO'
-    return settings.file_format in {'FFMPEG', 'AVI_JPEG', 'AVI_RAW'}
+        return media == "VIDEO"
+    return settings.file_format in {"FFMPEG", "AVI_JPEG", "AVI_RAW"}
 
 
 def sky_type_nishita():
     """Blender's physically based Sky Texture model: 'NISHITA' in 2.90-4.5; 5.0 renamed it
     'SINGLE_SCATTERING' (beside a new 'MULTIPLE_SCATTERING')."""
-    items = bpy.types.ShaderNodeTexSky.bl_rna.properties['sky_type'].enum_items
-    return 'NISHITA' if 'NISHITA' in items else 'SINGLE_SCATTERING'
+    items = bpy.types.ShaderNodeTexSky.bl_rna.properties["sky_type"].enum_items
+    return "NISHITA" if "NISHITA" in items else "SINGLE_SCATTERING"
 
 
 def compositor_output(tree):
     """The node whose input is the composited frame: the Composite node in 3.4-4.5, the
     tree's active Group Output in 5.0 (which has no Composite node). None if absent."""
     for node in tree.nodes:
-        if node.bl_idname == 'CompositorNodeComposite':
+        if node.bl_idname == "CompositorNodeComposite":
             return node
-    outputs = [n for n in tree.nodes if n.bl_idname == 'NodeGroupOutput']
+    outputs = [n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"]
     active = [n for n in outputs if getattr(n, "is_active_output", False)]
     return (active or outputs or [None])[0]
 
@@ -154,11 +156,12 @@ def cycles_vdb_placement():
 
 # --- Node groups, AOVs and the compositor (blender/aerial/frame.py) --------------------------------
 
+
 def new_group_socket(group, name, in_out, socket_type):
     """A socket on a node group's interface: group.interface in 4.0+, inputs/outputs before."""
     if hasattr(group, "interface"):
         return group.interface.new_socket(name, in_out=in_out, socket_type=socket_type)
-    sockets = group.inputs if in_out == 'INPUT' else group.outputs
+    sockets = group.inputs if in_out == "INPUT" else group.outputs
     return sockets.new(socket_type, name)
 
 
@@ -196,16 +199,16 @@ def _new_compositing_group(name, source):
     """A compositing node group `name` passing its frame to the Group Output: from a Render
     Layers node (`source` 'render', 5.0-5.2's scene compositor) or from the Group Input
     (`source` 'input', a 5.3 effect, which receives the frame of the effects before it)."""
-    tree = bpy.data.node_groups.new(name, 'CompositorNodeTree')
-    new_group_socket(tree, "Image", 'OUTPUT', 'NodeSocketColor')
-    out = tree.nodes.new('NodeGroupOutput')
+    tree = bpy.data.node_groups.new(name, "CompositorNodeTree")
+    new_group_socket(tree, "Image", "OUTPUT", "NodeSocketColor")
+    out = tree.nodes.new("NodeGroupOutput")
     out.location = (600, 0)
-    if source == 'input':
-        new_group_socket(tree, "Image", 'INPUT', 'NodeSocketColor')
-        node = tree.nodes.new('NodeGroupInput')
+    if source == "input":
+        new_group_socket(tree, "Image", "INPUT", "NodeSocketColor")
+        node = tree.nodes.new("NodeGroupInput")
         node.location = (-600, 300)
     else:
-        node = tree.nodes.new('CompositorNodeRLayers')
+        node = tree.nodes.new("CompositorNodeRLayers")
     tree.links.new(node.outputs["Image"], out.inputs[0])
     return tree
 
@@ -217,13 +220,13 @@ def _add_effect(scene, name, index=None):
     effects = scene.compositor_effects
     active = effects.active.name if effects.active is not None else ""
     effect = effects.new(name=name)
-    effect.node_group = _new_compositing_group(name, 'input')
+    effect.node_group = _new_compositing_group(name, "input")
     if index is not None and effects[index].name != effect.name:
         with bpy.context.temp_override(scene=scene):
             bpy.ops.scene.move_compositor_effect_to_index(name=effect.name, index=index)
     if active:
         effects.active = effects[active]
-    return effect.node_group, ('effect', active)
+    return effect.node_group, ("effect", active)
 
 
 def ensure_scene_compositor(scene, name):
@@ -235,17 +238,17 @@ def ensure_scene_compositor(scene, name):
     Group Input -> Group Output), or ('kept', None)."""
     if hasattr(scene, "compositor_effects"):
         tree = scene_compositor(scene)
-        return (tree, ('kept', None)) if tree is not None else _add_effect(scene, name)
+        return (tree, ("kept", None)) if tree is not None else _add_effect(scene, name)
     if hasattr(scene, "compositing_node_group"):
         tree = scene.compositing_node_group
         if tree is not None:
-            return tree, ('kept', None)
-        tree = _new_compositing_group(name, 'render')
+            return tree, ("kept", None)
+        tree = _new_compositing_group(name, "render")
         scene.compositing_node_group = tree
-        return tree, ('created', None)
+        return tree, ("created", None)
     previous = scene.use_nodes
     scene.use_nodes = True
-    return scene.node_tree, ('use_nodes', previous)
+    return scene.node_tree, ("use_nodes", previous)
 
 
 def _own_effect(scene, name):
@@ -275,9 +278,9 @@ def ensure_own_compositor(scene, name):
         return ensure_scene_compositor(scene, name)
     tree = own_compositor(scene, name)
     if tree is not None:
-        return tree, ('kept', None)
+        return tree, ("kept", None)
     tree, undo = _add_effect(scene, name, index=0)
-    tree.nodes.new('CompositorNodeRLayers').location = (-600, -100)
+    tree.nodes.new("CompositorNodeRLayers").location = (-600, -100)
     return tree, undo
 
 
@@ -287,7 +290,7 @@ def compositor_frame(tree, render_layers):
     Layers' Image otherwise."""
     if hasattr(bpy.types, "SceneCompositorEffect"):
         for node in tree.nodes:
-            if node.bl_idname == 'NodeGroupInput' and "Image" in node.outputs:
+            if node.bl_idname == "NodeGroupInput" and "Image" in node.outputs:
                 return node.outputs["Image"]
     return render_layers.outputs["Image"]
 
@@ -296,7 +299,7 @@ def restore_scene_compositor(scene, undo_kind, undo_value, created_name):
     """Undoes ensure_scene_compositor / ensure_own_compositor; `undo_value` as a string
     ('True'/'False' for use_nodes, the active effect's name for effect). 5.3+: the effect
     `created_name` goes whatever the kind (a file from 5.0-5.2 has 'created' or 'kept')."""
-    if undo_kind == 'use_nodes':
+    if undo_kind == "use_nodes":
         scene.use_nodes = undo_value == "True"
     elif hasattr(scene, "compositor_effects"):
         effects = scene.compositor_effects
@@ -306,9 +309,9 @@ def restore_scene_compositor(scene, undo_kind, undo_value, created_name):
             effects.remove(effect)
             if tree.users == 0:
                 bpy.data.node_groups.remove(tree)
-        if undo_kind == 'effect' and undo_value in effects:
+        if undo_kind == "effect" and undo_value in effects:
             effects.active = effects[undo_value]
-    elif undo_kind == 'created' and hasattr(scene, "compositing_node_group"):
+    elif undo_kind == "created" and hasattr(scene, "compositing_node_group"):
         tree = scene.compositing_node_group
         if tree is not None and tree.name == created_name:
             scene.compositing_node_group = None
@@ -328,24 +331,24 @@ def rgba_mix(tree, blend_type):
     """The shared Mix node (3.4+) in colour mode, factor 1 and clamped to [0, 1], result
     unclamped: (node, input A, input B, output). Shader trees in every version, the
     compositor from 5.0 (compositor_mix)."""
-    node = tree.nodes.new('ShaderNodeMix')
-    node.data_type = 'RGBA'
+    node = tree.nodes.new("ShaderNodeMix")
+    node.data_type = "RGBA"
     node.blend_type = blend_type
     node.clamp_result = False
     node.clamp_factor = True
     node.inputs[0].default_value = 1.0
-    return (node, *_mix_sockets(node, 'RGBA'))
+    return (node, *_mix_sockets(node, "RGBA"))
 
 
 def vector_mix(tree):
     """The shared Mix node (3.4+) in vector mode with one float factor, unclamped:
     (node, factor, input A, input B, output); the result is (1 - factor) A + factor B."""
-    node = tree.nodes.new('ShaderNodeMix')
-    node.data_type = 'VECTOR'
-    node.factor_mode = 'UNIFORM'
+    node = tree.nodes.new("ShaderNodeMix")
+    node.data_type = "VECTOR"
+    node.factor_mode = "UNIFORM"
     node.clamp_factor = False
-    factor = next(s for s in node.inputs if s.name == "Factor" and s.type == 'VALUE')
-    return (node, factor, *_mix_sockets(node, 'VECTOR'))
+    factor = next(s for s in node.inputs if s.name == "Factor" and s.type == "VALUE")
+    return (node, factor, *_mix_sockets(node, "VECTOR"))
 
 
 def compositor_mix(tree, blend_type):
@@ -354,7 +357,7 @@ def compositor_mix(tree, blend_type):
     the compositor's own Mix node is gone."""
     if at_least(5, 0):
         return rgba_mix(tree, blend_type)
-    node = tree.nodes.new('CompositorNodeMixRGB')
+    node = tree.nodes.new("CompositorNodeMixRGB")
     node.blend_type = blend_type
     node.use_clamp = False
     node.inputs[0].default_value = 1.0
@@ -401,19 +404,18 @@ def set_hashed_transparency(material):
     modes HASHED (EEVEE Legacy, up to 4.1); from 4.2 (EEVEE Next) dithered rendering with
     transparent shadows (surface_render_method, use_transparent_shadow)."""
     if hasattr(material, "surface_render_method"):
-        material.surface_render_method = 'DITHERED'
+        material.surface_render_method = "DITHERED"
         if hasattr(material, "use_transparent_shadow"):
             material.use_transparent_shadow = True
         return
-    material.blend_method = 'HASHED'
+    material.blend_method = "HASHED"
     if hasattr(material, "shadow_method"):
-        material.shadow_method = 'HASHED'
+        material.shadow_method = "HASHED"
 
 
 def set_non_color(image):
     """Pixels read as data (no colour transform): 'Non-Color' in 3.4 to 5.x."""
-    names = {item.identifier for item in
-             image.colorspace_settings.bl_rna.properties['name'].enum_items}
+    names = {item.identifier for item in image.colorspace_settings.bl_rna.properties["name"].enum_items}
     for name in ("Non-Color", "Non-Colour Data", "Raw"):
         if name in names:
             image.colorspace_settings.name = name
@@ -422,16 +424,19 @@ def set_non_color(image):
 
 def set_exr(image_settings, multilayer):
     """OpenEXR output, multilayer or not (set_file_format says how 5.0 differs)."""
-    set_file_format(image_settings, 'OPEN_EXR_MULTILAYER' if multilayer else 'OPEN_EXR')
+    set_file_format(image_settings, "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR")
 
 
 # --- Colour ---------------------------------------------------------------------------------
 
 # Blender's working spaces (5.0+) -> the core's colour spaces (color_space.hpp), and the
 # image colour space (OpenColorIO name) of each.
-_WORKING_SPACES = {'Linear Rec.709': "rec709", 'Linear Rec.2020': "rec2020", 'ACEScg': "acescg"}
-_IMAGE_SPACES = {"rec709": ("Linear Rec.709", "Linear"), "rec2020": ("Linear Rec.2020",),
-                 "acescg": ("ACEScg",)}
+_WORKING_SPACES = {"Linear Rec.709": "rec709", "Linear Rec.2020": "rec2020", "ACEScg": "acescg"}
+_IMAGE_SPACES = {
+    "rec709": ("Linear Rec.709", "Linear"),
+    "rec2020": ("Linear Rec.2020",),
+    "acescg": ("ACEScg",),
+}
 
 
 def working_color_space():
@@ -440,15 +445,14 @@ def working_color_space():
     wm.set_working_color_space); 3.4-4.5 always in Linear Rec.709. A space the core does
     not write (none in 5.0-5.3) falls back to "rec709"."""
     colorspace = getattr(bpy.data, "colorspace", None)
-    working = getattr(colorspace, "working_space", 'Linear Rec.709')
+    working = getattr(colorspace, "working_space", "Linear Rec.709")
     return _WORKING_SPACES.get(working, "rec709")
 
 
 def image_color_space(image, color_space):
     """The name of `image`'s colour space setting for pixels in the core's `color_space`:
     "Linear Rec.709" ("Linear" in 3.4), "Linear Rec.2020", "ACEScg"."""
-    names = {item.identifier for item in
-             image.colorspace_settings.bl_rna.properties['name'].enum_items}
+    names = {item.identifier for item in image.colorspace_settings.bl_rna.properties["name"].enum_items}
     for name in _IMAGE_SPACES[color_space]:
         if name in names:
             return name

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A frame the add-on could not prepare fails visibly in command-line renders.
 
 `blender -b file.blend -a` (or `-f N`) on a farm: when the sky or the aerial perspective
@@ -25,6 +26,7 @@ Only there: in the interface, and in Python scripts that render from a backgroun
 as before (a second break event would kill Blender: "Press ^C again to kill Blender"); and
 where Python, not Blender, owns SIGINT (the `bpy` module) nothing is raised either.
 """
+
 import os
 import signal
 import sys
@@ -43,7 +45,7 @@ def command_line_render():
         return False
     argv = sys.argv
     if "--" in argv:
-        argv = argv[:argv.index("--")]  # what follows belongs to Python scripts
+        argv = argv[: argv.index("--")]  # what follows belongs to Python scripts
     return any(a in _RENDER_FLAGS for a in argv[1:])
 
 
@@ -66,8 +68,11 @@ def fail_frame(scene, reason, *, remove_written=False):
         # renders are cancelled too), and a second event would kill it at once.
         return True
     _state["stopping"] = True
-    print(f"Welkin: error: frame {frame} failed: {reason}; the render stops, no file is "
-          f"left for frame {frame}, and Blender exits with a non-zero status", file=sys.stderr)
+    print(
+        f"Welkin: error: frame {frame} failed: {reason}; the render stops, no file is "
+        f"left for frame {frame}, and Blender exits with a non-zero status",
+        file=sys.stderr,
+    )
     sys.stdout.flush()
     sys.stderr.flush()
     signal.raise_signal(signal.SIGINT)
@@ -88,7 +93,7 @@ def frame_started(scene):
 
 def _single_frame():
     """True for `-f N` (the frames to render are the listed ones, not the scene's range)."""
-    argv = sys.argv[:sys.argv.index("--")] if "--" in sys.argv else sys.argv
+    argv = sys.argv[: sys.argv.index("--")] if "--" in sys.argv else sys.argv
     return any(a in {"-f", "--render-frame"} for a in argv[1:])
 
 
@@ -103,8 +108,7 @@ def _remove_frames(scene, remove_written):
         return []
     frame = scene.frame_current
     started = _started.get(scene.name)
-    frames = [frame] if _single_frame() else \
-        range(frame, scene.frame_end + 1, max(1, scene.frame_step))
+    frames = [frame] if _single_frame() else range(frame, scene.frame_end + 1, max(1, scene.frame_step))
     removed = []
     for f in frames:
         path = render.frame_path(frame=f)
@@ -116,8 +120,7 @@ def _remove_frames(scene, remove_written):
                 if not render.use_overwrite:
                     continue  # kept on purpose: Blender skips an existing frame
                 why = "an earlier run's frame"
-            elif f == frame and remove_written and started is not None \
-                    and mtime >= started - 2.0:
+            elif f == frame and remove_written and started is not None and mtime >= started - 2.0:
                 why = "written for the failed frame"
             else:
                 continue
@@ -131,8 +134,7 @@ def _remove_frames(scene, remove_written):
 def _animated(id_):
     """True when `id_` has keyframes, drivers or NLA strips."""
     data = getattr(id_, "animation_data", None) if id_ is not None else None
-    return data is not None and (data.action is not None or len(data.drivers) > 0
-                                 or len(data.nla_tracks) > 0)
+    return data is not None and (data.action is not None or len(data.drivers) > 0 or len(data.nla_tracks) > 0)
 
 
 def _moves(ob, with_data):
@@ -156,6 +158,7 @@ def changing_inputs(scene):
     driver, NLA strip or constraint on them counts."""
     from .clouds import scene as cloud_scene
     from .sky import scene_sun
+
     changing = []
     if _animated(scene) or any(m.camera is not None for m in scene.timeline_markers):
         changing.append(f"scene '{scene.name}'")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The sky follows the lamp.
 
   * In the UI, depsgraph_update_post notices that the sky's request changed (the sun lamp
@@ -19,6 +20,7 @@ kept in the panel's status line (a linked world's status cannot be written: prin
 a handler never raises. In a command-line render (`blender -b file.blend -a`), a frame
 whose sky could not be updated fails (farm.py): not written, non-zero exit.
 """
+
 import threading
 import time
 
@@ -71,6 +73,7 @@ def _run(scene, depsgraph, *, pack, live=False):
         outcome = update.update_sky(scene, depsgraph, pack=pack, live=live)
         for warning in outcome.warnings if outcome.updated else ():
             print(f"Welkin: warning: {warning}")
+
     return _guarded(scene, update_now)
 
 
@@ -135,7 +138,7 @@ def on_depsgraph_update(scene, depsgraph=None):
 
 def _concerns_sky(id_):
     if isinstance(id_, bpy.types.Object):
-        return id_.type == 'CAMERA' or (id_.type == 'LIGHT' and id_.data.type == 'SUN')
+        return id_.type == "CAMERA" or (id_.type == "LIGHT" and id_.data.type == "SUN")
     return isinstance(id_, (bpy.types.Scene, bpy.types.World, bpy.types.Light))
 
 
@@ -153,13 +156,15 @@ def on_frame_change_post(scene, depsgraph=None):
     # UI renders (F12, Ctrl F12) call frame handlers on the render thread while the
     # interface keeps drawing; changing images and lamps from there is only safe with
     # Render > Lock Interface on. Headless renders (-a) run on the main thread.
-    if threading.current_thread() is not threading.main_thread() \
-            and not scene.render.use_lock_interface:
-        _log(scene.world.welkin, "sky not updated for this frame: the render runs beside "
-             "the interface; enable Render > Lock Interface so renders follow the sun lamp")
+    if threading.current_thread() is not threading.main_thread() and not scene.render.use_lock_interface:
+        _log(
+            scene.world.welkin,
+            "sky not updated for this frame: the render runs beside "
+            "the interface; enable Render > Lock Interface so renders follow the sun lamp",
+        )
         return
     failure = _run(scene, depsgraph, pack=False)
-    if failure is not None and depsgraph is not None and depsgraph.mode == 'RENDER':
+    if failure is not None and depsgraph is not None and depsgraph.mode == "RENDER":
         # This frame would render with the previous frame's sky: fail it (farm.py).
         farm.fail_frame(scene, failure)
 
@@ -170,11 +175,9 @@ def on_save_pre(*_args):
         if update.not_editable(world) is not None:
             continue  # a linked world's images live in its library
         settings = world.welkin
-        shadow_maps = [i for i in bpy.data.images
-                       if i.get(cloud_shadows.SHADOW_KEY) == world.name_full]
+        shadow_maps = [i for i in bpy.data.images if i.get(cloud_shadows.SHADOW_KEY) == world.name_full]
         for image in (settings.sky_image, *shadow_maps):
-            if image is not None and image.library is None \
-                    and (image.is_dirty or image.packed_file is None):
+            if image is not None and image.library is None and (image.is_dirty or image.packed_file is None):
                 update.images.pack(image)
 
 

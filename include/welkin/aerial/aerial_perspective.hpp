@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Aerial perspective: the air between a camera and the surfaces it renders (Hillaire 2020,
 // "A Scalable and Production Ready Sky and Atmosphere Rendering Technique", sec. 5.6).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Aerial perspective from one viewpoint as a table of view direction and distance, for
 // renderers that apply it per shading point (the Blender add-on's material node group).
 //

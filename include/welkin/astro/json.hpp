@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The positions of one place and moment as JSON: the object `place_and_time` that
 // `welkin sun --time ...` prints and welkin.sun_and_moon() returns (as a dict), one schema
 // for both (docs/reference.md#place-and-time).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The moon as a light source at the top of the atmosphere: how bright its disc is, as a
 // fraction of the sun's light, and how that light spreads over the disc.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun and the moon as seen from a place on the Earth at a moment: apparent,
 // topocentric horizontal coordinates (elevation, azimuth clockwise from north), distances,
 // and the moon's phase.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A moment in time for the positions of the sun and the moon: civil date and time (UTC, or
 // local time with its offset from UTC) turned into the two time scales the ephemerides
 // need: Terrestrial Time (TT, the argument of the orbits) and UT1 (the Earth's rotation

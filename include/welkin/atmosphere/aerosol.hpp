@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The aerosol as an artist or a meteorologist states it: its vertical optical depth at
 // 550 nm, or a turbidity.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The atmosphere: everything about the planet and its air that the sky depends on.
 //
 // All quantities are SI: lengths in metres, scattering and extinction coefficients in

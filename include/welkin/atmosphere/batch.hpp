@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Up to four of an atmosphere's channels, packed for the fast methods.
 //
 // The LUT and ray-march methods work on four wavelengths at a time in single precision

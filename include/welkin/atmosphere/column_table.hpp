@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fast, exact-enough column densities for the reference path tracer's transmittances.
 //
 // Why. The path tracer needs the transmittance towards the sun at every scattering vertex

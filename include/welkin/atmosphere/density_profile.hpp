@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Vertical density profiles of the atmosphere's constituents.
 //
 // A profile is a stack of layers, as in Bruneton 2017 (atmosphere/definitions.glsl,

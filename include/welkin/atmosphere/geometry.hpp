@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ray geometry in a spherical planet, in double precision.
 //
 // A point is described by its distance r to the planet centre; a ray by the cosine mu of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The planet's surface below the horizon: a Lambertian ground lit by the sun through the
 // air and by the sky, seen through the air in front of it.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The single-scattering march shared by the sky-view LUT and the ray-march method.
 //
 // Along a view ray from radius r with zenith cosine mu, the path radiance is

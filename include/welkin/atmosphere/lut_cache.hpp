@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A cache of the atmosphere's look-up tables (AtmosphereLuts), so that a sun change pays
 // only for the sky-view LUT.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The look-up tables that depend on the atmosphere alone (docs/design.md#data-flow): for each
 // batch of four channels, the transmittance and the multiple-scattering LUTs. Built once
 // per atmosphere; the per-view sky-view LUT (skyview_lut.hpp) and the ray-march method

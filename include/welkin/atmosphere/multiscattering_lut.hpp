@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Multiple-scattering LUT (Hillaire 2020, "A Scalable and Production Ready Sky and
 // Atmosphere Rendering Technique", sec. 5.5, 32 x 32 texels), extended with the angular
 // shape of the multiply-scattered light.

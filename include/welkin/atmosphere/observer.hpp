@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where the sky is seen from: the observer's altitude and the direction towards the sun.
 //
 // Frame: Blender's world frame, Z up. The observer stands on the Z axis at

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Optical depth and transmittance by accurate quadrature, in double precision.
 //
 // These are the slow, exact answers the reference path tracer and the sun radiometry use,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Phase functions, normalised so that they integrate to 1 over the sphere (sr^-1).
 //
 // nu is the cosine of the scattering angle between the propagation directions: nu = 1

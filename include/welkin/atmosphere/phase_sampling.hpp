@@ -1,6 +1,7 @@
+// SPDX-License-Identifier: Apache-2.0
 // Direction sampling for the path tracers (the reference sky, the clouds' phase): phase
-// functions and a Lambertian ground. Each sampler maps uniform numbers in [0, 1) to a cosine (or a direction) whose
-// density is stated; tests/cpp/test_phase.cpp checks the distributions.
+// functions and a Lambertian ground. Each sampler maps uniform numbers in [0, 1) to a cosine (or a direction)
+// whose density is stated; tests/cpp/test_phase.cpp checks the distributions.
 //
 // Conventions as in phase.hpp: nu is the cosine between the two propagation directions;
 // a path tracer that follows light backwards samples the next tracing direction w' from

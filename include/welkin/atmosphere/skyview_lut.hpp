@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Sky-view LUT (Hillaire 2020 sec. 5.3, 192 x 108 texels): the path radiance around one
 // observer for one sun position, parametrised by the view's zenith angle and its azimuth
 // relative to the sun.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun as seen from the observer: transmittance, direct irradiance, and the disc.
 //
 // Direct irradiance is the normal-incidence spectral irradiance the sun's disc delivers

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun's disc as a radiance distribution: the one model that every renderer of the disc
 // uses (the equirectangular sky image, the camera plate, the add-on's shader nodes through
 // the Python binding).

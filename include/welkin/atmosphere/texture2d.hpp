@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A 2D table of Spectrum4 with bilinear lookup at texel centres, as a GPU texture with
 // clamp-to-edge addressing: texel (i, j) holds the value at u = (i + 0.5) / width,
 // v = (j + 0.5) / height.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Transmittance LUT: T(r, mu) from a point at radius r along zenith cosine mu to the top
 // of the atmosphere, for rays that do not hit the ground (Bruneton 2017 sec. 4.1;
 // Hillaire 2020 sec. 4, 256 x 64 texels).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The angles every method needs for one view direction (Bruneton 2017's r, mu, mu_s, nu).
 #pragma once
 

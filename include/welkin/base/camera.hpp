@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A render camera as Blender describes it, and the rays its pixels see.
 //
 // The description is Blender's own (bpy.types.Camera and Object.matrix_world), so that

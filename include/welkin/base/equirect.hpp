@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Blender's equirectangular (Environment Texture) mapping, exactly.
 //
 // Blender (intern/cycles/kernel/geom/..., direction_to_equirectangular): for a direction

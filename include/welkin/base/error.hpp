@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Error types of the Welkin core.
 //
 // The core never terminates its host. Bad input raises InvalidArgument, whose message

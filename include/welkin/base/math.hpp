@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Small numeric helpers that keep the physics out of trouble near its domain edges.
 //
 // As in Bruneton's implementation, every cosine that comes out of arithmetic is clamped

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Progress reporting and cancellation for long operations.
 //
 // Modelled on OpenVDB's interrupter: a host (the CLI's progress bar, Blender's status

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Gauss-Legendre rules shared by the exact integrators.
 #pragma once
 

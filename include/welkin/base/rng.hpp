@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Random numbers for the reference path tracer: a counter-based stream, and randomised
 // quasi-Monte Carlo points for the first dimensions of each path.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A band of an image's rows, [begin, end) counted from the top row (0), for computing a
 // frame band by band (the render engine's tiles) with the values the whole frame would
 // have in those rows. end < 0: to the last row.

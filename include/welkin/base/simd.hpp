@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Four floats in one SIMD register, for the few inner loops of the LUT builds.
 //
 // Spectrum4 (glm::vec4) arithmetic is written component by component; GCC turns it into

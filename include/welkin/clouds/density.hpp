@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cloud density sources: the one interface every cloud medium answers.
 //
 // As in pbrt-v4 (Pharr, Jakob & Humphreys, "Physically Based Rendering", 4th ed., ch. 11),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A lazily filled, sparse, multi-resolution grid of cloud optical depth towards a light.
 //
 // The fast march (clouds/lighting.hpp) needs, at every lit sample x, the cloud's optical

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Multiple scattering in thick clouds: the delta-Eddington slab along the sun line.
 //
 // Why. Wrenninge's octaves (clouds/lighting.hpp) attenuate every order as exp(-a^i tau_sun):

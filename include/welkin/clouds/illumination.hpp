@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What lights a cloud: the sun's irradiance at a point, after the atmosphere, and the
 // isotropic sky radiance around it. Both cloud integrators (the fast march and the path
 // tracer) use the same illumination, so the reference tests the lighting approximation

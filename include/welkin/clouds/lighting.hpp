@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fast cloud lighting: a view-ray march through any cloud density source.
 //
 // For each view ray from `origin` along d, through the density's majorant segments only

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tileable noise for procedural clouds, baked into small periodic 3D textures.
 //
 // Schneider 2015 ("The real-time volumetric cloudscapes of Horizon Zero Dawn", SIGGRAPH

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The phase function of cloud droplets: two Henyey-Greenstein lobes, forward and back.
 //
 // Mie scattering by cloud droplets (radius ~5-10 um) has a strong forward peak (the silver

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A procedural cloud layer on the curved planet, after Schneider's Nubis clouds
 // (Schneider & Vos 2015, "The real-time volumetric cloudscapes of Horizon Zero Dawn",
 // SIGGRAPH Advances in Real-Time Rendering; Schneider 2017, "Nubis: authoring real-time

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reference cloud lighting: a volumetric path tracer, all scattering orders.
 //
 // The same question as render_clouds (clouds/lighting.hpp), for the same density, phase,

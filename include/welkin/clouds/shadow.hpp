@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The clouds' transmittance towards a distant light (the sun) from many points: what the
 // Blender add-on's cloud shadows need (the sun lamp dimmed by the clouds over the scene, a
 // map of the shadow they cast on the ground).

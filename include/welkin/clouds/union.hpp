@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Several cloud density sources as one: the union of a scene's layers and volumes.
 //
 // Extinction is additive: where media overlap, a photon meets the particles of each, and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clouds from an OpenVDB file: a Blender volume object's grid as a cloud density source.
 //
 // Blender's Python cannot read voxels, so the core opens the .vdb file itself with

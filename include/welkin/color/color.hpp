@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // From spectral radiance to linear RGB (Rec.709 and the other spaces of color_space.hpp).
 //
 // Units: linear Rec.709 (sRGB primaries, D65 white, no white balance, no gamma) or another

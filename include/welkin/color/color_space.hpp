@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The linear RGB spaces Welkin writes colour in, and the matrices from CIE XYZ to them.
 //
 // Every colour starts as a spectrum, becomes CIE 1931 XYZ (color.hpp) and then the RGB of

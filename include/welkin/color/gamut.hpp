@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Bringing an RGB colour that lies outside its space's gamut back into it.
 //
 // A spectrum -> RGB conversion (color.hpp) is linear; where a spectrum's chromaticity lies

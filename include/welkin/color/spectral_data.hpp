@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Measured spectra the presets and the colour conversion are built from.
 //
 // Both tables are sampled in 10 nm bins from 360 to 830 nm and interpolated linearly

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // OpenEXR images in and out: named float channels, top row first.
 //
 // The writer is atomic and careful with the user's files: it writes a temporary file in

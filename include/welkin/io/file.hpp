@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Files in and out, bounded and atomic: the one place where Welkin reads an input file
 // whole and replaces an output file (every writer: EXR, atmosphere and scene JSON).
 //

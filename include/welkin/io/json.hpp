@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON in and out, the one implementation the atmosphere and scene files share.
 //
 // read_json_file reads a bounded regular file (read_file_bounded: at most

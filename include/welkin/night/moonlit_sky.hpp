@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sky of a moment with the moon: the sun's sky plus the moon's, and the moon's disc
 // with its phase.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A camera plate: what the scene camera sees of the sky, the sun and the air over the
 // ground, with no meshes (the Welkin render engine's frame, `welkin plate`).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera cloud passes: what the scene camera sees of the scene's clouds, in front of the
 // scene's geometry, with the air between the camera and the cloud (docs/design.md pass names;
 // docs/pipelines.md "Clouds in a scene" gives the same definition).

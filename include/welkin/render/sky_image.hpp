@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Equirectangular sky images (HDRIs), with the sun's disc.
 //
 // The image covers the whole sphere in Blender's Environment Texture mapping

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The clouds of a scene, as plain data: procedural layers, OpenVDB volumes and how they are
 // lit. Part of the SceneDescription (scene.hpp, key "clouds" of the scene JSON, docs/pipelines.md
 // "Scene JSON", the schema the Blender add-on writes).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The scene description (docs/design.md, data flow): everything one frame's sky and
 // camera passes depend on, as plain data, in and out of JSON.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "auto" sky method: model no more than the scene needs.
 //
 // Given a tolerance on the relative luminance error, auto picks, per scene (observer

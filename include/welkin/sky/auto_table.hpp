@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The measured table the "auto" sky method chooses from (see sky/auto.hpp).
 //
 // Its numbers are not written by hand: bench/chart.py measures every method and setting

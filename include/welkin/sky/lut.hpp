@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "lut" sky method; see sky/method.hpp for the ladder and src/sky/lut.cpp for the
 // derivation.
 #pragma once

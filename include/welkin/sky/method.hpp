@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One interface for every way of computing sky radiance.
 //
 // Every method answers the same question: the in-scattered (path) radiance reaching an

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "raymarch" sky method; see sky/method.hpp for the ladder and src/sky/raymarch.cpp for the
 // derivation.
 #pragma once

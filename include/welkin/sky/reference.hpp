@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The "reference" sky method: Monte-Carlo path tracing through the atmosphere, all
 // scattering orders, ground reflection, Earth shadow, seeded and thread-count independent.
 // See sky/method.hpp for the ladder and src/sky/reference.cpp for the derivation.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Aerial perspective for camera renders (Scene.welkin_aerial, Properties > Render >
 Welkin Aerial Perspective). Off by default.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The add-on's node in the scene's compositor for Aerial Perspective > Write Pass Files.
 
 "Welkin Aerial Depth", a File Output node writing a multilayer EXR of the render's Image
@@ -10,6 +11,7 @@ The compositor tree is the one aerial_frame.install made sure of (compat.ensure_
 compositor: the scene's compositor, or from Blender 5.3 Welkin's own compositor effect). The node is found by name; remove() takes it out. The user's nodes are never
 touched.
 """
+
 from .. import compat
 from .frame import CREATED_TREE
 
@@ -18,9 +20,9 @@ DEPTH_NODE = "Welkin Aerial Depth"
 
 def _render_layers(tree, scene):
     for node in tree.nodes:
-        if node.bl_idname == 'CompositorNodeRLayers' and node.scene in (None, scene):
+        if node.bl_idname == "CompositorNodeRLayers" and node.scene in (None, scene):
             return node
-    node = tree.nodes.new('CompositorNodeRLayers')
+    node = tree.nodes.new("CompositorNodeRLayers")
     node.location = (-600, 0)
     return node
 
@@ -41,14 +43,14 @@ def install(scene, settings, depth_base):
     rl = _render_layers(tree, scene)
     out = tree.nodes.get(DEPTH_NODE)
     if out is None:
-        out = tree.nodes.new('CompositorNodeOutputFile')
+        out = tree.nodes.new("CompositorNodeOutputFile")
         out.name = out.label = DEPTH_NODE
         out.location = (rl.location.x + 300, rl.location.y - 350)
-        compat.set_file_output_inputs(out, (("Image", 'RGBA'), ("Depth", 'FLOAT')))
+        compat.set_file_output_inputs(out, (("Image", "RGBA"), ("Depth", "FLOAT")))
     fmt = out.format
     compat.set_exr(fmt, multilayer=True)
-    fmt.color_depth = '32'
-    fmt.exr_codec = 'ZIP'
+    fmt.color_depth = "32"
+    fmt.exr_codec = "ZIP"
     compat.set_file_output_path(out, depth_base)
     tree.links.new(rl.outputs["Image"], out.inputs["Image"])
     if "Depth" in rl.outputs:

@@ -1,8 +1,10 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Aerial perspective's handlers: the frame's table baked before each frame renders
 (frame_change_post, with the render's own depsgraph), the compositor kept in step, the
 pass files written after each render, and the tables packed when the file is saved; and
 the feature's registration. A handler never raises: problems are printed, shown in the
 panel and, in a command-line render, fail the frame (farm.py)."""
+
 import bpy
 from bpy.app.handlers import persistent
 
@@ -34,7 +36,7 @@ def on_frame_change_post(scene, depsgraph=None):
     except Exception as error:
         text = UserError(f"unexpected {type(error).__name__}: {error}")
     pass_files.at_frame[scene.name] = {scene.frame_current: text}
-    if isinstance(text, UserError) and depsgraph.mode == 'RENDER':
+    if isinstance(text, UserError) and depsgraph.mode == "RENDER":
         # Known before the frame renders: fail it now, before anything is written.
         reason = f"aerial perspective not written for frame {scene.frame_current}: {text}"
         if not farm.fail_frame(scene, reason):
@@ -69,9 +71,11 @@ def on_save_pre(*_args):
             continue
         changing = farm.changing_inputs(scene)
         if changing:
-            text = (f"saved for farms with the add-on only: {', '.join(changing)} "
-                    f"animated; a Blender without Welkin would render every frame with "
-                    f"frame {scene.frame_current}'s sky and haze")
+            text = (
+                f"saved for farms with the add-on only: {', '.join(changing)} "
+                f"animated; a Blender without Welkin would render every frame with "
+                f"frame {scene.frame_current}'s sky and haze"
+            )
             print(f"Welkin: warning: scene '{scene.name}': {text}")
             if scene.welkin_aerial.enabled:
                 scene.welkin_aerial.status = text
@@ -118,8 +122,7 @@ def on_render_post(scene, *_args):
     except UserError as error:
         text = f"aerial perspective not written for frame {frame}: {error}"
     except Exception as error:  # a handler must never break Blender's render loop
-        text = (f"aerial perspective not written for frame {frame}: unexpected "
-                f"{type(error).__name__}: {error}")
+        text = f"aerial perspective not written for frame {frame}: unexpected {type(error).__name__}: {error}"
     aerial_scene.log(scene, text)
     # The frame's image is already saved (render_post follows the save): a command-line
     # render takes it away and stops, so the farm sees no file and a non-zero exit.
@@ -127,13 +130,15 @@ def on_render_post(scene, *_args):
 
 
 classes = (WelkinAerialSettings, RENDER_PT_welkin_aerial)
-_HANDLERS = ((bpy.app.handlers.frame_change_post, on_frame_change_post),
-             (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
-             (bpy.app.handlers.load_post, on_load_post),
-             (bpy.app.handlers.save_pre, on_save_pre),
-             (bpy.app.handlers.render_init, on_render_init),
-             (bpy.app.handlers.render_pre, on_render_pre),
-             (bpy.app.handlers.render_post, on_render_post))
+_HANDLERS = (
+    (bpy.app.handlers.frame_change_post, on_frame_change_post),
+    (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
+    (bpy.app.handlers.load_post, on_load_post),
+    (bpy.app.handlers.save_pre, on_save_pre),
+    (bpy.app.handlers.render_init, on_render_init),
+    (bpy.app.handlers.render_pre, on_render_pre),
+    (bpy.app.handlers.render_post, on_render_post),
+)
 
 
 def register():

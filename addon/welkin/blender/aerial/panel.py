@@ -1,11 +1,13 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Properties > Render > Welkin Aerial Perspective."""
+
 import bpy
 
 
 class RENDER_PT_welkin_aerial(bpy.types.Panel):
     bl_label = "Welkin Aerial Perspective"
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
     bl_context = "render"
 
     def draw(self, context):
@@ -20,4 +22,4 @@ class RENDER_PT_welkin_aerial(bpy.types.Panel):
         row.active = s.side_files
         row.prop(s, "method")
         if s.status:
-            layout.label(text=s.status, icon='INFO')
+            layout.label(text=s.status, icon="INFO")

@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Write Pass Files: the frame's scene JSON, aerial passes and hazed composite beside each
 render, from the render's Z pass (which the compositor's File Output node writes, its path
 kept in step with the output path)."""
+
 import json
 import os
 
@@ -23,14 +25,17 @@ def _ours(module, path, kind):
     except Exception:
         return False
     if kind == "aerial":
-        return sorted(names) in (sorted(scene_export.PASS_CHANNELS),
-                                 sorted(scene_export.PASS_CHANNELS + scene_export.CLOUD_CHANNELS))
+        return sorted(names) in (
+            sorted(scene_export.PASS_CHANNELS),
+            sorted(scene_export.PASS_CHANNELS + scene_export.CLOUD_CHANNELS),
+        )
     return sorted(names) == sorted(scene_export.COMPOSITE_CHANNELS)
 
 
 def write_frame(scene, frame):
     """Writes the frame's scene JSON, passes and composite; returns their paths."""
     import numpy as np
+
     module = native.module()
     if module is None:
         raise UserError(native.message())
@@ -45,25 +50,33 @@ def write_frame(scene, frame):
     paths = {k: scene_export.frame_path(base, k, frame) for k in ("scene", "aerial", "composite")}
     for kind, path in paths.items():
         if not _ours(module, path, kind):
-            raise UserError(f"{path} exists and was not written by Welkin: not replaced "
-                            f"(move it, or change Output > Output Path)")
+            raise UserError(
+                f"{path} exists and was not written by Welkin: not replaced "
+                f"(move it, or change Output > Output Path)"
+            )
     render_path = scene_export.frame_path(base, "render", frame)
     if not os.path.exists(render_path):
-        raise UserError(f"the render's depth file {render_path} is missing: the compositor "
-                        f"must run (Post Processing > Compositing on) with the node "
-                        f"'{compositor.DEPTH_NODE}'; toggle Aerial Perspective off and on")
+        raise UserError(
+            f"the render's depth file {render_path} is missing: the compositor "
+            f"must run (Post Processing > Compositing on) with the node "
+            f"'{compositor.DEPTH_NODE}'; toggle Aerial Perspective off and on"
+        )
     desc = module.SceneDescription.from_json_string(text)
     pixels, names = module.read_exr(render_path)
     depth_name = next((n for n in names if n.startswith("Depth.")), None)
     if depth_name is None:
-        raise UserError("the render has no Z pass (View Layer > Passes > Data > Z, linked "
-                        f"to the '{compositor.DEPTH_NODE}' node): the pass is on from the "
-                        "next render; toggle Aerial Perspective off and on to relink it")
+        raise UserError(
+            "the render has no Z pass (View Layer > Passes > Data > Z, linked "
+            f"to the '{compositor.DEPTH_NODE}' node): the pass is on from the "
+            "next render; toggle Aerial Perspective off and on to relink it"
+        )
     if not (pixels[..., names.index(depth_name)] > 0.0).any():
         # An unlinked File Output input writes a constant 0: the Z pass did not arrive.
-        raise UserError("the render's Z pass is empty (View Layer > Passes > Data > Z off, "
-                        "or its link to the 'Welkin Aerial Depth' node removed): it is on "
-                        "from the next render; toggle Aerial Perspective off and on")
+        raise UserError(
+            "the render's Z pass is empty (View Layer > Passes > Data > Z off, "
+            "or its link to the 'Welkin Aerial Depth' node removed): it is on "
+            "from the next render; toggle Aerial Perspective off and on"
+        )
     image = np.stack([pixels[..., names.index(f"Image.{c}")] for c in "RGB"], axis=-1)
     depth = pixels[..., names.index(depth_name)] * np.float32(scene.unit_settings.scale_length)
     depth = np.ascontiguousarray(depth)
@@ -82,12 +95,21 @@ def write_frame(scene, frame):
         layers += [clouds, cloud_depth[..., None]]
         channels += list(scene_export.CLOUD_CHANNELS)
     desc.to_json(paths["scene"], overwrite=True)
-    module.write_exr(paths["aerial"], np.concatenate(layers, axis=-1), channels, overwrite=True,
-                     attributes=[("welkinScene", text)])
-    module.write_exr(paths["composite"],
-                     np.ascontiguousarray(scene_export.composite(image, inscatter, transmittance,
-                                                                 clouds), dtype=np.float32),
-                     list(scene_export.COMPOSITE_CHANNELS), overwrite=True)
+    module.write_exr(
+        paths["aerial"],
+        np.concatenate(layers, axis=-1),
+        channels,
+        overwrite=True,
+        attributes=[("welkinScene", text)],
+    )
+    module.write_exr(
+        paths["composite"],
+        np.ascontiguousarray(
+            scene_export.composite(image, inscatter, transmittance, clouds), dtype=np.float32
+        ),
+        list(scene_export.COMPOSITE_CHANNELS),
+        overwrite=True,
+    )
     return paths
 
 

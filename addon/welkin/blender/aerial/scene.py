@@ -1,7 +1,9 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A scene's aerial perspective: turning it on and off, the frame's table baked for its
 camera, sun and atmosphere (frame.py's nodes read it), the frame's scene JSON, and the
 tables packed into a saved file. What it does in the frame and with Write Pass Files is in
 this package's __init__.py."""
+
 import json
 import math
 
@@ -92,24 +94,39 @@ def camera_of(scene, depsgraph=None):
         ob = ob.evaluated_get(depsgraph)
     cam = ob.data
     panorama = None
-    if cam.type == 'PANO':
+    if cam.type == "PANO":
         c = compat.camera_panorama(cam)
         if c is None:
-            raise UserError("panoramic camera: its panorama settings need the Cycles add-on "
-                            "(enabled by default)")
-        if c.panorama_type != 'EQUIRECTANGULAR':
-            raise UserError(f"camera '{ob.name}': panorama type {c.panorama_type} is not "
-                            f"supported by aerial perspective (only EQUIRECTANGULAR)")
-        panorama = dict(panorama_type=c.panorama_type,
-                        latitude_min_deg=math.degrees(c.latitude_min),
-                        latitude_max_deg=math.degrees(c.latitude_max),
-                        longitude_min_deg=math.degrees(c.longitude_min),
-                        longitude_max_deg=math.degrees(c.longitude_max))
+            raise UserError(
+                "panoramic camera: its panorama settings need the Cycles add-on (enabled by default)"
+            )
+        if c.panorama_type != "EQUIRECTANGULAR":
+            raise UserError(
+                f"camera '{ob.name}': panorama type {c.panorama_type} is not "
+                f"supported by aerial perspective (only EQUIRECTANGULAR)"
+            )
+        panorama = dict(
+            panorama_type=c.panorama_type,
+            latitude_min_deg=math.degrees(c.latitude_min),
+            latitude_max_deg=math.degrees(c.latitude_max),
+            longitude_min_deg=math.degrees(c.longitude_min),
+            longitude_max_deg=math.degrees(c.longitude_max),
+        )
     return scene_export.camera_dict(
-        [list(r) for r in ob.matrix_world], cam.type, cam.lens, cam.sensor_width,
-        cam.sensor_height, cam.sensor_fit, cam.ortho_scale, cam.shift_x, cam.shift_y,
-        cam.clip_start, cam.clip_end, scale_length=scene.unit_settings.scale_length,
-        panorama=panorama)
+        [list(r) for r in ob.matrix_world],
+        cam.type,
+        cam.lens,
+        cam.sensor_width,
+        cam.sensor_height,
+        cam.sensor_fit,
+        cam.ortho_scale,
+        cam.shift_x,
+        cam.shift_y,
+        cam.clip_start,
+        cam.clip_end,
+        scale_length=scene.unit_settings.scale_length,
+        panorama=panorama,
+    )
 
 
 def scene_json(scene, module, depsgraph=None):
@@ -117,18 +134,25 @@ def scene_json(scene, module, depsgraph=None):
     settings, the sun lamp the sky uses, the scene camera and the render size; the camera
     and lamp as evaluated in `depsgraph` when given (the render's own, at its frame)."""
     if scene.world is None:
-        raise UserError("the scene has no world: aerial perspective takes its atmosphere "
-                        "from World > Welkin Sky")
+        raise UserError(
+            "the scene has no world: aerial perspective takes its atmosphere from World > Welkin Sky"
+        )
     settings = scene.world.welkin
     request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
     atmosphere = json.loads(sky_request.build_atmosphere(request, module).to_json_string())
     r = scene.render
     d = scene_export.scene_dict(
-        atmosphere, settings.altitude_m, request.sun_direction, settings.exposure,
-        sky_request.resolve_method(settings.method, module), camera_of(scene, depsgraph),
+        atmosphere,
+        settings.altitude_m,
+        request.sun_direction,
+        settings.exposure,
+        sky_request.resolve_method(settings.method, module),
+        camera_of(scene, depsgraph),
         (r.resolution_x, r.resolution_y, r.resolution_percentage),
         aerial={"method": scene.welkin_aerial.method},
-        clouds=cloud_scene.clouds_section(scene, depsgraph), color_space=request.color_space)
+        clouds=cloud_scene.clouds_section(scene, depsgraph),
+        color_space=request.color_space,
+    )
     return module.SceneDescription.from_json_string(json.dumps(d)).to_json_string()
 
 
@@ -142,8 +166,7 @@ def pack_tables(scene):
         bake(scene)
     except UserError as error:
         return f"aerial perspective not saved with the file: {error}"
-    names = (aerial_frame.SCREEN_IMAGES if scene.render.engine == 'CYCLES'
-             else (aerial_frame.IMAGE,))
+    names = aerial_frame.SCREEN_IMAGES if scene.render.engine == "CYCLES" else (aerial_frame.IMAGE,)
     for name in names:
         image = bpy.data.images.get(name)
         if image is None or not image.get(aerial_frame.MARK) or image.library is not None:

@@ -1,13 +1,16 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Properties > World > Welkin Clouds, and Object > Properties > Welkin Cloud (Volume
 objects only)."""
+
 import bpy
 
 from . import scene as cloud_scene
 
 
 class WELKIN_UL_cloud_layers(bpy.types.UIList):
-    def draw_item(self, _context, layout, _data, item, _icon, _active_data, _active_prop,
-                  _index=0, _flt_flag=0):
+    def draw_item(
+        self, _context, layout, _data, item, _icon, _active_data, _active_prop, _index=0, _flt_flag=0
+    ):
         row = layout.row(align=True)
         row.prop(item, "enabled", text="")
         row.prop(item, "name", text="", emboss=False)
@@ -15,10 +18,10 @@ class WELKIN_UL_cloud_layers(bpy.types.UIList):
 
 class WORLD_PT_welkin_clouds(bpy.types.Panel):
     bl_label = "Welkin Clouds"
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
     bl_context = "world"
-    bl_options = {'DEFAULT_CLOSED'}
+    bl_options = {"DEFAULT_CLOSED"}
 
     @classmethod
     def poll(cls, context):
@@ -30,8 +33,8 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
         row = layout.row()
         row.template_list("WELKIN_UL_cloud_layers", "", s, "layers", s, "active_layer", rows=2)
         col = row.column(align=True)
-        col.operator("welkin.add_cloud_layer", icon='ADD', text="")
-        col.operator("welkin.remove_cloud_layer", icon='REMOVE', text="")
+        col.operator("welkin.add_cloud_layer", icon="ADD", text="")
+        col.operator("welkin.remove_cloud_layer", icon="REMOVE", text="")
         layout.use_property_split = True
         if 0 <= s.active_layer < len(s.layers):
             layer = s.layers[s.active_layer]
@@ -74,24 +77,24 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
         volumes = cloud_scene.marked_volumes(context.scene)
         box = layout.box()
         if not volumes:
-            box.label(text="none (select Volume objects, then Mark)", icon='INFO')
+            box.label(text="none (select Volume objects, then Mark)", icon="INFO")
         for ob in volumes:
-            box.label(text=f"{ob.name}: grid '{ob.welkin_cloud.grid}'", icon='VOLUME_DATA')
+            box.label(text=f"{ob.name}: grid '{ob.welkin_cloud.grid}'", icon="VOLUME_DATA")
         layout.prop(s, "volumes_in_world")
         row = layout.row(align=True)
-        row.operator("welkin.mark_cloud_volumes", icon='ADD')
-        row.operator("welkin.unmark_cloud_volumes", icon='REMOVE')
+        row.operator("welkin.mark_cloud_volumes", icon="ADD")
+        row.operator("welkin.unmark_cloud_volumes", icon="REMOVE")
 
 
 class OBJECT_PT_welkin_cloud(bpy.types.Panel):
     bl_label = "Welkin Cloud"
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
     bl_context = "object"
 
     @classmethod
     def poll(cls, context):
-        return context.object is not None and context.object.type == 'VOLUME'
+        return context.object is not None and context.object.type == "VOLUME"
 
     def draw_header(self, context):
         self.layout.prop(context.object.welkin_cloud, "enabled", text="")

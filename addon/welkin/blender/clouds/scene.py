@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The scene's clouds as the scene JSON's "clouds" section: the world's enabled procedural
 layers and every Volume object marked as a Welkin cloud (Object.welkin_cloud), with the VDB
 file it shows at the frame (Blender's sequence rule, cloud_export.volume_file), its
@@ -8,6 +9,7 @@ the path, before anything is written; a volume whose sequence shows nothing at t
 (CLIP outside its range) or that is hidden from renders is left out, as Blender leaves it
 out of its own render.
 """
+
 import bpy
 
 from ... import cloud_export
@@ -17,17 +19,24 @@ from ..sky.scene_sun import UserError
 
 def marked_volumes(scene):
     """The scene's Volume objects marked as Welkin clouds, by name."""
-    return sorted((o for o in scene.objects
-                   if o.type == 'VOLUME' and o.welkin_cloud.enabled), key=lambda o: o.name)
+    return sorted(
+        (o for o in scene.objects if o.type == "VOLUME" and o.welkin_cloud.enabled), key=lambda o: o.name
+    )
 
 
 def volume_path(volume, frame):
     """The absolute path of the VDB file `volume` (a Volume datablock) shows at `frame`,
     or None where its sequence shows nothing."""
     path = bpy.path.abspath(volume.filepath, library=volume.library)
-    return cloud_export.volume_file(path, volume.is_sequence, frame, volume.frame_start,
-                                    volume.frame_offset, volume.frame_duration,
-                                    volume.sequence_mode)
+    return cloud_export.volume_file(
+        path,
+        volume.is_sequence,
+        frame,
+        volume.frame_start,
+        volume.frame_offset,
+        volume.frame_duration,
+        volume.sequence_mode,
+    )
 
 
 def has_clouds(scene, volumes=True):
@@ -73,9 +82,11 @@ def clouds_section(scene, depsgraph=None, frame=None, with_volumes=True):
     if settings is not None:
         enabled = [layer for layer in settings.layers if layer.enabled]
         if len(enabled) > cloud_export.MAX_LAYERS:
-            raise UserError(f"World > Welkin Clouds has {len(enabled)} enabled cloud layers; "
-                            f"Welkin renders at most {cloud_export.MAX_LAYERS}: disable or "
-                            f"remove some")
+            raise UserError(
+                f"World > Welkin Clouds has {len(enabled)} enabled cloud layers; "
+                f"Welkin renders at most {cloud_export.MAX_LAYERS}: disable or "
+                f"remove some"
+            )
         for layer in enabled:
             values = {k: getattr(layer, k) for k in cloud_export.LAYER_FIELDS}
             try:
@@ -89,21 +100,29 @@ def clouds_section(scene, depsgraph=None, frame=None, with_volumes=True):
             continue
         volume = ob.data
         if not volume.filepath:
-            raise UserError(f"volume object '{ob.name}' is marked as a Welkin cloud but has no "
-                            f"VDB file (Object Data > OpenVDB File)")
+            raise UserError(
+                f"volume object '{ob.name}' is marked as a Welkin cloud but has no "
+                f"VDB file (Object Data > OpenVDB File)"
+            )
         path = volume_path(volume, frame)
         if path is None:
             continue
         try:
-            volumes.append(cloud_export.volume_dict(
-                ob.name, path, ob_eval.welkin_cloud.grid or "density",
-                [list(r) for r in ob_eval.matrix_world], ob_eval.welkin_cloud.density_scale,
-                scene.unit_settings.scale_length, compat.cycles_vdb_placement()))
+            volumes.append(
+                cloud_export.volume_dict(
+                    ob.name,
+                    path,
+                    ob_eval.welkin_cloud.grid or "density",
+                    [list(r) for r in ob_eval.matrix_world],
+                    ob_eval.welkin_cloud.density_scale,
+                    scene.unit_settings.scale_length,
+                    compat.cycles_vdb_placement(),
+                )
+            )
         except cloud_export.MissingVolume as error:
             raise UserError(str(error)) from None
     if settings is None:
-        albedo, lighting = 1.0, {"max_steps": 96, "light_steps": 8, "ambient_steps": 4,
-                                 "octaves": 4}
+        albedo, lighting = 1.0, {"max_steps": 96, "light_steps": 8, "ambient_steps": 4, "octaves": 4}
     else:
         albedo = settings.albedo
         lighting = {k: getattr(settings, k) for k in cloud_export.LIGHTING_FIELDS}
@@ -129,7 +148,7 @@ def capture(scene, depsgraph):
     frame's) values: a keyed wind offset would stand still. Read here, before anything
     is written, the values are this frame's."""
     _captured.clear()
-    if depsgraph is None or depsgraph.mode != 'RENDER':
+    if depsgraph is None or depsgraph.mode != "RENDER":
         return
     try:
         _captured[_capture_key(scene, depsgraph)] = clouds_section(scene, depsgraph)
@@ -140,9 +159,8 @@ def capture(scene, depsgraph):
 def frame_clouds(scene, depsgraph):
     """The clouds of the frame `depsgraph` renders: those capture() kept for it, else read
     now (clouds_section)."""
-    if depsgraph is not None and depsgraph.mode == 'RENDER':
+    if depsgraph is not None and depsgraph.mode == "RENDER":
         key = _capture_key(scene, depsgraph)
         if key in _captured:
             return _captured[key]
     return clouds_section(scene, depsgraph)
-

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Ground Shadows: the clouds' moving shadows on the scene, through a shadow layer.
 
 The layer is a square plane of the add-on's own ("Welkin Cloud Shadows"), Ground Shadow
@@ -20,6 +21,7 @@ The map is recomputed with the sky (each frame in animation, so wind moves the s
 the object, its mesh, material and image carry SHADOW_KEY and are removed exactly
 (Ground Shadows off, Remove Sky): nothing of the user's is changed.
 """
+
 import math
 
 import bpy
@@ -42,8 +44,11 @@ def map_points(extent_m, height_m, n):
 
 def shadow_map(native, shadow_json, extent_m, height_m, n, progress=None):
     """(n, n) float32, rows bottom first: T towards the sun at each texel's point."""
-    t = native.cloud_transmittance(native.SceneDescription.from_json_string(shadow_json),
-                                   map_points(extent_m, height_m, n), progress=progress)
+    t = native.cloud_transmittance(
+        native.SceneDescription.from_json_string(shadow_json),
+        map_points(extent_m, height_m, n),
+        progress=progress,
+    )
     return np.asarray(t, dtype=np.float32).reshape(n, n)
 
 
@@ -71,23 +76,23 @@ def _material(world, image, sun_direction):
         bsdf = nodes.new("ShaderNodeBsdfTransparent")
         tex = nodes.new("ShaderNodeTexImage")
         tex.name = "Shadow Map"
-        tex.interpolation = 'Linear'
-        tex.extension = 'EXTEND'
+        tex.interpolation = "Linear"
+        tex.extension = "EXTEND"
         uv = nodes.new("ShaderNodeTexCoord")
         geometry = nodes.new("ShaderNodeNewGeometry")
         dot = nodes.new("ShaderNodeVectorMath")
         dot.name = "Away From Sun"
-        dot.operation = 'DOT_PRODUCT'
+        dot.operation = "DOT_PRODUCT"
         gate = nodes.new("ShaderNodeMath")
-        gate.operation = 'GREATER_THAN'
+        gate.operation = "GREATER_THAN"
         gate.inputs[1].default_value = math.cos(math.radians(GATE_DEG))
         opacity = nodes.new("ShaderNodeMath")  # 1 - T
-        opacity.operation = 'SUBTRACT'
+        opacity.operation = "SUBTRACT"
         opacity.inputs[0].default_value = 1.0
         gated = nodes.new("ShaderNodeMath")  # gate x (1 - T)
-        gated.operation = 'MULTIPLY'
+        gated.operation = "MULTIPLY"
         shade = nodes.new("ShaderNodeMath")  # 1 - gate x (1 - T)
-        shade.operation = 'SUBTRACT'
+        shade.operation = "SUBTRACT"
         shade.inputs[0].default_value = 1.0
         links.new(uv.outputs["UV"], tex.inputs["Vector"])
         links.new(geometry.outputs["Incoming"], dot.inputs[0])

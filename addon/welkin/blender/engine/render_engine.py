@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The Welkin render engine ("WELKIN"): the active camera's plate of sky, sun disc and
 aerial perspective over the ground at the scene's ground altitude, no meshes.
 
@@ -15,6 +16,7 @@ tile, with the whole frame's values), each shown as soon as it is done, with
 update_progress and test_break between tiles. view_update / view_draw: the viewport
 preview (blender/engine/viewport.py), the same plate for the viewport's view.
 """
+
 import bpy
 
 from ... import plate, sky_request
@@ -28,20 +30,34 @@ BAND_ROWS = 64
 
 
 def _camera_data(cam):
-    data = {k: getattr(cam, k) for k in (
-        "type", "lens", "sensor_width", "sensor_height", "sensor_fit", "ortho_scale",
-        "shift_x", "shift_y", "clip_start", "clip_end")}
+    data = {
+        k: getattr(cam, k)
+        for k in (
+            "type",
+            "lens",
+            "sensor_width",
+            "sensor_height",
+            "sensor_fit",
+            "ortho_scale",
+            "shift_x",
+            "shift_y",
+            "clip_start",
+            "clip_end",
+        )
+    }
     if cam.type == "PANO":
         source = compat.camera_panorama(cam)
         if source is None:
-            raise UserError("panoramic camera: its panorama settings need the Cycles add-on "
-                            "(enabled by default)")
-        for k in ("panorama_type", "latitude_min", "latitude_max", "longitude_min",
-                  "longitude_max"):
+            raise UserError(
+                "panoramic camera: its panorama settings need the Cycles add-on (enabled by default)"
+            )
+        for k in ("panorama_type", "latitude_min", "latitude_max", "longitude_min", "longitude_max"):
             data[k] = getattr(source, k)
         if data["panorama_type"] != "EQUIRECTANGULAR":
-            raise UserError(f"camera '{cam.name}': panorama type {data['panorama_type']} is not "
-                            f"supported; Welkin renders EQUIRECTANGULAR panoramas")
+            raise UserError(
+                f"camera '{cam.name}': panorama type {data['panorama_type']} is not "
+                f"supported; Welkin renders EQUIRECTANGULAR panoramas"
+            )
     return data
 
 
@@ -50,8 +66,9 @@ def scene_world(scene, depsgraph, native):
     (atmosphere, altitude, sun, exposure, method, clouds) from the world's Welkin settings,
     the sun lamp and the clouds at this frame; UserError for what the user can fix."""
     if scene.world is None:
-        raise UserError("the scene has no world: add one (World properties); its Welkin Sky "
-                        "settings drive the plate")
+        raise UserError(
+            "the scene has no world: add one (World properties); its Welkin Sky settings drive the plate"
+        )
     settings = scene.world.welkin
     request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
     sky_request.validate(request, native)
@@ -59,29 +76,37 @@ def scene_world(scene, depsgraph, native):
     # The world's cloud layers and the marked volumes at this frame (a missing VDB file is
     # a UserError naming the object and the path: no frame is written).
     clouds = cloud_scene.frame_clouds(scene, depsgraph)
-    return {"atmosphere_json": atm.to_json_string(), "origin_altitude_m": settings.altitude_m,
-            "sun_direction": tuple(request.sun_direction), "exposure": request.exposure,
-            "method": sky_request.resolve_method(request.method, native), "clouds": clouds,
-            "color_space": request.color_space}
+    return {
+        "atmosphere_json": atm.to_json_string(),
+        "origin_altitude_m": settings.altitude_m,
+        "sun_direction": tuple(request.sun_direction),
+        "exposure": request.exposure,
+        "method": sky_request.resolve_method(request.method, native),
+        "clouds": clouds,
+        "color_space": request.color_space,
+    }
 
 
 def scene_description_json(scene, depsgraph, native):
     """The frame's scene JSON (docs/pipelines.md "Scene JSON"); UserError for what the user can fix."""
     if scene.camera is None:
-        raise UserError("the scene has no active camera: add one (Add > Camera) and make it "
-                        "active (Ctrl+Numpad 0)")
+        raise UserError(
+            "the scene has no active camera: add one (Add > Camera) and make it active (Ctrl+Numpad 0)"
+        )
     world = scene_world(scene, depsgraph, native)
     camera = scene.camera.evaluated_get(depsgraph)
     if camera.type != "CAMERA":
         raise UserError(f"the active camera '{camera.name}' is not a camera object")
-    cam = plate.camera_dict(camera.matrix_world, _camera_data(camera.data),
-                            scene.unit_settings.scale_length)
+    cam = plate.camera_dict(camera.matrix_world, _camera_data(camera.data), scene.unit_settings.scale_length)
     r = scene.render
     if r.use_border:
-        raise UserError("render region (Output > Format > Render Region) is not supported by "
-                        "the Welkin engine: turn it off to render the full frame")
-    return plate.scene_json(camera=cam, resolution=(r.resolution_x, r.resolution_y,
-                                                    r.resolution_percentage), **world)
+        raise UserError(
+            "render region (Output > Format > Render Region) is not supported by "
+            "the Welkin engine: turn it off to render the full frame"
+        )
+    return plate.scene_json(
+        camera=cam, resolution=(r.resolution_x, r.resolution_y, r.resolution_percentage), **world
+    )
 
 
 def _set_rect(render_pass, rect):
@@ -124,24 +149,27 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
         self.preview.draw(self, context, depsgraph)
 
     def update_render_passes(self, scene=None, renderlayer=None):
-        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
         for name, channels, chan_id, _source in plate.PASSES:
-            kind = 'VALUE' if channels == 1 else ('VECTOR' if channels == 3 else 'COLOR')
+            kind = "VALUE" if channels == 1 else ("VECTOR" if channels == 3 else "COLOR")
             self.register_pass(scene, renderlayer, name, channels, chan_id, kind)
 
     def render(self, depsgraph):
         import numpy as np
+
         scene = depsgraph.scene
         try:
             native = update.module_or_error()
             text = scene_description_json(scene, depsgraph, native)
             description = native.SceneDescription.from_json_string(text)
         except (UserError, ValueError) as error:
-            self.report({'ERROR'}, f"Welkin: {error}")
+            self.report({"ERROR"}, f"Welkin: {error}")
             return
         cloudy = bool(getattr(description, "has_clouds", False))
-        self.update_stats("Welkin", "sky, sun, clouds and aerial perspective" if cloudy
-                          else "sky, sun and aerial perspective")
+        self.update_stats(
+            "Welkin",
+            "sky, sun, clouds and aerial perspective" if cloudy else "sky, sun and aerial perspective",
+        )
         width, height = description.width, description.height
         for name, channels, chan_id, _source in plate.PASSES:
             self.add_pass(name, channels, chan_id)
@@ -150,12 +178,13 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
             # tiles of BAND_ROWS rows, each handed to Blender as soon as it is done.
             renderer = native.CameraPlateRenderer(description)
         except (ValueError, OSError) as error:
-            self.report({'ERROR'}, f"Welkin: {error}")
+            self.report({"ERROR"}, f"Welkin: {error}")
             return
         except KeyboardInterrupt:
             return
         done = 0
         for rows, _y, h in plate.bands(height, BAND_ROWS):
+
             def progress(fraction, done=done, h=h):
                 self.update_progress((done + fraction * h) / height)
                 return not self.test_break()
@@ -165,7 +194,7 @@ class WelkinRenderEngine(bpy.types.RenderEngine):
             try:
                 result = renderer.render(rows=rows, progress=progress)
             except (ValueError, OSError) as error:
-                self.report({'ERROR'}, f"Welkin: {error}")
+                self.report({"ERROR"}, f"Welkin: {error}")
                 return
             except KeyboardInterrupt:
                 return  # cancelled (the core raises KeyboardInterrupt): nothing more is written
@@ -193,10 +222,22 @@ def _panels():
     for name in dir(bpy.types):
         panel = getattr(bpy.types, name)
         engines = getattr(panel, "COMPAT_ENGINES", None)
-        if engines is not None and ("CYCLES" in engines or any(
-                e in engines for e in compat.eevee_engine_ids())) and (
-                name.startswith(("RENDER_PT_dimensions", "RENDER_PT_format", "RENDER_PT_output",
-                                 "DATA_PT_camera", "DATA_PT_lens", "WORLD_PT"))):
+        if (
+            engines is not None
+            and ("CYCLES" in engines or any(e in engines for e in compat.eevee_engine_ids()))
+            and (
+                name.startswith(
+                    (
+                        "RENDER_PT_dimensions",
+                        "RENDER_PT_format",
+                        "RENDER_PT_output",
+                        "DATA_PT_camera",
+                        "DATA_PT_lens",
+                        "WORLD_PT",
+                    )
+                )
+            )
+        ):
             out.append(panel)
     return out
 

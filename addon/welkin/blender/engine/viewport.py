@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The Welkin engine's viewport preview (Rendered shading): the plate the F12 render makes
 (sky, sun disc, clouds, aerial ground; render_engine.py), for the viewport's own view.
 
@@ -20,12 +21,14 @@ Needs only the GL context Blender already has for any viewport: no GPU compute.
 LAST records what the newest draw showed (tests read it): the level's size, its pixels,
 the key of the view, how long the draws took.
 """
+
 import collections
 import threading
 import time
 import weakref
 
 import bpy
+
 # Imported here, on the main thread, before any preview thread runs: a first import of
 # Blender's gpu module inside view_draw while a preview thread ran crashed Blender 3.4
 # (SIGSEGV in PyType_Ready under the import, seen under Xvfb).
@@ -97,9 +100,9 @@ class Preview:
     def __init__(self, engine, scene_world):
         self.engine = weakref.ref(engine)
         self.scene_world = scene_world  # render_engine.scene_world
-        self.world = None      # render_engine.scene_world's dict, or None
-        self.error = None      # a UserError's text from view_update
-        self.generation = 0    # bumped by each view_update
+        self.world = None  # render_engine.scene_world's dict, or None
+        self.error = None  # a UserError's text from view_update
+        self.generation = 0  # bumped by each view_update
         self.job = None
         self.texture = None
         self.texture_key = None
@@ -120,17 +123,28 @@ class Preview:
 
     def view_key(self, context):
         region, rv3d = context.region, context.region_data
-        return (self.generation, region.width, region.height, rv3d.is_perspective,
-                tuple(tuple(r) for r in rv3d.view_matrix),
-                tuple(tuple(r) for r in rv3d.window_matrix))
+        return (
+            self.generation,
+            region.width,
+            region.height,
+            rv3d.is_perspective,
+            tuple(tuple(r) for r in rv3d.view_matrix),
+            tuple(tuple(r) for r in rv3d.window_matrix),
+        )
 
     def start(self, context, key):
         region, rv3d = context.region, context.region_data
         scale = context.scene.unit_settings.scale_length
         cameras = []
         for w, h in viewport.levels(region.width, region.height):
-            cameras.append(((w, h), viewport.camera_from_view(
-                rv3d.view_matrix, rv3d.window_matrix, rv3d.is_perspective, w, h, scale)))
+            cameras.append(
+                (
+                    (w, h),
+                    viewport.camera_from_view(
+                        rv3d.view_matrix, rv3d.window_matrix, rv3d.is_perspective, w, h, scale
+                    ),
+                )
+            )
         self.job = Job(native_module.module(), self.world, cameras, key)
         self.job.start()
         if self.timer is None:
@@ -187,26 +201,33 @@ class Preview:
         if self.texture is not None:
             self._draw_texture(engine, context)
         self.draw_seconds.append((time.perf_counter() - t0, upload))
-        LAST.update(key=key, image=self.texture_key, job=job, done=job.done,
-                    timings=list(job.timings), draw_seconds=list(self.draw_seconds),
-                    drawn_size=self.drawn_size, error=job.error)
+        LAST.update(
+            key=key,
+            image=self.texture_key,
+            job=job,
+            done=job.done,
+            timings=list(job.timings),
+            draw_seconds=list(self.draw_seconds),
+            drawn_size=self.drawn_size,
+            error=job.error,
+        )
         if READBACK is not None and self.texture is not None:
             x, y, w, h = READBACK
             fb = gpu.state.active_framebuffer_get()
-            LAST["readback"] = fb.read_color(x, y, w, h, 4, 0, 'FLOAT').to_list()
+            LAST["readback"] = fb.read_color(x, y, w, h, 4, 0, "FLOAT").to_list()
 
     def _upload(self, image):
         _key, w, h, pixels = image
-        buffer = gpu.types.Buffer('FLOAT', len(pixels), pixels)
-        self.texture = gpu.types.GPUTexture((w, h), format='RGBA32F', data=buffer)
+        buffer = gpu.types.Buffer("FLOAT", len(pixels), pixels)
+        self.texture = gpu.types.GPUTexture((w, h), format="RGBA32F", data=buffer)
         self.texture_key = image
 
     def _draw_texture(self, engine, context):
         _key, w, h, _pixels = self.texture_key
         dw, dh = viewport.drawn_size(context.region.width, w, h)
         self.drawn_size = (dw, dh)
-        gpu.state.blend_set('ALPHA_PREMULT')
+        gpu.state.blend_set("ALPHA_PREMULT")
         engine.bind_display_space_shader(context.scene)
         draw_texture_2d(self.texture, (0, 0), dw, dh)
         engine.unbind_display_space_shader()
-        gpu.state.blend_set('NONE')
+        gpu.state.blend_set("NONE")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A cloudy sky for the live UI, computed beside the interface.
 
 A cloudy world texture takes seconds (every pixel's ray is marched through the clouds): too
@@ -25,6 +26,7 @@ its next report, within a band of rows): by start() for a newer state, by a fram
 (the frame's own synchronous update follows), by loading a file and by unregistering.
 Headless sessions run no timers; tests call poll() themselves.
 """
+
 import dataclasses
 import threading
 
@@ -48,7 +50,7 @@ class Job:
         self.fraction = 0.0
         self.cancelled = False
         self.result = None
-        self.preview = None        # the preview's SkyResult, once computed
+        self.preview = None  # the preview's SkyResult, once computed
         self.preview_shown = False  # poll() applied it
         self.error = None
         self.done = threading.Event()
@@ -72,11 +74,23 @@ class Job:
             preview = self.preview_request()
             if preview is not None:
                 self.preview = sky_compute.compute(
-                    module, preview, disc=disc, scene_json=scene_json, shadow_json=shadow_json,
-                    progress=lambda f: self._progress(0.0), **shadows)
-            self.result = sky_compute.compute(module, request, disc=disc, scene_json=scene_json,
-                                              shadow_json=shadow_json, progress=self._progress,
-                                              **shadows)
+                    module,
+                    preview,
+                    disc=disc,
+                    scene_json=scene_json,
+                    shadow_json=shadow_json,
+                    progress=lambda f: self._progress(0.0),
+                    **shadows,
+                )
+            self.result = sky_compute.compute(
+                module,
+                request,
+                disc=disc,
+                scene_json=scene_json,
+                shadow_json=shadow_json,
+                progress=self._progress,
+                **shadows,
+            )
         except KeyboardInterrupt:  # the progress callback said stop
             self.cancelled = True
         except Exception as error:  # reported by poll() on the main thread
@@ -108,16 +122,23 @@ def start(scene):
     request, _lamp, _warnings = scene_sun.request_for(scene, settings, None)
     clouds = update.clouds_of(scene, None)
     key = update.sky_key(settings, request, clouds)
-    if key == pending_key() or (key == settings.last_key and settings.sky_image is not None
-                                and update.images.owned(settings)):
+    if key == pending_key() or (
+        key == settings.last_key and settings.sky_image is not None and update.images.owned(settings)
+    ):
         return False
     update.refuse_if_not_editable(scene.world)  # a linked world: UserError, nothing changed
     cancel()
-    scene_json = (update.cloudy_scene_json(scene, settings, request, clouds, module, None)
-                  if clouds else None)
+    scene_json = update.cloudy_scene_json(scene, settings, request, clouds, module, None) if clouds else None
     shadow_json = update.shadow_scene_json(scene, settings, request, clouds, module)
-    _job = Job(module, request, scene_json, settings.show_sun_disc, key, shadow_json,
-               update.shadow_options(scene, module))
+    _job = Job(
+        module,
+        request,
+        scene_json,
+        settings.show_sun_disc,
+        key,
+        shadow_json,
+        update.shadow_options(scene, module),
+    )
     _job.thread.start()
     settings.status = "computing the cloudy sky beside the interface: 0 %"
     if not bpy.app.timers.is_registered(poll):
@@ -139,8 +160,7 @@ def poll():
             if job.preview is not None and not job.preview_shown:
                 _show_preview(scene, job)
             what = "refining" if job.preview_shown else "computing"
-            settings.status = (f"{what} the cloudy sky beside the interface: "
-                               f"{100.0 * job.fraction:.0f} %")
+            settings.status = f"{what} the cloudy sky beside the interface: {100.0 * job.fraction:.0f} %"
             _redraw_properties()
         return POLL_S
     job.thread.join()
@@ -157,8 +177,7 @@ def poll():
             return POLL_S if start(scene) else None
         outcome = update.Outcome()
         outcome.warnings = warnings
-        update.apply_sky(scene, request, lamp, key, job.result, outcome, pack=False,
-                         cloudy=job.cloudy)
+        update.apply_sky(scene, request, lamp, key, job.result, outcome, pack=False, cloudy=job.cloudy)
     except UserError as error:
         settings.status = f"sky not updated: {error}"
     _redraw_properties()
@@ -177,8 +196,9 @@ def _show_preview(scene, job):
         outcome = update.Outcome()
         outcome.warnings = warnings
         preview = job.preview_request()
-        update.apply_sky(scene, preview, lamp, job.key + PREVIEW_SUFFIX, job.preview, outcome,
-                         pack=False, cloudy=True)
+        update.apply_sky(
+            scene, preview, lamp, job.key + PREVIEW_SUFFIX, job.preview, outcome, pack=False, cloudy=True
+        )
     except UserError as error:
         settings.status = f"sky not updated: {error}"
 
@@ -204,7 +224,7 @@ def stop(wait_s=5.0):
 
 def _redraw_properties():
     wm = bpy.context.window_manager
-    for window in (wm.windows if wm is not None else ()):
+    for window in wm.windows if wm is not None else ():
         for area in window.screen.areas:
-            if area.type == 'PROPERTIES':
+            if area.type == "PROPERTIES":
                 area.tag_redraw()

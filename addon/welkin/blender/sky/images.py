@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The world's float images: created by the add-on, filled from the core's top-row-first
 arrays (flipped once, in pixels.py), packed into the .blend so they survive saving and
 farm rendering. Packing a float image stores it as OpenEXR (full float), so the radiance
@@ -9,6 +10,7 @@ another scene would rewrite the original's pixels; ensure() sees that another wo
 shows the image is its owner, leaves that image alone and gives the copy its own. An
 image whose owner shows it no more (the world renamed, a file from before the key) is
 claimed by the world that updates it."""
+
 import bpy
 
 from ... import pixels
@@ -34,15 +36,16 @@ def _owned_elsewhere(image, world):
     owner = image.get(OWNER_KEY)
     if owner == world.name_full:
         return False
-    return any(other != world and other.name_full == owner
-               and image == other.welkin.sky_image for other in bpy.data.worlds)
+    return any(
+        other != world and other.name_full == owner and image == other.welkin.sky_image
+        for other in bpy.data.worlds
+    )
 
 
 def owned(settings):
     """True when the world's image is its own to write (not another world's)."""
     image = settings.sky_image
-    return image is None or bool(image.get(ROLE_KEY)
-                                 and not _owned_elsewhere(image, settings.id_data))
+    return image is None or bool(image.get(ROLE_KEY) and not _owned_elsewhere(image, settings.id_data))
 
 
 def ensure(settings, role, width, height, color_space="rec709"):
@@ -57,7 +60,7 @@ def ensure(settings, role, width, height, color_space="rec709"):
         image = None  # another world's (this one is its copy): a new image of its own
     if image is not None and tuple(image.size) != (width, height):
         if image.packed_file is not None:
-            image.unpack(method='REMOVE')
+            image.unpack(method="REMOVE")
         image.scale(width, height)
     if image is None:
         image = bpy.data.images.new(NAMES[role], width, height, alpha=False, float_buffer=True)
@@ -91,7 +94,7 @@ def write(image, top_first):
 
 def pack(image):
     """Packs the image's current pixels into the .blend (as OpenEXR, float)."""
-    image.file_format = 'OPEN_EXR'
+    image.file_format = "OPEN_EXR"
     image.pack()
 
 

@@ -1,4 +1,6 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Properties > World > Welkin Sky."""
+
 import textwrap
 
 import bpy
@@ -6,16 +8,16 @@ import bpy
 from ... import native
 
 
-def _wrapped(layout, text, icon='NONE', width=60):
+def _wrapped(layout, text, icon="NONE", width=60):
     col = layout.column(align=True)
     for i, line in enumerate(textwrap.wrap(text, width)):
-        col.label(text=line, icon=icon if i == 0 else 'BLANK1')
+        col.label(text=line, icon=icon if i == 0 else "BLANK1")
 
 
 class WORLD_PT_welkin_sky(bpy.types.Panel):
     bl_label = "Welkin Sky"
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
     bl_context = "world"
 
     @classmethod
@@ -26,7 +28,7 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         layout = self.layout
         message = native.message()
         if message:
-            _wrapped(layout, message, icon='ERROR')
+            _wrapped(layout, message, icon="ERROR")
             return
         s = context.world.welkin
         layout.use_property_split = True
@@ -37,9 +39,9 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         sub.prop(s, "aerosol_density")
         sub.prop(s, "ozone_density")
         col.prop(s, "aerosol_input")
-        if s.aerosol_input == 'OPTICAL_DEPTH':
+        if s.aerosol_input == "OPTICAL_DEPTH":
             col.prop(s, "aerosol_optical_depth")
-        elif s.aerosol_input == 'TURBIDITY':
+        elif s.aerosol_input == "TURBIDITY":
             col.prop(s, "turbidity")
         col.prop(s, "use_preset_albedo")
         row = col.row()
@@ -62,14 +64,13 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         animated = lamp is not None and lamp.animation_data is not None
         if s.auto_update and animated and not context.scene.render.use_lock_interface:
             box = layout.box()
-            _wrapped(box, "Animated sun: UI renders follow it only with Lock Interface on",
-                     icon='INFO')
+            _wrapped(box, "Animated sun: UI renders follow it only with Lock Interface on", icon="INFO")
             box.prop(context.scene.render, "use_lock_interface")
         row = layout.row(align=True)
-        row.operator("welkin.update_sky", icon='WORLD')
-        row.operator("welkin.remove_sky", icon='X')
-        layout.operator("welkin.export_hdri", icon='EXPORT')
+        row.operator("welkin.update_sky", icon="WORLD")
+        row.operator("welkin.remove_sky", icon="X")
+        layout.operator("welkin.export_hdri", icon="EXPORT")
         if s.status:
-            _wrapped(layout, s.status, icon='INFO')
+            _wrapped(layout, s.status, icon="INFO")
         for warning in filter(None, s.warnings.split("\n")):
-            _wrapped(layout, warning, icon='ERROR')
+            _wrapped(layout, warning, icon="ERROR")

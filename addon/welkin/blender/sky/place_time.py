@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Place and Time (World.welkin_place_time): the sun lamp and a moon lamp placed from a date,
 a time and a place, by the compiled core (welkin.sun_and_moon; addon/welkin/place_time.py turns its
 directions into the scene's frame).
@@ -13,6 +14,7 @@ the lamps' evaluated copies are written (what Cycles and EEVEE read) and the val
 from the world's evaluated copy (the animated Time at that frame); see update._sync_lamp
 for why the originals are left alone there.
 """
+
 import bpy
 from mathutils import Euler, Matrix, Vector
 
@@ -30,6 +32,7 @@ def is_moon_lamp(obj):
 
 def _changed(settings, context):
     from .. import handlers
+
     world = settings.id_data
     if not settings.enabled:
         remove_moon(world)
@@ -38,36 +41,72 @@ def _changed(settings, context):
 
 class WelkinPlaceTime(bpy.types.PropertyGroup):
     enabled: bpy.props.BoolProperty(
-        name="Place and Time", default=False, update=_changed,
+        name="Place and Time",
+        default=False,
+        update=_changed,
         description="Place the sun lamp and a moon lamp from a date, a time and a place "
-                    "(apparent positions by the core; the sky adds the moon's light)")
+        "(apparent positions by the core; the sky adds the moon's light)",
+    )
     year: bpy.props.IntProperty(name="Year", default=2026, min=1900, max=2100, update=_changed)
     month: bpy.props.IntProperty(name="Month", default=6, min=1, max=12, update=_changed)
     day: bpy.props.IntProperty(name="Day", default=21, min=1, max=31, update=_changed)
     hours: bpy.props.FloatProperty(
-        name="Time (h)", default=12.0, min=-place_time.MAX_ABS_HOURS,
-        max=place_time.MAX_ABS_HOURS, soft_min=0.0, soft_max=24.0, precision=4,
+        name="Time (h)",
+        default=12.0,
+        min=-place_time.MAX_ABS_HOURS,
+        max=place_time.MAX_ABS_HOURS,
+        soft_min=0.0,
+        soft_max=24.0,
+        precision=4,
         update=_changed,
         description="Local time of day in hours since the date's midnight (21.5: 21:30); "
-                    "keyable; beyond 0-24 it carries into the next or previous days")
+        "keyable; beyond 0-24 it carries into the next or previous days",
+    )
     utc_offset_h: bpy.props.FloatProperty(
-        name="UTC Offset (h)", default=0.0, min=-14.0, max=14.0, update=_changed,
+        name="UTC Offset (h)",
+        default=0.0,
+        min=-14.0,
+        max=14.0,
+        update=_changed,
         description="Local time minus UTC in hours (2: central European summer time), "
-                    "rounded to whole minutes")
+        "rounded to whole minutes",
+    )
     latitude_deg: bpy.props.FloatProperty(
-        name="Latitude", default=48.8566, min=-90.0, max=90.0, precision=4, update=_changed,
-        description="Geodetic latitude in degrees, north positive")
+        name="Latitude",
+        default=48.8566,
+        min=-90.0,
+        max=90.0,
+        precision=4,
+        update=_changed,
+        description="Geodetic latitude in degrees, north positive",
+    )
     longitude_deg: bpy.props.FloatProperty(
-        name="Longitude", default=2.3522, min=-180.0, max=180.0, precision=4,
-        update=_changed, description="Longitude in degrees, east positive")
+        name="Longitude",
+        default=2.3522,
+        min=-180.0,
+        max=180.0,
+        precision=4,
+        update=_changed,
+        description="Longitude in degrees, east positive",
+    )
     height_m: bpy.props.FloatProperty(
-        name="Height (m)", default=0.0, min=-500.0, max=1e5, update=_changed,
-        description="The place's height above sea level in metres (refraction, parallax)")
+        name="Height (m)",
+        default=0.0,
+        min=-500.0,
+        max=1e5,
+        update=_changed,
+        description="The place's height above sea level in metres (refraction, parallax)",
+    )
     north_deg: bpy.props.FloatProperty(
-        name="North (deg)", default=0.0, min=-360.0, max=360.0, update=_changed,
+        name="North (deg)",
+        default=0.0,
+        min=-360.0,
+        max=360.0,
+        update=_changed,
         description="The scene's north: the angle from +Y counter-clockwise about +Z "
-                    "(0: north is +Y, east +X; 90: north is -X)")
-    moon_object: bpy.props.PointerProperty(type=bpy.types.Object, options={'HIDDEN'})
+        "(0: north is +Y, east +X; 90: north is -X)",
+    )
+    moon_object: bpy.props.PointerProperty(type=bpy.types.Object, options={"HIDDEN"})
 
 
 def _settings(scene, depsgraph):
@@ -82,8 +121,16 @@ def _settings(scene, depsgraph):
 
 def place_time_of(settings):
     return place_time.PlaceTime(
-        settings.year, settings.month, settings.day, settings.hours, settings.utc_offset_h,
-        settings.latitude_deg, settings.longitude_deg, settings.height_m, settings.north_deg)
+        settings.year,
+        settings.month,
+        settings.day,
+        settings.hours,
+        settings.utc_offset_h,
+        settings.latitude_deg,
+        settings.longitude_deg,
+        settings.height_m,
+        settings.north_deg,
+    )
 
 
 def bodies_for(scene, depsgraph=None):
@@ -105,13 +152,13 @@ def _aim(obj, direction, depsgraph):
     """Turns `obj` (its evaluated copy in a render's depsgraph) so that its local +Z points
     along `direction`, keeping its location and scale."""
     target = obj
-    if depsgraph is not None and depsgraph.mode == 'RENDER':
+    if depsgraph is not None and depsgraph.mode == "RENDER":
         target = obj.evaluated_get(depsgraph)
     m = target.matrix_world
     if (m.col[2].to_3d().normalized() - Vector(direction)).length < 1e-6:
         return  # already there: no needless depsgraph update
     location, _rotation, scale = m.decompose()
-    rotation = Euler(place_time.lamp_euler(direction), 'XYZ').to_matrix().to_4x4()
+    rotation = Euler(place_time.lamp_euler(direction), "XYZ").to_matrix().to_4x4()
     target.matrix_world = Matrix.Translation(location) @ rotation @ Matrix.Diagonal(scale).to_4x4()
 
 
@@ -120,7 +167,7 @@ def ensure_moon(scene, world):
     settings = world.welkin_place_time
     moon = settings.moon_object
     if moon is None or not is_moon_lamp(moon):
-        data = bpy.data.lights.new(MOON_NAME, 'SUN')
+        data = bpy.data.lights.new(MOON_NAME, "SUN")
         moon = bpy.data.objects.new(MOON_NAME, data)
         moon[MOON_KEY] = world.name_full
         settings.moon_object = moon
@@ -151,26 +198,35 @@ def place_lamps(scene, request, sun_lamp, depsgraph=None, sync=None):
     bodies = bodies_for(scene, depsgraph)
     if bodies is None:
         return
-    render = depsgraph is not None and depsgraph.mode == 'RENDER'
+    render = depsgraph is not None and depsgraph.mode == "RENDER"
     moon = scene.world.welkin_place_time.moon_object
     if moon is None or moon.name not in scene.objects:
         world = scene.world
         if world.library is not None or getattr(world, "override_library", None) is not None:
-            raise scene_sun.UserError(f"Place and Time: world '{world.name}' comes from a "
-                                      f"library: its moon lamp cannot be added here; make the "
-                                      f"world local first; nothing was changed")
+            raise scene_sun.UserError(
+                f"Place and Time: world '{world.name}' comes from a "
+                f"library: its moon lamp cannot be added here; make the "
+                f"world local first; nothing was changed"
+            )
         if render:
-            raise scene_sun.UserError("Place and Time: the moon lamp is missing; press Update "
-                                      "Sky (it adds the lamp), then render")
+            raise scene_sun.UserError(
+                "Place and Time: the moon lamp is missing; press Update Sky (it adds the lamp), then render"
+            )
         moon = ensure_moon(scene, world)
     _aim(sun_lamp, bodies.sun_direction, depsgraph)
     _aim(moon, bodies.moon_direction, depsgraph)
     if sync is not None:
         module = native.module()
         atm = sky_request.build_atmosphere(request, module)
-        values = place_time.moon_lamp(module, atm, request.altitude_m, bodies.moon_direction,
-                                      bodies.moon_irradiance_ratio,
-                                      bodies.moon_angular_radius_rad, request.exposure)
+        values = place_time.moon_lamp(
+            module,
+            atm,
+            request.altitude_m,
+            bodies.moon_direction,
+            bodies.moon_irradiance_ratio,
+            bodies.moon_angular_radius_rad,
+            request.exposure,
+        )
         sync(moon, values, depsgraph)
 
 
@@ -178,19 +234,19 @@ def place_now(scene):
     """Places the lamps for the current settings without a sky update: before a cloudy sky
     is computed beside the interface (handlers._tick), whose result comes seconds later."""
     from . import update  # (which imports this module)
+
     settings = scene.world.welkin
     request, lamp, _warnings = scene_sun.request_for(scene, settings, None)
-    place_lamps(scene, request, lamp, None,
-                sync=update._sync_lamp if settings.sync_lamp else None)
+    place_lamps(scene, request, lamp, None, sync=update._sync_lamp if settings.sync_lamp else None)
 
 
 class WORLD_PT_welkin_place_time(bpy.types.Panel):
     bl_label = "Place and Time"
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
     bl_context = "world"
     bl_parent_id = "WORLD_PT_welkin_sky"
-    bl_options = {'DEFAULT_CLOSED'}
+    bl_options = {"DEFAULT_CLOSED"}
 
     @classmethod
     def poll(cls, context):
@@ -221,17 +277,22 @@ class WORLD_PT_welkin_place_time(bpy.types.Panel):
         try:
             bodies = bodies_for(context.scene)
         except scene_sun.UserError as error:
-            col.label(text=str(error), icon='ERROR')
+            col.label(text=str(error), icon="ERROR")
             return
         if bodies is None:
             return
         p = bodies.place_and_time
-        col.label(text=f"UTC {p['utc']}", icon='TIME')
-        col.label(text=f"Sun: elevation {p['sun']['elevation_deg']:.2f}, azimuth "
-                       f"{p['sun']['azimuth_deg']:.2f}", icon='LIGHT_SUN')
-        col.label(text=f"Moon: elevation {p['moon']['elevation_deg']:.2f}, azimuth "
-                       f"{p['moon']['azimuth_deg']:.2f}, lit "
-                       f"{100.0 * p['moon']['illuminated_fraction']:.0f} %", icon='LIGHT_SUN')
+        col.label(text=f"UTC {p['utc']}", icon="TIME")
+        col.label(
+            text=f"Sun: elevation {p['sun']['elevation_deg']:.2f}, azimuth {p['sun']['azimuth_deg']:.2f}",
+            icon="LIGHT_SUN",
+        )
+        col.label(
+            text=f"Moon: elevation {p['moon']['elevation_deg']:.2f}, azimuth "
+            f"{p['moon']['azimuth_deg']:.2f}, lit "
+            f"{100.0 * p['moon']['illuminated_fraction']:.0f} %",
+            icon="LIGHT_SUN",
+        )
 
 
 classes = (WelkinPlaceTime, WORLD_PT_welkin_place_time)

@@ -1,5 +1,7 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The scene side of a sky request: which sun lamp drives it, where it points, and how
 high the observer stands."""
+
 import math
 
 from ... import sky_request
@@ -12,8 +14,14 @@ class UserError(Exception):
 
 
 def sun_lamps(scene):
-    return sorted((o for o in scene.objects if o.type == 'LIGHT' and o.data.type == 'SUN'
-                   and not place_time.is_moon_lamp(o)), key=lambda o: o.name)
+    return sorted(
+        (
+            o
+            for o in scene.objects
+            if o.type == "LIGHT" and o.data.type == "SUN" and not place_time.is_moon_lamp(o)
+        ),
+        key=lambda o: o.name,
+    )
 
 
 def choose_sun(scene, settings):
@@ -23,12 +31,16 @@ def choose_sun(scene, settings):
     if chosen is not None and chosen.name in scene.objects:
         return chosen, None
     if not lamps:
-        raise UserError("no sun lamp in the scene: add one (Add > Light > Sun) or choose "
-                        "one in World > Welkin Sky > Sun Lamp")
+        raise UserError(
+            "no sun lamp in the scene: add one (Add > Light > Sun) or choose "
+            "one in World > Welkin Sky > Sun Lamp"
+        )
     warning = None
     if len(lamps) > 1:
-        warning = (f"{len(lamps)} sun lamps in the scene: the sky follows '{lamps[0].name}' "
-                   f"(the first by name); choose another in World > Welkin Sky > Sun Lamp")
+        warning = (
+            f"{len(lamps)} sun lamps in the scene: the sky follows '{lamps[0].name}' "
+            f"(the first by name); choose another in World > Welkin Sky > Sun Lamp"
+        )
     return lamps[0], warning
 
 
@@ -40,8 +52,9 @@ def sun_direction(obj, depsgraph=None):
     x, y, zz = float(z[0]), float(z[1]), float(z[2])
     n = math.sqrt(x * x + y * y + zz * zz)
     if not n > 0.0 or not math.isfinite(n):
-        raise UserError(f"sun lamp '{obj.name}' has a degenerate transform (zero scale): "
-                        f"its direction is undefined")
+        raise UserError(
+            f"sun lamp '{obj.name}' has a degenerate transform (zero scale): its direction is undefined"
+        )
     return (x / n, y / n, zz / n)
 
 
@@ -63,16 +76,18 @@ def request_for(scene, settings, depsgraph=None):
     if warning:
         warnings.append(warning)
     altitude, warning = sky_request.observer_altitude(
-        settings.altitude_m, camera_height_m(scene, settings, depsgraph))
+        settings.altitude_m, camera_height_m(scene, settings, depsgraph)
+    )
     if warning:
         warnings.append(warning)
     request = sky_request.SkyRequest(
         preset=settings.preset,
         air_density=settings.air_density,
         aerosol_density=settings.aerosol_density,
-        aerosol_optical_depth=(settings.aerosol_optical_depth
-                               if settings.aerosol_input == 'OPTICAL_DEPTH' else -1.0),
-        turbidity=settings.turbidity if settings.aerosol_input == 'TURBIDITY' else -1.0,
+        aerosol_optical_depth=(
+            settings.aerosol_optical_depth if settings.aerosol_input == "OPTICAL_DEPTH" else -1.0
+        ),
+        turbidity=settings.turbidity if settings.aerosol_input == "TURBIDITY" else -1.0,
         ozone_density=settings.ozone_density,
         ground_albedo=-1.0 if settings.use_preset_albedo else settings.ground_albedo,
         altitude_m=altitude,
@@ -81,7 +96,7 @@ def request_for(scene, settings, depsgraph=None):
         method=settings.method,
         exposure=settings.exposure,
         ground=settings.show_ground,
-        spectral=settings.colour == 'SPECTRAL',
+        spectral=settings.colour == "SPECTRAL",
         color_space=compat.working_color_space(),
         moon_direction=bodies.moon_direction if bodies else (),
         moon_irradiance_ratio=bodies.moon_irradiance_ratio if bodies else 0.0,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """One sky update, shared by the operator and the handlers: scene -> SkyRequest -> the
 module -> the world's images and nodes, and the sun lamp.
 
@@ -7,6 +8,7 @@ reported. The world's user nodes are never touched (world_nodes.py); a world lin
 library (or a library override of one) is refused before anything changes (not_editable);
 the lamp's own colour, strength and angle are kept on its Light when Sync Lamp first
 changes them, and remove_sky puts them back."""
+
 import json
 
 import bpy
@@ -33,19 +35,26 @@ def not_editable(world):
     if world is None:
         return None
     if world.library is not None:
-        return (f"world '{world.name}' is linked from the library "
-                f"'{world.library.filepath}' and cannot be changed here: make it local "
-                f"(Outliner > right-click the world > Make Local) or update the sky in that "
-                f"file; nothing was changed")
+        return (
+            f"world '{world.name}' is linked from the library "
+            f"'{world.library.filepath}' and cannot be changed here: make it local "
+            f"(Outliner > right-click the world > Make Local) or update the sky in that "
+            f"file; nothing was changed"
+        )
     override = getattr(world, "override_library", None)
     if override is not None:
         reference = override.reference
-        library = reference.library.filepath if reference is not None and \
-            reference.library is not None else "its library"
-        return (f"world '{world.name}' is a library override of a world from "
-                f"'{library}': its nodes and images cannot be saved with this file; make it "
-                f"local (Outliner > right-click the world > Make Local) first; nothing was "
-                f"changed")
+        library = (
+            reference.library.filepath
+            if reference is not None and reference.library is not None
+            else "its library"
+        )
+        return (
+            f"world '{world.name}' is a library override of a world from "
+            f"'{library}': its nodes and images cannot be saved with this file; make it "
+            f"local (Outliner > right-click the world > Make Local) first; nothing was "
+            f"changed"
+        )
     return None
 
 
@@ -80,7 +89,7 @@ def _world(scene):
 
 def _sync_lamp(lamp, values, depsgraph):
     data = lamp.data
-    if depsgraph is not None and depsgraph.mode == 'RENDER':
+    if depsgraph is not None and depsgraph.mode == "RENDER":
         # A render's own depsgraph (frame_change_post during `-a` or F12): write the
         # lamp's values into its evaluated copy, which Cycles reads, and leave the
         # original alone. Editing the original would make Blender evaluate that
@@ -115,9 +124,15 @@ def sky_key(settings, request, clouds):
     # "disc nodes": a file saved while the disc was an image gets its nodes at the first
     # update.
     c = settings.id_data.welkin_clouds
-    key = request.key() + repr((settings.show_sun_disc, settings.sync_lamp, "disc nodes", c.shadows,
-                                c.ground_shadows and (c.shadow_extent_m, c.shadow_height_m,
-                                                      c.shadow_resolution)))
+    key = request.key() + repr(
+        (
+            settings.show_sun_disc,
+            settings.sync_lamp,
+            "disc nodes",
+            c.shadows,
+            c.ground_shadows and (c.shadow_extent_m, c.shadow_height_m, c.shadow_resolution),
+        )
+    )
     if clouds:
         key += json.dumps(clouds, sort_keys=True)
     return key
@@ -165,10 +180,16 @@ def _sky_scene_json(scene, request, module, atmosphere, origin_altitude_m, cloud
     origin_altitude_m, without a camera: what cloudy_scene_json and shadow_scene_json share."""
     r = scene.render
     d = scene_export.scene_dict(
-        atmosphere, origin_altitude_m, request.sun_direction, request.exposure,
-        sky_request.resolve_method(request.method, module), None,
-        (r.resolution_x, r.resolution_y, r.resolution_percentage), clouds=clouds,
-        color_space=request.color_space)
+        atmosphere,
+        origin_altitude_m,
+        request.sun_direction,
+        request.exposure,
+        sky_request.resolve_method(request.method, module),
+        None,
+        (r.resolution_x, r.resolution_y, r.resolution_percentage),
+        clouds=clouds,
+        color_space=request.color_space,
+    )
     del d["camera"]
     return json.dumps(d)
 
@@ -180,8 +201,10 @@ def shadow_options(scene, module):
     if not c.ground_shadows:
         return {"shade_lamp": c.shadows, "shadow_map": None}
     extent, height, n = c.shadow_extent_m, c.shadow_height_m, c.shadow_resolution
-    return {"shade_lamp": c.shadows, "shadow_map": lambda text: cloud_shadows.shadow_map(
-        module, text, extent, height, n)}
+    return {
+        "shade_lamp": c.shadows,
+        "shadow_map": lambda text: cloud_shadows.shadow_map(module, text, extent, height, n),
+    }
 
 
 def current_lamp(module, request, settings):
@@ -204,13 +227,17 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     world = _world(scene)
     settings = world.welkin
     request, lamp, outcome.warnings = scene_sun.request_for(scene, settings, depsgraph)
-    place_time.place_lamps(scene, request, lamp, depsgraph,
-                           sync=_sync_lamp if settings.sync_lamp else None)
+    place_time.place_lamps(scene, request, lamp, depsgraph, sync=_sync_lamp if settings.sync_lamp else None)
     clouds = clouds_of(scene, depsgraph)
     key = sky_key(settings, request, clouds)
-    render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
-    if (not force and settings.active and settings.last_key == key
-            and settings.sky_image is not None and images.owned(settings)):
+    render_graph = depsgraph is not None and depsgraph.mode == "RENDER"
+    if (
+        not force
+        and settings.active
+        and settings.last_key == key
+        and settings.sky_image is not None
+        and images.owned(settings)
+    ):
         if render_graph and settings.sync_lamp:
             # The sky is current, but this render's evaluated lamp may be a fresh copy of
             # the original (see _sync_lamp): give it its values again (no images).
@@ -222,20 +249,26 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     refuse_if_not_editable(world)  # before anything is changed
     if clouds and live and not force:
         # The UI's timer computes a cloudy sky beside the interface instead (background.py).
-        settings.status = ("the sky has clouds: press Update Sky to recompute it (seconds); "
-                           "renders update it every frame")
+        settings.status = (
+            "the sky has clouds: press Update Sky to recompute it (seconds); renders update it every frame"
+        )
         return outcome
     try:
-        scene_json = (cloudy_scene_json(scene, settings, request, clouds, module, depsgraph)
-                      if clouds else None)
+        scene_json = (
+            cloudy_scene_json(scene, settings, request, clouds, module, depsgraph) if clouds else None
+        )
         result = sky_compute.compute(
-            module, request, disc=settings.show_sun_disc, scene_json=scene_json,
+            module,
+            request,
+            disc=settings.show_sun_disc,
+            scene_json=scene_json,
             shadow_json=shadow_scene_json(scene, settings, request, clouds, module),
-            progress=progress, **shadow_options(scene, module))
+            progress=progress,
+            **shadow_options(scene, module),
+        )
     except (ValueError, OSError) as error:
         raise UserError(str(error)) from None
-    apply_sky(scene, request, lamp, key, result, outcome, pack=pack, depsgraph=depsgraph,
-              cloudy=bool(clouds))
+    apply_sky(scene, request, lamp, key, result, outcome, pack=pack, depsgraph=depsgraph, cloudy=bool(clouds))
     return outcome
 
 
@@ -253,13 +286,20 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     images.drop_disc_image(settings)  # files from before the disc was drawn by nodes
     clouds = scene.world.welkin_clouds
     clouds.lamp_transmittance = result.lamp_transmittance
-    render_graph = depsgraph is not None and depsgraph.mode == 'RENDER'
+    render_graph = depsgraph is not None and depsgraph.mode == "RENDER"
     if result.shadow_map is not None:
-        if not cloud_shadows.install(scene, result.shadow_map, request.sun_direction,
-                                     clouds.shadow_extent_m, clouds.shadow_height_m,
-                                     create=not render_graph):
-            outcome.warnings.append("Ground Shadows: the shadow layer is made by Update Sky "
-                                    "(not during a render): press Update Sky, then render")
+        if not cloud_shadows.install(
+            scene,
+            result.shadow_map,
+            request.sun_direction,
+            clouds.shadow_extent_m,
+            clouds.shadow_height_m,
+            create=not render_graph,
+        ):
+            outcome.warnings.append(
+                "Ground Shadows: the shadow layer is made by Update Sky "
+                "(not during a render): press Update Sky, then render"
+            )
     elif not render_graph:
         cloud_shadows.remove(scene.world)
     if settings.sync_lamp:
@@ -270,12 +310,17 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     outcome.seconds = result.seconds
     outcome.method = result.method
     settings.warnings = "\n".join(outcome.warnings)
-    settings.status = (f"sky {request.width}x{height}{' with clouds' if cloudy else ''} by "
-                       f"{result.method} in "
-                       f"{result.seconds:.2f} s from '{lamp.name}'"
-                       + (f"; sun lamp x {result.lamp_transmittance:.3g} under the clouds"
-                          if result.lamp_transmittance < 1.0 else "")
-                       + (f"; {len(outcome.warnings)} warning(s)" if outcome.warnings else ""))
+    settings.status = (
+        f"sky {request.width}x{height}{' with clouds' if cloudy else ''} by "
+        f"{result.method} in "
+        f"{result.seconds:.2f} s from '{lamp.name}'"
+        + (
+            f"; sun lamp x {result.lamp_transmittance:.3g} under the clouds"
+            if result.lamp_transmittance < 1.0
+            else ""
+        )
+        + (f"; {len(outcome.warnings)} warning(s)" if outcome.warnings else "")
+    )
 
 
 def remove_sky(scene):
@@ -305,7 +350,7 @@ def restore_lamps(scene):
     unless the user changed the lamp since Sync Lamp last did (Sync Lamp off): then the
     user's values stay."""
     for obj in scene.objects:
-        data = obj.data if obj.type == 'LIGHT' else None
+        data = obj.data if obj.type == "LIGHT" else None
         if data is None or LAMP_KEY not in data or data.library is not None:
             continue
         synced = data.get(SYNCED_KEY)

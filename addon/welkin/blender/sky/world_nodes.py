@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The add-on's nodes in the world's node tree.
 
 The user's nodes are never changed: the add-on adds its own nodes in a frame, including
@@ -30,6 +31,7 @@ cores), against 0.4 s at 1024 x 512. The sky is smooth, so the add-on sets the m
 Manual, at most 1024 wide (the sky's width when smaller), and remove() puts the world's own
 setting back.
 """
+
 import math
 
 from .. import compat
@@ -57,13 +59,15 @@ def _node(tree, role, idname, location, parent):
 
 
 def _active_outputs(tree):
-    return [n for n in tree.nodes if n.bl_idname == 'ShaderNodeOutputWorld'
-            and n.is_active_output and not n.get(ROLE_KEY)]
+    return [
+        n
+        for n in tree.nodes
+        if n.bl_idname == "ShaderNodeOutputWorld" and n.is_active_output and not n.get(ROLE_KEY)
+    ]
 
 
 def _math(tree, role, operation, location, parent, *values, vector=False):
-    n = _node(tree, role, 'ShaderNodeVectorMath' if vector else 'ShaderNodeMath', location,
-              parent)
+    n = _node(tree, role, "ShaderNodeVectorMath" if vector else "ShaderNodeMath", location, parent)
     n.operation = operation
     for socket, value in zip(n.inputs, values):
         if value is not None:
@@ -76,54 +80,59 @@ def _disc_nodes(tree, frame, x, y, disc):
     socket of its colour. `disc`: a sky_compute.DiscModel, or None (nothing shown)."""
     links = tree.links
     degree = len(disc.coefficients) - 1 if disc is not None else 5
-    coord = _node(tree, "disc_coordinate", 'ShaderNodeTexCoord', (x, y), frame)
-    view = _math(tree, "disc_view", 'NORMALIZE', (x + 180, y), frame, vector=True)
-    links.new(coord.outputs['Generated'], view.inputs[0])
+    coord = _node(tree, "disc_coordinate", "ShaderNodeTexCoord", (x, y), frame)
+    view = _math(tree, "disc_view", "NORMALIZE", (x + 180, y), frame, vector=True)
+    links.new(coord.outputs["Generated"], view.inputs[0])
     # sin rho = |D x S|, s = sin rho / sin alpha
-    cross = _math(tree, "disc_cross", 'CROSS_PRODUCT', (x + 360, y), frame, vector=True)
-    sin_rho = _math(tree, "disc_sin_rho", 'LENGTH', (x + 540, y), frame, vector=True)
-    s = _math(tree, "disc_s", 'DIVIDE', (x + 720, y), frame)
-    s2 = _math(tree, "disc_s2", 'MULTIPLY', (x + 900, y), frame)
-    mu2 = _math(tree, "disc_mu2", 'SUBTRACT', (x + 1080, y), frame, 1.0)
+    cross = _math(tree, "disc_cross", "CROSS_PRODUCT", (x + 360, y), frame, vector=True)
+    sin_rho = _math(tree, "disc_sin_rho", "LENGTH", (x + 540, y), frame, vector=True)
+    s = _math(tree, "disc_s", "DIVIDE", (x + 720, y), frame)
+    s2 = _math(tree, "disc_s2", "MULTIPLY", (x + 900, y), frame)
+    mu2 = _math(tree, "disc_mu2", "SUBTRACT", (x + 1080, y), frame, 1.0)
     mu2.use_clamp = True
-    mu = _math(tree, "disc_mu", 'SQRT', (x + 1260, y), frame)
-    links.new(view.outputs['Vector'], cross.inputs[0])
-    links.new(cross.outputs['Vector'], sin_rho.inputs[0])
-    links.new(sin_rho.outputs['Value'], s.inputs[0])
-    links.new(s.outputs['Value'], s2.inputs[0])
-    links.new(s.outputs['Value'], s2.inputs[1])
-    links.new(s2.outputs['Value'], mu2.inputs[1])
-    links.new(mu2.outputs['Value'], mu.inputs[0])
+    mu = _math(tree, "disc_mu", "SQRT", (x + 1260, y), frame)
+    links.new(view.outputs["Vector"], cross.inputs[0])
+    links.new(cross.outputs["Vector"], sin_rho.inputs[0])
+    links.new(sin_rho.outputs["Value"], s.inputs[0])
+    links.new(s.outputs["Value"], s2.inputs[0])
+    links.new(s.outputs["Value"], s2.inputs[1])
+    links.new(s2.outputs["Value"], mu2.inputs[1])
+    links.new(mu2.outputs["Value"], mu.inputs[0])
     # Where the disc is: s < 1, in front (D.S > 0), above the horizon.
-    inside = _math(tree, "disc_inside", 'LESS_THAN', (x + 900, y - 200), frame, None, 1.0)
-    dot = _math(tree, "disc_dot", 'DOT_PRODUCT', (x + 360, y - 350), frame, vector=True)
-    front = _math(tree, "disc_front", 'GREATER_THAN', (x + 540, y - 350), frame, None, 0.0)
-    view_z = _node(tree, "disc_view_z", 'ShaderNodeSeparateXYZ', (x + 360, y - 500), frame)
-    above = _math(tree, "disc_above", 'GREATER_THAN', (x + 540, y - 500), frame)
-    mask_a = _math(tree, "disc_mask_a", 'MULTIPLY', (x + 1080, y - 250), frame)
-    mask = _math(tree, "disc_mask", 'MULTIPLY', (x + 1260, y - 250), frame)
-    links.new(s.outputs['Value'], inside.inputs[0])
-    links.new(view.outputs['Vector'], dot.inputs[0])
-    links.new(dot.outputs['Value'], front.inputs[0])
-    links.new(view.outputs['Vector'], view_z.inputs[0])
-    links.new(view_z.outputs['Z'], above.inputs[0])
-    links.new(inside.outputs['Value'], mask_a.inputs[0])
-    links.new(front.outputs['Value'], mask_a.inputs[1])
-    links.new(mask_a.outputs['Value'], mask.inputs[0])
-    links.new(above.outputs['Value'], mask.inputs[1])
+    inside = _math(tree, "disc_inside", "LESS_THAN", (x + 900, y - 200), frame, None, 1.0)
+    dot = _math(tree, "disc_dot", "DOT_PRODUCT", (x + 360, y - 350), frame, vector=True)
+    front = _math(tree, "disc_front", "GREATER_THAN", (x + 540, y - 350), frame, None, 0.0)
+    view_z = _node(tree, "disc_view_z", "ShaderNodeSeparateXYZ", (x + 360, y - 500), frame)
+    above = _math(tree, "disc_above", "GREATER_THAN", (x + 540, y - 500), frame)
+    mask_a = _math(tree, "disc_mask_a", "MULTIPLY", (x + 1080, y - 250), frame)
+    mask = _math(tree, "disc_mask", "MULTIPLY", (x + 1260, y - 250), frame)
+    links.new(s.outputs["Value"], inside.inputs[0])
+    links.new(view.outputs["Vector"], dot.inputs[0])
+    links.new(dot.outputs["Value"], front.inputs[0])
+    links.new(view.outputs["Vector"], view_z.inputs[0])
+    links.new(view_z.outputs["Z"], above.inputs[0])
+    links.new(inside.outputs["Value"], mask_a.inputs[0])
+    links.new(front.outputs["Value"], mask_a.inputs[1])
+    links.new(mask_a.outputs["Value"], mask.inputs[0])
+    links.new(above.outputs["Value"], mask.inputs[1])
     # L = c_0 + mu (c_1 + mu (c_2 + ...)), one Multiply Add per power.
     horner = []
     for k in range(degree - 1, -1, -1):
-        n = _math(tree, f"disc_horner_{k}", 'MULTIPLY_ADD',
-                  (x + 1440 + 180 * (degree - 1 - k), y), frame, vector=True)
+        n = _math(
+            tree,
+            f"disc_horner_{k}",
+            "MULTIPLY_ADD",
+            (x + 1440 + 180 * (degree - 1 - k), y),
+            frame,
+            vector=True,
+        )
         if horner:
-            links.new(horner[-1].outputs['Vector'], n.inputs[0])
-        links.new(mu.outputs['Value'], n.inputs[1])
+            links.new(horner[-1].outputs["Vector"], n.inputs[0])
+        links.new(mu.outputs["Value"], n.inputs[1])
         horner.append(n)
-    radiance = _math(tree, "disc_radiance", 'SCALE', (x + 1440 + 180 * degree, y), frame,
-                     vector=True)
-    links.new(horner[-1].outputs['Vector'], radiance.inputs[0])
-    links.new(mask.outputs['Value'], radiance.inputs['Scale'])
+    radiance = _math(tree, "disc_radiance", "SCALE", (x + 1440 + 180 * degree, y), frame, vector=True)
+    links.new(horner[-1].outputs["Vector"], radiance.inputs[0])
+    links.new(mask.outputs["Value"], radiance.inputs["Scale"])
     # The numbers.
     if disc is not None:
         direction, sin_alpha = disc.direction, math.sin(disc.radius_rad)
@@ -138,7 +147,7 @@ def _disc_nodes(tree, frame, x, y, disc):
     horner[0].inputs[0].default_value = tuple(float(v) for v in c[degree])
     for n, k in zip(horner, range(degree - 1, -1, -1)):
         n.inputs[2].default_value = tuple(float(v) for v in c[k])
-    return radiance.outputs['Vector']
+    return radiance.outputs["Vector"]
 
 
 def install(world, settings, sky_image, disc):
@@ -160,7 +169,7 @@ def install(world, settings, sky_image, disc):
         settings.previous_sun_threshold = threshold
     compat.set_world_sun_threshold(world, 0.0)
     if cycles is not None:
-        cycles.sampling_method = 'MANUAL'
+        cycles.sampling_method = "MANUAL"
         cycles.sample_map_resolution = min(MAP_RESOLUTION, sky_image.size[0])
     for n in _ours(tree):
         if n.get(ROLE_KEY) in OLD_ROLES:
@@ -168,34 +177,34 @@ def install(world, settings, sky_image, disc):
     xs = [n.location.x for n in tree.nodes if not n.get(ROLE_KEY)] or [0.0]
     ys = [n.location.y for n in tree.nodes if not n.get(ROLE_KEY)] or [0.0]
     x0, y0 = min(xs), min(ys) - 400.0
-    frame = _node(tree, "frame", 'NodeFrame', (x0, y0), None)
+    frame = _node(tree, "frame", "NodeFrame", (x0, y0), None)
     frame.label = "Welkin Sky"
-    sky = _node(tree, "sky_texture", 'ShaderNodeTexEnvironment', (x0, y0), frame)
+    sky = _node(tree, "sky_texture", "ShaderNodeTexEnvironment", (x0, y0), frame)
     sky.image = sky_image
-    sky.projection = 'EQUIRECTANGULAR'
-    sky.interpolation = 'Linear'
-    bg_sky = _node(tree, "sky_background", 'ShaderNodeBackground', (x0 + 320, y0), frame)
-    bg_sky.inputs['Strength'].default_value = 1.0
+    sky.projection = "EQUIRECTANGULAR"
+    sky.interpolation = "Linear"
+    bg_sky = _node(tree, "sky_background", "ShaderNodeBackground", (x0 + 320, y0), frame)
+    bg_sky.inputs["Strength"].default_value = 1.0
     disc_color = _disc_nodes(tree, frame, x0 - 1400, y0 - 350, disc)
-    path = _node(tree, "light_path", 'ShaderNodeLightPath', (x0 + 300, y0 - 650), frame)
-    bg_disc = _node(tree, "disc_background", 'ShaderNodeBackground', (x0 + 520, y0 - 350), frame)
-    add = _node(tree, "add", 'ShaderNodeAddShader', (x0 + 720, y0 - 100), frame)
-    out = _node(tree, "output", 'ShaderNodeOutputWorld', (x0 + 920, y0 - 100), frame)
+    path = _node(tree, "light_path", "ShaderNodeLightPath", (x0 + 300, y0 - 650), frame)
+    bg_disc = _node(tree, "disc_background", "ShaderNodeBackground", (x0 + 520, y0 - 350), frame)
+    add = _node(tree, "add", "ShaderNodeAddShader", (x0 + 720, y0 - 100), frame)
+    out = _node(tree, "output", "ShaderNodeOutputWorld", (x0 + 920, y0 - 100), frame)
     links = tree.links
-    links.new(sky.outputs['Color'], bg_sky.inputs['Color'])
-    links.new(disc_color, bg_disc.inputs['Color'])
+    links.new(sky.outputs["Color"], bg_sky.inputs["Color"])
+    links.new(disc_color, bg_disc.inputs["Color"])
     if settings.show_sun_disc and disc is not None:
-        links.new(path.outputs['Is Camera Ray'], bg_disc.inputs['Strength'])
+        links.new(path.outputs["Is Camera Ray"], bg_disc.inputs["Strength"])
     else:
-        for link in list(bg_disc.inputs['Strength'].links):
+        for link in list(bg_disc.inputs["Strength"].links):
             links.remove(link)
-        bg_disc.inputs['Strength'].default_value = 0.0
-    links.new(bg_sky.outputs['Background'], add.inputs[0])
-    links.new(bg_disc.outputs['Background'], add.inputs[1])
-    links.new(add.outputs['Shader'], out.inputs['Surface'])
-    out.target = 'ALL'
+        bg_disc.inputs["Strength"].default_value = 0.0
+    links.new(bg_sky.outputs["Background"], add.inputs[0])
+    links.new(bg_disc.outputs["Background"], add.inputs[1])
+    links.new(add.outputs["Shader"], out.inputs["Surface"])
+    out.target = "ALL"
     for n in tree.nodes:
-        if n.bl_idname == 'ShaderNodeOutputWorld' and n is not out:
+        if n.bl_idname == "ShaderNodeOutputWorld" and n is not out:
             n.is_active_output = False
     out.is_active_output = True
 
