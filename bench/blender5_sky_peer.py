@@ -183,6 +183,11 @@ def main():
                 prep.append(with_sky - render(scene, tmp / "small.exr"))
             rows.append((e, label, theirs, statistics.median(prep)))
 
+    write_results(rows, args)
+
+
+def write_results(rows, args):
+    """Prints the table, writes the CSV and, with --docs, the table into docs/validation.md."""
     header = (
         "| sun | sky | zenith | horizon ring | hemisphere mean | Welkin / it: zenith, "
         "horizon, hemisphere | preparation |"

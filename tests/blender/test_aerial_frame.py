@@ -212,6 +212,46 @@ def cycles_depth(scene, tmp):
     return _depth
 
 
+def check_group_nodes(engine):
+    """The material group's nodes: what each engine's form evaluates."""
+    # The group reads the table as this engine filters best: the screen table in three
+    # linear fetches in Cycles, the direction table in sixteen nearest-texel fetches filtered
+    # by its own nodes in EEVEE.
+    group = bpy.data.node_groups[aerial_frame.SHADER_GROUP]
+    fetches = {n.interpolation for n in group.nodes if n.bl_idname == "ShaderNodeTexImage"}
+    count = sum(n.bl_idname == "ShaderNodeTexImage" for n in group.nodes)
+    cycles = engine == "CYCLES"
+    at.check(
+        (fetches, count) == (({"Linear"}, 3) if cycles else ({"Closest"}, 16)),
+        f"{engine}: the group fetches {count} texels, {fetches}",
+    )
+    # Cycles evaluates the group at every camera-ray sample: the screen form's 12 nodes that
+    # a perspective camera's group links (the View Vector's: Texture Coordinate is left out),
+    # each of the kinds that take the fewest of Cycles' instructions (docs/design.md), are
+    # what keeps aerial perspective within 10 % of a render (docs/validation.md).
+    if cycles:
+        used = sorted(
+            n.bl_idname
+            for n in group.nodes
+            if n.bl_idname == "ShaderNodeOutputAOV" or any(o.is_linked for o in n.outputs)
+        )
+        want = sorted(
+            [
+                "ShaderNodeCameraData",
+                "ShaderNodeMath",
+                "ShaderNodeVectorMath",
+                "ShaderNodeVectorMath",
+                *["ShaderNodeTexImage"] * 3,
+                "ShaderNodeCombineColor",
+                "ShaderNodeMix",
+                "ShaderNodeMix",
+                "ShaderNodeOutputAOV",
+                "ShaderNodeOutputAOV",
+            ]
+        )
+        at.check(used == want, f"the Cycles group evaluates {used}, not {want}")
+
+
 def run_engine(scene, engine, tmp):
     scene.render.engine = engine
     if hasattr(scene, "eevee"):
@@ -285,42 +325,7 @@ def run_engine(scene, engine, tmp):
     bpy.ops.render.render(write_still=True)
     got, _ = read(tmp / "f12.exr")
     compare(f"{engine} F12 frame 1", got, want[1], off[1], far_mask(depth[1]) & blocks(scene, 1, depth[1]))
-    # The group reads the table as this engine filters best: the screen table in three
-    # linear fetches in Cycles, the direction table in sixteen nearest-texel fetches filtered
-    # by its own nodes in EEVEE.
-    group = bpy.data.node_groups[aerial_frame.SHADER_GROUP]
-    fetches = {n.interpolation for n in group.nodes if n.bl_idname == "ShaderNodeTexImage"}
-    count = sum(n.bl_idname == "ShaderNodeTexImage" for n in group.nodes)
-    cycles = engine == "CYCLES"
-    at.check(
-        (fetches, count) == (({"Linear"}, 3) if cycles else ({"Closest"}, 16)),
-        f"{engine}: the group fetches {count} texels, {fetches}",
-    )
-    # Cycles evaluates the group at every camera-ray sample: the screen form's 12 nodes that
-    # a perspective camera's group links (the View Vector's: Texture Coordinate is left out),
-    # each of the kinds that take the fewest of Cycles' instructions (docs/design.md), are
-    # what keeps aerial perspective within 10 % of a render (docs/validation.md).
-    if cycles:
-        used = sorted(
-            n.bl_idname
-            for n in group.nodes
-            if n.bl_idname == "ShaderNodeOutputAOV" or any(o.is_linked for o in n.outputs)
-        )
-        want = sorted(
-            [
-                "ShaderNodeCameraData",
-                "ShaderNodeMath",
-                "ShaderNodeVectorMath",
-                "ShaderNodeVectorMath",
-                *["ShaderNodeTexImage"] * 3,
-                "ShaderNodeCombineColor",
-                "ShaderNodeMix",
-                "ShaderNodeMix",
-                "ShaderNodeOutputAOV",
-                "ShaderNodeOutputAOV",
-            ]
-        )
-        at.check(used == want, f"the Cycles group evaluates {used}, not {want}")
+    check_group_nodes(engine)
     # Removable exactly.
     scene.welkin_aerial.enabled = False
     after = snapshot(scene)
