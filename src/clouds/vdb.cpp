@@ -47,6 +47,11 @@ struct VdbClouds::Impl {
     float cell_at(int i, int j, int k) const { return majorant[(std::size_t(k) * n[1] + j) * n[0] + i]; }
 
     std::string where() const { return fmt::format("grid '{}' of VDB file '{}'", grid_name, path); }
+
+    // The steps of VdbClouds::load once the grid is read and its header checked.
+    void check_values(VdbCloudOptions::Negative negative);
+    void set_transforms(const VdbCloudOptions& options);
+    void build_majorant();
 };
 
 namespace {
@@ -383,6 +388,88 @@ void check_extent(const openvdb::Coord& lo, const openvdb::Coord& hi, const std:
 
 }  // namespace
 
+// Values: non-finite ones are rejected, negative ones clamped (and counted) or rejected.
+void VdbClouds::Impl::check_values(VdbCloudOptions::Negative negative) {
+    for (auto it = grid->beginValueOn(); it; ++it) {
+        const float v = *it;
+        if (!std::isfinite(v))
+            throw InvalidArgument("grid", fmt::format("{} holds a non-finite value at {}", where(),
+                                                      it.getCoord().asVec3i().str()));
+        if (v < 0.0f) {
+            if (negative == VdbCloudOptions::Negative::Reject)
+                throw InvalidArgument(
+                    "grid", fmt::format("{} holds a negative density {} at {} (densities must be >= 0; "
+                                        "the Clamp policy sets them to 0)",
+                                        where(), v, it.getCoord().asVec3i().str()));
+            negatives += it.isVoxelValue() ? 1 : it.getVoxelCount();
+            it.setValue(0.0f);
+        } else {
+            max_value = std::max(max_value, v);
+        }
+    }
+}
+
+// Index -> world (file transform, voxel placement, matrix_world), refusing a singular one.
+void VdbClouds::Impl::set_transforms(const VdbCloudOptions& options) {
+    // Transforms: index -> object from the file (OpenVDB's Mat4d acts on row vectors,
+    // p' = p M, so its transpose is glm's column-vector matrix), then object -> world.
+    const openvdb::Mat4d vm = grid->transform().baseMap()->getAffineMap()->getMat4();
+    glm::dmat4 index_to_object;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) index_to_object[c][r] = vm(c, r);
+    // The voxel placement (see the header): Blender's puts voxel ijk's value at index point
+    // ijk + 1/2, i.e. the grid's index frame is translated by +1/2 before its transform.
+    const double offset = options.placement == VdbCloudOptions::VoxelPlacement::Blender ? 0.5 : 0.0;
+    const glm::dmat4 placement = glm::translate(glm::dmat4(1.0), glm::dvec3(offset));
+    index_to_world = options.matrix_world * index_to_object * placement;
+    const double det = glm::determinant(glm::dmat3(index_to_world));
+    if (!(std::abs(det) > 1e-30) || !std::isfinite(det))
+        throw InvalidArgument("matrix_world",
+                              fmt::format("maps {} to a degenerate (singular) volume", where()));
+    world_to_index = glm::inverse(index_to_world);
+    voxel_size_m = std::cbrt(std::abs(det));
+}
+
+// The majorant grid over the active bounding box, dilated by one cell.
+void VdbClouds::Impl::build_majorant() {
+    // The majorant grid over the active bounding box, one voxel of margin for interpolation.
+    openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
+    box.expand(1);
+    const openvdb::Coord extent = box.dim();
+    const int largest = std::max({extent.x(), extent.y(), extent.z()});
+    cell = std::max(8, (largest + 63) / 64);
+    origin = box.min();
+    for (int a = 0; a < 3; ++a) n[a] = (extent[a] + cell - 1) / cell;
+    majorant.assign(std::size_t(n[0]) * n[1] * n[2], 0.0f);
+    const auto cell_of = [&](int a, int i) { return std::clamp((i - origin[a]) / cell, 0, n[a] - 1); };
+    for (auto it = grid->cbeginValueOn(); it; ++it) {
+        const float v = *it;
+        if (!(v > 0.0f)) continue;
+        openvdb::CoordBBox b;
+        it.getBoundingBox(b);
+        for (int k = cell_of(2, b.min().z()); k <= cell_of(2, b.max().z()); ++k)
+            for (int j = cell_of(1, b.min().y()); j <= cell_of(1, b.max().y()); ++j)
+                for (int i = cell_of(0, b.min().x()); i <= cell_of(0, b.max().x()); ++i)
+                    cell_at(i, j, k) = std::max(cell_at(i, j, k), v);
+    }
+    // Dilate by one cell: a voxel next to a cell's face reaches into it by interpolation.
+    std::vector<float> own = majorant;
+    for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+            for (int i = 0; i < n[0]; ++i) {
+                float v = 0.0f;
+                for (int dk = -1; dk <= 1; ++dk)
+                    for (int dj = -1; dj <= 1; ++dj)
+                        for (int di = -1; di <= 1; ++di) {
+                            const int ii = i + di, jj = j + dj, kk = k + dk;
+                            if (ii < 0 || jj < 0 || kk < 0 || ii >= n[0] || jj >= n[1] || kk >= n[2])
+                                continue;
+                            v = std::max(v, own[(std::size_t(kk) * n[1] + jj) * n[0] + ii]);
+                        }
+                cell_at(i, j, k) = v;
+            }
+}
+
 VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options)
     : impl_(std::make_unique<Impl>()) {
     try {
@@ -483,79 +570,9 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
             "grid",
             fmt::format("{} has a non-affine (frustum) transform, which Welkin does not read", m.where()));
 
-    // Values: non-finite ones are rejected, negative ones clamped (and counted) or rejected.
-    for (auto it = m.grid->beginValueOn(); it; ++it) {
-        const float v = *it;
-        if (!std::isfinite(v))
-            throw InvalidArgument("grid", fmt::format("{} holds a non-finite value at {}", m.where(),
-                                                      it.getCoord().asVec3i().str()));
-        if (v < 0.0f) {
-            if (options.negative == VdbCloudOptions::Negative::Reject)
-                throw InvalidArgument(
-                    "grid", fmt::format("{} holds a negative density {} at {} (densities must be >= 0; "
-                                        "the Clamp policy sets them to 0)",
-                                        m.where(), v, it.getCoord().asVec3i().str()));
-            m.negatives += it.isVoxelValue() ? 1 : it.getVoxelCount();
-            it.setValue(0.0f);
-        } else {
-            m.max_value = std::max(m.max_value, v);
-        }
-    }
-
-    // Transforms: index -> object from the file (OpenVDB's Mat4d acts on row vectors,
-    // p' = p M, so its transpose is glm's column-vector matrix), then object -> world.
-    const openvdb::Mat4d vm = m.grid->transform().baseMap()->getAffineMap()->getMat4();
-    glm::dmat4 index_to_object;
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) index_to_object[c][r] = vm(c, r);
-    // The voxel placement (see the header): Blender's puts voxel ijk's value at index point
-    // ijk + 1/2, i.e. the grid's index frame is translated by +1/2 before its transform.
-    const double offset = options.placement == VdbCloudOptions::VoxelPlacement::Blender ? 0.5 : 0.0;
-    const glm::dmat4 placement = glm::translate(glm::dmat4(1.0), glm::dvec3(offset));
-    m.index_to_world = options.matrix_world * index_to_object * placement;
-    const double det = glm::determinant(glm::dmat3(m.index_to_world));
-    if (!(std::abs(det) > 1e-30) || !std::isfinite(det))
-        throw InvalidArgument("matrix_world",
-                              fmt::format("maps {} to a degenerate (singular) volume", m.where()));
-    m.world_to_index = glm::inverse(m.index_to_world);
-    m.voxel_size_m = std::cbrt(std::abs(det));
-
-    // The majorant grid over the active bounding box, one voxel of margin for interpolation.
-    openvdb::CoordBBox box = m.grid->evalActiveVoxelBoundingBox();
-    box.expand(1);
-    const openvdb::Coord extent = box.dim();
-    const int largest = std::max({extent.x(), extent.y(), extent.z()});
-    m.cell = std::max(8, (largest + 63) / 64);
-    m.origin = box.min();
-    for (int a = 0; a < 3; ++a) m.n[a] = (extent[a] + m.cell - 1) / m.cell;
-    m.majorant.assign(std::size_t(m.n[0]) * m.n[1] * m.n[2], 0.0f);
-    const auto cell_of = [&](int a, int i) { return std::clamp((i - m.origin[a]) / m.cell, 0, m.n[a] - 1); };
-    for (auto it = m.grid->cbeginValueOn(); it; ++it) {
-        const float v = *it;
-        if (!(v > 0.0f)) continue;
-        openvdb::CoordBBox b;
-        it.getBoundingBox(b);
-        for (int k = cell_of(2, b.min().z()); k <= cell_of(2, b.max().z()); ++k)
-            for (int j = cell_of(1, b.min().y()); j <= cell_of(1, b.max().y()); ++j)
-                for (int i = cell_of(0, b.min().x()); i <= cell_of(0, b.max().x()); ++i)
-                    m.cell_at(i, j, k) = std::max(m.cell_at(i, j, k), v);
-    }
-    // Dilate by one cell: a voxel next to a cell's face reaches into it by interpolation.
-    std::vector<float> own = m.majorant;
-    for (int k = 0; k < m.n[2]; ++k)
-        for (int j = 0; j < m.n[1]; ++j)
-            for (int i = 0; i < m.n[0]; ++i) {
-                float v = 0.0f;
-                for (int dk = -1; dk <= 1; ++dk)
-                    for (int dj = -1; dj <= 1; ++dj)
-                        for (int di = -1; di <= 1; ++di) {
-                            const int ii = i + di, jj = j + dj, kk = k + dk;
-                            if (ii < 0 || jj < 0 || kk < 0 || ii >= m.n[0] || jj >= m.n[1] || kk >= m.n[2])
-                                continue;
-                            v = std::max(v, own[(std::size_t(kk) * m.n[1] + jj) * m.n[0] + ii]);
-                        }
-                m.cell_at(i, j, k) = v;
-            }
+    m.check_values(options.negative);
+    m.set_transforms(options);
+    m.build_majorant();
 }
 
 VdbClouds::~VdbClouds() = default;

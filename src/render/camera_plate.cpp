@@ -115,6 +115,14 @@ struct CameraPlateRenderer::Impl {
         return s;
     }
 
+    // The steps of render() over a band's rows (plate.depth already cut to the band).
+    void add_sky(CameraPlate& plate, const std::vector<std::size_t>& sky_pixels,
+                 const std::vector<glm::dvec3>& sky_dirs, const SpectrumToRgb& sky_to_rgb,
+                 Progress* progress) const;
+    void add_sun_disc(CameraPlate& plate, RowRange band, const SpectrumToRgb& sun_to_rgb) const;
+    void add_lit_ground(CameraPlate& plate, RowRange band, const SpectrumToRgb& sun_to_rgb) const;
+    void add_clouds(CameraPlate& plate, RowRange band, Progress* host_progress) const;
+
     SceneDescription scene;
     int w, h;
     CameraRays rays;
@@ -139,63 +147,33 @@ int CameraPlateRenderer::height() const { return impl_->h; }
 const std::string& CameraPlateRenderer::method() const { return impl_->method_name; }
 bool CameraPlateRenderer::has_clouds() const { return bool(impl_->clouds); }
 
-CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progress) const {
-    const Impl& f = *impl_;
-    const SceneDescription& scene = f.scene;
+// The sky's radiance on the band's sky pixels (q relative to the band), one call.
+void CameraPlateRenderer::Impl::add_sky(CameraPlate& plate, const std::vector<std::size_t>& sky_pixels,
+                                        const std::vector<glm::dvec3>& sky_dirs,
+                                        const SpectrumToRgb& sky_to_rgb, Progress* progress) const {
     const Atmosphere& atm = scene.atmosphere;
-    const int w = f.w, h = f.h;
-    const RowRange band = rows_in.resolved(h);
-    const std::size_t q0 = std::size_t(band.begin) * std::size_t(w);
-    const std::size_t nb = std::size_t(band.size()) * std::size_t(w);
-    // The clouds' march takes most of the time: the sky and the air get the first 30 % of
-    // the progress.
-    ProgressStage clear_stage(host_progress, 0.0, f.clouds ? 0.3 : 1.0);
-    Progress* progress = host_progress ? &clear_stage : nullptr;
-    check(progress, 0.0);
-
-    CameraPlate plate;
-    plate.width = w;
-    plate.height = band.size();
-    plate.row_begin = band.begin;
-    plate.frame_height = h;
-    plate.method = f.method_name;
-    plate.depth.assign(f.depth.begin() + std::ptrdiff_t(q0), f.depth.begin() + std::ptrdiff_t(q0 + nb));
-
-    // Sky radiance for the band's sky pixels (q relative to the band), one call.
-    std::vector<std::size_t> sky_pixels;
-    std::vector<glm::dvec3> sky_dirs;
-    for (std::size_t q = 0; q < nb; ++q)
-        if (std::isinf(plate.depth[q])) {
-            sky_pixels.push_back(q);
-            sky_dirs.push_back(
-                f.rays.at_pixel(int((q0 + q) % std::size_t(w)), int((q0 + q) / std::size_t(w))).direction);
+    ProgressStage stage(progress, 0.02, 0.6);
+    const SkyResult sky = sky_radiance(*method, atm, observer, sky_dirs, &stage);
+    std::vector<float> rgb(sky_dirs.size() * 3);
+    sky_to_rgb.convert(sky.radiance, rgb);
+    for (std::size_t k = 0; k < sky_pixels.size(); ++k)
+        for (int c = 0; c < 3; ++c) {
+            const float v = rgb[k * 3 + c];
+            if (!std::isfinite(v))
+                throw std::runtime_error(
+                    fmt::format("sky method {} returned a non-finite radiance", plate.method));
+            plate.sky[sky_pixels[k] * 3 + c] = v * float(scene.exposure);
         }
-    const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0, scene.color_space),
-        sun_to_rgb(atm.wavelengths_nm, 0.0, scene.color_space);
-    plate.sky.assign(nb * 3, 0.0f);
-    if (!sky_dirs.empty()) {
-        ProgressStage stage(progress, 0.02, 0.6);
-        const SkyResult sky = sky_radiance(*f.method, atm, f.observer, sky_dirs, &stage);
-        std::vector<float> rgb(sky_dirs.size() * 3);
-        sky_to_rgb.convert(sky.radiance, rgb);
-        for (std::size_t k = 0; k < sky_pixels.size(); ++k)
-            for (int c = 0; c < 3; ++c) {
-                const float v = rgb[k * 3 + c];
-                if (!std::isfinite(v))
-                    throw std::runtime_error(
-                        fmt::format("sky method {} returned a non-finite radiance", plate.method));
-                plate.sky[sky_pixels[k] * 3 + c] = v * float(scene.exposure);
-            }
-    }
-    check(progress, 0.6);
+}
 
-    // The sun's disc on the band's sky pixels (Impl: its mean radiance and limb darkening).
+// The sun's disc on the band's sky pixels (Impl: its mean radiance and limb darkening).
+void CameraPlateRenderer::Impl::add_sun_disc(CameraPlate& plate, RowRange band,
+                                             const SpectrumToRgb& sun_to_rgb) const {
+    const Atmosphere& atm = scene.atmosphere;
     const std::size_t nc = atm.channels();
-    const SunDisc& disc = *f.sun;
+    const SunDisc& disc = *sun;
     const double alpha = disc.angular_radius_rad();
     const glm::dvec3 s = disc.direction();
-    const CameraRays& rays = f.rays;
-    const double R = f.R;
     tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const auto& rows) {
         std::vector<double> spectrum_d(nc);
         std::vector<float> spectrum(nc);
@@ -222,7 +200,7 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
                             rays.at_screen(sx + ((a + 0.5) / S - 0.5) / w, sy + ((b + 0.5) / S - 0.5) / h);
                         const double rho = angle_between(ray.direction, s);
                         if (rho > alpha) continue;
-                        const glm::dvec3 rel = ray.origin - f.centre;
+                        const glm::dvec3 rel = ray.origin - centre;
                         const double r = glm::length(rel);
                         if (ray_hits_ground(r, glm::dot(rel, ray.direction) / r, R)) continue;
                         any = disc.add_radiance(rho, 1.0 / (S * S), spectrum_d) || any;
@@ -233,52 +211,45 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
                 for (int c = 0; c < 3; ++c) plate.sky[q * 3 + c] += float(add[c] * scene.exposure);
             }
     });
-    check(progress, 0.65);
+}
 
-    // Aerial perspective over the band's ground pixels (fitted to the whole frame's depth).
-    {
-        ProgressStage stage(progress, 0.65, 1.0);
-        plate.inscatter.resize(nb * 3);
-        plate.transmittance.resize(nb * 3);
-        f.aerial->render(band, plate.inscatter, plate.transmittance, &stage);
-    }
-    check(progress, 1.0);
-    plate.combined.resize(nb * 3);
-    for (std::size_t k = 0; k < nb * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
-    // The lit ground seen through the air (camera_plate.hpp): + T x albedo / pi x E(p).
-    if (f.ground) {
-        tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const auto& rows) {
-            std::vector<double> e(nc);
-            std::vector<float> surface(nc);
-            for (int j = rows.begin(); j != rows.end(); ++j)
-                for (int i = 0; i < w; ++i) {
-                    const std::size_t q = std::size_t(j - band.begin) * std::size_t(w) + std::size_t(i);
-                    const float z = plate.depth[q];
-                    if (!std::isfinite(z) || !(z > 0.0f)) continue;
-                    const CameraRays::Ray ray = rays.at_pixel(i, j);
-                    const glm::dvec3 p =
-                        ray.origin + double(z) * ray.distance_per_depth * ray.direction - f.centre;
-                    f.ground->irradiance(glm::dot(glm::normalize(p), s), e);
-                    for (std::size_t c = 0; c < nc; ++c)
-                        surface[c] = float(f.ground_albedo_over_pi[c] * e[c]);
-                    const std::array<double, 3> rgb = sun_to_rgb.convert(surface);
-                    for (int k = 0; k < 3; ++k)
-                        plate.combined[q * 3 + k] +=
-                            plate.transmittance[q * 3 + k] * float(rgb[k] * scene.exposure);
-                }
-        });
-    }
+// The lit ground seen through the air (camera_plate.hpp): + T x albedo / pi x E(p).
+void CameraPlateRenderer::Impl::add_lit_ground(CameraPlate& plate, RowRange band,
+                                               const SpectrumToRgb& sun_to_rgb) const {
+    const std::size_t nc = scene.atmosphere.channels();
+    const glm::dvec3 s = sun->direction();
+    tbb::parallel_for(tbb::blocked_range<int>(band.begin, band.end), [&](const auto& rows) {
+        std::vector<double> e(nc);
+        std::vector<float> surface(nc);
+        for (int j = rows.begin(); j != rows.end(); ++j)
+            for (int i = 0; i < w; ++i) {
+                const std::size_t q = std::size_t(j - band.begin) * std::size_t(w) + std::size_t(i);
+                const float z = plate.depth[q];
+                if (!std::isfinite(z) || !(z > 0.0f)) continue;
+                const CameraRays::Ray ray = rays.at_pixel(i, j);
+                const glm::dvec3 p = ray.origin + double(z) * ray.distance_per_depth * ray.direction - centre;
+                ground->irradiance(glm::dot(glm::normalize(p), s), e);
+                for (std::size_t c = 0; c < nc; ++c) surface[c] = float(ground_albedo_over_pi[c] * e[c]);
+                const std::array<double, 3> rgb = sun_to_rgb.convert(surface);
+                for (int k = 0; k < 3; ++k)
+                    plate.combined[q * 3 + k] +=
+                        plate.transmittance[q * 3 + k] * float(rgb[k] * scene.exposure);
+            }
+    });
+}
 
-    // Clouds over the sky and the hazed ground (cloud_passes.hpp): the band's clouds, ending
-    // at the whole frame's ground depth, so the ground (depth) hides what is below it, and
-    // Combined = Clouds.rgb + (1 - Clouds.a) (Image x T + Inscatter) with Image x T +
-    // Inscatter = the clear plate's combined (Image = the sky with its disc, T = 1 on sky
-    // pixels; Image = 0 on the black ground): so the sun's disc is dimmed by the cloud's
-    // transmittance, 1 - alpha.
-    if (f.clouds) {
+// Clouds over the sky and the hazed ground (cloud_passes.hpp): the band's clouds, ending
+// at the whole frame's ground depth, so the ground (depth) hides what is below it, and
+// Combined = Clouds.rgb + (1 - Clouds.a) (Image x T + Inscatter) with Image x T +
+// Inscatter = the clear plate's combined (Image = the sky with its disc, T = 1 on sky
+// pixels; Image = 0 on the black ground): so the sun's disc is dimmed by the cloud's
+// transmittance, 1 - alpha.
+void CameraPlateRenderer::Impl::add_clouds(CameraPlate& plate, RowRange band, Progress* host_progress) const {
+    const std::size_t nb = std::size_t(band.size()) * std::size_t(w);
+    if (clouds) {
         ProgressStage cloud_stage(host_progress, 0.3, 1.0);
         CloudPasses passes =
-            render_cloud_passes(scene, *f.clouds, f.depth, host_progress ? &cloud_stage : nullptr, band);
+            render_cloud_passes(scene, *clouds, depth, host_progress ? &cloud_stage : nullptr, band);
         for (std::size_t q = 0; q < nb; ++q) {
             const float* c = &passes.clouds[q * 4];
             for (int k = 0; k < 3; ++k)
@@ -291,6 +262,61 @@ CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progres
         plate.clouds.assign(nb * 4, 0.0f);
         plate.cloud_depth.assign(nb, kNoCloudDepth);
     }
+}
+
+CameraPlate CameraPlateRenderer::render(RowRange rows_in, Progress* host_progress) const {
+    const Impl& f = *impl_;
+    const SceneDescription& scene = f.scene;
+    const Atmosphere& atm = scene.atmosphere;
+    const int w = f.w, h = f.h;
+    const RowRange band = rows_in.resolved(h);
+    const std::size_t q0 = std::size_t(band.begin) * std::size_t(w);
+    const std::size_t nb = std::size_t(band.size()) * std::size_t(w);
+    // The clouds' march takes most of the time: the sky and the air get the first 30 % of
+    // the progress.
+    ProgressStage clear_stage(host_progress, 0.0, f.clouds ? 0.3 : 1.0);
+    Progress* progress = host_progress ? &clear_stage : nullptr;
+    check(progress, 0.0);
+
+    CameraPlate plate;
+    plate.width = w;
+    plate.height = band.size();
+    plate.row_begin = band.begin;
+    plate.frame_height = h;
+    plate.method = f.method_name;
+    plate.depth.assign(f.depth.begin() + std::ptrdiff_t(q0), f.depth.begin() + std::ptrdiff_t(q0 + nb));
+
+    // The band's sky pixels (q relative to the band) and their view directions.
+    std::vector<std::size_t> sky_pixels;
+    std::vector<glm::dvec3> sky_dirs;
+    for (std::size_t q = 0; q < nb; ++q)
+        if (std::isinf(plate.depth[q])) {
+            sky_pixels.push_back(q);
+            sky_dirs.push_back(
+                f.rays.at_pixel(int((q0 + q) % std::size_t(w)), int((q0 + q) / std::size_t(w))).direction);
+        }
+    const SpectrumToRgb sky_to_rgb(atm.wavelengths_nm, -3.0, scene.color_space),
+        sun_to_rgb(atm.wavelengths_nm, 0.0, scene.color_space);
+    plate.sky.assign(nb * 3, 0.0f);
+    if (!sky_dirs.empty()) f.add_sky(plate, sky_pixels, sky_dirs, sky_to_rgb, progress);
+    check(progress, 0.6);
+
+    f.add_sun_disc(plate, band, sun_to_rgb);
+    check(progress, 0.65);
+
+    // Aerial perspective over the band's ground pixels (fitted to the whole frame's depth).
+    {
+        ProgressStage stage(progress, 0.65, 1.0);
+        plate.inscatter.resize(nb * 3);
+        plate.transmittance.resize(nb * 3);
+        f.aerial->render(band, plate.inscatter, plate.transmittance, &stage);
+    }
+    check(progress, 1.0);
+    plate.combined.resize(nb * 3);
+    for (std::size_t k = 0; k < nb * 3; ++k) plate.combined[k] = plate.sky[k] + plate.inscatter[k];
+    if (f.ground) f.add_lit_ground(plate, band, sun_to_rgb);
+
+    f.add_clouds(plate, band, host_progress);
     if (host_progress && !host_progress->report(1.0)) throw Cancelled();
     return plate;
 }

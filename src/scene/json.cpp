@@ -103,6 +103,133 @@ bool boolean(const json& j, const std::string& parameter) {
     return j.get<bool>();
 }
 
+// One of "clouds.layers" (p: its key path): the type's preset, then the keys given.
+CloudLayerParams parse_cloud_layer(const json& l, const std::string& p) {
+    json_check_keys(l, p,
+                    {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "density_per_m",
+                     "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
+                     "weather_variation", "wind_offset_m", "evolution_m", "seed"});
+    // The type's preset first (procedural.hpp), then the keys given override it.
+    CloudLayerParams c;
+    if (l.contains("cloud_type"))
+        c = CloudLayerParams::preset(
+            cloud_type_from_name(string(l["cloud_type"], p + ".cloud_type"), p + ".cloud_type"));
+    const auto get = [&](const char* key, double& v) {
+        if (l.contains(key)) v = json_number(l[key], p + "." + key);
+    };
+    get("bottom_altitude_m", c.bottom_altitude_m);
+    get("top_altitude_m", c.top_altitude_m);
+    get("coverage", c.coverage);
+    get("density_per_m", c.density_per_m);
+    get("base_scale_m", c.base_scale_m);
+    get("detail_scale_m", c.detail_scale_m);
+    get("weather_scale_m", c.weather_scale_m);
+    get("detail_strength", c.detail_strength);
+    get("weather_variation", c.weather_variation);
+    if (l.contains("evolution_m")) c.evolution_m = json_number(l["evolution_m"], p + ".evolution_m");
+    if (l.contains("wind_offset_m")) {
+        const json& w = l["wind_offset_m"];
+        if (!w.is_array() || w.size() != 2)
+            throw InvalidArgument(p + ".wind_offset_m", "must be an array of 2 numbers [x, y] (m)");
+        c.wind_offset_m = {json_number(w[0], p + ".wind_offset_m[0]"),
+                           json_number(w[1], p + ".wind_offset_m[1]")};
+    }
+    if (l.contains("seed")) c.seed = unsigned_integer(l["seed"], p + ".seed");
+    return c;
+}
+
+// One of "clouds.volumes" (p: its key path); a relative file is taken relative to `base`.
+SceneCloudVolume parse_cloud_volume(const json& v, const std::string& p, const std::filesystem::path& base) {
+    json_check_keys(v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative", "placement"});
+    SceneCloudVolume vol;
+    if (v.contains("name")) vol.name = string(v["name"], p + ".name");
+    if (!v.contains("file"))
+        throw InvalidArgument(p + ".file", "is required: the volume's .vdb file for this frame");
+    const std::string file = string(v["file"], p + ".file");
+    if (file.empty()) throw InvalidArgument(p + ".file", "must not be empty");
+    const std::filesystem::path fp(file);
+    vol.file = fp.is_absolute() || base.empty() ? file : (base / fp).lexically_normal().string();
+    if (v.contains("grid")) vol.options.grid = string(v["grid"], p + ".grid");
+    if (v.contains("matrix_world"))
+        vol.options.matrix_world = matrix_rows(v["matrix_world"], p + ".matrix_world");
+    if (v.contains("density_scale"))
+        vol.options.density_scale = json_number(v["density_scale"], p + ".density_scale");
+    if (v.contains("negative"))
+        vol.options.negative =
+            vdb_negative_from_name(string(v["negative"], p + ".negative"), p + ".negative");
+    if (v.contains("placement"))
+        vol.options.placement =
+            vdb_placement_from_name(string(v["placement"], p + ".placement"), p + ".placement");
+    return vol;
+}
+
+// "clouds.scattering" into the lighting's scattering.
+void parse_cloud_scattering(const json& sc, CloudScattering& c) {
+    json_check_keys(sc, "clouds.scattering", {"albedo", "g_forward", "g_back", "w_forward"});
+    if (sc.contains("albedo")) c.albedo = json_number(sc["albedo"], "clouds.scattering.albedo");
+    if (sc.contains("g_forward"))
+        c.phase.g_forward = json_number(sc["g_forward"], "clouds.scattering.g_forward");
+    if (sc.contains("g_back")) c.phase.g_back = json_number(sc["g_back"], "clouds.scattering.g_back");
+    if (sc.contains("w_forward"))
+        c.phase.w_forward = json_number(sc["w_forward"], "clouds.scattering.w_forward");
+}
+
+// "clouds.lighting" into CloudLightingOptions' fields but the scattering.
+void parse_cloud_lighting(const json& li, CloudLightingOptions& o) {
+    const std::string p = "clouds.lighting.";
+    json_check_keys(
+        li, "clouds.lighting",
+        {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "multiple_scattering", "octaves",
+         "octave_extinction", "octave_contribution", "octave_eccentricity", "min_transmittance", "seed",
+         "jitter", "max_distance_m", "shadow_grid_spacing_m", "sides"});
+    const auto geti = [&](const char* key, int& v) {
+        if (li.contains(key)) v = integer(li[key], p + key);
+    };
+    const auto getd = [&](const char* key, double& v) {
+        if (li.contains(key)) v = json_number(li[key], p + key);
+    };
+    geti("max_steps", o.max_steps);
+    geti("light_steps", o.light_steps);
+    geti("ambient_steps", o.ambient_steps);
+    getd("light_distance_m", o.light_distance_m);
+    if (li.contains("multiple_scattering")) {
+        const std::string m = string(li["multiple_scattering"], p + "multiple_scattering");
+        if (m == "diffusion")
+            o.multiple_scattering = CloudMultipleScattering::diffusion;
+        else if (m == "octaves")
+            o.multiple_scattering = CloudMultipleScattering::octaves;
+        else
+            throw InvalidArgument(p + "multiple_scattering",
+                                  fmt::format("must be \"diffusion\" or \"octaves\", got \"{}\"", m));
+    }
+    geti("octaves", o.octaves);
+    getd("octave_extinction", o.octave_extinction);
+    getd("octave_contribution", o.octave_contribution);
+    getd("octave_eccentricity", o.octave_eccentricity);
+    getd("min_transmittance", o.min_transmittance);
+    if (li.contains("seed")) o.seed = unsigned_integer(li["seed"], p + "seed");
+    if (li.contains("jitter")) o.jitter = boolean(li["jitter"], p + "jitter");
+    if (li.contains("sides")) o.sides = boolean(li["sides"], p + "sides");
+    getd("max_distance_m", o.max_distance_m);
+    getd("shadow_grid_spacing_m", o.shadow_grid_spacing_m);
+}
+
+// "clouds.upsampling".
+void parse_cloud_upsampling(const json& u, CloudUpsampling& up) {
+    json_check_keys(
+        u, "clouds.upsampling",
+        {"stride", "finest", "transmittance_tolerance", "radiance_tolerance", "max_block_size_m"});
+    if (u.contains("stride")) up.stride = integer(u["stride"], "clouds.upsampling.stride");
+    if (u.contains("finest")) up.finest = integer(u["finest"], "clouds.upsampling.finest");
+    if (u.contains("max_block_size_m"))
+        up.max_block_size_m = json_number(u["max_block_size_m"], "clouds.upsampling.max_block_size_m");
+    if (u.contains("transmittance_tolerance"))
+        up.transmittance_tolerance =
+            json_number(u["transmittance_tolerance"], "clouds.upsampling.transmittance_tolerance");
+    if (u.contains("radiance_tolerance"))
+        up.radiance_tolerance = json_number(u["radiance_tolerance"], "clouds.upsampling.radiance_tolerance");
+}
+
 // "clouds" (docs/pipelines.md "Scene JSON"). Relative VDB paths are taken
 // relative to `base` (the scene file's folder).
 SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
@@ -115,139 +242,17 @@ SceneClouds parse_clouds(const json& j, const std::filesystem::path& base) {
     };
     if (j.contains("layers")) {
         const json& layers = array("layers");
-        for (std::size_t i = 0; i < layers.size(); ++i) {
-            const json& l = layers[i];
-            const std::string p = fmt::format("clouds.layers[{}]", i);
-            json_check_keys(l, p,
-                            {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "density_per_m",
-                             "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
-                             "weather_variation", "wind_offset_m", "evolution_m", "seed"});
-            // The type's preset first (procedural.hpp), then the keys given override it.
-            CloudLayerParams c;
-            if (l.contains("cloud_type"))
-                c = CloudLayerParams::preset(
-                    cloud_type_from_name(string(l["cloud_type"], p + ".cloud_type"), p + ".cloud_type"));
-            const auto get = [&](const char* key, double& v) {
-                if (l.contains(key)) v = json_number(l[key], p + "." + key);
-            };
-            get("bottom_altitude_m", c.bottom_altitude_m);
-            get("top_altitude_m", c.top_altitude_m);
-            get("coverage", c.coverage);
-            get("density_per_m", c.density_per_m);
-            get("base_scale_m", c.base_scale_m);
-            get("detail_scale_m", c.detail_scale_m);
-            get("weather_scale_m", c.weather_scale_m);
-            get("detail_strength", c.detail_strength);
-            get("weather_variation", c.weather_variation);
-            if (l.contains("evolution_m")) c.evolution_m = json_number(l["evolution_m"], p + ".evolution_m");
-            if (l.contains("wind_offset_m")) {
-                const json& w = l["wind_offset_m"];
-                if (!w.is_array() || w.size() != 2)
-                    throw InvalidArgument(p + ".wind_offset_m", "must be an array of 2 numbers [x, y] (m)");
-                c.wind_offset_m = {json_number(w[0], p + ".wind_offset_m[0]"),
-                                   json_number(w[1], p + ".wind_offset_m[1]")};
-            }
-            if (l.contains("seed")) c.seed = unsigned_integer(l["seed"], p + ".seed");
-            out.layers.push_back(c);
-        }
+        for (std::size_t i = 0; i < layers.size(); ++i)
+            out.layers.push_back(parse_cloud_layer(layers[i], fmt::format("clouds.layers[{}]", i)));
     }
     if (j.contains("volumes")) {
         const json& volumes = array("volumes");
-        for (std::size_t i = 0; i < volumes.size(); ++i) {
-            const json& v = volumes[i];
-            const std::string p = fmt::format("clouds.volumes[{}]", i);
-            json_check_keys(
-                v, p, {"name", "file", "grid", "matrix_world", "density_scale", "negative", "placement"});
-            SceneCloudVolume vol;
-            if (v.contains("name")) vol.name = string(v["name"], p + ".name");
-            if (!v.contains("file"))
-                throw InvalidArgument(p + ".file", "is required: the volume's .vdb file for this frame");
-            const std::string file = string(v["file"], p + ".file");
-            if (file.empty()) throw InvalidArgument(p + ".file", "must not be empty");
-            const std::filesystem::path fp(file);
-            vol.file = fp.is_absolute() || base.empty() ? file : (base / fp).lexically_normal().string();
-            if (v.contains("grid")) vol.options.grid = string(v["grid"], p + ".grid");
-            if (v.contains("matrix_world"))
-                vol.options.matrix_world = matrix_rows(v["matrix_world"], p + ".matrix_world");
-            if (v.contains("density_scale"))
-                vol.options.density_scale = json_number(v["density_scale"], p + ".density_scale");
-            if (v.contains("negative"))
-                vol.options.negative =
-                    vdb_negative_from_name(string(v["negative"], p + ".negative"), p + ".negative");
-            if (v.contains("placement"))
-                vol.options.placement =
-                    vdb_placement_from_name(string(v["placement"], p + ".placement"), p + ".placement");
-            out.volumes.push_back(vol);
-        }
+        for (std::size_t i = 0; i < volumes.size(); ++i)
+            out.volumes.push_back(parse_cloud_volume(volumes[i], fmt::format("clouds.volumes[{}]", i), base));
     }
-    if (j.contains("scattering")) {
-        const json& sc = j["scattering"];
-        json_check_keys(sc, "clouds.scattering", {"albedo", "g_forward", "g_back", "w_forward"});
-        CloudScattering& c = out.lighting.scattering;
-        if (sc.contains("albedo")) c.albedo = json_number(sc["albedo"], "clouds.scattering.albedo");
-        if (sc.contains("g_forward"))
-            c.phase.g_forward = json_number(sc["g_forward"], "clouds.scattering.g_forward");
-        if (sc.contains("g_back")) c.phase.g_back = json_number(sc["g_back"], "clouds.scattering.g_back");
-        if (sc.contains("w_forward"))
-            c.phase.w_forward = json_number(sc["w_forward"], "clouds.scattering.w_forward");
-    }
-    if (j.contains("lighting")) {
-        const json& li = j["lighting"];
-        const std::string p = "clouds.lighting.";
-        json_check_keys(
-            li, "clouds.lighting",
-            {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "multiple_scattering",
-             "octaves", "octave_extinction", "octave_contribution", "octave_eccentricity",
-             "min_transmittance", "seed", "jitter", "max_distance_m", "shadow_grid_spacing_m", "sides"});
-        CloudLightingOptions& o = out.lighting;
-        const auto geti = [&](const char* key, int& v) {
-            if (li.contains(key)) v = integer(li[key], p + key);
-        };
-        const auto getd = [&](const char* key, double& v) {
-            if (li.contains(key)) v = json_number(li[key], p + key);
-        };
-        geti("max_steps", o.max_steps);
-        geti("light_steps", o.light_steps);
-        geti("ambient_steps", o.ambient_steps);
-        getd("light_distance_m", o.light_distance_m);
-        if (li.contains("multiple_scattering")) {
-            const std::string m = string(li["multiple_scattering"], p + "multiple_scattering");
-            if (m == "diffusion")
-                o.multiple_scattering = CloudMultipleScattering::diffusion;
-            else if (m == "octaves")
-                o.multiple_scattering = CloudMultipleScattering::octaves;
-            else
-                throw InvalidArgument(p + "multiple_scattering",
-                                      fmt::format("must be \"diffusion\" or \"octaves\", got \"{}\"", m));
-        }
-        geti("octaves", o.octaves);
-        getd("octave_extinction", o.octave_extinction);
-        getd("octave_contribution", o.octave_contribution);
-        getd("octave_eccentricity", o.octave_eccentricity);
-        getd("min_transmittance", o.min_transmittance);
-        if (li.contains("seed")) o.seed = unsigned_integer(li["seed"], p + "seed");
-        if (li.contains("jitter")) o.jitter = boolean(li["jitter"], p + "jitter");
-        if (li.contains("sides")) o.sides = boolean(li["sides"], p + "sides");
-        getd("max_distance_m", o.max_distance_m);
-        getd("shadow_grid_spacing_m", o.shadow_grid_spacing_m);
-    }
-    if (j.contains("upsampling")) {
-        const json& u = j["upsampling"];
-        json_check_keys(
-            u, "clouds.upsampling",
-            {"stride", "finest", "transmittance_tolerance", "radiance_tolerance", "max_block_size_m"});
-        CloudUpsampling& up = out.upsampling;
-        if (u.contains("stride")) up.stride = integer(u["stride"], "clouds.upsampling.stride");
-        if (u.contains("finest")) up.finest = integer(u["finest"], "clouds.upsampling.finest");
-        if (u.contains("max_block_size_m"))
-            up.max_block_size_m = json_number(u["max_block_size_m"], "clouds.upsampling.max_block_size_m");
-        if (u.contains("transmittance_tolerance"))
-            up.transmittance_tolerance =
-                json_number(u["transmittance_tolerance"], "clouds.upsampling.transmittance_tolerance");
-        if (u.contains("radiance_tolerance"))
-            up.radiance_tolerance =
-                json_number(u["radiance_tolerance"], "clouds.upsampling.radiance_tolerance");
-    }
+    if (j.contains("scattering")) parse_cloud_scattering(j["scattering"], out.lighting.scattering);
+    if (j.contains("lighting")) parse_cloud_lighting(j["lighting"], out.lighting);
+    if (j.contains("upsampling")) parse_cloud_upsampling(j["upsampling"], out.upsampling);
     return out;
 }
 

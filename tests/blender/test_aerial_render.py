@@ -124,15 +124,10 @@ def frame_matches_the_core(scene, module, base, what):
     print(f"ok: {what} camera")
 
 
-def main():
-    addon, module = at.install_addon()
-    from welkin import scene_export
-    from welkin.blender.aerial import compositor, frame as aerial_frame, handlers as aerial_handlers
+def check_enable(scene, tree, comp, names_before):
+    """Enabling keeps the user's compositor and links the depth node to the un-hazed Image."""
     from welkin.blender import compat
-
-    scene = build_scene()
-    tree, comp = add_user_nodes(scene)
-    names_before = {n.name for n in tree.nodes}
+    from welkin.blender.aerial import compositor
 
     scene.welkin_aerial.side_files = True  # the pass files beside the render
     scene.welkin_aerial.enabled = True
@@ -149,6 +144,11 @@ def main():
         "the depth node does not take the render layer's own (un-hazed) Image",
     )
     at.check(scene.view_layers[0].use_pass_z, "enabling did not turn the Z pass on")
+
+
+def check_animation(scene, module):
+    """Two animated frames: passes, JSON and composite per frame; the CLI reproduces them."""
+    from welkin import scene_export
 
     bpy.ops.render.render(animation=True)
     base = scene_export.file_base(bpy.path.abspath(scene.render.filepath))
@@ -205,8 +205,13 @@ def main():
             diff = np.abs(cli_pix[..., cli_names.index(n)] - ours[..., our_names.index(n)]).max()
             at.check(diff < 1e-5, f"frame {frame}: CLI {n} differs by {diff}")
     print("ok: 2 frames, passes + JSON + composite, CLI reproduces")
+    return base
 
-    # The user's file where frame 3's passes would go is left alone.
+
+def check_user_file(scene, base):
+    """The user's file where frame 3's passes would go is left alone."""
+    from welkin import scene_export
+
     user = pathlib.Path(scene_export.frame_path(base, "aerial", 3))
     user.write_text("a user's file")
     scene.camera.animation_data_clear()
@@ -217,7 +222,11 @@ def main():
     user.unlink()
     print("ok: a user's file is never replaced")
 
-    # Z pass turned off behind the add-on's back: turned on again, reported or computed.
+
+def check_z_pass_off(scene, module, base):
+    """Z pass turned off behind the add-on's back: turned on again, reported or computed."""
+    from welkin import scene_export
+
     scene.frame_set(4)
     scene.view_layers[0].use_pass_z = False
     bpy.ops.render.render(write_still=True)
@@ -233,7 +242,12 @@ def main():
     at.check(wrote or "Z pass" in scene.welkin_aerial.status, scene.welkin_aerial.status)
     print(f"ok: Z pass off -> {'computed' if wrote else 'reported'}: {scene.welkin_aerial.status}")
 
-    # The Depth link to our File Output node removed: no depth written, reported.
+
+def check_unlinked_depth(scene, base):
+    """The Depth link to our File Output node removed: no depth written, reported."""
+    from welkin import scene_export
+    from welkin.blender.aerial import compositor
+
     scene.frame_set(9)
     out_node = compositor.depth_node(scene)
     out_node.id_data.links.remove(out_node.inputs["Depth"].links[0])
@@ -254,7 +268,12 @@ def main():
     )
     print(f"ok: unlinked Z pass reported: {scene.welkin_aerial.status}")
 
-    # A fisheye camera: a clear report, no passes.
+
+def check_fisheye(scene, base):
+    """A fisheye camera: a clear report, no passes."""
+    from welkin import scene_export
+    from welkin.blender import compat
+
     scene.frame_set(5)
     scene.camera.data.type = "PANO"
     compat.camera_panorama(scene.camera.data).panorama_type = "FISHEYE_EQUIDISTANT"
@@ -264,6 +283,12 @@ def main():
         not pathlib.Path(scene_export.frame_path(base, "aerial", 5)).exists(), "a fisheye frame got passes"
     )
     print(f"ok: fisheye reported: {scene.welkin_aerial.status}")
+
+
+def check_ortho_and_pano(scene, module, base):
+    """Orthographic and equirectangular frames: the frame Blender wrote equals the core's."""
+    from welkin.blender import compat
+    from welkin.blender.aerial import frame as aerial_frame
 
     # Orthographic and equirectangular frames: supported by the core; passes finite, T in
     # [0, 1]; the frame Blender wrote, hazed by the material group (Cycles: the screen table
@@ -303,7 +328,11 @@ def main():
     )
     scene.camera.rotation_euler.x = math.radians(88.0)
 
-    # No camera: the handler reports, never raises.
+
+def check_no_camera(scene):
+    """No camera: the handler reports, never raises."""
+    from welkin.blender.aerial import handlers as aerial_handlers
+
     scene.frame_set(7)
     camera = scene.camera
     scene.camera = None
@@ -312,8 +341,10 @@ def main():
     scene.camera = camera
     print(f"ok: no camera reported: {scene.welkin_aerial.status}")
 
-    scene.frame_set(8)
-    scene.camera.data.type = "PERSP"
+
+def check_saved_file(scene):
+    """The same from a saved file, rendered by `blender -a` in a fresh process."""
+    from welkin import scene_export
 
     # The same from a saved file, `blender -b file.blend --addons welkin -a` in a fresh
     # process: the setting is saved, the handlers load with the add-on.
@@ -346,7 +377,9 @@ def main():
         at.check(abs(cam_z - (40.0 * frame - 20.0)) < 1e-3, f"blender -a: frame {frame} z {cam_z}")
     print("ok: blender -b file.blend --addons welkin -a")
 
-    # Disable: our nodes out, the user's back in place.
+
+def check_disable(scene, tree, comp, names_before):
+    """Disable: our nodes out, the user's back in place."""
     scene.welkin_aerial.enabled = False
     names = {n.name for n in tree.nodes}
     at.check(names == names_before, f"after disable: {sorted(names ^ names_before)}")
@@ -357,6 +390,25 @@ def main():
         "disable did not relink the frame to the user's node",
     )
     print("ok: user nodes survive enable/disable")
+
+
+def main():
+    addon, module = at.install_addon()
+    scene = build_scene()
+    tree, comp = add_user_nodes(scene)
+    names_before = {n.name for n in tree.nodes}
+    check_enable(scene, tree, comp, names_before)
+    base = check_animation(scene, module)
+    check_user_file(scene, base)
+    check_z_pass_off(scene, module, base)
+    check_unlinked_depth(scene, base)
+    check_fisheye(scene, base)
+    check_ortho_and_pano(scene, module, base)
+    check_no_camera(scene)
+    scene.frame_set(8)
+    scene.camera.data.type = "PERSP"
+    check_saved_file(scene)
+    check_disable(scene, tree, comp, names_before)
     at.done("test_aerial_render")
 
 

@@ -80,7 +80,9 @@ TEST(Gamut, KeepsLuminanceAndDominantWavelength) {
             ++hue_checked;
         }
         EXPECT_GT(mapped, 1000);
-        if (w == kRec709LuminanceWeights) EXPECT_GT(hue_checked, 200);
+        if (w == kRec709LuminanceWeights) {
+            EXPECT_GT(hue_checked, 200);
+        }
     }
 }
 

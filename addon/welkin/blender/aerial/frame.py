@@ -308,25 +308,8 @@ def _screen_nodes(group):
         group.links.new(socket, aov.inputs["Color"])
 
 
-def shader_group(fetch=None):
-    """The node group that reads the table (aerial_table.screen_lookup() or lookup() in
-    nodes), with its two AOV outputs, in the form `fetch` (None: the existing group's if it
-    is the screen form, else FETCH_CLOSEST)."""
-    group = bpy.data.node_groups.get(SHADER_GROUP)
-    built = group.get(MARK) if group is not None else None
-    if fetch is None:
-        fetch = FETCH_SCREEN if built == _layout(FETCH_SCREEN) else FETCH_CLOSEST
-    if built == _layout(fetch):
-        return group
-    if group is None:
-        group = bpy.data.node_groups.new(SHADER_GROUP, "ShaderNodeTree")
-    group.nodes.clear()
-    if LATTICE in group:  # the constants went with the nodes
-        del group[LATTICE]
-    group[MARK] = _layout(fetch)
-    if fetch == FETCH_SCREEN:
-        _screen_nodes(group)
-        return group
+def _closest_view(group):
+    """The closest form's coordinates of the hit: u, the nearer slice's v0, the slices' weight w."""
     E, S, Hh = tab.ELEVATIONS, tab.SLICES, float(tab.HEIGHT)
     geo = group.nodes.new("ShaderNodeNewGeometry")
     geo.location = (-1400, 200)
@@ -413,6 +396,12 @@ def shader_group(fetch=None):
     )
     # v of the nearer slice's L texel; the others are + E / H (farther slice), + 1/2 (tau).
     v0 = _math(group, "MULTIPLY_ADD", k0, float(E) / Hh, rowh, x=600, y=0)
+    return u, v0, w
+
+
+def _closest_samples(group, u, v0):
+    """The closest form's four bilinear samples around (u, v0): L and tau of both slices."""
+    E, Hh = tab.ELEVATIONS, float(tab.HEIGHT)
     # The four texels around (u, v0) and the weights between them.
     Ww = float(tab.WIDTH)
     fx = _math(group, "MULTIPLY_ADD", u, Ww, -0.5, x=900, y=600)
@@ -456,6 +445,11 @@ def shader_group(fetch=None):
         lo = lerp(fetch_at(ua, v_lo, 1500, y), fetch_at(ub, v_lo, 1500, y - 150), ax, 1800, y)
         hi = lerp(fetch_at(ua, v_hi, 1500, y - 300), fetch_at(ub, v_hi, 1500, y - 450), ax, 1800, y - 300)
         samples[n] = lerp(lo, hi, ay, 2100, y - 150)
+    return samples
+
+
+def _closest_outputs(group, samples, w):
+    """The closest form's two AOVs: the slices mixed by w, and the opacity 1 - e^(-tau)."""
 
     def mix(near, far, x, y):  # near + (far - near) w: one Mix node
         node, a, b, out = compat.rgba_mix(group, "MIX")
@@ -484,6 +478,35 @@ def shader_group(fetch=None):
         compat.set_aov_name(aov, name)
         aov.location = (3500, y)
         group.links.new(socket, aov.inputs["Color"])
+
+
+def _closest_nodes(group):
+    """The closest form (aerial_table.lookup() in nodes): coordinates, samples, AOVs."""
+    u, v0, w = _closest_view(group)
+    samples = _closest_samples(group, u, v0)
+    _closest_outputs(group, samples, w)
+
+
+def shader_group(fetch=None):
+    """The node group that reads the table (aerial_table.screen_lookup() or lookup() in
+    nodes), with its two AOV outputs, in the form `fetch` (None: the existing group's if it
+    is the screen form, else FETCH_CLOSEST)."""
+    group = bpy.data.node_groups.get(SHADER_GROUP)
+    built = group.get(MARK) if group is not None else None
+    if fetch is None:
+        fetch = FETCH_SCREEN if built == _layout(FETCH_SCREEN) else FETCH_CLOSEST
+    if built == _layout(fetch):
+        return group
+    if group is None:
+        group = bpy.data.node_groups.new(SHADER_GROUP, "ShaderNodeTree")
+    group.nodes.clear()
+    if LATTICE in group:  # the constants went with the nodes
+        del group[LATTICE]
+    group[MARK] = _layout(fetch)
+    if fetch == FETCH_SCREEN:
+        _screen_nodes(group)
+        return group
+    _closest_nodes(group)
     return group
 
 
