@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy
 import os
 import typing
-__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'read_exr', 'scene_sky_image', 'sky_image', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'sun', 'sun_disc_image', 'write_exr']
+__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
 class DensityLayer:
     """
     One layer of a density profile (Bruneton 2017's DensityProfileLayer):
@@ -149,8 +149,10 @@ class Atmosphere:
     @staticmethod
     def preset(name: str, wavelengths_nm: typing.Any = None) -> Atmosphere:
         """
-        A built-in atmosphere: one of Atmosphere.preset_names() ("bruneton2017",
-        "clear", "hazy", "polluted", "mars"; sources in src/presets.cpp).
+        A built-in atmosphere: one of Atmosphere.preset_names() ("clear_day", the
+        default, an ordinary clear day; "clear", "hazy", "polluted", "desert_dust",
+        "maritime"; "bruneton2017", Bruneton's validation atmosphere; "mars"; sources
+        in src/atmosphere/presets.cpp).
         
         wavelengths_nm: None for the default 620, 560, 480, 440 nm, or any sequence of
         wavelengths in [360, 830] nm (e.g. welkin.spectral_wavelengths_nm()) at which
@@ -160,7 +162,7 @@ class Atmosphere:
     @staticmethod
     def preset_names() -> list[str]:
         """
-        Names of the built-in presets.
+        Names of the built-in presets, the default (clear_day) first.
         """
     def __copy__(self) -> Atmosphere:
         ...
@@ -172,6 +174,11 @@ class Atmosphere:
         ...
     def __setstate__(self, arg0: str) -> None:
         ...
+    def aerosol_optical_depth(self, wavelength_nm: float = 550.0) -> float:
+        """
+        The aerosol's vertical optical depth at a wavelength (default 550 nm), from the
+        ground to the top (include/welkin/atmosphere/aerosol.hpp).
+        """
     def copy(self) -> Atmosphere:
         """
         An independent copy.
@@ -183,6 +190,12 @@ class Atmosphere:
     def scattering(self, altitude_m: float) -> numpy.ndarray[numpy.float64]:
         """
         Scattering (Rayleigh + Mie, m^-1) per wavelength at altitude_m (m).
+        """
+    def set_aerosol_optical_depth(self, tau_550: float) -> None:
+        """
+        Scales the aerosol's scattering and extinction alike so that its vertical
+        optical depth at 550 nm is tau_550, in [0, 10] (ValueError naming
+        aerosol_optical_depth otherwise).
         """
     def to_json(self, path: os.PathLike, overwrite: bool = False) -> None:
         """
@@ -341,10 +354,12 @@ class SunRadiometry:
                              observer, W m^-2 nm^-1: solar irradiance x transmittance
                              x the visible fraction of the disc
       visible_fraction       fraction of the disc above the horizon (a float)
-      direct_irradiance_rgb  direct_irradiance in linear Rec.709, W m^-2, (3,)
+      direct_irradiance_rgb  direct_irradiance in linear RGB of color_space (Rec.709
+                             unless welkin.sun() was given another), W m^-2, (3,)
                              (CIE 1931, no 683 lm/W factor; lambda power 0 between
                              three samples) -- a Blender sun lamp's strength/colour
       wavelengths_nm         the wavelengths, nm
+      color_space            "rec709", "rec2020" or "acescg": of the *_rgb values
     
     The disc (one model for every renderer; include/welkin/atmosphere/sun_disc.hpp):
       angular_radius_rad     the disc's angular radius alpha, rad
@@ -356,9 +371,12 @@ class SunRadiometry:
       limb_coefficients      (C, 6): Neckel & Labs 1994 a_0..a_5, radiance at angle
                              rho from the centre = centre_radiance x sum_k a_k mu^k,
                              mu = sqrt(1 - (sin rho / sin alpha)^2)
-      centre_radiance_rgb    (3,) the same in linear Rec.709, W m^-2 sr^-1
+      centre_radiance_rgb    (3,) the same in linear RGB of color_space, W m^-2 sr^-1
       limb_coefficients_rgb  (3, 6) so that the RGB disc is exactly
-                             centre_radiance_rgb[j] x sum_k b[j, k] mu^k
+                             centre_radiance_rgb[j] x sum_k b[j, k] mu^k; each
+                             row a convex combination of limb_coefficients' rows
+                             (a positive profile darkening to the limb), the
+                             disc's integral the lamp's colour
     """
     def __repr__(self) -> str:
         ...
@@ -370,6 +388,9 @@ class SunRadiometry:
         ...
     @property
     def centre_radiance_rgb(self) -> numpy.ndarray[numpy.float64]:
+        ...
+    @property
+    def color_space(self) -> str:
         ...
     @property
     def direct_irradiance(self) -> numpy.ndarray[numpy.float64]:
@@ -713,7 +734,7 @@ def cloud_radiance(clouds: CloudDensity, atmosphere: Atmosphere, altitude_m: flo
     that radiance from every direction, below included (a Cycles sun lamp of that strength
     and a world of that colour); atm and altitude_m then do not light the cloud.
     g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
-    (include/welkin/cloud_phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
+    (include/welkin/clouds/phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
     """
 def cloud_transmittance(scene: typing.Any, points: typing.Any, direction: typing.Any = None, *, steps: int = 64, max_distance_m: float = 1000000.0, progress: typing.Any = None) -> numpy.ndarray[numpy.float32]:
     """
@@ -733,6 +754,13 @@ def cloud_transmittance(scene: typing.Any, points: typing.Any, direction: typing
 def cloud_type_preset(name: str) -> dict:
     """
     The layer parameters of a cloud type's preset, as a dict; ValueError lists the names.
+    """
+def color_space_matrix(from_space: str, to_space: str) -> typing.Any:
+    """
+    The 3 x 3 matrix taking linear RGB of from_space to linear RGB of to_space
+    (rgb_to = M @ rgb_from), both "rec709", "rec2020" or "acescg"; from_space
+    "xyz": the CIE XYZ (D65-referred) -> to_space matrix every spectrum goes
+    through (color_space.hpp). Raises ValueError naming color_space otherwise.
     """
 def direction_to_equirect(view_directions: typing.Any) -> numpy.ndarray[numpy.float64]:
     """
@@ -760,6 +788,27 @@ def methods() -> list[str]:
     a multiple-scattering term), "reference" (Monte-Carlo path tracing, all orders),
     then "auto" (the cheapest of the first three that meets a tolerance).
     """
+def moon_disc_image(atmosphere: Atmosphere, altitude_m: float, moon_direction: typing.Any, sun_from_moon: typing.Any, angular_radius_rad: float, irradiance_ratio: float, width: int, output: str = 'rgb', *, exposure: float = 1.0) -> numpy.ndarray[numpy.float32]:
+    """
+    The moon's disc alone, as the equirectangular image sky_image_at adds for it
+    (include/welkin/night/moonlit_sky.hpp): its phase lit from sun_from_moon
+    (Lommel-Seeliger across the disc), energy-exact (its pixels sum, times their
+    solid angles, to the moon's irradiance through the air: the sun's at 1 au x
+    irradiance_ratio x the transmittance towards the moon), hidden behind the
+    ground, times exposure. Directions in any frame (Z up): the scene's, for a
+    host that turns the sky. Same layout and units as sky_image.
+    
+    moon_direction, sun_from_moon  the "direction" and "sun_direction_from_moon" of
+                                   sun_and_moon's moon (turned alike)
+    angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
+    irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
+    """
+def preetham_turbidity_to_aerosol_optical_depth(turbidity: float) -> float:
+    """
+    The aerosol optical depth at 550 nm of Preetham, Shirley & Smits 1999's
+    turbidity T in [1, 20]: (0.04608 T - 0.04586) 0.55^-1.3 (T 2: 0.10).
+    ValueError naming turbidity outside the range.
+    """
 def read_exr(path: str) -> tuple:
     """
     Reads an OpenEXR file: returns (pixels, channel_names), pixels float32
@@ -785,7 +834,7 @@ def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, out
     ground: the lit ground below the horizon with the atmosphere's ground_albedo, as
     in sky_image (False: black there).
     """
-def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, width: int, method: str = 'lut', output: str = 'rgb', *, sun_disc: bool = True, exposure: float = 1.0, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, clouds: CloudDensity = None, progress: typing.Any = None, ground: bool = True, ground_albedo: float | None = None) -> numpy.ndarray[numpy.float32]:
+def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, width: int, method: str = 'lut', output: str = 'rgb', *, sun_disc: bool = True, exposure: float = 1.0, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, clouds: CloudDensity = None, progress: typing.Any = None, ground: bool = True, ground_albedo: float | None = None, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
     """
     An equirectangular sky image (HDRI) of the whole sphere, as the CLI renders it.
     
@@ -795,8 +844,9 @@ def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.A
     Blender's Environment Texture mapping (see direction_to_equirect), width x
     width/2 pixels (width even, 4..16384), TOP ROW (zenith) FIRST as in EXR files;
     Blender's own images are bottom row first (flip rows before Image.pixels).
-    Returns float32 (height, width, 3) linear Rec.709 in W m^-2 sr^-1 for
-    output="rgb", or (height, width, C) W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm for
+    Returns float32 (height, width, 3) linear RGB of color_space ("rec709",
+    "rec2020" or "acescg": the spectrum's CIE XYZ through that space's matrix,
+    color_space.hpp) in W m^-2 sr^-1 for output="rgb", or (height, width, C) W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm for
     "spectral"; every value times exposure. sun_disc adds the sun's disc, limb
     darkened and scaled so that the image delivers exactly welkin.sun()'s direct
     irradiance; leave it out when a sun lamp lights the scene. steps, sun_steps,
@@ -808,7 +858,21 @@ def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.A
     callback returning False cancels (KeyboardInterrupt). ValueError names the
     parameter for bad input.
     """
-def sky_radiance(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, method: str = 'lut', output: str = 'spectral', *, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, transmittance_width: int = 256, transmittance_height: int = 64, multiscattering_size: int = 32, skyview_width: int = 192, skyview_height: int = 108, tolerance: float = 0.1, return_standard_error: bool = False, progress: typing.Any = None) -> typing.Any:
+def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, longitude_deg: float, width: int, method: str = 'lut', output: str = 'rgb', *, height_m: float = 0.0, altitude_m: float = 0.0, discs: bool = True, exposure: float = 1.0, ground: bool = True, progress: typing.Any = None) -> numpy.ndarray[numpy.float32]:
+    """
+    The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
+    renders it: the sun's sky and disc at the sun's apparent position, plus the
+    moon's light (its sky: the same atmosphere lit by the moon, brightness from
+    Allen's magnitude-phase law) and its disc with its phase, energy-exact.
+    
+        img = welkin.sky_image_at(atm, "2026-06-21T23:30:00+02:00", 48.8566, 2.3522, 2048)
+    
+    Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
+    time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
+    observer above the ground (as in sky_image); discs=False leaves both discs out
+    (when sun and moon lamps light the scene).
+    """
+def sky_radiance(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, method: str = 'lut', output: str = 'spectral', *, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, transmittance_width: int = 256, transmittance_height: int = 64, multiscattering_size: int = 32, skyview_width: int = 192, skyview_height: int = 108, tolerance: float = 0.1, return_standard_error: bool = False, progress: typing.Any = None, color_space: str = 'rec709') -> typing.Any:
     """
     Sky (path) radiance seen by an observer, for many view directions.
     
@@ -836,8 +900,9 @@ def sky_radiance(atmosphere: Atmosphere, altitude_m: float, sun_direction: typin
         meeting `tolerance` (see welkin.auto_choice).
     output : str
         "spectral": W m^-2 sr^-1 nm^-1 at atm.wavelengths_nm, shape (N, C).
-        "rgb": linear Rec.709 in W m^-2 sr^-1 (CIE 1931, without the 683 lm/W
-        factor; 3 wavelengths are extended as a power law, lambda^-3), shape (N, 3).
+        "rgb": linear RGB of color_space (keyword: "rec709" by default, "rec2020",
+        "acescg") in W m^-2 sr^-1 (CIE 1931, without the 683 lm/W factor; 3
+        wavelengths are extended as a power law, lambda^-3), shape (N, 3).
     
     Keyword-only options (defaults are the core's, welkin::SkyOptions)
     ----------------------------------------------------------------
@@ -880,10 +945,12 @@ def spectral_wavelengths_nm(step_nm: float = 10.0) -> numpy.ndarray[numpy.float6
     Evenly spaced wavelengths for the spectral mode, 360..830 nm (48 samples at the
     default 10 nm step): pass them to Atmosphere.preset(name, wavelengths_nm=...).
     """
-def spectrum_to_rgb(spectra: typing.Any, wavelengths_nm: typing.Any, lambda_power: float = -3.0) -> numpy.ndarray[numpy.float32]:
+def spectrum_to_rgb(spectra: typing.Any, wavelengths_nm: typing.Any, lambda_power: float = -3.0, *, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
     """
-    Spectral radiance (W m^-2 sr^-1 nm^-1) at wavelengths_nm -> linear Rec.709
-    (W m^-2 sr^-1; CIE 1931 2-degree, D65 white, no 683 lm/W factor, no gamma).
+    Spectral radiance (W m^-2 sr^-1 nm^-1) at wavelengths_nm -> linear RGB of
+    color_space, "rec709" (default), "rec2020" or "acescg" (W m^-2 sr^-1; CIE 1931
+    2-degree XYZ through the space's matrix, color_space.hpp: D65 white, ACEScg's
+    ACES white reached by the Bradford adaptation; no 683 lm/W factor, no gamma).
     
     spectra: (N, C) or (C,) array-like with C = len(wavelengths_nm) >= 3; returns
     float32 (N, 3) or (3,). The default four wavelengths (620/560/480/440 nm) use
@@ -891,18 +958,44 @@ def spectrum_to_rgb(spectra: typing.Any, wavelengths_nm: typing.Any, lambda_powe
     sunlight); other sets of more than three wavelengths are integrated against the
     colour-matching functions; with exactly three, each sample is extended as the
     solar spectrum times (lambda / lambda_j)^lambda_power (Bruneton 2017's
-    approximate conversion): -3 for sky light, 0 for sunlight. This is the
-    conversion sky_radiance(output="rgb") uses.
+    approximate conversion): -3 for sky light, 0 for sunlight. A colour outside
+    Rec.709's gamut is then desaturated toward white at constant luminance until no
+    channel is negative (include/welkin/color/gamut.hpp). This is the conversion
+    sky_radiance(output="rgb") uses.
     """
-def sun(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any) -> SunRadiometry:
+def sun(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, *, color_space: str = 'rec709') -> SunRadiometry:
     """
     Sun radiometry at an observer altitude_m (m) above the ground, for a sun in
     sun_direction (vector towards the sun, Z up; normalised here). Returns a
     welkin.SunRadiometry: transmittance, direct_irradiance (W m^-2 nm^-1),
-    visible_fraction, direct_irradiance_rgb (W m^-2). Raises ValueError for
-    altitude_m < 0, a zero or NaN sun_direction, or an invalid atmosphere.
+    visible_fraction, direct_irradiance_rgb (W m^-2) in the linear RGB of
+    color_space ("rec709", "rec2020" or "acescg", color_space.hpp). Raises
+    ValueError for altitude_m < 0, a zero or NaN sun_direction, an invalid
+    atmosphere or an unknown color_space.
     """
-def sun_disc_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, width: int, output: str = 'rgb', *, exposure: float = 1.0) -> numpy.ndarray[numpy.float32]:
+def sun_and_moon(time: typing.Any, latitude_deg: float, longitude_deg: float, height_m: float = 0.0, pressure_hpa: float | None = None, temperature_c: float = 10.0) -> typing.Any:
+    """
+    The apparent (topocentric, refracted) sun and moon seen from a place at a moment.
+    
+    time           ISO 8601 with its UTC offset, "2026-06-21T21:30:00+02:00" or
+                   "...Z", or a timezone-aware datetime; years 1900-2100
+    latitude_deg   geodetic, north positive, [-90, 90]
+    longitude_deg  east positive, [-180, 180]
+    height_m       above the WGS84 ellipsoid, [-500, 100000]
+    pressure_hpa   air pressure for refraction, [0, 1100] (0: no refraction);
+                   None: the standard atmosphere's at height_m
+    temperature_c  air temperature for refraction, [-90, 60]
+    
+    Returns a dict, the "place_and_time" object of `welkin sun --time` (docs/reference.md):
+    sun/moon each with elevation_deg, azimuth_deg (clockwise from north),
+    airless_elevation_deg, distance_m, angular_radius_deg, right_ascension_deg,
+    declination_deg and direction (x east, y north, z up); the moon also with
+    phase_angle_deg, illuminated_fraction, age_angle_deg (0 new, 180 full) and
+    sun_direction_from_moon. Accuracy: the sun within 0.01 degree, the moon within
+    0.05 degree (ERFA; tested against NREL SPA, Meeus and JPL DE421 via Skyfield).
+    Raises ValueError naming the parameter for a bad time or place.
+    """
+def sun_disc_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, width: int, output: str = 'rgb', *, exposure: float = 1.0, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
     """
     The sun's disc alone, in the layout and units of sky_image: the term that
     sky_image(sun_disc=True) adds to sky_image(sun_disc=False). Zero everywhere but
