@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The output colour spaces (color_space.hpp): their matrices against published ones,
 // white to white, primaries to unit vectors, and the spectrum conversion in each space.
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -131,11 +132,24 @@ TEST(ColorSpace, SaturatedSpectrumIsOutsideRec709ButInsideRec2020) {
         w.push_back(l);
         spectrum.push_back(l >= 510.0 && l <= 560.0 ? 1.0f : 0.0f);
     }
-    const auto rec709 = SpectrumToRgb(w, -3.0, ColorSpace::Rec709).convert(spectrum);
-    EXPECT_LT(rec709[0], 0.0);
+    // The matrix alone (before convert's gamut mapping, gamut.hpp), row j times the spectrum.
+    const auto raw = [&](const SpectrumToRgb& to_rgb) {
+        std::array<double, 3> rgb{};
+        for (std::size_t j = 0; j < 3; ++j)
+            for (std::size_t c = 0; c < w.size(); ++c)
+                rgb[j] += to_rgb.matrix()[j * w.size() + c] * spectrum[c];
+        return rgb;
+    };
+    const SpectrumToRgb rec709(w, -3.0, ColorSpace::Rec709);
+    EXPECT_LT(raw(rec709)[0], 0.0);
+    for (double c : rec709.convert(spectrum)) EXPECT_GE(c, 0.0);  // mapped into the gamut
     for (ColorSpace s : {ColorSpace::Rec2020, ColorSpace::Acescg}) {
-        const auto rgb = SpectrumToRgb(w, -3.0, s).convert(spectrum);
-        for (double c : rgb) EXPECT_GE(c, 0.0) << color_space_name(s);
+        const SpectrumToRgb to_rgb(w, -3.0, s);
+        const auto inside = raw(to_rgb), converted = to_rgb.convert(spectrum);
+        for (int j = 0; j < 3; ++j) {
+            EXPECT_GE(inside[j], 0.0) << color_space_name(s);
+            EXPECT_NEAR(converted[j], inside[j], 1e-12 * std::abs(inside[j]) + 1e-15) << color_space_name(s);
+        }
     }
 }
 
