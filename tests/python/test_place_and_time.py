@@ -285,7 +285,7 @@ def test_cli_bad_place_or_time_names_the_option(tmp_path, args, option):
 def test_sky_image_at_is_the_cli_image(tmp_path):
     out = tmp_path / "night.exr"
     night = ("--latitude", "48.8566", "--longitude", "2.3522", "--time", "2026-06-30T01:30:00+02:00")
-    _cli("sky", *night, "--width", "64", "--method", "lut", "-o", out)
+    _cli("sky", *night, "--preset", "bruneton2017", "--width", "64", "--method", "lut", "-o", out)
     atm = welkin.Atmosphere.preset("bruneton2017")
     img = welkin.sky_image_at(atm, "2026-06-30T01:30:00+02:00", 48.8566, 2.3522, 64, method="lut")
     assert img.shape == (32, 64, 3) and img.dtype == np.float32
@@ -312,7 +312,7 @@ def test_sky_image_at_bad_input_names_the_parameter():
 
 
 def test_cli_sun_gives_the_moon_lamp():
-    j = json.loads(_cli("sun", *PARIS).stdout)
+    j = json.loads(_cli("sun", *PARIS, "--preset", "bruneton2017").stdout)
     moon = j["place_and_time"]["moon"]
     # Allen's magnitude-phase law at the moon's and (to 0.5 %, the moon's distance from the
     # observer against the sun's) the sun's distances.
