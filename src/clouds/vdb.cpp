@@ -196,6 +196,46 @@ private:
         }
         return bytes(n);
     }
+    // io::DelayedLoadMetadata::readValue (OpenVDB 10) reads its own layout, not the byte
+    // count n: a leaf count, then the leaves' masks (1 byte each) and their compressed sizes
+    // (8 bytes each), each as a byte count and that many blosc-compressed bytes, or 0 and
+    // the raw values (the sizes' count 0xffffffff: none), then skips what n has left. It
+    // sizes its buffers from the leaf count and the blosc header's uncompressed size before
+    // reading: both are held to what the file can hold.
+    void delayed_load(std::uint32_t n) {
+        const std::uint64_t count = u32();
+        if (count > size_)
+            fail(fmt::format(
+                "a delayed-load table at byte {} declares {} leaves, more than the file's {} bytes", pos_ - 4,
+                count, size_));
+        std::uint64_t total = 12 + packed_or_raw(u32(), count, 1, "the delayed-load masks");
+        const std::uint32_t sizes = u32();
+        if (sizes != 0xffffffffu) total += packed_or_raw(sizes, count, 8, "the delayed-load sizes");
+        if (total < n) {
+            need(n - total, "a delayed-load table's tail");
+            skip(n - total);
+        }
+    }
+    // `bytes` of blosc data, or with bytes 0 the count x item raw bytes; skips them and
+    // returns how many they were. The blosc header's uncompressed size (what OpenVDB
+    // reserves) is held to 8 bytes per byte of the file, as the leaf count is to one.
+    std::uint64_t packed_or_raw(std::uint32_t bytes, std::uint64_t count, std::uint64_t item,
+                                const char* what) {
+        const std::uint64_t raw = bytes > 0 ? bytes : count * item;
+        need(raw, what);
+        if (bytes >= 16) {
+            const std::string header = this->bytes(8);
+            std::uint32_t uncompressed;
+            std::memcpy(&uncompressed, header.data() + 4, 4);
+            if (uncompressed > 8 * size_ + 4096)
+                fail(fmt::format("{} at byte {} unpack to {} bytes, more than 8 per byte of the file", what,
+                                 pos_ - 8, uncompressed));
+            skip(raw - 8);
+        } else {
+            skip(raw);
+        }
+        return raw;
+    }
     // MetaMap::readMeta: a count, then (name, type name, byte count + value) per entry.
     void meta_map() {
         const std::uint32_t count = u32();
@@ -210,6 +250,10 @@ private:
             string();
             const std::string type = string();
             const std::uint32_t n = u32();
+            if (type == "__delayedload") {
+                if (n != 0) delayed_load(n);
+                continue;
+            }
             std::uint64_t size = n;
             for (const auto& [name, bytes] : kFixed)
                 if (type == name) size = std::uint64_t(bytes);
