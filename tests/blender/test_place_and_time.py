@@ -92,7 +92,7 @@ T.check(not scene.world.welkin.warnings, f"warnings: {scene.world.welkin.warning
 
 def lamp_rgb(body, d, core_dict):
     """colour x strength of the lamp for `body` at scene direction d."""
-    atm = welkin.Atmosphere.preset("bruneton2017")
+    atm = welkin.Atmosphere.preset(scene.world.welkin.preset)  # the world's air (clear_day by default)
     ratio = 1.0
     if body == "moon":
         atm.sun_angular_radius_rad = math.radians(core_dict["moon"]["angular_radius_deg"])
