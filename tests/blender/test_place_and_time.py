@@ -110,7 +110,13 @@ for name, obj in (("sun", sun), ("moon", moon)):
     expected = lamp_rgb(name, to_scene(core[name]["direction"]), core)
     got = np.asarray(obj.data.color) * obj.data.energy
     print(f"(a) {name} lamp colour x strength {got}, expected {expected}")
-    T.check(np.allclose(got, expected, rtol=1e-5, atol=0.0), f"(a) the {name} lamp's light")
+    # Within 1e-5 of each channel or of the colour's brightest one: a channel the gamut
+    # mapping brings up from below zero (the blue of a low sun in hazy air) is a small
+    # difference of large numbers, and holds its float rounding only relative to those.
+    T.check(
+        np.allclose(got, expected, rtol=1e-5, atol=1e-5 * float(np.max(expected))),
+        f"(a) the {name} lamp's light",
+    )
 
 
 def draw_place_time():
