@@ -418,7 +418,7 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
             // RGB output: the cloud's term in Rec.709, as the passes' Welkin.Clouds.rgb.
             if (clouds)
                 for (int k = 0; k < 3; ++k) d[k] += clouds->cloud[i * 3 + k];
-            if (to_rgb && (d[0] < 0.0f || d[1] < 0.0f || d[2] < 0.0f))  // into the space's gamut
+            if (d[0] < 0.0f || d[1] < 0.0f || d[2] < 0.0f)  // into the output space's gamut (gamut.hpp)
                 gamut_map(d, 1, to_rgb->luminance_weights());
         }
         std::size_t cur = bad.load();
