@@ -68,4 +68,8 @@ function(welkin_check_layers)
   if(errors)
     message(FATAL_ERROR "Welkin's layering is broken (docs/design.md, 'Layout'):${errors}")
   endif()
+  # The layers in the order declared (each after those it builds on), one per line, for
+  # the tools that link the static libraries themselves (scripts/fuzz.sh).
+  list(JOIN layers "\n" lines)
+  file(WRITE ${CMAKE_BINARY_DIR}/welkin_layers.txt "${lines}\n")
 endfunction()

@@ -26,7 +26,12 @@ if ! command -v "$CXX_FUZZ" >/dev/null; then
   echo "fuzz: $CXX_FUZZ not found (apt-get install clang libclang-rt-14-dev)" >&2
   exit 1
 fi
-for lib in base io color atmosphere reference sky aerial clouds scene render; do
+# The core's layers, as the build declared them (cmake/WelkinLayers.cmake writes the list):
+# a layer comes after those it builds on, so the link line takes them in reverse.
+layers_file=$BUILD_DIR/welkin_layers.txt
+[[ -f $layers_file ]] || { echo "fuzz: $layers_file missing: run scripts/build.sh" >&2; exit 1; }
+mapfile -t layers <"$layers_file"
+for lib in "${layers[@]}"; do
   [[ -f $BUILD_DIR/libwelkin_$lib.a ]] || { echo "fuzz: $BUILD_DIR/libwelkin_$lib.a missing: run scripts/build.sh" >&2; exit 1; }
 done
 
@@ -41,8 +46,8 @@ instrumented=(src/io/file.cpp src/io/json.cpp src/io/exr.cpp src/atmosphere/json
 launcher=()
 command -v ccache >/dev/null && launcher=(ccache)
 libs=()
-for lib in render scene sky reference aerial clouds atmosphere color io base; do libs+=("$BUILD_DIR/libwelkin_$lib.a"); done
-libs+=(-lopenvdb -lboost_iostreams -lfmt -ltbb -lOpenEXR-3_1 -lImath-3_1 -lIlmThread-3_1 -lIex-3_1 -lz -lm)
+for ((i = ${#layers[@]} - 1; i >= 0; i--)); do libs+=("$BUILD_DIR/libwelkin_${layers[i]}.a"); done
+libs+=(-lopenvdb -lboost_iostreams -lfmt -ltbb -lOpenEXR-3_1 -lImath-3_1 -lIlmThread-3_1 -lIex-3_1 -lerfa -lz -lm)
 
 # Every target runs under AddressSanitizer. fuzz_vdb and fuzz_exr replace operator new (see
 # the files): OpenVDB sizes buffers from lengths inside a grid's tree, OpenEXR from a
