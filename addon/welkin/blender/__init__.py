@@ -20,12 +20,13 @@
              (viewport.py)
   handlers.py  the sky follows the lamp: depsgraph (debounced timer), frame change, save
   farm.py      a frame the add-on could not prepare fails a command-line render (-a, -f)
+  farm_bake.py Bake for Farm: every frame's images and values for a Blender without Welkin
   compat.py    every difference between Blender versions
 """
 
 import bpy
 
-from . import handlers
+from . import farm_bake, handlers
 from .aerial import handlers as aerial_handlers
 from .clouds import operators as cloud_operators
 from .clouds import panel as cloud_panel
@@ -42,6 +43,7 @@ classes = (
     *cloud_operators.classes,
     *cloud_panel.classes,
     render_engine.WelkinRenderEngine,
+    *farm_bake.classes,
 )
 
 

@@ -29,7 +29,7 @@ from bpy.app.handlers import persistent
 
 from .sky import background, place_time, scene_sun, update
 from .clouds import scene as cloud_scene, shadows as cloud_shadows
-from . import farm
+from . import farm, farm_bake
 from .sky.scene_sun import UserError
 
 DEBOUNCE_S = 0.15
@@ -107,6 +107,8 @@ def _disarm():
 
 def _stale(scene, depsgraph):
     settings = scene.world.welkin
+    if farm_bake.check_frame(scene) == "":
+        return False  # the farm bake shows this frame (Update Sky would drop it)
     try:
         request, _lamp, _warnings = scene_sun.request_for(scene, settings, depsgraph)
         clouds = update.clouds_of(scene, depsgraph)
@@ -153,6 +155,8 @@ def on_frame_change_post(scene, depsgraph=None):
     cloud_scene.capture(scene, depsgraph)  # before anything is written (blender/clouds/scene.py)
     if not _live(scene):
         return
+    if farm_bake.on_frame(scene, depsgraph, lambda text: _log(scene.world.welkin, text)):
+        return  # the farm bake renders this frame (or refuses a stale one)
     # UI renders (F12, Ctrl F12) call frame handlers on the render thread while the
     # interface keeps drawing; changing images and lamps from there is only safe with
     # Render > Lock Interface on. Headless renders (-a) run on the main thread.

@@ -11,7 +11,7 @@ from bpy.app.handlers import persistent
 from ... import native, scene_export
 from . import compositor, frame as aerial_frame, pass_files
 from . import scene as aerial_scene
-from .. import compat, farm
+from .. import compat, farm, farm_bake
 from ..sky.scene_sun import UserError
 from .panel import RENDER_PT_welkin_aerial
 from .properties import WelkinAerialSettings
@@ -26,6 +26,17 @@ def on_frame_change_post(scene, depsgraph=None):
         return
     module = native.module()
     if module is None:
+        return
+    if farm_bake.on_frame(scene, depsgraph, lambda text: aerial_scene.log(scene, text)):
+        # The farm bake renders this frame (or refuses a stale one); Write Pass Files
+        # still reads the frame's scene JSON.
+        pass_files.at_frame.pop(scene.name, None)
+        if scene.welkin_aerial.side_files:
+            try:
+                text = aerial_scene.scene_json(scene, module, depsgraph)
+            except UserError as error:
+                text = error
+            pass_files.at_frame[scene.name] = {scene.frame_current: text}
         return
     try:
         aerial_frame.install_materials()
@@ -62,7 +73,10 @@ def on_save_pre(*_args):
     for scene in bpy.data.scenes:
         if scene.library is not None:
             continue
-        if scene.welkin_aerial.enabled:
+        baked = farm_bake.record(scene) is not None
+        if baked:
+            _check_bake_on_save(scene)
+        elif scene.welkin_aerial.enabled:
             problem = aerial_scene.pack_tables(scene)
             if problem is not None:
                 aerial_scene.log(scene, problem)
@@ -70,7 +84,7 @@ def on_save_pre(*_args):
         if not (sky or scene.welkin_aerial.enabled):
             continue
         changing = farm.changing_inputs(scene)
-        if changing:
+        if changing and not baked:
             text = (
                 f"saved for farms with the add-on only: {', '.join(changing)} "
                 f"animated; a Blender without Welkin would render every frame with "
@@ -79,6 +93,25 @@ def on_save_pre(*_args):
             print(f"Welkin: warning: scene '{scene.name}': {text}")
             if scene.welkin_aerial.enabled:
                 scene.welkin_aerial.status = text
+
+
+def _check_bake_on_save(scene):
+    """A saved bake is checked frame by frame: a stale one is said (the add-on refuses its
+    frames; a Blender without it would render them as baked)."""
+    try:
+        stale = farm_bake.verify(scene)
+    except UserError as error:
+        stale, problem = None, str(error)
+    if stale == []:
+        return
+    text = (
+        f"Bake for Farm is stale for frames {farm_bake.plan.ranges(stale)}: press Bake for Farm "
+        f"again; the add-on refuses these frames, a Blender without it would render them as baked"
+        if stale
+        else f"Bake for Farm could not be checked: {problem}"
+    )
+    print(f"Welkin: warning: scene '{scene.name}': {text}")
+    scene.welkin_aerial.status = text
 
 
 @persistent

@@ -21,5 +21,8 @@ class RENDER_PT_welkin_aerial(bpy.types.Panel):
         row = col.row()
         row.active = s.side_files
         row.prop(s, "method")
+        row = layout.row(align=True)
+        row.operator("welkin.bake_farm", icon="RENDER_ANIMATION")
+        row.operator("welkin.clear_farm_bake", text="", icon="X")
         if s.status:
             layout.label(text=s.status, icon="INFO")

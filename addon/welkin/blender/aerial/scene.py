@@ -26,8 +26,16 @@ def base_of(scene):
     return scene_export.file_base(bpy.path.abspath(scene.render.filepath))
 
 
+def _drop_farm_bake(scene):
+    from .. import farm_bake
+
+    if farm_bake.drop(scene, "aerial perspective was switched"):
+        log(scene, "the farm bake was dropped: press Bake for Farm again before sending the file to a farm")
+
+
 def enable(scene):
     s = scene.welkin_aerial
+    _drop_farm_bake(scene)
     for warning in aerial_frame.install(scene, s):
         log(scene, warning)
     try:
@@ -41,6 +49,7 @@ def enable(scene):
 
 
 def disable(scene):
+    _drop_farm_bake(scene)
     disable_side_files(scene)
     aerial_frame.remove(scene, scene.welkin_aerial)
     baked.clear()
