@@ -68,6 +68,18 @@ def enable_addon(name):
         raise SystemExit(f"bpy_blender: add-on {candidates[0]!r} could not be enabled")
 
 
+def render_init():
+    """The binary's `-a` and `-f` run the render_init handlers before the render pipeline
+    checks the scene (RE_RenderAnim: "call hooks before taking a copy of scene->r"), so a
+    handler can still set up the scene (the add-on gives a saved file its camera back,
+    blender/farm.py); the render operator checks first. Here they run before the operator,
+    as the binary runs them, and the operator runs them again (the add-on's are
+    idempotent)."""
+    scene = bpy.context.scene
+    for handler in list(bpy.app.handlers.render_init):
+        handler(scene, None)
+
+
 def render_frames(frames):
     """-f: Blender renders each frame as an animation of that one frame (RE_RenderAnim from
     the frame to itself): the output path's #### becomes the frame and the animation
@@ -78,6 +90,7 @@ def render_frames(frames):
     try:
         for frame in frames:
             scene.frame_start = scene.frame_end = frame
+            render_init()
             bpy.ops.render.render(animation=True)
     finally:
         scene.frame_start, scene.frame_end = start, end
@@ -170,6 +183,7 @@ def main(argv):
             render_frames(frame_list(value))
         elif arg in ("-a", "--render-anim"):
             i -= 1
+            render_init()
             bpy.ops.render.render(animation=True)
         elif arg.endswith(".blend") and pathlib.Path(arg).is_file():
             i -= 1

@@ -19,6 +19,9 @@ aerial table and the disc all change), 24 x 12 pixels, Cycles CPU, 2 samples, se
     stale (frame 2 lies between the keys); a command-line render with the add-on writes
     frame 1, refuses frame 2 (no file for 2 and 3, non-zero exit) on the Blender binary; Blender as a Python module (no Blender SIGINT
     handler, farm.py) prints the refusal. Clear Farm Bake gives the live nodes back.
+(d) The files a stock Blender would render wrong (animated without a bake; a stale bake)
+    refuse to render there: no frame, non-zero exit ("Cannot render, no camera": the
+    add-on saves the camera aside, farm.hide_camera, and puts it back when it is loaded).
 """
 
 import os
@@ -32,7 +35,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 addon, welkin = T.install_addon()
-from welkin.blender import farm_bake  # noqa: E402
+from welkin.blender import farm, farm_bake  # noqa: E402
 
 NO_WELKIN = T.TMP / "no_welkin.py"
 NO_WELKIN.write_text(
@@ -192,6 +195,22 @@ if not T.is_module_bpy():
     print(f"(c) the add-on refuses the stale frame: exit {code}, frames {sorted(frames)}")
 else:
     print(f"(c) the add-on refuses the stale frame (printed; bpy has no Blender SIGINT handler): exit {code}")
+
+# (d) Files a stock Blender would render wrong refuse to render there: the animated file
+# saved without a bake, and the stale bake (the scene's camera is kept for the add-on).
+T.check(scene.camera is not None and scene.camera.name == "Camera", "saving lost the scene's camera")
+for blend in (live_blend, stale_blend):
+    out = T.TMP / f"refused_{blend.stem}"
+    frames, log, code = render_anim(blend, out, with_addon=False, expect_ok=False)
+    print(f"(d) {blend.name} in a stock Blender: exit {code}, frames {sorted(frames)}")
+    T.check(code != 0 and not frames, f"{blend.name} rendered without the add-on: exit {code}\n{log[-2000:]}")
+    T.check("no camera" in log.lower(), f"{blend.name}: not refused for the camera:\n{log[-2000:]}")
+# With the add-on the camera is back at once (the live renders of (a) and (c) above), and
+# in a file opened where the add-on is enabled.
+bpy.ops.wm.open_mainfile(filepath=str(live_blend))
+T.check(bpy.context.scene.camera is not None, "the camera is not back after opening the file")
+T.check(farm.CAMERA_KEPT not in bpy.context.scene, "the kept camera property stayed")
+bpy.ops.wm.open_mainfile(filepath=str(stale_blend))
 
 # Clear Farm Bake: the live nodes back, the keys gone.
 bpy.ops.welkin.clear_farm_bake()

@@ -178,3 +178,41 @@ def changing_inputs(scene):
         if ob.data.is_sequence or _moves(ob, with_data=True):
             changing.append(f"cloud volume '{ob.name}'")
     return changing
+
+
+# --- files a Blender without the add-on must not render ----------------------------------
+# A scene whose sky or haze changes over its frames, saved without a current farm bake,
+# renders wrong in a Blender without Welkin (every frame with the saved frame's sky, lamp
+# and haze; or a stale bake), with exit status 0: nothing in a .blend runs there when
+# Python scripts are off, and a missing image renders magenta without an error. What
+# such a Blender does refuse is a scene without a camera: "Cannot render, no camera",
+# nothing written, exit status 1 (-a and -f). So the file is saved with the scene's
+# camera kept in a custom property (CAMERA_KEPT) and Scene.camera empty; the add-on puts
+# the camera back as soon as it sees the file (after saving, when a file loads, and when
+# it is enabled after the file was loaded: `blender -b f.blend --addons welkin -a`).
+# Not covered: a scene whose timeline markers bind cameras (Blender picks the camera from
+# the markers at render time), and scenes linked from libraries.
+
+CAMERA_KEPT = "welkin_camera_for_the_add_on"
+
+
+def hide_camera(scene):
+    """Empties Scene.camera for the saved file (see above); False when it cannot work."""
+    if scene.library is not None or scene.camera is None or CAMERA_KEPT in scene:
+        return False
+    if any(m.camera is not None for m in scene.timeline_markers):
+        return False
+    scene[CAMERA_KEPT] = scene.camera
+    scene.camera = None
+    return True
+
+
+def restore_cameras():
+    """Puts back every camera hide_camera kept (save_post, load_post, registration)."""
+    for scene in bpy.data.scenes:
+        if scene.library is not None or CAMERA_KEPT not in scene:
+            continue
+        camera = scene[CAMERA_KEPT]
+        del scene[CAMERA_KEPT]
+        if scene.camera is None and isinstance(camera, bpy.types.Object):
+            scene.camera = camera

@@ -62,6 +62,7 @@ def on_depsgraph_update(scene, *_args):
 
 @persistent
 def on_load_post(*_args):
+    farm.restore_cameras()
     aerial_scene.baked.clear()
     for scene in bpy.data.scenes:
         if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
@@ -74,9 +75,8 @@ def on_save_pre(*_args):
         if scene.library is not None:
             continue
         baked = farm_bake.record(scene) is not None
-        if baked:
-            _check_bake_on_save(scene)
-        elif scene.welkin_aerial.enabled:
+        stale = baked and _bake_is_stale(scene)
+        if not baked and scene.welkin_aerial.enabled:
             problem = aerial_scene.pack_tables(scene)
             if problem is not None:
                 aerial_scene.log(scene, problem)
@@ -84,38 +84,54 @@ def on_save_pre(*_args):
         if not (sky or scene.welkin_aerial.enabled):
             continue
         changing = farm.changing_inputs(scene)
+        hidden = farm.hide_camera(scene) if stale or (changing and not baked) else False
         if changing and not baked:
             text = (
                 f"saved for farms with the add-on only: {', '.join(changing)} "
-                f"animated; a Blender without Welkin would render every frame with "
-                f"frame {scene.frame_current}'s sky and haze"
+                f"animated; "
+                + (
+                    "a Blender without Welkin refuses to render the file (no scene camera "
+                    "there); Bake for Farm makes it render there"
+                    if hidden
+                    else f"a Blender without Welkin would render every frame with frame "
+                    f"{scene.frame_current}'s sky and haze"
+                )
             )
             print(f"Welkin: warning: scene '{scene.name}': {text}")
             if scene.welkin_aerial.enabled:
                 scene.welkin_aerial.status = text
 
 
-def _check_bake_on_save(scene):
+def _bake_is_stale(scene):
     """A saved bake is checked frame by frame: a stale one is said (the add-on refuses its
-    frames; a Blender without it would render them as baked)."""
+    frames; the file is saved so that a Blender without it refuses it, farm.hide_camera).
+    True when stale or when it could not be checked."""
     try:
         stale = farm_bake.verify(scene)
     except UserError as error:
         stale, problem = None, str(error)
     if stale == []:
-        return
+        return False
     text = (
         f"Bake for Farm is stale for frames {farm_bake.plan.ranges(stale)}: press Bake for Farm "
-        f"again; the add-on refuses these frames, a Blender without it would render them as baked"
+        f"again; the add-on refuses these frames, a Blender without it the file (no scene "
+        f"camera there)"
         if stale
         else f"Bake for Farm could not be checked: {problem}"
     )
     print(f"Welkin: warning: scene '{scene.name}': {text}")
     scene.welkin_aerial.status = text
+    return True
+
+
+@persistent
+def on_save_post(*_args):
+    farm.restore_cameras()
 
 
 @persistent
 def on_render_init(scene, *_args):
+    farm.restore_cameras()  # the add-on enabled after the file loaded (`--addons`, a farm script)
     if scene.welkin_aerial.enabled and scene.welkin_aerial.side_files:
         pass_files.sync_output_path(scene)
 
@@ -168,6 +184,7 @@ _HANDLERS = (
     (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
     (bpy.app.handlers.load_post, on_load_post),
     (bpy.app.handlers.save_pre, on_save_pre),
+    (bpy.app.handlers.save_post, on_save_post),
     (bpy.app.handlers.render_init, on_render_init),
     (bpy.app.handlers.render_pre, on_render_pre),
     (bpy.app.handlers.render_post, on_render_post),
@@ -181,6 +198,10 @@ def register():
     for handlers, function in _HANDLERS:
         if function not in handlers:
             handlers.append(function)
+    try:  # enabled after a file was loaded (`--addons`, a farm script): its cameras back
+        farm.restore_cameras()
+    except AttributeError:  # add-ons enabled at startup see no data yet (load_post does it)
+        pass
 
 
 def unregister():
