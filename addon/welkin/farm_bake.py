@@ -13,13 +13,14 @@ refuses a frame whose key differs (a stale bake).
 
 import hashlib
 import json
+from typing import Any
 
 VERSION = 1
 FOLDER = "welkin_farm"  # beside the .blend: //welkin_farm/<scene>/<role>_NNNN.exr
 DIGITS = 4
 
 
-def frame_key(sky_key, scene_json, engine):
+def frame_key(sky_key: str, scene_json: str, engine: str) -> str:
     """The key of one frame's bake (hex SHA-256): the frame's sky key, its scene JSON and
     the render engine (Cycles and EEVEE read different tables)."""
     h = hashlib.sha256()
@@ -30,13 +31,13 @@ def frame_key(sky_key, scene_json, engine):
     return h.hexdigest()
 
 
-def safe_name(name):
+def safe_name(name: str) -> str:
     """A file-name-safe form of a scene's or an image's name (letters, digits, '-', '_')."""
     out = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
     return out or "_"
 
 
-def sequence_path(scene_name, role, index):
+def sequence_path(scene_name: str, role: str, index: int) -> str:
     """The .blend-relative path of image `role`'s file for sequence index `index` (1-based),
     as Blender names a sequence's frames: the digits at the end of the name are the frame."""
     if index < 1:
@@ -44,20 +45,20 @@ def sequence_path(scene_name, role, index):
     return f"//{FOLDER}/{safe_name(scene_name)}/{safe_name(role)}_{index:0{DIGITS}d}.exr"
 
 
-def frames_of(frame_start, frame_end):
+def frames_of(frame_start: int, frame_end: int) -> list[int]:
     """Every frame of the scene's range (a farm may render any of them with its own -j)."""
     if frame_end < frame_start:
         raise ValueError(f"frame_end ({frame_end}) must not be before frame_start ({frame_start})")
     return list(range(frame_start, frame_end + 1))
 
 
-def image_user(frame_start, frame_end):
+def image_user(frame_start: int, frame_end: int) -> dict[str, int]:
     """The image user settings that make a sequence of files 1..N play frame_start..frame_end
     (Blender's image user: number = frame - start + 1 clamped to 1..duration, + offset)."""
     return {"frame_start": frame_start, "frame_duration": frame_end - frame_start + 1, "frame_offset": 0}
 
 
-def varying(values_per_frame):
+def varying(values_per_frame: list[dict[str, Any]]) -> list[str]:
     """The names whose value is not the same on every frame. `values_per_frame`: a list of
     {name: value} (floats or tuples of floats), one per frame, with the same names."""
     if not values_per_frame:
@@ -66,14 +67,14 @@ def varying(values_per_frame):
     return sorted(name for name in first if any(v[name] != first[name] for v in values_per_frame[1:]))
 
 
-def stale_frames(stored, current):
+def stale_frames(stored: dict[str, str], current: dict[int, str]) -> list[int]:
     """The frames of `current` ({frame: key}) whose key is not the stored one."""
     return sorted(f for f, key in current.items() if stored.get(str(f)) != key)
 
 
-def ranges(frames):
+def ranges(frames: list[int]) -> str:
     """'1-3, 7' for [1, 2, 3, 7] (sorted frames)."""
-    parts = []
+    parts: list[list[int]] = []
     for f in frames:
         if parts and f == parts[-1][1] + 1:
             parts[-1][1] = f
@@ -82,11 +83,11 @@ def ranges(frames):
     return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in parts)
 
 
-def encode(record):
+def encode(record: dict[str, Any]) -> str:
     return json.dumps(record, sort_keys=True)
 
 
-def decode(text):
+def decode(text: str) -> dict[str, Any] | None:
     """The stored bake record, or None (no bake, or an unreadable one)."""
     if not text:
         return None

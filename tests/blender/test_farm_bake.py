@@ -65,7 +65,16 @@ def render_anim(blend, out, *, with_addon, expect_ok=True):
         env["BLENDER_USER_CONFIG"] = str(home / "config")
         env["BLENDER_USER_EXTENSIONS"] = str(home / "extensions")
         extra = ["--python-exit-code", "1", "--python", str(NO_WELKIN)]
-    command = [*T.blender_command(), "-b", "--factory-startup", str(blend), *extra, "-o", str(out / "f_####"), "-a"]
+    command = [
+        *T.blender_command(),
+        "-b",
+        "--factory-startup",
+        str(blend),
+        *extra,
+        "-o",
+        str(out / "f_####"),
+        "-a",
+    ]
     print("running:", " ".join(command))
     run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
     log = run.stdout + run.stderr
@@ -148,7 +157,10 @@ print(f"(b) written: {files}; keyed {len(rec['keyed'])} values: {rec['keyed'][:6
 T.check(len(files) == 4 * len(FRAMES), f"expected 4 images (sky, 3 aerial) x {len(FRAMES)} frames: {files}")
 for _kind, _tree, _node, _live, farm_name in rec["images"]:
     image = bpy.data.images[farm_name]
-    T.check(image.source == "SEQUENCE" and image.filepath.startswith("//welkin_farm/"), f"{farm_name}: {image.filepath}")
+    T.check(
+        image.source == "SEQUENCE" and image.filepath.startswith("//welkin_farm/"),
+        f"{farm_name}: {image.filepath}",
+    )
 T.check(any(k.startswith("lamp\t") for k in rec["keyed"]), f"the lamp is not keyed: {rec['keyed']}")
 T.check(any(k.startswith("world\t") for k in rec["keyed"]), f"the disc is not keyed: {rec['keyed']}")
 T.check(user_nodes() == before, "the bake changed the user's own nodes")
@@ -159,7 +171,9 @@ T.check("stale" not in bpy.context.scene.welkin_aerial.status, bpy.context.scene
 # (a) A stock Blender renders the baked file as the add-on renders the live one.
 live, _log, _rc = render_anim(live_blend, T.TMP / "live_out", with_addon=True)
 stock, _log, _rc = render_anim(baked_blend, T.TMP / "stock_out", with_addon=False)
-T.check(sorted(live) == list(FRAMES) and sorted(stock) == list(FRAMES), f"frames: {sorted(live)} {sorted(stock)}")
+T.check(
+    sorted(live) == list(FRAMES) and sorted(stock) == list(FRAMES), f"frames: {sorted(live)} {sorted(stock)}"
+)
 motion = float(np.abs(live[3] - live[1]).max())
 print(f"(a) frame 3 vs frame 1 (the animation): max |diff| {motion:.3g} of max {float(live[3].max()):.3g}")
 T.check(motion > 0.05 * float(live[3].max()), f"the frames barely change: {motion}")
@@ -189,9 +203,14 @@ T.check("stale for frames 2-3" in status, f"saving a stale bake does not say so:
 out = T.TMP / "stale_out"
 frames, log, code = render_anim(stale_blend, out, with_addon=True, expect_ok=False)
 T.check("Bake for Farm: the farm bake of frame 2 is stale" in log, f"frame 2 not refused:\n{log[-3000:]}")
-T.check(1 in frames and np.array_equal(frames[1], live[1]), f"frame 1 (still current) is not rendered: {sorted(frames)}")
+T.check(
+    1 in frames and np.array_equal(frames[1], live[1]),
+    f"frame 1 (still current) is not rendered: {sorted(frames)}",
+)
 if not T.is_module_bpy():
-    T.check(code != 0 and sorted(frames) == [1], f"a stale frame rendered: exit {code}, frames {sorted(frames)}")
+    T.check(
+        code != 0 and sorted(frames) == [1], f"a stale frame rendered: exit {code}, frames {sorted(frames)}"
+    )
     print(f"(c) the add-on refuses the stale frame: exit {code}, frames {sorted(frames)}")
 else:
     print(f"(c) the add-on refuses the stale frame (printed; bpy has no Blender SIGINT handler): exit {code}")

@@ -13,9 +13,10 @@ sample count, CPU).
     differently; that file (the sky alone) renders the same with and without the add-on.
 (b) The table's images are packed in the file, as float OpenEXR (they reload unchanged),
     not 1 x 1 generated images.
-(c) Saving a scene whose sun is animated says, in the panel's status line, that the file
-    renders right only with the add-on (a stock Blender would render every frame with
-    the saved frame's sky and haze; nothing in a .blend can make it fail instead).
+(c) Saving a scene whose sun is animated (no farm bake) says, in the panel's status line,
+    that the file renders right only with the add-on and that a stock Blender refuses it:
+    the file on disk has no scene camera, the camera kept for the add-on, which puts it
+    back after saving (tests/blender/test_farm_bake.py renders such files).
 (d) Write Pass Files follows `-o`: `blender -b file.blend -o /elsewhere/f_#### -f 1`
     writes the depth file and the passes under /elsewhere, nothing at the saved path.
 Runs on every Blender of scripts/test_blender.sh (the binary's command line, or
@@ -171,6 +172,8 @@ T.check(
     "farms with the add-on only" in status and "sun lamp 'Sun'" in status,
     f"saving an animated sun does not say it needs the add-on: {status!r}",
 )
+T.check("refuses to render" in status, f"saving does not say a stock Blender refuses it: {status!r}")
+T.check(scene.camera is not None and scene.camera.name == "Camera", "saving lost the scene's camera")
 print(f"(c) saving an animated scene: {status}")
 
 # (d) Write Pass Files follows -o: the depth file and the passes go beside the frames of

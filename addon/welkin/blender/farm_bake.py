@@ -76,7 +76,9 @@ def check_frame(scene, depsgraph=None):
     frame = scene.frame_current
     stored = rec["frames"].get(str(frame))
     if stored is None:
-        return f"frame {frame} is outside the baked range {rec['start']}-{rec['end']}: press Bake for Farm again"
+        return (
+            f"frame {frame} is outside the baked range {rec['start']}-{rec['end']}: press Bake for Farm again"
+        )
     try:
         key = frame_key(scene, depsgraph)
     except UserError as error:
@@ -173,7 +175,14 @@ def _snapshot(scene, lamp):
             if image is not None:
                 structure.append((kind, name, node.name, image.name))
         structure += sorted(
-            (kind, name, link.from_node.name, link.from_socket.identifier, link.to_node.name, link.to_socket.identifier)
+            (
+                kind,
+                name,
+                link.from_node.name,
+                link.from_socket.identifier,
+                link.to_node.name,
+                link.to_socket.identifier,
+            )
             for link in tree.links
             if link.to_node in nodes
         )
@@ -200,8 +209,7 @@ def _refuse(scene):
     """Why the scene cannot be baked (UserError), before anything is changed."""
     if not bpy.data.filepath:
         raise UserError(
-            "save the .blend first: the bake's images are written beside it "
-            f"(//{plan.FOLDER}/<scene>/)"
+            f"save the .blend first: the bake's images are written beside it (//{plan.FOLDER}/<scene>/)"
         )
     world = scene.world
     if world is None or not world.welkin.active:
@@ -221,7 +229,11 @@ def _refuse(scene):
         if other != scene and record(other) is not None:
             raise UserError(f"scene '{other.name}' holds a farm bake already (one baked scene per file)")
     lamp = _sync_lamp(scene)
-    if lamp is not None and lamp.data.animation_data is not None and lamp.data.animation_data.action is not None:
+    if (
+        lamp is not None
+        and lamp.data.animation_data is not None
+        and lamp.data.animation_data.action is not None
+    ):
         raise UserError(
             f"the sun lamp's data '{lamp.data.name}' is animated, and Sync Lamp sets its colour "
             f"and strength on every frame: remove its keyframes, or turn Sync Lamp off"
@@ -274,7 +286,7 @@ class Bake:
             )
         self.values.append(values)
         self.keys[f] = frame_key(scene, depsgraph)
-        for kind, tree_name, node_name, image_name in _images(structure):
+        for _kind, _tree_name, _node_name, image_name in _images(structure):
             path = self._path(image_name, self.index + 1)
             _write_exr(bpy.data.images[image_name], path)
             self.written.append(path)
@@ -349,7 +361,9 @@ def _check_updated(scene, depsgraph, frame):
 
         text = pass_files.at_frame.get(scene.name, {}).get(frame)
         if not isinstance(text, str):
-            raise UserError(f"frame {frame}: the aerial table was not baked: {text or scene.welkin_aerial.status}")
+            raise UserError(
+                f"frame {frame}: the aerial table was not baked: {text or scene.welkin_aerial.status}"
+            )
 
 
 def _owner(name):

@@ -86,16 +86,12 @@ def on_save_pre(*_args):
         changing = farm.changing_inputs(scene)
         hidden = farm.hide_camera(scene) if stale or (changing and not baked) else False
         if changing and not baked:
-            text = (
-                f"saved for farms with the add-on only: {', '.join(changing)} "
-                f"animated; "
-                + (
-                    "a Blender without Welkin refuses to render the file (no scene camera "
-                    "there); Bake for Farm makes it render there"
-                    if hidden
-                    else f"a Blender without Welkin would render every frame with frame "
-                    f"{scene.frame_current}'s sky and haze"
-                )
+            text = f"saved for farms with the add-on only: {', '.join(changing)} animated; " + (
+                "a Blender without Welkin refuses to render the file (no scene camera "
+                "there); Bake for Farm makes it render there"
+                if hidden
+                else f"a Blender without Welkin would render every frame with frame "
+                f"{scene.frame_current}'s sky and haze"
             )
             print(f"Welkin: warning: scene '{scene.name}': {text}")
             if scene.welkin_aerial.enabled:

@@ -225,7 +225,9 @@ def update_sky(scene, depsgraph=None, *, force=False, pack=True, progress=None, 
     from .. import farm_bake
 
     if farm_bake.drop(scene, "the sky was updated"):  # its nodes read the live image again
-        outcome.warnings.append("the farm bake was dropped: press Bake for Farm again before sending the file to a farm")
+        outcome.warnings.append(
+            "the farm bake was dropped: press Bake for Farm again before sending the file to a farm"
+        )
     if scene.world is None:
         scene_sun.choose_sun(scene, None)  # no sun lamp: refuse before adding a world
     world = _world(scene)
