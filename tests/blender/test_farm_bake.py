@@ -22,6 +22,8 @@ aerial table and the disc all change), 24 x 12 pixels, Cycles CPU, 2 samples, se
 (d) The files a stock Blender would render wrong (animated without a bake; a stale bake)
     refuse to render there: no frame, non-zero exit ("Cannot render, no camera": the
     add-on saves the camera aside, farm.hide_camera, and puts it back when it is loaded).
+(e) A bake that fails part-way (the sun set at frame 3: the disc's nodes change shape)
+    says why and keeps nothing: no files, no record, the live nodes.
 """
 
 import os
@@ -238,6 +240,35 @@ T.check(farm_bake.record(scene) is None, "the bake is still there")
 sky_node = next(n for n in scene.world.node_tree.nodes if n.get("welkin_role") == "sky_texture")
 T.check(sky_node.image == scene.world.welkin.sky_image, f"the sky node reads {sky_node.image}")
 T.check(not any(i.get(farm_bake.MARK) for i in bpy.data.images), "farm images left in the file")
+for id_ in (scene.world.node_tree, scene.objects["Sun"].data):
+    data = id_.animation_data
+    T.check(data is None or data.action is None, f"{id_.name} keeps the bake's action")
 print("(c) Clear Farm Bake: the live nodes are back")
+
+# (e) A bake that fails on a later frame keeps nothing: the sun set below the horizon at
+# frame 3 takes the disc's link away (a shape keys cannot hold), the files of frames 1-2
+# are removed, no record, the nodes read the live images.
+scene = bpy.context.scene
+sun = scene.objects["Sun"]
+T.aim_sun(sun, -10.0, 60.0)
+sun.keyframe_insert("rotation_quaternion", frame=3)
+scene.frame_set(1)
+(T.TMP / "failing").mkdir()
+bpy.ops.wm.save_as_mainfile(filepath=str(T.TMP / "failing" / "failing.blend"))
+before = user_nodes()
+try:
+    bpy.ops.welkin.bake_farm()
+    T.check(False, "a bake whose nodes change shape finished")
+except RuntimeError as error:
+    print(f"(e) {error}")
+    T.check("change shape" in str(error) and "nothing kept" in str(error), f"unclear failure: {error}")
+left = sorted(p.name for p in (T.TMP / "failing").rglob("*.exr"))
+T.check(not left, f"a failed bake left files: {left}")
+T.check(farm_bake.record(scene) is None, "a failed bake left a record")
+sky_node = next(n for n in scene.world.node_tree.nodes if n.get("welkin_role") == "sky_texture")
+T.check(
+    sky_node.image == scene.world.welkin.sky_image, f"after a failed bake the sky node reads {sky_node.image}"
+)
+T.check(user_nodes() == before and scene.frame_current == 1, "a failed bake changed the scene")
 
 T.done("test_farm_bake")

@@ -457,3 +457,14 @@ def image_color_space(image, color_space):
         if name in names:
             return name
     raise ValueError(f"color_space: this Blender has no image colour space for {color_space}")
+
+
+def action_is_empty(action):
+    """True when `action` holds no F-curve: layered actions (4.4+; the legacy
+    Action.fcurves is deprecated there and gone in 5.0) count every channel bag's."""
+    layers = getattr(action, "layers", None)
+    if layers is not None:
+        return not any(
+            len(bag.fcurves) for layer in layers for strip in layer.strips for bag in strip.channelbags
+        )
+    return len(action.fcurves) == 0

@@ -34,7 +34,7 @@ import bpy
 import numpy as np
 
 from .. import farm_bake as plan, native
-from . import farm
+from . import compat, farm
 from .aerial import frame as aerial_frame, scene as aerial_scene
 from .sky import scene_sun, update
 from .sky.scene_sun import UserError
@@ -286,7 +286,7 @@ class Bake:
             )
         self.values.append(values)
         self.keys[f] = frame_key(scene, depsgraph)
-        for _kind, _tree_name, _node_name, image_name in _images(structure):
+        for image_name in sorted({s[3] for s in _images(structure)}):  # once each (EEVEE: 16 nodes, 1 image)
             path = self._path(image_name, self.index + 1)
             _write_exr(bpy.data.images[image_name], path)
             self.written.append(path)
@@ -311,9 +311,13 @@ class Bake:
         scene = self.scene
         start, end = self.frames[0], self.frames[-1]
         images = []
+        farm_images = {}
         for kind, tree_name, node_name, image_name in _images(self.structure):
             live = bpy.data.images[image_name]
-            farm_image = _sequence_image(scene, live, plan.sequence_path(scene.name, image_name, 1))
+            if image_name not in farm_images:
+                path = plan.sequence_path(scene.name, image_name, 1)
+                farm_images[image_name] = _sequence_image(scene, live, path)
+            farm_image = farm_images[image_name]
             node = _tree(kind, tree_name).nodes[node_name]
             node.image = farm_image
             user = node.image_user
@@ -323,6 +327,8 @@ class Bake:
             user.use_cyclic = False
             images.append([kind, tree_name, node_name, live.name, farm_image.name])
         keyed = plan.varying(self.values)
+        # The IDs the keys go on that have no action yet: drop() takes the action it makes away.
+        new_actions = sorted({n for n in map(_owner_id_name, keyed) if not _has_action(_owner_id(n))})
         prefs = bpy.context.preferences.edit
         interpolation = prefs.keyframe_new_interpolation_type
         prefs.keyframe_new_interpolation_type = "CONSTANT"
@@ -342,6 +348,7 @@ class Bake:
                 "frames": {str(f): k for f, k in self.keys.items()},
                 "images": images,
                 "keyed": keyed,
+                "new_actions": new_actions,
             }
         )
         scene.frame_set(self.current)
@@ -372,6 +379,38 @@ def _owner(name):
     if kind == "lamp":
         return bpy.data.objects[owner_name].data, what
     return _tree(kind, owner_name).nodes[node_name].inputs[int(what)], "default_value"
+
+
+def _owner_id_name(name):
+    """ "kind\towner" of the ID a snapshot name's keys go on."""
+    kind, owner_name = name.split("\t")[:2]
+    return f"{kind}\t{owner_name}"
+
+
+def _owner_id(id_name):
+    """The ID (lamp data, world node tree, node group) of _owner_id_name's text, or None."""
+    kind, owner_name = id_name.split("\t")
+    if kind == "lamp":
+        ob = bpy.data.objects.get(owner_name)
+        return ob.data if ob is not None else None
+    return _tree(kind, owner_name)
+
+
+def _has_action(id_):
+    return id_ is not None and id_.animation_data is not None and id_.animation_data.action is not None
+
+
+def _remove_empty_actions(id_names):
+    """After the bake's keys are deleted: the actions the bake made, now empty, go."""
+    for id_name in id_names:
+        id_ = _owner_id(id_name)
+        if not _has_action(id_):
+            continue
+        action = id_.animation_data.action
+        if compat.action_is_empty(action):
+            id_.animation_data.action = None
+            if action.users == 0:
+                bpy.data.actions.remove(action)
 
 
 def _assign(owner, prop, value):
@@ -455,6 +494,7 @@ def drop(scene, reason=None):
                 owner.keyframe_delete(prop, frame=f)
             except RuntimeError:
                 pass
+    _remove_empty_actions(rec.get("new_actions", []))
     del scene[RECORD]
     if reason:
         print(f"Welkin: Bake for Farm dropped for scene '{scene.name}': {reason}")
