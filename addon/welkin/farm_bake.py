@@ -22,7 +22,8 @@ DIGITS = 4
 
 def frame_key(sky_key: str, scene_json: str, engine: str) -> str:
     """The key of one frame's bake (hex SHA-256): the frame's sky key, its scene JSON and
-    the render engine (Cycles and EEVEE read different tables)."""
+    the render engine with what else shapes its table (Cycles and EEVEE read different
+    tables; Cycles' pixel filter width sets the screen table's margins)."""
     h = hashlib.sha256()
     for part in (f"welkin-farm-bake/{VERSION}", engine, sky_key, scene_json):
         data = part.encode("utf-8")

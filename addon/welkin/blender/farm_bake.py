@@ -64,7 +64,10 @@ def frame_key(scene, depsgraph=None):
     clouds = update.clouds_of(scene, depsgraph)
     sky_key = update.sky_key(settings, request, clouds)
     text = aerial_scene.scene_json(scene, module, depsgraph) if scene.welkin_aerial.enabled else ""
-    return plan.frame_key(sky_key, text, scene.render.engine)
+    # Cycles' pixel filter sets the screen table's margins (aerial_frame.screen_request).
+    cycles = getattr(scene, "cycles", None)
+    engine = f"{scene.render.engine}/{getattr(cycles, 'filter_width', '')!r}"
+    return plan.frame_key(sky_key, text, engine)
 
 
 def check_frame(scene, depsgraph=None):
