@@ -459,12 +459,20 @@ def image_color_space(image, color_space):
     raise ValueError(f"color_space: this Blender has no image colour space for {color_space}")
 
 
-def action_is_empty(action):
-    """True when `action` holds no F-curve: layered actions (4.4+; the legacy
-    Action.fcurves is deprecated there and gone in 5.0) count every channel bag's."""
+def animates_nothing(anim_data):
+    """True when the action assigned to `anim_data` (an ID's AnimData) holds no F-curve for
+    that ID. Layered actions (4.4+; the legacy Action.fcurves is deprecated there and gone
+    in 5.0) hold several IDs' curves, one slot each (keying a lamp's data puts its curves in
+    its object's action, in a slot of their own): only this ID's slot counts."""
+    action = anim_data.action
     layers = getattr(action, "layers", None)
-    if layers is not None:
-        return not any(
-            len(bag.fcurves) for layer in layers for strip in layer.strips for bag in strip.channelbags
-        )
-    return len(action.fcurves) == 0
+    if layers is None:
+        return len(action.fcurves) == 0
+    slot = anim_data.action_slot
+    return not any(
+        len(bag.fcurves)
+        for layer in layers
+        for strip in layer.strips
+        for bag in strip.channelbags
+        if slot is None or bag.slot == slot
+    )

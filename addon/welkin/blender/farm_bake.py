@@ -404,13 +404,14 @@ def _has_action(id_):
 
 
 def _remove_empty_actions(id_names):
-    """After the bake's keys are deleted: the actions the bake made, now empty, go."""
+    """After the bake's keys are deleted: the actions the bake assigned, now animating
+    nothing of their ID, are unassigned (and removed when nothing else uses them)."""
     for id_name in id_names:
         id_ = _owner_id(id_name)
         if not _has_action(id_):
             continue
         action = id_.animation_data.action
-        if compat.action_is_empty(action):
+        if compat.animates_nothing(id_.animation_data):
             id_.animation_data.action = None
             if action.users == 0:
                 bpy.data.actions.remove(action)
