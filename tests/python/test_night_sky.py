@@ -171,3 +171,23 @@ def test_stars_in_sky_image_at_are_star_image():
     alone = welkin.star_image(atm, welkin.stars_at(time, lat, lon, height_m=2396.0), 256, altitude_m=0.0)
     np.testing.assert_allclose(with_stars - without, alone, rtol=1e-4, atol=1e-12)
     assert np.all(np.isfinite(with_stars)) and with_stars.min() >= 0.0
+
+
+@pytest.mark.parametrize(
+    "call, parameter",
+    [
+        (lambda a: welkin.star_image(a, np.zeros((3, 4)), 16), "stars"),
+        (lambda a: welkin.star_image(a, np.array([[0.0, 0.0, 1.0, np.nan, 0.0]]), 16), "v_mag"),
+        (lambda a: welkin.star_image(a, np.array([[0.0, 0.0, 1.0, 1.0, np.inf]]), 16), "b_v"),
+        (lambda a: welkin.star_image(a, np.array([[0.0, 0.0, 0.0, 1.0, 0.0]]), 16), "stars.direction"),
+        (lambda a: welkin.star_image(a, np.zeros((0, 5)), 16, exposure=-1.0), "exposure"),
+        (lambda a: welkin.night_glow_image(a, 7), "width"),
+        (lambda a: welkin.night_glow_image(a, 16, color_space="srgb"), "color_space"),
+        (lambda a: welkin.stars_at("2026-01-01T00:00:00Z", 0.0, 0.0, faintest_v=99.0), "faintest_v"),
+        (lambda a: welkin.stars_at("2026-01-01T00:00:00Z", 91.0, 0.0), "latitude_deg"),
+    ],
+)
+def test_bad_input_names_the_parameter(call, parameter):
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    with pytest.raises(ValueError, match=f"^{parameter}"):
+        call(atm)
