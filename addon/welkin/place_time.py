@@ -41,6 +41,7 @@ class PlaceTime:
     longitude_deg: float = 0.0  # east positive
     height_m: float = 0.0  # above sea level
     north_deg: float = 0.0  # the scene's north, counter-clockwise from +Y about +Z
+    stars: bool = True  # the catalogue's stars in the night sky
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,6 +54,9 @@ class Bodies:
     moon_angular_radius_rad: float
     sun_from_moon: tuple[float, float, float]  # lights the moon's disc (its phase)
     place_and_time: dict[str, Any]  # welkin.sun_and_moon's dict, as the core gave it
+    # The night sky's moment and place for the world (sky_compute.with_night_sky):
+    # (ISO time, latitude_deg, longitude_deg, height_m, north_deg, stars).
+    night_sky: tuple[Any, ...] = ()
 
 
 def iso_time(place_time: PlaceTime) -> str:
@@ -117,7 +121,21 @@ def bodies(native: ModuleType, place_time: PlaceTime) -> Bodies:
         math.radians(float(moon["angular_radius_deg"])),
         to_scene(moon["sun_direction_from_moon"], p.north_deg),
         result,
+        (iso_time(p), p.latitude_deg, p.longitude_deg, p.height_m, p.north_deg, bool(p.stars)),
     )
+
+
+def scene_stars(native: ModuleType, night_sky: tuple[Any, ...]) -> Any:  # noqa: ANN401
+    """The catalogue's stars (welkin.stars_at: an (N, 5) array of direction, V, B-V) for a
+    Bodies.night_sky, their directions turned into the scene's frame as to_scene turns
+    one."""
+    time, latitude, longitude, height, north, _stars = night_sky
+    stars = native.stars_at(time, latitude, longitude, height_m=height)
+    c, s = math.cos(math.radians(north)), math.sin(math.radians(north))
+    x, y = stars[:, 0].copy(), stars[:, 1].copy()
+    stars[:, 0] = c * x - s * y
+    stars[:, 1] = s * x + c * y
+    return stars
 
 
 def moon_lamp(

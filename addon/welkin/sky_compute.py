@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from . import sky_request
+from . import place_time, sky_request
 
 
 @dataclasses.dataclass
@@ -216,6 +216,7 @@ def compute(
             color_space=request.color_space,
         )
         sky = with_moonlit_sky(native, request, atm, method, sky, request.color_space)
+        sky = with_night_sky(native, request, atm, sky, request.color_space)
     model = None
     if disc:
         model = disc_model(
@@ -287,6 +288,7 @@ def hdri(
         ground=request.ground,
     )
     sky = with_moonlit_sky(native, dataclasses.replace(request, width=width), atm, method, sky, "rec709")
+    sky = with_night_sky(native, dataclasses.replace(request, width=width), atm, sky, "rec709")
     if sun_disc and request.moon_direction and request.sun_from_moon:
         # The moon's disc with its phase, energy-exact, as welkin.sky_image_at draws it.
         sky = sky + native.moon_disc_image(
@@ -299,6 +301,30 @@ def hdri(
             width,
             exposure=request.exposure,
         )
+    return sky
+
+
+MOON_SKY_DEPRESSION_DEG = 20.0  # the core's kMoonSkyDepressionDeg
+
+
+def with_night_sky(
+    native: ModuleType,
+    request: sky_request.SkyRequest,
+    atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
+    sky: npt.NDArray[np.float32],
+    color_space: str,
+) -> npt.NDArray[np.float32]:
+    """`sky` plus the night sky when the request has one (Place and Time), as
+    welkin.sky_image_at adds it: the night sky's own glow (welkin.night_glow_image) and,
+    with stars, the catalogue's stars in the scene's frame (welkin.star_image,
+    energy-exact). Not under clouds."""
+    if not request.night_sky:
+        return sky
+    common = {"altitude_m": request.altitude_m, "exposure": request.exposure, "color_space": color_space}
+    sky = sky + native.night_glow_image(atm, request.width, **common)
+    if request.night_sky[5]:
+        stars = place_time.scene_stars(native, request.night_sky)
+        sky = sky + native.star_image(atm, stars, request.width, **common)
     return sky
 
 
@@ -315,6 +341,11 @@ def with_moonlit_sky(
     irradiance ratio, as the core composes it (night/moonlit_sky.cpp: every method's
     radiance is linear in the solar irradiance). The moon's disc is not drawn."""
     if not request.moon_direction or not request.moon_irradiance_ratio > 0.0:
+        return sky
+    # Far below the horizon the moon's sky is negligible and left out, as the core does
+    # (kMoonSkyDepressionDeg, include/welkin/night/moonlit_sky.hpp).
+    m = request.moon_direction
+    if m[2] / math.sqrt(m[0] ** 2 + m[1] ** 2 + m[2] ** 2) < math.sin(math.radians(-MOON_SKY_DEPRESSION_DEG)):
         return sky
     moonlit = native.sky_image(
         atm,

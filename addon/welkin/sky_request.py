@@ -65,6 +65,10 @@ class SkyRequest:
     # The moon's disc (the HDRI export draws it): its radius and the sun's direction from it.
     moon_angular_radius_rad: float = 0.0
     sun_from_moon: tuple[float, ...] = ()
+    # The night sky (Place and Time): (ISO time, latitude, longitude, height, north_deg,
+    # stars) as place_time.Bodies.night_sky; (): none. The world adds the night sky's own
+    # glow and, with stars, the catalogue's stars (sky_compute.with_night_sky).
+    night_sky: tuple[Any, ...] = ()
 
     def key(self) -> str:
         """A string that changes whenever the sky would (sun rounded to 1e-7)."""

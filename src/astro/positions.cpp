@@ -235,6 +235,36 @@ SunAndMoon sun_and_moon(const Instant& when, const Place& where) {
     return out;
 }
 
+std::vector<std::array<double, 3>> apparent_star_directions(const Instant& when, const Place& where,
+                                                            std::span<const std::array<double, 3>> icrs) {
+    where.validate();
+    if (!std::isfinite(when.tt_jd()) || !std::isfinite(when.ut1_jd()))
+        throw InvalidArgument("time", "must be a finite moment");
+    const Frames f = make_frames(when, &where);
+    // The rotation GCRS -> east/north/up, once: rows are the local axes in the GCRS.
+    double r[3][3];
+    for (int k = 0; k < 3; ++k) {
+        Vec axis{};
+        for (int j = 0; j < 3; ++j) axis[j] = f.rc2t[j][k];  // column k of GCRS -> ITRS
+        r[0][k] = dot(axis, f.east);
+        r[1][k] = dot(axis, f.north);
+        r[2][k] = dot(axis, f.up);
+    }
+    const double pressure = where.effective_pressure_hpa();
+    std::vector<std::array<double, 3>> out(icrs.size());
+    for (std::size_t i = 0; i < icrs.size(); ++i) {
+        // The ICRS axes are the GCRS's for directions (a star's light-time is not needed).
+        const Vec enu = mul(r, aberrate(f, icrs[i]));
+        const double airless = std::asin(std::clamp(enu[2], -1.0, 1.0)) * ERFA_DR2D;
+        const double el = (airless + refraction_deg(airless, pressure, where.temperature_c)) * ERFA_DD2R;
+        const double h = std::hypot(enu[0], enu[1]);
+        const double ce = std::cos(el);
+        out[i] = h > 0.0 ? std::array<double, 3>{ce * enu[0] / h, ce * enu[1] / h, std::sin(el)}
+                         : std::array<double, 3>{0.0, 0.0, enu[2] > 0.0 ? 1.0 : -1.0};
+    }
+    return out;
+}
+
 GeocentricPosition geocentric_moon(const Instant& when) {
     if (!std::isfinite(when.tt_jd())) throw InvalidArgument("time", "must be a finite moment");
     const Frames f = make_frames(when, nullptr);

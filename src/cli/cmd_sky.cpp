@@ -18,6 +18,8 @@
 #include "welkin/base/error.hpp"
 #include "welkin/io/exr.hpp"
 #include "welkin/night/moonlit_sky.hpp"
+#include "welkin/night/night_glow.hpp"
+#include "welkin/night/stars.hpp"
 #include "welkin/render/sky_image.hpp"
 #include "welkin/scene/scene.hpp"
 #include "welkin/sky/auto.hpp"
@@ -34,6 +36,7 @@ struct SkyArgs {
     double exposure = 1.0;
     bool half = false, full_float = false;
     bool no_sun_disc = false;
+    bool stars = true;  // with --time: the catalogue's stars
     bool ground = true;
     std::optional<double> ground_albedo;
     bool multilayer = false;
@@ -167,6 +170,11 @@ int run_sky(SkyArgs args) {
             moon.disc = image_options.sun_disc;
             image = render_equirect_sky_with_moon(*method, atm, observer, moon, args.width, image_options,
                                                   &progress);
+            add_night_glow(image, atm, observer, image_options);
+            if (args.stars) {
+                const Instant when = Instant::from_civil(place_time->time, "--time");
+                add_stars(image, atm, observer, stars_at(when, place_time->place), image_options);
+            }
         } else {
             image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
         }
@@ -196,6 +204,7 @@ int run_sky(SkyArgs args) {
         {"exposure", sky.exposure},
         {"sun_disc", !args.no_sun_disc},
         {"ground", args.ground},
+        {"stars", place_time.has_value() && args.stars},
         {"ground_albedo",
          args.ground_albedo ? nlohmann::json(*args.ground_albedo) : nlohmann::json("atmosphere")},
         {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
@@ -273,6 +282,9 @@ Command add_sky_command(CLI::App& app) {
     sub->add_flag("--no-sun-disc", args->no_sun_disc,
                   "Leave the sun's disc out (when a sun lamp lights the scene, so that its "
                   "energy is not counted twice)");
+    sub->add_flag("--stars,!--no-stars", args->stars,
+                  "With --time: the stars of V <= 7 of the Hipparcos catalogue at their apparent "
+                  "places, dimmed by the air (the default), or none (--no-stars)");
     sub->add_flag("--ground,!--no-ground", args->ground,
                   "Show the planet's surface below the horizon, lit by the sun and the sky and "
                   "seen through the air (the default), or leave it black (--no-ground)");

@@ -158,6 +158,7 @@ SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere
     moon.validate();
     SkyImage image = render_equirect_sky(method, atm, observer, width, options, progress);
     if (!(moon.irradiance_ratio > 0.0)) return image;
+    if (glm::normalize(moon.direction).z < std::sin(-kMoonSkyDepressionDeg * kDegree)) return image;
     // The moonlit sky: every method's radiance (and the lit ground's) is linear in the
     // solar irradiance, so the sky for a "sun" in the moon's direction, scaled by the
     // ratio, is the sky lit by the moon (the same cached LUTs; colour conversion linear).

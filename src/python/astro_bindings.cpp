@@ -15,7 +15,10 @@
 #include "welkin/astro/positions.hpp"
 #include "welkin/astro/time.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/color/color_space.hpp"
 #include "welkin/night/moonlit_sky.hpp"
+#include "welkin/night/night_glow.hpp"
+#include "welkin/night/stars.hpp"
 #include "welkin/sky/method.hpp"
 
 namespace welkin::python {
@@ -31,7 +34,8 @@ std::string time_text(const py::object& time) {
 py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, double latitude_deg,
                                 double longitude_deg, int width, const std::string& method,
                                 const std::string& output, double height_m, double altitude_m, bool discs,
-                                double exposure, bool ground, const py::object& progress) {
+                                double exposure, bool ground, bool stars, bool night_glow,
+                                const py::object& progress) {
     require_progress_callback(progress);
     const std::string text = time_text(time);
     SkyImageOptions options;
@@ -42,7 +46,8 @@ py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, d
     const std::unique_ptr<SkyMethod> sky = make_sky_method(method, SkyOptions{});
     const CivilTime civil = parse_iso8601(text, "time");
     const Place place{latitude_deg, longitude_deg, height_m};
-    const SunAndMoon positions = sun_and_moon(Instant::from_civil(civil, "time"), place);
+    const Instant when = Instant::from_civil(civil, "time");
+    const SunAndMoon positions = sun_and_moon(when, place);
     const auto& d = positions.sun.direction_enu;
     const Observer observer = Observer{altitude_m, {d[0], d[1], d[2]}}.validated();
     Moon moon = moon_at(positions);
@@ -51,6 +56,8 @@ py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, d
     run_cancellable(
         [&](Progress* p) {
             image = render_equirect_sky_with_moon(*sky, atmosphere, observer, moon, width, options, p);
+            if (night_glow) add_night_glow(image, atmosphere, observer, options);
+            if (stars) add_stars(image, atmosphere, observer, stars_at(when, place), options);
         },
         progress);
     const std::size_t channels = image.channels();
@@ -81,6 +88,79 @@ py::array_t<float> moon_disc_image(const Atmosphere& atmosphere, double altitude
         atmosphere.validate();
         const Observer observer = Observer{altitude_m, moon.direction}.validated();
         pixels = moon_disc_pixels(atmosphere, observer, moon, width, out);
+    }
+    for (float& v : pixels) v *= float(exposure);
+    const std::size_t channels = out == SkyImageOptions::Output::Rgb ? 3 : atmosphere.channels();
+    return to_image_array(std::move(pixels), width, width / 2, channels);
+}
+
+py::array_t<double> star_catalogue() {
+    const auto stars = hipparcos_stars();
+    py::array_t<double> out({py::ssize_t(stars.size()), py::ssize_t(6)});
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < stars.size(); ++i) {
+        const CatalogueStar& s = stars[i];
+        const double row[6] = {s.ra_deg, s.dec_deg, s.pm_ra_mas_yr, s.pm_dec_mas_yr, s.v_mag, s.b_v};
+        for (py::ssize_t k = 0; k < 6; ++k) o(py::ssize_t(i), k) = row[k];
+    }
+    return out;
+}
+
+py::array_t<double> stars_at_py(const py::object& time, double latitude_deg, double longitude_deg,
+                                double height_m, double faintest_v) {
+    const CivilTime civil = parse_iso8601(time_text(time), "time");
+    const std::vector<Star> stars = stars_at(Instant::from_civil(civil, "time"),
+                                             Place{latitude_deg, longitude_deg, height_m}, faintest_v);
+    py::array_t<double> out({py::ssize_t(stars.size()), py::ssize_t(5)});
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < stars.size(); ++i) {
+        const Star& s = stars[i];
+        const double row[5] = {s.direction.x, s.direction.y, s.direction.z, s.v_mag, s.b_v};
+        for (py::ssize_t k = 0; k < 5; ++k) o(py::ssize_t(i), k) = row[k];
+    }
+    return out;
+}
+
+void require_exposure(double exposure) {
+    if (!(exposure > 0.0 && exposure <= 1e6))
+        throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+}
+
+py::array_t<float> star_image(const Atmosphere& atmosphere, const py::array_t<double>& stars, int width,
+                              const std::string& output, double altitude_m, double exposure,
+                              const std::string& color_space) {
+    require_exposure(exposure);
+    const ColorSpace space = color_space_from_name(color_space);
+    if (stars.ndim() != 2 || stars.shape(1) != 5)
+        throw InvalidArgument("stars", "must be an (N, 5) array: x, y, z, V, B-V per star");
+    const auto s = stars.unchecked<2>();
+    std::vector<Star> list(std::size_t(stars.shape(0)));
+    for (py::ssize_t i = 0; i < stars.shape(0); ++i)
+        list[std::size_t(i)] = Star{{s(i, 0), s(i, 1), s(i, 2)}, s(i, 3), s(i, 4)};
+    const SkyImageOptions::Output out = parse_output(output);
+    std::vector<float> pixels;
+    {
+        py::gil_scoped_release release;
+        atmosphere.validate();
+        const Observer observer = Observer{altitude_m, {0.0, 0.0, 1.0}}.validated();
+        pixels = star_pixels(atmosphere, observer, list, width, out, space);
+    }
+    for (float& v : pixels) v *= float(exposure);
+    const std::size_t channels = out == SkyImageOptions::Output::Rgb ? 3 : atmosphere.channels();
+    return to_image_array(std::move(pixels), width, width / 2, channels);
+}
+
+py::array_t<float> night_glow_image(const Atmosphere& atmosphere, int width, const std::string& output,
+                                    double altitude_m, double exposure, const std::string& color_space) {
+    require_exposure(exposure);
+    const ColorSpace space = color_space_from_name(color_space);
+    const SkyImageOptions::Output out = parse_output(output);
+    std::vector<float> pixels;
+    {
+        py::gil_scoped_release release;
+        atmosphere.validate();
+        const Observer observer = Observer{altitude_m, {0.0, 0.0, 1.0}}.validated();
+        pixels = night_glow_pixels(atmosphere, observer, width, out, space);
     }
     for (float& v : pixels) v *= float(exposure);
     const std::size_t channels = out == SkyImageOptions::Output::Rgb ? 3 : atmosphere.channels();
@@ -148,10 +228,45 @@ angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
 irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
 )doc");
 
+    m.def("star_catalogue", &star_catalogue, R"doc(
+The compiled-in star catalogue, brightest first: an (N, 6) float64 array of ICRS
+right ascension and declination (degrees, epoch J1991.25), proper motion
+(mu_alpha cos delta, mu_delta; mas/yr), Johnson V and B-V, for the Hipparcos
+stars of V <= 7 (van Leeuwen 2007; V from Hp by Bessell 2000).
+)doc");
+    m.def("stars_at", &stars_at_py, py::arg("time"), py::arg("latitude_deg"), py::arg("longitude_deg"),
+          py::kw_only(), py::arg("height_m") = 0.0, py::arg("faintest_v") = 7.0, R"doc(
+The catalogue's stars of V <= faintest_v as seen from a place at a moment: an
+(N, 5) float64 array of the apparent direction (x east, y north, z up; with
+aberration, precession-nutation and refraction, as sun_and_moon), V and B-V.
+Stars below the horizon are included.
+)doc");
+    m.def("star_image", &star_image, py::arg("atmosphere"), py::arg("stars"), py::arg("width"),
+          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
+          py::arg("color_space") = "rec709", R"doc(
+The stars' light alone as an equirectangular (height, width, channels) float32
+image: each star of `stars` (an (N, 5) array as stars_at returns) dimmed by the
+air's transmittance towards it and spread over the 4 pixels around it so that the
+sum of radiance x pixel solid angle is its irradiance, times exposure. Same units
+and colour spaces as sky_image. Directions in any frame (Z up): the scene's, for a
+host that turns the sky.
+)doc");
+    m.def("night_glow_image", &night_glow_image, py::arg("atmosphere"), py::arg("width"),
+          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
+          py::arg("color_space") = "rec709",
+          R"doc(
+The night sky's own light alone (airglow, zodiacal light, unresolved stars:
+Krisciunas & Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith,
+van Rhijn's brightening towards the horizon, dimmed by the air), as an
+equirectangular (height, width, channels) float32 image times exposure; 0 below
+the horizon. Same units and colour spaces as sky_image.
+)doc");
+
     m.def("sky_image_at", &sky_image_at, py::arg("atmosphere"), py::arg("time"), py::arg("latitude_deg"),
           py::arg("longitude_deg"), py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb",
           py::kw_only(), py::arg("height_m") = 0.0, py::arg("altitude_m") = 0.0, py::arg("discs") = true,
-          py::arg("exposure") = 1.0, py::arg("ground") = true, py::arg("progress") = py::none(), R"doc(
+          py::arg("exposure") = 1.0, py::arg("ground") = true, py::arg("stars") = true,
+          py::arg("night_glow") = true, py::arg("progress") = py::none(), R"doc(
 The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
 renders it: the sun's sky and disc at the sun's apparent position, plus the
 moon's light (its sky: the same atmosphere lit by the moon, brightness from
@@ -162,7 +277,12 @@ Allen's magnitude-phase law) and its disc with its phase, energy-exact.
 Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
 time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
 observer above the ground (as in sky_image); discs=False leaves both discs out
-(when sun and moon lamps light the scene).
+(when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
+of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
+air towards each, energy-exact (welkin.star_image). night_glow=True adds the
+night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
+Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
+brightening towards the horizon, dimmed by the air).
 )doc");
 }
 

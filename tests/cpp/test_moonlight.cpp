@@ -3,7 +3,9 @@
 // illuminance on the ground against Krisciunas & Schaefer 1991, its disc's energy in the
 // sky image against its irradiance at any resolution, the phase's shape, and the moonlit
 // sky's linearity.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "invalid_argument_testing.hpp"
 #include <gtest/gtest.h>
@@ -15,6 +17,7 @@
 #include "welkin/base/math.hpp"
 #include "welkin/color/color.hpp"
 #include "welkin/night/moonlit_sky.hpp"
+#include "welkin/night/night_glow.hpp"
 #include "welkin/sky/method.hpp"
 
 namespace welkin {
@@ -198,6 +201,39 @@ TEST(Moonlight, BadInputNamesTheParameter) {
     EXPECT_EQ(
         parameter_of([&] { moon_disc_pixels(atm, Observer{}, moon, 15, SkyImageOptions::Output::Rgb); }),
         "width");
+}
+
+// The moon's sky is left out beyond kMoonSkyDepressionDeg: the sky of a sun just below that
+// depression, times the brightest moon's irradiance ratio (full moon at perigee, < 3e-6),
+// is under 1e-4 of the night glow everywhere above the horizon (the most just above the
+// horizon below the sun; at the zenith far less).
+TEST(MoonlitSky, LeftOutBelowTheDepressionLimitIsNegligible) {
+    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    const auto method = make_sky_method("lut", SkyOptions{});
+    Observer o;
+    o.sun_direction = from_elevation_azimuth(-kMoonSkyDepressionDeg - 1e-3, 0.0);
+    SkyImageOptions options;
+    options.sun_disc = false;
+    const int width = 256, height = 128;
+    const SkyImage sky = render_equirect_sky(*method, atm, o.validated(), width, options);
+    const std::vector<float> glow =
+        night_glow_pixels(atm, o.validated(), width, SkyImageOptions::Output::Rgb);
+    double worst = 0.0;
+    for (int j = 0; j < height / 2; ++j)
+        for (int i = 0; i < width; ++i) {
+            // Per pixel, over the three channels (near the horizon the deep red glow's blue
+            // is gamut-mapped to 0).
+            double s = 0.0, g = 0.0;
+            for (std::size_t c = 0; c < 3; ++c) {
+                const std::size_t k = (std::size_t(j) * width + std::size_t(i)) * 3 + c;
+                s += sky.pixels[k];
+                g += glow[k];
+            }
+            ASSERT_GT(g, 0.0) << "row " << j;
+            worst = std::max(worst, 3e-6 * s / g);
+        }
+    std::printf("moon's sky below the limit / night glow: at most %.3g\n", worst);
+    EXPECT_LT(worst, 1e-4);
 }
 
 }  // namespace

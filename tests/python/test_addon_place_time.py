@@ -120,7 +120,8 @@ def test_moon_lamp_is_the_clis_moon_light():
 @pytest.mark.parametrize("hours", [21.5, 23.75])  # dusk with the moon up; night
 def test_world_sky_is_the_modules_moment_sky(hours):
     """The world image of a Place and Time request (north 0: the scene's frame is the
-    core's) is welkin.sky_image_at's without the discs, to float rounding."""
+    core's) is welkin.sky_image_at's without the discs, to float rounding: the moonlit
+    sky, the night sky's glow and the stars."""
     p = dataclass_with(PARIS, hours=hours)
     b = place_time.bodies(welkin, p)
     request = sky_request.SkyRequest(
@@ -130,6 +131,7 @@ def test_world_sky_is_the_modules_moment_sky(hours):
         sun_direction=b.sun_direction,
         moon_direction=b.moon_direction,
         moon_irradiance_ratio=b.moon_irradiance_ratio,
+        night_sky=b.night_sky,
     )
     result = sky_compute.compute(welkin, request, disc=False)
     atm = sky_request.build_atmosphere(request, welkin)
@@ -180,6 +182,32 @@ def test_hdri_moon_disc_is_energy_exact(width, north):
         welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio, b.moon_angular_radius_rad, 1.0
     )
     assert np.allclose(energy, np.asarray(lamp.color) * lamp.strength_w_m2, rtol=1e-5, atol=0.0)
+
+
+def test_world_stars_turn_with_the_scenes_north():
+    """With the scene's north at 90 degrees (north is -X) the world's stars are the core's
+    stars turned by 90 degrees about +Z: the image is the north-0 one rolled by a quarter
+    of its width; Stars off leaves the glow alone."""
+    images = []
+    for north in (0.0, 90.0):
+        b = place_time.bodies(welkin, dataclass_with(PARIS, hours=26.0, north_deg=north))
+        request = sky_request.SkyRequest(
+            preset="bruneton2017",
+            width=256,
+            method="lut",
+            sun_direction=b.sun_direction,
+            night_sky=b.night_sky,
+        )
+        no_stars = dataclasses.replace(request, night_sky=(*b.night_sky[:5], False))
+        stars = (
+            sky_compute.compute(welkin, request, disc=False).sky
+            - sky_compute.compute(welkin, no_stars, disc=False).sky
+        )
+        assert float(stars.max()) > 0.0 and float(stars.min()) >= -1e-12
+        images.append(stars)
+    # u = 0.5 - atan2(y, x) / 2 pi: a turn by +90 degrees about +Z moves u by -1/4.
+    rolled = np.roll(images[0], -256 // 4, axis=1)
+    assert np.abs(rolled - images[1]).max() <= 1e-3 * float(images[0].max())
 
 
 def test_request_rejects_a_bad_moon():

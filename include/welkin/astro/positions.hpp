@@ -24,7 +24,9 @@
 #pragma once
 
 #include <array>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "welkin/astro/time.hpp"
 
@@ -84,6 +86,15 @@ struct SunAndMoon {
 // Everything above for one moment and one place. Throws InvalidArgument from
 // Place::validate. Microseconds (one precession-nutation evaluation per call).
 SunAndMoon sun_and_moon(const Instant& when, const Place& where);
+
+// Apparent topocentric directions (x east, y north, z up, refracted by refraction_deg) of
+// objects at infinite distance, the stars, from their ICRS unit vectors (at the moment:
+// proper motion already applied): the aberration by the observer's barycentric velocity,
+// precession-nutation and the Earth's rotation of sun_and_moon (the same frames). Light
+// deflection by the sun (1.75" at its limb, < 0.005" beyond 90 degrees from it) and the
+// annual parallax (< 0.8") are neglected. Throws InvalidArgument from Place::validate.
+std::vector<std::array<double, 3>> apparent_star_directions(const Instant& when, const Place& where,
+                                                            std::span<const std::array<double, 3>> icrs);
 
 // The moon's geocentric apparent right ascension and declination (true equator and
 // equinox of date) and distance: what Meeus' example 47.a tabulates.

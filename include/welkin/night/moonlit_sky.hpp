@@ -46,6 +46,13 @@ struct Moon {
 // from the sun).
 Moon moon_at(const SunAndMoon& sky);
 
+// Below this depression the moon's sky is left out (its disc is hidden anyway): the sky of
+// a sun 20 degrees down (past the end of astronomical twilight, 18) is within a few times
+// the night sky's own glow (night_glow.hpp) even just above the horizon below it, and the
+// moon's is that times its irradiance ratio (< 3e-6): under 1e-4 of the glow
+// (tests/cpp/test_moonlight.cpp). It saves a second sky render on most moonless nights.
+inline constexpr double kMoonSkyDepressionDeg = 20.0;
+
 // The sun's sky (and disc, per options.sun_disc) plus the moon's sky and disc. Same
 // options, units, exposure and errors as render_equirect_sky.
 SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere& atmosphere,

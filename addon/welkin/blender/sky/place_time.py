@@ -106,6 +106,12 @@ class WelkinPlaceTime(bpy.types.PropertyGroup):
         description="The scene's north: the angle from +Y counter-clockwise about +Z "
         "(0: north is +Y, east +X; 90: north is -X)",
     )
+    stars: bpy.props.BoolProperty(
+        name="Stars",
+        description="The stars of V <= 7 of the Hipparcos catalogue in the world at their places "
+        "for the moment, dimmed by the air (the night sky's own glow is always there)",
+        default=True,
+    )
     moon_object: bpy.props.PointerProperty(type=bpy.types.Object, options={"HIDDEN"})
 
 
@@ -130,6 +136,7 @@ def place_time_of(settings):
         settings.longitude_deg,
         settings.height_m,
         settings.north_deg,
+        settings.stars,
     )
 
 
@@ -272,6 +279,7 @@ class WORLD_PT_welkin_place_time(bpy.types.Panel):
         col.prop(s, "longitude_deg")
         col.prop(s, "height_m")
         col.prop(s, "north_deg")
+        col.prop(s, "stars")
         if not s.enabled:
             return
         try:

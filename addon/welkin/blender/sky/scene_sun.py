@@ -102,5 +102,6 @@ def request_for(scene, settings, depsgraph=None):
         moon_irradiance_ratio=bodies.moon_irradiance_ratio if bodies else 0.0,
         moon_angular_radius_rad=bodies.moon_angular_radius_rad if bodies else 0.0,
         sun_from_moon=bodies.sun_from_moon if bodies else (),
+        night_sky=bodies.night_sky if bodies else (),
     )
     return request, lamp, warnings
