@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy
 import os
 import typing
-__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
+__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'reflectance_to_rgb', 'rgb_to_reflectance', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
 class DensityLayer:
     """
     One layer of a density profile (Bruneton 2017's DensityProfileLayer):
@@ -814,6 +814,22 @@ def read_exr(path: str) -> tuple:
     Reads an OpenEXR file: returns (pixels, channel_names), pixels float32
     (height, width, channels), top row first, channels in the file's (sorted)
     order. OSError naming the path on failure.
+    """
+def reflectance_to_rgb(reflectance: typing.Any, wavelengths_nm: typing.Any, *, color_space: str = 'rec709') -> numpy.ndarray[numpy.float64]:
+    """
+    The colour of a reflectance spectrum sampled at wavelengths_nm (linear in
+    between, constant beyond): the linear RGB of color_space of light reflected
+    from it relative to a perfect white reflector; rgb_to_reflectance's inverse.
+    """
+def rgb_to_reflectance(rgb: typing.Any, wavelengths_nm: typing.Any, *, color_space: str = 'rec709') -> numpy.ndarray[numpy.float64]:
+    """
+    The reflectance spectrum (every value in [0, 1]) at wavelengths_nm whose colour
+    is the linear `rgb` of color_space (each channel in [0, 1]): Jakob & Hanika
+    2019's sigmoid of a quadratic, fitted so that light reflected from it, relative
+    to a perfect white reflector, has that RGB (include/welkin/color/reflectance.hpp).
+    A grey is the flat spectrum of its value. Use it as Atmosphere.ground_albedo
+    for a ground of a chosen colour. Raises ValueError naming ground_color for a
+    channel outside [0, 1].
     """
 def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, output: str = 'rgb', return_transmittance: bool = False, progress: typing.Any = None, ground: bool = True) -> typing.Any:
     """
