@@ -7,7 +7,8 @@
 What it does
 ------------
 1. Scenes: sun elevations from -8 to 90 degrees (twilight included) x observer altitudes
-   0 m, 1 km, 10 km, 50 km, 100 km, 400 km x the presets `bruneton2017` and `hazy`.
+   0 m, 1 km, 10 km, 50 km, 100 km, 400 km x the presets `clear_day` (the default),
+   `bruneton2017` and `hazy`.
 2. Directions: a Fibonacci sphere (the golden-angle spiral) of --directions points over the
    whole sphere, below the horizon too. A 2048x1024 reference sky takes hours; a few
    hundred evenly spread directions estimate the same sphere statistics.
@@ -63,7 +64,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 # --- scenes ---------------------------------------------------------------------------
 SUN_ELEVATIONS_DEG = [-8.0, -4.0, -2.0, 0.0, 3.0, 10.0, 20.0, 40.0, 65.0, 90.0]
 ALTITUDES_M = [0.0, 1e3, 1e4, 5e4, 1e5, 4e5]
-PRESETS = ["bruneton2017", "hazy"]
+PRESETS = ["clear_day", "bruneton2017", "hazy"]
 QUICK_SUN_ELEVATIONS_DEG = [-8.0, 0.0, 10.0, 60.0]
 QUICK_ALTITUDES_M = [0.0, 1e4, 4e5]
 
