@@ -82,8 +82,11 @@ TEST(Reflectance, SaturatedPrimariesKeepTheirHue) {
         const std::vector<double> r = rgb_to_reflectance(c, w);
         for (double v : r) ASSERT_TRUE(v >= 0.0 && v <= 1.0);
         const auto back = reflectance_to_rgb(r, w);
-        for (int k = 0; k < 3; ++k)
-            if (k != p) EXPECT_LT(back[k], 0.5 * back[p]) << "primary " << p << " channel " << k;
+        for (int k = 0; k < 3; ++k) {
+            if (k != p) {
+                EXPECT_LT(back[k], 0.5 * back[p]) << "primary " << p << " channel " << k;
+            }
+        }
         EXPECT_GT(back[p], 0.5) << "primary " << p;
     }
 }
