@@ -7,8 +7,9 @@ and -12 degrees, one row each, the same camera and exposure across a row.
 
 Columns: Welkin (the add-on's world as a user gets it: the default `auto` sky at 1024 x 512
 and the sun's disc drawn by the world's nodes), Blender's Nishita sky (this Blender), and
-Blender 5.0's "Multiple Scattering" sky when build/venv-bpy-5.0 (PyPI's bpy 5.0) is there:
-this script runs itself in that Python (--blender5 DIR) to render that column. Every tile
+Blender 5's "Multiple Scattering" sky in the newest PyPI bpy of build/venv-bpy-5.3 .. 5.0
+that is there (the newest Blender the tests run): this script runs itself in that Python
+(--blender5 DIR) to render that column. Every tile
 is a Cycles render through the same equirectangular panoramic camera: 120 degrees of
 azimuth centred on the sun, elevation -10 to +70 degrees; the Blender skies with their
 default air, dust and ozone and their sun disc. Exposure: per row, one factor for all three
@@ -31,7 +32,15 @@ ELEVATIONS = (60.0, 20.0, 5.0, 1.0, -2.0, -6.0, -12.0)
 AZIMUTH = 0.0  # the sun towards +X
 TILE_W, TILE_H = 240, 160
 LON_HALF, LAT_MIN, LAT_MAX = 60.0, -10.0, 70.0
-SAMPLES = 32  # the horizon is a hard edge inside a pixel row: fewer leave it speckled
+SAMPLES = 32
+# PyPI's bpy venvs (build/venv-bpy-<v>), newest first: the first present renders Blender 5's
+# Multiple Scattering sky.
+MULTIPLE_SCATTERING_VERSIONS = (
+    "5.3",
+    "5.2",
+    "5.1",
+    "5.0",
+)  # the horizon is a hard edge inside a pixel row: fewer leave it speckled
 
 import bpy  # noqa: E402
 
@@ -89,7 +98,7 @@ def render_blender_sky(scene, sky_type, out_dir, prefix):
 
 
 def blender5_main(out_dir):
-    """Run in bpy 5.0's Python: the Multiple Scattering column."""
+    """Run in bpy 5.x's Python: the Multiple Scattering column."""
     scene = bpy.context.scene
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj)
@@ -131,19 +140,29 @@ def main(out_png):
     render_blender_sky(scene, "NISHITA", tmp, "nishita")
     columns = [("welkin", "Welkin (add-on world)"), ("nishita", f"Blender {version} Nishita")]
 
-    python5 = ROOT / "build" / "venv-bpy-5.0" / "bin" / "python"
-    if python5.exists():
+    # The newest Blender the tests run (scripts/test_blender.sh) draws the Multiple
+    # Scattering column (the sky type exists from 5.0 on).
+    newest = next(
+        (
+            v
+            for v in MULTIPLE_SCATTERING_VERSIONS
+            if (ROOT / "build" / f"venv-bpy-{v}" / "bin" / "python").exists()
+        ),
+        None,
+    )
+    if newest is not None:
+        python5 = ROOT / "build" / f"venv-bpy-{newest}" / "bin" / "python"
         run = subprocess.run(
             [str(python5), str(pathlib.Path(__file__).resolve()), "--blender5", str(tmp)],
             capture_output=True,
             text=True,
         )
         if run.returncode == 0:
-            columns.append(("multiple", "Blender 5.0 Multiple Scattering"))
+            columns.append(("multiple", f"Blender {newest} Multiple Scattering"))
         else:
-            print(f"Blender 5.0's sky not rendered (bpy 5.0 failed):\n{run.stderr[-2000:]}")
+            print(f"Blender {newest}'s sky not rendered (bpy {newest} failed):\n{run.stderr[-2000:]}")
     else:
-        print(f"Blender 5.0's sky not rendered: no {python5}")
+        print("Blender 5's sky not rendered: no build/venv-bpy-5.x (scripts/install_blender_venvs.sh)")
 
     label_w, head_h = 92, 22
     sheet = Image.new(

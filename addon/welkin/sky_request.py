@@ -49,7 +49,10 @@ class SkyRequest:
     aerosol_optical_depth: float = -1.0  # at 550 nm, in [0, 10]; < 0: the preset's
     turbidity: float = -1.0  # Preetham's T in [1, 20], instead; < 0: not used
     ozone_density: float = 1.0  # x ozone absorption
-    ground_albedo: float = -1.0  # < 0: the preset's
+    ground_albedo: float = -1.0  # grey, in [0, 1]; < 0: the preset's
+    # The ground's colour, linear RGB of color_space in [0, 1], as a reflectance spectrum
+    # (the core's rgb_to_reflectance, Jakob & Hanika 2019); (): ground_albedo or the preset's.
+    ground_color: tuple[float, ...] = ()
     altitude_m: float = 0.0  # observer above the ground, m (>= 0)
     sun_direction: tuple[float, ...] = (0.0, 0.0, 1.0)  # towards the sun, Z up
     width: int = 1024  # equirect width; height = width / 2
@@ -76,6 +79,7 @@ class SkyRequest:
         d["sun_direction"] = tuple(round(float(c), 7) for c in self.sun_direction)
         d["moon_direction"] = tuple(round(float(c), 7) for c in self.moon_direction)
         d["sun_from_moon"] = tuple(round(float(c), 7) for c in self.sun_from_moon)
+        d["ground_color"] = tuple(float(c) for c in self.ground_color)
         return repr(sorted(d.items()))
 
 
@@ -97,6 +101,9 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
         raise ValueError(
             f"ground_albedo: must be in [0, 1] (or < 0 for the preset's), got {request.ground_albedo}"
         )
+    g = request.ground_color
+    if g and (len(g) != 3 or not all(math.isfinite(c) and 0.0 <= c <= 1.0 for c in g)):
+        raise ValueError(f"ground_color: must be 3 channels each in [0, 1], got {tuple(g)}")
     if not (math.isfinite(request.altitude_m) and request.altitude_m >= 0.0):
         raise ValueError(f"altitude_m: must be >= 0 m, got {request.altitude_m}")
     if request.width not in WIDTHS:
@@ -151,7 +158,11 @@ def build_atmosphere(request: SkyRequest, native: ModuleType) -> Any:  # noqa: A
         atm.mie_extinction = atm.mie_extinction * request.aerosol_density
     if request.ozone_density != 1.0:
         atm.absorption_extinction = atm.absorption_extinction * request.ozone_density
-    if request.ground_albedo >= 0.0:
+    if request.ground_color:
+        atm.ground_albedo = native.rgb_to_reflectance(
+            request.ground_color, atm.wavelengths_nm, color_space=request.color_space
+        )
+    elif request.ground_albedo >= 0.0:
         atm.ground_albedo = [request.ground_albedo] * len(atm.wavelengths_nm)
     atm.validate()
     return atm

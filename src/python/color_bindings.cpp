@@ -9,6 +9,7 @@
 #include "welkin/base/equirect.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/color/color.hpp"
+#include "welkin/color/reflectance.hpp"
 #include "welkin/sky/method.hpp"
 
 namespace welkin::python {
@@ -130,6 +131,43 @@ The 3 x 3 matrix taking linear RGB of from_space to linear RGB of to_space
 (rgb_to = M @ rgb_from), both "rec709", "rec2020" or "acescg"; from_space
 "xyz": the CIE XYZ (D65-referred) -> to_space matrix every spectrum goes
 through (color_space.hpp). Raises ValueError naming color_space otherwise.
+)doc");
+
+    m.def(
+        "rgb_to_reflectance",
+        [](const py::object& rgb, const py::object& wavelengths_nm, const std::string& color_space) {
+            const std::vector<double> c = to_vector(rgb, "ground_color");
+            if (c.size() != 3)
+                throw InvalidArgument("ground_color",
+                                      fmt::format("needs 3 channels (r, g, b), got {}", c.size()));
+            const std::vector<double> wavelengths = to_vector(wavelengths_nm, "wavelengths_nm");
+            return to_readonly_array(
+                rgb_to_reflectance({c[0], c[1], c[2]}, wavelengths, color_space_from_name(color_space)));
+        },
+        py::arg("rgb"), py::arg("wavelengths_nm"), py::kw_only(), py::arg("color_space") = "rec709", R"doc(
+The reflectance spectrum (every value in [0, 1]) at wavelengths_nm whose colour
+is the linear `rgb` of color_space (each channel in [0, 1]): Jakob & Hanika
+2019's sigmoid of a quadratic, fitted so that light reflected from it, relative
+to a perfect white reflector, has that RGB (include/welkin/color/reflectance.hpp).
+A grey is the flat spectrum of its value. Use it as Atmosphere.ground_albedo
+for a ground of a chosen colour. Raises ValueError naming ground_color for a
+channel outside [0, 1].
+)doc");
+
+    m.def(
+        "reflectance_to_rgb",
+        [](const py::object& reflectance, const py::object& wavelengths_nm, const std::string& color_space) {
+            const std::vector<double> r = to_vector(reflectance, "reflectance");
+            const std::vector<double> wavelengths = to_vector(wavelengths_nm, "wavelengths_nm");
+            const std::array<double, 3> rgb =
+                reflectance_to_rgb(r, wavelengths, color_space_from_name(color_space));
+            return to_readonly_array(std::vector<double>(rgb.begin(), rgb.end()));
+        },
+        py::arg("reflectance"), py::arg("wavelengths_nm"), py::kw_only(), py::arg("color_space") = "rec709",
+        R"doc(
+The colour of a reflectance spectrum sampled at wavelengths_nm (linear in
+between, constant beyond): the linear RGB of color_space of light reflected
+from it relative to a perfect white reflector; rgb_to_reflectance's inverse.
 )doc");
 
     m.def(

@@ -52,6 +52,9 @@ def test_request_validation_names_the_parameter():
         ({"exposure": 0.0}, "exposure"),
         ({"altitude_m": -5.0}, "altitude_m"),
         ({"ground_albedo": 1.5}, "ground_albedo"),
+        ({"ground_color": (0.2, 1.5, 0.1)}, "ground_color"),
+        ({"ground_color": (0.2, 0.1)}, "ground_color"),
+        ({"ground_color": (0.2, math.nan, 0.1)}, "ground_color"),
         ({"sun_direction": (0.0, 0.0, 0.0)}, "sun_direction"),
         ({"method": "reference"}, "method"),
     ):
@@ -76,6 +79,28 @@ def test_atmosphere_multipliers_scale_the_presets_coefficients():
     np.testing.assert_allclose(atm.mie_extinction, 0.5 * base.mie_extinction)
     np.testing.assert_allclose(atm.absorption_extinction, 0.0)
     np.testing.assert_allclose(atm.ground_albedo, 0.3)
+
+
+def test_ground_color_becomes_the_cores_reflectance_spectrum():
+    # The request's colour is the core's rgb_to_reflectance of it, in the request's colour
+    # space, at the atmosphere's wavelengths (default four and spectral alike), and wins
+    # over a grey ground_albedo; its colour comes back through the core's inverse.
+    for spectral in (False, True):
+        for space in ("rec709", "acescg"):
+            req = sky_request.SkyRequest(
+                ground_color=(0.4, 0.25, 0.1), ground_albedo=0.3, spectral=spectral, color_space=space
+            )
+            atm = sky_request.build_atmosphere(req, welkin)
+            w = atm.wavelengths_nm
+            np.testing.assert_allclose(
+                atm.ground_albedo, welkin.rgb_to_reflectance((0.4, 0.25, 0.1), w, color_space=space)
+            )
+            if spectral:
+                rgb = welkin.reflectance_to_rgb(atm.ground_albedo, w, color_space=space)
+                np.testing.assert_allclose(rgb, (0.4, 0.25, 0.1), atol=2e-3)
+    a = sky_request.SkyRequest(ground_color=(0.4, 0.25, 0.1))
+    assert a.key() != dataclasses.replace(a, ground_color=(0.4, 0.25, 0.11)).key()
+    assert a.key() != dataclasses.replace(a, ground_color=()).key()
 
 
 def test_observer_altitude_below_the_ground_is_put_on_it():

@@ -35,10 +35,14 @@ DIRECTIONS = 128
 
 # (preset, altitude m, sun elevation deg, tolerance): none of these altitudes or elevations
 # is a chart grid value. The sun is up: in deep twilight no fast method reaches these
-# tolerances, and auto says so (test_falls_back_and_says_so). The hazy preset gets a looser
-# tolerance: Hillaire's isotropic multiple-scattering term misses its bright aerosol
-# forward peak by tens of percent (the chart shows it for every fast method).
+# tolerances, and auto says so (test_falls_back_and_says_so). The hazy and clear_day presets
+# get looser tolerances: Hillaire's isotropic multiple-scattering term misses their bright
+# aerosol forward peak, by tens of percent for hazy and by 10-18 % for clear_day near the
+# ground with the sun low (the chart shows it for every fast method, raymarch 128/64
+# included: clear_day at 0 m, sun 10 degrees, p95 0.094-0.097 for all of them).
 HELD_OUT = [
+    ("clear_day", 150.0, 47.0, 0.25),
+    ("clear_day", 2000.0, 15.0, 0.25),
     ("bruneton2017", 300.0, 33.0, 0.1),
     ("bruneton2017", 3000.0, 52.0, 0.1),
     ("bruneton2017", 25000.0, 71.0, 0.1),

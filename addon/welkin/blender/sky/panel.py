@@ -46,7 +46,7 @@ class WORLD_PT_welkin_sky(bpy.types.Panel):
         col.prop(s, "use_preset_albedo")
         row = col.row()
         row.active = not s.use_preset_albedo
-        row.prop(s, "ground_albedo")
+        row.prop(s, "ground_color")
         col.separator()
         col.prop(s, "altitude_m")
         col.prop(s, "use_camera_height")

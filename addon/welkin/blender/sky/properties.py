@@ -108,13 +108,16 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
         update=_changed,
         description="Use the preset's ground albedo",
     )
-    ground_albedo: bpy.props.FloatProperty(
-        name="Ground Albedo",
-        default=0.1,
+    ground_color: bpy.props.FloatVectorProperty(
+        name="Ground Colour",
+        subtype="COLOR",
+        size=3,
+        default=(0.1, 0.1, 0.1),
         min=0.0,
         max=1.0,
         update=_changed,
-        description="Albedo of the planet's ground (lights the sky from below)",
+        description="Albedo of the planet's ground as a colour (scene linear), turned into a "
+        "smooth reflectance spectrum: the ground below the horizon and the light it sends up",
     )
     altitude_m: bpy.props.FloatProperty(
         name="Origin Altitude (m)",

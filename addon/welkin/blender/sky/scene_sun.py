@@ -89,7 +89,7 @@ def request_for(scene, settings, depsgraph=None):
         ),
         turbidity=settings.turbidity if settings.aerosol_input == "TURBIDITY" else -1.0,
         ozone_density=settings.ozone_density,
-        ground_albedo=-1.0 if settings.use_preset_albedo else settings.ground_albedo,
+        ground_color=() if settings.use_preset_albedo else tuple(float(c) for c in settings.ground_color),
         altitude_m=altitude,
         sun_direction=bodies.sun_direction if bodies else sun_direction(lamp, depsgraph),
         width=int(settings.resolution),
