@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy
 import os
 import typing
-__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'reflectance_to_rgb', 'rgb_to_reflectance', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
+__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc_image', 'night_glow_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'reflectance_to_rgb', 'rgb_to_reflectance', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'star_catalogue', 'star_image', 'stars_at', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
 class DensityLayer:
     """
     One layer of a density profile (Bruneton 2017's DensityProfileLayer):
@@ -803,6 +803,14 @@ def moon_disc_image(atmosphere: Atmosphere, altitude_m: float, moon_direction: t
     angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
     irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
     """
+def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
+    """
+    The night sky's own light alone (airglow, zodiacal light, unresolved stars:
+    Krisciunas & Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith,
+    van Rhijn's brightening towards the horizon, dimmed by the air), as an
+    equirectangular (height, width, channels) float32 image times exposure; 0 below
+    the horizon. Same units and colour spaces as sky_image.
+    """
 def preetham_turbidity_to_aerosol_optical_depth(turbidity: float) -> float:
     """
     The aerosol optical depth at 550 nm of Preetham, Shirley & Smits 1999's
@@ -874,7 +882,7 @@ def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.A
     callback returning False cancels (KeyboardInterrupt). ValueError names the
     parameter for bad input.
     """
-def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, longitude_deg: float, width: int, method: str = 'lut', output: str = 'rgb', *, height_m: float = 0.0, altitude_m: float = 0.0, discs: bool = True, exposure: float = 1.0, ground: bool = True, progress: typing.Any = None) -> numpy.ndarray[numpy.float32]:
+def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, longitude_deg: float, width: int, method: str = 'lut', output: str = 'rgb', *, height_m: float = 0.0, altitude_m: float = 0.0, discs: bool = True, exposure: float = 1.0, ground: bool = True, stars: bool = True, night_glow: bool = True, progress: typing.Any = None) -> numpy.ndarray[numpy.float32]:
     """
     The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
     renders it: the sun's sky and disc at the sun's apparent position, plus the
@@ -886,7 +894,12 @@ def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, 
     Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
     time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
     observer above the ground (as in sky_image); discs=False leaves both discs out
-    (when sun and moon lamps light the scene).
+    (when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
+    of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
+    air towards each, energy-exact (welkin.star_image). night_glow=True adds the
+    night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
+    Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
+    brightening towards the horizon, dimmed by the air).
     """
 def sky_radiance(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, method: str = 'lut', output: str = 'spectral', *, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, transmittance_width: int = 256, transmittance_height: int = 64, multiscattering_size: int = 32, skyview_width: int = 192, skyview_height: int = 108, tolerance: float = 0.1, return_standard_error: bool = False, progress: typing.Any = None, color_space: str = 'rec709') -> typing.Any:
     """
@@ -978,6 +991,29 @@ def spectrum_to_rgb(spectra: typing.Any, wavelengths_nm: typing.Any, lambda_powe
     Rec.709's gamut is then desaturated toward white at constant luminance until no
     channel is negative (include/welkin/color/gamut.hpp). This is the conversion
     sky_radiance(output="rgb") uses.
+    """
+def star_catalogue() -> numpy.ndarray[numpy.float64]:
+    """
+    The compiled-in star catalogue, brightest first: an (N, 6) float64 array of ICRS
+    right ascension and declination (degrees, epoch J1991.25), proper motion
+    (mu_alpha cos delta, mu_delta; mas/yr), Johnson V and B-V, for the Hipparcos
+    stars of V <= 7 (van Leeuwen 2007; V from Hp by Bessell 2000).
+    """
+def star_image(atmosphere: Atmosphere, stars: numpy.ndarray[numpy.float64], width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
+    """
+    The stars' light alone as an equirectangular (height, width, channels) float32
+    image: each star of `stars` (an (N, 5) array as stars_at returns) dimmed by the
+    air's transmittance towards it and spread over the 4 pixels around it so that the
+    sum of radiance x pixel solid angle is its irradiance, times exposure. Same units
+    and colour spaces as sky_image. Directions in any frame (Z up): the scene's, for a
+    host that turns the sky.
+    """
+def stars_at(time: typing.Any, latitude_deg: float, longitude_deg: float, *, height_m: float = 0.0, faintest_v: float = 7.0) -> numpy.ndarray[numpy.float64]:
+    """
+    The catalogue's stars of V <= faintest_v as seen from a place at a moment: an
+    (N, 5) float64 array of the apparent direction (x east, y north, z up; with
+    aberration, precession-nutation and refraction, as sun_and_moon), V and B-V.
+    Stars below the horizon are included.
     """
 def sun(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, *, color_space: str = 'rec709') -> SunRadiometry:
     """
