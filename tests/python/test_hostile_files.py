@@ -64,7 +64,10 @@ def test_every_vdb_of_the_corpus_loads_or_is_refused_and_the_interpreter_exits_n
     run = run_python(LOAD_VDB, vdb)
     assert run.returncode == 0, f"rc {run.returncode}:\n{run.stdout}\n{run.stderr[-2000:]}"
     lines = run.stdout.splitlines()
-    assert len(lines) == 3 and len(set(lines)) == 1, run.stdout  # the same outcome each time
+    # The same outcome each time. How a reader process that the file corrupts ends (the
+    # signal named in parentheses) is up to the corrupted heap, not to Welkin.
+    outcomes = {re.sub(r"reader process \([^)]*\)", "reader process", line) for line in lines}
+    assert len(lines) == 3 and len(outcomes) == 1, run.stdout
 
 
 def test_the_corpus_holds_the_ball_and_its_three_crashing_copies():
