@@ -32,9 +32,6 @@
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/base/memory.hpp"
-#include "welkin/base/simd.hpp"
-#include "welkin/color/color.hpp"
-#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 
