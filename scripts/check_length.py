@@ -26,9 +26,6 @@ ALLOWED: dict[tuple[str, str], str] = {
         "not split yet: its per-ray lambda shares a dozen shadow grids and buffers with the "
         "upsampling refinement; the stages become a class of their own (open work)"
     ),
-    ("bench/clouds/bench_clouds.cpp", "main"): (
-        "not split yet: one benchmark's sequence of timed sections (open work)"
-    ),
 }
 
 

@@ -72,6 +72,8 @@ ELSEWHERE = {
     "session.cpp": "a source file of Cycles",
     "bench/results/quick": "the folder bench/chart.py --quick writes",
     "tests/fuzz/openvdb_findings": "the folder scripts/fuzz.sh writes its findings to",
+    "welkin_native.pyi": "the module's stub as scripts/stub_protocol.py writes it for mypy",
+    "welkin_native_protocol.pyi": "the Protocol scripts/stub_protocol.py writes for mypy",
 }
 
 

@@ -2,8 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 # One way to format and lint: clang-format (.clang-format) on the C++ of src/, include/,
 # tests/ and bench/; ruff's formatter and linter (ruff.toml) and mypy (mypy.ini) on the
-# Python; and the house's own checks: every path, section and anchor a comment or doc
-# names exists (scripts/check_refs.py), every source file names its licence
+# Python, with the add-on's calls into the compiled module checked against its stub
+# (scripts/stub_protocol.py); and the house's own checks: every path, section and anchor
+# a comment or doc names exists (scripts/check_refs.py), every source file names its licence
 # (scripts/check_spdx.py), no function too long (scripts/check_length.py: lizard).
 # Pinned versions, in a venv of their own (build/venv-lint). Exits non-zero on any finding.
 #   bash scripts/lint.sh          check
@@ -50,6 +51,8 @@ fi
 "$venv/bin/ruff" format --check . || failed+=(ruff-format)
 "$venv/bin/ruff" check . || failed+=(ruff)
 if [[ -f mypy.ini ]]; then
+  # The compiled module's stub where mypy reads it (mypy.ini's mypy_path).
+  "$venv/bin/python" scripts/stub_protocol.py build/mypy-stubs
   "$venv/bin/mypy" --config-file mypy.ini || failed+=(mypy)
 fi
 if [[ ${1:-} != --python ]]; then

@@ -25,11 +25,14 @@ wrong and how to fix it (missing, built for another Python, failing to load), fo
 panel and for operator reports.
 """
 
+from __future__ import annotations
+
 import importlib.machinery
 import importlib.util
 import pathlib
 import sys
 import types
+from typing import TYPE_CHECKING, cast
 
 NATIVE_DIR = pathlib.Path(__file__).resolve().parent / "_native"
 BUILD_HINT = (
@@ -40,7 +43,18 @@ BUILD_HINT = (
     "(scripts/build_addon.sh, Python 3.11)"
 )
 
-_cache: dict[str, tuple[types.ModuleType | None, str | None]] = {}
+if TYPE_CHECKING:
+    # The compiled module's stub (src/python/welkin.pyi) under a name that is not the
+    # add-on's, and its API as a Protocol, both written by scripts/stub_protocol.py onto
+    # mypy's path (mypy.ini): the module object loaded here is typed as that Protocol, so
+    # mypy checks every call the add-on makes into it against the stub; the stub's module
+    # must itself satisfy the Protocol.
+    import welkin_native
+    from welkin_native_protocol import Module
+
+    _conforms: Module = welkin_native
+
+_cache: dict[str, tuple[Module | None, str | None]] = {}
 
 
 def _python_tag() -> str:
@@ -102,14 +116,14 @@ def find(directory: str | pathlib.Path = NATIVE_DIR) -> tuple[pathlib.Path | Non
 
 def load(
     directory: str | pathlib.Path = NATIVE_DIR, package: str | None = None
-) -> tuple[types.ModuleType | None, str | None]:
+) -> tuple[Module | None, str | None]:
     """(module or None, message or None). Cached per directory."""
     directory = pathlib.Path(directory)
     key = str(directory)
     if key in _cache:
         return _cache[key]
     path, message = find(directory)
-    module = None
+    module: types.ModuleType | None = None
     if path is not None:
         name = f"{package or __package__ or 'welkin_addon'}._native.welkin"
         if path.parent != directory:  # the installed wheel's module
@@ -131,11 +145,13 @@ def load(
                 f"Welkin's compiled module {path.name} could not be loaded in "
                 f"{_python_tag()}: {error}; " + BUILD_HINT
             )
-    _cache[key] = (module, message)
-    return module, message
+    # The one unchecked step: the file loaded is the module the stub describes (lint
+    # checks the stub against the built module).
+    _cache[key] = (cast("Module | None", module), message)
+    return _cache[key]
 
 
-def module() -> types.ModuleType | None:
+def module() -> Module | None:
     """The compiled module shipped with this add-on, or None (see message())."""
     return load()[0]
 

@@ -21,10 +21,12 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import math
-from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from . import sky_compute
+
+if TYPE_CHECKING:  # the compiled module's API (native.py)
+    from welkin_native_protocol import Module
 
 MAX_ABS_HOURS = 24.0 * 366.0
 MAX_ABS_OFFSET_H = 14.0  # the widest offsets in use (UTC-12 to UTC+14)
@@ -108,7 +110,7 @@ def lamp_euler(direction: Any) -> tuple[float, float, float]:  # noqa: ANN401
     return (a, 0.0, g)
 
 
-def bodies(native: ModuleType, place_time: PlaceTime) -> Bodies:
+def bodies(native: Module, place_time: PlaceTime) -> Bodies:
     """The sun and the moon for `place_time`, from the compiled core. ValueError naming the
     parameter for bad input (the core's own for the place and years outside 1900-2100)."""
     p = place_time
@@ -139,7 +141,7 @@ def scene_stars(native: ModuleType, night_sky: tuple[Any, ...]) -> Any:  # noqa:
 
 
 def moon_lamp(
-    native: ModuleType,
+    native: Module,
     atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
     altitude_m: float,
     moon_direction: Any,  # noqa: ANN401

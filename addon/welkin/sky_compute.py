@@ -23,13 +23,15 @@ import json
 import math
 import time
 from collections.abc import Callable, Sequence
-from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
 from . import place_time, sky_request
+
+if TYPE_CHECKING:  # the compiled module's API (native.py)
+    from welkin_native_protocol import Module
 
 
 @dataclasses.dataclass
@@ -70,7 +72,7 @@ class SkyResult:
 
 
 def lamp_values(
-    native: ModuleType,
+    native: Module,
     atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
     altitude_m: float,
     sun_direction: Sequence[float],
@@ -93,7 +95,7 @@ def horizon_z(atm: Any, altitude_m: float) -> float:  # noqa: ANN401 (welkin.Atm
 
 
 def disc_model(
-    native: ModuleType,
+    native: Module,
     atm: Any,  # noqa: ANN401
     altitude_m: float,
     sun_direction: Sequence[float],
@@ -127,7 +129,7 @@ def shaded_lamp(lamp: LampValues, transmittance: float) -> LampValues:
 
 
 def lamp_transmittance(
-    native: ModuleType, shadow_json: str, progress: Callable[[float], bool] | None = None
+    native: Module, shadow_json: str, progress: Callable[[float], bool] | None = None
 ) -> float:
     """The clouds' transmittance towards the sun at the origin of `shadow_json` (a scene
     description whose origin is the scene's: update.shadow_scene_json)."""
@@ -137,7 +139,7 @@ def lamp_transmittance(
     return float(t[0])
 
 
-def lamp_for(native: ModuleType, request: sky_request.SkyRequest) -> LampValues:
+def lamp_for(native: Module, request: sky_request.SkyRequest) -> LampValues:
     """The lamp's values alone for `request` (no images): cheap."""
     sky_request.validate(request, native)
     atm = sky_request.build_atmosphere(request, native)
@@ -165,7 +167,7 @@ def _warnings(
 
 
 def compute(
-    native: ModuleType,
+    native: Module,
     request: sky_request.SkyRequest,
     *,
     disc: bool = True,
@@ -238,7 +240,7 @@ def compute(
     )
 
 
-def _pixel_at(native: ModuleType, image: npt.NDArray[np.float32], direction: Sequence[float]) -> float:
+def _pixel_at(native: Module, image: npt.NDArray[np.float32], direction: Sequence[float]) -> float:
     """The value of an (H, W) top-row-first equirectangular image at `direction`."""
     h, w = image.shape[:2]
     u, v = native.direction_to_equirect(np.asarray(direction, dtype=np.float64))
@@ -246,7 +248,7 @@ def _pixel_at(native: ModuleType, image: npt.NDArray[np.float32], direction: Seq
 
 
 def hdri(
-    native: ModuleType,
+    native: Module,
     request: sky_request.SkyRequest,
     width: int,
     *,
@@ -329,7 +331,7 @@ def with_night_sky(
 
 
 def with_moonlit_sky(
-    native: ModuleType,
+    native: Module,
     request: sky_request.SkyRequest,
     atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
     method: str,

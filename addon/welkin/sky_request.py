@@ -18,8 +18,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the compiled module's API (native.py)
+    import welkin_native
+    from welkin_native_protocol import Module
 
 FALLBACK_PRESETS = (
     "clear_day",
@@ -83,7 +86,7 @@ class SkyRequest:
         return repr(sorted(d.items()))
 
 
-def validate(request: SkyRequest, native: ModuleType) -> None:
+def validate(request: SkyRequest, native: Module) -> None:
     """Raises ValueError naming the parameter and its accepted range."""
     names = native.Atmosphere.preset_names()
     if request.preset not in names:
@@ -125,7 +128,7 @@ def validate(request: SkyRequest, native: ModuleType) -> None:
     resolve_method(request.method, native)
 
 
-def resolve_method(method: str, native: ModuleType) -> str:
+def resolve_method(method: str, native: Module) -> str:
     """The module's method for `method`: "auto" is the module's own automatic choice
     where it has one, else "lut" (Hillaire 2020, the fast default)."""
     available = list(native.methods())
@@ -137,7 +140,7 @@ def resolve_method(method: str, native: ModuleType) -> str:
     return method
 
 
-def build_atmosphere(request: SkyRequest, native: ModuleType) -> Any:  # noqa: ANN401 (welkin.Atmosphere)
+def build_atmosphere(request: SkyRequest, native: Module) -> welkin_native.Atmosphere:
     """The preset with the request's aerosol optical depth (or turbidity) and multipliers
     applied (validated by the core), at the
     default four wavelengths or, `spectral`, at 360..830 nm every 10 nm (48; the colour the

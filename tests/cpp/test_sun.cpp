@@ -214,7 +214,7 @@ TEST(SunDisc, RgbPolynomialIsAPhysicalProfileWithTheLampsEnergy) {
             const Atmosphere atm = Atmosphere::preset(preset, spectral_wavelengths_nm(40.0));
             const SunDisc disc(atm, sun_at(elevation));
             const SpectrumToRgb to_rgb(atm.wavelengths_nm, 0.0);
-            const SunDisc::Rgb rgb = disc.rgb(to_rgb.matrix());
+            const SunDisc::Rgb rgb = disc.rgb(to_rgb.matrix(), to_rgb.luminance_weights());
             const double alpha = disc.angular_radius_rad();
             std::vector<float> e(atm.channels());
             for (std::size_t c = 0; c < atm.channels(); ++c)

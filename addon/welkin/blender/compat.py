@@ -2,7 +2,10 @@
 """Differences between the Blender versions Welkin supports (3.4, 4.2 LTS, 4.5 LTS, 5.0-5.3),
 in one place. The rest of the add-on calls these functions and never tests
 bpy.app.version itself, so a new Blender is one edit here. Each function says which
-versions differ and how (checked against each of them by tests/blender/).
+versions differ and how (checked against each of them by tests/blender/). The one test
+elsewhere is not a difference but the floor: the add-on's register() (addon/welkin/__init__.py)
+refuses a Blender older than MINIMUM_BLENDER before it imports this package, whose
+modules need 3.4's API to import at all.
 """
 
 import os

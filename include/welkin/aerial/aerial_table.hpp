@@ -38,9 +38,10 @@
 // interpolation between deep slices does not band (as the froxel volume does).
 //
 // How it is computed: each direction's ray is marched once through the slices
-// (steps_per_slice energy-conserving steps per slice, aerial_perspective.cpp), so the table
-// of a frame costs directions x slices x steps samples. Rays below the horizon go on under
-// the ground sphere with the ground's air, as aerial_perspective() treats such points.
+// (steps_per_slice energy-conserving steps per slice: src/aerial/air_march.hpp, derived in
+// aerial_perspective.cpp), so the table of a frame costs directions x slices x steps
+// samples. Rays below the horizon go on under the ground sphere with the ground's air, as
+// aerial_perspective() treats such points.
 //
 // Limits: one viewpoint per table, so an orthographic camera (whose rays start across its
 // film) is approximated by its centre; surfaces beyond max_distance_m read the last slice.

@@ -40,7 +40,6 @@
 #include "welkin/atmosphere/atmosphere.hpp"
 #include "welkin/atmosphere/observer.hpp"
 #include "welkin/atmosphere/sun.hpp"
-#include "welkin/color/gamut.hpp"
 
 namespace welkin {
 
@@ -61,13 +60,12 @@ public:
 
     // The disc in linear RGB (W m^-2 sr^-1) as L_centre_rgb[j] sum_k b[j][k] mu^k
     // (header), with `to_rgb` the 3 x C sunlight matrix (SpectrumToRgb(wl, 0).matrix())
-    // and `luminance` the output space's luminance weights (gamut.hpp).
+    // and `luminance` the same space's luminance weights (its luminance_weights()).
     struct Rgb {
         std::array<double, 3> centre_radiance{};
         std::array<std::array<double, 6>, 3> limb_coefficients{};
     };
-    Rgb rgb(std::span<const double> to_rgb,
-            const std::array<double, 3>& luminance = kRec709LuminanceWeights) const;
+    Rgb rgb(std::span<const double> to_rgb, const std::array<double, 3>& luminance) const;
 
     // Angle from the disc centre; the radiance of channel c there (0 outside the disc).
     // Whether the ray is above the horizon is the caller's test (it knows the ray's origin).

@@ -32,9 +32,6 @@
 
 namespace welkin {
 
-// Rec.709 / sRGB (D65): the Y row of the IEC 61966-2-1 RGB -> XYZ matrix.
-inline constexpr std::array<double, 3> kRec709LuminanceWeights = {0.2126, 0.7152, 0.0722};
-
 // The Y row of an RGB -> XYZ matrix (row-major 3 x 3): a space's luminance weights.
 constexpr std::array<double, 3> luminance_weights(const std::array<double, 9>& rgb_to_xyz) {
     return {rgb_to_xyz[3], rgb_to_xyz[4], rgb_to_xyz[5]};
