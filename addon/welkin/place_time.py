@@ -127,7 +127,7 @@ def bodies(native: Module, place_time: PlaceTime) -> Bodies:
     )
 
 
-def scene_stars(native: ModuleType, night_sky: tuple[Any, ...]) -> Any:  # noqa: ANN401
+def scene_stars(native: Module, night_sky: tuple[Any, ...]) -> Any:  # noqa: ANN401
     """The catalogue's stars (welkin.stars_at: an (N, 5) array of direction, V, B-V) for a
     Bodies.night_sky, their directions turned into the scene's frame as to_scene turns
     one."""

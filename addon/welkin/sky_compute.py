@@ -310,7 +310,7 @@ MOON_SKY_DEPRESSION_DEG = 20.0  # the core's kMoonSkyDepressionDeg
 
 
 def with_night_sky(
-    native: ModuleType,
+    native: Module,
     request: sky_request.SkyRequest,
     atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
     sky: npt.NDArray[np.float32],
@@ -322,11 +322,15 @@ def with_night_sky(
     energy-exact). Not under clouds."""
     if not request.night_sky:
         return sky
-    common = {"altitude_m": request.altitude_m, "exposure": request.exposure, "color_space": color_space}
-    sky = sky + native.night_glow_image(atm, request.width, **common)
+    altitude_m, exposure = request.altitude_m, request.exposure
+    sky = sky + native.night_glow_image(
+        atm, request.width, altitude_m=altitude_m, exposure=exposure, color_space=color_space
+    )
     if request.night_sky[5]:
         stars = place_time.scene_stars(native, request.night_sky)
-        sky = sky + native.star_image(atm, stars, request.width, **common)
+        sky = sky + native.star_image(
+            atm, stars, request.width, altitude_m=altitude_m, exposure=exposure, color_space=color_space
+        )
     return sky
 
 
