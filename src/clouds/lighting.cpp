@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -62,16 +64,12 @@ namespace {
 
 constexpr int kSideLevels = 3;  // the side grids' levels above the sun grid's
 
-// The march of every ray (grid_width == 0), or of a grid of rays (rows of grid_width) with
-// upsampling (the header's render_clouds_grid).
-CloudResult march(const CloudDensity& density, const CloudIllumination& light,
-                  std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
-                  std::span<const double> max_distances, const CloudLightingOptions& options,
-                  Progress* progress, std::uint64_t first_ray_index, int grid_width,
-                  const CloudUpsampling& up) {
-    options.validate();
+// The input checks of a march: one origin or one per direction, finite; max_distances
+// empty or one non-negative length per direction.
+void check_rays(std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                std::span<const double> max_distances) {
     validate_directions(directions);
-    const std::size_t n = directions.size(), nc = light.channels();
+    const std::size_t n = directions.size();
     if (origins.size() != 1 && origins.size() != n)
         throw InvalidArgument("origins", fmt::format("must hold 1 or {} points (one per direction), got {}",
                                                      n, origins.size()));
@@ -86,218 +84,371 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
         if (!(max_distances[i] >= 0.0))
             throw InvalidArgument(fmt::format("max_distances[{}]", i),
                                   fmt::format("must be >= 0 m, got {}", max_distances[i]));
-    CloudResult result;
-    result.channels = nc;
-    result.radiance.assign(n * nc, 0.0f);
-    result.transmittance.assign(n, 1.0f);
-    result.depth_m.assign(n, 0.0f);
+}
 
-    const glm::dvec3 s = light.sun_direction();
-    const CloudScattering& sc = options.scattering;
-    const int octaves = options.octaves;
-    // Per-octave weights b^i, extinction scales a^i, eccentricity scales c^i.
-    std::vector<double> ob(octaves), oa(octaves), oc(octaves);
-    for (int i = 0; i < octaves; ++i) {
-        ob[i] = std::pow(options.octave_contribution, i);
-        oa[i] = std::pow(options.octave_extinction, i);
-        oc[i] = std::pow(options.octave_eccentricity, i);
+// The optical-depth grids (clouds/depth_grid.hpp) a march reads: towards the sun, away
+// from it (the sun line's other half, for the diffusion's slab or the octaves' optical
+// size), both ways across the sun line (the diffusion's sides) and, when the sky light
+// decays (albedo < 1), towards the local zenith. Each is null where the march does not
+// need it or marches a ray per sample instead (shadow_grid off). Filled lazily by the rays.
+struct ShadowGrids {
+    std::unique_ptr<OpticalDepthGrid> sun, anti, side, back, sky;
+};
+
+// The per-sample light of the header: the sun's weight (single and multiple scattering)
+// and the sky's, from the optical depths along the grids' directions.
+class SampleLight {
+public:
+    struct Cursors {
+        std::vector<MajorantSegment> light_segs;  // a shadow march's segments (no grid)
+        OpticalDepthGrid::Cursor sun, sky, anti, side, back;
+    };
+    // The grid levels a sample reads (the sun's and its other half's, the sides').
+    struct Levels {
+        int sun = 0, side = 0;
+    };
+    // The phase values of one ray's direction: nu = d . s is the same at every sample.
+    struct RayPhase {
+        double nu = 0.0, twice = 0.0;
+        std::vector<double> octave;
+    };
+
+    SampleLight(const CloudDensity& density, const CloudIllumination& light,
+                const CloudLightingOptions& options)
+        : density_(density),
+          light_(light),
+          options_(options),
+          s_(light.sun_direction()),
+          mean_g_(options.scattering.phase.mean_cosine()),
+          similarity_(options.scattering.albedo, mean_g_) {
+        const CloudScattering& sc = options.scattering;
+        const int octaves = options.octaves;
+        // Per-octave weights b^i, extinction scales a^i, eccentricity scales c^i.
+        ob_.resize(octaves), oa_.resize(octaves), oc_.resize(octaves);
+        for (int i = 0; i < octaves; ++i) {
+            ob_[i] = std::pow(options.octave_contribution, i);
+            oa_[i] = std::pow(options.octave_extinction, i);
+            oc_[i] = std::pow(options.octave_eccentricity, i);
+        }
+        // The diffusion decay rate of sky light into an absorbing cloud, per unit optical
+        // depth (see the header): 0 for albedo 1.
+        kappa_ = std::sqrt(std::max(0.0, 3.0 * (1.0 - sc.albedo) * (1.0 - sc.albedo * mean_g_)));
+        ambient_decay_ = options.ambient_steps > 0 && kappa_ > 0.0;
+        // The cloud's chord across the sun line, for the diffusion's sides (diffusion.hpp):
+        // along the horizontal direction normal to the sun (x where the sun is at the
+        // zenith), both ways.
+        const glm::dvec3 c = glm::cross(s_, glm::dvec3(0.0, 0.0, 1.0));
+        across_ = glm::length(c) > 1e-6 ? glm::normalize(c) : glm::dvec3(1.0, 0.0, 0.0);
+        // Orders >= 2: the delta-Eddington slab along the sun line (clouds/diffusion.hpp)
+        // or the octaves; either way octaves = 1 is single scattering.
+        diffusion_ = options.multiple_scattering == CloudMultipleScattering::diffusion && octaves > 1;
+        sized_ = octaves > 1 && (diffusion_ || options.octave_optical_size);
+        if (options.shadow_grid) build_grids();
     }
 
-    // The diffusion decay rate of sky light into an absorbing cloud, per unit optical depth
-    // (see the header): 0 for albedo 1.
-    const double mean_g = sc.phase.mean_cosine();
-    const double kappa = std::sqrt(std::max(0.0, 3.0 * (1.0 - sc.albedo) * (1.0 - sc.albedo * mean_g)));
+    const OpticalDepthGrid* sun_grid() const { return grids_.sun.get(); }
 
-    // The optical-depth grids (clouds/depth_grid.hpp) towards the sun and, when the sky
-    // light decays (albedo < 1), towards the local zenith; filled lazily by the rays.
-    const double h0 =
-        options.shadow_grid_spacing_m > 0.0 ? options.shadow_grid_spacing_m : 2.0 * density.feature_size_m();
-    const bool ambient_decay = options.ambient_steps > 0 && kappa > 0.0;
-    std::unique_ptr<OpticalDepthGrid> sun_grid, sky_grid, anti_grid, side_grid, back_grid;
-    // The cloud's chord across the sun line, for the diffusion's sides (diffusion.hpp): along
-    // the horizontal direction normal to the sun (x where the sun is at the zenith), both
-    // ways, on a grid three levels coarser than the sun's (the chord is a large-scale
-    // quantity: it sets the leak, not the shading's detail).
-    const glm::dvec3 across = [&] {
-        const glm::dvec3 c = glm::cross(s, glm::dvec3(0.0, 0.0, 1.0));
-        return glm::length(c) > 1e-6 ? glm::normalize(c) : glm::dvec3(1.0, 0.0, 0.0);
-    }();
-    const bool sides = options.sides;
-    // Orders >= 2: the delta-Eddington slab along the sun line (clouds/diffusion.hpp) or
-    // the octaves; either way octaves = 1 is single scattering.
-    const bool diffusion = options.multiple_scattering == CloudMultipleScattering::diffusion && octaves > 1;
-    const bool sized = octaves > 1 && (diffusion || options.octave_optical_size);
-    const SimilarityScaling similarity(sc.albedo, mean_g);
-    if (options.shadow_grid) {
-        sun_grid = std::make_unique<OpticalDepthGrid>(
-            density, [s](const glm::dvec3&) { return s; }, h0, options.light_distance_m, options.light_steps);
-        if (sized)
-            anti_grid = std::make_unique<OpticalDepthGrid>(
-                density, [s](const glm::dvec3&) { return -s; }, h0, options.light_distance_m,
-                options.light_steps);
-        if (diffusion && sides) {
-            side_grid = std::make_unique<OpticalDepthGrid>(
-                density, [across](const glm::dvec3&) { return across; }, h0, options.light_distance_m,
-                options.light_steps);
-            back_grid = std::make_unique<OpticalDepthGrid>(
-                density, [across](const glm::dvec3&) { return -across; }, h0, options.light_distance_m,
-                options.light_steps);
-        }
-        if (ambient_decay)
-            sky_grid = std::make_unique<OpticalDepthGrid>(
-                density, [&light](const glm::dvec3& p) { return light.zenith(p); }, h0,
-                options.light_distance_m, options.ambient_steps);
+    // The levels for a footprint of `width` metres: no finer than it; the sides' grid
+    // kSideLevels coarser (the chord is a large-scale quantity: it sets the leak, not the
+    // shading's detail).
+    Levels levels_for(double width) const {
+        Levels lv;
+        lv.sun = grids_.sun ? grids_.sun->level_for(width) : 0;
+        lv.side = std::min(lv.sun + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
+        return lv;
     }
 
-    struct Scratch {
-        std::vector<MajorantSegment> segs, light_segs;
-        std::vector<float> sun, sky;
-        std::vector<double> acc;
-        OpticalDepthGrid::Cursor sun_cursor, sky_cursor, anti_cursor, side_cursor, back_cursor;
-    };
-    // Marches ray r into the result.
-    const auto march_ray = [&](std::size_t r, Scratch& scratch) {
-        auto& [segs, light_segs, sun, sky, acc, sun_cursor, sky_cursor, anti_cursor, side_cursor,
-               back_cursor] = scratch;
-        sun.resize(nc), sky.resize(nc), acc.resize(nc);
-        {
-            const glm::dvec3 d = glm::normalize(directions[r]);
-            const CloudRay ray{origins[origins.size() == 1 ? 0 : r], d};
-            const double t_end = max_distances.empty() ? options.max_distance_m
-                                                       : std::min(max_distances[r], options.max_distance_m);
-            density.segments(ray, t_end, segs);
-            double total = 0.0;
-            for (const auto& g : segs) total += g.t1 - g.t0;
-            if (!(total > 0.0)) return;
-            const double dt_target = std::max(total / options.max_steps, 0.5 * density.feature_size_m());
-            // The grids' levels at distance t: no finer than the view step nor the ray's
-            // footprint (the header); re-read when the footprint has doubled.
-            const bool footprint = sun_grid && (options.ray_spread_rad > 0.0 || options.ray_width_m > 0.0);
-            int sun_level = 0, side_level = 0;
-            double next_level_t = -1.0;  // the footprint's level holds below this t
-            const auto set_levels = [&](double t) {
-                const double w = options.ray_width_m + options.ray_spread_rad * t;
-                sun_level = sun_grid ? sun_grid->level_for(std::max(dt_target, w)) : 0;
-                side_level = std::min(sun_level + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
-                next_level_t =
-                    footprint && options.ray_spread_rad > 0.0
-                        ? (sun_grid->spacing_m(sun_level + 1) - options.ray_width_m) / options.ray_spread_rad
-                        : std::numeric_limits<double>::infinity();
-            };
-            set_levels(0.0);
-            PathRng rng(options.seed, first_ray_index + r, 0, 0x636c6f7564ULL);
-            const double u = options.jitter ? rng.uniform() : 0.5;
-            // Phase values of the octaves: nu = d . s is the same at every sample.
-            const double nu = glm::dot(d, s);
-            std::vector<double> phase(octaves);
-            for (int i = 0; i < octaves; ++i) phase[i] = sc.phase(nu, oc[i]);
-            const double phase2 = diffusion ? sc.phase.twice(nu) : 0.0;
+    void ray_phase(const glm::dvec3& d, RayPhase& ph) const {
+        const CloudScattering& sc = options_.scattering;
+        ph.nu = glm::dot(d, s_);
+        ph.octave.resize(options_.octaves);
+        for (int i = 0; i < options_.octaves; ++i) ph.octave[i] = sc.phase(ph.nu, oc_[i]);
+        ph.twice = diffusion_ ? sc.phase.twice(ph.nu) : 0.0;
+    }
 
-            std::fill(acc.begin(), acc.end(), 0.0);
-            double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
-            bool done = false;
-            for (const auto& g : segs) {
-                if (done) break;
-                const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
-                const double dt = (g.t1 - g.t0) / steps;
-                for (int k = 0, span = 1; k < steps; k += span) {
-                    // The dim tail: below tail_transmittance a step spans up to 8 base steps,
-                    // about tail_transmittance / T of them (whole steps, the same jitter u).
-                    // Empty space keeps the base step: a longer step there can pass over a
-                    // thin wisp (tests/cpp/test_cloud_fast_vs_reference.cpp measures it).
-                    const bool dim = T < options.tail_transmittance;
-                    span =
-                        dim ? std::min({steps - k, 8, std::max(1, int(options.tail_transmittance / T))}) : 1;
-                    const double h = span * dt;
-                    const double t = g.t0 + k * dt + u * h;
-                    const glm::dvec3 x = ray.at(t);
-                    const double sigma_t = density.sigma_t(x);
-                    if (!(sigma_t > 0.0)) continue;
-                    if (footprint && t >= next_level_t) set_levels(t);
-                    // The cloud's optical depth from x along dir: from the grid when there is
-                    // one, else by its own march of `steps` steps.
-                    const auto depth_along = [&](const std::unique_ptr<OpticalDepthGrid>& grid,
-                                                 OpticalDepthGrid::Cursor& cursor, int level,
-                                                 const glm::dvec3& dir, int steps) {
-                        return grid ? grid->tau(x, level, cursor)
-                                    : march_optical_depth(density, {x, dir}, options.light_distance_m, steps,
-                                                          light_segs);
-                    };
-                    const double tau_sun =
-                        depth_along(sun_grid, sun_cursor, sun_level, s, options.light_steps);
-                    // The cloud's depth away from the sun along the sun line through x: the
-                    // slab's thickness (diffusion), or the octaves' optical size f =
-                    // 1 - exp(-tau_line), octave i weighted by f^i (see the header).
-                    const double tau_anti =
-                        sized ? depth_along(anti_grid, anti_cursor, sun_level, -s, options.light_steps) : 0.0;
-                    double sun_w = 0.0;
-                    if (diffusion) {
-                        // Single scattering plus the forward-scattered and diffuse parts.
-                        double tau_side = std::numeric_limits<double>::infinity();
-                        if (sides)
-                            tau_side =
-                                depth_along(side_grid, side_cursor, side_level, across, options.light_steps) +
-                                depth_along(back_grid, back_cursor, side_level, -across, options.light_steps);
-                        sun_w =
-                            sun_source(similarity, tau_sun, tau_anti, tau_side, nu, mean_g, phase[0], phase2);
-                    } else {
-                        const double f = sized ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
-                        double fi = 1.0;
-                        for (int i = 0; i < octaves; ++i, fi *= f)
-                            sun_w += ob[i] * fi * std::exp(-oa[i] * tau_sun) * phase[i];
-                    }
-                    double sky_w = 1.0;
-                    if (ambient_decay) {
-                        const double tau_up = depth_along(sky_grid, sky_cursor, sun_level, light.zenith(x),
-                                                          options.ambient_steps);
-                        sky_w = std::exp(-kappa * tau_up);
-                    }
-                    light.sun_irradiance(x, sun.data());
-                    light.ambient_radiance(x, sky.data());
-                    // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
-                    const double step_opacity = 1.0 - std::exp(-sigma_t * h);
-                    const double w = T * step_opacity * sc.albedo;
-                    for (std::size_t c = 0; c < nc; ++c) acc[c] += w * (sun[c] * sun_w + sky[c] * sky_w);
-                    depth_sum += t * T * step_opacity;
-                    opacity_sum += T * step_opacity;
-                    T *= 1.0 - step_opacity;
-                    if (T < options.min_transmittance) {
-                        done = true;
-                        break;
-                    }
-                }
-            }
-            for (std::size_t c = 0; c < nc; ++c) result.radiance[r * nc + c] = float(acc[c]);
-            result.transmittance[r] = float(T);
-            result.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
+    // The sun's and the sky's weights at sample x (the factors of sigma_s E and sigma_s
+    // L_sky in the source).
+    std::pair<double, double> weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph,
+                                      Cursors& cur) const {
+        const int steps = options_.light_steps;
+        const double tau_sun = depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur);
+        // The cloud's depth away from the sun along the sun line through x: the slab's
+        // thickness (diffusion), or the octaves' optical size f = 1 - exp(-tau_line),
+        // octave i weighted by f^i (see the header).
+        const double tau_anti = sized_ ? depth_along(grids_.anti, cur.anti, lv.sun, x, -s_, steps, cur) : 0.0;
+        double sun_w = 0.0;
+        if (diffusion_) {
+            // Single scattering plus the forward-scattered and diffuse parts.
+            double tau_side = std::numeric_limits<double>::infinity();
+            if (options_.sides)
+                tau_side = depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) +
+                           depth_along(grids_.back, cur.back, lv.side, x, -across_, steps, cur);
+            sun_w =
+                sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0], ph.twice);
+        } else {
+            const double f = sized_ ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
+            double fi = 1.0;
+            for (int i = 0; i < options_.octaves; ++i, fi *= f)
+                sun_w += ob_[i] * fi * std::exp(-oa_[i] * tau_sun) * ph.octave[i];
         }
-    };
-    tbb::enumerable_thread_specific<Scratch> scratches;
-    // Marches the rays `which` (all when null).
-    const auto march_rays = [&](const std::vector<std::size_t>* which, ProgressTracker& tracker) {
-        const std::size_t count = which ? which->size() : n;
+        double sky_w = 1.0;
+        if (ambient_decay_) {
+            const double tau_up =
+                depth_along(grids_.sky, cur.sky, lv.sun, x, light_.zenith(x), options_.ambient_steps, cur);
+            sky_w = std::exp(-kappa_ * tau_up);
+        }
+        return {sun_w, sky_w};
+    }
+
+private:
+    void build_grids() {
+        const double h0 = options_.shadow_grid_spacing_m > 0.0 ? options_.shadow_grid_spacing_m
+                                                               : 2.0 * density_.feature_size_m();
+        const auto along = [&](const glm::dvec3& dir, int steps) {
+            return std::make_unique<OpticalDepthGrid>(
+                density_, [dir](const glm::dvec3&) { return dir; }, h0, options_.light_distance_m, steps);
+        };
+        grids_.sun = along(s_, options_.light_steps);
+        if (sized_) grids_.anti = along(-s_, options_.light_steps);
+        if (diffusion_ && options_.sides) {
+            grids_.side = along(across_, options_.light_steps);
+            grids_.back = along(-across_, options_.light_steps);
+        }
+        if (ambient_decay_)
+            grids_.sky = std::make_unique<OpticalDepthGrid>(
+                density_, [&light = light_](const glm::dvec3& p) { return light.zenith(p); }, h0,
+                options_.light_distance_m, options_.ambient_steps);
+    }
+
+    // The cloud's optical depth from x along dir: from the grid when there is one, else by
+    // its own march of `steps` steps.
+    double depth_along(const std::unique_ptr<OpticalDepthGrid>& grid, OpticalDepthGrid::Cursor& cursor,
+                       int level, const glm::dvec3& x, const glm::dvec3& dir, int steps, Cursors& cur) const {
+        return grid ? grid->tau(x, level, cursor)
+                    : march_optical_depth(density_, {x, dir}, options_.light_distance_m, steps,
+                                          cur.light_segs);
+    }
+
+    const CloudDensity& density_;
+    const CloudIllumination& light_;
+    const CloudLightingOptions& options_;
+    glm::dvec3 s_, across_;
+    double mean_g_;  // the phase's mean cosine g
+    SimilarityScaling similarity_;
+    std::vector<double> ob_, oa_, oc_;
+    double kappa_ = 0.0;
+    bool ambient_decay_ = false, diffusion_ = false, sized_ = false;
+    ShadowGrids grids_;
+};
+
+// The march of view rays (the header's steps) into a CloudResult.
+class RayMarcher {
+public:
+    RayMarcher(const CloudDensity& density, const CloudIllumination& light,
+               std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+               std::span<const double> max_distances, const CloudLightingOptions& options,
+               std::uint64_t first_ray_index, CloudResult& result)
+        : density_(density),
+          light_(light),
+          origins_(origins),
+          directions_(directions),
+          max_distances_(max_distances),
+          options_(options),
+          first_ray_index_(first_ray_index),
+          result_(result),
+          sample_light_(density, light, options) {}
+
+    // Marches the rays `which` (all when null), in parallel.
+    void march_rays(const std::vector<std::size_t>* which, ProgressTracker& tracker) {
+        const std::size_t count = which ? which->size() : directions_.size();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
-            Scratch& scratch = scratches.local();  // warm tile caches across a thread's chunks
+            Scratch& scratch = scratches_.local();  // warm tile caches across a thread's chunks
             for (std::size_t k = range.begin(); k != range.end(); ++k) {
                 march_ray(which ? (*which)[k] : k, scratch);
                 tracker.advance();
             }
         });
-    };
-    if (grid_width <= 0 || up.stride <= 1) {
-        ProgressTracker tracker(progress, n);
-        march_rays(nullptr, tracker);
-        tracker.finish();
-        return result;
     }
 
-    // The grid, refined as a quadtree (the header's CloudUpsampling): march the rays at
-    // every stride-th column and row (and the last ones), then, level by level, split each
-    // block whose four corner rays disagree at its midpoints, marching the new corners.
-    // Each pixel belongs to the block whose half-open rectangle [x0, x1) x [y0, y1) holds it
-    // (the last column and row closed), so it is interpolated once, from the corners of the
-    // smallest block around it.
-    const int W = grid_width, H = int(n / std::size_t(grid_width));
+private:
+    struct Scratch {
+        std::vector<MajorantSegment> segs;
+        std::vector<float> sun, sky;
+        std::vector<double> acc;
+        SampleLight::Cursors cursors;
+        SampleLight::RayPhase phase;
+    };
+
+    // Marches ray r into the result.
+    void march_ray(std::size_t r, Scratch& scratch) const {
+        const std::size_t nc = light_.channels();
+        auto& [segs, sun, sky, acc, cursors, phase] = scratch;
+        sun.resize(nc), sky.resize(nc), acc.resize(nc);
+        const glm::dvec3 d = glm::normalize(directions_[r]);
+        const CloudRay ray{origins_[origins_.size() == 1 ? 0 : r], d};
+        const double t_end = max_distances_.empty() ? options_.max_distance_m
+                                                    : std::min(max_distances_[r], options_.max_distance_m);
+        density_.segments(ray, t_end, segs);
+        double total = 0.0;
+        for (const auto& g : segs) total += g.t1 - g.t0;
+        if (!(total > 0.0)) return;
+        const double dt_target = std::max(total / options_.max_steps, 0.5 * density_.feature_size_m());
+        // The grids' levels at distance t: no finer than the view step nor the ray's
+        // footprint (the header); re-read when the footprint has doubled.
+        const OpticalDepthGrid* sun_grid = sample_light_.sun_grid();
+        const bool footprint = sun_grid && (options_.ray_spread_rad > 0.0 || options_.ray_width_m > 0.0);
+        SampleLight::Levels levels;
+        double next_level_t = -1.0;  // the footprint's level holds below this t
+        const auto set_levels = [&](double t) {
+            const double w = options_.ray_width_m + options_.ray_spread_rad * t;
+            levels = sample_light_.levels_for(std::max(dt_target, w));
+            next_level_t =
+                footprint && options_.ray_spread_rad > 0.0
+                    ? (sun_grid->spacing_m(levels.sun + 1) - options_.ray_width_m) / options_.ray_spread_rad
+                    : std::numeric_limits<double>::infinity();
+        };
+        set_levels(0.0);
+        PathRng rng(options_.seed, first_ray_index_ + r, 0, 0x636c6f7564ULL);
+        const double u = options_.jitter ? rng.uniform() : 0.5;
+        sample_light_.ray_phase(d, phase);
+
+        std::fill(acc.begin(), acc.end(), 0.0);
+        double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
+        const double albedo = options_.scattering.albedo;
+        bool done = false;
+        for (const auto& g : segs) {
+            if (done) break;
+            const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
+            const double dt = (g.t1 - g.t0) / steps;
+            for (int k = 0, span = 1; k < steps; k += span) {
+                // The dim tail: below tail_transmittance a step spans up to 8 base steps,
+                // about tail_transmittance / T of them (whole steps, the same jitter u).
+                // Empty space keeps the base step: a longer step there can pass over a thin
+                // wisp (tests/cpp/test_cloud_fast_vs_reference.cpp measures it).
+                const bool dim = T < options_.tail_transmittance;
+                span = dim ? std::min({steps - k, 8, std::max(1, int(options_.tail_transmittance / T))}) : 1;
+                const double h = span * dt;
+                const double t = g.t0 + k * dt + u * h;
+                const glm::dvec3 x = ray.at(t);
+                const double sigma_t = density_.sigma_t(x);
+                if (!(sigma_t > 0.0)) continue;
+                if (footprint && t >= next_level_t) set_levels(t);
+                const auto [sun_w, sky_w] = sample_light_.weights(x, levels, phase, cursors);
+                light_.sun_irradiance(x, sun.data());
+                light_.ambient_radiance(x, sky.data());
+                // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
+                const double step_opacity = 1.0 - std::exp(-sigma_t * h);
+                const double w = T * step_opacity * albedo;
+                for (std::size_t c = 0; c < nc; ++c) acc[c] += w * (sun[c] * sun_w + sky[c] * sky_w);
+                depth_sum += t * T * step_opacity;
+                opacity_sum += T * step_opacity;
+                T *= 1.0 - step_opacity;
+                if (T < options_.min_transmittance) {
+                    done = true;
+                    break;
+                }
+            }
+        }
+        for (std::size_t c = 0; c < nc; ++c) result_.radiance[r * nc + c] = float(acc[c]);
+        result_.transmittance[r] = float(T);
+        result_.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
+    }
+
+    const CloudDensity& density_;
+    const CloudIllumination& light_;
+    std::span<const glm::dvec3> origins_, directions_;
+    std::span<const double> max_distances_;
+    const CloudLightingOptions& options_;
+    std::uint64_t first_ray_index_;
+    CloudResult& result_;
+    SampleLight sample_light_;
+    tbb::enumerable_thread_specific<Scratch> scratches_;
+};
+
+using Block = CloudGridInterpolation::Block;
+
+// Whether the four corner rays of a block agree (transmittances within
+// up.transmittance_tolerance, each channel's radiance within up.radiance_tolerance of the
+// largest).
+bool corners_agree(const CloudResult& result, const Block& b, int width, const CloudUpsampling& up) {
+    const std::array<std::size_t, 4> q = b.corners(width);
+    const std::size_t nc = result.channels;
+    float tmin = 2.0f, tmax = -1.0f;
+    for (std::size_t a : q) {
+        tmin = std::min(tmin, result.transmittance[a]);
+        tmax = std::max(tmax, result.transmittance[a]);
+    }
+    if (tmax - tmin > up.transmittance_tolerance) return false;
+    for (std::size_t c = 0; c < nc; ++c) {
+        float lmin = 1e30f, lmax = 0.0f;
+        for (std::size_t a : q) {
+            lmin = std::min(lmin, result.radiance[a * nc + c]);
+            lmax = std::max(lmax, result.radiance[a * nc + c]);
+        }
+        if (lmax - lmin > up.radiance_tolerance * lmax) return false;
+    }
+    return true;
+}
+
+// Whether the block spans more than up.max_block_size_m at its farthest cloud: the angle
+// between its diagonal's corner rays times that depth.
+bool too_wide(const CloudResult& result, std::span<const glm::dvec3> directions, const Block& b, int width,
+              const CloudUpsampling& up) {
+    const std::array<std::size_t, 4> q = b.corners(width);
+    float depth = 0.0f;
+    for (std::size_t a : q) depth = std::max(depth, result.depth_m[a]);
+    if (!(depth > 0.0f)) return false;
+    const double chord =
+        std::max(glm::length(glm::normalize(directions[q[0]]) - glm::normalize(directions[q[3]])),
+                 glm::length(glm::normalize(directions[q[1]]) - glm::normalize(directions[q[2]])));
+    return chord * depth > up.max_block_size_m;
+}
+
+// Splits b at its midpoints along each axis at least two pixels long into `split`,
+// calling mark(x, y) for each corner of the new blocks.
+template <class Mark>
+void split_block(const Block& b, std::vector<Block>& split, Mark&& mark) {
+    const int xm = b.x1 - b.x0 >= 2 ? (b.x0 + b.x1) / 2 : -1;
+    const int ym = b.y1 - b.y0 >= 2 ? (b.y0 + b.y1) / 2 : -1;
+    const int cx[3] = {b.x0, xm, b.x1}, cy[3] = {b.y0, ym, b.y1};
+    for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+            if (cx[i] >= 0 && cy[j] >= 0) mark(cx[i], cy[j]);
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+            const int x0 = xm < 0 ? (i == 0 ? b.x0 : -1) : cx[i], x1 = xm < 0 ? b.x1 : cx[i + 1];
+            const int y0 = ym < 0 ? (j == 0 ? b.y0 : -1) : cy[j], y1 = ym < 0 ? b.y1 : cy[j + 1];
+            if (x0 >= 0 && y0 >= 0) split.push_back({x0, y0, x1, y1});
+        }
+}
+
+// Every unmarched ray from its block's corners; the depth weighted by opacity, where there
+// is cloud.
+void interpolate_unmarched(CloudResult& result) {
+    const CloudGridInterpolation& grid = result.interpolation;
+    grid.interpolate(result.radiance, result.channels);
+    grid.interpolate(result.transmittance, 1);
+    grid.for_each_interpolated([&](std::size_t p, const std::size_t q[4], const double w[4]) {
+        double dsum = 0.0, dw = 0.0;
+        for (int a = 0; a < 4; ++a) {
+            const double o = w[a] * (1.0 - result.transmittance[q[a]]);
+            dsum += o * result.depth_m[q[a]];
+            dw += o;
+        }
+        result.depth_m[p] = dw > 0.0 ? float(dsum / dw) : 0.0f;
+    });
+}
+
+// The grid, refined as a quadtree (the header's CloudUpsampling): march the rays at every
+// stride-th column and row (and the last ones), then, level by level, split each block
+// whose four corner rays disagree at its midpoints, marching the new corners. Each pixel
+// belongs to the block whose half-open rectangle [x0, x1) x [y0, y1) holds it (the last
+// column and row closed), so it is interpolated once, from the corners of the smallest
+// block around it.
+void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm::dvec3> directions,
+                   int width, const CloudUpsampling& up, Progress* progress) {
+    const std::size_t n = directions.size();
+    const int W = width, H = int(n / std::size_t(width));
     CloudGridInterpolation& grid = result.interpolation;
     grid.width = W, grid.height = H;
     grid.marched.assign(n, 0);
@@ -311,7 +462,6 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
     if (xs.back() != W - 1) xs.push_back(W - 1);
     for (int j = 0; j < H; j += up.stride) ys.push_back(j);
     if (ys.back() != H - 1) ys.push_back(H - 1);
-    using Block = CloudGridInterpolation::Block;
     std::vector<Block> blocks;
     for (std::size_t b = 0; b + 1 < ys.size(); ++b)
         for (std::size_t a = 0; a + 1 < xs.size(); ++a)
@@ -320,82 +470,51 @@ CloudResult march(const CloudDensity& density, const CloudIllumination& light,
         for (int x : xs) mark(x, y);
     ProgressTracker tracker(progress, n);
     std::size_t marched = 0;
-    // Whether the four corner rays of a block agree (transmittances within
-    // up.transmittance_tolerance, each channel's radiance within up.radiance_tolerance of
-    // the largest).
-    const auto smooth = [&](const Block& b) {
-        const std::array<std::size_t, 4> q = b.corners(W);
-        float tmin = 2.0f, tmax = -1.0f;
-        for (std::size_t a : q) {
-            tmin = std::min(tmin, result.transmittance[a]);
-            tmax = std::max(tmax, result.transmittance[a]);
-        }
-        if (tmax - tmin > up.transmittance_tolerance) return false;
-        for (std::size_t c = 0; c < nc; ++c) {
-            float lmin = 1e30f, lmax = 0.0f;
-            for (std::size_t a : q) {
-                lmin = std::min(lmin, result.radiance[a * nc + c]);
-                lmax = std::max(lmax, result.radiance[a * nc + c]);
-            }
-            if (lmax - lmin > up.radiance_tolerance * lmax) return false;
-        }
-        return true;
-    };
-    // Whether the block spans more than up.max_block_size_m at its farthest cloud: the
-    // angle between its diagonal's corner rays times that depth.
-    const auto too_wide = [&](const Block& b) {
-        const std::array<std::size_t, 4> q = b.corners(W);
-        float depth = 0.0f;
-        for (std::size_t a : q) depth = std::max(depth, result.depth_m[a]);
-        if (!(depth > 0.0f)) return false;
-        const double chord =
-            std::max(glm::length(glm::normalize(directions[q[0]]) - glm::normalize(directions[q[3]])),
-                     glm::length(glm::normalize(directions[q[1]]) - glm::normalize(directions[q[2]])));
-        return chord * depth > up.max_block_size_m;
-    };
     while (!todo.empty()) {
         std::sort(todo.begin(), todo.end());  // neighbouring rays together, whatever the order found
-        march_rays(&todo, tracker);
+        marcher.march_rays(&todo, tracker);
         marched += todo.size();
         todo.clear();
         std::vector<Block> split;
         for (const Block& b : blocks) {
             if (b.x1 - b.x0 <= 1 && b.y1 - b.y0 <= 1) continue;  // every pixel it owns is a corner
-            if ((b.x1 - b.x0 <= up.finest && b.y1 - b.y0 <= up.finest) || (smooth(b) && !too_wide(b))) {
+            if ((b.x1 - b.x0 <= up.finest && b.y1 - b.y0 <= up.finest) ||
+                (corners_agree(result, b, W, up) && !too_wide(result, directions, b, W, up))) {
                 grid.blocks.push_back(b);
                 continue;
             }
-            // Split along each axis at least two pixels long, marching the new corners.
-            const int xm = b.x1 - b.x0 >= 2 ? (b.x0 + b.x1) / 2 : -1;
-            const int ym = b.y1 - b.y0 >= 2 ? (b.y0 + b.y1) / 2 : -1;
-            const int cx[3] = {b.x0, xm, b.x1}, cy[3] = {b.y0, ym, b.y1};
-            for (int j = 0; j < 3; ++j)
-                for (int i = 0; i < 3; ++i)
-                    if (cx[i] >= 0 && cy[j] >= 0) mark(cx[i], cy[j]);
-            for (int j = 0; j < 2; ++j)
-                for (int i = 0; i < 2; ++i) {
-                    const int x0 = xm < 0 ? (i == 0 ? b.x0 : -1) : cx[i], x1 = xm < 0 ? b.x1 : cx[i + 1];
-                    const int y0 = ym < 0 ? (j == 0 ? b.y0 : -1) : cy[j], y1 = ym < 0 ? b.y1 : cy[j + 1];
-                    if (x0 >= 0 && y0 >= 0) split.push_back({x0, y0, x1, y1});
-                }
+            split_block(b, split, mark);
         }
         blocks = std::move(split);
     }
-    // Every other ray from its block's corners; the depth weighted by opacity, where there
-    // is cloud.
-    grid.interpolate(result.radiance, nc);
-    grid.interpolate(result.transmittance, 1);
-    grid.for_each_interpolated([&](std::size_t p, const std::size_t q[4], const double w[4]) {
-        double dsum = 0.0, dw = 0.0;
-        for (int a = 0; a < 4; ++a) {
-            const double o = w[a] * (1.0 - result.transmittance[q[a]]);
-            dsum += o * result.depth_m[q[a]];
-            dw += o;
-        }
-        result.depth_m[p] = dw > 0.0 ? float(dsum / dw) : 0.0f;
-    });
+    interpolate_unmarched(result);
     tracker.advance(n - marched);
     tracker.finish();
+}
+
+// The march of every ray (grid_width == 0), or of a grid of rays (rows of grid_width) with
+// upsampling (the header's render_clouds_grid).
+CloudResult march(const CloudDensity& density, const CloudIllumination& light,
+                  std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                  std::span<const double> max_distances, const CloudLightingOptions& options,
+                  Progress* progress, std::uint64_t first_ray_index, int grid_width,
+                  const CloudUpsampling& up) {
+    options.validate();
+    check_rays(origins, directions, max_distances);
+    const std::size_t n = directions.size(), nc = light.channels();
+    CloudResult result;
+    result.channels = nc;
+    result.radiance.assign(n * nc, 0.0f);
+    result.transmittance.assign(n, 1.0f);
+    result.depth_m.assign(n, 0.0f);
+    RayMarcher marcher(density, light, origins, directions, max_distances, options, first_ray_index, result);
+    if (grid_width <= 0 || up.stride <= 1) {
+        ProgressTracker tracker(progress, n);
+        marcher.march_rays(nullptr, tracker);
+        tracker.finish();
+    } else {
+        march_refined(marcher, result, directions, grid_width, up, progress);
+    }
     return result;
 }
 

@@ -16,6 +16,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 
 namespace welkin {
 namespace {
@@ -116,6 +117,16 @@ std::map<std::tuple<int, double, double, double, double, double, double, double,
 
 std::string_view cloud_type_name(CloudType type) { return kCloudTypeNames[static_cast<int>(type)]; }
 
+std::string_view coverage_measure_name(CloudCoverageMeasure measure) {
+    return kCoverageMeasureNames[static_cast<int>(measure)];
+}
+
+CloudCoverageMeasure coverage_measure_from_name(std::string_view name, const std::string& parameter) {
+    for (std::size_t i = 0; i < kCoverageMeasureNames.size(); ++i)
+        if (kCoverageMeasureNames[i] == name) return static_cast<CloudCoverageMeasure>(i);
+    throw InvalidArgument(parameter, fmt::format("must be \"area\" or \"dome\", got \"{}\"", name));
+}
+
 CloudType cloud_type_from_name(std::string_view name, const std::string& parameter) {
     for (std::size_t i = 0; i < kCloudTypeNames.size(); ++i)
         if (kCloudTypeNames[i] == name) return static_cast<CloudType>(i);
@@ -162,6 +173,8 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
 void CloudLayerParams::validate() const {
     if (static_cast<int>(cloud_type) < 0 || static_cast<int>(cloud_type) >= int(kCloudTypeNames.size()))
         throw InvalidArgument("cloud_type", "must be one of the CloudType values");
+    if (coverage_measure != CloudCoverageMeasure::area && coverage_measure != CloudCoverageMeasure::dome)
+        throw InvalidArgument("coverage_measure", "must be area or dome");
     require_in_range("bottom_altitude_m", bottom_altitude_m, 0.0, 20000.0, "m");
     require_in_range("top_altitude_m", top_altitude_m, 0.0, 20000.0, "m");
     if (!(top_altitude_m > bottom_altitude_m))
@@ -235,10 +248,11 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
         k_ = kMaxInternalCoverage;
         return;
     }
-    const auto key = std::make_tuple(static_cast<int>(p_.cloud_type), p_.bottom_altitude_m, p_.top_altitude_m,
-                                     p_.coverage, p_.density_per_m, p_.base_scale_m, p_.detail_scale_m,
-                                     p_.weather_scale_m, p_.detail_strength, p_.weather_variation, p_.seed,
-                                     p_.planet_radius_m, p_.origin_altitude_m, p_.evolution_m);
+    const auto key = std::make_tuple(
+        static_cast<int>(p_.cloud_type) * 2 + static_cast<int>(p_.coverage_measure), p_.bottom_altitude_m,
+        p_.top_altitude_m, p_.coverage, p_.density_per_m, p_.base_scale_m, p_.detail_scale_m,
+        p_.weather_scale_m, p_.detail_strength, p_.weather_variation, p_.seed, p_.planet_radius_m,
+        p_.origin_altitude_m, p_.evolution_m);
     {
         std::lock_guard<std::mutex> lock(calibration_mutex);
         if (const auto it = calibration_cache.find(key); it != calibration_cache.end()) {
@@ -249,7 +263,10 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     double lo = 0.0, hi = kMaxInternalCoverage;
     for (int it = 0; it < 14; ++it) {  // k to 4 / 2^14
         const double mid = 0.5 * (lo + hi);
-        (fraction(mid, kCoverageColumns) < p_.coverage ? lo : hi) = mid;
+        const double share = p_.coverage_measure == CloudCoverageMeasure::dome
+                                 ? dome_share(mid, kDomeObservers, kDomeDirections)
+                                 : fraction(mid, kCoverageColumns);
+        (share < p_.coverage ? lo : hi) = mid;
     }
     k_ = 0.5 * (lo + hi);
     std::lock_guard<std::mutex> lock(calibration_mutex);
@@ -299,6 +316,69 @@ double ProceduralClouds::fraction(double k, int columns) const {
 double ProceduralClouds::covered_fraction(int columns) const {
     if (columns < 1) throw InvalidArgument("columns", fmt::format("must be >= 1, got {}", columns));
     return fraction(k_, columns);
+}
+
+double ProceduralClouds::dome_fraction(int observers, int directions) const {
+    require_in_range("observers", observers, 1, 4096);
+    require_in_range("directions", directions, 1, 65536);
+    return dome_share(k_, observers, directions);
+}
+
+// The slant optical depth along the ray through the shell, by the midpoint rule in 64 steps
+// spread over its segments (as march_optical_depth, clouds/depth_grid.hpp), stopped once it
+// reaches the coverage threshold.
+double ProceduralClouds::slant_depth(const CloudRay& ray, double k,
+                                     std::vector<MajorantSegment>& segs) const {
+    constexpr int kSteps = 64;
+    shell(ray, 1e6, segs);
+    double total = 0.0;
+    for (const auto& s : segs) total += s.t1 - s.t0;
+    if (!(total > 0.0)) return 0.0;
+    double tau = 0.0;
+    for (const auto& s : segs) {
+        const int n = std::max(1, int(std::ceil((s.t1 - s.t0) / (total / kSteps) - 1e-9)));
+        const double dt = (s.t1 - s.t0) / n;
+        for (int i = 0; i < n && tau < kCoverageOpticalDepth; ++i) {
+            const glm::dvec3 x = ray.at(s.t0 + (i + 0.5) * dt);
+            tau += p_.density_per_m * density(x, glm::length(x - centre_) - p_.planet_radius_m, k) * dt;
+        }
+    }
+    return tau;
+}
+
+// The dome share (header) at internal coverage k: observers on the ground below R2 points
+// of the columns' square (field frame, so the wind moves them with the field), directions
+// of equal solid angle above kDomeMinElevationDeg (sin(elevation) uniform, R2 points in
+// (sin(elevation), azimuth)).
+double ProceduralClouds::dome_share(double k, int observers, int directions) const {
+    constexpr double a1 = 0.7548776662466927, a2 = 0.5698402909980532;
+    const double side = 2.0 * p_.weather_scale_m;
+    const double s0 = std::sin(kDomeMinElevationDeg * kPi / 180.0);
+    const int rays = observers * directions;
+    const int covered = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, rays, 16), 0,
+        [&](const tbb::blocked_range<int>& r, int acc) {
+            std::vector<MajorantSegment> segs;
+            for (int i = r.begin(); i != r.end(); ++i) {
+                const int o = i / directions, d = i % directions;
+                // The observer: on the ground below the point (x, y) of the world.
+                const double x = side * std::fmod(0.5 + a1 * (o + 1), 1.0) + p_.wind_offset_m.x;
+                const double y = side * std::fmod(0.5 + a2 * (o + 1), 1.0) + p_.wind_offset_m.y;
+                const glm::dvec3 up = glm::normalize(glm::dvec3(x, y, 0.0) - centre_);
+                // (a metre up: a point on the ground sphere may round into it, and its rays stop there)
+                const glm::dvec3 ground = centre_ + (p_.planet_radius_m + 1.0) * up;
+                const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0.0, 1.0, 0.0), up));
+                const glm::dvec3 north = glm::cross(up, east);
+                const double sin_el = s0 + (1.0 - s0) * std::fmod(0.5 + a1 * (d + 1), 1.0);
+                const double cos_el = std::sqrt(std::max(0.0, 1.0 - sin_el * sin_el));
+                const double az = kTwoPi * std::fmod(0.5 + a2 * (d + 1), 1.0);
+                const glm::dvec3 dir = sin_el * up + cos_el * (std::cos(az) * east + std::sin(az) * north);
+                acc += slant_depth({ground, dir}, k, segs) >= kCoverageOpticalDepth;
+            }
+            return acc;
+        },
+        [](int a, int b) { return a + b; });
+    return double(covered) / rays;
 }
 
 double ProceduralClouds::sigma_t(const glm::dvec3& p) const {
@@ -363,8 +443,14 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
 // [0, t_max] inside the top sphere, minus the part inside the bottom sphere.
 void ProceduralClouds::segments(const CloudRay& ray, double t_max, std::vector<MajorantSegment>& out) const {
     out.clear();
+    if (!(p_.density_per_m > 0.0) || !(k_ > 0.0)) return;
+    shell(ray, t_max, out);
+}
+
+// The shell's part of the ray (segments without the clear layer's early out).
+void ProceduralClouds::shell(const CloudRay& ray, double t_max, std::vector<MajorantSegment>& out) const {
+    out.clear();
     const double majorant = p_.density_per_m;
-    if (!(majorant > 0.0) || !(k_ > 0.0)) return;
     double g0, g1;
     if (sphere_interval(ray, centre_, p_.planet_radius_m, g0, g1) && g1 > 0.0)
         t_max = std::min(t_max, std::max(g0, 0.0));

@@ -140,14 +140,17 @@ cloud type, wind). cloud_type is a preset name: "cumulus" (the default), "strato
 "altocumulus", "stratus" or "cirrus"; every other parameter left as None takes the
 preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
 the ground; coverage the share of the ground's area under cloud (a column is cloudy when
-its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
+its vertical optical depth reaches 0.3), or with coverage_measure="dome" the share of the
+sky dome a ground observer sees covered (oktas / 8: directions above 5 degrees whose slant
+optical depth reaches 0.3); density_per_m the extinction of the densest
 cloud (m^-1); wind_offset_m carries the field (x, y in m) and evolution_m moves its noise
 through the layer's height (m): keyed over time the shapes change in place;
 origin_altitude_m the world origin's (observer's) altitude. ValueError names a bad
 parameter.
 )doc")
         .def(py::init([](const std::string& type, const py::object& bottom, const py::object& top,
-                         const py::object& coverage, const py::object& density, const py::object& base_scale,
+                         const py::object& coverage, const std::string& coverage_measure,
+                         const py::object& density, const py::object& base_scale,
                          const py::object& detail_scale, const py::object& weather_scale,
                          const py::object& detail_strength, const py::object& weather_variation,
                          const py::object& wind, double evolution, std::uint64_t seed, double planet_radius,
@@ -164,6 +167,7 @@ parameter.
                  set(bottom, "bottom_altitude_m", p.bottom_altitude_m);
                  set(top, "top_altitude_m", p.top_altitude_m);
                  set(coverage, "coverage", p.coverage);
+                 p.coverage_measure = coverage_measure_from_name(coverage_measure);
                  set(density, "density_per_m", p.density_per_m);
                  set(base_scale, "base_scale_m", p.base_scale_m);
                  set(detail_scale, "detail_scale_m", p.detail_scale_m);
@@ -182,11 +186,11 @@ parameter.
              }),
              py::kw_only(), py::arg("cloud_type") = "cumulus", py::arg("bottom_altitude_m") = py::none(),
              py::arg("top_altitude_m") = py::none(), py::arg("coverage") = py::none(),
-             py::arg("density_per_m") = py::none(), py::arg("base_scale_m") = py::none(),
-             py::arg("detail_scale_m") = py::none(), py::arg("weather_scale_m") = py::none(),
-             py::arg("detail_strength") = py::none(), py::arg("weather_variation") = py::none(),
-             py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0), py::arg("evolution_m") = 0.0,
-             py::arg("seed") = CloudLayerParams{}.seed,
+             py::arg("coverage_measure") = "area", py::arg("density_per_m") = py::none(),
+             py::arg("base_scale_m") = py::none(), py::arg("detail_scale_m") = py::none(),
+             py::arg("weather_scale_m") = py::none(), py::arg("detail_strength") = py::none(),
+             py::arg("weather_variation") = py::none(), py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0),
+             py::arg("evolution_m") = 0.0, py::arg("seed") = CloudLayerParams{}.seed,
              py::arg("planet_radius_m") = CloudLayerParams{}.planet_radius_m,
              py::arg("origin_altitude_m") = CloudLayerParams{}.origin_altitude_m)
         .def_property_readonly(
@@ -195,6 +199,11 @@ parameter.
         .def("covered_fraction", &ProceduralClouds::covered_fraction,
              py::arg("columns") = ProceduralClouds::kCoverageColumns,
              "The measured coverage: the share of columns whose vertical optical depth reaches 0.3.")
+        .def("dome_fraction", &ProceduralClouds::dome_fraction,
+             py::arg("observers") = ProceduralClouds::kDomeObservers,
+             py::arg("directions") = ProceduralClouds::kDomeDirections,
+             "The measured dome coverage (oktas / 8): the share of directions above 5 degrees, "
+             "from ground observers, whose slant optical depth reaches 0.3.")
         .def_property_readonly("bottom_altitude_m",
                                [](const ProceduralClouds& c) { return c.params().bottom_altitude_m; })
         .def_property_readonly("top_altitude_m",

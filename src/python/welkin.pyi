@@ -435,17 +435,23 @@ class CloudLayer(CloudDensity):
     "altocumulus", "stratus" or "cirrus"; every other parameter left as None takes the
     preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
     the ground; coverage the share of the ground's area under cloud (a column is cloudy when
-    its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
+    its vertical optical depth reaches 0.3), or with coverage_measure="dome" the share of the
+    sky dome a ground observer sees covered (oktas / 8: directions above 5 degrees whose slant
+    optical depth reaches 0.3); density_per_m the extinction of the densest
     cloud (m^-1); wind_offset_m carries the field (x, y in m) and evolution_m moves its noise
     through the layer's height (m): keyed over time the shapes change in place;
     origin_altitude_m the world origin's (observer's) altitude. ValueError names a bad
     parameter.
     """
-    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
+    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, coverage_measure: str = 'area', density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
         ...
     def covered_fraction(self, columns: int = 2048) -> float:
         """
         The measured coverage: the share of columns whose vertical optical depth reaches 0.3.
+        """
+    def dome_fraction(self, observers: int = 32, directions: int = 64) -> float:
+        """
+        The measured dome coverage (oktas / 8): the share of directions above 5 degrees, from ground observers, whose slant optical depth reaches 0.3.
         """
     @property
     def bottom_altitude_m(self) -> float:

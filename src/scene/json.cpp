@@ -106,8 +106,8 @@ bool boolean(const json& j, const std::string& parameter) {
 // One of "clouds.layers" (p: its key path): the type's preset, then the keys given.
 CloudLayerParams parse_cloud_layer(const json& l, const std::string& p) {
     json_check_keys(l, p,
-                    {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "density_per_m",
-                     "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
+                    {"cloud_type", "bottom_altitude_m", "top_altitude_m", "coverage", "coverage_measure",
+                     "density_per_m", "base_scale_m", "detail_scale_m", "weather_scale_m", "detail_strength",
                      "weather_variation", "wind_offset_m", "evolution_m", "seed"});
     // The type's preset first (procedural.hpp), then the keys given override it.
     CloudLayerParams c;
@@ -120,6 +120,9 @@ CloudLayerParams parse_cloud_layer(const json& l, const std::string& p) {
     get("bottom_altitude_m", c.bottom_altitude_m);
     get("top_altitude_m", c.top_altitude_m);
     get("coverage", c.coverage);
+    if (l.contains("coverage_measure"))
+        c.coverage_measure = coverage_measure_from_name(
+            string(l["coverage_measure"], p + ".coverage_measure"), p + ".coverage_measure");
     get("density_per_m", c.density_per_m);
     get("base_scale_m", c.base_scale_m);
     get("detail_scale_m", c.detail_scale_m);
@@ -264,6 +267,7 @@ ordered_json clouds_json(const SceneClouds& c) {
                           {"bottom_altitude_m", l.bottom_altitude_m},
                           {"top_altitude_m", l.top_altitude_m},
                           {"coverage", l.coverage},
+                          {"coverage_measure", std::string(coverage_measure_name(l.coverage_measure))},
                           {"density_per_m", l.density_per_m},
                           {"base_scale_m", l.base_scale_m},
                           {"detail_scale_m", l.detail_scale_m},

@@ -5,13 +5,18 @@
 #include <cstdio>
 #include <fstream>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "cloud_test_util.hpp"
+#include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/clouds/illumination.hpp"
+#include "welkin/clouds/lighting.hpp"
 #include "welkin/clouds/noise.hpp"
 #include "welkin/clouds/procedural.hpp"
 #include "welkin/clouds/vdb.hpp"
@@ -124,6 +129,60 @@ TEST(ProceduralClouds, CoverageIsTheShareOfTheAreaUnderCloud) {
             EXPECT_NEAR(measured, coverage, 0.1) << name << " at coverage " << coverage;
             std::printf("coverage %-13s setting %.1f measured %.3f\n", std::string(name).c_str(), coverage,
                         measured);
+        }
+    }
+}
+
+// Coverage as the WMO's cloud amount (coverage_measure dome, procedural.hpp): the share of
+// the sky dome a ground observer sees covered, measured as the renderer sees it: the fast
+// march's transmittance (clouds/lighting.hpp) on 600 random directions of equal solid
+// angle above 5 degrees from eight ground points (the world origin and seven 80-180 km
+// away, none of the calibration's), covered where T < exp(-0.3). Their mean within 0.1 of
+// the setting for every type (one observer's share varies with the weather map around
+// it); the area share of the same layer printed beside it.
+TEST(ProceduralClouds, DomeCoverageIsTheShareOfTheSkySeenCovered) {
+    const ConstantIllumination light({0.6, 0.0, 0.8}, {1.0f}, {0.1f});
+    CloudLightingOptions o;
+    o.octaves = 1, o.ambient_steps = 0, o.light_steps = 1, o.shadow_grid = false;  // the transmittance only
+    const double s0 = std::sin(ProceduralClouds::kDomeMinElevationDeg * M_PI / 180.0);
+    for (const auto name : kCloudTypeNames) {
+        for (const double coverage : {0.2, 0.5, 0.8}) {
+            CloudLayerParams p = CloudLayerParams::preset(cloud_type_from_name(name));
+            p.coverage = coverage;
+            p.coverage_measure = CloudCoverageMeasure::dome;
+            const ProceduralClouds layer(p);
+            const double R = p.planet_radius_m;
+            std::mt19937_64 gen(23);
+            std::uniform_real_distribution<double> U(0.0, 1.0);
+            double sum = 0.0;
+            std::string per_observer;
+            for (const glm::dvec2 g :
+                 {glm::dvec2(0.0, 0.0), glm::dvec2(70e3, -40e3), glm::dvec2(-90e3, 60e3),
+                  glm::dvec2(20e3, 105e3), glm::dvec2(-130e3, -75e3), glm::dvec2(150e3, 35e3),
+                  glm::dvec2(-35e3, -160e3), glm::dvec2(95e3, 140e3)}) {
+                const glm::dvec3 up = glm::normalize(glm::dvec3(g.x, g.y, R));
+                const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0.0, 1.0, 0.0), up));
+                const glm::dvec3 north = glm::cross(up, east);
+                constexpr int kDirections = 600;
+                std::vector<glm::dvec3> dirs(kDirections);
+                for (auto& d : dirs) {
+                    const double sin_el = s0 + (1.0 - s0) * U(gen), az = 2.0 * M_PI * U(gen);
+                    const double cos_el = std::sqrt(1.0 - sin_el * sin_el);
+                    d = sin_el * up + cos_el * (std::cos(az) * east + std::sin(az) * north);
+                }
+                const CloudResult r =
+                    render_clouds(layer, light, glm::dvec3(0.0, 0.0, -R) + (R + 1.0) * up, dirs, o);
+                int covered = 0;
+                for (const float t : r.transmittance) covered += t < std::exp(-0.3);
+                const double share = double(covered) / kDirections;
+                sum += share;
+                per_observer += fmt::format(" {:.3f}", share);
+            }
+            const double measured = sum / 8.0;
+            EXPECT_NEAR(measured, coverage, 0.1) << name << " at coverage " << coverage;
+            std::printf("dome coverage %-13s setting %.1f seen %.3f (observers%s), area share %.3f\n",
+                        std::string(name).c_str(), coverage, measured, per_observer.c_str(),
+                        layer.covered_fraction());
         }
     }
 }
@@ -517,4 +576,11 @@ TEST(ProceduralClouds, TypeNamesAndErrors) {
     EXPECT_NE(m.find("layers[0].cloud_type"), std::string::npos) << m;
     for (const auto n : kCloudTypeNames) EXPECT_NE(m.find(std::string(n)), std::string::npos) << m;
     EXPECT_NE(m.find("nimbus"), std::string::npos) << m;
+    for (const auto n : kCoverageMeasureNames)
+        EXPECT_EQ(coverage_measure_name(coverage_measure_from_name(n)), n);
+    const std::string mm = expect_throw_message<InvalidArgument>(
+        [] { coverage_measure_from_name("oktas", "layers[0].coverage_measure"); });
+    EXPECT_NE(mm.find("layers[0].coverage_measure"), std::string::npos) << mm;
+    EXPECT_NE(mm.find("dome"), std::string::npos) << mm;
+    EXPECT_NE(mm.find("oktas"), std::string::npos) << mm;
 }

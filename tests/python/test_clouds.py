@@ -92,6 +92,29 @@ def test_cloud_layer_coverage_is_measured():
     assert abs(layer.covered_fraction() - 0.3) < 0.02
 
 
+def test_cloud_layer_dome_coverage_is_the_sky_seen_covered():
+    # coverage_measure="dome": the share of the sky dome a ground observer sees covered
+    # (oktas / 8), measured on other observers and directions than the calibration's.
+    layer = welkin.CloudLayer(cloud_type="altocumulus", coverage=0.5, coverage_measure="dome")
+    assert abs(layer.dome_fraction(observers=16, directions=256) - 0.5) < 0.05
+    # Seen from the ground the layer's sides fill the gaps: less area than dome covered.
+    assert layer.covered_fraction() < 0.45
+    with pytest.raises(ValueError, match="observers"):
+        layer.dome_fraction(observers=0)
+    with pytest.raises(ValueError, match="directions"):
+        layer.dome_fraction(directions=10**6)
+    with pytest.raises(ValueError, match="coverage_measure.*oktas"):
+        welkin.CloudLayer(coverage_measure="oktas")
+    scene = welkin.SceneDescription.from_json_string(
+        '{"version": 1, "clouds": {"layers": [{"cloud_type": "cirrus", "coverage_measure": "dome"}]}}'
+    )
+    assert '"coverage_measure": "dome"' in scene.to_json_string()
+    with pytest.raises(ValueError, match=r"clouds\.layers\[0\]\.coverage_measure"):
+        welkin.SceneDescription.from_json_string(
+            '{"version": 1, "clouds": {"layers": [{"coverage_measure": "sky"}]}}'
+        )
+
+
 def test_cloud_layer_and_cloudy_sky_image():
     with pytest.raises(ValueError, match="coverage"):
         welkin.CloudLayer(coverage=2.0)

@@ -37,13 +37,25 @@
 // in [0, 1], so density <= 1: the
 // majorant is density_per_m on the shell.
 //
-// Coverage means coverage: `coverage` is the share of the ground's area over which the
-// layer's vertical column is cloudy, a column being cloudy when its vertical optical depth
-// is at least kCoverageOpticalDepth (about a quarter of the light stopped). The internal
-// coverage k above is found at construction by bisection so that the share of cloudy
-// columns, over kCoverageColumns columns on a deterministic low-discrepancy set of points
-// (a square of two weather tiles), equals `coverage` (covered_fraction; the share grows
-// with k, so the bisection converges). Coverage 0 is a clear sky and 1 an overcast one.
+// Coverage means coverage, in one of two measures (coverage_measure):
+//  * area (the default): the share of the ground's area over which the layer's vertical
+//    column is cloudy, a column being cloudy when its vertical optical depth is at least
+//    kCoverageOpticalDepth (about a quarter of the light stopped);
+//  * dome: the share of the sky dome a ground observer sees covered, the WMO's cloud
+//    amount (oktas / 8; WMO International Cloud Atlas, "Cloud amount", and the Guide to
+//    Instruments and Methods of Observation, WMO-No. 8, vol. I, ch. 15): the solid-angle
+//    weighted share of the directions more than kDomeMinElevationDeg above the horizon
+//    whose slant optical depth through the layer reaches kCoverageOpticalDepth. Seen from
+//    the ground a layer looks more covered than its area share, the clouds' sides filling
+//    the gaps at slant angles (docs/validation.md, "Coverage and cloud types").
+// The internal coverage k above is found at construction by bisection so that the
+// measured share equals `coverage` (the share grows with k: the density grows with k at
+// every point, so the bisection converges): for the area, over kCoverageColumns columns on
+// a deterministic low-discrepancy set of points (a square of two weather tiles,
+// covered_fraction); for the dome, over kDomeDirections directions (equal solid angles)
+// from each of kDomeObservers ground points on the same kind of set (dome_fraction).
+// Both sets lie in the field's own frame, so k does not depend on the wind. Coverage 0 is
+// a clear sky and 1 an overcast one.
 //
 // The shape constants are Welkin's choice, in the spirit of Schneider's hand-drawn height
 // gradients (GPU Pro 7, fig. 4.7) and of the WMO International Cloud Atlas's descriptions
@@ -68,6 +80,15 @@ namespace welkin {
 
 enum class CloudType { cumulus, stratocumulus, altocumulus, stratus, cirrus };
 
+// What `coverage` measures (the header): the share of the ground's area under cloud, or of
+// the sky dome a ground observer sees covered (oktas / 8).
+enum class CloudCoverageMeasure { area, dome };
+constexpr std::array<std::string_view, 2> kCoverageMeasureNames{"area", "dome"};
+std::string_view coverage_measure_name(CloudCoverageMeasure measure);
+// InvalidArgument naming `parameter` and listing the accepted names for an unknown one.
+CloudCoverageMeasure coverage_measure_from_name(std::string_view name,
+                                                const std::string& parameter = "coverage_measure");
+
 // "cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus".
 constexpr std::array<std::string_view, 5> kCloudTypeNames{"cumulus", "stratocumulus", "altocumulus",
                                                           "stratus", "cirrus"};
@@ -77,9 +98,10 @@ CloudType cloud_type_from_name(std::string_view name, const std::string& paramet
 
 struct CloudLayerParams {
     CloudType cloud_type = CloudType::cumulus;
-    double bottom_altitude_m = 1200.0;   // [0, 20000), below top
-    double top_altitude_m = 3200.0;      // (bottom, 20000]
-    double coverage = 0.4;               // [0, 1]: share of the area under cloud (header)
+    double bottom_altitude_m = 1200.0;  // [0, 20000), below top
+    double top_altitude_m = 3200.0;     // (bottom, 20000]
+    double coverage = 0.4;              // [0, 1]: share of the area or the dome under cloud (header)
+    CloudCoverageMeasure coverage_measure = CloudCoverageMeasure::area;  // what coverage measures
     double density_per_m = 0.04;         // sigma_t of the densest cloud, m^-1, [0, 10]
     double base_scale_m = 5000.0;        // tile of the base shape, [10, 1e6] m
     double detail_scale_m = 700.0;       // tile of the erosion noise, [1, 1e6] m
@@ -107,6 +129,9 @@ public:
     static constexpr double kCoverageOpticalDepth = 0.3;
     static constexpr int kCoverageColumns = 2048;
     static constexpr double kMaxErosion = 0.6;
+    static constexpr double kDomeMinElevationDeg = 5.0;
+    static constexpr int kDomeObservers = 32;
+    static constexpr int kDomeDirections = 64;
 
     explicit ProceduralClouds(const CloudLayerParams& params);
 
@@ -118,6 +143,9 @@ public:
     // The share of `columns` columns (the header's point set) whose vertical optical depth
     // reaches kCoverageOpticalDepth: the measured coverage.
     double covered_fraction(int columns = kCoverageColumns) const;
+    // The share of the dome covered (the header), averaged over `observers` ground points,
+    // each seeing `directions` directions of equal solid angle: the measured dome coverage.
+    double dome_fraction(int observers = kDomeObservers, int directions = kDomeDirections) const;
 
     // The type's height gradient G(f) for f in [0, 1] of its local height (0 outside).
     static double height_gradient(CloudType type, double f);
@@ -126,6 +154,9 @@ private:
     double density(const glm::dvec3& p, double h, double k) const;
     double column_depth(double x, double y, double k) const;
     double fraction(double k, int columns) const;
+    double dome_share(double k, int observers, int directions) const;
+    double slant_depth(const CloudRay& ray, double k, std::vector<MajorantSegment>& segs) const;
+    void shell(const CloudRay& ray, double t_max, std::vector<MajorantSegment>& out) const;
 
     CloudLayerParams p_;
     double k_ = 0.0;
