@@ -16,6 +16,7 @@
 #include <tbb/global_control.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/color/reflectance.hpp"
 #include "welkin/io/exr.hpp"
 #include "welkin/night/moonlit_sky.hpp"
 #include "welkin/night/night_glow.hpp"
@@ -39,6 +40,7 @@ struct SkyArgs {
     bool stars = true;  // with --time: the catalogue's stars
     bool ground = true;
     std::optional<double> ground_albedo;
+    std::vector<double> ground_color;  // --ground-color R,G,B: empty unless given
     bool multilayer = false;
     bool spectral_channels = false;
     bool overwrite = false;
@@ -127,7 +129,17 @@ int run_sky(SkyArgs args) {
         throw InvalidArgument("--time", "cannot be combined with --scene (the scene places the sun)");
     const std::optional<PlaceTime> place_time = resolve_place_time(args.place_time, args.observer);
     const SkySettings sky = settings_from(args);
-    const Atmosphere& atm = sky.atmosphere;
+    const ColorSpace color_space =
+        args.color_space.empty() ? sky.color_space : color_space_from_name(args.color_space);
+    Atmosphere atm = sky.atmosphere;
+    if (!args.ground_color.empty()) {
+        // The colour's reflectance spectrum (color/reflectance.hpp), in the output's colour
+        // space, as the ground's albedo everywhere it counts: the image below the horizon and
+        // the light the ground sends back up into the sky.
+        atm.ground_albedo =
+            rgb_to_reflectance({args.ground_color[0], args.ground_color[1], args.ground_color[2]},
+                               atm.wavelengths_nm, color_space, "--ground-color");
+    }
     const Observer& observer = sky.observer;
     SkyOptions options = sky.options;
     options.tolerance = args.tolerance;
@@ -145,10 +157,12 @@ int run_sky(SkyArgs args) {
     SkyImageOptions image_options;
     image_options.sun_disc = !args.no_sun_disc;
     image_options.ground = args.ground && sky.ground;
-    image_options.ground_albedo = args.ground_albedo ? args.ground_albedo : sky.ground_albedo;
+    // A scene's grey albedo would hide --ground-color's spectrum (image_options' albedo wins).
+    image_options.ground_albedo = args.ground_albedo
+                                      ? args.ground_albedo
+                                      : (args.ground_color.empty() ? sky.ground_albedo : std::nullopt);
     image_options.exposure = sky.exposure;
-    image_options.color_space =
-        args.color_space.empty() ? sky.color_space : color_space_from_name(args.color_space);
+    image_options.color_space = color_space;
     image_options.output =
         args.spectral_channels ? SkyImageOptions::Output::Spectral : SkyImageOptions::Output::Rgb;
     image_options.clouds = sky.clouds;
@@ -205,11 +219,13 @@ int run_sky(SkyArgs args) {
         {"sun_disc", !args.no_sun_disc},
         {"ground", args.ground},
         {"stars", place_time.has_value() && args.stars},
-        {"ground_albedo",
-         args.ground_albedo ? nlohmann::json(*args.ground_albedo) : nlohmann::json("atmosphere")},
+        {"ground_albedo", args.ground_albedo           ? nlohmann::json(*args.ground_albedo)
+                          : !args.ground_color.empty() ? nlohmann::json({{"color", args.ground_color}})
+                                                       : nlohmann::json("atmosphere")},
         {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
-        {"units", args.spectral_channels ? "W m^-2 sr^-1 nm^-1 (times exposure)"
-                                         : "linear Rec.709, W m^-2 sr^-1 (times exposure)"}};
+        {"units", args.spectral_channels ? std::string("W m^-2 sr^-1 nm^-1 (times exposure)")
+                                         : fmt::format("linear {}, W m^-2 sr^-1 (times exposure)",
+                                                       color_space_name(color_space))}};
     if (place_time) settings["place_and_time"] = place_time->json();
     if (args.scene.empty()) {
         settings["sun_elevation_deg"] = args.observer.sun_elevation_deg;
@@ -288,10 +304,18 @@ Command add_sky_command(CLI::App& app) {
     sub->add_flag("--ground,!--no-ground", args->ground,
                   "Show the planet's surface below the horizon, lit by the sun and the sky and "
                   "seen through the air (the default), or leave it black (--no-ground)");
-    sub->add_option("--ground-albedo", args->ground_albedo,
-                    "The ground's albedo in [0, 1] at every wavelength (default: the "
-                    "atmosphere's ground_albedo)")
-        ->type_name("A");
+    auto* albedo = sub->add_option("--ground-albedo", args->ground_albedo,
+                                   "The ground's albedo in [0, 1] at every wavelength (default: the "
+                                   "atmosphere's ground_albedo)")
+                       ->type_name("A");
+    sub->add_option("--ground-color", args->ground_color,
+                    "The ground's colour instead of a grey: linear R,G,B each in [0, 1] in the output's "
+                    "colour space, turned into a smooth reflectance spectrum (Jakob & Hanika 2019) "
+                    "that lights the sky above it too")
+        ->type_name("R,G,B")
+        ->delimiter(',')
+        ->expected(3)
+        ->excludes(albedo);
     sub->add_flag("--multilayer", args->multilayer,
                   "Name the channels Welkin.Sky.R/G/B (a Blender multilayer EXR) instead of "
                   "R/G/B");

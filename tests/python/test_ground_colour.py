@@ -95,3 +95,33 @@ def test_bad_colour_names_the_parameter():
     for bad in ((1.2, 0.1, 0.1), (-0.1, 0.1, 0.1), (0.1, math.nan, 0.1), (0.1, 0.2)):
         with pytest.raises(ValueError, match="ground_color"):
             welkin.rgb_to_reflectance(bad, [550.0])
+
+
+def test_the_command_line_ground_colour_is_the_modules(tmp_path):
+    """`welkin sky --ground-color R,G,B` renders what the module renders with that colour's
+    reflectance as the atmosphere's ground albedo (the ground and the sky it lights), in the
+    output's colour space; a bad colour is refused, naming the option and its range."""
+    import subprocess
+
+    from cli_testing import CLI
+
+    colour = (0.40, 0.25, 0.10)
+    for space in ("rec709", "acescg"):
+        out = tmp_path / f"ground_{space}.exr"
+        args = ["sky", "--preset", "clear_day", "--width", WIDTH, "--method", "lut", "--sun-elevation", 40]
+        args += ["--no-sun-disc", "--color-space", space, "--ground-color", ",".join(map(str, colour))]
+        run = subprocess.run([CLI, *map(str, args), "-o", out], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        pixels, names = welkin.read_exr(str(out))[:2]  # channels in the file's (sorted) order
+        got = pixels[..., [names.index(c) for c in "RGB"]]
+        atm = welkin.Atmosphere.preset("clear_day")
+        atm.ground_albedo = welkin.rgb_to_reflectance(colour, atm.wavelengths_nm, color_space=space)
+        want = welkin.sky_image(atm, 0.0, SUN, WIDTH, method="lut", sun_disc=False, color_space=space)
+        np.testing.assert_allclose(got, want, rtol=1e-6, atol=0.0)
+    bad = subprocess.run(
+        [CLI, "sky", "--width", "16", "--ground-color", "0.4,1.5,0.1", "-o", str(tmp_path / "bad.exr")],
+        capture_output=True,
+        text=True,
+    )
+    assert bad.returncode != 0 and "--ground-color" in bad.stderr and "[0, 1]" in bad.stderr, bad.stderr
+    assert not (tmp_path / "bad.exr").exists()
