@@ -122,6 +122,41 @@ SkySettings settings_from(const SkyArgs& args) {
     }
 }
 
+// The settings that reproduce the file (its welkinSettings attribute).
+nlohmann::ordered_json provenance(const SkyArgs& args, const SkySettings& sky, const Atmosphere& atm,
+                                  const Observer& observer, const std::string& method_name,
+                                  ColorSpace color_space, const std::optional<PlaceTime>& place_time) {
+    nlohmann::ordered_json settings = {
+        {"atmosphere", !args.scene.empty()            ? atm.name
+                       : args.atmosphere.file.empty() ? atm.name
+                                                      : args.atmosphere.file},
+        {"wavelengths_nm", atm.wavelengths_nm},
+        {"sun_direction", {observer.sun_direction.x, observer.sun_direction.y, observer.sun_direction.z}},
+        {"altitude_m", observer.altitude_m},
+        {"method", method_name},
+        {"requested_method", sky.method},
+        {"tolerance", args.tolerance},
+        {"exposure", sky.exposure},
+        {"sun_disc", !args.no_sun_disc},
+        {"ground", args.ground},
+        {"stars", place_time.has_value() && args.stars},
+        {"ground_albedo", args.ground_albedo           ? nlohmann::json(*args.ground_albedo)
+                          : !args.ground_color.empty() ? nlohmann::json({{"color", args.ground_color}})
+                                                       : nlohmann::json("atmosphere")},
+        {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
+        {"units", args.spectral_channels ? std::string("W m^-2 sr^-1 nm^-1 (times exposure)")
+                                         : fmt::format("linear {}, W m^-2 sr^-1 (times exposure)",
+                                                       color_space_name(color_space))}};
+    if (place_time) settings["place_and_time"] = place_time->json();
+    if (args.scene.empty()) {
+        settings["sun_elevation_deg"] = args.observer.sun_elevation_deg;
+        settings["sun_azimuth_deg"] = args.observer.sun_azimuth_deg;
+    } else {
+        settings["scene"] = args.scene;
+    }
+    return settings;
+}
+
 int run_sky(SkyArgs args) {
     // Everything that can be refused is refused before the render starts.
     check_output_path(args.output, args.overwrite);
@@ -204,35 +239,8 @@ int run_sky(SkyArgs args) {
         exr.channel_names.push_back(args.multilayer ? "Welkin.Sky." + name : name);
     exr.pixels = std::move(image.pixels);
     ExrWriteOptions write = exr_write_options(args.overwrite, args.half);
-    // Provenance: the settings that reproduce the file.
-    nlohmann::ordered_json settings = {
-        {"atmosphere", !args.scene.empty()            ? atm.name
-                       : args.atmosphere.file.empty() ? atm.name
-                                                      : args.atmosphere.file},
-        {"wavelengths_nm", atm.wavelengths_nm},
-        {"sun_direction", {observer.sun_direction.x, observer.sun_direction.y, observer.sun_direction.z}},
-        {"altitude_m", observer.altitude_m},
-        {"method", method_name},
-        {"requested_method", sky.method},
-        {"tolerance", args.tolerance},
-        {"exposure", sky.exposure},
-        {"sun_disc", !args.no_sun_disc},
-        {"ground", args.ground},
-        {"stars", place_time.has_value() && args.stars},
-        {"ground_albedo", args.ground_albedo           ? nlohmann::json(*args.ground_albedo)
-                          : !args.ground_color.empty() ? nlohmann::json({{"color", args.ground_color}})
-                                                       : nlohmann::json("atmosphere")},
-        {"clouds", {{"layers", sky.cloud_layers}, {"volumes", sky.cloud_volumes}}},
-        {"units", args.spectral_channels ? std::string("W m^-2 sr^-1 nm^-1 (times exposure)")
-                                         : fmt::format("linear {}, W m^-2 sr^-1 (times exposure)",
-                                                       color_space_name(color_space))}};
-    if (place_time) settings["place_and_time"] = place_time->json();
-    if (args.scene.empty()) {
-        settings["sun_elevation_deg"] = args.observer.sun_elevation_deg;
-        settings["sun_azimuth_deg"] = args.observer.sun_azimuth_deg;
-    } else {
-        settings["scene"] = args.scene;
-    }
+    const nlohmann::ordered_json settings =
+        provenance(args, sky, atm, observer, method_name, color_space, place_time);
     write.attributes.emplace_back("welkinSettings", settings.dump());
     if (args.spectral_channels) write.attributes.emplace_back("emissiveUnits", "W.m^-2.sr^-1.nm^-1");
     const ExrWriteReport report = write_exr(args.output, exr, write);
