@@ -6,6 +6,7 @@
 #include <cmath>
 #include <optional>
 
+#include "layer.hpp"
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
@@ -39,13 +40,11 @@ void Moon::validate() const {
 std::vector<float> moon_disc_pixels(const Atmosphere& atm, const Observer& observer, const Moon& moon,
                                     int width, SkyImageOptions::Output output) {
     moon.validate();
-    if (width < 4 || width > 16384 || width % 2 != 0)
-        throw InvalidArgument("width", fmt::format("must be even and in [4, 16384], got {}", width));
     const int height = width / 2;
     const std::size_t nc = atm.channels();
     const bool rgb = output == SkyImageOptions::Output::Rgb;
     const std::size_t out_nc = rgb ? 3 : nc;
-    std::vector<float> pixels(std::size_t(width) * std::size_t(height) * out_nc, 0.0f);
+    std::vector<float> pixels = night::blank_layer(width, out_nc);
     if (!(moon.irradiance_ratio > 0.0)) return pixels;
 
     const glm::dvec3 m = glm::normalize(moon.direction), s = glm::normalize(moon.sun_from_moon);
@@ -171,13 +170,8 @@ SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere
     const float ratio = float(moon.irradiance_ratio);
     for (std::size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] += ratio * moonlit.pixels[k];
     if (moon.disc) {
-        const std::vector<float> disc = moon_disc_pixels(atm, observer, moon, width, options.output);
-        const std::size_t nc = image.channels();
-        const float exposure = float(options.exposure);
-        for (std::size_t p = 0; p < disc.size() / nc; ++p) {
-            const float T = image.cloud_transmittance.empty() ? 1.0f : image.cloud_transmittance[p];
-            for (std::size_t c = 0; c < nc; ++c) image.pixels[p * nc + c] += exposure * T * disc[p * nc + c];
-        }
+        night::add_under_clouds(image, moon_disc_pixels(atm, observer, moon, width, options.output),
+                                options.exposure);
     }
     return image;
 }

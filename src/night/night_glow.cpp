@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "air_transmittance.hpp"
+#include "layer.hpp"
 #include <fmt/format.h>
 
 #include "welkin/base/equirect.hpp"
@@ -27,13 +28,11 @@ double v_surface_brightness_to_radiance(double v_mag_per_arcsec2) {
 
 std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& observer, int width,
                                      SkyImageOptions::Output output, ColorSpace color_space) {
-    if (width < 4 || width > 16384 || width % 2 != 0)
-        throw InvalidArgument("width", fmt::format("must be even and in [4, 16384], got {}", width));
     const int height = width / 2;
     const std::size_t nc = atm.channels();
     const bool rgb = output == SkyImageOptions::Output::Rgb;
     const std::size_t out_nc = rgb ? 3 : nc;
-    std::vector<float> pixels(std::size_t(width) * std::size_t(height) * out_nc, 0.0f);
+    std::vector<float> pixels = night::blank_layer(width, out_nc);
 
     // The zenith's spectrum: the sun's shape, V's radiance at 545 nm (linear interpolation of
     // the solar irradiance between the channels; the end channels beyond them).
@@ -80,14 +79,9 @@ std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& obse
 
 void add_night_glow(SkyImage& image, const Atmosphere& atm, const Observer& observer,
                     const SkyImageOptions& options) {
-    const std::vector<float> add =
-        night_glow_pixels(atm, observer, image.width, options.output, options.color_space);
-    const std::size_t nc = image.channels();
-    const float exposure = float(options.exposure);
-    for (std::size_t p = 0; p < add.size() / nc; ++p) {
-        const float t = image.cloud_transmittance.empty() ? 1.0f : image.cloud_transmittance[p];
-        for (std::size_t c = 0; c < nc; ++c) image.pixels[p * nc + c] += exposure * t * add[p * nc + c];
-    }
+    night::add_under_clouds(
+        image, night_glow_pixels(atm, observer, image.width, options.output, options.color_space),
+        options.exposure);
 }
 
 }  // namespace welkin

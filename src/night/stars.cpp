@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "air_transmittance.hpp"
+#include "layer.hpp"
 #include <fmt/format.h>
 
 #include "welkin/base/equirect.hpp"
@@ -79,13 +80,11 @@ std::vector<Star> stars_at(const Instant& when, const Place& where, double faint
 
 std::vector<float> star_pixels(const Atmosphere& atm, const Observer& observer, std::span<const Star> stars,
                                int width, SkyImageOptions::Output output, ColorSpace color_space) {
-    if (width < 4 || width > 16384 || width % 2 != 0)
-        throw InvalidArgument("width", fmt::format("must be even and in [4, 16384], got {}", width));
     const int height = width / 2;
     const std::size_t nc = atm.channels();
     const bool rgb = output == SkyImageOptions::Output::Rgb;
     const std::size_t out_nc = rgb ? 3 : nc;
-    std::vector<float> pixels(std::size_t(width) * std::size_t(height) * out_nc, 0.0f);
+    std::vector<float> pixels = night::blank_layer(width, out_nc);
     if (stars.empty()) return pixels;
     const night::TransmittanceByElevation air(atm, observer.altitude_m);
     std::optional<SpectrumToRgb> to_rgb;
@@ -130,14 +129,9 @@ std::vector<float> star_pixels(const Atmosphere& atm, const Observer& observer, 
 void add_stars(SkyImage& image, const Atmosphere& atm, const Observer& observer, std::span<const Star> stars,
                const SkyImageOptions& options) {
     if (stars.empty()) return;
-    const std::vector<float> add =
-        star_pixels(atm, observer, stars, image.width, options.output, options.color_space);
-    const std::size_t nc = image.channels();
-    const float exposure = float(options.exposure);
-    for (std::size_t p = 0; p < add.size() / nc; ++p) {
-        const float t = image.cloud_transmittance.empty() ? 1.0f : image.cloud_transmittance[p];
-        for (std::size_t c = 0; c < nc; ++c) image.pixels[p * nc + c] += exposure * t * add[p * nc + c];
-    }
+    night::add_under_clouds(
+        image, star_pixels(atm, observer, stars, image.width, options.output, options.color_space),
+        options.exposure);
 }
 
 }  // namespace welkin
