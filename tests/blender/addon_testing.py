@@ -149,6 +149,38 @@ def scripts_dir():
     return TMP / "scripts"
 
 
+NO_WELKIN_SAYS = "no_welkin: the add-on is not installed"
+
+
+def command_line_blender(with_addon):
+    """(environment, arguments) for a command-line render of this Blender: with the add-on
+    as installed here (`--addons welkin`), or as a stock Blender of its own (empty user
+    folders, no add-on anywhere; a script first fails the run if Welkin is found, and
+    prints NO_WELKIN_SAYS)."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    if with_addon:
+        env["BLENDER_USER_SCRIPTS"] = str(scripts_dir())
+        env["BLENDER_USER_CONFIG"] = str(TMP / "config")
+        return env, ["--addons", "welkin"]
+    home = TMP / "stock"
+    for name in ("scripts", "config", "extensions"):
+        (home / name).mkdir(parents=True, exist_ok=True)
+    env["BLENDER_USER_RESOURCES"] = str(home)
+    env["BLENDER_USER_SCRIPTS"] = str(home / "scripts")
+    env["BLENDER_USER_CONFIG"] = str(home / "config")
+    env["BLENDER_USER_EXTENSIONS"] = str(home / "extensions")
+    no_welkin = TMP / "no_welkin.py"
+    no_welkin.write_text(
+        "import sys, addon_utils\n"
+        "loaded = [m for m in sys.modules if m == 'welkin' or m.startswith(('welkin.', 'bl_ext.'))"
+        " and m.split('.')[-1] == 'welkin']\n"
+        "names = [m.__name__ for m in addon_utils.modules() if m.__name__.split('.')[-1] == 'welkin']\n"
+        "assert not loaded and not names, f'Welkin is installed here: {loaded} {names}'\n"
+        f"print({NO_WELKIN_SAYS!r})\n"
+    )
+    return env, ["--python-exit-code", "1", "--python", str(no_welkin)]
+
+
 def install_addon():
     """Installs and enables the add-on from its zip; returns (add-on package, compiled
     module)."""

@@ -39,34 +39,12 @@ import numpy as np  # noqa: E402
 addon, welkin = T.install_addon()
 from welkin.blender import farm, farm_bake  # noqa: E402
 
-NO_WELKIN = T.TMP / "no_welkin.py"
-NO_WELKIN.write_text(
-    "import sys, addon_utils\n"
-    "loaded = [m for m in sys.modules if m == 'welkin' or m.startswith(('welkin.', 'bl_ext.'))"
-    " and m.split('.')[-1] == 'welkin']\n"
-    "names = [m.__name__ for m in addon_utils.modules() if m.__name__.split('.')[-1] == 'welkin']\n"
-    "assert not loaded and not names, f'Welkin is installed here: {loaded} {names}'\n"
-    "print('no_welkin: the add-on is not installed')\n"
-)
 FRAMES = (1, 2, 3)
 
 
 def render_anim(blend, out, *, with_addon, expect_ok=True):
     """`blender -b blend -o out/f_#### -a`; returns ({frame: RGB array}, log, exit code)."""
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    if with_addon:
-        env["BLENDER_USER_SCRIPTS"] = str(T.scripts_dir())
-        env["BLENDER_USER_CONFIG"] = str(T.TMP / "config")
-        extra = ["--addons", "welkin"]
-    else:  # a Blender of its own: empty user folders, no add-on anywhere
-        home = T.TMP / "stock"
-        for name in ("scripts", "config", "extensions"):
-            (home / name).mkdir(parents=True, exist_ok=True)
-        env["BLENDER_USER_RESOURCES"] = str(home)
-        env["BLENDER_USER_SCRIPTS"] = str(home / "scripts")
-        env["BLENDER_USER_CONFIG"] = str(home / "config")
-        env["BLENDER_USER_EXTENSIONS"] = str(home / "extensions")
-        extra = ["--python-exit-code", "1", "--python", str(NO_WELKIN)]
+    env, extra = T.command_line_blender(with_addon)
     command = [
         *T.blender_command(),
         "-b",
@@ -84,7 +62,7 @@ def render_anim(blend, out, *, with_addon, expect_ok=True):
         T.check(run.returncode == 0, f"the render exited {run.returncode}:\n{log[-3000:]}")
         T.check("Traceback" not in log, f"traceback in the render:\n{log[-3000:]}")
     if not with_addon:
-        T.check("no_welkin: the add-on is not installed" in log, f"the check did not run:\n{log[-2000:]}")
+        T.check(T.NO_WELKIN_SAYS in log, f"the check did not run:\n{log[-2000:]}")
     frames = {}
     for f in FRAMES:
         path = out / f"f_{f:04d}.exr"
