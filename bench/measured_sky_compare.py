@@ -250,11 +250,17 @@ SHEET_ELEVATIONS = (60.0, 20.0, 5.0, 1.0)
 SHEET_LAT = (-10.0, 70.0)
 
 
+def read_tile(path):
+    """A kept tile as linear RGB (read_exr gives the channels in the file's sorted order)."""
+    pixels, names = welkin.read_exr(str(path))
+    return pixels[:, :, [names.index(c) for c in "RGB"]]
+
+
 def sheet_pixel(tile, elevation_deg):
     """The mean linear RGB of the 3 x 3 pixels at the tile's centre column and elevation."""
     h, w = tile.shape[:2]
     row = int((SHEET_LAT[1] - elevation_deg) / (SHEET_LAT[1] - SHEET_LAT[0]) * h)
-    return tile[row - 1 : row + 2, w // 2 - 1 : w // 2 + 2, :3].reshape(-1, 3).mean(axis=0)
+    return tile[row - 1 : row + 2, w // 2 - 1 : w // 2 + 2].reshape(-1, 3).mean(axis=0)
 
 
 def sheet_table(folder):
@@ -268,8 +274,8 @@ def sheet_table(folder):
             away, toward = (folder / f"{key}_{sun_el:+05.1f}_{v}.exr" for v in ("away", "toward"))
             if not (away.exists() and toward.exists()):
                 continue
-            blue = sheet_pixel(welkin.read_exr(str(away))[0], 45.0)
-            glow = sheet_pixel(welkin.read_exr(str(toward))[0], sun_el + 5.0)
+            blue = sheet_pixel(read_tile(away), 45.0)
+            glow = sheet_pixel(read_tile(toward), sun_el + 5.0)
             xyz = to_xyz(np.array([blue, glow]))
             t = cct(xyz)
             lines.append(

@@ -14,7 +14,7 @@ away from it (where a clear sky is bluest). Every tile is a Cycles render throug
 equirectangular panoramic camera: 120 degrees of azimuth centred on the view's, elevation
 -10 to +70 degrees; the Blender skies with their default air, dust and ozone and their sun
 disc. Exposure: per row, one factor for all six columns (0.18 over Welkin's median sky
-luminance in that row's tile toward the sun, shown as EV); tone curve x / (1 + x) per
+luminance in that row's two tiles, shown as EV); tone curve x / (1 + x) per
 channel, then sRGB. --keep DIR keeps the linear tiles (<sky>_<sun>_<view>.exr), which
 `bench/measured_sky_compare.py --sheet DIR` measures. The add-on is installed from its zip as in the tests
 (a temporary scripts directory; the machine's Blender configuration is untouched).
@@ -196,10 +196,13 @@ def main(out_png, keep=None):
     luminance = np.array([0.2126, 0.7152, 0.0722])
     for r, e in enumerate(ELEVATIONS):
         tiles = [read_exr(tmp / f"{key}_{e:+05.1f}_{view}.exr") for key, view in tiles_per_row]
-        # The row's exposure: Welkin's median sky luminance (above the horizon row; the
-        # median leaves the sun's disc out) to 0.18.
+        # The row's exposure: Welkin's median sky luminance over both its views (above the
+        # horizon row; the median leaves the sun's disc out) to 0.18.
         horizon_row = int(TILE_H * LAT_MAX / (LAT_MAX - LAT_MIN))
-        median = float(np.median(tiles[0][:horizon_row] @ luminance))
+        welkin_sky = np.concatenate(
+            [t[:horizon_row] for t, (key, _v) in zip(tiles, tiles_per_row) if key == "welkin"]
+        )
+        median = float(np.median(welkin_sky @ luminance))
         k = 0.18 / max(median, 1e-12)
         for c, tile in enumerate(tiles):
             x = np.clip(np.nan_to_num(tile * k), 0.0, None)
