@@ -180,15 +180,46 @@ def chain_cct(luminance):
     return np.where(den > 0.0, 1.0e6 / np.maximum(den, 1e-9), np.inf)
 
 
-def colour_row(preset, sun_el):
+def scaled_aerosol(factor):
+    def apply(atm):
+        atm.mie_extinction = [factor * v for v in atm.mie_extinction]
+        atm.mie_scattering = [factor * v for v in atm.mie_scattering]
+
+    return apply
+
+
+# What each ingredient of clear_day does to its colour and its sunset glow: one change at a
+# time (a sensitivity, not a preset).
+FACTORS = (
+    ("clear_day", lambda atm: None),
+    ("no ozone", lambda atm: setattr(atm, "absorption_extinction", [0.0] * atm.channels)),
+    ("ground: black", lambda atm: setattr(atm, "ground_albedo", [0.0] * atm.channels)),
+    ("ground: grey 0.3", lambda atm: setattr(atm, "ground_albedo", [0.3] * atm.channels)),
+    ("aerosol: no absorption (ω = 1)", lambda atm: setattr(atm, "mie_scattering", list(atm.mie_extinction))),
+    ("aerosol: τ₅₅₀ 0.06 (half)", scaled_aerosol(0.5)),
+    ("aerosol: τ₅₅₀ 0.018 (Blender 5's default)", scaled_aerosol(0.018 / 0.12)),
+)
+
+
+def colour_row(preset, sun_el, change=None):
     named, grid = probes(sun_el)
     named["side"] = (math.radians(90.0 - sun_el), math.pi)  # solar meridian, 90 deg from the sun
     keys = ("zenith", "side", "near", "horizon", "anti")
     pts = np.array([named[k] for k in keys] + [tuple(g) for g in grid])
     sun_vec = direction(math.radians(sun_el), 0.0)
     dirs = np.ascontiguousarray(direction(pts[:, 0], pts[:, 1]))
-    rgb = welkin.sky_radiance(welkin.Atmosphere.preset(preset), 0.0, tuple(sun_vec), dirs, "lut", "rgb")
-    xyz = to_xyz(rgb)
+    atm = welkin.Atmosphere.preset(preset)
+    if change is not None:
+        change(atm)
+    xyz = to_xyz(welkin.sky_radiance(atm, 0.0, tuple(sun_vec), dirs, "lut", "rgb"))
+    if change is not None:  # the spectral path is for the presets themselves
+        return (
+            cct(xyz)[:3],
+            None,
+            LUMINOUS_EFFICACY * xyz[:, 1],
+            *chain_median(xyz, pts, sun_el, len(keys)),
+            None,
+        )
     wl = welkin.spectral_wavelengths_nm()
     spectral = welkin.sky_radiance(welkin.Atmosphere.preset(preset, wl), 0.0, tuple(sun_vec), dirs, "lut")
     xyz_s = to_xyz(welkin.spectrum_to_rgb(spectral, wl, color_space="rec2020"), "rec2020")
@@ -199,12 +230,47 @@ def colour_row(preset, sun_el):
     temps = cct(xyz)
     lum = LUMINOUS_EFFICACY * xyz[:, 1]
     chain = chain_cct(lum)
-    n = len(keys)
-    chi = angle_from_sun(pts[:, 0], pts[:, 1], sun_el)
-    use = (lum[n:] >= 1000.0) & (chi[n:] > math.radians(5.0))
-    mired = np.median(1.0e6 / temps[n:][use] - 1.0e6 / chain[n:][use]) if use.any() else float("nan")
+    (mired,) = chain_median(xyz, pts, sun_el, len(keys))
     dxy = float(np.max(np.linalg.norm(xy(xyz) - xy(xyz_s), axis=1)))
     return dict(zip(keys, temps)), dict(zip(keys, chain)), dict(zip(keys, lum)), mired, dxy
+
+
+def chain_median(xyz, pts, sun_el, n):
+    """The median over the grid (after the n named places) of Welkin - Chain, in mired."""
+    temps, lum = cct(xyz[n:]), LUMINOUS_EFFICACY * xyz[n:, 1]
+    chi = angle_from_sun(pts[n:, 0], pts[n:, 1], sun_el)
+    use = (lum >= 1000.0) & (chi > math.radians(5.0))
+    return (
+        float(np.median(1.0e6 / temps[use] - 1.0e6 / chain_cct(lum[use]))) if use.any() else float("nan"),
+    )
+
+
+def glow(change, sun_el=1.0):
+    """Luminance 5 degrees from a low sun (on its almucantar) over the zenith's."""
+    named, _grid = probes(sun_el)
+    dirs = np.ascontiguousarray(direction(*np.array([named["near"], named["zenith"]]).T))
+    atm = welkin.Atmosphere.preset("clear_day")
+    change(atm)
+    y = to_xyz(
+        welkin.sky_radiance(atm, 0.0, tuple(direction(math.radians(sun_el), 0.0)), dirs, "lut", "rgb")
+    )[:, 1]
+    return y[0] / y[1]
+
+
+def factor_table():
+    lines = [
+        "| change to clear_day | sun 60°: CCT zenith / 90° / 5° from the sun (K) | Welkin − Chain (mired) "
+        "| sun 20°: CCT zenith / 90° / 5° (K) | Welkin − Chain (mired) | sun 1°: luminance 5° from the sun "
+        "over the zenith's |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name, change in FACTORS:
+        cells = []
+        for sun_el in (60.0, 20.0):
+            temps, _c, _lum, mired, _dxy = colour_row("clear_day", sun_el, change)
+            cells.append(f"{' / '.join(kelvin(t) for t in temps)} | {mired:+.0f}")
+        lines.append(f"| {name} | {' | '.join(cells)} | {glow(change):.1f} |")
+    return "\n".join(lines)
 
 
 def kelvin(t):
@@ -311,9 +377,12 @@ def main():
     print(text)
     colour = colour_table()
     print(colour)
+    factors = factor_table()
+    print(factors)
     if args.docs:
         write_docs(text, "measured-sky")
         write_docs(colour, "measured-colour")
+        write_docs(factors, "colour-factors")
     if args.sheet:
         sheet = sheet_table(args.sheet)
         print(sheet)
