@@ -43,6 +43,10 @@ at Welkin's own luminance (683 lm/W times Y) at the first three; the median over
 difference Welkin - Chain in mired (10^6 / T, the scale on which equal steps look alike);
 and the largest CIE 1931 xy distance over the grid between the four-wavelength RGB and the
 48-wavelength spectral path (the same lut method).
+A third table changes clear_day one ingredient at a time (ozone, the ground, the
+aerosol's absorption and amount); a fourth gives the light on a horizontal ground, sun and
+sky together, against Granada's typical daylight of 5700 K (Hernandez-Andres, Romero,
+Nieves & Lee 2001, JOSA A 18(6), 1325-1335).
 With --sheet DIR (the tiles `bench/time_of_day_sheet.py --keep DIR` kept) it also measures
 the contact sheet's skies, Welkin's add-on world beside Blender's: the CCT 45 degrees up
 looking away from the sun, the CCT 5 degrees above the sun, and the luminance there over
@@ -273,6 +277,29 @@ def factor_table():
     return "\n".join(lines)
 
 
+def daylight_table(preset="clear_day", n=64):
+    """The light on a horizontal ground: the sky's irradiance (a midpoint rule in the cosine
+    of the zenith angle and the azimuth) plus the sun's direct beam (welkin.sun)."""
+    mu, az = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(2 * n) + 0.5) / (2 * n) * 2.0 * math.pi)
+    dirs = np.ascontiguousarray(direction(np.arcsin(mu.ravel()), az.ravel()))
+    weight = mu.ravel() * (2.0 * math.pi / (2 * n * n))  # cos(zenith) dOmega
+    atm = welkin.Atmosphere.preset(preset)
+    lines = [
+        f"| sun | {preset}: global CCT (K) | illuminance (lux) | the sky's part: CCT (K) | its illuminance (lux) |",
+        "|---|---|---|---|---|",
+    ]
+    for sun_el in (60.0, 40.0, 20.0, 10.0):
+        sun_vec = tuple(direction(math.radians(sun_el), 0.0))
+        sky = weight @ np.asarray(welkin.sky_radiance(atm, 0.0, sun_vec, dirs, "lut", "rgb"))
+        beam = np.asarray(welkin.sun(atm, 0.0, sun_vec).direct_irradiance_rgb) * math.sin(
+            math.radians(sun_el)
+        )
+        xyz = to_xyz(np.array([sky + beam, sky]))
+        t, lux = cct(xyz), LUMINOUS_EFFICACY * xyz[:, 1]
+        lines.append(f"| {sun_el:g}° | {kelvin(t[0])} | {lux[0]:.0f} | {kelvin(t[1])} | {lux[1]:.0f} |")
+    return "\n".join(lines)
+
+
 def kelvin(t):
     return "∞" if not np.isfinite(t) or t > 50000.0 else f"{100 * round(t / 100):.0f}"
 
@@ -379,10 +406,13 @@ def main():
     print(colour)
     factors = factor_table()
     print(factors)
+    daylight = daylight_table()
+    print(daylight)
     if args.docs:
         write_docs(text, "measured-sky")
         write_docs(colour, "measured-colour")
         write_docs(factors, "colour-factors")
+        write_docs(daylight, "measured-daylight")
     if args.sheet:
         sheet = sheet_table(args.sheet)
         print(sheet)
