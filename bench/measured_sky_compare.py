@@ -41,6 +41,8 @@ opposite the sun, from the default four-wavelength RGB (rec709 -> XYZ); Chain et
 at Welkin's own luminance (683 lm/W times Y) at the first three; the median over the
 10-degree grid (elements of at least 1000 cd/m^2, the fit's daylight range) of the
 difference Welkin - Chain in mired (10^6 / T, the scale on which equal steps look alike);
+Duv over the grid (the distance from the Planckian locus in CIE 1960 uv, positive towards
+green: D65's is +0.0032), which says how near the daylight locus the sky's colours lie;
 and the largest CIE 1931 xy distance over the grid between the four-wavelength RGB and the
 48-wavelength spectral path (the same lut method).
 A third table changes clear_day one ingredient at a time (ozone, the ground, the
@@ -178,6 +180,23 @@ def cct(xyz):
     return temps[np.argmin(((uv[:, None, :] - locus[None]) ** 2).sum(axis=2), axis=1)]
 
 
+def duv(xyz):
+    """Distance from the Planckian locus in CIE 1960 uv, positive above it (towards green)."""
+    _temps, locus = planckian_locus()
+    uv = uv1960(xyz)
+    nearest = locus[np.argmin(((uv[:, None, :] - locus[None]) ** 2).sum(axis=2), axis=1)]
+    return np.linalg.norm(uv - nearest, axis=1) * np.sign(uv[:, 1] - nearest[:, 1])
+
+
+def duv_over_the_sky(preset, sun_el):
+    """Duv's median and range over the 10-degree grid of the upper hemisphere."""
+    _named, grid = probes(sun_el)
+    dirs = np.ascontiguousarray(direction(grid[:, 0], grid[:, 1]))
+    sun_vec = tuple(direction(math.radians(sun_el), 0.0))
+    d = duv(to_xyz(welkin.sky_radiance(welkin.Atmosphere.preset(preset), 0.0, sun_vec, dirs, "lut", "rgb")))
+    return np.median(d), d.min(), d.max()
+
+
 def chain_cct(luminance):
     """Chain, Dumortier & Fontoynont 1999: a clear sky element's CCT from its luminance."""
     den = -132.1 + 59.77 * np.log10(np.maximum(luminance, 1e-9))
@@ -308,18 +327,19 @@ def colour_table():
     lines = [
         "| preset | sun | Welkin CCT (K): zenith / 90° from the sun / 5° from it / horizon under / "
         "opposite | Chain et al. at Welkin's luminance: zenith / 90° / 5° | median Welkin − Chain "
-        "(mired) | RGB vs spectral, worst Δxy |",
-        "|---|---|---|---|---|---|",
+        "(mired) | Duv over the sky: median (range) | RGB vs spectral, worst Δxy |",
+        "|---|---|---|---|---|---|---|",
     ]
     for preset in COLOUR_PRESETS:
         for sun_el in COLOUR_ELEVATIONS:
             t, c, _lum, mired, dxy = colour_row(preset, sun_el)
+            d = duv_over_the_sky(preset, sun_el)
             lines.append(
                 f"| {preset} | {sun_el:g}° | "
                 + " / ".join(kelvin(t[k]) for k in ("zenith", "side", "near", "horizon", "anti"))
                 + " | "
                 + " / ".join(kelvin(c[k]) for k in ("zenith", "side", "near"))
-                + f" | {mired:+.0f} | {dxy:.4f} |"
+                + f" | {mired:+.0f} | {d[0]:+.4f} ({d[1]:+.4f} .. {d[2]:+.4f}) | {dxy:.4f} |"
             )
     return "\n".join(lines)
 
