@@ -5,16 +5,18 @@ and -12 degrees, one row each, the same camera and exposure across a row.
     blender -b --factory-startup --python-use-system-env --python bench/time_of_day_sheet.py \
         [-- --out docs/time_of_day.png]
 
-Columns: Welkin (the add-on's world as a user gets it: the default `auto` sky at 1024 x 512
+Skies: Welkin (the add-on's world as a user gets it: the default `auto` sky at 1024 x 512
 and the sun's disc drawn by the world's nodes), Blender's Nishita sky (this Blender), and
 Blender 5's "Multiple Scattering" sky in the newest PyPI bpy of build/venv-bpy-5.3 .. 5.0
 that is there (the newest Blender the tests run): this script runs itself in that Python
-(--blender5 DIR) to render that column. Every tile
-is a Cycles render through the same equirectangular panoramic camera: 120 degrees of
-azimuth centred on the sun, elevation -10 to +70 degrees; the Blender skies with their
-default air, dust and ozone and their sun disc. Exposure: per row, one factor for all three
-columns (0.18 over Welkin's median sky luminance in that row's tile, shown as EV); tone curve
-x / (1 + x) per channel, then sRGB. The add-on is installed from its zip as in the tests
+(--blender5 DIR) to render that sky. Each sky has two columns, looking toward the sun and
+away from it (where a clear sky is bluest). Every tile is a Cycles render through the same
+equirectangular panoramic camera: 120 degrees of azimuth centred on the view's, elevation
+-10 to +70 degrees; the Blender skies with their default air, dust and ozone and their sun
+disc. Exposure: per row, one factor for all six columns (0.18 over Welkin's median sky
+luminance in that row's two tiles, shown as EV); tone curve x / (1 + x) per
+channel, then sRGB. --keep DIR keeps the linear tiles (<sky>_<sun>_<view>.exr), which
+`bench/measured_sky_compare.py --sheet DIR` measures. The add-on is installed from its zip as in the tests
 (a temporary scripts directory; the machine's Blender configuration is untouched).
 """
 
@@ -30,6 +32,8 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 ELEVATIONS = (60.0, 20.0, 5.0, 1.0, -2.0, -6.0, -12.0)
 AZIMUTH = 0.0  # the sun towards +X
+# (name, camera azimuth relative to the sun's, label)
+VIEWS = (("toward", 0.0, "toward the sun"), ("away", 180.0, "away from the sun"))
 TILE_W, TILE_H = 240, 160
 LON_HALF, LAT_MIN, LAT_MAX = 60.0, -10.0, 70.0
 SAMPLES = 32
@@ -45,8 +49,20 @@ MULTIPLE_SCATTERING_VERSIONS = (
 import bpy  # noqa: E402
 
 
+def aim_camera(scene, view_azimuth):
+    scene.camera.rotation_euler = (math.radians(90.0), 0.0, math.radians(AZIMUTH + view_azimuth - 90.0))
+
+
+def render_views(scene, out_dir, stem):
+    """One render per view of VIEWS: <stem>_<view>.exr."""
+    for view, view_azimuth, _label in VIEWS:
+        aim_camera(scene, view_azimuth)
+        scene.render.filepath = str(pathlib.Path(out_dir) / f"{stem}_{view}.exr")
+        bpy.ops.render.render(write_still=True)
+
+
 def setup_camera(scene):
-    """An equirectangular crop towards the sun's azimuth, Cycles, linear EXR."""
+    """An equirectangular crop, Cycles, linear EXR (aim_camera turns it)."""
     if scene.camera is None:
         cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
         scene.collection.objects.link(cam)
@@ -54,7 +70,7 @@ def setup_camera(scene):
     cam = scene.camera
     cam.location = (0.0, 0.0, 0.0)
     cam.rotation_mode = "XYZ"
-    cam.rotation_euler = (math.radians(90.0), 0.0, math.radians(AZIMUTH - 90.0))
+    aim_camera(scene, 0.0)
     cam.data.type = "PANO"
     pano = cam.data if hasattr(cam.data, "panorama_type") else cam.data.cycles
     pano.panorama_type = "EQUIRECTANGULAR"
@@ -93,8 +109,7 @@ def render_blender_sky(scene, sky_type, out_dir, prefix):
     scene.world = world
     for e in ELEVATIONS:
         node.sun_elevation = math.radians(e)
-        scene.render.filepath = str(pathlib.Path(out_dir) / f"{prefix}_{e:+05.1f}.exr")
-        bpy.ops.render.render(write_still=True)
+        render_views(scene, out_dir, f"{prefix}_{e:+05.1f}")
 
 
 def blender5_main(out_dir):
@@ -117,7 +132,7 @@ def read_exr(path):
     return flat.reshape(h, w, 4)[::-1, :, :3]
 
 
-def main(out_png):
+def main(out_png, keep=None):
     import numpy as np
     from PIL import Image, ImageDraw
 
@@ -125,8 +140,12 @@ def main(out_png):
     import addon_testing as T
 
     T.install_addon()
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix="welkin_sheet_"))
-    atexit.register(shutil.rmtree, tmp, ignore_errors=True)
+    if keep is not None:
+        tmp = pathlib.Path(keep)
+        tmp.mkdir(parents=True, exist_ok=True)
+    else:
+        tmp = pathlib.Path(tempfile.mkdtemp(prefix="welkin_sheet_"))
+        atexit.register(shutil.rmtree, tmp, ignore_errors=True)
 
     scene, sun = T.new_scene(ELEVATIONS[0], AZIMUTH, resolution="1024")
     setup_camera(scene)
@@ -134,8 +153,7 @@ def main(out_png):
         T.aim_sun(sun, e, AZIMUTH)
         bpy.context.view_layer.update()
         bpy.ops.welkin.update_sky()
-        scene.render.filepath = str(tmp / f"welkin_{e:+05.1f}.exr")
-        bpy.ops.render.render(write_still=True)
+        render_views(scene, tmp, f"welkin_{e:+05.1f}")
     version = bpy.app.version_string.split()[0]
     render_blender_sky(scene, "NISHITA", tmp, "nishita")
     columns = [("welkin", "Welkin (add-on world)"), ("nishita", f"Blender {version} Nishita")]
@@ -164,20 +182,27 @@ def main(out_png):
     else:
         print("Blender 5's sky not rendered: no build/venv-bpy-5.x (scripts/install_blender_venvs.sh)")
 
-    label_w, head_h = 92, 22
+    label_w, head_h = 92, 36
+    tiles_per_row = [(key, view[0]) for key, _title in columns for view in VIEWS]
     sheet = Image.new(
-        "RGB", (label_w + TILE_W * len(columns), head_h + TILE_H * len(ELEVATIONS)), (24, 24, 24)
+        "RGB", (label_w + TILE_W * len(tiles_per_row), head_h + TILE_H * len(ELEVATIONS)), (24, 24, 24)
     )
     draw = ImageDraw.Draw(sheet)
     for c, (_key, title) in enumerate(columns):
-        draw.text((label_w + c * TILE_W + 6, 5), title, fill=(230, 230, 230))
+        x = label_w + c * len(VIEWS) * TILE_W
+        draw.text((x + 6, 4), title, fill=(230, 230, 230))
+        for v, (_view, _azimuth, label) in enumerate(VIEWS):
+            draw.text((x + v * TILE_W + 6, 19), label, fill=(170, 170, 170))
     luminance = np.array([0.2126, 0.7152, 0.0722])
     for r, e in enumerate(ELEVATIONS):
-        tiles = [read_exr(tmp / f"{key}_{e:+05.1f}.exr") for key, _title in columns]
-        # The row's exposure: Welkin's median sky luminance (above the horizon row; the
-        # median leaves the sun's disc out) to 0.18.
+        tiles = [read_exr(tmp / f"{key}_{e:+05.1f}_{view}.exr") for key, view in tiles_per_row]
+        # The row's exposure: Welkin's median sky luminance over both its views (above the
+        # horizon row; the median leaves the sun's disc out) to 0.18.
         horizon_row = int(TILE_H * LAT_MAX / (LAT_MAX - LAT_MIN))
-        median = float(np.median(tiles[0][:horizon_row] @ luminance))
+        welkin_sky = np.concatenate(
+            [t[:horizon_row] for t, (key, _v) in zip(tiles, tiles_per_row) if key == "welkin"]
+        )
+        median = float(np.median(welkin_sky @ luminance))
         k = 0.18 / max(median, 1e-12)
         for c, tile in enumerate(tiles):
             x = np.clip(np.nan_to_num(tile * k), 0.0, None)
@@ -191,6 +216,9 @@ def main(out_png):
         draw.text((6, y + 6), f"sun {e:+g} deg", fill=(230, 230, 230))
         draw.text((6, y + 22), f"EV {math.log2(1.0 / k):+.1f}", fill=(170, 170, 170))
         draw.line([(label_w, y), (sheet.width, y)], fill=(24, 24, 24))
+    for c in range(1, len(columns)):  # a gap between the skies
+        x = label_w + c * len(VIEWS) * TILE_W
+        draw.line([(x, head_h), (x, sheet.height)], fill=(24, 24, 24), width=3)
     out_png.parent.mkdir(parents=True, exist_ok=True)
     sheet.save(out_png, optimize=True)
     print(
@@ -202,9 +230,10 @@ def main(out_png):
 argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:]
 parser = argparse.ArgumentParser()
 parser.add_argument("--out", default=str(ROOT / "docs" / "time_of_day.png"))
+parser.add_argument("--keep", default=None, help="keep the linear EXR tiles in this folder")
 parser.add_argument("--blender5", default=None, help=argparse.SUPPRESS)
 args, _unknown = parser.parse_known_args(argv)
 if args.blender5:
     blender5_main(args.blender5)
 else:
-    main(pathlib.Path(args.out))
+    main(pathlib.Path(args.out), args.keep)
