@@ -71,7 +71,8 @@ struct AirglowLine {
     double lambda_nm, rayleigh;
 };
 // Header comment: O I 557.7, Na D (the doublet's centre), O I 630.0 and 636.4.
-constexpr std::array<AirglowLine, 4> kAirglowLines{{{557.7, 250.0}, {589.3, 50.0}, {630.0, 60.0}, {636.4, 20.0}}};
+constexpr std::array<AirglowLine, 4> kAirglowLines{
+    {{557.7, 250.0}, {589.3, 50.0}, {630.0, 60.0}, {636.4, 20.0}}};
 constexpr double kAirglowContinuumRayleighPerNm = 3.0;
 
 // Linear interpolation of per-channel values at x (monotonic wavelengths; beyond the
@@ -215,7 +216,8 @@ std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& obse
             for (int k = 0; k < nodes_x; ++k) {
                 // Node (k, l) is pixel (k step, l step)'s centre (rows past the bottom: the
                 // bottom row's, below the horizon anyway).
-                const glm::dvec3 d = equirect_pixel_direction(k * step, std::min(l * step, height - 1), width, height);
+                const glm::dvec3 d =
+                    equirect_pixel_direction(k * step, std::min(l * step, height - 1), width, height);
                 const double ex = m[0][0] * d.x + m[0][1] * d.y + m[0][2] * d.z;
                 const double ey = m[1][0] * d.x + m[1][1] * d.y + m[1][2] * d.z;
                 const double ez = m[2][0] * d.x + m[2][1] * d.y + m[2][2] * d.z;
@@ -258,7 +260,8 @@ std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& obse
                 const double sr = w00 * s_top[k] * r_top[k] + w10 * s_top[k1] * r_top[k1] +
                                   w01 * s_bot[k] * r_bot[k] + w11 * s_bot[k1] * r_bot[k1];
                 float* px = row + std::size_t(i) * out_nc;
-                for (std::size_t c = 0; c < m_nc; ++c) px[c] = float(a_out[c] + s10 * z0_out[c] + sr * z1_out[c]);
+                for (std::size_t c = 0; c < m_nc; ++c)
+                    px[c] = float(a_out[c] + s10 * z0_out[c] + sr * z1_out[c]);
             }
             if (rgb) gamut_map(row, std::size_t(width), to_rgb->luminance_weights());
         }

@@ -193,6 +193,54 @@ py::array_t<float> night_glow_image(const Atmosphere& atmosphere, int width, con
     return to_image_array(std::move(pixels), width, width / 2, channels);
 }
 
+// The stars and the night glow, each alone.
+void register_night_parts(py::module_& m) {
+    m.def("star_catalogue", &star_catalogue, R"doc(
+The compiled-in star catalogue, brightest first: an (N, 6) float64 array of ICRS
+right ascension and declination (degrees, epoch J1991.25), proper motion
+(mu_alpha cos delta, mu_delta; mas/yr), Johnson V and B-V, for the Hipparcos
+stars of V <= 7 (van Leeuwen 2007; V from Hp by Bessell 2000).
+)doc");
+    m.def("stars_at", &stars_at_py, py::arg("time"), py::arg("latitude_deg"), py::arg("longitude_deg"),
+          py::kw_only(), py::arg("height_m") = 0.0, py::arg("faintest_v") = 7.0, R"doc(
+The catalogue's stars of V <= faintest_v as seen from a place at a moment: an
+(N, 5) float64 array of the apparent direction (x east, y north, z up; with
+aberration, precession-nutation and refraction, as sun_and_moon), V and B-V.
+Stars below the horizon are included.
+)doc");
+    m.def("star_image", &star_image, py::arg("atmosphere"), py::arg("stars"), py::arg("width"),
+          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
+          py::arg("color_space") = "rec709", R"doc(
+The stars' light alone as an equirectangular (height, width, channels) float32
+image: each star of `stars` (an (N, 5) array as stars_at returns) dimmed by the
+air's transmittance towards it and spread over the 4 pixels around it so that the
+sum of radiance x pixel solid angle is its irradiance, times exposure. Same units
+and colour spaces as sky_image. Directions in any frame (Z up): the scene's, for a
+host that turns the sky.
+)doc");
+    m.def("night_glow_image", &night_glow_image, py::arg("atmosphere"), py::arg("width"),
+          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
+          py::arg("color_space") = "rec709", py::arg("time") = py::none(), py::arg("latitude_deg") = 0.0,
+          py::arg("longitude_deg") = 0.0, py::arg("height_m") = 0.0, py::arg("north_deg") = 0.0,
+          py::arg("airglow") = true, py::arg("zodiacal_light") = true,
+          R"doc(
+The night sky's own light alone (include/welkin/night/night_glow.hpp), as an
+equirectangular (height, width, channels) float32 image times exposure; 0 below
+the horizon. Same units and colour spaces as sky_image. Its parts:
+airglow=True: the upper atmosphere's glow (O I 557.7 nm, Na D, O I 630/636 nm and
+its continuum) from a layer 97 km up, brightening towards the horizon by van
+Rhijn's factor; zodiacal_light=True: Leinert et al. 1998's zodiacal light by
+helioecliptic longitude and ecliptic latitude, the sun's light slightly
+reddened. Both dimmed by the air towards each direction.
+
+time, latitude_deg, longitude_deg, height_m: the moment and place (as in
+sun_and_moon) that put the ecliptic and the sun in the sky; time=None: the
+zodiacal light at its darkest (the ecliptic pole's) everywhere. north_deg: the
+image's frame turned about the vertical as stars_at's directions are turned by
+a host (x' = cos n x - sin n y, y' = sin n x + cos n y).
+)doc");
+}
+
 }  // namespace
 
 void register_astro(py::module_& m) {
@@ -254,51 +302,7 @@ angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
 irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
 )doc");
 
-    m.def("star_catalogue", &star_catalogue, R"doc(
-The compiled-in star catalogue, brightest first: an (N, 6) float64 array of ICRS
-right ascension and declination (degrees, epoch J1991.25), proper motion
-(mu_alpha cos delta, mu_delta; mas/yr), Johnson V and B-V, for the Hipparcos
-stars of V <= 7 (van Leeuwen 2007; V from Hp by Bessell 2000).
-)doc");
-    m.def("stars_at", &stars_at_py, py::arg("time"), py::arg("latitude_deg"), py::arg("longitude_deg"),
-          py::kw_only(), py::arg("height_m") = 0.0, py::arg("faintest_v") = 7.0, R"doc(
-The catalogue's stars of V <= faintest_v as seen from a place at a moment: an
-(N, 5) float64 array of the apparent direction (x east, y north, z up; with
-aberration, precession-nutation and refraction, as sun_and_moon), V and B-V.
-Stars below the horizon are included.
-)doc");
-    m.def("star_image", &star_image, py::arg("atmosphere"), py::arg("stars"), py::arg("width"),
-          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
-          py::arg("color_space") = "rec709", R"doc(
-The stars' light alone as an equirectangular (height, width, channels) float32
-image: each star of `stars` (an (N, 5) array as stars_at returns) dimmed by the
-air's transmittance towards it and spread over the 4 pixels around it so that the
-sum of radiance x pixel solid angle is its irradiance, times exposure. Same units
-and colour spaces as sky_image. Directions in any frame (Z up): the scene's, for a
-host that turns the sky.
-)doc");
-    m.def("night_glow_image", &night_glow_image, py::arg("atmosphere"), py::arg("width"),
-          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
-          py::arg("color_space") = "rec709", py::arg("time") = py::none(), py::arg("latitude_deg") = 0.0,
-          py::arg("longitude_deg") = 0.0, py::arg("height_m") = 0.0, py::arg("north_deg") = 0.0,
-          py::arg("airglow") = true, py::arg("zodiacal_light") = true,
-          R"doc(
-The night sky's own light alone (include/welkin/night/night_glow.hpp), as an
-equirectangular (height, width, channels) float32 image times exposure; 0 below
-the horizon. Same units and colour spaces as sky_image. Its parts:
-airglow=True: the upper atmosphere's glow (O I 557.7 nm, Na D, O I 630/636 nm and
-its continuum) from a layer 97 km up, brightening towards the horizon by van
-Rhijn's factor; zodiacal_light=True: Leinert et al. 1998's zodiacal light by
-helioecliptic longitude and ecliptic latitude, the sun's light slightly
-reddened. Both dimmed by the air towards each direction.
-
-time, latitude_deg, longitude_deg, height_m: the moment and place (as in
-sun_and_moon) that put the ecliptic and the sun in the sky; time=None: the
-zodiacal light at its darkest (the ecliptic pole's) everywhere. north_deg: the
-image's frame turned about the vertical as stars_at's directions are turned by
-a host (x' = cos n x - sin n y, y' = sin n x + cos n y).
-)doc");
-
+    register_night_parts(m);
     m.def("sky_image_at", &sky_image_at, py::arg("atmosphere"), py::arg("time"), py::arg("latitude_deg"),
           py::arg("longitude_deg"), py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb",
           py::kw_only(), py::arg("height_m") = 0.0, py::arg("altitude_m") = 0.0, py::arg("discs") = true,

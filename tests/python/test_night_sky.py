@@ -240,7 +240,10 @@ def test_stars_in_sky_image_at_are_star_image():
         (lambda a: welkin.night_glow_image(a, 7), "width"),
         (lambda a: welkin.night_glow_image(a, 16, color_space="srgb"), "color_space"),
         (lambda a: welkin.night_glow_image(a, 16, time="2026-13-01T00:00:00Z"), "time"),
-        (lambda a: welkin.night_glow_image(a, 16, time="2026-01-01T00:00:00Z", latitude_deg=91.0), "latitude_deg"),
+        (
+            lambda a: welkin.night_glow_image(a, 16, time="2026-01-01T00:00:00Z", latitude_deg=91.0),
+            "latitude_deg",
+        ),
         (lambda a: welkin.night_glow_image(a, 16, north_deg=np.nan), "north_deg"),
         (lambda a: welkin.stars_at("2026-01-01T00:00:00Z", 0.0, 0.0, faintest_v=99.0), "faintest_v"),
         (lambda a: welkin.stars_at("2026-01-01T00:00:00Z", 91.0, 0.0), "latitude_deg"),

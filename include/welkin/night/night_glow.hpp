@@ -44,7 +44,8 @@
 // 2012, A&A 543, A92, Sect. 3.3): f_co(lambda) = 1 + a ln(lambda / 500 nm), a = 1.2
 // below 500 nm and 0.8 above at elongation 30 degrees, 0.9 and 0.6 at 90 degrees and
 // beyond, linear between. The directions' ecliptic coordinates: astro/positions.hpp's
-// ecliptic_frame (ERFA) for the moment and place.
+// ecliptic_frame (ERFA) for the moment and place; the image evaluates the table on nodes
+// every few pixels (1.4 degrees apart at most) and interpolates bilinearly between them.
 //
 // Through the air: each part times the transmittance T(z, lambda) from the observer to
 // the top of the atmosphere of the scene's Atmosphere (the layer and the dust are above
