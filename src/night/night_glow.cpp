@@ -62,18 +62,17 @@ std::pair<int, double> zodi_cell(double x, double knee, int last) {
 constexpr double kS10VMag = 27.78151250383644;
 
 // Photon energy h c / lambda (J), lambda in nm.
-double photon_energy_j(double lambda_nm) { return 1.98644586e-16 / lambda_nm; }
+double photon_energy_j(double lambda_nm) {
+    constexpr double kPlanck = 6.62607015e-34, kLightSpeed = 299792458.0;  // SI, exact
+    return kPlanck * kLightSpeed / (lambda_nm * 1e-9);
+}
 
 // 1 R (rayleigh) of a line or 1 R/nm of a continuum as photons s^-1 m^-2 sr^-1 (nm^-1).
 constexpr double kRayleighPhotonRadiance = 1e10 / (4.0 * kPi);
 
-struct AirglowLine {
-    double lambda_nm, rayleigh;
-};
 // Header comment: O I 557.7, Na D (the doublet's centre), O I 630.0 and 636.4.
 constexpr std::array<AirglowLine, 4> kAirglowLines{
     {{557.7, 250.0}, {589.3, 50.0}, {630.0, 60.0}, {636.4, 20.0}}};
-constexpr double kAirglowContinuumRayleighPerNm = 3.0;
 
 // Linear interpolation of per-channel values at x (monotonic wavelengths; beyond the
 // ends, the end channel's value).
@@ -88,6 +87,8 @@ double interpolate_channels(std::span<const double> wl, std::span<const double> 
 }
 
 }  // namespace
+
+std::span<const AirglowLine> airglow_lines() { return kAirglowLines; }
 
 double v_surface_brightness_to_radiance(double v_mag_per_arcsec2) {
     require_in_range("v_mag_per_arcsec2", v_mag_per_arcsec2, -30.0, 40.0);

@@ -76,6 +76,13 @@ inline constexpr double kDarkSkyZenithVMagArcsec2 = 21.587;
 // Height of the airglow layer above the ground.
 inline constexpr double kAirglowHeight_m = 97e3;
 
+// The airglow's lines at the zenith above the air and its continuum (header comment).
+struct AirglowLine {
+    double lambda_nm, rayleigh;
+};
+std::span<const AirglowLine> airglow_lines();
+inline constexpr double kAirglowContinuumRayleighPerNm = 3.0;
+
 // Spectral radiance (W m^-2 sr^-1 nm^-1) of a V surface brightness (mag/arcsec^2) at
 // 545 nm.
 double v_surface_brightness_to_radiance(double v_mag_per_arcsec2);
