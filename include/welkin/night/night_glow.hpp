@@ -67,11 +67,10 @@
 
 namespace welkin {
 
-// The measured dark-sky brightness at the zenith, V mag/arcsec^2: Krisciunas & Schaefer
-// 1991 (PASP 103, 1033), Mauna Kea, 21.587; the range measured at dark sites, 21.5-22
-// (e.g. Benn & Ellison 1998, La Palma, 21.9). What the parts above add up to is checked
-// against it (tests/python/test_night_sky.py; docs/validation.md).
-inline constexpr double kDarkSkyZenithVMagArcsec2 = 21.587;
+// What the parts add up to at the zenith of a dark site is checked against the measured
+// dark sky, 21.5-22 V mag/arcsec^2 (Krisciunas & Schaefer 1991, PASP 103, 1033, Mauna
+// Kea, 21.587; Benn & Ellison 1998, La Palma, 21.9): tests/python/test_night_sky.py,
+// docs/validation.md.
 
 // Height of the airglow layer above the ground.
 inline constexpr double kAirglowHeight_m = 97e3;
