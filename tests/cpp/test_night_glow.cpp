@@ -56,6 +56,40 @@ TEST(NightGlow, ZodiacalLightIsLeinertsTable) {
     EXPECT_EQ(parameter_of([] { zodiacal_light_s10(0.0, INFINITY); }), "ecliptic_latitude_deg");
 }
 
+TEST(NightGlow, EclipticFrameAgainstTheSunAndTheEquinox) {
+    // The March equinox of 2026 is 20 March 14:46 UTC (USNO's "Earth's Seasons" table: the
+    // sun's geocentric apparent longitude 0). The frame is the mean ecliptic and equinox of
+    // date (nutation in longitude, at most 17.2", left out) and topocentric (the solar
+    // parallax, 8.8"): the sun's longitude then is within 26", 0.0072 degrees, of 0, where
+    // it moves 0.00068 degrees a minute.
+    const Place greenwich{51.4779, 0.0, 46.0};
+    const auto lon_at = [&](const char* t) {
+        const double l = ecliptic_frame(Instant::from_civil(parse_iso8601(t)), greenwich).sun_longitude_deg;
+        return l > 180.0 ? l - 360.0 : l;
+    };
+    EXPECT_NEAR(lon_at("2026-03-20T14:46:00Z"), 0.0, 0.0072);
+    EXPECT_NEAR(lon_at("2026-03-20T15:46:00Z") - lon_at("2026-03-20T14:46:00Z"), 0.0411, 0.002);
+    // The sun's own direction (high in the sky: refraction under 1') lands on the
+    // ecliptic at the sun's longitude, and the frame is a rotation.
+    const Instant when = Instant::from_civil(parse_iso8601("2026-06-21T12:00:00Z"));
+    const EclipticFrame f = ecliptic_frame(when, greenwich);
+    const auto& d = sun_and_moon(when, greenwich).sun.direction_enu;
+    const auto& m = f.enu_to_ecliptic;
+    double e[3];
+    for (int i = 0; i < 3; ++i)
+        e[i] = m[std::size_t(i)][0] * d[0] + m[std::size_t(i)][1] * d[1] + m[std::size_t(i)][2] * d[2];
+    EXPECT_NEAR(std::asin(e[2]) / kDegree, 0.0, 0.02);
+    EXPECT_NEAR(std::atan2(e[1], e[0]) / kDegree, f.sun_longitude_deg, 0.02);
+    EXPECT_NEAR(f.sun_longitude_deg, 90.0, 0.2);  // the June solstice is 21 June 08:24 UTC
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double dot = 0.0;
+            for (int k = 0; k < 3; ++k)
+                dot += m[std::size_t(i)][std::size_t(k)] * m[std::size_t(j)][std::size_t(k)];
+            EXPECT_NEAR(dot, i == j ? 1.0 : 0.0, 1e-12);
+        }
+}
+
 TEST(NightGlow, ZodiacalLightOnTheEclipticOverHighLatitudeIsTheTablesRatio) {
     // The same elongation (90 degrees: helioecliptic longitude 90 at any latitude), at the
     // zenith (the same air), on the ecliptic and 60 degrees off it: 202 / 67 S10.
