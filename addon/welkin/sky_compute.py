@@ -317,14 +317,25 @@ def with_night_sky(
     color_space: str,
 ) -> npt.NDArray[np.float32]:
     """`sky` plus the night sky when the request has one (Place and Time), as
-    welkin.sky_image_at adds it: the night sky's own glow (welkin.night_glow_image) and,
-    with stars, the catalogue's stars in the scene's frame (welkin.star_image,
-    energy-exact). Not under clouds."""
+    welkin.sky_image_at adds it: the night sky's own glow (welkin.night_glow_image: the
+    airglow and the zodiacal light along the moment's ecliptic) and, with stars, the
+    catalogue's stars, both in the scene's frame (welkin.star_image, energy-exact). Not
+    under clouds."""
     if not request.night_sky:
         return sky
     altitude_m, exposure = request.altitude_m, request.exposure
+    time, latitude, longitude, height, north, _stars = request.night_sky
     sky = sky + native.night_glow_image(
-        atm, request.width, altitude_m=altitude_m, exposure=exposure, color_space=color_space
+        atm,
+        request.width,
+        altitude_m=altitude_m,
+        exposure=exposure,
+        color_space=color_space,
+        time=time,
+        latitude_deg=latitude,
+        longitude_deg=longitude,
+        height_m=height,
+        north_deg=north,
     )
     if request.night_sky[5]:
         stars = place_time.scene_stars(native, request.night_sky)

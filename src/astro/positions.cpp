@@ -157,6 +157,17 @@ Vec moon_topocentric_au(const Frames& f, double* geometric_au) {
     return topo;
 }
 
+// The rotation GCRS -> east/north/up: rows are the local axes in the GCRS.
+void gcrs_to_enu(const Frames& f, double (&r)[3][3]) {
+    for (int k = 0; k < 3; ++k) {
+        Vec axis{};
+        for (int j = 0; j < 3; ++j) axis[j] = f.rc2t[j][k];  // column k of GCRS -> ITRS
+        r[0][k] = dot(axis, f.east);
+        r[1][k] = dot(axis, f.north);
+        r[2][k] = dot(axis, f.up);
+    }
+}
+
 }  // namespace
 
 void Place::validate() const {
@@ -241,15 +252,8 @@ std::vector<std::array<double, 3>> apparent_star_directions(const Instant& when,
     if (!std::isfinite(when.tt_jd()) || !std::isfinite(when.ut1_jd()))
         throw InvalidArgument("time", "must be a finite moment");
     const Frames f = make_frames(when, &where);
-    // The rotation GCRS -> east/north/up, once: rows are the local axes in the GCRS.
     double r[3][3];
-    for (int k = 0; k < 3; ++k) {
-        Vec axis{};
-        for (int j = 0; j < 3; ++j) axis[j] = f.rc2t[j][k];  // column k of GCRS -> ITRS
-        r[0][k] = dot(axis, f.east);
-        r[1][k] = dot(axis, f.north);
-        r[2][k] = dot(axis, f.up);
-    }
+    gcrs_to_enu(f, r);
     const double pressure = where.effective_pressure_hpa();
     std::vector<std::array<double, 3>> out(icrs.size());
     for (std::size_t i = 0; i < icrs.size(); ++i) {
@@ -275,6 +279,27 @@ GeocentricPosition geocentric_moon(const Instant& when) {
     out.right_ascension_deg = wrap360(std::atan2(date[1], date[0]) * ERFA_DR2D);
     out.declination_deg = std::asin(std::clamp(date[2], -1.0, 1.0)) * ERFA_DR2D;
     out.distance_m = distance_au * ERFA_DAU;
+    return out;
+}
+
+EclipticFrame ecliptic_frame(const Instant& when, const Place& where) {
+    where.validate();
+    if (!std::isfinite(when.tt_jd()) || !std::isfinite(when.ut1_jd()))
+        throw InvalidArgument("time", "must be a finite moment");
+    const Frames f = make_frames(when, &where);
+    double r[3][3], ecm[3][3];
+    gcrs_to_enu(f, r);
+    eraEcm06(when.tt1, when.tt2, ecm);  // GCRS -> ecliptic of date
+    EclipticFrame out;
+    // ecliptic = ecm * GCRS = ecm * r^T * enu.
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) {
+            double s = 0.0;
+            for (int j = 0; j < 3; ++j) s += ecm[i][j] * r[k][j];
+            out.enu_to_ecliptic[std::size_t(i)][std::size_t(k)] = s;
+        }
+    const Vec sun = mul(ecm, aberrate(f, sub(scale(f.earth_helio_au, -1.0), f.observer_gcrs_au)));
+    out.sun_longitude_deg = wrap360(std::atan2(sun[1], sun[0]) * ERFA_DR2D);
     return out;
 }
 

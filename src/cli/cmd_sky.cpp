@@ -219,11 +219,11 @@ int run_sky(SkyArgs args) {
             moon.disc = image_options.sun_disc;
             image = render_equirect_sky_with_moon(*method, atm, observer, moon, args.width, image_options,
                                                   &progress);
-            add_night_glow(image, atm, observer, image_options);
-            if (args.stars) {
-                const Instant when = Instant::from_civil(place_time->time, "--time");
-                add_stars(image, atm, observer, stars_at(when, place_time->place), image_options);
-            }
+            const Instant when = Instant::from_civil(place_time->time, "--time");
+            NightGlowOptions glow;
+            glow.ecliptic = ecliptic_frame(when, place_time->place);
+            add_night_glow(image, atm, observer, image_options, glow);
+            if (args.stars) add_stars(image, atm, observer, stars_at(when, place_time->place), image_options);
         } else {
             image = render_equirect_sky(*method, atm, observer, args.width, image_options, &progress);
         }

@@ -15,6 +15,7 @@
 #include "welkin/astro/positions.hpp"
 #include "welkin/astro/time.hpp"
 #include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 #include "welkin/color/color_space.hpp"
 #include "welkin/night/moonlit_sky.hpp"
 #include "welkin/night/night_glow.hpp"
@@ -56,7 +57,11 @@ py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, d
     run_cancellable(
         [&](Progress* p) {
             image = render_equirect_sky_with_moon(*sky, atmosphere, observer, moon, width, options, p);
-            if (night_glow) add_night_glow(image, atmosphere, observer, options);
+            if (night_glow) {
+                NightGlowOptions glow;
+                glow.ecliptic = ecliptic_frame(when, place);
+                add_night_glow(image, atmosphere, observer, options, glow);
+            }
             if (stars) add_stars(image, atmosphere, observer, stars_at(when, place), options);
         },
         progress);
@@ -151,20 +156,89 @@ py::array_t<float> star_image(const Atmosphere& atmosphere, const py::array_t<do
 }
 
 py::array_t<float> night_glow_image(const Atmosphere& atmosphere, int width, const std::string& output,
-                                    double altitude_m, double exposure, const std::string& color_space) {
+                                    double altitude_m, double exposure, const std::string& color_space,
+                                    const py::object& time, double latitude_deg, double longitude_deg,
+                                    double height_m, double north_deg, bool airglow, bool zodiacal_light) {
     require_exposure(exposure);
+    require_in_range("north_deg", north_deg, -360.0, 360.0, "degrees");
     const ColorSpace space = color_space_from_name(color_space);
     const SkyImageOptions::Output out = parse_output(output);
+    NightGlowOptions glow;
+    glow.airglow = airglow;
+    glow.zodiacal_light = zodiacal_light;
+    std::optional<std::string> text;
+    if (!time.is_none()) text = time_text(time);
     std::vector<float> pixels;
     {
         py::gil_scoped_release release;
         atmosphere.validate();
+        if (text) {
+            const Instant when = Instant::from_civil(parse_iso8601(*text, "time"), "time");
+            EclipticFrame frame = ecliptic_frame(when, Place{latitude_deg, longitude_deg, height_m});
+            // The image's frame is the local one turned by north_deg about z (a scene's, as
+            // stars_at's directions are turned): enu = Rz(-north) image.
+            const double c = std::cos(north_deg * kDegree), s = std::sin(north_deg * kDegree);
+            for (auto& row : frame.enu_to_ecliptic) {
+                const double x = row[0], y = row[1];
+                row[0] = c * x - s * y;
+                row[1] = s * x + c * y;
+            }
+            glow.ecliptic = frame;
+        }
         const Observer observer = Observer{altitude_m, {0.0, 0.0, 1.0}}.validated();
-        pixels = night_glow_pixels(atmosphere, observer, width, out, space);
+        pixels = night_glow_pixels(atmosphere, observer, width, out, space, glow);
     }
     for (float& v : pixels) v *= float(exposure);
     const std::size_t channels = out == SkyImageOptions::Output::Rgb ? 3 : atmosphere.channels();
     return to_image_array(std::move(pixels), width, width / 2, channels);
+}
+
+// The stars and the night glow, each alone.
+void register_night_parts(py::module_& m) {
+    m.def("star_catalogue", &star_catalogue, R"doc(
+The compiled-in star catalogue, brightest first: an (N, 6) float64 array of ICRS
+right ascension and declination (degrees, epoch J1991.25), proper motion
+(mu_alpha cos delta, mu_delta; mas/yr), Johnson V and B-V, for the Hipparcos
+stars of V <= 7 (van Leeuwen 2007; V from Hp by Bessell 2000).
+)doc");
+    m.def("stars_at", &stars_at_py, py::arg("time"), py::arg("latitude_deg"), py::arg("longitude_deg"),
+          py::kw_only(), py::arg("height_m") = 0.0, py::arg("faintest_v") = 7.0, R"doc(
+The catalogue's stars of V <= faintest_v as seen from a place at a moment: an
+(N, 5) float64 array of the apparent direction (x east, y north, z up; with
+aberration, precession-nutation and refraction, as sun_and_moon), V and B-V.
+Stars below the horizon are included.
+)doc");
+    m.def("star_image", &star_image, py::arg("atmosphere"), py::arg("stars"), py::arg("width"),
+          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
+          py::arg("color_space") = "rec709", R"doc(
+The stars' light alone as an equirectangular (height, width, channels) float32
+image: each star of `stars` (an (N, 5) array as stars_at returns) dimmed by the
+air's transmittance towards it and spread over the 4 pixels around it so that the
+sum of radiance x pixel solid angle is its irradiance, times exposure. Same units
+and colour spaces as sky_image. Directions in any frame (Z up): the scene's, for a
+host that turns the sky.
+)doc");
+    m.def("night_glow_image", &night_glow_image, py::arg("atmosphere"), py::arg("width"),
+          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
+          py::arg("color_space") = "rec709", py::arg("time") = py::none(), py::arg("latitude_deg") = 0.0,
+          py::arg("longitude_deg") = 0.0, py::arg("height_m") = 0.0, py::arg("north_deg") = 0.0,
+          py::arg("airglow") = true, py::arg("zodiacal_light") = true,
+          R"doc(
+The night sky's own light alone (include/welkin/night/night_glow.hpp), as an
+equirectangular (height, width, channels) float32 image times exposure; 0 below
+the horizon. Same units and colour spaces as sky_image. Its parts:
+airglow=True: the upper atmosphere's glow (O I 557.7 nm, Na D, O I 630/636 nm and
+its continuum) from a layer 97 km up, brightening towards the horizon by van
+Rhijn's factor; zodiacal_light=True: Leinert et al. 1998's zodiacal light by
+helioecliptic longitude and ecliptic latitude, the sun's light slightly
+reddened. Both dimmed by the air towards each direction.
+
+time, latitude_deg, longitude_deg, height_m: the moment and place (as in
+sun_and_moon) that put the ecliptic and the sun in the sky; time=None: the
+zodiacal light at its darkest (the ecliptic pole's) everywhere. north_deg: the
+image's frame turned about the vertical as stars_at's directions are turned by
+a host (x' = cos n x - sin n y, y' = sin n x + cos n y).
+)doc");
 }
 
 }  // namespace
@@ -228,40 +302,7 @@ angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
 irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
 )doc");
 
-    m.def("star_catalogue", &star_catalogue, R"doc(
-The compiled-in star catalogue, brightest first: an (N, 6) float64 array of ICRS
-right ascension and declination (degrees, epoch J1991.25), proper motion
-(mu_alpha cos delta, mu_delta; mas/yr), Johnson V and B-V, for the Hipparcos
-stars of V <= 7 (van Leeuwen 2007; V from Hp by Bessell 2000).
-)doc");
-    m.def("stars_at", &stars_at_py, py::arg("time"), py::arg("latitude_deg"), py::arg("longitude_deg"),
-          py::kw_only(), py::arg("height_m") = 0.0, py::arg("faintest_v") = 7.0, R"doc(
-The catalogue's stars of V <= faintest_v as seen from a place at a moment: an
-(N, 5) float64 array of the apparent direction (x east, y north, z up; with
-aberration, precession-nutation and refraction, as sun_and_moon), V and B-V.
-Stars below the horizon are included.
-)doc");
-    m.def("star_image", &star_image, py::arg("atmosphere"), py::arg("stars"), py::arg("width"),
-          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
-          py::arg("color_space") = "rec709", R"doc(
-The stars' light alone as an equirectangular (height, width, channels) float32
-image: each star of `stars` (an (N, 5) array as stars_at returns) dimmed by the
-air's transmittance towards it and spread over the 4 pixels around it so that the
-sum of radiance x pixel solid angle is its irradiance, times exposure. Same units
-and colour spaces as sky_image. Directions in any frame (Z up): the scene's, for a
-host that turns the sky.
-)doc");
-    m.def("night_glow_image", &night_glow_image, py::arg("atmosphere"), py::arg("width"),
-          py::arg("output") = "rgb", py::kw_only(), py::arg("altitude_m") = 0.0, py::arg("exposure") = 1.0,
-          py::arg("color_space") = "rec709",
-          R"doc(
-The night sky's own light alone (airglow, zodiacal light, unresolved stars:
-Krisciunas & Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith,
-van Rhijn's brightening towards the horizon, dimmed by the air), as an
-equirectangular (height, width, channels) float32 image times exposure; 0 below
-the horizon. Same units and colour spaces as sky_image.
-)doc");
-
+    register_night_parts(m);
     m.def("sky_image_at", &sky_image_at, py::arg("atmosphere"), py::arg("time"), py::arg("latitude_deg"),
           py::arg("longitude_deg"), py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb",
           py::kw_only(), py::arg("height_m") = 0.0, py::arg("altitude_m") = 0.0, py::arg("discs") = true,
@@ -280,9 +321,8 @@ observer above the ground (as in sky_image); discs=False leaves both discs out
 (when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
 of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
 air towards each, energy-exact (welkin.star_image). night_glow=True adds the
-night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
-Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
-brightening towards the horizon, dimmed by the air).
+night sky's own light: airglow and the zodiacal light along the moment's
+ecliptic, dimmed by the air (welkin.night_glow_image).
 )doc");
 }
 

@@ -96,6 +96,21 @@ SunAndMoon sun_and_moon(const Instant& when, const Place& where);
 std::vector<std::array<double, 3>> apparent_star_directions(const Instant& when, const Place& where,
                                                             std::span<const std::array<double, 3>> icrs);
 
+// The ecliptic as seen from a place at a moment, for the light that lies along it (the
+// zodiacal light, night/night_glow.hpp): the rotation from the local frame (x east,
+// y north, z up) to the geocentric ecliptic and equinox of date (ERFA's eraEcm06: the
+// IAU 2006 ecliptic of date from the GCRS, with the frame bias and precession), and the
+// sun's apparent ecliptic longitude of date. Nutation (< 20") and the aberration of the
+// directions (< 21") are left out of the rotation: the zodiacal light varies over
+// degrees. Throws InvalidArgument from Place::validate.
+struct EclipticFrame {
+    // ecliptic = enu_to_ecliptic * enu (row-major; x towards the equinox, z the north
+    // ecliptic pole).
+    std::array<std::array<double, 3>, 3> enu_to_ecliptic{{{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+    double sun_longitude_deg = 0.0;  // [0, 360)
+};
+EclipticFrame ecliptic_frame(const Instant& when, const Place& where);
+
 // The moon's geocentric apparent right ascension and declination (true equator and
 // equinox of date) and distance: what Meeus' example 47.a tabulates.
 struct GeocentricPosition {
