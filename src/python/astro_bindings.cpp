@@ -24,9 +24,7 @@
 #include "welkin/sky/method.hpp"
 
 namespace welkin::python {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 std::vector<Star> to_stars(const py::array_t<double>& stars) {
     if (stars.ndim() != 2 || stars.shape(1) != 5)
@@ -46,6 +44,29 @@ std::string time_text(const py::object& time) {
     if (py::hasattr(time, "isoformat")) return py::str(time.attr("isoformat")()).cast<std::string>();
     throw InvalidArgument("time", "must be an ISO 8601 string or a timezone-aware datetime");
 }
+
+constexpr const char* kSkyImageAtDoc = R"doc(
+The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
+renders it: the sun's sky and disc at the sun's apparent position, plus the
+moon's light (its sky: the same atmosphere lit by the moon, brightness from
+Allen's magnitude-phase law) and its disc with its phase, energy-exact.
+
+    img = welkin.sky_image_at(atm, "2026-06-21T23:30:00+02:00", 48.8566, 2.3522, 2048)
+
+Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
+time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
+observer above the ground (as in sky_image); discs=False leaves both discs out
+(when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
+of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
+air towards each, energy-exact (welkin.star_image). night_glow=True adds the
+night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
+Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
+brightening towards the horizon, dimmed by the air). clouds: as in sky_image
+(a welkin.CloudLayer or any CloudDensity, default lighting): lit by the sun and
+by the moon (the same march for a "sun" in the moon's direction, times its
+brightness; left out while the sun is up), with the discs, the stars and the
+night glow seen through them, dimmed by their transmittance.
+)doc";
 
 py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, double latitude_deg,
                                 double longitude_deg, int width, const std::string& method,
@@ -279,28 +300,7 @@ the horizon. Same units and colour spaces as sky_image.
           py::kw_only(), py::arg("height_m") = 0.0, py::arg("altitude_m") = 0.0, py::arg("discs") = true,
           py::arg("exposure") = 1.0, py::arg("ground") = true, py::arg("stars") = true,
           py::arg("night_glow") = true, py::arg("progress") = py::none(), py::arg("clouds") = py::none(),
-          R"doc(
-The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
-renders it: the sun's sky and disc at the sun's apparent position, plus the
-moon's light (its sky: the same atmosphere lit by the moon, brightness from
-Allen's magnitude-phase law) and its disc with its phase, energy-exact.
-
-    img = welkin.sky_image_at(atm, "2026-06-21T23:30:00+02:00", 48.8566, 2.3522, 2048)
-
-Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
-time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
-observer above the ground (as in sky_image); discs=False leaves both discs out
-(when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
-of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
-air towards each, energy-exact (welkin.star_image). night_glow=True adds the
-night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
-Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
-brightening towards the horizon, dimmed by the air). clouds: as in sky_image
-(a welkin.CloudLayer or any CloudDensity, default lighting): lit by the sun and
-by the moon (the same march for a "sun" in the moon's direction, times its
-brightness; left out while the sun is up), with the discs, the stars and the
-night glow seen through them, dimmed by their transmittance.
-)doc");
+          kSkyImageAtDoc);
 }
 
 }  // namespace welkin::python

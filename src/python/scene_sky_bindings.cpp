@@ -3,7 +3,9 @@
 // included, as `welkin sky --scene` renders it (sky_image.hpp): the scene's atmosphere, sun,
 // observer at the scene origin, sky method and options, exposure, and its clouds (layers and
 // VDB volumes, lit with clouds.lighting). Thin: converts, releases the GIL, calls the core.
+#include <cmath>
 #include <optional>
+#include <utility>
 
 #include "bindings.hpp"
 #include <fmt/format.h>
@@ -57,10 +59,15 @@ std::optional<Moon> moon_from(const py::object& direction, const py::object& sun
     moon.direction = to_dvec3(direction, "moon_direction");
     if (sun_from_moon.is_none()) throw InvalidArgument("sun_from_moon", "is required with moon_direction");
     moon.sun_from_moon = to_dvec3(sun_from_moon, "sun_from_moon");
+    for (const auto& [v, name] :
+         {std::pair{moon.direction, "moon_direction"}, std::pair{moon.sun_from_moon, "sun_from_moon"}})
+        if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) ||
+            (v.x == 0.0 && v.y == 0.0 && v.z == 0.0))
+            throw InvalidArgument(name, "must be a finite non-zero vector");
     moon.angular_radius_rad = angular_radius_rad;
     moon.irradiance_ratio = irradiance_ratio;
     moon.disc = disc;
-    moon.validate();
+    moon.validate();  // the radius and the ratio, named moon.<field> (as moon_disc_image)
     return moon;
 }
 
@@ -113,12 +120,12 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
 }  // namespace
 
 void register_scene_sky(py::module_& m) {
-    m.def("scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"),
-          py::kw_only(), py::arg("sun_disc") = true, py::arg("output") = "rgb",
-          py::arg("return_transmittance") = false, py::arg("progress") = py::none(),
-          py::arg("ground") = true, py::arg("moon_direction") = py::none(),
-          py::arg("sun_from_moon") = py::none(), py::arg("moon_angular_radius_rad") = Moon{}.angular_radius_rad,
-          py::arg("moon_irradiance_ratio") = 0.0, py::arg("stars") = py::none(), py::arg("night_glow") = false);
+    m.def(
+        "scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"), py::kw_only(),
+        py::arg("sun_disc") = true, py::arg("output") = "rgb", py::arg("return_transmittance") = false,
+        py::arg("progress") = py::none(), py::arg("ground") = true, py::arg("moon_direction") = py::none(),
+        py::arg("sun_from_moon") = py::none(), py::arg("moon_angular_radius_rad") = Moon{}.angular_radius_rad,
+        py::arg("moon_irradiance_ratio") = 0.0, py::arg("stars") = py::none(), py::arg("night_glow") = false);
 }
 
 }  // namespace welkin::python

@@ -126,7 +126,7 @@ TEST(NightClouds, StarsAndGlowBehindACloudAreDimmedByBeerLambert) {
 TEST(NightClouds, MoonDiscBehindACloudIsDimmedByBeerLambert) {
     const Atmosphere atm = Atmosphere::preset("bruneton2017");
     const auto method = make_sky_method("lut");
-    const int width = 256;
+    const int width = 128;
     const Observer o = Observer{0.0, from_elevation_azimuth(-40.0, 0.0)}.validated();
     Moon moon;
     moon.direction = from_elevation_azimuth(70.0, 100.0);
@@ -188,12 +188,13 @@ TEST(NightClouds, CloudsLitByTheMoonAreTheScaledSunlitClouds) {
         for (std::size_t c = 0; c < 3; ++c) {
             const std::size_t k = p * 3 + c;
             const double expected = dark.pixels[k] + moon.irradiance_ratio * lit.pixels[k];
-            max_rel = std::max(max_rel,
-                               std::abs(night.pixels[k] - expected) / std::max(1e-30, std::abs(expected)));
+            max_rel =
+                std::max(max_rel, std::abs(night.pixels[k] - expected) / std::max(1e-30, std::abs(expected)));
             const float t = night.cloud_transmittance[p];
             if (t < 0.5f) {
                 // The cloud's own (moon) light over the moonlit sky dimmed by the cloud.
-                cloud_gain += night.pixels[k] - dark.pixels[k] - moon.irradiance_ratio * t * lit_clear.pixels[k];
+                cloud_gain +=
+                    night.pixels[k] - dark.pixels[k] - moon.irradiance_ratio * t * lit_clear.pixels[k];
                 ++cloudy;
             }
         }

@@ -70,13 +70,26 @@ def test_cli_scene_with_time_is_scene_sky_image_with_the_night(tmp_path):
     path = _scene(tmp_path)
     out = tmp_path / "night.exr"
     lat, lon = PARIS
-    done = _cli("sky", "--scene", path, "--time", FULL_MOON_NIGHT, "--latitude", lat, "--longitude", lon,
-                "--width", "64", "-o", out)
+    done = _cli(
+        "sky",
+        "--scene",
+        path,
+        "--time",
+        FULL_MOON_NIGHT,
+        "--latitude",
+        lat,
+        "--longitude",
+        lon,
+        "--width",
+        "64",
+        "-o",
+        out,
+    )
     assert done.returncode == 0, done.stderr
     cli = _read_rgb(out)
     pt, night = _night_kwargs(FULL_MOON_NIGHT)
     scene = json.loads(path.read_text())
-    scene["sun_direction"] = pt["sun"]["direction"]
+    scene["sun"] = {"direction": pt["sun"]["direction"]}
     text = json.dumps(scene)
     module = welkin.scene_sky_image(text, 64, **night).astype(np.float64)
     assert np.isfinite(cli).all() and (cli >= 0.0).all()
@@ -87,7 +100,7 @@ def test_cli_scene_with_time_is_scene_sky_image_with_the_night(tmp_path):
     assert (module >= dark - 1e-6 * module.max()).all()
     cloudy = t < 0.1
     assert cloudy.sum() > 20 and (t > 0.99).sum() > 20
-    assert module[cloudy].sum() > 3.0 * dark[cloudy].sum()
+    assert module[cloudy].sum() > 100.0 * dark[cloudy].sum()
 
 
 def test_sky_image_at_shows_stars_through_gaps_only():
@@ -100,7 +113,7 @@ def test_sky_image_at_shows_stars_through_gaps_only():
     starlight = (with_stars - without).sum(axis=2)
     clear = welkin.star_image(atm, welkin.stars_at(MOONLESS, *PARIS), 256).astype(np.float64).sum(axis=2)
     scene = {"version": 1, "atmosphere": "bruneton2017", "method": "lut", "clouds": {"layers": [LAYER]}}
-    scene["sun_direction"] = welkin.sun_and_moon(MOONLESS, *PARIS)["sun"]["direction"]
+    scene["sun"] = {"direction": welkin.sun_and_moon(MOONLESS, *PARIS)["sun"]["direction"]}
     _img, t = welkin.scene_sky_image(json.dumps(scene), 256, return_transmittance=True)
     gaps, overcast = (t > 0.99) & (clear > 0.0), (t < 0.01) & (clear > 0.0)
     assert gaps.sum() > 50 and overcast.sum() > 50, (gaps.sum(), overcast.sum())
@@ -117,8 +130,9 @@ def test_sky_image_at_lights_the_clouds_with_the_moon():
     atm = welkin.Atmosphere.preset("bruneton2017")
     layer = welkin.CloudLayer(**LAYER)
     pt = welkin.sun_and_moon(FULL_MOON_NIGHT, *PARIS)
-    img = welkin.sky_image_at(atm, FULL_MOON_NIGHT, *PARIS, 64, clouds=layer, discs=False, stars=False,
-                              night_glow=False).astype(np.float64)
+    img = welkin.sky_image_at(
+        atm, FULL_MOON_NIGHT, *PARIS, 64, clouds=layer, discs=False, stars=False, night_glow=False
+    ).astype(np.float64)
     sun = welkin.sky_image(atm, 0.0, pt["sun"]["direction"], 64, clouds=layer, sun_disc=False)
     moon = welkin.sky_image(atm, 0.0, pt["moon"]["direction"], 64, clouds=layer, sun_disc=False)
     expected = sun.astype(np.float64) + pt["moon"]["irradiance_ratio"] * moon.astype(np.float64)
@@ -130,13 +144,19 @@ def test_scene_sky_image_night_bad_input_names_the_parameter():
     scene = json.dumps({"version": 1, "method": "lut"})
     stars = np.array([[0.0, 0.0, 1.0, 2.0, 0.5]])
     for kwargs, name in [
-        ({"moon_direction": (0.0, 0.0, 0.0), "sun_from_moon": (0, 0, 1), "moon_irradiance_ratio": 1e-6},
-         "moon_direction"),
+        (
+            {"moon_direction": (0.0, 0.0, 0.0), "sun_from_moon": (0, 0, 1), "moon_irradiance_ratio": 1e-6},
+            "moon_direction",
+        ),
         ({"moon_direction": (0.0, 0.0, 1.0), "moon_irradiance_ratio": 1e-6}, "sun_from_moon"),
-        ({"moon_direction": (0, 0, 1), "sun_from_moon": (0, 0, -1), "moon_irradiance_ratio": 1.0},
-         "moon.irradiance_ratio"),
-        ({"moon_direction": (0, 0, 1), "sun_from_moon": (0, 0, -1), "moon_angular_radius_rad": 1.0},
-         "moon.angular_radius_rad"),
+        (
+            {"moon_direction": (0, 0, 1), "sun_from_moon": (0, 0, -1), "moon_irradiance_ratio": 1.0},
+            "moon.irradiance_ratio",
+        ),
+        (
+            {"moon_direction": (0, 0, 1), "sun_from_moon": (0, 0, -1), "moon_angular_radius_rad": 1.0},
+            "moon.angular_radius_rad",
+        ),
         ({"stars": np.zeros((3, 4))}, "stars"),
     ]:
         with pytest.raises(ValueError, match=name.replace(".", r"\.")):
