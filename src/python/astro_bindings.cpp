@@ -24,7 +24,6 @@
 #include "welkin/sky/method.hpp"
 
 namespace welkin::python {
-namespace {}  // namespace
 
 std::vector<Star> to_stars(const py::array_t<double>& stars) {
     if (stars.ndim() != 2 || stars.shape(1) != 5)
