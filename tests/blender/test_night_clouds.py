@@ -1,11 +1,12 @@
 # SPDX-License-Identifier: Apache-2.0
 """The night sky under the world's clouds (Place and Time with a cloud layer): La Palma, 19
-March 2026 00:30 UTC, a moonless night (sun 51 degrees down), under a layer of thick
+March 2026 00:30 UTC, a moonless night (sun 59.5 degrees down), under a layer of thick
 cumulus (1.5 to 2.5 km up, half the sky covered, 0.05 per metre: optical depths in the
 tens). After Update Sky the world's stars (the world with Stars on minus the world with
 Stars off) are, pixel by pixel, welkin.star_image of welkin.stars_at times the clouds'
 transmittance there (welkin.scene_sky_image's, for the world's own cloudy scene): in the
-clear gaps (T > 0.99) as bright as in a clear sky, within 1e-3; behind the thick clouds
+clear gaps (T > 0.99) as bright as in a clear sky, within 1e-3 per pixel (of the star and
+1e-6 of its pixel: float32 rounding) and 1e-4 in total; behind the thick clouds
 (T < 0.01) under 1 % of it. Both kinds of pixel are plentiful (over 30 star pixels each).
 
 Run: bash scripts/test_blender.sh -v 3.4,5.3 tests/blender/test_night_clouds.py
@@ -69,10 +70,17 @@ gaps = (t > 0.99) & (clear > 0.0)
 overcast = (t < 0.01) & (clear > 0.0)
 print(f"star pixels in the gaps: {int(gaps.sum())}, behind thick cloud: {int(overcast.sum())}")
 T.check(gaps.sum() > 30 and overcast.sum() > 30, "the layer leaves too few star pixels of either kind")
-floor = 1e-6 * float(clear.max())
-gap_error = float(np.max(np.abs(starlight[gaps] - clear[gaps] * t[gaps]) / (clear[gaps] + floor)))
-print(f"stars in the gaps vs a clear sky's: max relative difference {gap_error:.3g}")
+# A faint star is a small part of its pixel, so float32 rounding of the world's pixels
+# (its 2^-24 of the pixel, twice) is a larger part of the star: allow 1e-6 of the pixel.
+rounding = 1e-6 * sky.sum(axis=2)
+excess = np.maximum(np.abs(starlight[gaps] - clear[gaps] * t[gaps]) - rounding[gaps], 0.0)
+gap_error = float(np.max(excess / clear[gaps]))
+print(f"stars in the gaps vs a clear sky's: max relative difference {gap_error:.3g} (beyond rounding)")
 T.check(gap_error <= 1e-3, "the stars in the clear gaps are not the clear sky's")
+total = float(starlight[gaps].sum() / (clear[gaps] * t[gaps]).sum())
+print(f"the gaps' starlight / the clear sky's: {total:.6f}")
+T.check(abs(total - 1.0) <= 1e-4, "the starlight in the clear gaps is not the clear sky's")
+floor = 1e-6 * float(clear.max())
 behind = float(np.max(starlight[overcast] / (clear[overcast] + floor)))
 print(f"stars behind thick cloud: at most {behind:.3g} of their clear-sky light")
 T.check(behind <= 0.01, "stars shine through thick clouds")
