@@ -183,7 +183,9 @@ def compute(
     observer, update.cloudy_scene_json); the core then renders the sky with them
     (welkin.scene_sky_image, as `welkin sky --scene`), lit by the same atmosphere, and the
     disc is dimmed by the clouds' transmittance towards the sun's centre (the core dims an
-    HDRI's disc pixel by pixel). `shadow_json`: the clouds that shade the sun lamp,
+    HDRI's disc pixel by pixel). With Place and Time the moon lights the clouds too, and
+    the moonlit sky, the night glow and the stars shine through them (night_under_clouds).
+    `shadow_json`: the clouds that shade the sun lamp,
     in a scene description centred on the scene origin (update.shadow_scene_json): the
     lamp's strength is then times their transmittance towards the sun there (shaded_lamp),
     unless shade_lamp is False; `shadow_map`: callable(shadow_json) -> the ground shadows'
@@ -203,6 +205,7 @@ def compute(
             return_transmittance=True,
             progress=progress,
             ground=request.ground,
+            **night_under_clouds(native, request),
         )
     else:
         sky = native.sky_image(
@@ -260,9 +263,10 @@ def hdri(
     sun_disc is False), for export. `scene_json`: the cloudy sky's scene description (as
     for compute): the HDRI is then the world's cloudy sky, the clouds composited over it
     and the disc dimmed by their transmittance (welkin.scene_sky_image), the sky the world
-    shows; `progress` as for compute. A request with a moon (Place and Time) and no
-    clouds adds the moonlit sky and, with sun_disc, the moon's disc: the image
-    welkin.sky_image_at renders for that moment, in the scene's frame. In linear Rec.709
+    shows; `progress` as for compute. A request with a moon (Place and Time) adds the
+    moonlit sky (and its light on the clouds), the night sky and, with sun_disc, the
+    moon's disc: the image welkin.sky_image_at renders for that moment, in the scene's
+    frame. In linear Rec.709
     whatever the request's colour space: an EXR carries no colour space, and Rec.709 is
     what HDRIs are read as."""
     sky_request.validate(dataclasses.replace(request, width=sky_request.WIDTHS[0]), native)
@@ -274,6 +278,7 @@ def hdri(
             width,
             sun_disc=sun_disc,
             progress=progress,
+            **night_under_clouds(native, request),
         )
         return image
     method = sky_request.resolve_method(request.method, native)
@@ -309,6 +314,25 @@ def hdri(
 MOON_SKY_DEPRESSION_DEG = 20.0  # the core's kMoonSkyDepressionDeg
 
 
+def night_under_clouds(native: Module, request: sky_request.SkyRequest) -> dict[str, Any]:
+    """welkin.scene_sky_image's keyword arguments for the night sky of a request with a
+    moon or a night sky (Place and Time), in the scene's frame: the moon (its sky, its
+    light on the clouds, its disc where the image has discs), the night glow and, with
+    stars, the catalogue's stars; the core composes them under the clouds, each dimmed by
+    the clouds' transmittance towards it. Empty without Place and Time."""
+    kwargs: dict[str, Any] = {}
+    if request.moon_direction and request.sun_from_moon and request.moon_irradiance_ratio > 0.0:
+        kwargs["moon_direction"] = tuple(request.moon_direction)
+        kwargs["sun_from_moon"] = tuple(request.sun_from_moon)
+        kwargs["moon_angular_radius_rad"] = request.moon_angular_radius_rad
+        kwargs["moon_irradiance_ratio"] = request.moon_irradiance_ratio
+    if request.night_sky:
+        kwargs["night_glow"] = True
+        if request.night_sky[5]:
+            kwargs["stars"] = place_time.scene_stars(native, request.night_sky)
+    return kwargs
+
+
 def with_night_sky(
     native: Module,
     request: sky_request.SkyRequest,
@@ -319,8 +343,8 @@ def with_night_sky(
     """`sky` plus the night sky when the request has one (Place and Time), as
     welkin.sky_image_at adds it: the night sky's own glow (welkin.night_glow_image: the
     airglow and the zodiacal light along the moment's ecliptic) and, with stars, the
-    catalogue's stars, both in the scene's frame (welkin.star_image, energy-exact). Not
-    under clouds."""
+    catalogue's stars, both in the scene's frame (welkin.star_image, energy-exact).
+    Under clouds the core adds it instead (night_under_clouds)."""
     if not request.night_sky:
         return sky
     altitude_m, exposure = request.altitude_m, request.exposure

@@ -160,10 +160,15 @@ nlohmann::ordered_json provenance(const SkyArgs& args, const SkySettings& sky, c
 int run_sky(SkyArgs args) {
     // Everything that can be refused is refused before the render starts.
     check_output_path(args.output, args.overwrite);
-    if (!args.scene.empty() && args.place_time.app->get_option("--time")->count() > 0)
-        throw InvalidArgument("--time", "cannot be combined with --scene (the scene places the sun)");
     const std::optional<PlaceTime> place_time = resolve_place_time(args.place_time, args.observer);
-    const SkySettings sky = settings_from(args);
+    SkySettings sky = settings_from(args);
+    if (place_time && !args.scene.empty()) {
+        // The place and the moment place the sun (and the moon) in the scene's frame (+Y
+        // north, +X east), under the scene's clouds.
+        const auto& d = place_time->sky.sun.direction_enu;
+        sky.observer.sun_direction = {d[0], d[1], d[2]};
+        sky.observer = sky.observer.validated();
+    }
     const ColorSpace color_space =
         args.color_space.empty() ? sky.color_space : color_space_from_name(args.color_space);
     Atmosphere atm = sky.atmosphere;
@@ -350,7 +355,9 @@ Command add_sky_command(CLI::App& app) {
                                   "Take the atmosphere, the sun, the observer altitude (the scene "
                                   "origin's), the method, the exposure and the clouds (layers, "
                                   "VDB volumes, their lighting) from a scene JSON (the schema "
-                                  "`welkin aerial` reads); replaces those options")
+                                  "`welkin aerial` reads); replaces those options. With --time the "
+                                  "place and the moment place the sun instead, and the moon lights "
+                                  "the clouds; the stars and the night glow shine through them")
                       ->type_name("FILE.json");
     for (const char* name : {"--preset", "--atmosphere", "--spectral", "--aerosol-optical-depth",
                              "--turbidity", "--sun-elevation", "--sun-azimuth", "--altitude", "--method",

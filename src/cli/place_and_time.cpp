@@ -14,7 +14,8 @@ void add_place_time_options(CLI::App* app, PlaceTimeArgs& args) {
     app->add_option("--time", args.time,
                     "Moment, ISO 8601 with its UTC offset (2026-06-21T21:30:00+02:00 or "
                     "...Z), years 1900-2100: the sun and the moon from --latitude/--longitude "
-                    "then (replaces --sun-elevation/--sun-azimuth; +Y is north, +X east)")
+                    "then (replaces --sun-elevation/--sun-azimuth, or a --scene's sun; +Y is north, +X "
+                    "east)")
         ->type_name("ISO8601");
     app->add_option("--latitude", args.latitude_deg, "Geodetic latitude, degrees north in [-90, 90]")
         ->type_name("DEG");

@@ -161,14 +161,25 @@ SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere
     // The moonlit sky: every method's radiance (and the lit ground's) is linear in the
     // solar irradiance, so the sky for a "sun" in the moon's direction, scaled by the
     // ratio, is the sky lit by the moon (the same cached LUTs; colour conversion linear).
+    // With clouds the same holds for them (their march is linear in the light too): the
+    // moon's image marches them lit from the moon, and the two composites add, the
+    // clouds' transmittance being the same for both lights.
     Observer lit_by_moon = observer;
     lit_by_moon.sun_direction = moon.direction;
     SkyImageOptions moon_options = options;
     moon_options.sun_disc = false;
+    // While the sun is up the moon's light on the clouds is left out (header): its clear sky
+    // is seen through them, times their transmittance, and no second march is made.
+    const bool clouds_by_sunlight = options.clouds && moon_clouds_left_out(observer);
+    if (clouds_by_sunlight) moon_options.clouds = nullptr;
     const SkyImage moonlit =
         render_equirect_sky(method, atm, lit_by_moon.validated(), width, moon_options, progress);
     const float ratio = float(moon.irradiance_ratio);
-    for (std::size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] += ratio * moonlit.pixels[k];
+    if (clouds_by_sunlight) {
+        night::add_under_clouds(image, moonlit.pixels, ratio);
+    } else {
+        for (std::size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] += ratio * moonlit.pixels[k];
+    }
     if (moon.disc) {
         night::add_under_clouds(image, moon_disc_pixels(atm, observer, moon, width, options.output),
                                 options.exposure);

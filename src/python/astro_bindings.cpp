@@ -3,6 +3,7 @@
 // (include/welkin/astro/positions.hpp), as the dict `welkin sun --time` prints under
 // "place_and_time" (one schema: include/welkin/astro/json.hpp).
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -16,6 +17,7 @@
 #include "welkin/astro/time.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
+#include "welkin/clouds/density.hpp"
 #include "welkin/color/color_space.hpp"
 #include "welkin/night/moonlit_sky.hpp"
 #include "welkin/night/night_glow.hpp"
@@ -23,6 +25,17 @@
 #include "welkin/sky/method.hpp"
 
 namespace welkin::python {
+
+std::vector<Star> to_stars(const py::array_t<double>& stars) {
+    if (stars.ndim() != 2 || stars.shape(1) != 5)
+        throw InvalidArgument("stars", "must be an (N, 5) array: x, y, z, V, B-V per star");
+    const auto s = stars.unchecked<2>();
+    std::vector<Star> list(std::size_t(stars.shape(0)));
+    for (py::ssize_t i = 0; i < stars.shape(0); ++i)
+        list[std::size_t(i)] = Star{{s(i, 0), s(i, 1), s(i, 2)}, s(i, 3), s(i, 4)};
+    return list;
+}
+
 namespace {
 
 // A str, or anything with isoformat() (an aware datetime.datetime).
@@ -32,11 +45,33 @@ std::string time_text(const py::object& time) {
     throw InvalidArgument("time", "must be an ISO 8601 string or a timezone-aware datetime");
 }
 
+constexpr const char* kSkyImageAtDoc = R"doc(
+The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
+renders it: the sun's sky and disc at the sun's apparent position, plus the
+moon's light (its sky: the same atmosphere lit by the moon, brightness from
+Allen's magnitude-phase law) and its disc with its phase, energy-exact.
+
+    img = welkin.sky_image_at(atm, "2026-06-21T23:30:00+02:00", 48.8566, 2.3522, 2048)
+
+Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
+time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
+observer above the ground (as in sky_image); discs=False leaves both discs out
+(when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
+of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
+air towards each, energy-exact (welkin.star_image). night_glow=True adds the
+night sky's own light: airglow and the zodiacal light along the moment's
+ecliptic, dimmed by the air (welkin.night_glow_image). clouds: as in sky_image
+(a welkin.CloudLayer or any CloudDensity, default lighting): lit by the sun and
+by the moon (the same march for a "sun" in the moon's direction, times its
+brightness; left out while the sun is up), with the discs, the stars and the
+night glow seen through them, dimmed by their transmittance.
+)doc";
+
 py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, double latitude_deg,
                                 double longitude_deg, int width, const std::string& method,
                                 const std::string& output, double height_m, double altitude_m, bool discs,
                                 double exposure, bool ground, bool stars, bool night_glow,
-                                const py::object& progress) {
+                                const py::object& progress, std::shared_ptr<const CloudDensity> clouds) {
     require_progress_callback(progress);
     const std::string text = time_text(time);
     SkyImageOptions options;
@@ -44,6 +79,7 @@ py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, d
     options.ground = ground;
     options.exposure = exposure;
     options.output = parse_output(output);
+    options.clouds = std::move(clouds);
     const std::unique_ptr<SkyMethod> sky = make_sky_method(method, SkyOptions{});
     const CivilTime civil = parse_iso8601(text, "time");
     const Place place{latitude_deg, longitude_deg, height_m};
@@ -136,12 +172,7 @@ py::array_t<float> star_image(const Atmosphere& atmosphere, const py::array_t<do
                               const std::string& color_space) {
     require_exposure(exposure);
     const ColorSpace space = color_space_from_name(color_space);
-    if (stars.ndim() != 2 || stars.shape(1) != 5)
-        throw InvalidArgument("stars", "must be an (N, 5) array: x, y, z, V, B-V per star");
-    const auto s = stars.unchecked<2>();
-    std::vector<Star> list(std::size_t(stars.shape(0)));
-    for (py::ssize_t i = 0; i < stars.shape(0); ++i)
-        list[std::size_t(i)] = Star{{s(i, 0), s(i, 1), s(i, 2)}, s(i, 3), s(i, 4)};
+    const std::vector<Star> list = to_stars(stars);
     const SkyImageOptions::Output out = parse_output(output);
     std::vector<float> pixels;
     {
@@ -307,23 +338,8 @@ irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
           py::arg("longitude_deg"), py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb",
           py::kw_only(), py::arg("height_m") = 0.0, py::arg("altitude_m") = 0.0, py::arg("discs") = true,
           py::arg("exposure") = 1.0, py::arg("ground") = true, py::arg("stars") = true,
-          py::arg("night_glow") = true, py::arg("progress") = py::none(), R"doc(
-The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
-renders it: the sun's sky and disc at the sun's apparent position, plus the
-moon's light (its sky: the same atmosphere lit by the moon, brightness from
-Allen's magnitude-phase law) and its disc with its phase, energy-exact.
-
-    img = welkin.sky_image_at(atm, "2026-06-21T23:30:00+02:00", 48.8566, 2.3522, 2048)
-
-Same image layout, units, exposure and errors as sky_image (+Y north, +X east).
-time, latitude_deg, longitude_deg, height_m: as in sun_and_moon; altitude_m: the
-observer above the ground (as in sky_image); discs=False leaves both discs out
-(when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
-of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
-air towards each, energy-exact (welkin.star_image). night_glow=True adds the
-night sky's own light: airglow and the zodiacal light along the moment's
-ecliptic, dimmed by the air (welkin.night_glow_image).
-)doc");
+          py::arg("night_glow") = true, py::arg("progress") = py::none(), py::arg("clouds") = py::none(),
+          kSkyImageAtDoc);
 }
 
 }  // namespace welkin::python

@@ -18,6 +18,7 @@
 #include <pybind11/pybind11.h>
 
 #include "welkin/base/progress.hpp"
+#include "welkin/night/stars.hpp"
 #include "welkin/render/sky_image.hpp"
 #include "welkin/scene/scene.hpp"
 
@@ -38,6 +39,10 @@ void register_scene_sky(py::module_& m);
 void register_cloud_passes(py::module_& m);
 void register_cloud_shadow(py::module_& m);
 void register_astro(py::module_& m);
+
+// An (N, 5) array of stars (x, y, z, V, B-V per row, as welkin.stars_at returns them);
+// InvalidArgument naming `stars` for another shape (astro_bindings.cpp).
+std::vector<Star> to_stars(const py::array_t<double>& stars);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
 // is not one.

@@ -3,10 +3,18 @@
 // included, as `welkin sky --scene` renders it (sky_image.hpp): the scene's atmosphere, sun,
 // observer at the scene origin, sky method and options, exposure, and its clouds (layers and
 // VDB volumes, lit with clouds.lighting). Thin: converts, releases the GIL, calls the core.
+#include <cmath>
+#include <optional>
+#include <utility>
+
 #include "bindings.hpp"
 #include <fmt/format.h>
+#include <pybind11/stl.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/night/moonlit_sky.hpp"
+#include "welkin/night/night_glow.hpp"
+#include "welkin/night/stars.hpp"
 #include "welkin/render/sky_image.hpp"
 #include "welkin/scene/scene.hpp"
 
@@ -31,12 +39,48 @@ disc by (for a disc kept in an image of its own). ValueError names the parameter
 scene's key (clouds.volumes[i].file for a bad VDB). Cancellable (progress, Ctrl-C).
 ground: the lit ground below the horizon with the atmosphere's ground_albedo, as
 in sky_image (False: black there).
+
+The night sky of a place and a moment, in the scene's frame (the add-on's Place and
+Time; `welkin sky --scene --time` and sky_image_at compose the same): moon_direction,
+sun_from_moon, moon_angular_radius_rad and moon_irradiance_ratio as in
+moon_disc_image add the moon's light: its sky, and the clouds lit by it as by a "sun"
+in its direction times the ratio (left out while the scene's sun is up), and with
+sun_disc its disc with its phase, dimmed by the clouds' transmittance. stars: an (N, 5)
+array as stars_at returns (directions in the scene's frame), drawn energy-exact and
+dimmed by the air and by the clouds' transmittance; night_glow=True adds the night
+sky's own glow, dimmed the same way.
 )doc";
 
+// The moon of the keyword arguments, or none (no moon_direction).
+std::optional<Moon> moon_from(const py::object& direction, const py::object& sun_from_moon,
+                              double angular_radius_rad, double irradiance_ratio, bool disc) {
+    if (direction.is_none()) return std::nullopt;
+    Moon moon;
+    moon.direction = to_dvec3(direction, "moon_direction");
+    if (sun_from_moon.is_none()) throw InvalidArgument("sun_from_moon", "is required with moon_direction");
+    moon.sun_from_moon = to_dvec3(sun_from_moon, "sun_from_moon");
+    for (const auto& [v, name] :
+         {std::pair{moon.direction, "moon_direction"}, std::pair{moon.sun_from_moon, "sun_from_moon"}})
+        if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) ||
+            (v.x == 0.0 && v.y == 0.0 && v.z == 0.0))
+            throw InvalidArgument(name, "must be a finite non-zero vector");
+    moon.angular_radius_rad = angular_radius_rad;
+    moon.irradiance_ratio = irradiance_ratio;
+    moon.disc = disc;
+    moon.validate();  // the radius and the ratio, named moon.<field> (as moon_disc_image)
+    return moon;
+}
+
 py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc, const std::string& output,
-                           bool return_transmittance, const py::object& progress, bool ground) {
+                           bool return_transmittance, const py::object& progress, bool ground,
+                           const py::object& moon_direction, const py::object& sun_from_moon,
+                           double moon_angular_radius_rad, double moon_irradiance_ratio,
+                           const std::optional<py::array_t<double>>& stars, bool night_glow) {
     SceneDescription scene = to_scene(scene_in);
     require_progress_callback(progress);
+    const std::optional<Moon> moon =
+        moon_from(moon_direction, sun_from_moon, moon_angular_radius_rad, moon_irradiance_ratio, sun_disc);
+    const std::vector<Star> star_list = stars ? to_stars(*stars) : std::vector<Star>{};
     SkyImageOptions options;
     options.sun_disc = sun_disc;
     options.ground = ground && scene.ground;
@@ -54,8 +98,12 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
                 options.air_steps = scene.aerial.raymarch_steps;
             }
             const std::unique_ptr<SkyMethod> method = make_sky_method(scene.method, scene.sky_options);
-            image =
-                render_equirect_sky(*method, scene.atmosphere, scene.origin_observer(), width, options, p);
+            const Observer observer = scene.origin_observer();
+            image = moon ? render_equirect_sky_with_moon(*method, scene.atmosphere, observer, *moon, width,
+                                                         options, p)
+                         : render_equirect_sky(*method, scene.atmosphere, observer, width, options, p);
+            if (night_glow) add_night_glow(image, scene.atmosphere, observer, options);
+            add_stars(image, scene.atmosphere, observer, star_list, options);
         },
         progress);
     const int w = image.width, h = image.height;
@@ -72,10 +120,12 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
 }  // namespace
 
 void register_scene_sky(py::module_& m) {
-    m.def("scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"),
-          py::kw_only(), py::arg("sun_disc") = true, py::arg("output") = "rgb",
-          py::arg("return_transmittance") = false, py::arg("progress") = py::none(),
-          py::arg("ground") = true);
+    m.def(
+        "scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"), py::kw_only(),
+        py::arg("sun_disc") = true, py::arg("output") = "rgb", py::arg("return_transmittance") = false,
+        py::arg("progress") = py::none(), py::arg("ground") = true, py::arg("moon_direction") = py::none(),
+        py::arg("sun_from_moon") = py::none(), py::arg("moon_angular_radius_rad") = Moon{}.angular_radius_rad,
+        py::arg("moon_irradiance_ratio") = 0.0, py::arg("stars") = py::none(), py::arg("night_glow") = false);
 }
 
 }  // namespace welkin::python

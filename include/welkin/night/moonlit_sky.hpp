@@ -21,6 +21,17 @@
 // the observer, E_sun(lambda) x ratio x T(lambda), per wavelength; samples behind the
 // ground are dropped (a setting moon loses that part of its light). With clouds its
 // pixels are dimmed by the clouds' transmittance there, as the sun's are.
+//
+// Clouds (options.clouds). The cloud march and the composite over the sky
+// (render/sky_image.hpp, "Clouds") are linear in the light as well: the clouds'
+// in-scattered radiance L_c and the air's S(0, d_c) scale with the solar irradiance, while
+// their transmittance T_c, depth d_c and the air's T(0, d_c) do not depend on the light.
+// So the clouds lit by the moon are the clouds the same march gives for a "sun" in the
+// moon's direction (its shadow rays, its diffusion along the moon's line) times the
+// ratio, and the two composites add: the moon's image marches them once more, lit from the
+// moon, with the same seeds and upsampling. While the sun is up (moon_clouds_left_out)
+// that second march is skipped: the moon's clear sky is only seen through the clouds,
+// times T_c, as the stars and the night glow are (stars.hpp, night_glow.hpp).
 #pragma once
 
 #include <glm/vec3.hpp>
@@ -52,6 +63,13 @@ Moon moon_at(const SunAndMoon& sky);
 // moon's is that times its irradiance ratio (< 3e-6): under 1e-4 of the glow
 // (tests/cpp/test_moonlight.cpp). It saves a second sky render on most moonless nights.
 inline constexpr double kMoonSkyDepressionDeg = 20.0;
+
+// Whether the moon's light on the clouds is left out for this observer: while the sun's
+// centre is above the horizon. Then the moon's irradiance (at most 3e-6 of the sun's,
+// a full moon at perigee) lights the clouds far less than the sun does even at the
+// horizon, where the air passes a few per cent of it: the moonlit clouds are under 1e-3
+// of the sunlit ones (tests/cpp/test_night_clouds.cpp measures it).
+inline bool moon_clouds_left_out(const Observer& observer) { return observer.sun_direction.z > 0.0; }
 
 // The sun's sky (and disc, per options.sun_disc) plus the moon's sky and disc. Same
 // options, units, exposure and errors as render_equirect_sky.
