@@ -809,13 +809,22 @@ def moon_disc_image(atmosphere: Atmosphere, altitude_m: float, moon_direction: t
     angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
     irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
     """
-def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
+def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709', time: typing.Any = None, latitude_deg: float = 0.0, longitude_deg: float = 0.0, height_m: float = 0.0, north_deg: float = 0.0, airglow: bool = True, zodiacal_light: bool = True) -> numpy.ndarray[numpy.float32]:
     """
-    The night sky's own light alone (airglow, zodiacal light, unresolved stars:
-    Krisciunas & Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith,
-    van Rhijn's brightening towards the horizon, dimmed by the air), as an
+    The night sky's own light alone (include/welkin/night/night_glow.hpp), as an
     equirectangular (height, width, channels) float32 image times exposure; 0 below
-    the horizon. Same units and colour spaces as sky_image.
+    the horizon. Same units and colour spaces as sky_image. Its parts:
+    airglow=True: the upper atmosphere's glow (O I 557.7 nm, Na D, O I 630/636 nm and
+    its continuum) from a layer 97 km up, brightening towards the horizon by van
+    Rhijn's factor; zodiacal_light=True: Leinert et al. 1998's zodiacal light by
+    helioecliptic longitude and ecliptic latitude, the sun's light slightly
+    reddened. Both dimmed by the air towards each direction.
+    
+    time, latitude_deg, longitude_deg, height_m: the moment and place (as in
+    sun_and_moon) that put the ecliptic and the sun in the sky; time=None: the
+    zodiacal light at its darkest (the ecliptic pole's) everywhere. north_deg: the
+    image's frame turned about the vertical as stars_at's directions are turned by
+    a host (x' = cos n x - sin n y, y' = sin n x + cos n y).
     """
 def preetham_turbidity_to_aerosol_optical_depth(turbidity: float) -> float:
     """
@@ -913,9 +922,8 @@ def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, 
     (when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
     of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
     air towards each, energy-exact (welkin.star_image). night_glow=True adds the
-    night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
-    Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
-    brightening towards the horizon, dimmed by the air). clouds: as in sky_image
+    night sky's own light: airglow and the zodiacal light along the moment's
+    ecliptic, dimmed by the air (welkin.night_glow_image). clouds: as in sky_image
     (a welkin.CloudLayer or any CloudDensity, default lighting): lit by the sun and
     by the moon (the same march for a "sun" in the moon's direction, times its
     brightness; left out while the sun is up), with the discs, the stars and the
