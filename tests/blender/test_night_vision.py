@@ -23,12 +23,15 @@ the Render Layers and the output before 5.3; an effect of the user's from 5.3).
     strips the frame passes through values between the two strips' over 3 or more
     columns (none without the blur: the edge is sharp); the photopic strip's last column
     before its edge keeps its own value.
+  * A stock Blender without the add-on renders the saved file (with the user's
+    compositing and the group) to the same frame within 1e-6: the group is stock nodes.
   * The user's nodes and links are unchanged after adding (the link into the output now
     runs through the group), and everything is as before after removing; the same for a
     scene with no compositing at all. The render after removing is the physical one again.
 """
 
 import pathlib
+import subprocess
 import sys
 
 import bpy
@@ -271,7 +274,31 @@ def check_night(img, gain, label):
     at.check(sharp < 1e-4, f"{label}: the photopic strip is blurred at its edge ({sharp:.1e})")
 
 
-def add_remove(scene, label, gain):
+def stock_render(scene, label):
+    """The scene saved, rendered by a stock Blender without the add-on (-f 1)."""
+    blend = at.TMP / f"{label}.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    env, extra = at.command_line_blender(with_addon=False)
+    out = at.TMP / f"{label}_stock_"
+    command = [
+        *at.blender_command(),
+        "-b",
+        "--factory-startup",
+        str(blend),
+        *extra,
+        "-o",
+        f"{out}#",
+        "-f",
+        "1",
+    ]
+    run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=400)
+    log = run.stdout + run.stderr
+    at.check(run.returncode == 0, f"the stock render exited {run.returncode}:\n{log[-3000:]}")
+    at.check(at.NO_WELKIN_SAYS in log, f"the stock Blender's check did not run:\n{log[-2000:]}")
+    return at.read_rgb_exr(module, f"{out}1.exr").astype(np.float64)
+
+
+def add_remove(scene, label, gain, stock=False):
     before = snapshot(scene)
     check_physical(render(scene, f"{label}_before"), gain, f"{label}, before")
     bpy.ops.welkin.add_night_vision(acuity_blur_px=BLUR_PX)
@@ -287,7 +314,13 @@ def add_remove(scene, label, gain):
     if EFFECTS:
         names = [e.name for e in scene.compositor_effects]
         at.check(names[-1] == CREATED, f"{label}: the effects are {names}: night vision must be last")
-    check_night(render(scene, f"{label}_night"), gain, label)
+    night = render(scene, f"{label}_night")
+    check_night(night, gain, label)
+    if stock:
+        other = stock_render(scene, "stock")
+        diff = float(np.abs(other - night).max() / np.abs(night).max())
+        print(f"  {label}: a stock Blender without Welkin renders the same frame within {diff:.1e}")
+        at.check(diff < 1e-6, f"{label}: the stock Blender's frame is {diff:.1e} off")
     bpy.ops.welkin.add_night_vision(acuity_blur_px=BLUR_PX)  # again: nothing more is added
     at.check(snapshot(scene, skip=node_name) == after_add, f"{label}: adding twice changed the compositing")
     bpy.ops.welkin.remove_night_vision()
@@ -305,7 +338,7 @@ def main():
     add_remove(scene, "no compositing", 1.0)
     print("no compositing: the frame as Jensen 2001 maps it, restored exactly")
     user_compositing(scene)
-    add_remove(scene, "user's x2", GAIN)
+    add_remove(scene, "user's x2", GAIN, stock=True)
     print("the user's compositing untouched, restored exactly")
     at.done("test_night_vision")
 
