@@ -5,7 +5,7 @@
 The rendered frame holds physical radiance: a camera's record of the night, in colour.
 The dark-adapted eye sees it otherwise: with its rods, in little colour, a little blue,
 and with less detail. Jensen, Durand, Stark, Premoze, Dorsey and Shirley, "A
-Physically-Based Night Sky Model" (SIGGRAPH 2001), section "Tone mapping", map a
+Physically-Based Night Sky Model" (SIGGRAPH 2001), in their section on tone mapping, map a
 physical image to what the eye sees at night in three steps, which the group applies to
 each pixel of the frame as it reaches the compositor's output (the frame in the render
 layer, the passes and the world keep their physical values):
