@@ -79,7 +79,16 @@ class _Builder:
 
 
 def _build(group, color_space):
-    """The nodes of the group (addon/welkin/night_vision.py, steps 1-3)."""
+    """The nodes of the group, per pixel (addon/welkin/night_vision.py derives and cites
+    them; Jensen et al. 2001's tone-mapping section, V after Ward Larson et al. 1997):
+      (X, Y, Z) = M rgb                      M: the working space to XYZ (D65)
+      L = k Y                                k: the "Luminance Scale" node, cd/m^2 per unit
+      V = max(Y [1.33 (1 + (Y + Z) / X) - 1.68], 0)
+      t = clamp((log10 max(L, 1e-12) + 2) / 2.6, 0, 1),  s = t^2 (3 - 2 t)
+      x' = 0.25 + s (x - 0.25),  y' = 0.25 + s (y - 0.25),  (x, y) = (X, Y) / (X + Y + Z)
+      Y' = s Y + (1 - s) 0.4468 V,  X' = x' Y' / y',  Z' = (1 - x' - y') Y' / y'
+      out = s M^-1 (X', Y', Z') + (1 - s) Gauss_r(M^-1 (X', Y', Z'))
+    with r the "Acuity Blur" node's radius in pixels; the divisions are guarded by 1e-30."""
     m = nv.rgb_to_xyz(color_space)
     m_inv = nv.inverse(m)
     gin = group.nodes.new("NodeGroupInput")
