@@ -25,6 +25,8 @@ the Render Layers and the output before 5.3; an effect of the user's from 5.3).
     before its edge keeps its own value.
   * A stock Blender without the add-on renders the saved file (with the user's
     compositing and the group) to the same frame within 1e-6: the group is stock nodes.
+  * The group's luminance scale is 683 / the sky's Exposure; an output with nothing
+    linked into it is refused with a report saying so, the compositing unchanged.
   * The user's nodes and links are unchanged after adding (the link into the output now
     runs through the group), and everything is as before after removing; the same for a
     scene with no compositing at all. The render after removing is the physical one again.
@@ -333,6 +335,35 @@ def add_remove(scene, label, gain, stock=False):
     check_physical(render(scene, f"{label}_after"), gain, f"{label}, after removing")
 
 
+def settings_and_bad_input(scene):
+    """The group's luminance scale follows the sky's Exposure (683 / exposure); an output
+    with nothing linked into it is refused with a report naming it, nothing changed."""
+    scene.world.welkin.exposure = 4.0
+    bpy.ops.welkin.add_night_vision(acuity_blur_px=BLUR_PX)
+    scale = bpy.data.node_groups["Welkin Night Vision"].nodes["Luminance Scale"].outputs[0].default_value
+    at.check(abs(scale - 683.0 / 4.0) < 1e-4, f"the luminance scale is {scale}, not 683 / 4")
+    bpy.ops.welkin.remove_night_vision()
+    scene.world.welkin.exposure = 1.0
+    if EFFECTS:  # the add-on's own effect always links its input to its output
+        return
+    tree = compat.scene_compositor(scene)
+    target = compat.compositor_output(tree).inputs[0]
+    source = target.links[0].from_socket
+    tree.links.remove(target.links[0])
+    before = snapshot(scene)
+    try:
+        bpy.ops.welkin.add_night_vision(acuity_blur_px=BLUR_PX)
+    except RuntimeError as error:
+        print(f"an output with nothing linked: refused: {error}")
+        at.check("nothing linked" in str(error), f"the report does not say what is wrong: {error}")
+    else:
+        raise AssertionError("an output with nothing linked into it was accepted")
+    after = snapshot(scene)
+    at.check(after == before, f"a refused add changed the compositing:\n{before}\n{after}")
+    at.check("welkin_night_vision_undo" not in scene, "a refused add left its undo record")
+    tree.links.new(source, target)
+
+
 def main():
     scene = build_scene()
     add_remove(scene, "no compositing", 1.0)
@@ -340,6 +371,7 @@ def main():
     user_compositing(scene)
     add_remove(scene, "user's x2", GAIN, stock=True)
     print("the user's compositing untouched, restored exactly")
+    settings_and_bad_input(scene)
     at.done("test_night_vision")
 
 

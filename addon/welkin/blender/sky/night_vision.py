@@ -218,10 +218,9 @@ def add(scene, blur_px=None):
     blur = scene_blur_px(scene) if blur_px is None else float(blur_px)
     if not 0.0 <= blur <= 1000.0:
         raise NightVisionError(f"acuity_blur_px: {blur} is outside [0, 1000] pixels")
-    group = night_group(compat.working_color_space())
-    set_constants(group, scale, blur)
     node = night_node(scene)
     if node is not None:
+        set_constants(night_group(compat.working_color_space()), scale, blur)
         return node
     tree, (kind, value) = compat.ensure_output_compositor(scene, CREATED)
     output = compat.compositor_output(tree)
@@ -232,6 +231,8 @@ def add(scene, blur_px=None):
             "no Composite or Group Output node" if output is None else f"nothing linked into '{output.name}'"
         )
         raise NightVisionError(f"the scene's compositor has {where}: link the frame to its output first")
+    group = night_group(compat.working_color_space())
+    set_constants(group, scale, blur)
     source = target.links[0].from_socket
     node = tree.nodes.new("CompositorNodeGroup")
     node.node_tree = group
