@@ -25,8 +25,10 @@ the Render Layers and the output before 5.3; an effect of the user's from 5.3).
     before its edge keeps its own value.
   * A stock Blender without the add-on renders the saved file (with the user's
     compositing and the group) to the same frame within 1e-6: the group is stock nodes.
-  * The group's luminance scale is 683 / the sky's Exposure; an output with nothing
-    linked into it is refused with a report saying so, the compositing unchanged.
+  * The group's luminance scale is 683 / the sky's Exposure; a group of another version
+    is rebuilt in place (the node keeps its links), a group of the user's with the same
+    name is left alone; an output with nothing linked into it is refused with a report
+    saying so, the compositing unchanged.
   * The user's nodes and links are unchanged after adding (the link into the output now
     runs through the group), and everything is as before after removing; the same for a
     scene with no compositing at all. The render after removing is the physical one again.
@@ -44,6 +46,7 @@ import addon_testing as at  # noqa: E402
 
 addon, module = at.install_addon()
 from welkin.blender import compat  # noqa: E402
+from welkin.blender.sky import night_vision  # noqa: E402
 
 EFFECTS = hasattr(bpy.types, "SceneCompositorEffect")  # Blender 5.3+
 CREATED = "Welkin Night Vision Compositing"  # the add-on's effect (5.3+) or compositing group
@@ -338,11 +341,24 @@ def add_remove(scene, label, gain, stock=False):
 def settings_and_bad_input(scene):
     """The group's luminance scale follows the sky's Exposure (683 / exposure); an output
     with nothing linked into it is refused with a report naming it, nothing changed."""
+    users = bpy.data.node_groups.new("Welkin Night Vision", "CompositorNodeTree")  # the user's
     scene.world.welkin.exposure = 4.0
     bpy.ops.welkin.add_night_vision(acuity_blur_px=BLUR_PX)
-    scale = bpy.data.node_groups["Welkin Night Vision"].nodes["Luminance Scale"].outputs[0].default_value
+    node = night_vision.night_node(scene)
+    scale = node.node_tree.nodes["Luminance Scale"].outputs[0].default_value
     at.check(abs(scale - 683.0 / 4.0) < 1e-4, f"the luminance scale is {scale}, not 683 / 4")
+    at.check(node.node_tree != users and len(users.nodes) == 0, "the user's group of that name was taken")
+    # A group built by another version is rebuilt in place; the node keeps its links.
+    node.node_tree["welkin_night_vision"] = "0/older"
+    bpy.ops.welkin.add_night_vision(acuity_blur_px=BLUR_PX)
+    node = night_vision.night_node(scene)
+    at.check(node.node_tree.get("welkin_night_vision") != "0/older", "the older group was not rebuilt")
+    at.check(
+        bool(node.inputs[0].links) and bool(node.outputs[0].links), "the rebuilt group's node lost its links"
+    )
     bpy.ops.welkin.remove_night_vision()
+    at.check(bpy.data.node_groups.get("Welkin Night Vision") == users, "the user's group of that name went")
+    bpy.data.node_groups.remove(users)
     scene.world.welkin.exposure = 1.0
     if EFFECTS:  # the add-on's own effect always links its input to its output
         return

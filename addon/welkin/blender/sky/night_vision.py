@@ -142,21 +142,28 @@ def _build(group, color_space):
     group.links.new(out, gout.inputs["Image"])
 
 
+def _our_group():
+    """The file's group of ours (marked; a group of the user's that has the name is not it)."""
+    return next(
+        (g for g in bpy.data.node_groups if g.bl_idname == "CompositorNodeTree" and g.get(MARK)), None
+    )
+
+
 def night_group(color_space):
     """The group "Welkin Night Vision" for the working space `color_space`, built if
-    missing or built for another space or version (rebuilt in place: its users keep it)."""
+    missing, its nodes rebuilt if built for another space or version (its interface, one
+    Image in and out, is kept, so the node using it keeps its links)."""
     key = f"{BUILT}/{color_space}"
-    group = bpy.data.node_groups.get(GROUP)
+    group = _our_group()
     if group is not None and group.get(MARK) == key:
         return group
     if group is None:
         group = bpy.data.node_groups.new(GROUP, "CompositorNodeTree")
+        compat.new_group_socket(group, "Image", "INPUT", "NodeSocketColor")
+        compat.new_group_socket(group, "Image", "OUTPUT", "NodeSocketColor")
     else:
         group.nodes.clear()
-        compat.clear_group_sockets(group)
     group[MARK] = key
-    compat.new_group_socket(group, "Image", "INPUT", "NodeSocketColor")
-    compat.new_group_socket(group, "Image", "OUTPUT", "NodeSocketColor")
     _build(group, color_space)
     return group
 
@@ -265,8 +272,8 @@ def remove(scene):
         compat.restore_scene_compositor(scene, kind, value, CREATED)
         del scene[UNDO]
         found = True
-    group = bpy.data.node_groups.get(GROUP)
-    if group is not None and group.get(MARK) and group.users == 0:
+    group = _our_group()
+    if group is not None and group.users == 0:
         bpy.data.node_groups.remove(group)
     return found
 
