@@ -502,25 +502,27 @@ def compositor_value(tree, value):
 
 
 def set_gaussian_blur(node, radius_px):
-    """A compositor Blur node as a Gaussian of `radius_px` pixels in x and y. Before 5.0:
+    """A compositor Blur node as a Gaussian of `radius_px` pixels in x and y. 3.4-4.4:
     filter_type 'GAUSS', size_x/size_y (whole pixels) times the Size input (a factor,
-    left at 1); 5.0+: the Type menu input 'Gaussian' and the Size input (a 2D vector of
-    pixels)."""
+    left at 1); 4.5: filter_type 'GAUSS' and the Size input, now a 2D vector of pixels;
+    5.0+: the Type menu input 'Gaussian' and the Size input (pixels)."""
+    size = node.inputs["Size"]
     if "Type" in node.inputs:
         node.inputs["Type"].default_value = "Gaussian"
-        node.inputs["Size"].default_value = (radius_px, radius_px)
+    else:
+        node.filter_type = "GAUSS"
+    if size.type == "VECTOR":
+        size.default_value = (radius_px, radius_px)
         return
-    node.filter_type = "GAUSS"
     node.use_relative = False
     node.size_x = node.size_y = int(round(radius_px))
-    node.inputs["Size"].default_value = 1.0
+    size.default_value = 1.0
 
 
 def gaussian_blur_radius(node):
     """The radius in pixels set_gaussian_blur gave `node`."""
-    if "Type" in node.inputs:
-        return float(node.inputs["Size"].default_value[0])
-    return float(node.size_x)
+    size = node.inputs["Size"]
+    return float(size.default_value[0]) if size.type == "VECTOR" else float(node.size_x)
 
 
 def ensure_output_compositor(scene, name):
