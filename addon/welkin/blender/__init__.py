@@ -9,7 +9,8 @@
              operators.py (welkin.update_sky, remove_sky, export_hdri), panel.py,
              background.py (a cloudy sky for the live UI, on a thread beside it),
              place_time.py (World.welkin_place_time: sun and moon lamps from a date, a
-             time and a place; its sub-panel)
+             time and a place; its sub-panel), night_vision.py (the compositor group for
+             the eye's night vision, welkin.add_night_vision / remove_night_vision)
   clouds/    properties.py (World.welkin_clouds, Object.welkin_cloud), scene.py (the scene
              JSON's "clouds" section), shadows.py (Ground Shadows), operators.py, panel.py
   aerial/    aerial perspective per render (Scene.welkin_aerial): properties.py, panel.py,
@@ -32,7 +33,7 @@ from .clouds import operators as cloud_operators
 from .clouds import panel as cloud_panel
 from .clouds import properties as cloud_properties
 from .engine import render_engine
-from .sky import operators, panel, place_time, properties
+from .sky import night_vision, operators, panel, place_time, properties
 
 classes = (
     properties.WelkinWorldSettings,
@@ -40,6 +41,7 @@ classes = (
     operators.WELKIN_OT_remove_sky,
     operators.WELKIN_OT_export_hdri,
     panel.WORLD_PT_welkin_sky,
+    *night_vision.classes,
     *cloud_operators.classes,
     *cloud_panel.classes,
     render_engine.WelkinRenderEngine,

@@ -479,3 +479,61 @@ def animates_nothing(anim_data):
         for bag in strip.channelbags
         if slot is None or bag.slot == slot
     )
+
+
+# --- Compositor nodes of any version (blender/sky/night_vision.py) ------------------------------
+
+
+def compositor_math(tree, operation):
+    """A Math node in a compositing tree, unclamped: CompositorNodeMath before 5.0, the
+    shared ShaderNodeMath from 5.0 (the compositor's own is gone). Inputs 0-2, output 0."""
+    node = tree.nodes.new("ShaderNodeMath" if at_least(5, 0) else "CompositorNodeMath")
+    node.operation = operation
+    node.use_clamp = False
+    return node
+
+
+def compositor_value(tree, value):
+    """A Value node holding `value` in a compositing tree: CompositorNodeValue before 5.0,
+    ShaderNodeValue from 5.0."""
+    node = tree.nodes.new("ShaderNodeValue" if at_least(5, 0) else "CompositorNodeValue")
+    node.outputs[0].default_value = value
+    return node
+
+
+def set_gaussian_blur(node, radius_px):
+    """A compositor Blur node as a Gaussian of `radius_px` pixels in x and y. 3.4-4.4:
+    filter_type 'GAUSS', size_x/size_y (whole pixels) times the Size input (a factor,
+    left at 1); 4.5: filter_type 'GAUSS' and the Size input, now a 2D vector of pixels;
+    5.0+: the Type menu input 'Gaussian' and the Size input (pixels)."""
+    size = node.inputs["Size"]
+    if "Type" in node.inputs:
+        node.inputs["Type"].default_value = "Gaussian"
+    else:
+        node.filter_type = "GAUSS"
+    if size.type == "VECTOR":
+        size.default_value = (radius_px, radius_px)
+        return
+    node.use_relative = False
+    node.size_x = node.size_y = int(round(radius_px))
+    size.default_value = 1.0
+
+
+def gaussian_blur_radius(node):
+    """The radius in pixels set_gaussian_blur gave `node`."""
+    size = node.inputs["Size"]
+    return float(size.default_value[0]) if size.type == "VECTOR" else float(node.size_x)
+
+
+def ensure_output_compositor(scene, name):
+    """The compositing tree whose output is the frame Blender writes, made if missing,
+    for an add-on that works on the frame as it leaves the compositor: (tree, undo) as
+    ensure_scene_compositor. Before 5.3 the scene's compositor (ensure_scene_compositor);
+    from 5.3 the add-on's own effect `name`, last in the stack (fed the frame of the
+    user's effects), so that the user's effects are never edited."""
+    if not hasattr(scene, "compositor_effects"):
+        return ensure_scene_compositor(scene, name)
+    effect = _own_effect(scene, name)
+    if effect is not None:
+        return effect.node_group, ("kept", None)
+    return _add_effect(scene, name)

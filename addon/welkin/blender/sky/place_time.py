@@ -280,6 +280,11 @@ class WORLD_PT_welkin_place_time(bpy.types.Panel):
         col.prop(s, "height_m")
         col.prop(s, "north_deg")
         col.prop(s, "stars")
+        # Displaying night: the eye's night vision in the compositor (blender/sky/night_vision.py).
+        row = layout.row(align=True)
+        row.active = True
+        row.operator("welkin.add_night_vision", icon="HIDE_OFF")
+        row.operator("welkin.remove_night_vision", icon="X", text="")
         if not s.enabled:
             return
         try:
