@@ -99,8 +99,8 @@ TEST(ProceduralClouds, DeterministicAndSeeded) {
     EXPECT_GT(differ, 40);
 }
 
-// Coverage is the share of the ground's area whose vertical column reaches optical depth
-// kCoverageOpticalDepth (procedural.hpp). Measured here on columns of its own (random
+// Coverage with coverage_measure area is the share of the ground's area whose vertical
+// column reaches optical depth kCoverageOpticalDepth (procedural.hpp). Measured here on columns of its own (random
 // points over a square of 300 km, far from the calibration's), with a finer quadrature
 // through sigma_t itself on the curved shell: within 0.1 of the setting for every type.
 TEST(ProceduralClouds, CoverageIsTheShareOfTheAreaUnderCloud) {
@@ -108,6 +108,7 @@ TEST(ProceduralClouds, CoverageIsTheShareOfTheAreaUnderCloud) {
         for (const double coverage : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9}) {
             CloudLayerParams p = CloudLayerParams::preset(cloud_type_from_name(name));
             p.coverage = coverage;
+            p.coverage_measure = CloudCoverageMeasure::area;
             const ProceduralClouds layer(p);
             const double R = p.planet_radius_m;
             std::mt19937_64 gen(11);
@@ -218,6 +219,7 @@ TEST(ProceduralClouds, WindShiftsTheField) {
 // detail tiles (the only periodic lookups in height) brings it back to float rounding.
 TEST(ProceduralClouds, EvolutionReshapesInPlaceAndCycles) {
     CloudLayerParams p;  // cumulus: base 5000 m, detail 700 m tiles
+    p.coverage_measure = CloudCoverageMeasure::area;  // the coverage checked below
     const ProceduralClouds still(p);
     p.evolution_m = 300.0;
     const ProceduralClouds moved(p);
