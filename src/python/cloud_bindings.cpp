@@ -211,7 +211,9 @@ parameter.
         .def_property_readonly("coverage", [](const ProceduralClouds& c) { return c.params().coverage; })
         .def_property_readonly(
             "coverage_measure",
-            [](const ProceduralClouds& c) { return std::string(coverage_measure_name(c.params().coverage_measure)); },
+            [](const ProceduralClouds& c) {
+                return std::string(coverage_measure_name(c.params().coverage_measure));
+            },
             "What coverage measures: \"dome\" (the sky a ground observer sees covered, oktas / 8) or "
             "\"area\" (the ground's area under cloud).")
         .def_property_readonly("seed", [](const ProceduralClouds& c) { return c.params().seed; });

@@ -100,9 +100,10 @@ TEST(ProceduralClouds, DeterministicAndSeeded) {
 }
 
 // Coverage with coverage_measure area is the share of the ground's area whose vertical
-// column reaches optical depth kCoverageOpticalDepth (procedural.hpp). Measured here on columns of its own (random
-// points over a square of 300 km, far from the calibration's), with a finer quadrature
-// through sigma_t itself on the curved shell: within 0.1 of the setting for every type.
+// column reaches optical depth kCoverageOpticalDepth (procedural.hpp). Measured here on
+// columns of its own (random points over a square of 300 km, far from the calibration's),
+// with a finer quadrature through sigma_t itself on the curved shell: within 0.1 of the
+// setting for every type.
 TEST(ProceduralClouds, CoverageIsTheShareOfTheAreaUnderCloud) {
     for (const auto name : kCloudTypeNames) {
         for (const double coverage : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9}) {
@@ -218,8 +219,9 @@ TEST(ProceduralClouds, WindShiftsTheField) {
 // a shift: the coverage stays the setting's), and the least common multiple of the base and
 // detail tiles (the only periodic lookups in height) brings it back to float rounding.
 TEST(ProceduralClouds, EvolutionReshapesInPlaceAndCycles) {
-    CloudLayerParams p;  // cumulus: base 5000 m, detail 700 m tiles
-    p.coverage_measure = CloudCoverageMeasure::area;  // the coverage checked below
+    // Cumulus (base 5000 m, detail 700 m tiles), its coverage the area share checked below.
+    CloudLayerParams p;
+    p.coverage_measure = CloudCoverageMeasure::area;
     const ProceduralClouds still(p);
     p.evolution_m = 300.0;
     const ProceduralClouds moved(p);
