@@ -55,6 +55,7 @@ CloudLayerParams tile_params() {
     p.detail_scale_m = 500.0;
     p.weather_scale_m = 2000.0;
     p.coverage = 0.8;
+    p.coverage_measure = CloudCoverageMeasure::area;  // the share of cloudy points below assumes it
     p.density_per_m = 0.02;
     return p;
 }
@@ -244,6 +245,7 @@ TEST(ProceduralClouds, EvolutionReshapesInPlaceAndCycles) {
 
 TEST(ProceduralClouds, CoverageDoesNotDependOnTheWind) {
     CloudLayerParams p = tile_params();
+    p.coverage_measure = CloudCoverageMeasure::dome;  // the default's calibration (observers in the field)
     p.seed = 9103;  // a layer no other test builds: its calibration is made here
     p.wind_offset_m = {3000.0, -1700.0};
     const ProceduralClouds windy(p);

@@ -199,7 +199,8 @@ TEST(WindOffset, IsBoundedAndTheLayerKeepsItsCloudsAtTheBound) {
         EXPECT_EQ(test::parameter_of([&] { p.validate(); }), "wind_offset_m[0]") << w;
     }
     const auto cloudy_share = [](glm::dvec2 wind) {
-        CloudLayerParams p;  // cumulus, coverage 0.4
+        CloudLayerParams p;  // cumulus, coverage 0.4 of the area (the shares below assume it)
+        p.coverage_measure = CloudCoverageMeasure::area;
         p.wind_offset_m = wind;
         const ProceduralClouds layer(p);
         std::mt19937_64 gen(3);
