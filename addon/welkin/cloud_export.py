@@ -28,8 +28,11 @@ from typing import Any
 
 # The layer fields of the schema, with the core's defaults (clouds/procedural.hpp,
 # CloudLayerParams); planet radius and origin altitude come from the scene.
-# cloud_type is a preset name (CLOUD_TYPES); the others are numbers.
+# cloud_type is a preset name (CLOUD_TYPES), coverage_measure what coverage measures
+# (COVERAGE_MEASURES: the sky dome a ground observer sees covered, oktas / 8, or the ground's
+# area under cloud); the others are numbers.
 CLOUD_TYPES = ("cumulus", "stratocumulus", "altocumulus", "stratus", "cirrus")
+COVERAGE_MEASURES = ("dome", "area")
 # The most cloud layers a scene holds (the core's SceneClouds::kMaxLayers, scene/clouds.hpp).
 MAX_LAYERS = 32
 LAYER_FIELDS = (
@@ -37,6 +40,7 @@ LAYER_FIELDS = (
     "bottom_altitude_m",
     "top_altitude_m",
     "coverage",
+    "coverage_measure",
     "density_per_m",
     "base_scale_m",
     "detail_scale_m",
@@ -120,12 +124,15 @@ def volume_file(
 
 def layer_dict(values: Mapping[str, Any], seed: int, wind_offset_m: Sequence[float]) -> dict[str, Any]:
     """One procedural layer: `values` maps LAYER_FIELDS to numbers (cloud_type to one of
-    CLOUD_TYPES, any case). ValueError naming the field for a number that is not finite
-    (JSON has no NaN or infinity; the core checks every range)."""
-    d: dict[str, Any] = {k: float(values[k]) for k in LAYER_FIELDS if k != "cloud_type"}
+    CLOUD_TYPES, coverage_measure to one of COVERAGE_MEASURES, any case; a missing
+    coverage_measure is the core's default, "dome"). ValueError naming the field for a number
+    that is not finite (JSON has no NaN or infinity; the core checks every range and name)."""
+    names = ("cloud_type", "coverage_measure")
+    d: dict[str, Any] = {k: float(values[k]) for k in LAYER_FIELDS if k not in names}
     d["cloud_type"] = str(values["cloud_type"]).lower()
+    d["coverage_measure"] = str(values.get("coverage_measure", "dome")).lower()
     d["wind_offset_m"] = [float(wind_offset_m[0]), float(wind_offset_m[1])]
-    named = [(k, v) for k, v in d.items() if k != "cloud_type" and k != "wind_offset_m"]
+    named = [(k, v) for k, v in d.items() if k not in names and k != "wind_offset_m"]
     named += [(f"wind_offset_m[{i}]", v) for i, v in enumerate(d["wind_offset_m"])]
     for name, v in named:
         if not math.isfinite(v):

@@ -235,6 +235,13 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     for (int j = 0; j < qc; ++j)
         for (int i = 0; i < qc; ++i)
             for (int c = 0; c < 2; ++c) curl_.at(i, j, 0)[c] = nc.at(i, j, 0)[c];
+    for (int j = 0; j < q; ++j)
+        for (int i = 0; i < q; ++i)
+            for (int c = 0; c < 4; ++c) weather_mean_[c] += weather_.at(i, j, 0)[c] / (double(q) * q);
+    for (int k = 0; k < n; ++k)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                for (int c = 0; c < 2; ++c) base_mean_[c] += base_.at(i, j, k)[c] / (double(n) * n * n);
     inv_weather_ = 1.0 / p_.weather_scale_m;
     inv_base_ = 1.0 / p_.base_scale_m;
     inv_detail_ = 1.0 / p_.detail_scale_m;
@@ -396,7 +403,7 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     const double x = p.x - p_.wind_offset_m.x, y = p.y - p_.wind_offset_m.y;
 
     float w[4];
-    weather_.sample(x * inv_weather_, y * inv_weather_, 0.0, w);
+    weather_at(x * inv_weather_, y * inv_weather_, w);
     const double c = clamp01d(k * (1.0 + p_.weather_variation * (2.0 * w[0] - 1.0)));
     if (c <= 0.0) return 0.0;
     // Towers: the local top, lower where the weather map's g is low.
@@ -412,7 +419,7 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
     const double zb = (h - p_.bottom_altitude_m + p_.evolution_m) * inv_base_;
     float b[2];  // the Perlin-Worley channel and fbm_w = 0.625 g + 0.25 b + 0.125 a
-    base_.sample(along * inv_base_ / sq, across * inv_base_ * sq, zb, b);
+    base_at(along * inv_base_ / sq, across * inv_base_ * sq, zb, b);
     const double fbm_w = b[1];
     const double base = clamp01d(remap(b[0], -(1.0 - fbm_w), 1.0, 0.0, 1.0)) * g;
     const double covered = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
@@ -437,6 +444,34 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     // where it is high and clear where it is low, not only at the edges.
     const double strands = clamp01d(remap(fbm_d, 0.4, 0.65, 0.0, 1.0));
     return eroded * (1.0 - shape.fibres * p_.detail_strength * (1.0 - strands));
+}
+
+// Hex-tiled reads (noise.hpp, hex_taps), the lattice half a texture period apart: every
+// channel is the texture's mean plus the weighted deviations of the taps, times the taps'
+// contrast factor, clamped to the channel's range [0, 1]. The offsets move in the plane
+// only: the base shape still repeats through the height (evolution_m cycles).
+void ProceduralClouds::weather_at(double u, double v, float* w) const {
+    HexTaps taps;
+    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + 0x57ea7e5, taps);
+    double acc[4] = {};
+    for (int t = 0; t < taps.count; ++t) {
+        float r[4];
+        weather_.sample(u + taps.du[t], v + taps.dv[t], 0.0, r);
+        for (int c = 0; c < 4; ++c) acc[c] += taps.weight[t] * (r[c] - weather_mean_[c]);
+    }
+    for (int c = 0; c < 4; ++c) w[c] = float(clamp01d(weather_mean_[c] + taps.contrast * acc[c]));
+}
+
+void ProceduralClouds::base_at(double u, double v, double z, float* b) const {
+    HexTaps taps;
+    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + 0xba5e, taps);
+    double acc[2] = {};
+    for (int t = 0; t < taps.count; ++t) {
+        float r[2];
+        base_.sample(u + taps.du[t], v + taps.dv[t], z, r);
+        for (int c = 0; c < 2; ++c) acc[c] += taps.weight[t] * (r[c] - base_mean_[c]);
+    }
+    for (int c = 0; c < 2; ++c) b[c] = float(clamp01d(base_mean_[c] + taps.contrast * acc[c]));
 }
 
 // The shell between the bottom and top spheres, the ray stopped by the ground: the part of

@@ -139,10 +139,10 @@ Perlin-Worley base shape, Worley erosion with curl distortion, a height gradient
 cloud type, wind). cloud_type is a preset name: "cumulus" (the default), "stratocumulus",
 "altocumulus", "stratus" or "cirrus"; every other parameter left as None takes the
 preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
-the ground; coverage the share of the ground's area under cloud (a column is cloudy when
-its vertical optical depth reaches 0.3), or with coverage_measure="dome" the share of the
-sky dome a ground observer sees covered (oktas / 8: directions above 5 degrees whose slant
-optical depth reaches 0.3); density_per_m the extinction of the densest
+the ground; coverage the share of the sky dome a ground observer sees covered (oktas / 8:
+directions above 5 degrees whose slant optical depth reaches 0.3), or with
+coverage_measure="area" the share of the ground's area under cloud (a column is cloudy
+when its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
 cloud (m^-1); wind_offset_m carries the field (x, y in m) and evolution_m moves its noise
 through the layer's height (m): keyed over time the shapes change in place;
 origin_altitude_m the world origin's (observer's) altitude. ValueError names a bad
@@ -186,7 +186,7 @@ parameter.
              }),
              py::kw_only(), py::arg("cloud_type") = "cumulus", py::arg("bottom_altitude_m") = py::none(),
              py::arg("top_altitude_m") = py::none(), py::arg("coverage") = py::none(),
-             py::arg("coverage_measure") = "area", py::arg("density_per_m") = py::none(),
+             py::arg("coverage_measure") = "dome", py::arg("density_per_m") = py::none(),
              py::arg("base_scale_m") = py::none(), py::arg("detail_scale_m") = py::none(),
              py::arg("weather_scale_m") = py::none(), py::arg("detail_strength") = py::none(),
              py::arg("weather_variation") = py::none(), py::arg("wind_offset_m") = py::make_tuple(0.0, 0.0),
@@ -209,6 +209,13 @@ parameter.
         .def_property_readonly("top_altitude_m",
                                [](const ProceduralClouds& c) { return c.params().top_altitude_m; })
         .def_property_readonly("coverage", [](const ProceduralClouds& c) { return c.params().coverage; })
+        .def_property_readonly(
+            "coverage_measure",
+            [](const ProceduralClouds& c) {
+                return std::string(coverage_measure_name(c.params().coverage_measure));
+            },
+            "What coverage measures: \"dome\" (the sky a ground observer sees covered, oktas / 8) or "
+            "\"area\" (the ground's area under cloud).")
         .def_property_readonly("seed", [](const ProceduralClouds& c) { return c.params().seed; });
 
     m.def(

@@ -434,16 +434,16 @@ class CloudLayer(CloudDensity):
     cloud type, wind). cloud_type is a preset name: "cumulus" (the default), "stratocumulus",
     "altocumulus", "stratus" or "cirrus"; every other parameter left as None takes the
     preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
-    the ground; coverage the share of the ground's area under cloud (a column is cloudy when
-    its vertical optical depth reaches 0.3), or with coverage_measure="dome" the share of the
-    sky dome a ground observer sees covered (oktas / 8: directions above 5 degrees whose slant
-    optical depth reaches 0.3); density_per_m the extinction of the densest
+    the ground; coverage the share of the sky dome a ground observer sees covered (oktas / 8:
+    directions above 5 degrees whose slant optical depth reaches 0.3), or with
+    coverage_measure="area" the share of the ground's area under cloud (a column is cloudy
+    when its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
     cloud (m^-1); wind_offset_m carries the field (x, y in m) and evolution_m moves its noise
     through the layer's height (m): keyed over time the shapes change in place;
     origin_altitude_m the world origin's (observer's) altitude. ValueError names a bad
     parameter.
     """
-    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, coverage_measure: str = 'area', density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
+    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, coverage_measure: str = 'dome', density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
         ...
     def covered_fraction(self, columns: int = 2048) -> float:
         """
@@ -462,6 +462,11 @@ class CloudLayer(CloudDensity):
     @property
     def coverage(self) -> float:
         ...
+    @property
+    def coverage_measure(self) -> str:
+        """
+        What coverage measures: "dome" (the sky a ground observer sees covered, oktas / 8) or "area" (the ground's area under cloud).
+        """
     @property
     def seed(self) -> int:
         ...

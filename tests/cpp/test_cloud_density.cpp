@@ -55,6 +55,7 @@ CloudLayerParams tile_params() {
     p.detail_scale_m = 500.0;
     p.weather_scale_m = 2000.0;
     p.coverage = 0.8;
+    p.coverage_measure = CloudCoverageMeasure::area;  // the share of cloudy points below assumes it
     p.density_per_m = 0.02;
     return p;
 }
@@ -99,15 +100,17 @@ TEST(ProceduralClouds, DeterministicAndSeeded) {
     EXPECT_GT(differ, 40);
 }
 
-// Coverage is the share of the ground's area whose vertical column reaches optical depth
-// kCoverageOpticalDepth (procedural.hpp). Measured here on columns of its own (random
-// points over a square of 300 km, far from the calibration's), with a finer quadrature
-// through sigma_t itself on the curved shell: within 0.1 of the setting for every type.
+// Coverage with coverage_measure area is the share of the ground's area whose vertical
+// column reaches optical depth kCoverageOpticalDepth (procedural.hpp). Measured here on
+// columns of its own (random points over a square of 300 km, far from the calibration's),
+// with a finer quadrature through sigma_t itself on the curved shell: within 0.1 of the
+// setting for every type.
 TEST(ProceduralClouds, CoverageIsTheShareOfTheAreaUnderCloud) {
     for (const auto name : kCloudTypeNames) {
         for (const double coverage : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9}) {
             CloudLayerParams p = CloudLayerParams::preset(cloud_type_from_name(name));
             p.coverage = coverage;
+            p.coverage_measure = CloudCoverageMeasure::area;
             const ProceduralClouds layer(p);
             const double R = p.planet_radius_m;
             std::mt19937_64 gen(11);
@@ -217,7 +220,9 @@ TEST(ProceduralClouds, WindShiftsTheField) {
 // a shift: the coverage stays the setting's), and the least common multiple of the base and
 // detail tiles (the only periodic lookups in height) brings it back to float rounding.
 TEST(ProceduralClouds, EvolutionReshapesInPlaceAndCycles) {
-    CloudLayerParams p;  // cumulus: base 5000 m, detail 700 m tiles
+    // Cumulus (base 5000 m, detail 700 m tiles), its coverage the area share checked below.
+    CloudLayerParams p;
+    p.coverage_measure = CloudCoverageMeasure::area;
     const ProceduralClouds still(p);
     p.evolution_m = 300.0;
     const ProceduralClouds moved(p);
@@ -240,6 +245,7 @@ TEST(ProceduralClouds, EvolutionReshapesInPlaceAndCycles) {
 
 TEST(ProceduralClouds, CoverageDoesNotDependOnTheWind) {
     CloudLayerParams p = tile_params();
+    p.coverage_measure = CloudCoverageMeasure::dome;  // the default's calibration (observers in the field)
     p.seed = 9103;  // a layer no other test builds: its calibration is made here
     p.wind_offset_m = {3000.0, -1700.0};
     const ProceduralClouds windy(p);

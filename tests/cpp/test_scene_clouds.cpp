@@ -151,6 +151,9 @@ TEST(SceneClouds, DefaultsAreTheCoresAndAreAllWritten) {
     const CloudLightingOptions lo;
     const SceneClouds& c = *s.clouds;
     EXPECT_EQ(c.layers[0].coverage, d.coverage);
+    // Coverage is the sky seen covered (oktas / 8) unless the scene asks for the area share.
+    EXPECT_EQ(c.layers[0].coverage_measure, CloudCoverageMeasure::dome);
+    EXPECT_EQ(d.coverage_measure, CloudCoverageMeasure::dome);
     EXPECT_EQ(c.layers[0].density_per_m, d.density_per_m);
     EXPECT_EQ(c.volumes[0].options.grid, "density");
     EXPECT_EQ(c.volumes[0].options.negative, VdbCloudOptions::Negative::Clamp);

@@ -88,14 +88,14 @@ def test_cloud_types_are_presets_and_bad_names_list_them():
 
 
 def test_cloud_layer_coverage_is_measured():
-    layer = welkin.CloudLayer(coverage=0.3)
+    layer = welkin.CloudLayer(coverage=0.3, coverage_measure="area")
     assert abs(layer.covered_fraction() - 0.3) < 0.02
 
 
 def test_cloud_layer_dome_coverage_is_the_sky_seen_covered():
-    # coverage_measure="dome": the share of the sky dome a ground observer sees covered
-    # (oktas / 8), measured on other observers and directions than the calibration's.
-    layer = welkin.CloudLayer(cloud_type="altocumulus", coverage=0.5, coverage_measure="dome")
+    # coverage_measure="dome", the default: the share of the sky dome a ground observer sees
+    # covered (oktas / 8), measured on other observers and directions than the calibration's.
+    layer = welkin.CloudLayer(cloud_type="altocumulus", coverage=0.5)
     assert abs(layer.dome_fraction(observers=16, directions=256) - 0.5) < 0.05
     # Seen from the ground the layer's sides fill the gaps: less area than dome covered.
     assert layer.covered_fraction() < 0.45
@@ -106,9 +106,11 @@ def test_cloud_layer_dome_coverage_is_the_sky_seen_covered():
     with pytest.raises(ValueError, match="coverage_measure.*oktas"):
         welkin.CloudLayer(coverage_measure="oktas")
     scene = welkin.SceneDescription.from_json_string(
-        '{"version": 1, "clouds": {"layers": [{"cloud_type": "cirrus", "coverage_measure": "dome"}]}}'
+        '{"version": 1, "clouds": {"layers": [{"cloud_type": "cirrus", "coverage_measure": "area"}]}}'
     )
-    assert '"coverage_measure": "dome"' in scene.to_json_string()
+    assert '"coverage_measure": "area"' in scene.to_json_string()
+    scene = welkin.SceneDescription.from_json_string('{"version": 1, "clouds": {"layers": [{}]}}')
+    assert '"coverage_measure": "dome"' in scene.to_json_string()  # the default, written out
     with pytest.raises(ValueError, match=r"clouds\.layers\[0\]\.coverage_measure"):
         welkin.SceneDescription.from_json_string(
             '{"version": 1, "clouds": {"layers": [{"coverage_measure": "sky"}]}}'

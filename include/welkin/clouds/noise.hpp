@@ -112,6 +112,78 @@ private:
     std::vector<float> texels_;
 };
 
+// Aperiodic lookups of a periodic texture by hex tiling (Heitz & Neyret 2018, "High-performance
+// by-example noise using a histogram-preserving blending operator", Proc. ACM CGIT 1(2);
+// Mikkelsen 2022, "Practical real-time hex-tiling", JCGT 11(2)). The texture plane is covered by
+// a triangular lattice of vertices `cell` texture units apart; each vertex reads the texture
+// shifted by an offset of its own (a hash of the vertex and the seed, uniform over one period),
+// and a point blends the reads of its triangle's three vertices, each weighted by its
+// barycentric coordinate (a tent over the vertex's hexagon, zero on the far edge: the blend is
+// continuous) raised to kHexSharpness, normalised, less kHexCutoff (a weight that reaches 0
+// continuously, so that half the plane needs one read and most of the rest two: 1.6 reads on
+// average, 8 % of the plane three), renormalised.
+// With cell <= 1/2 two points a whole period apart never share a vertex, so they read unrelated
+// parts of the texture: the field no longer repeats at the texture's period or its multiples
+// (a wrapped texture alone repeats, and seen over tens of periods from above the repetition
+// reads as ribbing). The blend keeps the texture's contrast (Heitz & Neyret, sec. 3.2, the
+// variance-preserving blend): mean + sum_i w_i (read_i - mean) / sqrt(sum_i w_i^2).
+struct HexTaps {
+    static constexpr double kHexSharpness = 3.0, kHexCutoff = 0.1;
+    int count = 0;
+    double du[3] = {}, dv[3] = {};  // the reads' offsets, texture units
+    double weight[3] = {};          // sharpened, cut off, summing to 1
+    double contrast = 1.0;          // 1 / sqrt(sum weight^2): the variance-preserving factor
+};
+// The taps at texture coordinates (u, v): lattice spacing `cell` (texture units), offsets from
+// `seed`.
+inline void hex_taps(double u, double v, double cell, std::uint64_t seed, HexTaps& taps) {
+    // Skewed coordinates (a, b) of the point on the lattice basis (cell, 0), (cell/2, cell sqrt(3)/2).
+    constexpr double kInvSin60 = 1.1547005383792515;  // 2 / sqrt(3)
+    const double b = v / cell * kInvSin60, a = u / cell - 0.5 * b;
+    const double fa = std::floor(a), fb = std::floor(b);
+    const double ta = a - fa, tb = b - fb;
+    const std::int64_t i = std::int64_t(fa), j = std::int64_t(fb);
+    std::int64_t vi[3], vj[3];
+    double w[3];
+    if (ta + tb < 1.0) {  // the lower triangle (i, j), (i + 1, j), (i, j + 1)
+        vi[0] = i, vj[0] = j, w[0] = 1.0 - ta - tb;
+        vi[1] = i + 1, vj[1] = j, w[1] = ta;
+        vi[2] = i, vj[2] = j + 1, w[2] = tb;
+    } else {  // the upper one (i + 1, j + 1), (i, j + 1), (i + 1, j)
+        vi[0] = i + 1, vj[0] = j + 1, w[0] = ta + tb - 1.0;
+        vi[1] = i, vj[1] = j + 1, w[1] = 1.0 - ta;
+        vi[2] = i + 1, vj[2] = j, w[2] = 1.0 - tb;
+    }
+    double sum = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        w[k] = w[k] * w[k] * w[k];  // kHexSharpness
+        sum += w[k];
+    }
+    taps.count = 0;
+    double kept = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        w[k] = w[k] / sum - HexTaps::kHexCutoff;  // the largest is at least 1/3: one is kept
+        if (w[k] <= 0.0) continue;
+        // splitmix64's finaliser (base/rng.hpp's splitmix64_mix) of the vertex and the seed.
+        std::uint64_t h = seed + 0x9e3779b97f4a7c15ULL * std::uint64_t(vi[k]) +
+                          0xc2b2ae3d27d4eb4fULL * std::uint64_t(vj[k]);
+        h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ULL;
+        h = (h ^ (h >> 27)) * 0x94d049bb133111ebULL;
+        h ^= h >> 31;
+        taps.du[taps.count] = double(h >> 40) / double(1 << 24);
+        taps.dv[taps.count] = double((h >> 16) & 0xffffff) / double(1 << 24);
+        taps.weight[taps.count] = w[k];
+        kept += w[k];
+        ++taps.count;
+    }
+    double sq = 0.0;
+    for (int k = 0; k < taps.count; ++k) {
+        taps.weight[k] /= kept;
+        sq += taps.weight[k] * taps.weight[k];
+    }
+    taps.contrast = 1.0 / std::sqrt(sq);
+}
+
 // Schneider's two textures and a weather texture, baked for one seed.
 struct CloudNoiseTextures {
     // base: r = Perlin-Worley, g, b, a = Worley at 4, 8, 16 cells per period (size^3).

@@ -11,7 +11,8 @@
 // type (CloudType), whose preset (CloudLayerParams::preset) gives altitudes, scales and
 // density typical of it, and whose shape constants (below) give its height profile.
 // At a point p with altitude h and height fraction f = (h - bottom) / (top - bottom):
-//   weather map (2D, tiling every weather_scale_m), w the weather texture (Perlin fBm):
+//   weather map (2D, a texture of period weather_scale_m read hex-tiled, below), w the weather
+//       texture (Perlin fBm):
 //       local coverage c = clamp(k (1 + weather_variation (2 w_r - 1)), 0, 1), k the
 //       internal coverage (below); the local top fraction f_top = 1 - towers (1 - w_g)
 //       (cumulus: tall towers where w_g is high, low mounds elsewhere);
@@ -20,9 +21,12 @@
 //   base shape (3D, tile base_scale_m, read at the height h - bottom + evolution_m,
 //       stretched by the type's `stretch` along a direction 30 degrees off the x axis): base = remap(pw, -(1
 //       - fbm_w), 1, 0, 1), pw the Perlin-Worley channel and fbm_w its Worley octaves, read at a point
-//       displaced by a low-frequency domain warp (the weather map's b, a channels, half a base tile at most),
-//       which breaks the base texture's repetition (seen over tens of tiles towards the horizon, a periodic
-//       texture shows as streaks running to a vanishing point);
+//       displaced by a low-frequency domain warp (the weather map's b, a channels, half a base tile at most);
+//   no tiling: the weather map and the base shape are read hex-tiled (noise.hpp, hex_taps: each
+//       vertex of a triangular lattice half a period apart reads the texture at an offset of its
+//       own, blended keeping the contrast), so neither repeats at its period: read as they are,
+//       over tens of periods from above and towards the horizon, the periods show as a diagonal
+//       ribbing (docs/validation.md, "Tiling"; tests/python/test_cloud_tiling.py);
 //   coverage: covered = clamp(remap(base G, 1 - c, 1, 0, 1)) c (Schneider's remap by coverage);
 //   erosion (3D, tile detail_scale_m, read at the same height, its lookup displaced by the
 //       curl noise, Nubis's "curl distortion", stronger at the bottom): the detail Worley fBm, inverted
@@ -38,16 +42,16 @@
 // majorant is density_per_m on the shell.
 //
 // Coverage means coverage, in one of two measures (coverage_measure):
-//  * area (the default): the share of the ground's area over which the layer's vertical
-//    column is cloudy, a column being cloudy when its vertical optical depth is at least
-//    kCoverageOpticalDepth (about a quarter of the light stopped);
-//  * dome: the share of the sky dome a ground observer sees covered, the WMO's cloud
-//    amount (oktas / 8; WMO International Cloud Atlas, "Cloud amount", and the Guide to
+//  * dome (the default): the share of the sky dome a ground observer sees covered, the WMO's
+//    cloud amount (oktas / 8; WMO International Cloud Atlas, "Cloud amount", and the Guide to
 //    Instruments and Methods of Observation, WMO-No. 8, vol. I, ch. 15): the solid-angle
 //    weighted share of the directions more than kDomeMinElevationDeg above the horizon
 //    whose slant optical depth through the layer reaches kCoverageOpticalDepth. Seen from
 //    the ground a layer looks more covered than its area share, the clouds' sides filling
-//    the gaps at slant angles (docs/validation.md, "Coverage and cloud types").
+//    the gaps at slant angles (docs/validation.md, "Coverage and cloud types");
+//  * area: the share of the ground's area over which the layer's vertical column is
+//    cloudy, a column being cloudy when its vertical optical depth is at least
+//    kCoverageOpticalDepth (about a quarter of the light stopped).
 // The internal coverage k above is found at construction by bisection so that the
 // measured share equals `coverage` (the share grows with k: the density grows with k at
 // every point, so the bisection converges): for the area, over kCoverageColumns columns on
@@ -101,7 +105,7 @@ struct CloudLayerParams {
     double bottom_altitude_m = 1200.0;  // [0, 20000), below top
     double top_altitude_m = 3200.0;     // (bottom, 20000]
     double coverage = 0.4;              // [0, 1]: share of the area or the dome under cloud (header)
-    CloudCoverageMeasure coverage_measure = CloudCoverageMeasure::area;  // what coverage measures
+    CloudCoverageMeasure coverage_measure = CloudCoverageMeasure::dome;  // what coverage measures
     double density_per_m = 0.04;         // sigma_t of the densest cloud, m^-1, [0, 10]
     double base_scale_m = 5000.0;        // tile of the base shape, [10, 1e6] m
     double detail_scale_m = 700.0;       // tile of the erosion noise, [1, 1e6] m
@@ -168,6 +172,11 @@ private:
     PeriodicTexture<4> weather_;
     PeriodicTexture<1> detail_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
+    // The weather map and the base shape read aperiodically (noise.hpp, hex_taps), about the
+    // channels' means over their textures.
+    void weather_at(double u, double v, float* w) const;
+    void base_at(double u, double v, double z, float* b) const;
+    double weather_mean_[4] = {}, base_mean_[2] = {};
 };
 
 }  // namespace welkin

@@ -45,6 +45,7 @@ class WORLD_PT_welkin_clouds(bpy.types.Panel):
             sub.prop(layer, "bottom_altitude_m")
             sub.prop(layer, "top_altitude_m")
             col.prop(layer, "coverage")
+            col.prop(layer, "coverage_measure")
             col.prop(layer, "density_per_m")
             sub = col.column(align=True)
             sub.prop(layer, "base_scale_m")

@@ -59,8 +59,30 @@ class WelkinCloudLayer(bpy.types.PropertyGroup):
         min=0.0,
         max=1.0,
         update=_changed,
-        description="Share of the ground's area under cloud (a column is cloudy when its "
-        "vertical optical depth reaches 0.3)",
+        description="Share of the sky a ground observer sees covered (oktas / 8), or of the "
+        "ground's area under cloud: see Coverage Measure",
+    )
+    coverage_measure: bpy.props.EnumProperty(
+        name="Coverage Measure",
+        default="dome",
+        update=_changed,
+        items=[
+            (
+                "dome",
+                "Sky Seen Covered (Oktas)",
+                "Coverage is the share of the sky dome a ground observer sees covered, the "
+                "weather report's cloud amount (oktas / 8): directions above 5 degrees whose "
+                "slant optical depth reaches 0.3",
+            ),
+            (
+                "area",
+                "Ground Area Under Cloud",
+                "Coverage is the share of the ground's area under cloud (a column is cloudy "
+                "when its vertical optical depth reaches 0.3); seen from the ground the same "
+                "layer covers more of the sky, its clouds' sides filling the gaps",
+            ),
+        ],
+        description="What Coverage measures",
     )
     cloud_type: bpy.props.EnumProperty(
         name="Type",
