@@ -180,7 +180,8 @@ public:
         // The cloud's depth away from the sun along the sun line through x: the slab's
         // thickness (diffusion), or the octaves' optical size f = 1 - exp(-tau_line),
         // octave i weighted by f^i (see the header).
-        const double tau_anti = sized_ ? depth_along(grids_.anti, cur.anti, lv.anti, x, -s_, steps, cur) : 0.0;
+        const double tau_anti =
+            sized_ ? depth_along(grids_.anti, cur.anti, lv.anti, x, -s_, steps, cur) : 0.0;
         double sun_w = 0.0;
         if (diffusion_) {
             // Single scattering plus the forward-scattered and diffuse parts.

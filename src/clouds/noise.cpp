@@ -57,9 +57,10 @@ public:
             for (int dj = -1; dj <= 1; ++dj)
                 for (int di = -1; di <= 1; ++di) {
                     const int i = ci + di, j = cj + dj, k = ck + dk;
-                    const double* q = &p_[((std::size_t(wrap_index(k, f)) * f + std::size_t(wrap_index(j, f))) * f +
-                                           std::size_t(wrap_index(i, f))) *
-                                          3];
+                    const double* q =
+                        &p_[((std::size_t(wrap_index(k, f)) * f + std::size_t(wrap_index(j, f))) * f +
+                             std::size_t(wrap_index(i, f))) *
+                            3];
                     const double fx = i + q[0] - px;
                     const double fy = j + q[1] - py;
                     const double fz = k + q[2] - pz;
@@ -89,10 +90,9 @@ public:
         double corner[8];
         for (int c = 0; c < 8; ++c) {
             const int di = c & 1, dj = (c >> 1) & 1, dk = (c >> 2) & 1;
-            const int* g = kGradients[g_[(std::size_t(wrap_index(ck + dk, f)) * f +
-                                          std::size_t(wrap_index(cj + dj, f))) *
-                                             f +
-                                         std::size_t(wrap_index(ci + di, f))]];
+            const int* g = kGradients
+                [g_[(std::size_t(wrap_index(ck + dk, f)) * f + std::size_t(wrap_index(cj + dj, f))) * f +
+                    std::size_t(wrap_index(ci + di, f))]];
             corner[c] = g[0] * (tx - di) + g[1] * (ty - dj) + g[2] * (tz - dk);
         }
         return interpolate(corner, tx, ty, tz);
@@ -215,8 +215,9 @@ CloudNoiseTextures CloudNoiseTextures::bake(std::uint64_t seed, int base_size, i
                         const double x = (i + 0.5) / nb, y = (j + 0.5) / nb, z = (k + 0.5) / nb;
                         const double worley = shape(x, y, z);
                         const double perlin = perlin_fbm(x, y, z);
-                        t.base.at(i, j, k) = glm::vec4(float(worley + perlin * (1.0 - worley)),
-                                                       float(w4(x, y, z)), float(w8(x, y, z)), float(w16(x, y, z)));
+                        t.base.at(i, j, k) =
+                            glm::vec4(float(worley + perlin * (1.0 - worley)), float(w4(x, y, z)),
+                                      float(w8(x, y, z)), float(w16(x, y, z)));
                     }
         });
     }
