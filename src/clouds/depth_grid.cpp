@@ -9,6 +9,7 @@
 #include <tbb/concurrent_unordered_map.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/base/rng.hpp"
 
 namespace welkin {
 
@@ -45,8 +46,16 @@ struct OpticalDepthGrid::Tile {
     }
 };
 
+// The tile key's bits hashed (splitmix64's finaliser): std::hash of an integer is the
+// integer itself, and the map's buckets are the low bits of the hash, here the tile's z
+// coordinate, which takes a handful of values over a cloud layer (a shell a few tiles
+// thick): every tile of a layer would share a few buckets, and a lookup would walk them.
+struct TileKeyHash {
+    std::size_t operator()(std::uint64_t key) const { return std::size_t(splitmix64_mix(key)); }
+};
+
 struct OpticalDepthGrid::Map {
-    tbb::concurrent_unordered_map<std::uint64_t, std::unique_ptr<Tile>> tiles;
+    tbb::concurrent_unordered_map<std::uint64_t, std::unique_ptr<Tile>, TileKeyHash> tiles;
 };
 
 OpticalDepthGrid::OpticalDepthGrid(const CloudDensity& density, Direction direction, double base_spacing_m,

@@ -63,6 +63,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 namespace {
 
 constexpr int kSideLevels = 3;  // the side grids' levels above the sun grid's
+constexpr int kAntiLevels = 1;  // the anti-sun grid's levels above the sun grid's
 
 // The input checks of a march: one origin or one per direction, finite; max_distances
 // empty or one non-negative length per direction.
@@ -103,9 +104,9 @@ public:
         std::vector<MajorantSegment> light_segs;  // a shadow march's segments (no grid)
         OpticalDepthGrid::Cursor sun, sky, anti, side, back;
     };
-    // The grid levels a sample reads (the sun's and its other half's, the sides').
+    // The grid levels a sample reads (the sun's, its other half's, the sides').
     struct Levels {
-        int sun = 0, side = 0;
+        int sun = 0, anti = 0, side = 0;
     };
     // The phase values of one ray's direction: nu = d . s is the same at every sample.
     struct RayPhase {
@@ -148,12 +149,16 @@ public:
 
     const OpticalDepthGrid* sun_grid() const { return grids_.sun.get(); }
 
-    // The levels for a footprint of `width` metres: no finer than it; the sides' grid
-    // kSideLevels coarser (the chord is a large-scale quantity: it sets the leak, not the
-    // shading's detail).
+    // The levels for a footprint of `width` metres: no finer than it; the anti-sun grid
+    // kAntiLevels coarser and the sides' grid kSideLevels coarser: the depth away from the
+    // sun sets the slab's thickness (diffusion) or the octaves' optical size, and the chord
+    // across the sun line the leak, large-scale quantities of the diffuse light, which
+    // diffusion smooths over a transport mean free path; the depth towards the sun, the
+    // single scattering's shadow, is the shading's detail.
     Levels levels_for(double width) const {
         Levels lv;
         lv.sun = grids_.sun ? grids_.sun->level_for(width) : 0;
+        lv.anti = std::min(lv.sun + kAntiLevels, OpticalDepthGrid::kMaxLevels - 1);
         lv.side = std::min(lv.sun + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
         return lv;
     }
@@ -175,7 +180,8 @@ public:
         // The cloud's depth away from the sun along the sun line through x: the slab's
         // thickness (diffusion), or the octaves' optical size f = 1 - exp(-tau_line),
         // octave i weighted by f^i (see the header).
-        const double tau_anti = sized_ ? depth_along(grids_.anti, cur.anti, lv.sun, x, -s_, steps, cur) : 0.0;
+        const double tau_anti =
+            sized_ ? depth_along(grids_.anti, cur.anti, lv.anti, x, -s_, steps, cur) : 0.0;
         double sun_w = 0.0;
         if (diffusion_) {
             // Single scattering plus the forward-scattered and diffuse parts.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Cloud density sources: the procedural layer (determinism, tiling, bounds, majorants) and
 // OpenVDB volumes (sampling, transforms, empty-space skipping, and every bad input).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -76,6 +77,43 @@ TEST(CloudNoise, TileableAndDeterministic) {
         EXPECT_GE(w, 0.0);
         EXPECT_LE(w, 1.0);
     }
+}
+
+// The bake hashes each lattice once and reads the table; every texel must be the same bits
+// as the header's formulas evaluated from the per-point functions (which hash per cell).
+TEST(CloudNoise, BakeEqualsThePerPointFunctions) {
+    const std::uint64_t seed = 5;
+    const int n = 8;
+    const CloudNoiseTextures t = CloudNoiseTextures::bake(seed, n, n, n, n);
+    const auto worley_fbm = [&](double x, double y, double z, int f0, std::uint64_t s) {
+        return 0.625 * tileable_worley(x, y, z, f0, s) + 0.25 * tileable_worley(x, y, z, 2 * f0, s + 1) +
+               0.125 * tileable_worley(x, y, z, 4 * f0, s + 2);
+    };
+    const auto perlin_fbm = [&](double x, double y, double z, int f0, std::uint64_t s) {
+        double sum = 0.0, amp = 0.5, norm = 0.0;
+        for (int o = 0; o < 3; ++o, amp *= 0.5) {
+            sum += amp * tileable_perlin(x, y, z, f0 << o, s + std::uint64_t(o));
+            norm += amp;
+        }
+        return std::clamp(0.5 + 0.5 * sum / norm * 1.4, 0.0, 1.0);
+    };
+    for (int k = 0; k < n; ++k)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const double x = (i + 0.5) / n, y = (j + 0.5) / n, z = (k + 0.5) / n;
+                const double w = worley_fbm(x, y, z, 4, seed * 16 + 1);
+                const double p = perlin_fbm(x, y, z, 4, seed * 16 + 5);
+                const glm::vec4 b = t.base.at(i, j, k), d = t.detail.at(i, j, k);
+                EXPECT_EQ(b.r, float(w + p * (1.0 - w)));
+                EXPECT_EQ(b.g, float(worley_fbm(x, y, z, 4, seed * 16 + 8)));
+                EXPECT_EQ(b.a, float(worley_fbm(x, y, z, 16, seed * 16 + 14)));
+                EXPECT_EQ(d.r, float(worley_fbm(x, y, z, 4, seed * 16 + 3)));
+                EXPECT_EQ(d.b, float(worley_fbm(x, y, z, 16, seed * 16 + 9)));
+                if (k == 0) {
+                    EXPECT_EQ(t.weather.at(i, j, 0).r, float(perlin_fbm(x, y, 0.5 / n, 2, seed * 16 + 20)));
+                    EXPECT_EQ(t.weather.at(i, j, 0).a, float(perlin_fbm(x, y, 0.5 / n, 4, seed * 16 + 32)));
+                }
+            }
 }
 
 TEST(ProceduralClouds, DeterministicAndSeeded) {
