@@ -230,6 +230,34 @@ py::array_t<float> night_glow_image(const Atmosphere& atmosphere, int width, con
     return to_image_array(std::move(pixels), width, width / 2, channels);
 }
 
+// The moon's disc as a formula, for hosts that draw it (the add-on's world nodes).
+void register_moon_disc(py::module_& m) {
+    m.def("moon_disc", &moon_disc_py, py::arg("atmosphere"), py::arg("altitude_m"), py::arg("moon_direction"),
+          py::arg("sun_from_moon"), py::arg("angular_radius_rad"), py::arg("irradiance_ratio"), py::kw_only(),
+          py::arg("exposure") = 1.0, py::arg("color_space") = "rec709", R"doc(
+The moon's disc as a formula of the view direction, for a host that draws it
+itself (include/welkin/night/moonlit_sky.hpp, MoonDiscModel): where the view v is
+above the horizon its radiance is
+    radiance_scale_rgb x moon_disc_relative_radiance(v, ...)
+(Lommel-Seeliger seen from afar, zero on the night side: the phase), and its
+integral over the disc is the moon's irradiance through the air (the sun's at
+1 au x irradiance_ratio x the transmittance towards the moon, times exposure),
+as the disc of sky_image_at and moon_disc_image. Returns a dict:
+radiance_scale (per wavelength) and radiance_scale_rgb (linear RGB of
+color_space, the sun's conversion), W m^-2 sr^-1 (nm^-1) per unit relative
+radiance; relative_integral_sr (the disc's integral of the relative radiance:
+sin^2(radius) pi/2 Phi(phase), Lommel-Seeliger's phase function); phase_angle_rad;
+color_space. Arguments as moon_disc_image's.
+)doc");
+    m.def("moon_disc_relative_radiance", &moon_disc_relative_radiance_py, py::arg("views"),
+          py::arg("moon_direction"), py::arg("sun_from_moon"), py::arg("angular_radius_rad"), R"doc(
+The disc's relative radiance (include/welkin/astro/moonlight.hpp,
+moon_disc_relative_radiance_far) for an (N, 3) array of view directions
+(normalised here): mu0 / (mu0 + mu) on the lit, visible disc, 0 elsewhere; times
+moon_disc's radiance_scale_rgb it is the disc's radiance.
+)doc");
+}
+
 }  // namespace
 
 void register_astro(py::module_& m) {
@@ -291,30 +319,7 @@ angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
 irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
 )doc");
 
-    m.def("moon_disc", &moon_disc_py, py::arg("atmosphere"), py::arg("altitude_m"), py::arg("moon_direction"),
-          py::arg("sun_from_moon"), py::arg("angular_radius_rad"), py::arg("irradiance_ratio"), py::kw_only(),
-          py::arg("exposure") = 1.0, py::arg("color_space") = "rec709", R"doc(
-The moon's disc as a formula of the view direction, for a host that draws it
-itself (include/welkin/night/moonlit_sky.hpp, MoonDiscModel): where the view v is
-above the horizon its radiance is
-    radiance_scale_rgb x moon_disc_relative_radiance(v, ...)
-(Lommel-Seeliger seen from afar, zero on the night side: the phase), and its
-integral over the disc is the moon's irradiance through the air (the sun's at
-1 au x irradiance_ratio x the transmittance towards the moon, times exposure),
-as the disc of sky_image_at and moon_disc_image. Returns a dict:
-radiance_scale (per wavelength) and radiance_scale_rgb (linear RGB of
-color_space, the sun's conversion), W m^-2 sr^-1 (nm^-1) per unit relative
-radiance; relative_integral_sr (the disc's integral of the relative radiance:
-sin^2(radius) pi/2 Phi(phase), Lommel-Seeliger's phase function); phase_angle_rad;
-color_space. Arguments as moon_disc_image's.
-)doc");
-    m.def("moon_disc_relative_radiance", &moon_disc_relative_radiance_py, py::arg("views"),
-          py::arg("moon_direction"), py::arg("sun_from_moon"), py::arg("angular_radius_rad"), R"doc(
-The disc's relative radiance (include/welkin/astro/moonlight.hpp,
-moon_disc_relative_radiance_far) for an (N, 3) array of view directions
-(normalised here): mu0 / (mu0 + mu) on the lit, visible disc, 0 elsewhere; times
-moon_disc's radiance_scale_rgb it is the disc's radiance.
-)doc");
+    register_moon_disc(m);
     m.def("star_catalogue", &star_catalogue, R"doc(
 The compiled-in star catalogue, brightest first: an (N, 6) float64 array of ICRS
 right ascension and declination (degrees, epoch J1991.25), proper motion

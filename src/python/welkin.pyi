@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy
 import os
 import typing
-__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc_image', 'night_glow_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'reflectance_to_rgb', 'rgb_to_reflectance', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'star_catalogue', 'star_image', 'stars_at', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
+__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc', 'moon_disc_image', 'moon_disc_relative_radiance', 'night_glow_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'reflectance_to_rgb', 'rgb_to_reflectance', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'star_catalogue', 'star_image', 'stars_at', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
 class DensityLayer:
     """
     One layer of a density profile (Bruneton 2017's DensityProfileLayer):
@@ -794,6 +794,22 @@ def methods() -> list[str]:
     a multiple-scattering term), "reference" (Monte-Carlo path tracing, all orders),
     then "auto" (the cheapest of the first three that meets a tolerance).
     """
+def moon_disc(atmosphere: Atmosphere, altitude_m: float, moon_direction: typing.Any, sun_from_moon: typing.Any, angular_radius_rad: float, irradiance_ratio: float, *, exposure: float = 1.0, color_space: str = 'rec709') -> dict:
+    """
+    The moon's disc as a formula of the view direction, for a host that draws it
+    itself (include/welkin/night/moonlit_sky.hpp, MoonDiscModel): where the view v is
+    above the horizon its radiance is
+        radiance_scale_rgb x moon_disc_relative_radiance(v, ...)
+    (Lommel-Seeliger seen from afar, zero on the night side: the phase), and its
+    integral over the disc is the moon's irradiance through the air (the sun's at
+    1 au x irradiance_ratio x the transmittance towards the moon, times exposure),
+    as the disc of sky_image_at and moon_disc_image. Returns a dict:
+    radiance_scale (per wavelength) and radiance_scale_rgb (linear RGB of
+    color_space, the sun's conversion), W m^-2 sr^-1 (nm^-1) per unit relative
+    radiance; relative_integral_sr (the disc's integral of the relative radiance:
+    sin^2(radius) pi/2 Phi(phase), Lommel-Seeliger's phase function); phase_angle_rad;
+    color_space. Arguments as moon_disc_image's.
+    """
 def moon_disc_image(atmosphere: Atmosphere, altitude_m: float, moon_direction: typing.Any, sun_from_moon: typing.Any, angular_radius_rad: float, irradiance_ratio: float, width: int, output: str = 'rgb', *, exposure: float = 1.0) -> numpy.ndarray[numpy.float32]:
     """
     The moon's disc alone, as the equirectangular image sky_image_at adds for it
@@ -808,6 +824,13 @@ def moon_disc_image(atmosphere: Atmosphere, altitude_m: float, moon_direction: t
                                    sun_and_moon's moon (turned alike)
     angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
     irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
+    """
+def moon_disc_relative_radiance(views: numpy.ndarray[numpy.float64], moon_direction: typing.Any, sun_from_moon: typing.Any, angular_radius_rad: float) -> numpy.ndarray[numpy.float64]:
+    """
+    The disc's relative radiance (include/welkin/astro/moonlight.hpp,
+    moon_disc_relative_radiance_far) for an (N, 3) array of view directions
+    (normalised here): mu0 / (mu0 + mu) on the lit, visible disc, 0 elsewhere; times
+    moon_disc's radiance_scale_rgb it is the disc's radiance.
     """
 def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
     """
