@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <functional>
 #include <vector>
 
@@ -24,5 +25,18 @@ inline double median_s(int repeats, const std::function<void()>& f) {
 
 // The same in milliseconds.
 inline double median_ms(int repeats, const std::function<void()>& f) { return 1e3 * median_s(repeats, f); }
+
+// Median CPU time of the process (all threads: std::clock) over `repeats` (>= 1) calls of
+// f, in seconds: what a loaded, shared machine disturbs less than the wall clock.
+inline double median_cpu_s(int repeats, const std::function<void()>& f) {
+    std::vector<double> t;
+    for (int i = 0; i < repeats; ++i) {
+        const std::clock_t a = std::clock();
+        f();
+        t.push_back(double(std::clock() - a) / CLOCKS_PER_SEC);
+    }
+    std::sort(t.begin(), t.end());
+    return t[t.size() / 2];
+}
 
 }  // namespace welkin::bench

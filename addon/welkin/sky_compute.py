@@ -6,7 +6,9 @@ Energy appears once (docs/design.md): the sky image carries no sun disc, because
 lights the scene; the world draws the disc with shader nodes from the view direction
 (world_nodes.py), shown to camera rays only, from the numbers of a DiscModel: the disc's
 centre, angular radius and horizon, and its radiance profile as a polynomial in mu (below).
-The exported HDRI keeps the core's own energy-exact disc (welkin.sky_image).
+The exported HDRI keeps the core's own energy-exact disc (welkin.sky_image). The moon
+(Place and Time) is done alike: its lamp lights the scene, and the world draws its disc with
+its phase for camera rays only, from a MoonDiscModel (welkin.moon_disc).
 
 Sun lamp sync (Blender's sun strength is an irradiance in W m^-2; with colour c the lamp
 delivers strength x c per channel at normal incidence): the lamp takes the transmitted
@@ -59,6 +61,24 @@ class DiscModel:
 
 
 @dataclasses.dataclass
+class MoonDiscModel:
+    """The moon's disc as the world's nodes draw it (welkin.moon_disc; its phase from the
+    sun's direction seen from the moon). A view direction v above horizon_z sees
+        L_c = scale_rgb[c] x f(v),   f = mu0 / (mu0 + mu) where mu0 > 0 and s < 1, else 0,
+        s = |v x m| / sin(radius), mu = sqrt(1 - s^2),
+        mu0 = (v x m) . (sun_from_moon x m) / sin(radius) - mu (m . sun_from_moon)
+    (Lommel-Seeliger seen from afar: welkin.moon_disc_relative_radiance), linear RGB (the
+    request's colour space) W m^-2 sr^-1 times the exposure; its integral over the disc is
+    the moon's irradiance through the air, the moon lamp's light over its visible fraction."""
+
+    direction: tuple[float, float, float]  # unit vector m towards the disc's centre
+    sun_from_moon: tuple[float, float, float]  # unit vector from the moon towards the sun
+    radius_rad: float  # angular radius of the disc
+    horizon_z: float  # z of the horizon's direction (0 on the ground)
+    scale_rgb: npt.NDArray[np.float64]  # (3,)
+
+
+@dataclasses.dataclass
 class SkyResult:
     sky: npt.NDArray[np.float32]  # (H, W, 3) float32, top row first, no disc, x exposure
     disc: DiscModel | None  # None: no disc shown (or the sun below the horizon)
@@ -69,6 +89,7 @@ class SkyResult:
     warnings: list[str]
     lamp_transmittance: float = 1.0  # the clouds' towards the sun at the scene origin
     shadow_map: npt.NDArray[np.float32] | None = None  # (n, n) T, rows bottom first
+    moon_disc: MoonDiscModel | None = None  # None: no moon, or none of its disc shown
 
 
 def lamp_values(
@@ -116,6 +137,42 @@ def disc_model(
     centre = np.asarray(sun.centre_radiance_rgb, dtype=np.float64) * exposure
     coefficients = (np.asarray(sun.limb_coefficients_rgb, dtype=np.float64) * centre[:, None]).T.copy()
     return DiscModel(direction, alpha, horizon_z(atm, altitude_m), coefficients)
+
+
+def _unit(v: Sequence[float]) -> tuple[float, float, float]:
+    x, y, z = (float(c) for c in v)
+    n = math.sqrt(x * x + y * y + z * z)
+    return (x / n, y / n, z / n)
+
+
+def moon_disc_model(
+    native: Module,
+    atm: Any,  # noqa: ANN401 (welkin.Atmosphere)
+    request: sky_request.SkyRequest,
+) -> MoonDiscModel | None:
+    """The moon's disc for the world's nodes (Place and Time), or None: no moon in the
+    request, a new moon, or the disc wholly below the horizon."""
+    if not (request.moon_direction and request.sun_from_moon and request.moon_irradiance_ratio > 0.0):
+        return None
+    m, s = _unit(request.moon_direction), _unit(request.sun_from_moon)
+    radius = float(request.moon_angular_radius_rad)
+    horizon = horizon_z(atm, request.altitude_m)
+    if math.asin(max(-1.0, min(1.0, m[2]))) + radius < math.asin(horizon):
+        return None
+    disc = native.moon_disc(
+        atm,
+        request.altitude_m,
+        m,
+        s,
+        radius,
+        request.moon_irradiance_ratio,
+        exposure=request.exposure,
+        color_space=request.color_space,
+    )
+    scale = np.asarray(disc["radiance_scale_rgb"], dtype=np.float64)
+    if not float(disc["relative_integral_sr"]) > 0.0 or not np.any(scale > 0.0):
+        return None
+    return MoonDiscModel(m, s, radius, horizon, scale.copy())
 
 
 def shaded_lamp(lamp: LampValues, transmittance: float) -> LampValues:
@@ -229,6 +286,9 @@ def compute(
         )
         if model is not None and transmittance is not None:
             model.coefficients *= _pixel_at(native, transmittance, model.direction)
+    moon = moon_disc_model(native, atm, request) if disc else None
+    if moon is not None and transmittance is not None:
+        moon.scale_rgb *= _pixel_at(native, transmittance, moon.direction)
     lamp = lamp_values(
         native, atm, request.altitude_m, request.sun_direction, request.exposure, request.color_space
     )
@@ -239,7 +299,7 @@ def compute(
     if shadow_json is not None and shadow_map is not None:
         ground = shadow_map(shadow_json)
     return SkyResult(
-        sky, model, lamp, method, elevation, time.perf_counter() - start, warnings, shade, ground
+        sky, model, lamp, method, elevation, time.perf_counter() - start, warnings, shade, ground, moon
     )
 
 
@@ -380,7 +440,8 @@ def with_moonlit_sky(
     """`sky` plus the moon's sky when the request has a moon (Place and Time): the same
     method's sky, in `color_space`, for a "sun" in the moon's direction times the moon's
     irradiance ratio, as the core composes it (night/moonlit_sky.cpp: every method's
-    radiance is linear in the solar irradiance). The moon's disc is not drawn."""
+    radiance is linear in the solar irradiance). The moon's disc is not in it (the world's
+    nodes draw it: MoonDiscModel; hdri adds the core's)."""
     if not request.moon_direction or not request.moon_irradiance_ratio > 0.0:
         return sky
     # Far below the horizon the moon's sky is negligible and left out, as the core does

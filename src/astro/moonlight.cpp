@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "welkin/base/error.hpp"
+#include "welkin/base/math.hpp"
 
 namespace welkin {
 namespace {
@@ -42,6 +43,41 @@ double moon_disc_relative_radiance(const std::array<double, 3>& v, const std::ar
     const double mu0 = n[0] * s[0] + n[1] * s[1] + n[2] * s[2];    // towards the sun
     if (mu0 <= 0.0 || mu <= 0.0) return 0.0;
     return mu0 / (mu0 + mu);
+}
+
+double moon_disc_relative_radiance_far(const std::array<double, 3>& v, const std::array<double, 3>& m,
+                                       double radius_rad, const std::array<double, 3>& s) {
+    const auto cross = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+        return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                                     a[0] * b[1] - a[1] * b[0]};
+    };
+    const auto dot = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    };
+    const double sin_alpha = std::sin(radius_rad);
+    const std::array<double, 3> vm = cross(v, m), sm = cross(s, m);
+    const double x = std::sqrt(dot(vm, vm)) / sin_alpha;
+    if (!(x < 1.0) || dot(v, m) <= 0.0) return 0.0;
+    const double mu = std::sqrt(1.0 - x * x);
+    const double mu0 = dot(vm, sm) / sin_alpha - mu * dot(m, s);
+    if (mu0 <= 0.0) return 0.0;
+    return mu0 / (mu0 + mu);
+}
+
+double moon_disc_relative_integral_far(double g, double radius_rad) {
+    if (!(radius_rad > 0.0 && radius_rad <= 0.05))
+        throw InvalidArgument("radius_rad", "must be in (0, 0.05] rad");
+    if (!std::isfinite(g)) throw InvalidArgument("phase_angle_rad", "must be finite");
+    g = std::clamp(std::abs(g), 0.0, kPi);
+    const double sin_a = std::sin(radius_rad);
+    double phi = 1.0;
+    if (g >= kPi) {
+        phi = 0.0;
+    } else if (g > 0.0) {
+        // ln cot(g/4) -> infinity as g -> 0, but sin(g/2) tan(g/2) -> 0 faster.
+        phi = 1.0 - std::sin(0.5 * g) * std::tan(0.5 * g) * std::log(1.0 / std::tan(0.25 * g));
+    }
+    return sin_a * sin_a * 0.5 * kPi * std::max(0.0, phi);
 }
 
 }  // namespace welkin

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "welkin/atmosphere/skyview_lut.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <tbb/parallel_for.h>
@@ -57,6 +58,15 @@ SkyViewLut::SkyViewLut(const AtmosphereBatch& batch, const TransmittanceLut& tlu
                           std::span<Spectrum4>(&texture_.at(0, j), std::size_t(width)), scratch);
         }
     });
+    // A sky with no light at all (the sun far below the horizon, every texel in the
+    // planet's shadow): lookups of it are 0 exactly, so the many-views radiance() skips them.
+    dark_ = true;
+    for (int j = 0; j < height && dark_; ++j)
+        for (int i = 0; i < width; ++i)
+            if (texture_.at(i, j) != Spectrum4(0.0f)) {
+                dark_ = false;
+                break;
+            }
 }
 
 namespace {
@@ -156,6 +166,10 @@ WELKIN_SIMD_CLONES_WIDE void lookup_coordinates(const glm::dvec3* __restrict d, 
 
 void SkyViewLut::radiance(std::span<const glm::dvec3> directions, const glm::dvec3& sun, std::size_t count,
                           float* out, std::size_t stride) const {
+    if (dark_) {  // every texel is 0, so is every bilinear lookup (finite weights)
+        for (std::size_t k = 0; k < directions.size(); ++k) std::fill_n(out + k * stride, count, 0.0f);
+        return;
+    }
     const double hs2 = sun.x * sun.x + sun.y * sun.y;
     constexpr std::size_t kBlock = 64;
     int i_tex[kBlock], j_tex[kBlock];

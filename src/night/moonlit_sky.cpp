@@ -37,14 +37,21 @@ void Moon::validate() const {
     require_in_range("moon.irradiance_ratio", irradiance_ratio, 0.0, 1e-3);
 }
 
-std::vector<float> moon_disc_pixels(const Atmosphere& atm, const Observer& observer, const Moon& moon,
-                                    int width, SkyImageOptions::Output output) {
+namespace {
+
+// The disc's pixels: their indices (row * width + column) and values (out channels each).
+struct DiscPixels {
+    std::vector<std::size_t> pixel;
+    std::vector<float> values;
+};
+
+DiscPixels disc_pixels(const Atmosphere& atm, const Observer& observer, const Moon& moon, int width,
+                       SkyImageOptions::Output output) {
     moon.validate();
     const int height = width / 2;
     const std::size_t nc = atm.channels();
     const bool rgb = output == SkyImageOptions::Output::Rgb;
-    const std::size_t out_nc = rgb ? 3 : nc;
-    std::vector<float> pixels = night::blank_layer(width, out_nc);
+    DiscPixels pixels;
     if (!(moon.irradiance_ratio > 0.0)) return pixels;
 
     const glm::dvec3 m = glm::normalize(moon.direction), s = glm::normalize(moon.sun_from_moon);
@@ -129,15 +136,51 @@ std::vector<float> moon_disc_pixels(const Atmosphere& atm, const Observer& obser
         const int i = ((i0 + int(q % std::size_t(ncols))) % width + width) % width;
         const double omega = equirect_pixel_solid_angle(j, width, height);
         for (std::size_t c = 0; c < nc; ++c) spectrum[c] = float(irradiance[c] * visible[q] / total / omega);
-        float* dst = pixels.data() + (std::size_t(j) * std::size_t(width) + std::size_t(i)) * out_nc;
+        pixels.pixel.push_back(std::size_t(j) * std::size_t(width) + std::size_t(i));
         if (rgb) {
             const std::array<double, 3> v = to_rgb->convert(spectrum);
-            for (int c = 0; c < 3; ++c) dst[c] += float(v[std::size_t(c)]);
+            for (int c = 0; c < 3; ++c) pixels.values.push_back(float(v[std::size_t(c)]));
         } else {
-            for (std::size_t c = 0; c < nc; ++c) dst[c] += spectrum[c];
+            pixels.values.insert(pixels.values.end(), spectrum.begin(), spectrum.end());
         }
     }
     return pixels;
+}
+
+}  // namespace
+
+std::vector<float> moon_disc_pixels(const Atmosphere& atm, const Observer& observer, const Moon& moon,
+                                    int width, SkyImageOptions::Output output) {
+    moon.validate();
+    const std::size_t out_nc = output == SkyImageOptions::Output::Rgb ? 3 : atm.channels();
+    std::vector<float> layer = night::blank_layer(width, out_nc);
+    const DiscPixels disc = disc_pixels(atm, observer, moon, width, output);
+    for (std::size_t k = 0; k < disc.pixel.size(); ++k)
+        for (std::size_t c = 0; c < out_nc; ++c)
+            layer[disc.pixel[k] * out_nc + c] += disc.values[k * out_nc + c];
+    return layer;
+}
+
+MoonDiscModel moon_disc_model(const Atmosphere& atm, const Observer& observer, const Moon& moon) {
+    moon.validate();
+    atm.validate();
+    const glm::dvec3 m = glm::normalize(moon.direction), s = glm::normalize(moon.sun_from_moon);
+    MoonDiscModel model;
+    model.phase_angle_rad = std::acos(std::clamp(-glm::dot(m, s), -1.0, 1.0));
+    model.relative_integral_sr =
+        moon_disc_relative_integral_far(model.phase_angle_rad, moon.angular_radius_rad);
+    model.radiance_scale.assign(atm.channels(), 0.0);
+    if (!(model.relative_integral_sr > 0.0) || !(moon.irradiance_ratio > 0.0)) return model;
+    // The air towards the moon, as moon_disc_pixels takes it.
+    Atmosphere moon_atm = atm;
+    moon_atm.sun_angular_radius_rad = moon.angular_radius_rad;
+    Observer mo = observer;
+    mo.sun_direction = m;
+    const SunRadiometry air = sun_radiometry(moon_atm, mo.validated());
+    for (std::size_t c = 0; c < atm.channels(); ++c)
+        model.radiance_scale[c] = atm.solar_irradiance[c] * moon.irradiance_ratio * air.transmittance[c] /
+                                  model.relative_integral_sr;
+    return model;
 }
 
 Moon moon_at(const SunAndMoon& sky) {
@@ -155,34 +198,52 @@ SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere
                                        const Observer& observer, const Moon& moon, int width,
                                        const SkyImageOptions& options, Progress* progress) {
     moon.validate();
-    SkyImage image = render_equirect_sky(method, atm, observer, width, options, progress);
-    if (!(moon.irradiance_ratio > 0.0)) return image;
-    if (glm::normalize(moon.direction).z < std::sin(-kMoonSkyDepressionDeg * kDegree)) return image;
-    // The moonlit sky: every method's radiance (and the lit ground's) is linear in the
-    // solar irradiance, so the sky for a "sun" in the moon's direction, scaled by the
-    // ratio, is the sky lit by the moon (the same cached LUTs; colour conversion linear).
-    // With clouds the same holds for them (their march is linear in the light too): the
-    // moon's image marches them lit from the moon, and the two composites add, the
-    // clouds' transmittance being the same for both lights.
-    Observer lit_by_moon = observer;
-    lit_by_moon.sun_direction = moon.direction;
-    SkyImageOptions moon_options = options;
-    moon_options.sun_disc = false;
-    // While the sun is up the moon's light on the clouds is left out (header): its clear sky
-    // is seen through them, times their transmittance, and no second march is made.
-    const bool clouds_by_sunlight = options.clouds && moon_clouds_left_out(observer);
-    if (clouds_by_sunlight) moon_options.clouds = nullptr;
-    const SkyImage moonlit =
-        render_equirect_sky(method, atm, lit_by_moon.validated(), width, moon_options, progress);
-    const float ratio = float(moon.irradiance_ratio);
-    if (clouds_by_sunlight) {
-        night::add_under_clouds(image, moonlit.pixels, ratio);
+    const bool moon_sky = moon.irradiance_ratio > 0.0 &&
+                          glm::normalize(moon.direction).z >= std::sin(-kMoonSkyDepressionDeg * kDegree);
+    SkyImage image;
+    if (moon_sky && !options.clouds) {
+        // The moonlit sky: every method's radiance (and the lit ground's) is linear in the
+        // solar irradiance, so the sky for a "sun" in the moon's direction, scaled by the
+        // ratio, is the sky lit by the moon (the same cached LUTs; colour conversion
+        // linear). One pass over the image for both (sky_image.hpp, ExtraSun).
+        const ExtraSun lit_by_moon{moon.direction, moon.irradiance_ratio};
+        image = render_equirect_sky(method, atm, observer, std::span<const ExtraSun>(&lit_by_moon, 1), width,
+                                    options, progress);
     } else {
-        for (std::size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] += ratio * moonlit.pixels[k];
+        image = render_equirect_sky(method, atm, observer, width, options, progress);
+        if (moon_sky) {
+            // With clouds, the moon's sky is a render of its own. The clouds' march is linear
+            // in the light too: the moon's image marches them lit from the moon, and the two
+            // composites add, the clouds' transmittance being the same for both lights.
+            // While the sun is up the moon's light on the clouds is left out (header): its
+            // clear sky is seen through them, times their transmittance, with no second march.
+            Observer lit_by_moon = observer;
+            lit_by_moon.sun_direction = moon.direction;
+            SkyImageOptions moon_options = options;
+            moon_options.sun_disc = false;
+            const bool clouds_by_sunlight = moon_clouds_left_out(observer);
+            if (clouds_by_sunlight) moon_options.clouds = nullptr;
+            const SkyImage moonlit =
+                render_equirect_sky(method, atm, lit_by_moon.validated(), width, moon_options, progress);
+            const float ratio = float(moon.irradiance_ratio);
+            if (clouds_by_sunlight) {
+                night::add_under_clouds(image, moonlit.pixels, ratio);
+            } else {
+                for (std::size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] += ratio * moonlit.pixels[k];
+            }
+        }
     }
-    if (moon.disc) {
-        night::add_under_clouds(image, moon_disc_pixels(atm, observer, moon, width, options.output),
-                                options.exposure);
+    if (moon_sky && moon.disc) {
+        // Its pixels alone, as night::add_under_clouds adds a layer: exposure x the clouds'
+        // transmittance x the value.
+        const DiscPixels disc = disc_pixels(atm, observer, moon, width, options.output);
+        const std::size_t nc = image.channels();
+        const float e = float(options.exposure);
+        for (std::size_t k = 0; k < disc.pixel.size(); ++k) {
+            const std::size_t p = disc.pixel[k];
+            const float t = image.cloud_transmittance.empty() ? 1.0f : image.cloud_transmittance[p];
+            for (std::size_t c = 0; c < nc; ++c) image.pixels[p * nc + c] += e * t * disc.values[k * nc + c];
+        }
     }
     return image;
 }

@@ -10,14 +10,17 @@
 
 #include "bindings.hpp"
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
 #include <pybind11/stl.h>
 
 #include "welkin/astro/json.hpp"
+#include "welkin/astro/moonlight.hpp"
 #include "welkin/astro/positions.hpp"
 #include "welkin/astro/time.hpp"
 #include "welkin/base/error.hpp"
 #include "welkin/base/math.hpp"
 #include "welkin/clouds/density.hpp"
+#include "welkin/color/color.hpp"
 #include "welkin/color/color_space.hpp"
 #include "welkin/night/moonlit_sky.hpp"
 #include "welkin/night/night_glow.hpp"
@@ -105,12 +108,9 @@ py::array_t<float> sky_image_at(Atmosphere atmosphere, const py::object& time, d
     return to_image_array(std::move(image.pixels), image.width, image.height, channels);
 }
 
-py::array_t<float> moon_disc_image(const Atmosphere& atmosphere, double altitude_m,
-                                   const py::object& moon_direction, const py::object& sun_from_moon,
-                                   double angular_radius_rad, double irradiance_ratio, int width,
-                                   const std::string& output, double exposure) {
-    if (!(exposure > 0.0 && exposure <= 1e6))
-        throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+// A Moon from the binding's arguments (their names in the errors).
+Moon moon_from(const py::object& moon_direction, const py::object& sun_from_moon, double angular_radius_rad,
+               double irradiance_ratio) {
     Moon moon;
     moon.direction = to_dvec3(moon_direction, "moon_direction");
     moon.sun_from_moon = to_dvec3(sun_from_moon, "sun_from_moon");
@@ -122,6 +122,16 @@ py::array_t<float> moon_disc_image(const Atmosphere& atmosphere, double altitude
             (v.x == 0.0 && v.y == 0.0 && v.z == 0.0))
             throw InvalidArgument(name, "must be a finite non-zero vector");
     moon.validate();  // the radius and the ratio, named moon.<field>
+    return moon;
+}
+
+py::array_t<float> moon_disc_image(const Atmosphere& atmosphere, double altitude_m,
+                                   const py::object& moon_direction, const py::object& sun_from_moon,
+                                   double angular_radius_rad, double irradiance_ratio, int width,
+                                   const std::string& output, double exposure) {
+    if (!(exposure > 0.0 && exposure <= 1e6))
+        throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+    const Moon moon = moon_from(moon_direction, sun_from_moon, angular_radius_rad, irradiance_ratio);
     const SkyImageOptions::Output out = parse_output(output);
     std::vector<float> pixels;
     {
@@ -133,6 +143,59 @@ py::array_t<float> moon_disc_image(const Atmosphere& atmosphere, double altitude
     for (float& v : pixels) v *= float(exposure);
     const std::size_t channels = out == SkyImageOptions::Output::Rgb ? 3 : atmosphere.channels();
     return to_image_array(std::move(pixels), width, width / 2, channels);
+}
+
+py::dict moon_disc_py(const Atmosphere& atmosphere, double altitude_m, const py::object& moon_direction,
+                      const py::object& sun_from_moon, double angular_radius_rad, double irradiance_ratio,
+                      double exposure, const std::string& color_space) {
+    if (!(exposure > 0.0 && exposure <= 1e6))
+        throw InvalidArgument("exposure", fmt::format("must be in (0, 1e6], got {}", exposure));
+    const Moon moon = moon_from(moon_direction, sun_from_moon, angular_radius_rad, irradiance_ratio);
+    const ColorSpace space = color_space_from_name(color_space);
+    MoonDiscModel model;
+    {
+        py::gil_scoped_release release;
+        model = moon_disc_model(atmosphere, Observer{altitude_m, moon.direction}.validated(), moon);
+    }
+    // Moonlight has the sun's spectrum: the sun's conversion (lambda power 0), as the disc's
+    // pixels and the moon lamp take it.
+    const SpectrumToRgb to_rgb(atmosphere.wavelengths_nm, 0.0, space);
+    const std::vector<double> mat = to_rgb.matrix();
+    const std::size_t nc = model.radiance_scale.size();
+    std::vector<double> rgb(3, 0.0), spectral(nc);
+    for (std::size_t c = 0; c < nc; ++c) {
+        spectral[c] = model.radiance_scale[c] * exposure;
+        for (std::size_t k = 0; k < 3; ++k) rgb[k] += mat[k * nc + c] * spectral[c];
+    }
+    py::dict out;
+    out["radiance_scale"] = to_readonly_array(spectral);
+    out["radiance_scale_rgb"] = to_readonly_array(rgb);
+    out["relative_integral_sr"] = model.relative_integral_sr;
+    out["phase_angle_rad"] = model.phase_angle_rad;
+    out["color_space"] = color_space_name(space);
+    return out;
+}
+
+py::array_t<double> moon_disc_relative_radiance_py(const py::array_t<double>& views,
+                                                   const py::object& moon_direction,
+                                                   const py::object& sun_from_moon,
+                                                   double angular_radius_rad) {
+    const Moon moon = moon_from(moon_direction, sun_from_moon, angular_radius_rad, 0.0);
+    if (views.ndim() != 2 || views.shape(1) != 3) throw InvalidArgument("views", "must be an (N, 3) array");
+    const glm::dvec3 m = glm::normalize(moon.direction), s = glm::normalize(moon.sun_from_moon);
+    const auto v = views.unchecked<2>();
+    py::array_t<double> out(views.shape(0));
+    auto o = out.mutable_unchecked<1>();
+    for (py::ssize_t i = 0; i < views.shape(0); ++i) {
+        glm::dvec3 d{v(i, 0), v(i, 1), v(i, 2)};
+        const double l = glm::length(d);
+        if (!(l > 0.0) || !std::isfinite(l))
+            throw InvalidArgument("views", fmt::format("row {} is not a direction", i));
+        d /= l;
+        o(i) = moon_disc_relative_radiance_far({d.x, d.y, d.z}, {m.x, m.y, m.z}, moon.angular_radius_rad,
+                                               {s.x, s.y, s.z});
+    }
+    return out;
 }
 
 py::array_t<double> star_catalogue() {
@@ -272,6 +335,34 @@ a host (x' = cos n x - sin n y, y' = sin n x + cos n y).
 )doc");
 }
 
+// The moon's disc as a formula, for hosts that draw it (the add-on's world nodes).
+void register_moon_disc(py::module_& m) {
+    m.def("moon_disc", &moon_disc_py, py::arg("atmosphere"), py::arg("altitude_m"), py::arg("moon_direction"),
+          py::arg("sun_from_moon"), py::arg("angular_radius_rad"), py::arg("irradiance_ratio"), py::kw_only(),
+          py::arg("exposure") = 1.0, py::arg("color_space") = "rec709", R"doc(
+The moon's disc as a formula of the view direction, for a host that draws it
+itself (include/welkin/night/moonlit_sky.hpp, MoonDiscModel): where the view v is
+above the horizon its radiance is
+    radiance_scale_rgb x moon_disc_relative_radiance(v, ...)
+(Lommel-Seeliger seen from afar, zero on the night side: the phase), and its
+integral over the disc is the moon's irradiance through the air (the sun's at
+1 au x irradiance_ratio x the transmittance towards the moon, times exposure),
+as the disc of sky_image_at and moon_disc_image. Returns a dict:
+radiance_scale (per wavelength) and radiance_scale_rgb (linear RGB of
+color_space, the sun's conversion), W m^-2 sr^-1 (nm^-1) per unit relative
+radiance; relative_integral_sr (the disc's integral of the relative radiance:
+sin^2(radius) pi/2 Phi(phase), Lommel-Seeliger's phase function); phase_angle_rad;
+color_space. Arguments as moon_disc_image's.
+)doc");
+    m.def("moon_disc_relative_radiance", &moon_disc_relative_radiance_py, py::arg("views"),
+          py::arg("moon_direction"), py::arg("sun_from_moon"), py::arg("angular_radius_rad"), R"doc(
+The disc's relative radiance (include/welkin/astro/moonlight.hpp,
+moon_disc_relative_radiance_far) for an (N, 3) array of view directions
+(normalised here): mu0 / (mu0 + mu) on the lit, visible disc, 0 elsewhere; times
+moon_disc's radiance_scale_rgb it is the disc's radiance.
+)doc");
+}
+
 }  // namespace
 
 void register_astro(py::module_& m) {
@@ -334,6 +425,7 @@ irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
 )doc");
 
     register_night_parts(m);
+    register_moon_disc(m);
     m.def("sky_image_at", &sky_image_at, py::arg("atmosphere"), py::arg("time"), py::arg("latitude_deg"),
           py::arg("longitude_deg"), py::arg("width"), py::arg("method") = "lut", py::arg("output") = "rgb",
           py::kw_only(), py::arg("height_m") = 0.0, py::arg("altitude_m") = 0.0, py::arg("discs") = true,

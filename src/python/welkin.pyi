@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy
 import os
 import typing
-__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc_image', 'night_glow_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'reflectance_to_rgb', 'rgb_to_reflectance', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'star_catalogue', 'star_image', 'stars_at', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
+__all__: list[str] = ['Atmosphere', 'CLOUD_TYPES', 'CameraPlateRenderer', 'CloudDensity', 'CloudLayer', 'DensityLayer', 'DensityProfile', 'SceneDescription', 'SunRadiometry', 'VdbClouds', 'aerial_perspective', 'aerial_screen_table', 'aerial_table', 'auto_choice', 'camera_plate', 'chart_table', 'cloud_passes', 'cloud_radiance', 'cloud_transmittance', 'cloud_type_preset', 'color_space_matrix', 'direction_to_equirect', 'equirect_pixel_directions', 'equirect_to_direction', 'methods', 'moon_disc', 'moon_disc_image', 'moon_disc_relative_radiance', 'night_glow_image', 'preetham_turbidity_to_aerosol_optical_depth', 'read_exr', 'reflectance_to_rgb', 'rgb_to_reflectance', 'scene_sky_image', 'sky_image', 'sky_image_at', 'sky_radiance', 'spectral_wavelengths_nm', 'spectrum_to_rgb', 'star_catalogue', 'star_image', 'stars_at', 'sun', 'sun_and_moon', 'sun_disc_image', 'write_exr']
 class DensityLayer:
     """
     One layer of a density profile (Bruneton 2017's DensityProfileLayer):
@@ -434,16 +434,16 @@ class CloudLayer(CloudDensity):
     cloud type, wind). cloud_type is a preset name: "cumulus" (the default), "stratocumulus",
     "altocumulus", "stratus" or "cirrus"; every other parameter left as None takes the
     preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
-    the ground; coverage the share of the sky dome a ground observer sees covered (oktas / 8:
-    directions above 5 degrees whose slant optical depth reaches 0.3), or with
-    coverage_measure="area" the share of the ground's area under cloud (a column is cloudy
-    when its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
+    the ground; coverage the share of the ground's area under cloud (a column is cloudy when
+    its vertical optical depth reaches 0.3), or with coverage_measure="dome" the share of the
+    sky dome a ground observer sees covered (oktas / 8: directions above 5 degrees whose slant
+    optical depth reaches 0.3); density_per_m the extinction of the densest
     cloud (m^-1); wind_offset_m carries the field (x, y in m) and evolution_m moves its noise
     through the layer's height (m): keyed over time the shapes change in place;
     origin_altitude_m the world origin's (observer's) altitude. ValueError names a bad
     parameter.
     """
-    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, coverage_measure: str = 'dome', density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
+    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, coverage_measure: str = 'area', density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
         ...
     def covered_fraction(self, columns: int = 2048) -> float:
         """
@@ -462,11 +462,6 @@ class CloudLayer(CloudDensity):
     @property
     def coverage(self) -> float:
         ...
-    @property
-    def coverage_measure(self) -> str:
-        """
-        What coverage measures: "dome" (the sky a ground observer sees covered, oktas / 8) or "area" (the ground's area under cloud).
-        """
     @property
     def seed(self) -> int:
         ...
@@ -799,6 +794,22 @@ def methods() -> list[str]:
     a multiple-scattering term), "reference" (Monte-Carlo path tracing, all orders),
     then "auto" (the cheapest of the first three that meets a tolerance).
     """
+def moon_disc(atmosphere: Atmosphere, altitude_m: float, moon_direction: typing.Any, sun_from_moon: typing.Any, angular_radius_rad: float, irradiance_ratio: float, *, exposure: float = 1.0, color_space: str = 'rec709') -> dict:
+    """
+    The moon's disc as a formula of the view direction, for a host that draws it
+    itself (include/welkin/night/moonlit_sky.hpp, MoonDiscModel): where the view v is
+    above the horizon its radiance is
+        radiance_scale_rgb x moon_disc_relative_radiance(v, ...)
+    (Lommel-Seeliger seen from afar, zero on the night side: the phase), and its
+    integral over the disc is the moon's irradiance through the air (the sun's at
+    1 au x irradiance_ratio x the transmittance towards the moon, times exposure),
+    as the disc of sky_image_at and moon_disc_image. Returns a dict:
+    radiance_scale (per wavelength) and radiance_scale_rgb (linear RGB of
+    color_space, the sun's conversion), W m^-2 sr^-1 (nm^-1) per unit relative
+    radiance; relative_integral_sr (the disc's integral of the relative radiance:
+    sin^2(radius) pi/2 Phi(phase), Lommel-Seeliger's phase function); phase_angle_rad;
+    color_space. Arguments as moon_disc_image's.
+    """
 def moon_disc_image(atmosphere: Atmosphere, altitude_m: float, moon_direction: typing.Any, sun_from_moon: typing.Any, angular_radius_rad: float, irradiance_ratio: float, width: int, output: str = 'rgb', *, exposure: float = 1.0) -> numpy.ndarray[numpy.float32]:
     """
     The moon's disc alone, as the equirectangular image sky_image_at adds for it
@@ -814,22 +825,20 @@ def moon_disc_image(atmosphere: Atmosphere, altitude_m: float, moon_direction: t
     angular_radius_rad             the moon's apparent radius, [1e-4, 0.05]
     irradiance_ratio               the moon's "irradiance_ratio", [0, 1e-3]
     """
-def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709', time: typing.Any = None, latitude_deg: float = 0.0, longitude_deg: float = 0.0, height_m: float = 0.0, north_deg: float = 0.0, airglow: bool = True, zodiacal_light: bool = True) -> numpy.ndarray[numpy.float32]:
+def moon_disc_relative_radiance(views: numpy.ndarray[numpy.float64], moon_direction: typing.Any, sun_from_moon: typing.Any, angular_radius_rad: float) -> numpy.ndarray[numpy.float64]:
     """
-    The night sky's own light alone (include/welkin/night/night_glow.hpp), as an
+    The disc's relative radiance (include/welkin/astro/moonlight.hpp,
+    moon_disc_relative_radiance_far) for an (N, 3) array of view directions
+    (normalised here): mu0 / (mu0 + mu) on the lit, visible disc, 0 elsewhere; times
+    moon_disc's radiance_scale_rgb it is the disc's radiance.
+    """
+def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
+    """
+    The night sky's own light alone (airglow, zodiacal light, unresolved stars:
+    Krisciunas & Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith,
+    van Rhijn's brightening towards the horizon, dimmed by the air), as an
     equirectangular (height, width, channels) float32 image times exposure; 0 below
-    the horizon. Same units and colour spaces as sky_image. Its parts:
-    airglow=True: the upper atmosphere's glow (O I 557.7 nm, Na D, O I 630/636 nm and
-    its continuum) from a layer 97 km up, brightening towards the horizon by van
-    Rhijn's factor; zodiacal_light=True: Leinert et al. 1998's zodiacal light by
-    helioecliptic longitude and ecliptic latitude, the sun's light slightly
-    reddened. Both dimmed by the air towards each direction.
-    
-    time, latitude_deg, longitude_deg, height_m: the moment and place (as in
-    sun_and_moon) that put the ecliptic and the sun in the sky; time=None: the
-    zodiacal light at its darkest (the ecliptic pole's) everywhere. north_deg: the
-    image's frame turned about the vertical as stars_at's directions are turned by
-    a host (x' = cos n x - sin n y, y' = sin n x + cos n y).
+    the horizon. Same units and colour spaces as sky_image.
     """
 def preetham_turbidity_to_aerosol_optical_depth(turbidity: float) -> float:
     """
@@ -859,7 +868,7 @@ def rgb_to_reflectance(rgb: typing.Any, wavelengths_nm: typing.Any, *, color_spa
     for a ground of a chosen colour. Raises ValueError naming ground_color for a
     channel outside [0, 1].
     """
-def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, output: str = 'rgb', return_transmittance: bool = False, progress: typing.Any = None, ground: bool = True, moon_direction: typing.Any = None, sun_from_moon: typing.Any = None, moon_angular_radius_rad: float = 0.0045, moon_irradiance_ratio: float = 0.0, stars: numpy.ndarray[numpy.float64] | None = None, night_glow: bool = False) -> typing.Any:
+def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, output: str = 'rgb', return_transmittance: bool = False, progress: typing.Any = None, ground: bool = True) -> typing.Any:
     """
     The equirectangular sky of a scene, with its clouds (the world texture of a cloudy sky).
     
@@ -877,16 +886,6 @@ def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, out
     scene's key (clouds.volumes[i].file for a bad VDB). Cancellable (progress, Ctrl-C).
     ground: the lit ground below the horizon with the atmosphere's ground_albedo, as
     in sky_image (False: black there).
-    
-    The night sky of a place and a moment, in the scene's frame (the add-on's Place and
-    Time; `welkin sky --scene --time` and sky_image_at compose the same): moon_direction,
-    sun_from_moon, moon_angular_radius_rad and moon_irradiance_ratio as in
-    moon_disc_image add the moon's light: its sky, and the clouds lit by it as by a "sun"
-    in its direction times the ratio (left out while the scene's sun is up), and with
-    sun_disc its disc with its phase, dimmed by the clouds' transmittance. stars: an (N, 5)
-    array as stars_at returns (directions in the scene's frame), drawn energy-exact and
-    dimmed by the air and by the clouds' transmittance; night_glow=True adds the night
-    sky's own glow, dimmed the same way.
     """
 def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, width: int, method: str = 'lut', output: str = 'rgb', *, sun_disc: bool = True, exposure: float = 1.0, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, clouds: CloudDensity = None, progress: typing.Any = None, ground: bool = True, ground_albedo: float | None = None, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
     """
@@ -912,7 +911,7 @@ def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.A
     callback returning False cancels (KeyboardInterrupt). ValueError names the
     parameter for bad input.
     """
-def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, longitude_deg: float, width: int, method: str = 'lut', output: str = 'rgb', *, height_m: float = 0.0, altitude_m: float = 0.0, discs: bool = True, exposure: float = 1.0, ground: bool = True, stars: bool = True, night_glow: bool = True, progress: typing.Any = None, clouds: CloudDensity = None) -> numpy.ndarray[numpy.float32]:
+def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, longitude_deg: float, width: int, method: str = 'lut', output: str = 'rgb', *, height_m: float = 0.0, altitude_m: float = 0.0, discs: bool = True, exposure: float = 1.0, ground: bool = True, stars: bool = True, night_glow: bool = True, progress: typing.Any = None) -> numpy.ndarray[numpy.float32]:
     """
     The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
     renders it: the sun's sky and disc at the sun's apparent position, plus the
@@ -927,12 +926,9 @@ def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, 
     (when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
     of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
     air towards each, energy-exact (welkin.star_image). night_glow=True adds the
-    night sky's own light: airglow and the zodiacal light along the moment's
-    ecliptic, dimmed by the air (welkin.night_glow_image). clouds: as in sky_image
-    (a welkin.CloudLayer or any CloudDensity, default lighting): lit by the sun and
-    by the moon (the same march for a "sun" in the moon's direction, times its
-    brightness; left out while the sun is up), with the discs, the stars and the
-    night glow seen through them, dimmed by their transmittance.
+    night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
+    Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
+    brightening towards the horizon, dimmed by the air).
     """
 def sky_radiance(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, method: str = 'lut', output: str = 'spectral', *, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, transmittance_width: int = 256, transmittance_height: int = 64, multiscattering_size: int = 32, skyview_width: int = 192, skyview_height: int = 108, tolerance: float = 0.1, return_standard_error: bool = False, progress: typing.Any = None, color_space: str = 'rec709') -> typing.Any:
     """

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <span>
@@ -260,14 +261,14 @@ private:
 };
 
 // 3. The lit ground (header, "The ground") on the views of a band that meet it, added to
-// the method's path radiance `sky` (n x nc) of those views.
+// the method's path radiance `sky` (n x nc) of those views, for a sun in `sun` (each sun
+// of render_equirect_sky's shares the rows' geometry).
 class GroundShading {
 public:
     GroundShading(const Atmosphere& atm, const Observer& obs, const std::optional<double>& albedo, int height)
         : light_(GroundIllumination::shared(atm)),
           nc_(atm.channels()),
           r_(atm.bottom_radius_m + obs.altitude_m),
-          sun_(obs.sun_direction),
           rows_(height) {
         for (std::size_t c = 0; c < nc_; ++c)
             albedo_over_pi_.push_back((albedo ? *albedo : atm.ground_albedo[c]) / kPi);
@@ -284,17 +285,30 @@ public:
         }
     }
 
-    void add(int row0, int rows, int width, const glm::dvec3* dirs, float* sky) const {
+    void add(int row0, int rows, int width, const glm::dvec3* dirs, const glm::dvec3& sun, float* sky) const {
         tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const auto& range) {
             std::vector<double> e(nc_);
             for (int jj = range.begin(); jj != range.end(); ++jj) {
                 const Row& row = rows_[std::size_t(row0 + jj)];
                 if (!row.hits) continue;
+                if (row.distance == 0.0) {
+                    // The observer on the ground: every view of the row meets it at the
+                    // observer's own point, p = x, one irradiance for the row.
+                    const glm::dvec3 p(0.0, 0.0, r_);
+                    light_->irradiance(glm::dot(p, sun) / glm::length(p), e);
+                    for (std::size_t c = 0; c < nc_; ++c)
+                        e[c] = row.transmittance[c] * albedo_over_pi_[c] * e[c];
+                    for (int i = 0; i < width; ++i) {
+                        float* L = sky + (std::size_t(jj) * std::size_t(width) + std::size_t(i)) * nc_;
+                        for (std::size_t c = 0; c < nc_; ++c) L[c] += float(e[c]);
+                    }
+                    continue;
+                }
                 for (int i = 0; i < width; ++i) {
                     const std::size_t q = std::size_t(jj) * std::size_t(width) + std::size_t(i);
                     // The ground point p = x + d v, x = (0, 0, r); mu_s = (p / |p|) . s.
                     const glm::dvec3 p = glm::dvec3(0.0, 0.0, r_) + row.distance * dirs[q];
-                    light_->irradiance(glm::dot(p, sun_) / glm::length(p), e);
+                    light_->irradiance(glm::dot(p, sun) / glm::length(p), e);
                     float* L = sky + q * nc_;
                     for (std::size_t c = 0; c < nc_; ++c)
                         L[c] += float(row.transmittance[c] * albedo_over_pi_[c] * e[c]);
@@ -312,7 +326,6 @@ private:
     std::shared_ptr<const GroundIllumination> light_;  // shared by every image of this atmosphere
     std::size_t nc_;
     double r_;
-    glm::dvec3 sun_;
     std::vector<double> albedo_over_pi_;
     std::vector<Row> rows_;
 };
@@ -369,13 +382,36 @@ BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIll
     return b;
 }
 
+// One spectrum and its RGB output (composite_and_convert).
+struct Memo {
+    explicit Memo(std::size_t nc) : spectrum(nc) {}
+    std::vector<float> spectrum;
+    float rgb[3] = {0.0f, 0.0f, 0.0f};
+    bool valid = false;
+    bool same(const float* v) const {  // bit for bit (-0 and 0 apart)
+        return valid && std::memcmp(spectrum.data(), v, spectrum.size() * sizeof(float)) == 0;
+    }
+    void keep(const float* v) {
+        std::copy_n(v, spectrum.size(), spectrum.begin());
+        valid = true;
+    }
+};
+
+// The radiance of one band for an extra sun (n x nc), and its scale.
+struct ExtraBand {
+    const float* sky;
+    float scale;
+};
+
 // 5. One band's output pixels from its sky radiance `sky` (n x nc): the clouds composited
 // over it (header), then, for RGB output, the conversion into `dst` (n x 3; `dst` may be
-// `sky` itself when nc == 3: each pixel is read before it is written). Returns the index
-// of the first pixel with a non-finite radiance, or npos.
+// `sky` itself when nc == 3: each pixel is read before it is written); plus each extra
+// sun's radiance times its scale (no clouds then), converted and brought into the gamut
+// on its own. Returns the index of the first pixel with a non-finite radiance, or npos.
 constexpr std::size_t kNone = std::size_t(-1);
 std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::size_t nc,
-                                  const SpectrumToRgb* to_rgb, const BandClouds* clouds) {
+                                  const SpectrumToRgb* to_rgb, const BandClouds* clouds,
+                                  std::span<const ExtraBand> extra) {
     const bool rgb = to_rgb != nullptr;
     const std::vector<double> m = rgb ? to_rgb->matrix() : std::vector<double>{};
     std::atomic<std::size_t> bad{kNone};
@@ -383,6 +419,10 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
         std::array<double, 9> m3{};  // local copy: no reloads through possible aliases
         if (rgb && nc == 3) std::copy(m.begin(), m.end(), m3.begin());
         std::size_t first = kNone;
+        // The last spectrum converted (per sun) and its RGB, brought into the gamut: a run
+        // of equal spectra (the ground's rows seen from the ground are one spectrum each)
+        // is converted once, with the same result.
+        std::vector<Memo> memo(rgb && !clouds ? 1 + extra.size() : 0, Memo(nc));
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             float* s = &sky[i * nc];
             // The sky behind the cloud: T_c L_sky; with spectral output also the cloud's
@@ -398,28 +438,55 @@ std::size_t composite_and_convert(float* sky, float* dst, std::size_t n, std::si
             }
             bool finite = true;
             for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(s[c]);
+            for (const ExtraBand& x : extra)
+                for (std::size_t c = 0; c < nc; ++c) finite = finite && std::isfinite(x.sky[i * nc + c]);
             if (!finite && first == kNone) first = i;
-            if (!rgb) continue;
-            float* d = &dst[3 * i];
-            if (nc == 3) {  // possibly in place
-                const float a = s[0], b = s[1], c = s[2];
-                d[0] = float(m3[0] * a + m3[1] * b + m3[2] * c);
-                d[1] = float(m3[3] * a + m3[4] * b + m3[5] * c);
-                d[2] = float(m3[6] * a + m3[7] * b + m3[8] * c);
-            } else {
-                double r = 0.0, g = 0.0, b = 0.0;
-                for (std::size_t c = 0; c < nc; ++c) {
-                    r += m[c] * s[c];
-                    g += m[nc + c] * s[c];
-                    b += m[2 * nc + c] * s[c];
-                }
-                d[0] = float(r), d[1] = float(g), d[2] = float(b);
+            if (!rgb) {
+                for (const ExtraBand& x : extra)
+                    for (std::size_t c = 0; c < nc; ++c) s[c] += x.scale * x.sky[i * nc + c];
+                continue;
             }
-            // RGB output: the cloud's term in Rec.709, as the passes' Welkin.Clouds.rgb.
-            if (clouds)
-                for (int k = 0; k < 3; ++k) d[k] += clouds->cloud[i * 3 + k];
-            if (d[0] < 0.0f || d[1] < 0.0f || d[2] < 0.0f)  // into the output space's gamut (gamut.hpp)
-                gamut_map(d, 1, to_rgb->luminance_weights());
+            // One spectrum into RGB (possibly in place when nc == 3).
+            auto convert = [&](const float* v, float* d) {
+                if (nc == 3) {
+                    const float a = v[0], b = v[1], c = v[2];
+                    d[0] = float(m3[0] * a + m3[1] * b + m3[2] * c);
+                    d[1] = float(m3[3] * a + m3[4] * b + m3[5] * c);
+                    d[2] = float(m3[6] * a + m3[7] * b + m3[8] * c);
+                } else {
+                    double r = 0.0, g = 0.0, b = 0.0;
+                    for (std::size_t c = 0; c < nc; ++c) {
+                        r += m[c] * v[c];
+                        g += m[nc + c] * v[c];
+                        b += m[2 * nc + c] * v[c];
+                    }
+                    d[0] = float(r), d[1] = float(g), d[2] = float(b);
+                }
+            };
+            float* d = &dst[3 * i];
+            if (!memo.empty() && memo[0].same(s)) {
+                std::copy_n(memo[0].rgb, 3, d);
+            } else {
+                if (!memo.empty()) memo[0].keep(s);
+                convert(s, d);
+                // RGB output: the cloud's term in Rec.709, as the passes' Welkin.Clouds.rgb.
+                if (clouds)
+                    for (int k = 0; k < 3; ++k) d[k] += clouds->cloud[i * 3 + k];
+                if (d[0] < 0.0f || d[1] < 0.0f || d[2] < 0.0f)  // into the output space's gamut (gamut.hpp)
+                    gamut_map(d, 1, to_rgb->luminance_weights());
+                if (!memo.empty()) std::copy_n(d, 3, memo[0].rgb);
+            }
+            for (std::size_t x = 0; x < extra.size(); ++x) {
+                const float* v = &extra[x].sky[i * nc];
+                Memo& e = memo[1 + x];
+                if (!e.same(v)) {
+                    e.keep(v);
+                    convert(v, e.rgb);
+                    if (e.rgb[0] < 0.0f || e.rgb[1] < 0.0f || e.rgb[2] < 0.0f)
+                        gamut_map(e.rgb, 1, to_rgb->luminance_weights());
+                }
+                for (int k = 0; k < 3; ++k) d[k] += extra[x].scale * e.rgb[k];
+            }
         }
         std::size_t cur = bad.load();
         while (first < cur && !bad.compare_exchange_weak(cur, first)) {
@@ -477,7 +544,29 @@ std::string spectral_channel_name(double wavelength_nm) {
 
 SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm, const Observer& observer,
                              int width, const SkyImageOptions& options, Progress* progress) {
+    return render_equirect_sky(method, atm, observer, {}, width, options, progress);
+}
+
+SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm, const Observer& observer,
+                             std::span<const ExtraSun> extra, int width, const SkyImageOptions& options,
+                             Progress* progress) {
     options.validate();
+    std::vector<Observer> extra_obs;  // each extra sun as the observer's sun
+    for (const ExtraSun& x : extra) {
+        const glm::dvec3& v = x.direction;
+        if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) ||
+            (v.x == 0.0 && v.y == 0.0 && v.z == 0.0))
+            throw InvalidArgument("extra_suns", "each direction must be a finite non-zero vector");
+        if (!(x.irradiance_scale >= 0.0) || !std::isfinite(x.irradiance_scale))
+            throw InvalidArgument(
+                "extra_suns",
+                fmt::format("irradiance_scale must be finite and >= 0, got {}", x.irradiance_scale));
+        if (options.clouds)
+            throw InvalidArgument("extra_suns", "not with clouds (they would be lit by the first sun alone)");
+        Observer o = observer;
+        o.sun_direction = v;
+        extra_obs.push_back(o.validated());
+    }
     require_in_range("width", width, 4, 16384, "pixels");
     if (width % 2 != 0)
         throw InvalidArgument("width", fmt::format("must be even (height = width / 2), got {}", width));
@@ -510,6 +599,9 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm, con
     const std::size_t band_pixels = std::size_t(band_rows) * std::size_t(W);
     const auto directions = huge_buffer<glm::dvec3>(band_pixels);
     const auto scratch = huge_buffer<float>(in_place ? 0 : band_pixels * nc);
+    std::vector<std::unique_ptr<float[], FreeDeleter>> extra_scratch;
+    for (std::size_t k = 0; k < extra.size(); ++k)
+        extra_scratch.push_back(huge_buffer<float>(band_pixels * nc));
     std::optional<GroundShading> ground;
     if (options.ground) ground.emplace(atm, obs, options.ground_albedo, H);
     // Clouds: the illumination is built once; the cloud transmittance of every pixel is
@@ -526,12 +618,25 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm, con
         const std::size_t n = std::size_t(rows) * std::size_t(W);
         pixel_directions.fill(row0, rows, directions.get());
         const std::span<const glm::dvec3> dirs(directions.get(), n);
-        ProgressStage stage(progress, double(band) / bands, double(band + 1) / bands);
+        // The band's progress, shared by its suns' radiance calls.
+        const double parts = double(1 + extra.size()), f0 = double(band) / bands,
+                     f1 = double(band + 1) / bands;
+        ProgressStage stage(progress, f0, f0 + (f1 - f0) / parts);
         Progress* band_progress = progress ? &stage : nullptr;
         float* dst = image.pixels.data() + std::size_t(row0) * std::size_t(W) * out_nc;
         float* sky = in_place ? dst : scratch.get();
         method.radiance(atm, obs, dirs, std::span<float>(sky, n * nc), {}, band_progress);
-        if (ground) ground->add(row0, rows, W, directions.get(), sky);
+        if (ground) ground->add(row0, rows, W, directions.get(), obs.sun_direction, sky);
+        std::vector<ExtraBand> extra_bands;
+        for (std::size_t k = 0; k < extra.size(); ++k) {
+            ProgressStage part(progress, f0 + (f1 - f0) * double(k + 1) / parts,
+                               f0 + (f1 - f0) * double(k + 2) / parts);
+            float* x = extra_scratch[k].get();
+            method.radiance(atm, extra_obs[k], dirs, std::span<float>(x, n * nc), {},
+                            progress ? &part : nullptr);
+            if (ground) ground->add(row0, rows, W, directions.get(), extra_obs[k].sun_direction, x);
+            extra_bands.push_back({x, float(extra[k].irradiance_scale)});
+        }
         std::optional<BandClouds> clouds;
         if (options.clouds) {
             clouds = march_band_clouds(options, *cloud_light, atm, obs, dirs, W,
@@ -540,8 +645,8 @@ SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atm, con
             std::copy(clouds->march.transmittance.begin(), clouds->march.transmittance.end(),
                       cloud_transmittance.begin() + std::ptrdiff_t(row0) * W);
         }
-        const std::size_t bad =
-            composite_and_convert(sky, dst, n, nc, rgb ? &*sky_to_rgb : nullptr, clouds ? &*clouds : nullptr);
+        const std::size_t bad = composite_and_convert(sky, dst, n, nc, rgb ? &*sky_to_rgb : nullptr,
+                                                      clouds ? &*clouds : nullptr, extra_bands);
         if (bad != kNone) {
             const glm::dvec3 d = directions[bad];
             throw std::runtime_error(

@@ -2,7 +2,7 @@
 // The moon as a light source (astro/moonlight.hpp, night/moonlit_sky.hpp): its
 // illuminance on the ground against Krisciunas & Schaefer 1991, its disc's energy in the
 // sky image against its irradiance at any resolution, the phase's shape, and the moonlit
-// sky's linearity.
+// sky's linearity, in one pass with the sun's, and the disc as a formula for hosts.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -179,6 +179,119 @@ TEST(Moonlight, MoonlitSkyIsTheScaledSky) {
     double added = 0.0;
     for (std::size_t k = 0; k < night.pixels.size(); ++k) added += with_disc.pixels[k] - night.pixels[k];
     EXPECT_GT(added, 0.0);
+}
+
+// One pass for two suns (render_equirect_sky with an ExtraSun, what the moonlit sky uses)
+// equals the sum of two separate renders, pixel by pixel, up to float rounding: RGB with
+// the default four wavelengths (converted and gamut-mapped per sun: a twilight sun's sky
+// has out-of-gamut pixels), three wavelengths (converted in place) and spectral, with and
+// without the lit ground.
+TEST(Moonlight, ExtraSunIsTheSumOfSeparateRenders) {
+    const auto method = make_sky_method("lut");
+    const Atmosphere four = Atmosphere::preset("clear_day");
+    const Atmosphere three = Atmosphere::preset("bruneton2017", {680.0, 550.0, 440.0});
+    const ExtraSun moon{from_elevation_azimuth(25.0, 200.0), 2.5e-6};
+    for (const Atmosphere* atm : {&four, &three})
+        for (double sun_elevation : {30.0, -4.0})
+            for (auto output : {SkyImageOptions::Output::Rgb, SkyImageOptions::Output::Spectral})
+                for (bool ground : {true, false}) {
+                    Observer o;
+                    o.sun_direction = from_elevation_azimuth(sun_elevation, 10.0);
+                    SkyImageOptions options;
+                    options.output = output;
+                    options.ground = ground;
+                    options.exposure = 3.0;
+                    const SkyImage both =
+                        render_equirect_sky(*method, *atm, o, std::span(&moon, 1), 64, options);
+                    const SkyImage sun = render_equirect_sky(*method, *atm, o, 64, options);
+                    Observer mo = o;
+                    mo.sun_direction = moon.direction;
+                    SkyImageOptions moon_options = options;
+                    moon_options.sun_disc = false;
+                    const SkyImage lit = render_equirect_sky(*method, *atm, mo, 64, moon_options);
+                    ASSERT_EQ(both.pixels.size(), sun.pixels.size());
+                    double max_rel = 0.0, moon_share = 0.0;
+                    for (std::size_t k = 0; k < both.pixels.size(); ++k) {
+                        const double m = moon.irradiance_scale * lit.pixels[k];
+                        const double expected = sun.pixels[k] + m;
+                        max_rel =
+                            std::max(max_rel, std::abs(both.pixels[k] - expected) /
+                                                  std::max(1e-30, std::abs(sun.pixels[k]) + std::abs(m)));
+                        moon_share = std::max(moon_share, std::abs(m) / std::max(1e-30, std::abs(expected)));
+                    }
+                    EXPECT_LT(max_rel, 1e-6) << atm->channels() << " wavelengths, sun " << sun_elevation;
+                    EXPECT_GT(moon_share, 1e-9);  // the moon's part is there, not rounded away
+                }
+    // Not with clouds; bad extra suns are named.
+    using test::parameter_of;
+    const Observer o;
+    EXPECT_EQ(parameter_of([&] {
+                  const ExtraSun bad{{0.0, 0.0, 0.0}, 1.0};
+                  render_equirect_sky(*method, four, o, std::span(&bad, 1), 16);
+              }),
+              "extra_suns");
+    EXPECT_EQ(parameter_of([&] {
+                  const ExtraSun bad{{0.0, 0.0, 1.0}, -1.0};
+                  render_equirect_sky(*method, four, o, std::span(&bad, 1), 16);
+              }),
+              "extra_suns");
+}
+
+// The disc as a formula (moon_disc_model, drawn by hosts from the view direction): the
+// far-away Lommel-Seeliger law's integral over the disc is the closed form
+// moon_disc_relative_integral_far (quadrature in polar coordinates about the centre, within
+// 1e-4 at phases 0-150 degrees), close to the exact finite-distance law's (within 3 %, the
+// difference of order the angular radius, largest at thin crescents); and the model's
+// radiance integrates to the moon's irradiance through the air, E_sun ratio T.
+TEST(Moonlight, DiscModelIntegratesToTheIrradiance) {
+    const std::array<double, 3> m{0.0, 0.0, 1.0};
+    const double radius = 0.259 * kDegree;
+    for (double alpha : {0.0, 30.0, 90.0, 150.0}) {
+        const double a = alpha * kDegree;
+        const std::array<double, 3> s{std::sin(a), 0.0, -std::cos(a)};
+        // Over theta in [0, pi/2) with sin(rho) = sin(radius) sin(theta) (mu = cos theta
+        // on the far form's disc: smooth to the limb), psi around:
+        // dOmega = sin(rho) sin(radius) cos(theta) / cos(rho) dtheta dpsi.
+        const int nt = 600, np = 1200;
+        double far = 0.0, exact = 0.0;
+        for (int i = 0; i < nt; ++i) {
+            const double theta = 0.5 * kPi * (i + 0.5) / nt;
+            const double rho = std::asin(std::sin(radius) * std::sin(theta));
+            const double w = std::sin(rho) * std::sin(radius) * std::cos(theta) / std::cos(rho) *
+                             (0.5 * kPi / nt) * (kTwoPi / np);
+            for (int k = 0; k < np; ++k) {
+                const double psi = kTwoPi * (k + 0.5) / np;
+                const std::array<double, 3> v{std::sin(rho) * std::cos(psi), std::sin(rho) * std::sin(psi),
+                                              std::cos(rho)};
+                far += moon_disc_relative_radiance_far(v, m, radius, s) * w;
+                exact += moon_disc_relative_radiance(v, m, radius, s) * w;
+            }
+        }
+        const double closed = moon_disc_relative_integral_far(a, radius);
+        EXPECT_NEAR(far / closed, 1.0, 1e-4) << "phase " << alpha;
+        EXPECT_NEAR(exact / closed, 1.0, 0.03) << "phase " << alpha;
+    }
+    EXPECT_NEAR(moon_disc_relative_integral_far(0.0, radius), 0.5 * kPi * std::pow(std::sin(radius), 2),
+                1e-15);
+    EXPECT_EQ(moon_disc_relative_integral_far(kPi, radius), 0.0);
+
+    const Atmosphere atm = Atmosphere::preset("bruneton2017");
+    Moon moon;
+    moon.direction = from_elevation_azimuth(35.0, 80.0);
+    moon.angular_radius_rad = radius;
+    moon.sun_from_moon = sun_from_moon(moon.direction, 70.0);
+    moon.irradiance_ratio = moon_irradiance_ratio(70.0, kMeanMoon_m, kAu_m);
+    const MoonDiscModel model = moon_disc_model(atm, Observer{}, moon);
+    EXPECT_NEAR(model.phase_angle_rad / kDegree, 70.0, 1e-9);
+    Observer mo;
+    mo.sun_direction = moon.direction;
+    Atmosphere moon_atm = atm;
+    moon_atm.sun_angular_radius_rad = radius;
+    const SunRadiometry air = sun_radiometry(moon_atm, mo.validated());
+    for (std::size_t c = 0; c < atm.channels(); ++c)
+        EXPECT_NEAR(model.radiance_scale[c] * model.relative_integral_sr /
+                        (atm.solar_irradiance[c] * moon.irradiance_ratio * air.transmittance[c]),
+                    1.0, 1e-12);
 }
 
 TEST(Moonlight, BadInputNamesTheParameter) {

@@ -219,3 +219,70 @@ def test_request_rejects_a_bad_moon():
         sky_request.validate(
             sky_request.SkyRequest(moon_direction=(0.0, 0.0, 1.0), moon_irradiance_ratio=-1.0), welkin
         )
+
+
+@pytest.mark.parametrize("hours, north", [(23.75, 0.0), (23.75, 30.0), (21.5, 0.0)])
+def test_world_moon_disc_is_the_moon_lamps_light(hours, north):
+    """The moon's disc the world's nodes draw (sky_compute.MoonDiscModel, welkin.moon_disc):
+    its radiance, scale x the core's law (welkin.moon_disc_relative_radiance), integrated
+    over the disc on a fine polar grid about its centre, is the moon lamp's light (colour x
+    strength: the moon whole above the horizon) within 1e-4, at any north and exposure; the
+    law is lit on the sun's side (its light's centroid towards the sun seen from the moon);
+    no moon in the request, no disc."""
+    b = place_time.bodies(welkin, dataclass_with(PARIS, hours=hours, north_deg=north))
+    assert b.moon_direction[2] > 0.1
+    request = sky_request.SkyRequest(
+        width=256,
+        method="lut",
+        exposure=4.0,
+        sun_direction=b.sun_direction,
+        moon_direction=b.moon_direction,
+        moon_irradiance_ratio=b.moon_irradiance_ratio,
+        moon_angular_radius_rad=b.moon_angular_radius_rad,
+        sun_from_moon=b.sun_from_moon,
+    )
+    result = sky_compute.compute(welkin, request)
+    moon = result.moon_disc
+    assert moon is not None
+    m, p, alpha = np.array(moon.direction), np.array(moon.sun_from_moon), moon.radius_rad
+    # A polar grid about m: rho in [0, alpha), psi around.
+    e1 = np.cross(m, [0.0, 0.0, 1.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(m, e1)
+    nr, npsi = 1000, 2000
+    rho = (np.arange(nr) + 0.5) / nr * alpha
+    psi = (np.arange(npsi) + 0.5) / npsi * 2.0 * np.pi
+    r, q = np.meshgrid(rho, psi, indexing="ij")
+    views = (
+        np.cos(r)[..., None] * m
+        + (np.sin(r) * np.cos(q))[..., None] * e1
+        + (np.sin(r) * np.sin(q))[..., None] * e2
+    ).reshape(-1, 3)
+    law = welkin.moon_disc_relative_radiance(views, m, p, alpha)
+    weights = (np.sin(r) * (alpha / nr) * (2.0 * np.pi / npsi)).reshape(-1)
+    energy = moon.scale_rgb * float((law * weights).sum())
+    atm = sky_request.build_atmosphere(request, welkin)
+    lamp = place_time.moon_lamp(
+        welkin, atm, 0.0, b.moon_direction, b.moon_irradiance_ratio, b.moon_angular_radius_rad, 4.0
+    )
+    assert np.allclose(energy, np.asarray(lamp.color) * lamp.strength_w_m2, rtol=1e-4, atol=0.0)
+    centroid = (views * (law * weights)[:, None]).sum(axis=0)
+    towards = p - np.dot(p, m) * m
+    assert np.dot(centroid - np.dot(centroid, m) * m, towards) > 0.0
+    assert moon.horizon_z == pytest.approx(sky_compute.horizon_z(atm, 0.0))
+    plain = sky_compute.compute(welkin, dataclass_with(request, moon_direction=(), sun_from_moon=()))
+    assert plain.moon_disc is None
+    assert sky_compute.compute(welkin, request, disc=False).moon_disc is None
+
+
+def test_moon_disc_names_bad_input():
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    good = ((0.0, 0.6, 0.8), (0.0, -0.6, 0.8), 0.0045, 2e-6)
+    with pytest.raises(ValueError, match="moon_direction"):
+        welkin.moon_disc(atm, 0.0, (0.0, 0.0, 0.0), *good[1:])
+    with pytest.raises(ValueError, match="irradiance_ratio"):
+        welkin.moon_disc(atm, 0.0, *good[:3], 1.0)
+    with pytest.raises(ValueError, match="exposure"):
+        welkin.moon_disc(atm, 0.0, *good, exposure=0.0)
+    with pytest.raises(ValueError, match="views"):
+        welkin.moon_disc_relative_radiance(np.zeros((2, 2)), *good[:3])

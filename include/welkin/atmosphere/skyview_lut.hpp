@@ -44,7 +44,8 @@ public:
     // view_geometry() gives them. Writes lanes [0, count) of each view's radiance to
     // out[i * stride + c]. The same values as one call per view, computed in blocks: a
     // pass over the block for the texel coordinates (the angles, the acos and the latitude
-    // mapping: arithmetic only, it vectorises), then the bilinear fetches.
+    // mapping: arithmetic only, it vectorises), then the bilinear fetches. A LUT whose
+    // texels are all 0 (no light: the sun far below the horizon) writes 0 at once.
     void radiance(std::span<const glm::dvec3> directions, const glm::dvec3& sun, std::size_t count,
                   float* out, std::size_t stride) const;
 
@@ -57,6 +58,7 @@ public:
 private:
     double r_, theta_h_, beta_;
     Texture2D texture_;
+    bool dark_ = false;  // every texel 0
 };
 
 }  // namespace welkin

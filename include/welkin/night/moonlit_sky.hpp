@@ -9,7 +9,10 @@
 // the solar irradiance scaled by that ratio (the method's LUTs are reused, nothing is
 // refitted), and the ground below the horizon is lit by it in the same way. Radiance
 // adds: the image is render_equirect_sky for the sun (its disc included) plus the same for
-// that dimmer "sun" without its disc, plus the moon's disc.
+// that dimmer "sun" without its disc, plus the moon's disc. Without clouds both skies are
+// rendered in one pass over the image (render_equirect_sky with an ExtraSun: shared
+// directions, pixels and conversion; the same image to float rounding); with clouds the
+// moon's is a render of its own, its clouds lit by the moon.
 //
 // The moon's disc. Across the disc the radiance follows the Lommel-Seeliger law
 // (moon_disc_relative_radiance: zero beyond the terminator, so the phase shows), times the
@@ -81,5 +84,20 @@ SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere
 // exposure): for tests and for hosts that keep the disc in an image of their own.
 std::vector<float> moon_disc_pixels(const Atmosphere& atmosphere, const Observer& observer, const Moon& moon,
                                     int width, SkyImageOptions::Output output);
+
+// The moon's disc as a formula of the view direction v, for hosts that draw it themselves
+// (the Blender add-on's world nodes, which show it to camera rays while a moon lamp lights
+// the scene): where v is above the horizon,
+//     L(v) = radiance_scale[c] x moon_disc_relative_radiance_far(v, ...)   (astro/moonlight.hpp),
+// radiance_scale = E_sun(lambda) x irradiance_ratio x T(lambda) / relative_integral_sr,
+// with T the transmittance towards the moon (as moon_disc_pixels) and relative_integral_sr
+// = moon_disc_relative_integral_far: the disc's integral is the moon's irradiance at the
+// observer, as the image's is. Before the exposure; spectral, per wavelength.
+struct MoonDiscModel {
+    std::vector<double> radiance_scale;  // W m^-2 sr^-1 nm^-1 per unit relative radiance
+    double relative_integral_sr = 0.0;   // 0 at a new moon (then the scale is 0)
+    double phase_angle_rad = 0.0;
+};
+MoonDiscModel moon_disc_model(const Atmosphere& atmosphere, const Observer& observer, const Moon& moon);
 
 }  // namespace welkin

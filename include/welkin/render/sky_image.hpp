@@ -68,8 +68,11 @@
 
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
+
+#include <glm/vec3.hpp>
 
 #include "welkin/clouds/lighting.hpp"
 #include "welkin/color/color_space.hpp"
@@ -122,6 +125,29 @@ struct SkyImage {
 // non-finite radiance.
 SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atmosphere, const Observer& observer,
                              int width, const SkyImageOptions& options = {}, Progress* progress = nullptr);
+
+// A further sun lighting the same sky, without a disc: in `direction` (Z up), its
+// irradiance at the top of the atmosphere `irradiance_scale` times the atmosphere's solar
+// irradiance at every wavelength (the moon, sunlight it reflects: night/moonlit_sky.hpp).
+// Every method's radiance and the lit ground are linear in the solar irradiance, so its
+// sky is the method's sky for a sun there, times the scale.
+struct ExtraSun {
+    glm::dvec3 direction{0.0, 0.0, 1.0};
+    double irradiance_scale = 0.0;  // >= 0, finite
+};
+
+// render_equirect_sky plus the skies of `extra` suns, in one pass over the image: per band
+// of rows, the method's radiance and the lit ground of each sun, then per pixel each sun's
+// spectrum converted to RGB and brought into the gamut on its own (as separate images
+// would be) and summed, times the scale. The image equals render_equirect_sky for the
+// observer's sun plus, per extra sun, irradiance_scale x render_equirect_sky for a sun in
+// its direction with sun_disc off, up to float rounding; the directions, the pixels and
+// the conversion are shared, and each extra sun costs its radiance and ground only.
+// Not with clouds (the clouds would be lit by the observer's sun alone): InvalidArgument
+// naming extra_suns; likewise for a zero or non-finite direction or a negative scale.
+SkyImage render_equirect_sky(const SkyMethod& method, const Atmosphere& atmosphere, const Observer& observer,
+                             std::span<const ExtraSun> extra, int width, const SkyImageOptions& options = {},
+                             Progress* progress = nullptr);
 
 // Spectral channel name for a wavelength, e.g. 550 -> "S0.550nm", 550.5 -> "S0.550,5nm".
 std::string spectral_channel_name(double wavelength_nm);

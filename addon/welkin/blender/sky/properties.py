@@ -152,7 +152,8 @@ class WelkinWorldSettings(bpy.types.PropertyGroup):
         name="Sun Disc for Camera",
         default=True,
         update=_changed,
-        description="Show the sun's disc to camera rays (the lamp does the lighting)",
+        description="Show the sun's disc (and, with Place and Time, the moon's) to camera rays "
+        "(the lamps do the lighting)",
     )
     show_ground: bpy.props.BoolProperty(
         name="Ground Below Horizon",

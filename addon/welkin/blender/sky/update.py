@@ -121,14 +121,14 @@ def clouds_of(scene, depsgraph=None):
 def sky_key(settings, request, clouds):
     """Changes whenever the world's images would: the request, the disc and lamp switches,
     and the clouds (their layers, and each volume's file for the frame and placement)."""
-    # "disc nodes": a file saved while the disc was an image gets its nodes at the first
-    # update.
+    # "disc nodes": a file saved while the disc was an image, or before the moon's disc
+    # was drawn, gets its nodes at the first update.
     c = settings.id_data.welkin_clouds
     key = request.key() + repr(
         (
             settings.show_sun_disc,
             settings.sync_lamp,
-            "disc nodes",
+            "disc and moon disc nodes",
             c.shadows,
             c.ground_shadows and (c.shadow_extent_m, c.shadow_height_m, c.shadow_resolution),
         )
@@ -288,7 +288,7 @@ def apply_sky(scene, request, lamp, key, result, outcome, *, pack, depsgraph=Non
     images.write(sky, result.sky)
     if pack:
         images.pack(sky)
-    world_nodes.install(scene.world, settings, sky, result.disc)
+    world_nodes.install(scene.world, settings, sky, result.disc, result.moon_disc)
     images.drop_disc_image(settings)  # files from before the disc was drawn by nodes
     clouds = scene.world.welkin_clouds
     clouds.lamp_transmittance = result.lamp_transmittance

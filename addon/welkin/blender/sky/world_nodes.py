@@ -9,11 +9,12 @@ nodes and makes the user's output active again, which restores the tree exactly.
 The tree (energy appears once, docs/design.md):
 
     Environment Texture (sky, no disc) -> Background ---------------------------\
-    the sun's disc from the view direction -> Background (strength = Is Camera Ray) -> Add -> World Output
+    the sun's disc from the view direction -> Background (strength = Is Camera Ray) -> Add -\
+    the moon's disc from the view direction -> Background (strength = Is Camera Ray) -> Add -> World Output
 
-The sun lamp lights the scene; the disc's Background has strength "Is Camera Ray", so
-camera rays see the disc while diffuse, glossy and shadow rays, and Cycles' importance map
-of the world, see the sky alone.
+The sun lamp (and the moon lamp, Place and Time) lights the scene; the discs' Backgrounds
+have strength "Is Camera Ray", so camera rays see the discs while diffuse, glossy and
+shadow rays, and Cycles' importance map of the world, see the sky alone.
 
 The disc is drawn analytically, so it is round and sharp at any focal length and world
 resolution (sky_compute.DiscModel): with D the normalised view direction (Texture
@@ -24,6 +25,14 @@ direction of the disc's centre,
     L = sum_k c_k mu^k  (Horner, one Vector Math Multiply Add per power, RGB at once),
 shown where s < 1, D.S > 0 and D.z is above the horizon. The numbers (S, alpha, the
 horizon, c_k) are the nodes' input values, written at every update.
+
+The moon's disc (sky_compute.MoonDiscModel) with its phase: with M its centre and P the
+direction from the moon towards the sun, s and mu as above, and
+    mu0 = (D x M) . W - mu (M . P),   W = (P x M) / sin alpha   (a constant),
+L = K mu0 / (mu0 + mu) where mu0 > 0 (the lit side: the terminator is mu0 = 0), s < 1,
+D.M > 0 and above the horizon: the Lommel-Seeliger law seen from afar, K the RGB scale that
+makes its integral the moon's irradiance. The nodes always exist (zero when there is no
+moon), so that a farm bake keys the same nodes on every frame.
 
 Cycles' world importance map: on "Automatic" it takes the resolution of the largest
 environment texture, and building a 2048 x 1024 map took 4.3 s per render here (two
@@ -150,9 +159,88 @@ def _disc_nodes(tree, frame, x, y, disc):
     return radiance.outputs["Vector"]
 
 
-def install(world, settings, sky_image, disc):
+def _moon_disc_nodes(tree, frame, x, y, view, view_z, moon):
+    """The moon's disc with its phase from the view direction (module docstring); returns
+    the output socket of its colour. `view`, `view_z`: the sun disc's normalised view
+    direction and its Separate XYZ. `moon`: a sky_compute.MoonDiscModel, or None."""
+    links = tree.links
+    cross = _math(tree, "moon_cross", "CROSS_PRODUCT", (x, y), frame, vector=True)
+    sin_rho = _math(tree, "moon_sin_rho", "LENGTH", (x + 180, y), frame, vector=True)
+    s = _math(tree, "moon_s", "DIVIDE", (x + 360, y), frame)
+    s2 = _math(tree, "moon_s2", "MULTIPLY", (x + 540, y), frame)
+    mu2 = _math(tree, "moon_mu2", "SUBTRACT", (x + 720, y), frame, 1.0)
+    mu2.use_clamp = True
+    mu = _math(tree, "moon_mu", "SQRT", (x + 900, y), frame)
+    links.new(view.outputs["Vector"], cross.inputs[0])
+    links.new(cross.outputs["Vector"], sin_rho.inputs[0])
+    links.new(sin_rho.outputs["Value"], s.inputs[0])
+    links.new(s.outputs["Value"], s2.inputs[0])
+    links.new(s.outputs["Value"], s2.inputs[1])
+    links.new(s2.outputs["Value"], mu2.inputs[1])
+    links.new(mu2.outputs["Value"], mu.inputs[0])
+    # mu0 = (D x M) . W - mu (M . P), on the lit side only; L = mu0 / (mu0 + mu).
+    lit = _math(tree, "moon_w", "DOT_PRODUCT", (x + 180, y - 180), frame, vector=True)
+    mu0 = _math(tree, "moon_mu0", "MULTIPLY_ADD", (x + 1080, y - 180), frame)
+    mu0_lit = _math(tree, "moon_mu0_lit", "MAXIMUM", (x + 1260, y - 180), frame, None, 0.0)
+    total = _math(tree, "moon_mu0_mu", "ADD", (x + 1440, y - 180), frame)
+    law = _math(tree, "moon_law", "DIVIDE", (x + 1620, y - 180), frame)  # 0 / 0 gives 0
+    links.new(cross.outputs["Vector"], lit.inputs[0])
+    links.new(mu.outputs["Value"], mu0.inputs[0])
+    links.new(lit.outputs["Value"], mu0.inputs[2])
+    links.new(mu0.outputs["Value"], mu0_lit.inputs[0])
+    links.new(mu0_lit.outputs["Value"], total.inputs[0])
+    links.new(mu.outputs["Value"], total.inputs[1])
+    links.new(mu0_lit.outputs["Value"], law.inputs[0])
+    links.new(total.outputs["Value"], law.inputs[1])
+    # Where the disc is: s < 1, in front (D.M > 0), above the horizon.
+    inside = _math(tree, "moon_inside", "LESS_THAN", (x + 540, y - 360), frame, None, 1.0)
+    dot = _math(tree, "moon_dot", "DOT_PRODUCT", (x, y - 540), frame, vector=True)
+    front = _math(tree, "moon_front", "GREATER_THAN", (x + 180, y - 540), frame, None, 0.0)
+    above = _math(tree, "moon_above", "GREATER_THAN", (x + 180, y - 720), frame)
+    mask_a = _math(tree, "moon_mask_a", "MULTIPLY", (x + 720, y - 450), frame)
+    mask = _math(tree, "moon_mask", "MULTIPLY", (x + 900, y - 450), frame)
+    shown = _math(tree, "moon_shown", "MULTIPLY", (x + 1800, y - 270), frame)
+    links.new(s.outputs["Value"], inside.inputs[0])
+    links.new(view.outputs["Vector"], dot.inputs[0])
+    links.new(dot.outputs["Value"], front.inputs[0])
+    links.new(view_z.outputs["Z"], above.inputs[0])
+    links.new(inside.outputs["Value"], mask_a.inputs[0])
+    links.new(front.outputs["Value"], mask_a.inputs[1])
+    links.new(mask_a.outputs["Value"], mask.inputs[0])
+    links.new(above.outputs["Value"], mask.inputs[1])
+    links.new(law.outputs["Value"], shown.inputs[0])
+    links.new(mask.outputs["Value"], shown.inputs[1])
+    radiance = _math(tree, "moon_radiance", "SCALE", (x + 1980, y - 270), frame, vector=True)
+    links.new(shown.outputs["Value"], radiance.inputs["Scale"])
+    # The numbers.
+    if moon is not None:
+        m = tuple(float(c) for c in moon.direction)
+        p = tuple(float(c) for c in moon.sun_from_moon)
+        sin_alpha = math.sin(moon.radius_rad)
+        w = (
+            (p[1] * m[2] - p[2] * m[1]) / sin_alpha,
+            (p[2] * m[0] - p[0] * m[2]) / sin_alpha,
+            (p[0] * m[1] - p[1] * m[0]) / sin_alpha,
+        )
+        m_dot_p = m[0] * p[0] + m[1] * p[1] + m[2] * p[2]
+        horizon, scale = moon.horizon_z, tuple(float(c) for c in moon.scale_rgb)
+    else:
+        m, w, m_dot_p, sin_alpha, horizon = (0.0, 0.0, 1.0), (0.0, 0.0, 0.0), 0.0, 1.0, 2.0
+        scale = (0.0, 0.0, 0.0)
+    cross.inputs[1].default_value = m
+    dot.inputs[1].default_value = m
+    lit.inputs[1].default_value = w
+    mu0.inputs[1].default_value = -m_dot_p
+    s.inputs[1].default_value = sin_alpha
+    above.inputs[1].default_value = horizon
+    radiance.inputs[0].default_value = scale
+    return radiance.outputs["Vector"]
+
+
+def install(world, settings, sky_image, disc, moon_disc=None):
     """Adds (or refreshes) the add-on's nodes and makes its output active. `disc`: the
-    sun's sky_compute.DiscModel, or None (no disc)."""
+    sun's sky_compute.DiscModel, or None (no disc); `moon_disc`: the moon's
+    sky_compute.MoonDiscModel, or None (no moon disc)."""
     if not settings.active:
         settings.previous_use_nodes = compat.world_uses_nodes(world)
     tree = compat.world_node_tree(world)
@@ -186,22 +274,37 @@ def install(world, settings, sky_image, disc):
     bg_sky = _node(tree, "sky_background", "ShaderNodeBackground", (x0 + 320, y0), frame)
     bg_sky.inputs["Strength"].default_value = 1.0
     disc_color = _disc_nodes(tree, frame, x0 - 1400, y0 - 350, disc)
+    moon_color = _moon_disc_nodes(
+        tree,
+        frame,
+        x0 - 2000,
+        y0 - 1000,
+        _node(tree, "disc_view", "ShaderNodeVectorMath", (0, 0), frame),  # made by _disc_nodes
+        _node(tree, "disc_view_z", "ShaderNodeSeparateXYZ", (0, 0), frame),
+        moon_disc,
+    )
     path = _node(tree, "light_path", "ShaderNodeLightPath", (x0 + 300, y0 - 650), frame)
     bg_disc = _node(tree, "disc_background", "ShaderNodeBackground", (x0 + 520, y0 - 350), frame)
+    bg_moon = _node(tree, "moon_background", "ShaderNodeBackground", (x0 + 520, y0 - 900), frame)
     add = _node(tree, "add", "ShaderNodeAddShader", (x0 + 720, y0 - 100), frame)
-    out = _node(tree, "output", "ShaderNodeOutputWorld", (x0 + 920, y0 - 100), frame)
+    add_moon = _node(tree, "moon_add", "ShaderNodeAddShader", (x0 + 900, y0 - 300), frame)
+    out = _node(tree, "output", "ShaderNodeOutputWorld", (x0 + 1100, y0 - 100), frame)
     links = tree.links
     links.new(sky.outputs["Color"], bg_sky.inputs["Color"])
     links.new(disc_color, bg_disc.inputs["Color"])
-    if settings.show_sun_disc and disc is not None:
-        links.new(path.outputs["Is Camera Ray"], bg_disc.inputs["Strength"])
-    else:
-        for link in list(bg_disc.inputs["Strength"].links):
-            links.remove(link)
-        bg_disc.inputs["Strength"].default_value = 0.0
+    links.new(moon_color, bg_moon.inputs["Color"])
+    for bg, model in ((bg_disc, disc), (bg_moon, moon_disc)):
+        if settings.show_sun_disc and model is not None:
+            links.new(path.outputs["Is Camera Ray"], bg.inputs["Strength"])
+        else:
+            for link in list(bg.inputs["Strength"].links):
+                links.remove(link)
+            bg.inputs["Strength"].default_value = 0.0
     links.new(bg_sky.outputs["Background"], add.inputs[0])
     links.new(bg_disc.outputs["Background"], add.inputs[1])
-    links.new(add.outputs["Shader"], out.inputs["Surface"])
+    links.new(add.outputs["Shader"], add_moon.inputs[0])
+    links.new(bg_moon.outputs["Background"], add_moon.inputs[1])
+    links.new(add_moon.outputs["Shader"], out.inputs["Surface"])
     out.target = "ALL"
     for n in tree.nodes:
         if n.bl_idname == "ShaderNodeOutputWorld" and n is not out:
