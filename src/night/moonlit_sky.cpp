@@ -229,7 +229,8 @@ SkyImage render_equirect_sky_with_moon(const SkyMethod& method, const Atmosphere
             if (clouds_by_sunlight) {
                 night::add_under_clouds(image, moonlit.pixels, ratio);
             } else {
-                for (std::size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] += ratio * moonlit.pixels[k];
+                for (std::size_t k = 0; k < image.pixels.size(); ++k)
+                    image.pixels[k] += ratio * moonlit.pixels[k];
             }
         }
     }

@@ -434,16 +434,16 @@ class CloudLayer(CloudDensity):
     cloud type, wind). cloud_type is a preset name: "cumulus" (the default), "stratocumulus",
     "altocumulus", "stratus" or "cirrus"; every other parameter left as None takes the
     preset's value (welkin.cloud_type_preset(name) lists them). Altitudes in metres above
-    the ground; coverage the share of the ground's area under cloud (a column is cloudy when
-    its vertical optical depth reaches 0.3), or with coverage_measure="dome" the share of the
-    sky dome a ground observer sees covered (oktas / 8: directions above 5 degrees whose slant
-    optical depth reaches 0.3); density_per_m the extinction of the densest
+    the ground; coverage the share of the sky dome a ground observer sees covered (oktas / 8:
+    directions above 5 degrees whose slant optical depth reaches 0.3), or with
+    coverage_measure="area" the share of the ground's area under cloud (a column is cloudy
+    when its vertical optical depth reaches 0.3); density_per_m the extinction of the densest
     cloud (m^-1); wind_offset_m carries the field (x, y in m) and evolution_m moves its noise
     through the layer's height (m): keyed over time the shapes change in place;
     origin_altitude_m the world origin's (observer's) altitude. ValueError names a bad
     parameter.
     """
-    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, coverage_measure: str = 'area', density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
+    def __init__(self, *, cloud_type: str = 'cumulus', bottom_altitude_m: typing.Any = None, top_altitude_m: typing.Any = None, coverage: typing.Any = None, coverage_measure: str = 'dome', density_per_m: typing.Any = None, base_scale_m: typing.Any = None, detail_scale_m: typing.Any = None, weather_scale_m: typing.Any = None, detail_strength: typing.Any = None, weather_variation: typing.Any = None, wind_offset_m: typing.Any = (0.0, 0.0), evolution_m: float = 0.0, seed: int = 1, planet_radius_m: float = 6360000.0, origin_altitude_m: float = 0.0) -> None:
         ...
     def covered_fraction(self, columns: int = 2048) -> float:
         """
@@ -462,6 +462,11 @@ class CloudLayer(CloudDensity):
     @property
     def coverage(self) -> float:
         ...
+    @property
+    def coverage_measure(self) -> str:
+        """
+        What coverage measures: "dome" (the sky a ground observer sees covered, oktas / 8) or "area" (the ground's area under cloud).
+        """
     @property
     def seed(self) -> int:
         ...
@@ -832,13 +837,22 @@ def moon_disc_relative_radiance(views: numpy.ndarray[numpy.float64], moon_direct
     (normalised here): mu0 / (mu0 + mu) on the lit, visible disc, 0 elsewhere; times
     moon_disc's radiance_scale_rgb it is the disc's radiance.
     """
-def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
+def night_glow_image(atmosphere: Atmosphere, width: int, output: str = 'rgb', *, altitude_m: float = 0.0, exposure: float = 1.0, color_space: str = 'rec709', time: typing.Any = None, latitude_deg: float = 0.0, longitude_deg: float = 0.0, height_m: float = 0.0, north_deg: float = 0.0, airglow: bool = True, zodiacal_light: bool = True) -> numpy.ndarray[numpy.float32]:
     """
-    The night sky's own light alone (airglow, zodiacal light, unresolved stars:
-    Krisciunas & Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith,
-    van Rhijn's brightening towards the horizon, dimmed by the air), as an
+    The night sky's own light alone (include/welkin/night/night_glow.hpp), as an
     equirectangular (height, width, channels) float32 image times exposure; 0 below
-    the horizon. Same units and colour spaces as sky_image.
+    the horizon. Same units and colour spaces as sky_image. Its parts:
+    airglow=True: the upper atmosphere's glow (O I 557.7 nm, Na D, O I 630/636 nm and
+    its continuum) from a layer 97 km up, brightening towards the horizon by van
+    Rhijn's factor; zodiacal_light=True: Leinert et al. 1998's zodiacal light by
+    helioecliptic longitude and ecliptic latitude, the sun's light slightly
+    reddened. Both dimmed by the air towards each direction.
+    
+    time, latitude_deg, longitude_deg, height_m: the moment and place (as in
+    sun_and_moon) that put the ecliptic and the sun in the sky; time=None: the
+    zodiacal light at its darkest (the ecliptic pole's) everywhere. north_deg: the
+    image's frame turned about the vertical as stars_at's directions are turned by
+    a host (x' = cos n x - sin n y, y' = sin n x + cos n y).
     """
 def preetham_turbidity_to_aerosol_optical_depth(turbidity: float) -> float:
     """
@@ -868,7 +882,7 @@ def rgb_to_reflectance(rgb: typing.Any, wavelengths_nm: typing.Any, *, color_spa
     for a ground of a chosen colour. Raises ValueError naming ground_color for a
     channel outside [0, 1].
     """
-def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, output: str = 'rgb', return_transmittance: bool = False, progress: typing.Any = None, ground: bool = True) -> typing.Any:
+def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, output: str = 'rgb', return_transmittance: bool = False, progress: typing.Any = None, ground: bool = True, moon_direction: typing.Any = None, sun_from_moon: typing.Any = None, moon_angular_radius_rad: float = 0.0045, moon_irradiance_ratio: float = 0.0, stars: numpy.ndarray[numpy.float64] | None = None, night_glow: bool = False) -> typing.Any:
     """
     The equirectangular sky of a scene, with its clouds (the world texture of a cloudy sky).
     
@@ -886,6 +900,16 @@ def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, out
     scene's key (clouds.volumes[i].file for a bad VDB). Cancellable (progress, Ctrl-C).
     ground: the lit ground below the horizon with the atmosphere's ground_albedo, as
     in sky_image (False: black there).
+    
+    The night sky of a place and a moment, in the scene's frame (the add-on's Place and
+    Time; `welkin sky --scene --time` and sky_image_at compose the same): moon_direction,
+    sun_from_moon, moon_angular_radius_rad and moon_irradiance_ratio as in
+    moon_disc_image add the moon's light: its sky, and the clouds lit by it as by a "sun"
+    in its direction times the ratio (left out while the scene's sun is up), and with
+    sun_disc its disc with its phase, dimmed by the clouds' transmittance. stars: an (N, 5)
+    array as stars_at returns (directions in the scene's frame), drawn energy-exact and
+    dimmed by the air and by the clouds' transmittance; night_glow=True adds the night
+    sky's own glow, dimmed the same way.
     """
 def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, width: int, method: str = 'lut', output: str = 'rgb', *, sun_disc: bool = True, exposure: float = 1.0, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, clouds: CloudDensity = None, progress: typing.Any = None, ground: bool = True, ground_albedo: float | None = None, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
     """
@@ -911,7 +935,7 @@ def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.A
     callback returning False cancels (KeyboardInterrupt). ValueError names the
     parameter for bad input.
     """
-def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, longitude_deg: float, width: int, method: str = 'lut', output: str = 'rgb', *, height_m: float = 0.0, altitude_m: float = 0.0, discs: bool = True, exposure: float = 1.0, ground: bool = True, stars: bool = True, night_glow: bool = True, progress: typing.Any = None) -> numpy.ndarray[numpy.float32]:
+def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, longitude_deg: float, width: int, method: str = 'lut', output: str = 'rgb', *, height_m: float = 0.0, altitude_m: float = 0.0, discs: bool = True, exposure: float = 1.0, ground: bool = True, stars: bool = True, night_glow: bool = True, progress: typing.Any = None, clouds: CloudDensity = None) -> numpy.ndarray[numpy.float32]:
     """
     The sky of a place and a moment, as `welkin sky --time --latitude --longitude`
     renders it: the sun's sky and disc at the sun's apparent position, plus the
@@ -926,9 +950,12 @@ def sky_image_at(atmosphere: Atmosphere, time: typing.Any, latitude_deg: float, 
     (when sun and moon lamps light the scene). stars=True adds the stars of V <= 7
     of the Hipparcos catalogue at their apparent places, dimmed and reddened by the
     air towards each, energy-exact (welkin.star_image). night_glow=True adds the
-    night sky's own light (airglow, zodiacal light, unresolved stars: Krisciunas &
-    Schaefer 1991's dark sky, 21.587 V mag/arcsec^2 at the zenith, van Rhijn's
-    brightening towards the horizon, dimmed by the air).
+    night sky's own light: airglow and the zodiacal light along the moment's
+    ecliptic, dimmed by the air (welkin.night_glow_image). clouds: as in sky_image
+    (a welkin.CloudLayer or any CloudDensity, default lighting): lit by the sun and
+    by the moon (the same march for a "sun" in the moon's direction, times its
+    brightness; left out while the sun is up), with the discs, the stars and the
+    night glow seen through them, dimmed by their transmittance.
     """
 def sky_radiance(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, method: str = 'lut', output: str = 'spectral', *, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, transmittance_width: int = 256, transmittance_height: int = 64, multiscattering_size: int = 32, skyview_width: int = 192, skyview_height: int = 108, tolerance: float = 0.1, return_standard_error: bool = False, progress: typing.Any = None, color_space: str = 'rec709') -> typing.Any:
     """
