@@ -387,7 +387,15 @@ def night_under_clouds(native: Module, request: sky_request.SkyRequest) -> dict[
         kwargs["moon_angular_radius_rad"] = request.moon_angular_radius_rad
         kwargs["moon_irradiance_ratio"] = request.moon_irradiance_ratio
     if request.night_sky:
-        kwargs["night_glow"] = True
+        time, latitude, longitude, height, north, _stars = request.night_sky
+        kwargs.update(
+            night_glow=True,
+            time=time,
+            latitude_deg=latitude,
+            longitude_deg=longitude,
+            height_m=height,
+            north_deg=north,
+        )
         if request.night_sky[5]:
             kwargs["stars"] = place_time.scene_stars(native, request.night_sky)
     return kwargs

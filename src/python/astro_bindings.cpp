@@ -40,6 +40,31 @@ std::vector<Star> to_stars(const py::array_t<double>& stars) {
 }
 
 namespace {
+std::string time_text(const py::object& time);
+}  // namespace
+
+NightGlowOptions night_glow_options(const py::object& time, double latitude_deg, double longitude_deg,
+                                    double height_m, double north_deg, bool airglow, bool zodiacal_light) {
+    require_in_range("north_deg", north_deg, -360.0, 360.0, "degrees");
+    NightGlowOptions glow;
+    glow.airglow = airglow;
+    glow.zodiacal_light = zodiacal_light;
+    if (time.is_none()) return glow;
+    const Instant when = Instant::from_civil(parse_iso8601(time_text(time), "time"), "time");
+    EclipticFrame frame = ecliptic_frame(when, Place{latitude_deg, longitude_deg, height_m});
+    // The image's frame is the local one turned by north_deg about z (a scene's, as
+    // stars_at's directions are turned): enu = Rz(-north) image.
+    const double c = std::cos(north_deg * kDegree), s = std::sin(north_deg * kDegree);
+    for (auto& row : frame.enu_to_ecliptic) {
+        const double x = row[0], y = row[1];
+        row[0] = c * x - s * y;
+        row[1] = s * x + c * y;
+    }
+    glow.ecliptic = frame;
+    return glow;
+}
+
+namespace {
 
 // A str, or anything with isoformat() (an aware datetime.datetime).
 std::string time_text(const py::object& time) {
@@ -254,31 +279,14 @@ py::array_t<float> night_glow_image(const Atmosphere& atmosphere, int width, con
                                     const py::object& time, double latitude_deg, double longitude_deg,
                                     double height_m, double north_deg, bool airglow, bool zodiacal_light) {
     require_exposure(exposure);
-    require_in_range("north_deg", north_deg, -360.0, 360.0, "degrees");
     const ColorSpace space = color_space_from_name(color_space);
     const SkyImageOptions::Output out = parse_output(output);
-    NightGlowOptions glow;
-    glow.airglow = airglow;
-    glow.zodiacal_light = zodiacal_light;
-    std::optional<std::string> text;
-    if (!time.is_none()) text = time_text(time);
+    const NightGlowOptions glow =
+        night_glow_options(time, latitude_deg, longitude_deg, height_m, north_deg, airglow, zodiacal_light);
     std::vector<float> pixels;
     {
         py::gil_scoped_release release;
         atmosphere.validate();
-        if (text) {
-            const Instant when = Instant::from_civil(parse_iso8601(*text, "time"), "time");
-            EclipticFrame frame = ecliptic_frame(when, Place{latitude_deg, longitude_deg, height_m});
-            // The image's frame is the local one turned by north_deg about z (a scene's, as
-            // stars_at's directions are turned): enu = Rz(-north) image.
-            const double c = std::cos(north_deg * kDegree), s = std::sin(north_deg * kDegree);
-            for (auto& row : frame.enu_to_ecliptic) {
-                const double x = row[0], y = row[1];
-                row[0] = c * x - s * y;
-                row[1] = s * x + c * y;
-            }
-            glow.ecliptic = frame;
-        }
         const Observer observer = Observer{altitude_m, {0.0, 0.0, 1.0}}.validated();
         pixels = night_glow_pixels(atmosphere, observer, width, out, space, glow);
     }

@@ -18,6 +18,7 @@
 #include <pybind11/pybind11.h>
 
 #include "welkin/base/progress.hpp"
+#include "welkin/night/night_glow.hpp"
 #include "welkin/night/stars.hpp"
 #include "welkin/render/sky_image.hpp"
 #include "welkin/scene/scene.hpp"
@@ -43,6 +44,15 @@ void register_astro(py::module_& m);
 // An (N, 5) array of stars (x, y, z, V, B-V per row, as welkin.stars_at returns them);
 // InvalidArgument naming `stars` for another shape (astro_bindings.cpp).
 std::vector<Star> to_stars(const py::array_t<double>& stars);
+
+// The night glow's options for a moment and a place (time: an ISO 8601 str or an aware
+// datetime; None: no moment, the zodiacal light at its darkest everywhere), the ecliptic
+// given in an image frame turned by north_deg about z from east-north-up, as a host turns
+// stars_at's directions; InvalidArgument naming time or north_deg (astro_bindings.cpp).
+// Holding the GIL; the moment is parsed here.
+NightGlowOptions night_glow_options(const py::object& time, double latitude_deg, double longitude_deg,
+                                    double height_m, double north_deg, bool airglow = true,
+                                    bool zodiacal_light = true);
 
 // Any 1-D array-like of numbers -> std::vector<double>; InvalidArgument(parameter) if it
 // is not one.

@@ -48,7 +48,10 @@ in its direction times the ratio (left out while the scene's sun is up), and wit
 sun_disc its disc with its phase, dimmed by the clouds' transmittance. stars: an (N, 5)
 array as stars_at returns (directions in the scene's frame), drawn energy-exact and
 dimmed by the air and by the clouds' transmittance; night_glow=True adds the night
-sky's own glow, dimmed the same way.
+sky's own glow (welkin.night_glow_image), dimmed the same way. time, latitude_deg,
+longitude_deg, height_m, north_deg: the moment and place that put the ecliptic (and
+so the zodiacal light) in the scene's frame, as night_glow_image's; time=None: the
+zodiacal light at its darkest everywhere.
 )doc";
 
 // The moon of the keyword arguments, or none (no moon_direction).
@@ -75,12 +78,15 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
                            bool return_transmittance, const py::object& progress, bool ground,
                            const py::object& moon_direction, const py::object& sun_from_moon,
                            double moon_angular_radius_rad, double moon_irradiance_ratio,
-                           const std::optional<py::array_t<double>>& stars, bool night_glow) {
+                           const std::optional<py::array_t<double>>& stars, bool night_glow,
+                           const py::object& time, double latitude_deg, double longitude_deg, double height_m,
+                           double north_deg) {
     SceneDescription scene = to_scene(scene_in);
     require_progress_callback(progress);
     const std::optional<Moon> moon =
         moon_from(moon_direction, sun_from_moon, moon_angular_radius_rad, moon_irradiance_ratio, sun_disc);
     const std::vector<Star> star_list = stars ? to_stars(*stars) : std::vector<Star>{};
+    const NightGlowOptions glow = night_glow_options(time, latitude_deg, longitude_deg, height_m, north_deg);
     SkyImageOptions options;
     options.sun_disc = sun_disc;
     options.ground = ground && scene.ground;
@@ -102,7 +108,7 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
             image = moon ? render_equirect_sky_with_moon(*method, scene.atmosphere, observer, *moon, width,
                                                          options, p)
                          : render_equirect_sky(*method, scene.atmosphere, observer, width, options, p);
-            if (night_glow) add_night_glow(image, scene.atmosphere, observer, options);
+            if (night_glow) add_night_glow(image, scene.atmosphere, observer, options, glow);
             add_stars(image, scene.atmosphere, observer, star_list, options);
         },
         progress);
@@ -120,12 +126,14 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
 }  // namespace
 
 void register_scene_sky(py::module_& m) {
-    m.def(
-        "scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"), py::kw_only(),
-        py::arg("sun_disc") = true, py::arg("output") = "rgb", py::arg("return_transmittance") = false,
-        py::arg("progress") = py::none(), py::arg("ground") = true, py::arg("moon_direction") = py::none(),
-        py::arg("sun_from_moon") = py::none(), py::arg("moon_angular_radius_rad") = Moon{}.angular_radius_rad,
-        py::arg("moon_irradiance_ratio") = 0.0, py::arg("stars") = py::none(), py::arg("night_glow") = false);
+    m.def("scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"),
+          py::kw_only(), py::arg("sun_disc") = true, py::arg("output") = "rgb",
+          py::arg("return_transmittance") = false, py::arg("progress") = py::none(), py::arg("ground") = true,
+          py::arg("moon_direction") = py::none(), py::arg("sun_from_moon") = py::none(),
+          py::arg("moon_angular_radius_rad") = Moon{}.angular_radius_rad,
+          py::arg("moon_irradiance_ratio") = 0.0, py::arg("stars") = py::none(),
+          py::arg("night_glow") = false, py::arg("time") = py::none(), py::arg("latitude_deg") = 0.0,
+          py::arg("longitude_deg") = 0.0, py::arg("height_m") = 0.0, py::arg("north_deg") = 0.0);
 }
 
 }  // namespace welkin::python

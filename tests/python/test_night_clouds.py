@@ -63,6 +63,9 @@ def _night_kwargs(time):
         "moon_irradiance_ratio": moon["irradiance_ratio"],
         "stars": welkin.stars_at(time, *PARIS),
         "night_glow": True,
+        "time": time,
+        "latitude_deg": PARIS[0],
+        "longitude_deg": PARIS[1],
     }
 
 
