@@ -152,15 +152,17 @@ double zodiacal_light_s10(double helioecliptic_longitude_deg, double ecliptic_la
     return row(i) * (1.0 - fi) + row(i + 1) * fi;
 }
 
-std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& observer, int width,
-                                     SkyImageOptions::Output output, ColorSpace color_space,
-                                     const NightGlowOptions& glow) {
+namespace {
+
+// The glow's light into `sink` (an image `width` wide in the output's channels), a row at a
+// time: each row is computed (and gamut-mapped) in a buffer of its own, then added.
+void add_glow_light(const night::LayerSink& sink, const Atmosphere& atm, const Observer& observer, int width,
+                    SkyImageOptions::Output output, ColorSpace color_space, const NightGlowOptions& glow) {
     const int height = width / 2;
     const std::size_t nc = atm.channels();
     const bool rgb = output == SkyImageOptions::Output::Rgb;
     const std::size_t out_nc = rgb ? 3 : nc;
-    std::vector<float> pixels = night::blank_layer(width, out_nc);
-    if (!glow.airglow && !glow.zodiacal_light) return pixels;
+    if (!glow.airglow && !glow.zodiacal_light) return;
 
     // Above the air, per channel: the airglow at the zenith; the zodiacal light per S10
     // (the sun's shape, 1 S10 at 500 nm) and its reddening's part (f_co - 1 at 30 degrees).
@@ -233,6 +235,7 @@ std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& obse
 
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
         std::vector<double> t(nc), a(nc), z0(nc), z1(nc), a_out, z0_out, z1_out;
+        std::vector<float> row(std::size_t(width) * out_nc);
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const double sin_e = equirect_pixel_direction(0, j, width, height).z;
             if (!air(sin_e, t)) continue;  // the ground
@@ -251,7 +254,6 @@ std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& obse
             const double* r_top = node_red.data() + std::size_t(l) * std::size_t(nodes_x);
             const double* s_bot = s_top + nodes_x;
             const double* r_bot = r_top + nodes_x;
-            float* row = pixels.data() + std::size_t(j) * std::size_t(width) * out_nc;
             for (int i = 0; i < width; ++i) {
                 const int k = i / step, k1 = (k + 1) % nodes_x;
                 const double fx = (i - k * step) * inv_step;
@@ -260,21 +262,33 @@ std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& obse
                 const double s10 = w00 * s_top[k] + w10 * s_top[k1] + w01 * s_bot[k] + w11 * s_bot[k1];
                 const double sr = w00 * s_top[k] * r_top[k] + w10 * s_top[k1] * r_top[k1] +
                                   w01 * s_bot[k] * r_bot[k] + w11 * s_bot[k1] * r_bot[k1];
-                float* px = row + std::size_t(i) * out_nc;
+                float* px = row.data() + std::size_t(i) * out_nc;
                 for (std::size_t c = 0; c < m_nc; ++c)
                     px[c] = float(a_out[c] + s10 * z0_out[c] + sr * z1_out[c]);
             }
-            if (rgb) gamut_map(row, std::size_t(width), to_rgb->luminance_weights());
+            if (rgb) gamut_map(row.data(), std::size_t(width), to_rgb->luminance_weights());
+            const std::size_t first = std::size_t(j) * std::size_t(width);
+            for (std::size_t i = 0; i < std::size_t(width); ++i)
+                for (std::size_t c = 0; c < out_nc; ++c) sink.add(first + i, c, row[i * out_nc + c]);
         }
     });
+}
+
+}  // namespace
+
+std::vector<float> night_glow_pixels(const Atmosphere& atm, const Observer& observer, int width,
+                                     SkyImageOptions::Output output, ColorSpace color_space,
+                                     const NightGlowOptions& glow) {
+    const std::size_t out_nc = output == SkyImageOptions::Output::Rgb ? 3 : atm.channels();
+    std::vector<float> pixels = night::blank_layer(width, out_nc);
+    add_glow_light(night::sink_into(pixels, out_nc), atm, observer, width, output, color_space, glow);
     return pixels;
 }
 
 void add_night_glow(SkyImage& image, const Atmosphere& atm, const Observer& observer,
                     const SkyImageOptions& options, const NightGlowOptions& glow) {
-    night::add_under_clouds(
-        image, night_glow_pixels(atm, observer, image.width, options.output, options.color_space, glow),
-        options.exposure);
+    add_glow_light(night::sink_into(image, options.exposure), atm, observer, image.width, options.output,
+                   options.color_space, glow);
 }
 
 }  // namespace welkin

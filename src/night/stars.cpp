@@ -78,14 +78,15 @@ std::vector<Star> stars_at(const Instant& when, const Place& where, double faint
     return out;
 }
 
-std::vector<float> star_pixels(const Atmosphere& atm, const Observer& observer, std::span<const Star> stars,
-                               int width, SkyImageOptions::Output output, ColorSpace color_space) {
+namespace {
+
+// Each star's light into `sink` (an image `width` wide in the output's channels).
+void add_star_light(const night::LayerSink& sink, const Atmosphere& atm, const Observer& observer,
+                    std::span<const Star> stars, int width, SkyImageOptions::Output output,
+                    ColorSpace color_space) {
     const int height = width / 2;
     const std::size_t nc = atm.channels();
     const bool rgb = output == SkyImageOptions::Output::Rgb;
-    const std::size_t out_nc = rgb ? 3 : nc;
-    std::vector<float> pixels = night::blank_layer(width, out_nc);
-    if (stars.empty()) return pixels;
     const night::TransmittanceByElevation air(atm, observer.altitude_m);
     std::optional<SpectrumToRgb> to_rgb;
     if (rgb) to_rgb.emplace(atm.wavelengths_nm, 0.0, color_space);  // a smooth spectrum, as the sun's
@@ -115,23 +116,31 @@ std::vector<float> star_pixels(const Atmosphere& atm, const Observer& observer, 
             for (int di = 0; di < 2; ++di) {
                 const int i = ((i0 + di) % width + width) % width;
                 const double w = wy * (di ? fx : 1.0 - fx) / omega;
-                float* dst = pixels.data() + (std::size_t(j) * std::size_t(width) + std::size_t(i)) * out_nc;
+                const std::size_t p = std::size_t(j) * std::size_t(width) + std::size_t(i);
                 if (rgb)
-                    for (int c = 0; c < 3; ++c) dst[c] += float(w * value[std::size_t(c)]);
+                    for (std::size_t c = 0; c < 3; ++c) sink.add(p, c, float(w * value[c]));
                 else
-                    for (std::size_t c = 0; c < nc; ++c) dst[c] += float(w * spectrum[c]);
+                    for (std::size_t c = 0; c < nc; ++c) sink.add(p, c, float(w * spectrum[c]));
             }
         }
     }
+}
+
+}  // namespace
+
+std::vector<float> star_pixels(const Atmosphere& atm, const Observer& observer, std::span<const Star> stars,
+                               int width, SkyImageOptions::Output output, ColorSpace color_space) {
+    const std::size_t out_nc = output == SkyImageOptions::Output::Rgb ? 3 : atm.channels();
+    std::vector<float> pixels = night::blank_layer(width, out_nc);
+    add_star_light(night::sink_into(pixels, out_nc), atm, observer, stars, width, output, color_space);
     return pixels;
 }
 
 void add_stars(SkyImage& image, const Atmosphere& atm, const Observer& observer, std::span<const Star> stars,
                const SkyImageOptions& options) {
     if (stars.empty()) return;
-    night::add_under_clouds(
-        image, star_pixels(atm, observer, stars, image.width, options.output, options.color_space),
-        options.exposure);
+    add_star_light(night::sink_into(image, options.exposure), atm, observer, stars, image.width,
+                   options.output, options.color_space);
 }
 
 }  // namespace welkin
