@@ -90,8 +90,15 @@ public:
         if (version > std::uint32_t(openvdb::OPENVDB_FILE_VERSION))
             fail(fmt::format("file format version {} is newer than this OpenVDB's ({})", version,
                              openvdb::OPENVDB_FILE_VERSION));
-        if (version < 222) return;  // older layouts: left to OpenVDB
-        skip(8);                    // library version
+        // Older layouts (OpenVDB's NODE_MASK_COMPRESSION is 222; OpenVDB 10 writes 224) are not
+        // walked here, and OpenVDB's File::open would read their metadata (strings of any
+        // declared length) in this process: refused.
+        if (version < 222)
+            fail(
+                fmt::format("file format version {} is older than 222, the oldest layout Welkin reads; "
+                            "re-save the file with a current OpenVDB",
+                            version));
+        skip(8);  // library version
         const bool offsets = bytes(1)[0] != 0;
         skip(36);  // uuid
         meta_map();

@@ -70,6 +70,16 @@ def test_every_vdb_of_the_corpus_loads_or_is_refused_and_the_interpreter_exits_n
     assert len(lines) == 3 and len(outcomes) == 1, run.stdout
 
 
+def test_a_file_of_an_older_layout_is_refused_before_openvdb_reads_it():
+    # Version 0 and a file-level metadata string declaring 943 MB in a 159-byte file: OpenVDB's
+    # File::open would allocate it in this process (the fuzzer's out-of-memory finding).
+    path = VDB_CORPUS / "version_zero_huge_metadata_string.vdb"
+    assert path.stat().st_size < 200
+    run = run_python(LOAD_VDB, path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.count("file format version 0 is older than 222") == 3, run.stdout
+
+
 def test_the_corpus_holds_the_ball_and_its_three_crashing_copies():
     names = {p.name for p in VDB_CORPUS.glob("*.vdb")}
     assert {"ball.vdb", "crash_ball_15.vdb", "crash_ball_36.vdb", "crash_ball_97.vdb"} <= names
