@@ -374,6 +374,20 @@ def hdri(
 MOON_SKY_DEPRESSION_DEG = 20.0  # the core's kMoonSkyDepressionDeg
 
 
+def _moment_kwargs(night_sky: tuple[Any, ...]) -> dict[str, Any]:
+    """The moment and place of a request's night sky as the keyword arguments of
+    welkin.night_glow_image and scene_sky_image (time, latitude_deg, longitude_deg,
+    height_m, north_deg)."""
+    time, latitude, longitude, height, north, _stars = night_sky
+    return {
+        "time": time,
+        "latitude_deg": latitude,
+        "longitude_deg": longitude,
+        "height_m": height,
+        "north_deg": north,
+    }
+
+
 def night_under_clouds(native: Module, request: sky_request.SkyRequest) -> dict[str, Any]:
     """welkin.scene_sky_image's keyword arguments for the night sky of a request with a
     moon or a night sky (Place and Time), in the scene's frame: the moon (its sky, its
@@ -387,15 +401,7 @@ def night_under_clouds(native: Module, request: sky_request.SkyRequest) -> dict[
         kwargs["moon_angular_radius_rad"] = request.moon_angular_radius_rad
         kwargs["moon_irradiance_ratio"] = request.moon_irradiance_ratio
     if request.night_sky:
-        time, latitude, longitude, height, north, _stars = request.night_sky
-        kwargs.update(
-            night_glow=True,
-            time=time,
-            latitude_deg=latitude,
-            longitude_deg=longitude,
-            height_m=height,
-            north_deg=north,
-        )
+        kwargs.update(night_glow=True, **_moment_kwargs(request.night_sky))
         if request.night_sky[5]:
             kwargs["stars"] = place_time.scene_stars(native, request.night_sky)
     return kwargs
@@ -416,18 +422,13 @@ def with_night_sky(
     if not request.night_sky:
         return sky
     altitude_m, exposure = request.altitude_m, request.exposure
-    time, latitude, longitude, height, north, _stars = request.night_sky
     sky = sky + native.night_glow_image(
         atm,
         request.width,
         altitude_m=altitude_m,
         exposure=exposure,
         color_space=color_space,
-        time=time,
-        latitude_deg=latitude,
-        longitude_deg=longitude,
-        height_m=height,
-        north_deg=north,
+        **_moment_kwargs(request.night_sky),
     )
     if request.night_sky[5]:
         stars = place_time.scene_stars(native, request.night_sky)

@@ -84,6 +84,29 @@ def _math(tree, role, operation, location, parent, *values, vector=False):
     return n
 
 
+def _disc_radius_nodes(tree, prefix, frame, x, y, view):
+    """A disc's radial coordinate from the normalised view direction D (`view`): the nodes
+    <prefix>_cross (D x C, C the centre, linked by the caller), <prefix>_sin_rho,
+    <prefix>_s = sin rho / sin alpha (the divisor linked by the caller) and <prefix>_mu =
+    sqrt(1 - s^2), clamped; returns (cross, s, mu)."""
+    links = tree.links
+    cross = _math(tree, f"{prefix}_cross", "CROSS_PRODUCT", (x, y), frame, vector=True)
+    sin_rho = _math(tree, f"{prefix}_sin_rho", "LENGTH", (x + 180, y), frame, vector=True)
+    s = _math(tree, f"{prefix}_s", "DIVIDE", (x + 360, y), frame)
+    s2 = _math(tree, f"{prefix}_s2", "MULTIPLY", (x + 540, y), frame)
+    mu2 = _math(tree, f"{prefix}_mu2", "SUBTRACT", (x + 720, y), frame, 1.0)
+    mu2.use_clamp = True
+    mu = _math(tree, f"{prefix}_mu", "SQRT", (x + 900, y), frame)
+    links.new(view.outputs["Vector"], cross.inputs[0])
+    links.new(cross.outputs["Vector"], sin_rho.inputs[0])
+    links.new(sin_rho.outputs["Value"], s.inputs[0])
+    links.new(s.outputs["Value"], s2.inputs[0])
+    links.new(s.outputs["Value"], s2.inputs[1])
+    links.new(s2.outputs["Value"], mu2.inputs[1])
+    links.new(mu2.outputs["Value"], mu.inputs[0])
+    return cross, s, mu
+
+
 def _disc_nodes(tree, frame, x, y, disc):
     """The disc's radiance from the view direction (module docstring); returns the output
     socket of its colour. `disc`: a sky_compute.DiscModel, or None (nothing shown)."""
@@ -93,20 +116,7 @@ def _disc_nodes(tree, frame, x, y, disc):
     view = _math(tree, "disc_view", "NORMALIZE", (x + 180, y), frame, vector=True)
     links.new(coord.outputs["Generated"], view.inputs[0])
     # sin rho = |D x S|, s = sin rho / sin alpha
-    cross = _math(tree, "disc_cross", "CROSS_PRODUCT", (x + 360, y), frame, vector=True)
-    sin_rho = _math(tree, "disc_sin_rho", "LENGTH", (x + 540, y), frame, vector=True)
-    s = _math(tree, "disc_s", "DIVIDE", (x + 720, y), frame)
-    s2 = _math(tree, "disc_s2", "MULTIPLY", (x + 900, y), frame)
-    mu2 = _math(tree, "disc_mu2", "SUBTRACT", (x + 1080, y), frame, 1.0)
-    mu2.use_clamp = True
-    mu = _math(tree, "disc_mu", "SQRT", (x + 1260, y), frame)
-    links.new(view.outputs["Vector"], cross.inputs[0])
-    links.new(cross.outputs["Vector"], sin_rho.inputs[0])
-    links.new(sin_rho.outputs["Value"], s.inputs[0])
-    links.new(s.outputs["Value"], s2.inputs[0])
-    links.new(s.outputs["Value"], s2.inputs[1])
-    links.new(s2.outputs["Value"], mu2.inputs[1])
-    links.new(mu2.outputs["Value"], mu.inputs[0])
+    cross, s, mu = _disc_radius_nodes(tree, "disc", frame, x + 360, y, view)
     # Where the disc is: s < 1, in front (D.S > 0), above the horizon.
     inside = _math(tree, "disc_inside", "LESS_THAN", (x + 900, y - 200), frame, None, 1.0)
     dot = _math(tree, "disc_dot", "DOT_PRODUCT", (x + 360, y - 350), frame, vector=True)
@@ -164,20 +174,7 @@ def _moon_disc_nodes(tree, frame, x, y, view, view_z, moon):
     the output socket of its colour. `view`, `view_z`: the sun disc's normalised view
     direction and its Separate XYZ. `moon`: a sky_compute.MoonDiscModel, or None."""
     links = tree.links
-    cross = _math(tree, "moon_cross", "CROSS_PRODUCT", (x, y), frame, vector=True)
-    sin_rho = _math(tree, "moon_sin_rho", "LENGTH", (x + 180, y), frame, vector=True)
-    s = _math(tree, "moon_s", "DIVIDE", (x + 360, y), frame)
-    s2 = _math(tree, "moon_s2", "MULTIPLY", (x + 540, y), frame)
-    mu2 = _math(tree, "moon_mu2", "SUBTRACT", (x + 720, y), frame, 1.0)
-    mu2.use_clamp = True
-    mu = _math(tree, "moon_mu", "SQRT", (x + 900, y), frame)
-    links.new(view.outputs["Vector"], cross.inputs[0])
-    links.new(cross.outputs["Vector"], sin_rho.inputs[0])
-    links.new(sin_rho.outputs["Value"], s.inputs[0])
-    links.new(s.outputs["Value"], s2.inputs[0])
-    links.new(s.outputs["Value"], s2.inputs[1])
-    links.new(s2.outputs["Value"], mu2.inputs[1])
-    links.new(mu2.outputs["Value"], mu.inputs[0])
+    cross, s, mu = _disc_radius_nodes(tree, "moon", frame, x, y, view)
     # mu0 = (D x M) . W - mu (M . P), on the lit side only; L = mu0 / (mu0 + mu).
     lit = _math(tree, "moon_w", "DOT_PRODUCT", (x + 180, y - 180), frame, vector=True)
     mu0 = _math(tree, "moon_mu0", "MULTIPLY_ADD", (x + 1080, y - 180), frame)
