@@ -199,16 +199,19 @@ if hasattr(scene.eevee, "taa_render_samples"):
     scene.eevee.taa_render_samples = 16
 shown, hidden, ungated = plane_radiance(True), plane_radiance(False), plane_radiance(True, False)
 print(f"EEVEE plane: moon disc shown {shown:.6g}, hidden {hidden:.6g}, un-gated {ungated:.6g}")
+T.check(ungated - hidden > 0.2 * hidden, f"the control failed: un-gated {ungated} vs {hidden}")
 if bpy.app.version < (4, 2, 0):
     T.check(
         abs(shown - hidden) <= 1e-4 * hidden, f"EEVEE: the moon's disc lights the plane: {shown} vs {hidden}"
     )
 else:
-    # EEVEE Next renders the plane 3-6 % darker, and not the same twice, when the gated disc
-    # is bright (a gated disc of radiance 0 renders it exactly as hidden): an open
-    # difference, docs/validation.md. Its light is not added: the plane is no brighter.
-    T.check(shown <= hidden * (1.0 + 1e-4), f"EEVEE: the moon's disc lights the plane: {shown} vs {hidden}")
-T.check(ungated - hidden > 0.02 * hidden, f"the control failed: un-gated {ungated} vs {hidden}")
+    # EEVEE Next's world lighting scatters by up to 5 % from render to render and machine to
+    # machine, whether or not the gated disc is shown (docs/validation.md), so the two renders
+    # cannot be held to rounding. The disc's light counted again would bring the plane up to
+    # the un-gated control (+40 % and more); a quarter of that step fails.
+    share = (shown - hidden) / (ungated - hidden)
+    print(f"EEVEE: shown - hidden is {share:+.3f} of the un-gated disc's light")
+    T.check(share < 0.25, f"EEVEE: the moon's disc lights the plane: {shown} vs {hidden}, un-gated {ungated}")
 bpy.data.objects.remove(plane)
 settings.show_sun_disc = True
 T.done("moon disc")
