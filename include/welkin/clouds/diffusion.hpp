@@ -113,7 +113,10 @@ struct SimilarityScaling {
 // depths tau_sun, tau_anti (unscaled), the chord tau_side across the sun line (unscaled;
 // infinity: no sides), nu = d . s, g the phase's mean cosine, p the phase and p2 the
 // twice-scattered phase at nu.
+// side_fraction: the share of tau_side on x's -across side (x's place across the chord);
+// across_view: the across direction's cosine with the view direction d (0: no transverse
+// flux towards the viewer).
 double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side, double nu,
-                  double g, double p, double p2);
+                  double g, double p, double p2, double side_fraction = 0.5, double across_view = 0.0);
 
 }  // namespace welkin
