@@ -1,36 +1,32 @@
 # SPDX-License-Identifier: Apache-2.0
-"""A VDB cumulus under the add-on's own world and synced sun lamp: Cycles against the WELKIN
-engine's cloud pass, and the pieces between them, in one Blender process.
+"""A VDB cumulus under the add-on's own sky: Cycles against the WELKIN engine's cloud pass,
+Welkin's reference path tracer, and the pieces between them, in one Blender process.
 
-    PYTHONPATH=build blender -b --factory-startup --python-use-system-env \
-        --python bench/clouds/cycles_addon_lighting.py -- [--size 96 64] [--samples 128] \
-        [--bounces 48] [--paths 256] [--sigma 0.0148] [--csv FILE]
+    build/venv-bpy-5.0/bin/python tests/blender/bpy_blender.py -b --factory-startup \
+        --python-use-system-env --python bench/clouds/cycles_addon_lighting.py -- \
+        [--size 96 64] [--samples 128] [--bounces 256] [--paths 256] [--lobes welkin|one] \
+        [--lamp ground|cloud|both] [--csv bench/results/cycles_addon_clouds.csv] \
+        [--doc docs/validation.md]
 
-The scene: the cumulus of bench/cycles_volume.py scaled 2.7 x (about 1.2 x 0.9 km), its
-centre 5 km up and 6 km away along +X; the camera on the ground (1.5 m) looking at it; the
-sun 30 degrees up, 60 degrees to the left of the view (front-left); the add-on's sky
-(Update Sky: the world texture and the synced lamp's strength, colour and angle). Cycles
-renders the volume (Welkin's phase 0.8 HG(0.8) + 0.2 HG(-0.3), albedo 1) with
-film_transparent, so its RGB is the cloud's premultiplied radiance, no world behind; the
-engine's pass Welkin.Clouds is the same quantity (welkin.cloud_passes on the engine's own
-scene description).
+(Blender 3.4: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
+--python bench/clouds/cycles_addon_lighting.py -- --lobes one: its Cycles lights two Volume
+Scatter closures as the sum of their lobes.) The scene and what each renderer gets:
+bench/cycles_addon_clouds.py; the "side" view of tests/blender/test_cycles_clouds_lighting.py
+(the sun 30 degrees up, 60 degrees left of the view) and its "backlit" view for the silver
+lining. Rows, luminance ratios per region (Cycles' alpha > 0.05; sunlit / shadow halves
+towards / away from the sun on the image; base: the bottom fifth of the cloud's rows):
 
-Rows (luminance ratios over the cloud's pixels, Cycles' alpha > 0.05; "sunlit" is the half
-of the cloud's pixels towards the sun's direction on the image, "shadow" the other half,
-"base" the bottom fifth of the cloud's rows):
+* engine / Cycles: the engine's pass as it renders (the air in front of the cloud included);
+* engine without air / Cycles: the pass with the air left out (Cycles has none);
+* reference / Cycles: Welkin's path tracer (same light as the engine);
+* engine without air / reference.
 
-* engine / Cycles: the issue's comparison (the air between the camera and the cloud
-  included in the engine's pass, as the engine renders it);
-* engine without the air / Cycles: the same pass with every cloud at "sky depth"
-  (aerial.sky_depth_m = 1 m), so no air is applied in front of it;
-* fast / reference: welkin.cloud_radiance's march against its path tracer under the same
-  atmosphere light (green channel, 560 nm), no air in either.
+--doc replaces the table between the markers "<!-- cycles_addon_clouds: begin -->" and
+"<!-- cycles_addon_clouds: end -->" in that file.
 """
 
 import argparse
 import atexit
-import json
-import math
 import os
 import pathlib
 import shutil
@@ -38,7 +34,6 @@ import sys
 import tempfile
 
 import bpy
-import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))
@@ -51,173 +46,95 @@ argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:
 p = argparse.ArgumentParser()
 p.add_argument("--size", type=int, nargs=2, default=(96, 64))
 p.add_argument("--samples", type=int, default=128)
-p.add_argument("--bounces", type=int, default=48)
-p.add_argument("--paths", type=int, default=256, help="reference paths per pixel (0: skip)")
-p.add_argument("--scale", type=float, default=2.7)
+p.add_argument("--bounces", type=int, default=256)
+p.add_argument("--paths", type=int, default=256)
 p.add_argument("--sigma", type=float, default=0.04 / 2.7, help="sigma_t at the densest voxel, m^-1")
 p.add_argument("--lobes", default="welkin", choices=("welkin", "one"))
-p.add_argument("--lamp", default="ground", choices=("ground", "cloud"),
-               help="the lamp as the add-on syncs it (the sun at the ground) or the sun at the cloud's altitude")
+p.add_argument("--lamp", default="both", choices=("ground", "cloud", "both"))
 p.add_argument("--csv", default="")
+p.add_argument("--doc", default="")
 args = p.parse_args(argv)
 
 addon, native = T.install_addon()
+import cycles_addon_clouds as ac  # noqa: E402
 import cycles_volume as cv  # noqa: E402
-from welkin.blender.engine import render_engine  # noqa: E402
-from welkin.blender.sky import scene_sun  # noqa: E402
 
-W, H = args.size
-LOBES = ((0.8, 0.8), (-0.3, 0.2)) if args.lobes == "welkin" else ((cv.G, 1.0),)
-CLOUD_AT = (6000.0, 0.0, 5000.0)
-
+LOBES = ac.WELKIN_LOBES if args.lobes == "welkin" else ac.ONE_LOBE
+VIEWS = {"side": (30.0, 60.0), "backlit": (43.0, 3.0)}
 tmp = tempfile.mkdtemp(prefix="welkin_cycles_addon_lighting_")
 atexit.register(shutil.rmtree, tmp, ignore_errors=True)
 vdb = os.path.join(tmp, "cumulus.vdb")
-cv.write_cumulus(vdb, voxel_m=6.0 * args.scale, radius_m=220.0 * args.scale)
+ac.write_cloud(vdb)
 
-scene, sun = T.new_scene(sun_elevation_deg=30.0, sun_azimuth_deg=60.0, resolution="512", camera_z=1.5)
-world = scene.world
-world.welkin.method = "lut"
-vol = bpy.data.volumes.new("Cloud")
-vol.filepath = vdb
-vol.render.precision = "FULL"
-vol.render.clipping = 0.0
-vol.render.space = "OBJECT"
-vol.render.step_size = 0.0
-ob = bpy.data.objects.new("Cloud", vol)
-ob.location = CLOUD_AT
-scene.collection.objects.link(ob)
-vol.materials.append(cv._cloud_material(args.sigma / 1.0, LOBES))
-ob.welkin_cloud.enabled = True
-ob.welkin_cloud.density_scale = args.sigma
-cam = scene.camera
-cam.data.lens = 150.0
-cam.data.clip_start, cam.data.clip_end = 0.1, 1e6
-cv.look_at(cam, CLOUD_AT)
-bpy.context.view_layer.update()
-bpy.ops.welkin.update_sky()
-if args.lamp == "cloud":
-    import welkin as _w
-    from welkin import sky_request as _sr
+rows = []  # (view, lamp, comparison, {region: ratio})
+lining = []  # (lamp, Cycles edge/core, engine edge/core)
+lamps = ("ground", "cloud") if args.lamp == "both" else (args.lamp,)
+for lamp in lamps:
+    for view, (el, az) in VIEWS.items():
+        scene, sun, _ob = ac.build(
+            T,
+            vdb,
+            sigma=args.sigma,
+            lobes=LOBES,
+            sun_elevation_deg=el,
+            sun_azimuth_deg=az,
+            camera=(0.0, 0.0, 1.5),
+            lens_mm=150.0,
+            size=tuple(args.size),
+            samples=args.samples,
+            bounces=args.bounces,
+        )
+        e_ground, e_cloud = ac.update_sky(scene, sun, native, lamp=lamp)
+        cyc = cv.render(scene, os.path.join(tmp, f"cycles_{lamp}_{view}.exr"))
+        eng = ac.engine_pass(scene, native, LOBES, air=True)
+        noair = ac.engine_pass(scene, native, LOBES, air=False)
+        regs = ac.regions(scene, cyc[..., 3], ac.sun_direction(el, az))
+        print(
+            f"{view}, lamp at the {lamp}: {int(regs['all'].sum())} cloud pixels; the sun's luminance "
+            f"at the ground / at the cloud {(e_ground @ ac.LUMINANCE) / (e_cloud @ ac.LUMINANCE):.3f}",
+            flush=True,
+        )
+        if view == "backlit":
+            lining.append(
+                (lamp, ac.edge_over_core(cyc, regs, cyc[..., 3]), ac.edge_over_core(noair, regs, noair[..., 3]))
+            )
+            print(f"  silver lining, edge over core: Cycles {lining[-1][1]:.3f}, engine {lining[-1][2]:.3f}")
+            continue
+        comps = [("engine / Cycles", eng, cyc), ("engine without air / Cycles", noair, cyc)]
+        if args.paths:
+            ref, _t = ac.reference(scene, native, vdb, args.sigma, LOBES, args.paths)
+            comps += [("reference / Cycles", ref, cyc), ("engine without air / reference", noair, ref)]
+        for name, x, y in comps:
+            r = ac.ratios(x, y, regs)
+            rows.append((view, lamp, name, r))
+            print(f"  {name}: " + ", ".join(f"{k} {v:.3f}" for k, v in r.items()), flush=True)
 
-    _req, _l, _ = scene_sun.request_for(scene, world.welkin, None)
-    _atm = _sr.build_atmosphere(_req, native)
-    e_ground = np.array(_w.sun(_atm, _req.altitude_m, tuple(_req.sun_direction)).direct_irradiance_rgb)
-    e_cloud = np.array(_w.sun(_atm, CLOUD_AT[2], tuple(_req.sun_direction)).direct_irradiance_rgb)
-    print("sun RGB irradiance at the ground", e_ground, "at the cloud", e_cloud)
-    world.welkin.sync_lamp = False  # else the render's handler writes the ground's values back
-    sun.data.energy = float(e_cloud.max())
-    sun.data.color = tuple(float(v) for v in e_cloud / e_cloud.max())
-print("lamp:", sun.data.energy, tuple(sun.data.color), math.degrees(sun.data.angle), world.welkin.status)
-
-r = scene.render
-r.engine = "CYCLES"
-r.resolution_x, r.resolution_y, r.resolution_percentage = W, H, 100
-r.film_transparent = True
-r.filter_size = 0.01
-r.image_settings.file_format = "OPEN_EXR"
-r.image_settings.color_mode = "RGBA"
-r.image_settings.color_depth = "32"
-scene.view_settings.view_transform = "Standard"
-c = scene.cycles
-c.device = "CPU"
-c.samples = args.samples
-c.use_adaptive_sampling = False
-c.use_denoising = False
-c.max_bounces = c.volume_bounces = c.transparent_max_bounces = args.bounces
-c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = 0
-c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
-c.light_sampling_threshold = 0.0
-c.volume_max_steps = 4096
-c.pixel_filter_type = "BOX"
-c.filter_width = 0.01
-cyc = cv.render(scene, os.path.join(tmp, "cycles.exr"))
-
-depsgraph = bpy.context.evaluated_depsgraph_get()
-text = render_engine.scene_description_json(scene, depsgraph, native)
-desc = json.loads(text)
-if args.lobes == "one":
-    desc["clouds"]["scattering"] = {"albedo": 1.0, "g_forward": cv.G, "g_back": 0.0, "w_forward": 1.0}
-    text = json.dumps(desc)
-PHASE = dict(g_forward=cv.G, w_forward=1.0) if args.lobes == "one" else {}
-print("clouds:", json.dumps(desc.get("clouds", {}).get("volumes", []))[:400])
-passes = native.cloud_passes(native.SceneDescription.from_json_string(text))
-eng = passes["Welkin.Clouds"]
-print("keys:", list(desc))
-desc.setdefault("aerial", {})["sky_depth_m"] = 1.0
-passes = native.cloud_passes(native.SceneDescription.from_json_string(json.dumps(desc)))
-eng_noair = passes["Welkin.Clouds"]
-
-Y = np.array([0.2126, 0.7152, 0.0722])
-
-
-def lum(x):
-    return x[..., :3] @ Y
-
-
-alpha = cyc[..., 3]
-mask = alpha > 0.05
-rows = np.nonzero(mask.any(axis=1))[0]
-# The sun's direction on the image: project the sun direction onto the camera's right/up.
-m = np.array(cam.matrix_world.to_3x3())
-right, up = m[:, 0], m[:, 1]
-s = np.array(T.sun_direction(30.0, 60.0))
-sx, sy = float(s @ right), float(s @ up)
-yy, xx = np.mgrid[0:H, 0:W].astype(float)
-cxm, cym = xx[mask].mean(), yy[mask].mean()
-toward = (xx - cxm) * sx - (yy - cym) * sy  # image rows grow downwards
-sunlit = mask & (toward > np.median(toward[mask]))
-shadow = mask & ~sunlit & mask
-base = mask & (yy >= rows.min() + 0.8 * (rows.max() - rows.min() + 1))
-regions = {"all": mask, "sunlit": sunlit, "shadow": shadow, "base": base}
-
-out = []
-
-
-def compare(name, x, ref):
-    a, b = lum(x), lum(ref)
-    line = [name]
-    for k, reg in regions.items():
-        line.append((k, float(a[reg].sum() / b[reg].sum())))
-    q = a[mask] / np.maximum(b[mask], 1e-12)
-    line += [("p10", float(np.percentile(q, 10))), ("p50", float(np.median(q))), ("p90", float(np.percentile(q, 90)))]
-    print(name + ": " + ", ".join(f"{k} {v:.3f}" for k, v in line[1:]), flush=True)
-    out.append(line)
-
-
-print(f"cloud pixels {mask.sum()}, sun on the image ({sx:+.2f}, {sy:+.2f})")
-compare("engine/cycles", eng, cyc)
-compare("engine_noair/cycles", eng_noair, cyc)
-compare("engine/engine_noair", eng, eng_noair)
-
-if args.paths:
-    import welkin
-
-    request, _lamp, _w = scene_sun.request_for(scene, world.welkin, None)
-    from welkin import sky_request
-
-    atm = sky_request.build_atmosphere(request, native)
-    origin, dirs = cv.camera_rays(scene)
-    mw = np.array(ob.matrix_world)
-    clouds = welkin.VdbClouds(vdb, density_scale=args.sigma, matrix_world=mw, placement=desc["clouds"]["volumes"][0].get("placement", "blender"))
-    kw = dict(origin=(0.0, 0.0, 0.0))
-    alt = request.altitude_m
-    sd = tuple(request.sun_direction)
-    o = np.array(origin)
-    # cloud_radiance's origin is the observer's: move the cloud, not the camera.
-    mw2 = mw.copy()
-    mw2[:3, 3] -= o
-    clouds = welkin.VdbClouds(vdb, density_scale=args.sigma, matrix_world=mw2, placement=desc["clouds"]["volumes"][0].get("placement", "blender"))
-    Lf, Tf, _ = welkin.cloud_radiance(clouds, atm, alt, sd, dirs, method="fast", **kw, **PHASE)
-    Lr, Tr, _ = welkin.cloud_radiance(clouds, atm, alt, sd, dirs, method="reference", paths=args.paths, seed=1, **kw, **PHASE)
-    g = 1 if Lf.shape[1] > 1 else 0
-    f = Lf[:, g].reshape(H, W)
-    rr = Lr[:, g].reshape(H, W)
-    for k, reg in regions.items():
-        print(f"fast/reference {k}: {f[reg].sum() / rr[reg].sum():.3f}")
-    q = f[mask] / np.maximum(rr[mask], 1e-12)
-    print(f"fast/reference per pixel p10 {np.percentile(q, 10):.3f} p50 {np.median(q):.3f} p90 {np.percentile(q, 90):.3f}")
-    print(f"alpha: cycles {alpha[mask].mean():.3f}, reference {(1 - Tr.reshape(H, W))[mask].mean():.3f}")
-    # engine's march vs this march (same light?) on the green channel is not comparable in RGB;
-    # the ratio of engine_noair to fast in luminance vs green shows the colour conversion only.
-    np.savez(os.path.join(os.environ.get("WELKIN_DUMP", tmp), "dump.npz"), cyc=cyc, eng=eng, eng_noair=eng_noair, f=f, r=rr, mask=mask)
+KEYS = ("all", "sunlit", "shadow", "base", "p10", "p50", "p90")
+if args.csv:
+    os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)
+    with open(args.csv, "w") as f:
+        f.write("view,lamp,comparison," + ",".join(KEYS) + "\n")
+        for view, lamp, name, r in rows:
+            f.write(f"{view},{lamp},{name}," + ",".join(f"{r[k]:.4f}" for k in KEYS) + "\n")
+        for lamp, c, e in lining:
+            f.write(f"backlit,{lamp},edge over core Cycles {c:.4f} engine {e:.4f}" + "," * len(KEYS) + "\n")
+    print(f"wrote {args.csv}")
+if args.doc:
+    lines = [
+        f"Blender {bpy.app.version_string}, {args.size[0]} x {args.size[1]}, Cycles {args.samples} spp "
+        f"({args.bounces} bounces), reference {args.paths} paths, phase "
+        + ("Welkin's two lobes" if args.lobes == "welkin" else f"one HG lobe g = {cv.G}")
+        + "; luminance ratios:",
+        "",
+        "| lamp | comparison | all | sunlit half | shadow half | base | p10 | p50 | p90 |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for _view, lamp, name, r in rows:
+        lines.append(f"| {lamp} | {name} | " + " | ".join(f"{r[k]:.3f}" for k in KEYS) + " |")
+    for lamp, c, e in lining:
+        lines.append(f"| {lamp} | silver lining (backlit), edge over core: Cycles {c:.2f}, engine {e:.2f} |" + " |" * 7)
+    begin, end = "<!-- cycles_addon_clouds: begin -->", "<!-- cycles_addon_clouds: end -->"
+    text = pathlib.Path(args.doc).read_text()
+    a, b = text.index(begin) + len(begin), text.index(end)
+    pathlib.Path(args.doc).write_text(text[:a] + "\n" + "\n".join(lines) + "\n" + text[b:])
+    print(f"wrote the table into {args.doc}")
