@@ -45,10 +45,27 @@ def write_cloud(path, scale=2.7):
     cv.write_cumulus(path, voxel_m=6.0 * scale, radius_m=220.0 * scale)
 
 
-def build(T, vdb, *, sigma, lobes, sun_elevation_deg, sun_azimuth_deg, camera, lens_mm, size, samples, bounces, seed=1):
-    """The scene (T: tests/blender/addon_testing). Returns (scene, sun lamp, volume object)."""
+def build(
+    T,
+    vdb,
+    *,
+    sigma,
+    lobes,
+    sun_elevation_deg,
+    sun_azimuth_deg,
+    camera,
+    lens_mm,
+    size,
+    samples,
+    bounces,
+    seed=1,
+):
+    """The scene (T: tests/blender/addon_testing.py, the caller's import). Returns (scene, sun lamp, volume object)."""
     scene, sun = T.new_scene(
-        sun_elevation_deg=sun_elevation_deg, sun_azimuth_deg=sun_azimuth_deg, resolution="512", camera_z=camera[2]
+        sun_elevation_deg=sun_elevation_deg,
+        sun_azimuth_deg=sun_azimuth_deg,
+        resolution="512",
+        camera_z=camera[2],
     )
     scene.world.welkin.method = "lut"
     vol = bpy.data.volumes.new("Cloud")
@@ -121,7 +138,7 @@ def engine_pass(scene, native, lobes, air=True):
     depsgraph = bpy.context.evaluated_depsgraph_get()
     desc = json.loads(render_engine.scene_description_json(scene, depsgraph, native))
     if lobes != WELKIN_LOBES:
-        (g, _w), = lobes
+        ((g, _w),) = lobes
         desc["clouds"]["scattering"] = {"albedo": 1.0, "g_forward": g, "g_back": 0.0, "w_forward": 1.0}
     if not air:
         desc.setdefault("aerial", {})["sky_depth_m"] = 1.0

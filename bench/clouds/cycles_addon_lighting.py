@@ -96,7 +96,11 @@ for lamp in lamps:
         )
         if view == "backlit":
             lining.append(
-                (lamp, ac.edge_over_core(cyc, regs, cyc[..., 3]), ac.edge_over_core(noair, regs, noair[..., 3]))
+                (
+                    lamp,
+                    ac.edge_over_core(cyc, regs, cyc[..., 3]),
+                    ac.edge_over_core(noair, regs, noair[..., 3]),
+                )
             )
             print(f"  silver lining, edge over core: Cycles {lining[-1][1]:.3f}, engine {lining[-1][2]:.3f}")
             continue
@@ -132,7 +136,9 @@ if args.doc:
     for _view, lamp, name, r in rows:
         lines.append(f"| {lamp} | {name} | " + " | ".join(f"{r[k]:.3f}" for k in KEYS) + " |")
     for lamp, c, e in lining:
-        lines.append(f"| {lamp} | silver lining (backlit), edge over core: Cycles {c:.2f}, engine {e:.2f} |" + " |" * 7)
+        lines.append(
+            f"| {lamp} | silver lining (backlit), edge over core: Cycles {c:.2f}, engine {e:.2f} |" + " |" * 7
+        )
     begin, end = "<!-- cycles_addon_clouds: begin -->", "<!-- cycles_addon_clouds: end -->"
     text = pathlib.Path(args.doc).read_text()
     a, b = text.index(begin) + len(begin), text.index(end)

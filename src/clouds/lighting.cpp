@@ -192,8 +192,8 @@ public:
                 tau_side = depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) + minus;
                 if (tau_side > 0.0) side_fraction = minus / tau_side;
             }
-            sun_w = sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0], ph.twice,
-                               side_fraction, ph.across);
+            sun_w = sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0],
+                               ph.twice, side_fraction, ph.across);
         } else {
             const double f = sized_ ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
             double fi = 1.0;

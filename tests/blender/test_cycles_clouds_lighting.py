@@ -82,8 +82,10 @@ def main():
         fast = ac.engine_pass(scene, native, ac.WELKIN_LOBES, air=False)
         regs = ac.regions(scene, cyc[..., 3], ac.sun_direction(el, az))
         T.check(regs["all"].sum() > 400, f"{view}: the cloud covers too few pixels ({regs['all'].sum()})")
-        print(f"{NAME}: {view}: lamp at the ground / at the cloud (luminance) "
-              f"{(e_ground @ ac.LUMINANCE) / (e_cloud @ ac.LUMINANCE):.3f}")
+        print(
+            f"{NAME}: {view}: lamp at the ground / at the cloud (luminance) "
+            f"{(e_ground @ ac.LUMINANCE) / (e_cloud @ ac.LUMINANCE):.3f}"
+        )
         if view == "side":
             ref, t_ref = ac.reference(scene, native, vdb, SIGMA, ac.WELKIN_LOBES, PATHS)
             # The same cloud in both (density, placement): their opacity agrees on average
