@@ -75,14 +75,12 @@ SimilarityScaling::SimilarityScaling(double a, double g) {
 }
 
 double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side, double nu,
-                  double g, double p, double p2, double side_fraction, double across_view) {
+                  double g, double p, double p2) {
     const double single = std::exp(-tau_sun);
     const double ts = sim.depth_scale * tau_sun, T = sim.depth_scale * (tau_sun + tau_anti);
     // The sides (header): the fundamental transverse mode's buckling across the chord's
     // scaled width W' between extrapolated boundaries, B = pi / (W' + 4/3).
-    const bool sides = std::isfinite(tau_side);
-    const double We = sides ? sim.depth_scale * tau_side + 4.0 / 3.0 : 0.0;
-    const double Bw = sides ? kPi / We : 0.0;
+    const double Bw = std::isfinite(tau_side) ? kPi / (sim.depth_scale * tau_side + 4.0 / 3.0) : 0.0;
     const double leak = Bw * Bw;
     // The orientation average (see the header): int_0^1 2 mu0 f(mu0) dmu0 = int_0^1 f(sqrt(v)) dv,
     // by 3-point Gauss-Legendre in v = mu0^2 (exact for f polynomial of degree 5 in v).
@@ -91,43 +89,24 @@ double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti,
     // mu = sqrt(v):
     static constexpr std::array<double, 3> mu = {0.3357106870197288, 0.7071067811865476, 0.9419651451198934};
     const double beam_t = std::exp(-ts), beam_T = std::exp(-T);  // the scaled beam
-    // The slab's field at inclination i, with the leak k2_extra.
-    const auto field = [&](int i, double k2_extra) {
-        return 3.0 * (1.0 - sim.albedo) + k2_extra < kConservative
-                   ? conservative_slab(mu[i] * T, mu[i] * ts, mu[i], beam_t, beam_T)
-                   : eddington_slab(mu[i] * T, mu[i] * ts, sim.albedo, mu[i], k2_extra);
-    };
-    // Its diffuse source towards the viewer.
-    const auto toward_viewer = [&](int i, const DiffuseField& d) {
+    // The slab's diffuse source towards the viewer at inclination i, with the leak k2_extra.
+    const auto slab = [&](int i, double k2_extra) {
+        const DiffuseField d = 3.0 * (1.0 - sim.albedo) + k2_extra < kConservative
+                                   ? conservative_slab(mu[i] * T, mu[i] * ts, mu[i], beam_t, beam_T)
+                                   : eddington_slab(mu[i] * T, mu[i] * ts, sim.albedo, mu[i], k2_extra);
         return std::max(0.0, d.fluence + 3.0 * g * d.flux * mu[i] * nu);
     };
     // The higher modes' share at depth t' (the header's blend); below 1e-4 of the difference
     // it is left out.
     const double near = std::exp(-3.0 * Bw * ts);
-    double diffuse = 0.0, fundamental = 0.0;
+    double diffuse = 0.0;
     for (int i = 0; i < 3; ++i) {
-        const DiffuseField d = field(i, leak);
-        double v = toward_viewer(i, d);
-        if (leak > 0.0 && near > 1e-4) v += (toward_viewer(i, field(i, 0.0)) - v) * near;
+        double v = slab(i, leak);
+        if (leak > 0.0 && near > 1e-4) v += (slab(i, 0.0) - v) * near;
         diffuse += w[i] * v;
-        fundamental += w[i] * d.fluence;
-    }
-    if (sides && across_view != 0.0) {
-        // The fundamental mode's flux across the sun line (header, "The sides"): its fluence
-        // goes as sin(pi u / W_e) across the chord, u the scaled depth from the -across
-        // extrapolated boundary, so Fick's law gives the transverse flux
-        //     F_u = -(1/3) dphi/du = -(pi / (3 W_e)) cot(pi u / W_e) phi
-        // (towards the nearer side; at a side, u = 2/3, it is Marshak's phi / 2 out of a wide
-        // cloud). It is the light the leak takes out, on its way to the sides; in-scattered
-        // towards the viewer with the phase's first moment it adds 3 g F_u (u . w_out) / (4 pi),
-        // w_out = -d the direction to the viewer. The higher modes near the lit face carry
-        // none (the blend above).
-        const double u = sim.depth_scale * tau_side * std::clamp(side_fraction, 0.0, 1.0) + 2.0 / 3.0;
-        const double Fu = -(kPi / (3.0 * We)) / std::tan(kPi * u / We) * fundamental * (1.0 - near);
-        diffuse += 3.0 * g * Fu * (-across_view);
     }
     const double forward = (beam_t - single) * p2;
-    return single * p + forward + std::max(0.0, diffuse) / (4.0 * kPi);
+    return single * p + forward + diffuse / (4.0 * kPi);
 }
 
 }  // namespace welkin

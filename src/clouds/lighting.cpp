@@ -110,7 +110,7 @@ public:
     };
     // The phase values of one ray's direction: nu = d . s is the same at every sample.
     struct RayPhase {
-        double nu = 0.0, twice = 0.0, across = 0.0;  // across = d . across_
+        double nu = 0.0, twice = 0.0;
         std::vector<double> octave;
     };
 
@@ -166,7 +166,6 @@ public:
     void ray_phase(const glm::dvec3& d, RayPhase& ph) const {
         const CloudScattering& sc = options_.scattering;
         ph.nu = glm::dot(d, s_);
-        ph.across = glm::dot(d, across_);
         ph.octave.resize(options_.octaves);
         for (int i = 0; i < options_.octaves; ++i) ph.octave[i] = sc.phase(ph.nu, oc_[i]);
         ph.twice = diffusion_ ? sc.phase.twice(ph.nu) : 0.0;
@@ -186,14 +185,12 @@ public:
         double sun_w = 0.0;
         if (diffusion_) {
             // Single scattering plus the forward-scattered and diffuse parts.
-            double tau_side = std::numeric_limits<double>::infinity(), side_fraction = 0.5;
-            if (options_.sides) {
-                const double minus = depth_along(grids_.back, cur.back, lv.side, x, -across_, steps, cur);
-                tau_side = depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) + minus;
-                if (tau_side > 0.0) side_fraction = minus / tau_side;
-            }
-            sun_w = sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0],
-                               ph.twice, side_fraction, ph.across);
+            double tau_side = std::numeric_limits<double>::infinity();
+            if (options_.sides)
+                tau_side = depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) +
+                           depth_along(grids_.back, cur.back, lv.side, x, -across_, steps, cur);
+            sun_w =
+                sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0], ph.twice);
         } else {
             const double f = sized_ ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
             double fi = 1.0;

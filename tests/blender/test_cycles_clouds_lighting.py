@@ -7,7 +7,7 @@ The scene and what each renderer gets: bench/cycles_addon_clouds.py (the cumulus
 1.2 x 0.9 km, 5 km up and 6 km away, sigma_t up to 0.0148 /m, Welkin's phase 0.8 HG(0.8) +
 0.2 HG(-0.3), albedo 1; Cycles 96 x 64, 128 samples, 256 volume bounces; the reference 256
 paths). The lamp is the sun at the cloud's altitude (the light Welkin gives the cloud; the
-add-on syncs the lamp to the sun at the camera, 0.78 of it in luminance here), and the
+add-on syncs the lamp to the sun at the camera, 0.73 of it in luminance here), and the
 engine's pass leaves out the air in front of the cloud, which Cycles does not have.
 
 Two views. "side": the sun 30 degrees up, 60 degrees left of the view; luminance ratios

@@ -141,31 +141,6 @@ TEST(CloudDiffusion, SidesVanishForWideCloudsAndDarkenNarrowOnes) {
                 sun_source(sim, 0.0, 20.0, inf, nu, 0.85, p, p2), 1e-12);
 }
 
-// The sides' transverse flux (clouds/diffusion.hpp, sun_source): none at the chord's middle
-// (the fundamental mode's fluence is flat there) and none at the lit face (the higher modes
-// hold the slab there); off the middle it flows to the nearer side, so a viewer looking
-// along +across at a point near the -across side (light leaving towards -across, to the
-// viewer) sees more than one looking the other way, and the two differ symmetrically about
-// the term-free source; without a view component across the sun line nothing changes.
-TEST(CloudDiffusion, SidesFluxFlowsToTheNearerSide) {
-    const SimilarityScaling sim(1.0, 0.85);
-    const double nu = 0.2, p = 0.1, p2 = 0.12;
-    const double ts = 4.0, anti = 20.0, chord = 10.0;
-    const double none = sun_source(sim, ts, anti, chord, nu, 0.85, p, p2, 0.2, 0.0);
-    for (double a : {-1.0, 0.6})
-        EXPECT_NEAR(sun_source(sim, ts, anti, chord, nu, 0.85, p, p2, 0.5, a),
-                    sun_source(sim, ts, anti, chord, nu, 0.85, p, p2, 0.5, 0.0), 1e-12);
-    EXPECT_NEAR(sun_source(sim, 0.0, anti, chord, nu, 0.85, p, p2, 0.2, 1.0),
-                sun_source(sim, 0.0, anti, chord, nu, 0.85, p, p2, 0.2, 0.0), 1e-12);
-    const double towards = sun_source(sim, ts, anti, chord, nu, 0.85, p, p2, 0.2, 1.0);
-    const double away = sun_source(sim, ts, anti, chord, nu, 0.85, p, p2, 0.2, -1.0);
-    EXPECT_GT(towards, none);
-    EXPECT_LT(away, none);
-    EXPECT_NEAR(towards - none, none - away, 1e-12);
-    // Mirror image: the point near the +across side, the viewer the other way.
-    EXPECT_NEAR(sun_source(sim, ts, anti, chord, nu, 0.85, p, p2, 0.8, -1.0), towards, 1e-12);
-}
-
 // A thick conservative slab (tau = 16 vertically, wide enough to be infinite), lit by the
 // sun alone, views from below (transmitted light) and from above (reflected light): the
 // fast march against the path-tracing reference (all orders). The sun stands at

@@ -82,19 +82,10 @@
 // phi_B the slab with k^2 + B^2, phi_0 without, t' the scaled depth from the lit face;
 // each inclination of the orientation average the same way. The other transverse axis is
 // left infinite, as before: the march measures one chord, and a cloud wider than it leaks
-// less, not more. W' infinite (no cloud across) is the slab itself. The light the leak
-// removes flows across the sun line on its way out: the fundamental mode goes as
-// sin(pi u / W_e) across the chord (u from the -across extrapolated boundary, which the two
-// side depths locate), so Fick's law gives the transverse flux
-//     F_u = -(1/3) dphi/du = -(pi / (3 W_e)) cot(pi u / W_e) phi_B,
-// towards the nearer side (at a side of a wide cloud, Marshak's phi / 2), weighted by the
-// fundamental's share 1 - exp(-3 B t'); its in-scattering towards the viewer adds
-// 3 g F_u (u . w_out) / (4 pi), w_out = -d, as the sun-line flux adds 3 g F mu0 nu. The leak,
-// the blend and the flux follow from the mode expansion; nothing is fitted. What they buy
-// is measured in docs/validation.md ("Under the add-on's own lighting", "Against Cycles
-// under the add-on's own sky"). Not modelled: the sky's share of multiple scattering (its
-// own term, clouds/lighting.hpp), the second transverse axis (normal to the sun line and
-// to u), along which light diffuses into the lower flank of a heap from the body above.
+// less, not more. W' infinite (no cloud across) is the slab itself. The leak and the blend
+// follow from the mode expansion; nothing is fitted. What it buys is measured in
+// docs/validation.md ("Under the add-on's own lighting"). Not modelled: the sky's share of
+// multiple scattering (its own term, clouds/lighting.hpp).
 #pragma once
 
 namespace welkin {
@@ -122,10 +113,7 @@ struct SimilarityScaling {
 // depths tau_sun, tau_anti (unscaled), the chord tau_side across the sun line (unscaled;
 // infinity: no sides), nu = d . s, g the phase's mean cosine, p the phase and p2 the
 // twice-scattered phase at nu.
-// side_fraction: the share of tau_side on x's -across side (x's place across the chord);
-// across_view: the across direction's cosine with the view direction d (0: no transverse
-// flux towards the viewer).
 double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side, double nu,
-                  double g, double p, double p2, double side_fraction = 0.5, double across_view = 0.0);
+                  double g, double p, double p2);
 
 }  // namespace welkin
