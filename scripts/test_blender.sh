@@ -36,7 +36,9 @@ tests=("$@")
 # KNOWN FAILURE with the reason; it does not fail the run, and its passing does (so that
 # the entry goes). Every entry is open work, named in the closing note of the change that
 # added it.
-declare -A known=()
+declare -A known=(
+  ["test_cycles_clouds_lighting@5.0"]="the fast march is 15 % dark against Cycles in all and 22 % on the sunlit half (tolerances 10 % and 15 %), its silver lining 20 % too strong against its core (docs/validation.md, Against Cycles under the add-on's own sky)"
+)
 
 # Every temporary file of the run (the tests', bpy_blender.py's user folders, Blender's
 # session folders) goes into one folder, removed when the run ends however it ends: a test
@@ -102,11 +104,18 @@ for v in "${versions[@]}"; do
       fi
     else
       [[ -n ${WELKIN_EXTENSION_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
+      reason=${known["$(basename "$t" .py)@$v"]:-}
       # No PYTHONPATH: the compiled core comes from the Extension's wheel alone.
-      env -u PYTHONPATH timeout -k 10 "${WELKIN_TEST_TIMEOUT:-900}" \
+      if env -u PYTHONPATH timeout -k 10 "${WELKIN_TEST_TIMEOUT:-900}" \
         "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py \
         -b --factory-startup --python-use-system-env --python-exit-code 1 \
-        --python "$t" || failed+=("$t@$v")
+        --python "$t"; then
+        [[ -z $reason ]] || { echo "test_blender: $t now passes on $v: take it off the known list"; failed+=("$t@$v(known)"); }
+      elif [[ -n $reason ]]; then
+        echo "test_blender: KNOWN FAILURE on Blender $v: $t: $reason"
+      else
+        failed+=("$t@$v")
+      fi
     fi
   done
   seconds[$v]=$((SECONDS - start))
