@@ -29,7 +29,7 @@ import pytest
 import welkin
 
 # The type's streak stretch (clouds/procedural.cpp, shape_of) and the streak direction.
-STRETCH = {"cumulus": 1.0, "stratocumulus": 1.6, "altocumulus": 1.0, "stratus": 1.5, "cirrus": 8.0}
+STRETCH = {"cumulus": 1.0, "stratocumulus": 1.6, "altocumulus": 1.0, "stratus": 1.5, "cirrus": 25.0}
 STREAK = math.radians(30.0)
 PIXELS = 384
 R_PLANET = 6360e3

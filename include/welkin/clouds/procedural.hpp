@@ -133,6 +133,8 @@ public:
     static constexpr double kCoverageOpticalDepth = 0.3;
     static constexpr int kCoverageColumns = 2048;
     static constexpr double kMaxErosion = 0.6;
+    static constexpr double kEdgeM = 30.0;         // cells: the density's rise inside the surface
+    static constexpr double kFibreStretch = 25.0;  // cirrus: the fibres' length over their width
     static constexpr double kDomeMinElevationDeg = 5.0;
     static constexpr int kDomeObservers = 32;
     static constexpr int kDomeDirections = 64;
@@ -156,6 +158,8 @@ public:
 
 private:
     double density(const glm::dvec3& p, double h, double k) const;
+    double cell_density(double x, double y, double f, double c, const float* w) const;
+    double cirrus_density(double x, double y, double f, double c, const float* w) const;
     double column_depth(double x, double y, double k) const;
     double fraction(double k, int columns) const;
     double dome_share(double k, int observers, int directions) const;
