@@ -81,8 +81,7 @@ struct TypeShape {
     double fibres;  // how much the detail noise shapes the whole cloud, not only its edges
     // cells (cumulus, stratocumulus, altocumulus): 1 builds the cloud from its footprint
     // (flat base, domed top, billows); 0 the layer model (stratus). billow: the billows'
-    // depth, a fraction of the layer; dome: the top's rise with the footprint's strength m,
-    // f_top m^dome (0.5: steep sides, a rounded top).
+    // depth, a fraction of the layer; dome: the dome's half-width over its height.
     double cells, billow, dome;
     // cirrus: the fallstreaks' length below the heads (a fraction of the layer, times the
     // footprint's strength) and their shear (down-wind drift at the bottom, in base tiles).
@@ -100,7 +99,7 @@ const TypeShape& shape_of(CloudType t) {
         {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.2, 3.0, 0.0, 0.0},     // stratocumulus
         {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.25, 2.0, 0.0, 0.0},    // altocumulus
         {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},        // stratus
-        {{0.6, 0.75, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.0, 0.0, 0.0, 0.0, 0.3, 0.15},     // cirrus
+        {{0.7, 0.8, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.5, 0.0, 0.0, 0.0, 0.3, 0.15},     // cirrus
     };
     return shapes[static_cast<int>(t)];
 }
@@ -542,7 +541,7 @@ double ProceduralClouds::cirrus_density(double x, double y, double f, double c, 
     float d;
     detail_.sample(along * inv_detail_ / fs, across * inv_detail_ * fs, 0.5 * zd, &d);
     const double strands = clamp01d(remap(d, 0.42, 0.62, 0.0, 1.0));
-    return env * (1.0 - shape.fibres * p_.detail_strength * (1.0 - strands));
+    return env * (1.0 - std::min(1.0, shape.fibres * p_.detail_strength) * (1.0 - strands));
 }
 
 // Hex-tiled reads (noise.hpp, hex_taps), the lattice half a texture period apart: every
