@@ -95,11 +95,11 @@ const TypeShape& shape_of(CloudType t) {
     // stratus: a low, uniform grey sheet with faint, stretched undulations;
     // cirrus: thin high heads of stretched, curl-bent fibres with sheared fallstreaks below.
     static const TypeShape shapes[] = {
-        {{0.0, 0.02, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.12, 1.5, 0.0, 0.0},    // cumulus
-        {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.2, 3.0, 0.0, 0.0},     // stratocumulus
-        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.25, 2.0, 0.0, 0.0},    // altocumulus
-        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},        // stratus
-        {{0.7, 0.8, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.5, 0.0, 0.0, 0.0, 0.3, 0.15},     // cirrus
+        {{0.0, 0.02, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.12, 1.5, 0.0, 0.0},  // cumulus
+        {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.2, 3.0, 0.0, 0.0},   // stratocumulus
+        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.25, 2.0, 0.0, 0.0},  // altocumulus
+        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},      // stratus
+        {{0.7, 0.8, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.5, 0.0, 0.0, 0.0, 0.3, 0.15},    // cirrus
     };
     return shapes[static_cast<int>(t)];
 }
@@ -477,7 +477,7 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double in_m = m * 0.12 * p_.base_scale_m;
     const double u = std::min(1.0, in_m / (shape.dome * f_max * thickness));
     const double f_top = f_max * std::sqrt(u * (2.0 - u));
-    if (f >= f_top) return 0.0;  // the billows only remove
+    if (f >= f_top) return 0.0;                           // the billows only remove
     const double rise = clamp01d(f / shape.gradient.a1);  // the flat base
     const double inside = std::min((f_top - f) * thickness, in_m);
     if (p_.detail_strength <= 0.0) return rise * clamp01d(inside / kEdgeM);
@@ -490,8 +490,8 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double amp = shape.curl;
     const double ax = kStreakCos * x + kStreakSin * y, ay = -kStreakSin * x + kStreakCos * y;
     float d1, d2;
-    detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1], h_m * inv_detail_,
-                   &d1);
+    detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1],
+                   h_m * inv_detail_, &d1);
     detail_.sample(0.5 * (ax * inv_detail_ / sq) + 0.37 + amp * cu[1],
                    0.5 * (ay * inv_detail_ * sq) + 0.61 - amp * cu[0], 0.5 * h_m * inv_detail_ + 0.29, &d2);
     const double billow = clamp01d((0.8 - (0.6 * d2 + 0.4 * d1)) / 0.5);

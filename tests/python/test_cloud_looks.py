@@ -104,5 +104,7 @@ def test_cirrus_is_fibrous_and_cumulus_round(cloud_type, lo, hi):
     along = quarter_lag(c, span / n, STREAK)
     across = quarter_lag(c, span / n, STREAK + math.pi / 2)
     ratio = along / across
-    print(f"{cloud_type}: quarter-correlation lag {along:.0f} m along the streaks, {across:.0f} m across: {ratio:.2f}")
+    print(
+        f"{cloud_type}: quarter-correlation lag {along:.0f} m along the streaks, {across:.0f} m across: {ratio:.2f}"
+    )
     assert lo <= ratio <= hi
