@@ -95,11 +95,11 @@ const TypeShape& shape_of(CloudType t) {
     // stratus: a low, uniform grey sheet with faint, stretched undulations;
     // cirrus: thin high heads of stretched, curl-bent fibres with sheared fallstreaks below.
     static const TypeShape shapes[] = {
-        {{0.0, 0.02, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.12, 1.5, 0.0, 0.0},  // cumulus
+        {{0.0, 0.04, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.12, 1.5, 0.0, 0.0},  // cumulus
         {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.2, 3.0, 0.0, 0.0},   // stratocumulus
-        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.25, 2.0, 0.0, 0.0},  // altocumulus
+        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.25, 1.0, 0.0, 0.0},  // altocumulus
         {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},      // stratus
-        {{0.7, 0.8, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.5, 0.0, 0.0, 0.0, 0.3, 0.15},    // cirrus
+        {{0.7, 0.8, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.0, 0.0, 0.0, 0.0, 0.3, 0.15},    // cirrus
     };
     return shapes[static_cast<int>(t)];
 }

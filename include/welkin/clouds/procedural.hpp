@@ -154,7 +154,7 @@ public:
     static constexpr double kCoverageOpticalDepth = 0.3;
     static constexpr int kCoverageColumns = 2048;
     static constexpr double kMaxErosion = 0.6;
-    static constexpr double kEdgeM = 30.0;         // cells: the density's rise inside the surface
+    static constexpr double kEdgeM = 80.0;         // cells: the density's rise inside the surface
     static constexpr double kFibreStretch = 25.0;  // cirrus: the fibres' length over their width
     static constexpr double kDomeMinElevationDeg = 5.0;
     static constexpr int kDomeObservers = 32;
