@@ -1,13 +1,17 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The contact sheet of the cloud types (docs/clouds_types.png): each preset seen from the
-ground (looking 15 degrees up) and from above (12 km up, looking 30 degrees down), through
-the scene camera's plate (welkin.camera_plate, the WELKIN render engine's picture), tone
-mapped (exposure per type, x / (1 + x), sRGB gamma); the march at 48 view steps to keep it quick.
+"""The contact sheet of the cloud types (docs/clouds_types.png): one row per type, each
+preset at its defaults seen from the ground at noon (sun 60 degrees up, camera 15 degrees
+up), from the ground at sunset (sun 3 degrees up, 45 degrees to the right) and from above
+(10 km up, looking 30 degrees down, sun 45 degrees up), beside what the WMO International
+Cloud Atlas says the type looks like (in our words). Through the scene camera's plate
+(welkin.camera_plate, the WELKIN render engine's picture); each view has one exposure for
+every type, set from the clear sky of that view (its median maps to 0.25 before
+x / (1 + x) and sRGB's curve), so a grey type reads grey beside a white one.
 
-    PYTHONPATH=build /usr/bin/python3 bench/clouds/types_sheet.py docs/clouds_types.png
-    ... --views ground --width 480 --types cumulus      # one type, to look at it
-(needs numpy and Pillow: scripts/install_deps.sh installs Debian's python3-numpy, and
-python3-matplotlib brings python3-pil.)
+    PYTHONPATH=build /usr/bin/python3 bench/clouds/types_sheet.py            # docs/clouds_types.png
+    ... /tmp/cu.png --types cumulus --width 480                             # one type, to look at it
+(needs numpy, Pillow and matplotlib's DejaVu font: scripts/install_deps.sh installs Debian's
+python3-numpy and python3-matplotlib, which brings python3-pil and fonts-dejavu-core.)
 """
 
 import argparse
@@ -15,13 +19,44 @@ import json
 import math
 import pathlib
 import sys
+import textwrap
+import time
 
 import numpy as np
-from PIL import Image, ImageDraw
+from matplotlib import font_manager
+from PIL import Image, ImageDraw, ImageFont
 
 import welkin
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+# What the WMO International Cloud Atlas (2017 online edition, "Definitions of clouds" and
+# the species and varieties) describes, paraphrased.
+ATLAS = {
+    "cumulus": "Separate, dense heaps with crisp outlines that build upwards as mounds, domes "
+    "or towers. The sunlit upper parts bulge like a cauliflower and are brilliant white; the "
+    "bases are almost level and comparatively dark. Humilis: flattened, little depth; "
+    "mediocris: about as tall as wide, small bulges on top. Blue sky between them.",
+    "stratocumulus": "A low grey or whitish sheet or patches, nearly always with darker parts, "
+    "made of rounded masses, rolls or tiles, joined or not. Seen more than 30 degrees up, "
+    "each regular element is wider than about 5 degrees (three fingers at arm's length).",
+    "altocumulus": "A mid-level white or grey sheet or patches of small rounded masses, "
+    "rolls or flakes, with their own shading, often in regular rows; each element seen "
+    "more than 30 degrees up spans between 1 and 5 degrees (a mackerel sky).",
+    "stratus": "A generally grey layer with a fairly uniform base; it may give drizzle. When "
+    "the sun shows through, its outline is clearly seen. No rolls or cells: an even sheet, "
+    "sometimes in ragged shreds.",
+    "cirrus": "Detached high clouds of white, delicate filaments or narrow bands, hair-like "
+    "(fibrous), silky or both. Uncinus: comma-shaped strands ending in a hook or tuft at the "
+    "top; the trails below are fallstreaks of ice crystals drifting in the wind's shear.",
+}
+
+VIEWS = {
+    # name: (camera height m, pitch deg, sun elevation deg, sun azimuth deg right of the view)
+    "ground, noon": (20.0, 15.0, 60.0, 60.0),
+    "ground, sunset": (20.0, 15.0, 3.0, 45.0),
+    "above (10 km)": (10000.0, -30.0, 45.0, 60.0),
+}
 
 
 def camera(height_m, pitch_deg, fov_deg=70.0):
@@ -38,68 +73,66 @@ def camera(height_m, pitch_deg, fov_deg=70.0):
     }
 
 
-def render(cloud_type, view, width, coverage=None, detail=None):
-    height = width * 9 // 16
-    layer = {"cloud_type": cloud_type}
-    if coverage is not None:
-        layer["coverage"] = coverage
-    if detail is not None:
-        layer["detail_strength"] = detail
-    cam = camera(20.0, 15.0) if view == "ground" else camera(12000.0, -30.0)
+def sun(elevation_deg, azimuth_deg):
+    e, a = math.radians(elevation_deg), math.radians(azimuth_deg)
+    return [math.cos(e) * math.sin(a), math.cos(e) * math.cos(a), math.sin(e)]
+
+
+def render(cloud_type, view, width, steps):
+    height_m, pitch, elevation, azimuth = VIEWS[view]
     scene = {
         "version": 1,
         "atmosphere": "bruneton2017",
-        "sun": {"direction": [0.55, 0.35, 0.6]},
-        "camera": cam,
-        "resolution": {"x": width, "y": height, "percentage": 100},
-        "clouds": {"layers": [layer], "lighting": {"max_steps": 48, "light_steps": 6}},
+        "sun": {"direction": sun(elevation, azimuth)},
+        "camera": camera(height_m, pitch),
+        "resolution": {"x": width, "y": width * 9 // 16, "percentage": 100},
     }
-    plate = welkin.camera_plate(json.dumps(scene))
-    return plate["combined"]
+    if cloud_type:
+        scene["clouds"] = {"layers": [{"cloud_type": cloud_type}], "lighting": {"max_steps": steps}}
+    return np.asarray(welkin.camera_plate(json.dumps(scene))["combined"], np.float64)[..., :3]
 
 
 def tone(rgb, scale):
-    x = rgb * scale
+    x = np.maximum(rgb * scale, 0.0)
     x = x / (1.0 + x)
-    return np.clip(np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.abs(x) ** (1 / 2.4) - 0.055), 0, 1)
+    return np.clip(np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055), 0, 1)
+
+
+def font(size):
+    return ImageFont.truetype(font_manager.findfont("DejaVu Sans"), size)
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out", nargs="?", default=str(ROOT / "docs" / "clouds_types.png"))
-    ap.add_argument("--width", type=int, default=320)
+    ap.add_argument("--width", type=int, default=400, help="of each view, pixels")
+    ap.add_argument("--steps", type=int, default=96, help="the march's view steps")
     ap.add_argument("--types", nargs="*", default=list(welkin.CLOUD_TYPES))
-    ap.add_argument("--views", nargs="*", default=["ground", "above"])
-    ap.add_argument("--coverage", type=float, default=None)
-    ap.add_argument("--detail", type=float, default=None)
-    ap.add_argument("--cache", default=None, help="a folder: each type's row is kept there and reused")
+    ap.add_argument("--views", nargs="*", default=list(VIEWS))
     args = ap.parse_args()
-    rows = []
-    for t in args.types:
-        cached = pathlib.Path(args.cache) / f"{t}.png" if args.cache else None
-        if cached and cached.exists():
-            rows.append(np.asarray(Image.open(cached)))
-            continue
-        tiles = []
-        scale = None
-        for v in args.views:
-            rgb = render(t, v, args.width, args.coverage, args.detail)
-            # One exposure per type, from the ground view: its 90th percentile (the bright
-            # clouds and sky, the ground left out) maps to 1.2 before x / (1 + x).
-            if scale is None:
-                scale = 1.2 / np.percentile(rgb.mean(axis=2)[: rgb.shape[0] * 3 // 4], 90)
-            tiles.append(tone(rgb, scale))
-            print(f"{t} {v}: mean {rgb.mean():.4f}", file=sys.stderr)
-        row = np.concatenate(tiles, axis=1)
-        img = Image.fromarray((row * 255 + 0.5).astype(np.uint8))
-        d = ImageDraw.Draw(img)
-        d.rectangle([0, 0, 8 + 7 * len(t), 14], fill=(0, 0, 0))
-        d.text((4, 2), t, fill=(255, 255, 255))
-        if cached:
-            cached.parent.mkdir(parents=True, exist_ok=True)
-            img.save(cached)
-        rows.append(np.asarray(img))
-    sheet = Image.fromarray(np.concatenate(rows, axis=0))
+    w, h = args.width, args.width * 9 // 16
+    text_w, head_h = 330, 22
+    scales = {}
+    for v in args.views:  # each view's exposure, from its clear sky
+        clear = render(None, v, w, args.steps)
+        scales[v] = 0.25 / np.median(clear[: h * 3 // 4].mean(axis=2))
+    sheet = Image.new("RGB", (text_w + w * len(args.views), head_h + h * len(args.types)), (18, 18, 18))
+    d = ImageDraw.Draw(sheet)
+    small, body, title = font(13), font(12), font(17)
+    for i, v in enumerate(args.views):
+        d.text((text_w + i * w + 6, 3), v, fill=(235, 235, 235), font=small)
+    for r, t in enumerate(args.types):
+        y0 = head_h + r * h
+        d.text((8, y0 + 6), t, fill=(255, 255, 255), font=title)
+        lines = textwrap.wrap(ATLAS[t], 47)
+        for k, line in enumerate(lines):
+            d.text((8, y0 + 32 + 15 * k), line, fill=(200, 200, 200), font=body)
+        for i, v in enumerate(args.views):
+            t0 = time.perf_counter()
+            rgb = render(t, v, w, args.steps)
+            print(f"{t:13s} {v:15s} {time.perf_counter() - t0:6.1f} s", file=sys.stderr)
+            tile = Image.fromarray((tone(rgb, scales[v]) * 255 + 0.5).astype(np.uint8))
+            sheet.paste(tile, (text_w + i * w, y0))
     sheet.save(args.out, optimize=True)
     print(f"wrote {args.out} ({pathlib.Path(args.out).stat().st_size // 1024} KB)")
 

@@ -66,7 +66,7 @@ public:
                     const double fz = k + q[2] - pz;
                     best = std::min(best, fx * fx + fy * fy + fz * fz);
                 }
-        return std::clamp(1.0 - std::sqrt(best), 0.0, 1.0);
+        return std::clamp(1.0 - best, 0.0, 1.0);
     }
 
 private:
@@ -127,7 +127,7 @@ double tileable_worley(double x, double y, double z, int f, std::uint64_t seed) 
                 const double fz = k + unit_from_bits(h, 40) - pz;
                 best = std::min(best, fx * fx + fy * fy + fz * fz);
             }
-    return std::clamp(1.0 - std::sqrt(best), 0.0, 1.0);
+    return std::clamp(1.0 - best, 0.0, 1.0);
 }
 
 double tileable_perlin(double x, double y, double z, int f, std::uint64_t seed) {

@@ -79,20 +79,27 @@ struct TypeShape {
     Trapezoid gradient;
     double towers, base_erosion, stretch, curl;
     double fibres;  // how much the detail noise shapes the whole cloud, not only its edges
+    // cells (cumulus, stratocumulus, altocumulus): 1 builds the cloud from its footprint
+    // (flat base, domed top, billows); 0 the layer model (stratus). billow: the billows'
+    // depth, a fraction of the layer; dome: the dome's half-width over its height.
+    double cells, billow, dome;
+    // cirrus: the fallstreaks' length below the heads (a fraction of the layer, times the
+    // footprint's strength) and their shear (down-wind drift at the bottom, in base tiles).
+    double fall, shear;
 };
 const TypeShape& shape_of(CloudType t) {
-    // cumulus: a flat base (steep rise, no erosion at the bottom), towers over half the
-    //   layer where the weather map says so, rounded tops;
-    // stratocumulus: a lumpy layer of rolls, somewhat stretched;
+    // cumulus: a flat base (steep rise, no billows at the bottom), towers where the weather
+    //   map says so, domed cauliflower tops of billows;
+    // stratocumulus: a lumpy layer of low domed rolls, somewhat stretched;
     // altocumulus: a thin mid-level sheet of small rounded cells;
     // stratus: a low, uniform grey sheet with faint, stretched undulations;
-    // cirrus: thin high streaks, strongly stretched, fibrous (strong curl).
+    // cirrus: thin high heads of stretched, curl-bent fibres with sheared fallstreaks below.
     static const TypeShape shapes[] = {
-        {{0.0, 0.04, 0.45, 1.0}, 0.6, 0.12, 1.0, 0.3, 0.0},   // cumulus
-        {{0.0, 0.12, 0.5, 0.95}, 0.25, 0.05, 1.6, 0.3, 0.0},  // stratocumulus
-        {{0.0, 0.25, 0.55, 0.95}, 0.2, 0.0, 1.0, 0.4, 0.0},   // altocumulus
-        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0},     // stratus
-        {{0.0, 0.3, 0.45, 1.0}, 0.3, 0.0, 8.0, 0.8, 1.0},     // cirrus
+        {{0.0, 0.04, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.12, 1.5, 0.0, 0.0},  // cumulus
+        {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.2, 3.0, 0.0, 0.0},   // stratocumulus
+        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.25, 1.0, 0.0, 0.0},  // altocumulus
+        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},      // stratus
+        {{0.7, 0.8, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.0, 0.0, 0.0, 0.0, 0.3, 0.15},    // cirrus
     };
     return shapes[static_cast<int>(t)];
 }
@@ -156,14 +163,14 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
             p.detail_strength = 0.5, p.weather_variation = 0.5;
             break;
         case CloudType::stratus:
-            p.bottom_altitude_m = 400.0, p.top_altitude_m = 900.0, p.coverage = 0.9, p.density_per_m = 0.04;
+            p.bottom_altitude_m = 400.0, p.top_altitude_m = 900.0, p.coverage = 1.0, p.density_per_m = 0.04;
             p.base_scale_m = 8000.0, p.detail_scale_m = 900.0, p.weather_scale_m = 60000.0;
             p.detail_strength = 0.35, p.weather_variation = 0.3;
             break;
         case CloudType::cirrus:
             p.bottom_altitude_m = 8000.0, p.top_altitude_m = 9500.0, p.coverage = 0.3,
             p.density_per_m = 0.0025;
-            p.base_scale_m = 8000.0, p.detail_scale_m = 400.0, p.weather_scale_m = 60000.0;
+            p.base_scale_m = 8000.0, p.detail_scale_m = 3000.0, p.weather_scale_m = 60000.0;
             p.detail_strength = 0.6, p.weather_variation = 0.6;
             break;
     }
@@ -404,8 +411,11 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
 
     float w[4];
     weather_at(x * inv_weather_, y * inv_weather_, w);
-    const double c = clamp01d(k * (1.0 + p_.weather_variation * (2.0 * w[0] - 1.0)));
+    const double c_raw = k * (1.0 + p_.weather_variation * (2.0 * w[0] - 1.0));
+    if (shape.fall > 0.0) return cirrus_density(x, y, f, c_raw, w);
+    const double c = clamp01d(c_raw);
     if (c <= 0.0) return 0.0;
+    if (shape.cells > 0.0) return cell_density(x, y, f, c, w);
     // Towers: the local top, lower where the weather map's g is low.
     const double tower = clamp01d((w[1] - 0.3) / 0.4);
     const double f_top = 1.0 - shape.towers * (1.0 - tower);
@@ -438,12 +448,100 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     const double modifier = fbm_d + (1.0 - 2.0 * fbm_d) * clamp01d(10.0 * f);  // mix(fbm, 1 - fbm, .)
     const double fade = shape.base_erosion > 0.0 ? clamp01d(f / shape.base_erosion) : 1.0;
     const double e = kMaxErosion * p_.detail_strength * (1.0 - covered) * modifier * fade;
-    const double eroded = clamp01d(remap(covered, e, 1.0, 0.0, 1.0));
-    if (shape.fibres <= 0.0) return eroded;
-    // Fibres: the (streak-stretched) detail noise thins the whole cloud into strands, dense
-    // where it is high and clear where it is low, not only at the edges.
-    const double strands = clamp01d(remap(fbm_d, 0.4, 0.65, 0.0, 1.0));
-    return eroded * (1.0 - shape.fibres * p_.detail_strength * (1.0 - strands));
+    return clamp01d(remap(covered, e, 1.0, 0.0, 1.0));
+}
+
+// Cells (header): the footprint m from the base shape read at one height (every cell keeps
+// its outline up the layer), its top f_top m^dome, its base the layer's bottom; the top
+// surface lowered by billows (inverted Worley: deep between the detail noise's balls),
+// nothing at the base and most at the top; the density rises over kEdgeM inside the surface.
+double ProceduralClouds::cell_density(double x, double y, double f, double c, const float* w) const {
+    const TypeShape& shape = shape_of(p_.cloud_type);
+    const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
+    const double tower = clamp01d((w[1] - 0.3) / 0.4);
+    const double f_max = 1.0 - shape.towers * (1.0 - tower);
+    // A gentle domain warp (its slope below one: a stronger one shreds the cells into swirls).
+    const double warp = 0.3 * p_.base_scale_m;
+    const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
+    const double sq = std::sqrt(shape.stretch);
+    const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
+    float b[2];
+    base_at(along * inv_base_ / sq, across * inv_base_ * sq, p_.evolution_m * inv_base_, b);
+    const double base = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
+    const double m = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
+    if (m <= 0.0) return 0.0;
+    // How far in from the footprint's edge the point is, in metres (m rises over about a
+    // eighth of a base tile), and the dome over it: half an ellipse, `dome` times as wide
+    // as the local top f_max is high, its top rising as sqrt(u (2 - u)), u the distance in
+    // over the half-width: steep sides at the base, a rounded top.
+    const double in_m = m * 0.12 * p_.base_scale_m;
+    const double u = std::min(1.0, in_m / (shape.dome * f_max * thickness));
+    const double f_top = f_max * std::sqrt(u * (2.0 - u));
+    if (f >= f_top) return 0.0;                           // the billows only remove
+    const double rise = clamp01d(f / shape.gradient.a1);  // the flat base
+    const double inside = std::min((f_top - f) * thickness, in_m);
+    if (p_.detail_strength <= 0.0) return rise * clamp01d(inside / kEdgeM);
+    // The billows: two octaves of the detail noise (its tile and twice it), their lookup
+    // bent by the curl noise; inverted, so that the cloud keeps the balls; the surface
+    // pushed in by them, in every direction, little at the base and most at the top.
+    const double h_m = f * thickness + p_.evolution_m;
+    float cu[2];
+    curl_.sample(x * inv_detail_ * 0.25, y * inv_detail_ * 0.25, 0.0, cu);
+    const double amp = shape.curl;
+    const double ax = kStreakCos * x + kStreakSin * y, ay = -kStreakSin * x + kStreakCos * y;
+    float d1, d2;
+    detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1],
+                   h_m * inv_detail_, &d1);
+    detail_.sample(0.5 * (ax * inv_detail_ / sq) + 0.37 + amp * cu[1],
+                   0.5 * (ay * inv_detail_ * sq) + 0.61 - amp * cu[0], 0.5 * h_m * inv_detail_ + 0.29, &d2);
+    const double billow = clamp01d((0.8 - (0.6 * d2 + 0.4 * d1)) / 0.5);
+    const double weight = clamp01d(f / shape.base_erosion) * (0.3 + 0.7 * f / f_top);
+    const double depth = inside - 2.0 * p_.detail_strength * shape.billow * thickness * billow * weight;
+    return rise * clamp01d(depth / kEdgeM);
+}
+
+// Cirrus (header): heads near the layer's top where the footprint m is high, fallstreaks
+// hanging below them, longer under the stronger heads, drifting down-wind with depth (the
+// wind shear that bends them into hooks), the whole bent by the curl noise and thinned
+// into fibres by the streak-stretched detail noise.
+double ProceduralClouds::cirrus_density(double x, double y, double f, double c, const float* w) const {
+    const TypeShape& shape = shape_of(p_.cloud_type);
+    const double drop = 1.0 - f;
+    // Patches several kilometres across (the weather map read at 4 times its frequency,
+    // elsewhere in its lattice): the strands come in tufts and bands, not over the whole sky.
+    float wp[4];
+    weather_at(4.0 * x * inv_weather_ + 0.31, 4.0 * y * inv_weather_ + 0.53, wp);
+    c = clamp01d(c * (0.2 + 1.6 * wp[0]));
+    if (c <= 0.0) return 0.0;
+    // Curl bends (a quarter of a base tile at most) and the shear's drift along the streaks.
+    float cu[2];
+    curl_.sample(x * inv_base_ * 0.25, y * inv_base_ * 0.25, 0.0, cu);
+    const double bend = 0.1 * p_.base_scale_m;
+    const double warp = 0.3 * p_.base_scale_m;
+    const double xw = x + warp * (w[2] - 0.5) + bend * cu[0], yw = y + warp * (w[3] - 0.5) + bend * cu[1];
+    const double drift = shape.shear * p_.base_scale_m * drop * drop;
+    const double sq = std::sqrt(shape.stretch);
+    const double along = kStreakCos * xw + kStreakSin * yw - drift,
+                 across = -kStreakSin * xw + kStreakCos * yw;
+    float b[2];
+    base_at(along * inv_base_ / sq, across * inv_base_ * sq, p_.evolution_m * inv_base_, b);
+    const double base = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
+    const double m = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
+    if (m <= 0.0) return 0.0;
+    // The head's trapezoid, and the fallstreak down to 1 - a0 - fall m, thinning downwards.
+    const double head = shape.gradient(f);
+    const double bottom = shape.gradient.a0 - shape.fall * m;
+    const double tail = f < shape.gradient.a1 ? clamp01d((f - bottom) / 0.1) * (0.1 + 0.4 * f) : 0.0;
+    const double env = std::max(head, tail) * clamp01d(m / 0.25);
+    if (env <= 0.0) return 0.0;
+    if (p_.detail_strength <= 0.0) return env;
+    // Fibres: the detail noise stretched kFibreStretch-fold along the (bent) streaks.
+    const double fs = std::sqrt(kFibreStretch);
+    const double zd = (f * (p_.top_altitude_m - p_.bottom_altitude_m) + p_.evolution_m) * inv_detail_;
+    float d;
+    detail_.sample(along * inv_detail_ / fs, across * inv_detail_ * fs, 0.5 * zd, &d);
+    const double strands = clamp01d(remap(d, 0.42, 0.62, 0.0, 1.0));
+    return env * (1.0 - std::min(1.0, shape.fibres * p_.detail_strength) * (1.0 - strands));
 }
 
 // Hex-tiled reads (noise.hpp, hex_taps), the lattice half a texture period apart: every

@@ -18,7 +18,7 @@ Z_MAX = 4 of their standard deviations above their mean. A tile period is then n
 above what the noise's own autocorrelation reaches at non-period lags. With the textures read
 as they are (a plain wrapped lookup), the weather periods stand 5 to 38 standard deviations
 out for every type, and the base periods of stratocumulus and altocumulus 5 to 7; hex-tiled,
-the largest of the 115 lags is 2.8 (docs/validation.md, "Tiling").
+the largest of the lags is 3.0 (docs/validation.md, "Tiling").
 """
 
 import math
@@ -29,7 +29,7 @@ import pytest
 import welkin
 
 # The type's streak stretch (clouds/procedural.cpp, shape_of) and the streak direction.
-STRETCH = {"cumulus": 1.0, "stratocumulus": 1.6, "altocumulus": 1.0, "stratus": 1.5, "cirrus": 8.0}
+STRETCH = {"cumulus": 1.0, "stratocumulus": 1.6, "altocumulus": 1.0, "stratus": 1.5, "cirrus": 25.0}
 STREAK = math.radians(30.0)
 PIXELS = 384
 R_PLANET = 6360e3

@@ -12,7 +12,7 @@
 //
 //  * Worley (cellular) noise, Worley 1996 ("A cellular texture basis function", SIGGRAPH):
 //    one feature point per lattice cell, hashed from (seed, cell); the value is the
-//    distance to the nearest feature point in cell units, inverted (1 - d, clamped) so
+//    distance d to the nearest feature point in cell units, inverted as 1 - d^2 (clamped) so
 //    that cell centres are dense, as Schneider uses it ("billowy" shapes).
 //  * Perlin gradient noise, Perlin 2002 ("Improving noise", SIGGRAPH): hashed gradients
 //    from the 12 cube edge directions at lattice points, quintic fade 6t^5 - 15t^4 + 10t^3.

@@ -14,32 +14,53 @@
 //   weather map (2D, a texture of period weather_scale_m read hex-tiled, below), w the weather
 //       texture (Perlin fBm):
 //       local coverage c = clamp(k (1 + weather_variation (2 w_r - 1)), 0, 1), k the
-//       internal coverage (below); the local top fraction f_top = 1 - towers (1 - w_g)
+//       internal coverage (below); the local top fraction f_max = 1 - towers (1 - w_g)
 //       (cumulus: tall towers where w_g is high, low mounds elsewhere);
-//   height gradient G(f / f_top): the type's trapezoid (0 below a0, up to 1 at a1, 1 to a2,
-//       down to 0 at a3); a steep a0 -> a1 gives a flat base;
-//   base shape (3D, tile base_scale_m, read at the height h - bottom + evolution_m,
-//       stretched by the type's `stretch` along a direction 30 degrees off the x axis): base = remap(pw, -(1
-//       - fbm_w), 1, 0, 1), pw the Perlin-Worley channel and fbm_w its Worley octaves, read at a point
-//       displaced by a low-frequency domain warp (the weather map's b, a channels, half a base tile at most);
 //   no tiling: the weather map and the base shape are read hex-tiled (noise.hpp, hex_taps: each
 //       vertex of a triangular lattice half a period apart reads the texture at an offset of its
 //       own, blended keeping the contrast), so neither repeats at its period: read as they are,
 //       over tens of periods from above and towards the horizon, the periods show as a diagonal
 //       ribbing (docs/validation.md, "Tiling"; tests/python/test_cloud_tiling.py);
-//   coverage: covered = clamp(remap(base G, 1 - c, 1, 0, 1)) c (Schneider's remap by coverage);
-//   erosion (3D, tile detail_scale_m, read at the same height, its lookup displaced by the
-//       curl noise, Nubis's "curl distortion", stronger at the bottom): the detail Worley fBm, inverted
-//       towards the top (billowy tops) and faded out at the base by the type's `base_erosion` (flat bases for
-//       cumulus); at most kMaxErosion of the range is eroded, and only where the cloud is thin (erosion x (1
-//       - covered)), so that raising the detail shapes edges and leaves no isolated specks: density =
-//       clamp(remap(covered, e, 1, 0, 1)), e = kMaxErosion detail_strength (1 - covered) modifier;
-//   fibres (cirrus): the streak-stretched detail noise thins the whole cloud into strands,
-//       density *= 1 - fibres detail_strength (1 - clamp(remap(fbm_d, 0.4, 0.65, 0, 1)));
+//   base = remap(pw, -(1 - fbm_w), 1, 0, 1), pw the base texture's Perlin-Worley channel and fbm_w
+//       its Worley octaves (tile base_scale_m, stretched by the type's `stretch` along a direction
+//       30 degrees off the x axis, read at a point displaced by a domain warp from the weather
+//       map's b, a channels); every type then builds its clouds its own way (the WMO
+//       International Cloud Atlas's descriptions, docs/artists.md#cloud-types):
+//  * cells (cumulus, stratocumulus, altocumulus: a flat base, a domed top, billows):
+//       the footprint m = clamp(remap(base, 1 - c, 1, 0, 1)) from the base texture read at
+//       one height (h = evolution_m: every cell keeps its outline up the layer), d_in =
+//       m base_scale_m / 8 metres in from its edge (about a Worley cell's radius at m = 1);
+//       over it half an ellipse `dome` times as wide as f_max is high: the local top
+//       f_top = f_max sqrt(u (2 - u)), u = min(1, d_in / (dome f_max thickness)) (steep sides
+//       at the base, a rounded top); the point is inside = min((f_top - f) thickness, d_in)
+//       metres in, less the billows' depth 2 detail_strength billow thickness B W, B the
+//       inverted Worley fBm of the detail texture at its tile and at twice it (deep between
+//       its balls: cauliflower), its lookup bent by the curl noise, W = clamp(f / base_erosion)
+//       (0.3 + 0.7 f / f_top) (none at the base, most at the top); density =
+//       clamp(f / a1) clamp(inside / kEdgeM), a1 the type's gradient's first corner (the base's
+//       rise over a few tens of metres);
+//  * the layer (stratus): height gradient G(f / f_max), the type's trapezoid (0 below a0,
+//       up to 1 at a1, 1 to a2, down to 0 at a3), the base texture read at the height
+//       h - bottom + evolution_m; covered = clamp(remap(base G, 1 - c, 1, 0, 1))
+//       (Schneider's remap by coverage); erosion (3D, tile detail_scale_m, read at the same
+//       height, its lookup displaced by the curl noise, Nubis's "curl distortion", stronger
+//       at the bottom): the detail Worley fBm, inverted towards the top and faded out at the
+//       base by `base_erosion`; at most kMaxErosion of the range is eroded, and only where
+//       the cloud is thin, so that raising the detail shapes edges and leaves no isolated
+//       specks: density = clamp(remap(covered, e, 1, 0, 1)), e = kMaxErosion detail_strength
+//       (1 - covered) modifier;
+//  * cirrus (heads of fibres with fallstreaks): c further thinned into patches a few
+//       kilometres wide (the weather map read at 4 times its frequency, its r channel wp:
+//       c = clamp(c_raw (0.2 + 1.6 wp))); the base texture's lookup bent by the curl noise
+//       (a tenth of a base tile) and drifted down-wind by shear base_scale_m (1 - f)^2 (the
+//       wind's shear: the fallstreaks trail behind their heads, as hooks); the footprint m as
+//       for cells; the head the type's trapezoid G(f) near the top, the fallstreak below it
+//       down to a0 - fall m, thinning downwards; density = max(head, tail) clamp(m / 0.25)
+//       (1 - min(1, fibres detail_strength) (1 - strands)), strands = clamp(remap(fbm_d,
+//       0.42, 0.62, 0, 1)) of the detail texture stretched kFibreStretch-fold along the
+//       bent streaks;
 //   sigma_t = density_per_m * density.
-// Every remap keeps values <= its input when the input is <= 1, and the fibres' factor is
-// in [0, 1], so density <= 1: the
-// majorant is density_per_m on the shell.
+// Every factor is in [0, 1], so density <= 1: the majorant is density_per_m on the shell.
 //
 // Coverage means coverage, in one of two measures (coverage_measure):
 //  * dome (the default): the share of the sky dome a ground observer sees covered, the WMO's
@@ -133,6 +154,8 @@ public:
     static constexpr double kCoverageOpticalDepth = 0.3;
     static constexpr int kCoverageColumns = 2048;
     static constexpr double kMaxErosion = 0.6;
+    static constexpr double kEdgeM = 80.0;         // cells: the density's rise inside the surface
+    static constexpr double kFibreStretch = 25.0;  // cirrus: the fibres' length over their width
     static constexpr double kDomeMinElevationDeg = 5.0;
     static constexpr int kDomeObservers = 32;
     static constexpr int kDomeDirections = 64;
@@ -156,6 +179,8 @@ public:
 
 private:
     double density(const glm::dvec3& p, double h, double k) const;
+    double cell_density(double x, double y, double f, double c, const float* w) const;
+    double cirrus_density(double x, double y, double f, double c, const float* w) const;
     double column_depth(double x, double y, double k) const;
     double fraction(double k, int columns) const;
     double dome_share(double k, int observers, int directions) const;
