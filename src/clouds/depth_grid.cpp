@@ -268,10 +268,17 @@ double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) con
     if (!aligned_ || near_levels_ <= 0) return grid_tau(p, level, cursor);
     const int far = std::min(level + near_levels_, kMaxLevels - 1);
     const double d = std::min(spacing_m(far), max_distance_m_);
-    const double dt = d / near_steps_;
+    // The midpoint rule over the parts of [0, d] inside the majorant segments, steps no
+    // longer than d / near_steps_ (exact on a constant density, as a vertex's cells).
+    auto& segs = cursor.segs;
+    segs.clear();
+    density_.segments({p, axis_[2]}, d, segs);
     double near = 0.0;
-    for (int q = 0; q < near_steps_; ++q) near += density_.sigma_t(p + ((q + 0.5) * dt) * axis_[2]);
-    near *= dt;
+    for (const auto& g : segs) {
+        const int n = std::max(1, int(std::ceil((g.t1 - g.t0) * near_steps_ / d - 1e-9)));
+        const double dt = (g.t1 - g.t0) / n;
+        for (int q = 0; q < n; ++q) near += density_.sigma_t(p + (g.t0 + (q + 0.5) * dt) * axis_[2]) * dt;
+    }
     if (!(d < max_distance_m_)) return near;
     return near + grid_tau(p + d * axis_[2], far, cursor);
 }

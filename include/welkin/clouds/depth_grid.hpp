@@ -69,13 +69,13 @@
 //
 // Near field (aligned grids, set_near_field(levels, steps), off by default). A lookup on
 // level L reads the grid `levels` coarser, L' = L + levels, at the point one cell of L'
-// further along w, and adds the first cell's depth marched at the lookup's own point by
-// `steps` midpoint steps: tau(x) = integral_0^d sigma_t(x + l w) dl + tau'(x + d w),
-// d = h_{L'}, the vertices of L' holding their depth over max_distance_m - h_{L'}. The
-// shadow's detail next to x (a lit face, the edge of a wisp) is marched exactly, the depth
-// from farther away is read on cells 2^levels times as wide, whose vertices the
-// neighbouring rays share (a ray's samples each touch new vertices when the rays are a
-// cell apart, as an image's pixels are at the footprint's level).
+// further along w, and adds the first cell's depth marched at the lookup's own point (the
+// midpoint rule over the density's majorant segments, steps no longer than d / `steps`): tau(x) =
+// integral_0^d sigma_t(x + l w) dl + tau'(x + d w), d = h_{L'}, the vertices of L' holding their depth over
+// max_distance_m - h_{L'}. The shadow's detail next to x (a lit face, the edge of a wisp) is marched exactly,
+// the depth from farther away is read on cells 2^levels times as wide, whose vertices the neighbouring rays
+// share (a ray's samples each touch new vertices when the rays are a cell apart, as an image's pixels are at
+// the footprint's level).
 #pragma once
 
 #include <algorithm>
