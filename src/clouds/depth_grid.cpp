@@ -149,6 +149,9 @@ std::int64_t tile_of(std::int64_t v) {
     return v >= 0 ? v / n : -((-v + n - 1) / n);
 }
 
+// Floor division by a positive n.
+std::int64_t floor_div(std::int64_t v, std::int64_t n) { return v >= 0 ? v / n : -((-v + n - 1) / n); }
+
 bool key_in_range(std::int64_t t) { return t > -kCoordHalf && t < kCoordHalf - 1; }
 
 }  // namespace
@@ -187,7 +190,8 @@ float OpticalDepthGrid::stored_cumulative(int level, const std::int64_t v[3], Cu
 // else walked along the line from v to the first stored vertex or the line's end, the new
 // values stored from the far end back (release stores: each one published after every
 // value beyond it).
-double OpticalDepthGrid::cumulative(int level, const std::int64_t v[3], Cursor& cursor) const {
+double OpticalDepthGrid::cumulative(int level, const std::int64_t v[3], std::int64_t block,
+                                    Cursor& cursor) const {
     const double h = spacing_m(level);
     const double delta = std::min(h, max_distance_m_ / steps_);  // the longest quadrature step
     const std::int64_t ti = tile_of(v[0]), tj = tile_of(v[1]);
@@ -196,11 +200,12 @@ double OpticalDepthGrid::cumulative(int level, const std::int64_t v[3], Cursor& 
     run.clear();
     double beyond = 0.0;  // C after the run's last vertex
     std::int64_t k = v[2];
+    const std::int64_t block_end = (floor_div(k, block) + 1) * block;  // C = 0 there (its block's)
     Tile* tile = nullptr;
     std::int64_t kb = 0;  // the base vertex (along the line) of `tile`
     auto& segs = cursor.segs;
     glm::dvec3 base_x(0.0);
-    for (;;) {
+    while (k < block_end) {
         const std::int64_t tk = tile_of(k);
         if (!tile || tk * kTile != kb) {
             const std::int64_t t[3] = {ti, tj, tk};
@@ -244,24 +249,39 @@ double OpticalDepthGrid::cumulative(int level, const std::int64_t v[3], Cursor& 
     return beyond;
 }
 
-// tau over max_distance_m at an aligned vertex: C(v) less C at D further along its line,
-// linear between the two vertices around that point (an unset value beyond a known one is
-// past the line's end: 0).
+// tau over max_distance_m at an aligned vertex (the header's blocks): C(v) less C at q
+// cells further along its line, linear between the two vertices around that point, read in
+// v's block or, past its end, as the next block's C at its first vertex less C there. An
+// unset value after a known one in the same block is past the line's end: 0.
 double OpticalDepthGrid::aligned_vertex(int level, const std::int64_t v[3], Cursor& cursor) const {
-    const double c0 = cumulative(level, v, cursor);
-    if (!(c0 > 0.0)) return 0.0;
+    const double h = spacing_m(level);
     // With the near field, the far part's vertices reach max_distance_m less one cell.
-    const double q = (max_distance_m_ - (near_levels_ > 0 ? spacing_m(level) : 0.0)) / spacing_m(level);
+    const double q = (max_distance_m_ - (near_levels_ > 0 ? h : 0.0)) / h;
     if (!(q > 0.0)) return 0.0;
-    const double k0 = std::floor(q), f = q - k0;
-    if (!(k0 < 1e15)) return c0;
-    double far[2];
-    for (int e = 0; e < 2; ++e) {
-        const std::int64_t w[3] = {v[0], v[1], v[2] + std::int64_t(k0) + e};
+    if (!(q < 1e15)) return march(vertex_position(level, v[0], v[1], v[2]), cursor.segs);
+    const std::int64_t block = std::int64_t(std::ceil(q)) + 1;
+    const double c0 = cumulative(level, v, block, cursor);
+    const std::int64_t kk = v[2] + std::int64_t(std::floor(q));
+    const double f = q - std::floor(q);
+    // C at vertex j of the line in the block ending at `end` (0 from there on).
+    const auto at = [&](std::int64_t j, std::int64_t end) {
+        if (j >= end) return 0.0;
+        const std::int64_t w[3] = {v[0], v[1], j};
         const float c = stored_cumulative(level, w, cursor);
-        far[e] = std::isnan(c) ? 0.0 : double(c);
-    }
-    return std::max(0.0, c0 - (far[0] + f * (far[1] - far[0])));
+        return std::isnan(c) ? 0.0 : double(c);
+    };
+    const std::int64_t end = (floor_div(v[2], block) + 1) * block;
+    if (kk < end) return std::max(0.0, c0 - (at(kk, end) + f * (at(kk + 1, end) - at(kk, end))));
+    // The point lies in the next block (q < block: never beyond it). If v's line leaves the
+    // density's segments before that block, it holds nothing.
+    auto& segs = cursor.segs;
+    segs.clear();
+    density_.segments({vertex_position(level, v[0], v[1], v[2]), axis_[2]}, kFarM, segs);
+    if (segs.empty() || segs.back().t1 <= double(end - v[2]) * h) return std::max(0.0, c0);
+    const std::int64_t e[3] = {v[0], v[1], end};
+    const double c_end = cumulative(level, e, block, cursor);
+    const double far = at(kk, end + block) + f * (at(kk + 1, end + block) - at(kk, end + block));
+    return std::max(0.0, c0 + c_end - far);
 }
 
 double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) const {

@@ -44,28 +44,33 @@
 // march). When the direction w is the same everywhere, the grid's axes are turned so that
 // its third axis is w (the first two any orthonormal pair across it): the vertices
 // (i, j, k), (i, j, k + 1), ... then lie on one line along w, a cell edge h apart, and
-// share their march. Each vertex stores the cumulative optical depth to the end of its
-// line, C(k) = integral from 0 to infinity of sigma_t(x_k + l w) dl, by the recurrence
+// share their march. A line is cut into blocks of B = ceil(q) + 1 cells (q = D / h, D =
+// max_distance_m), and each vertex stores the optical depth from it to the end of its
+// block, C(k) = integral of sigma_t(x_k + l w) dl up to the block's last vertex, by the
+// recurrence
 //
-//     C(k) = integral over the cell [x_k, x_{k+1}] + C(k + 1),
+//     C(k) = integral over the cell [x_k, x_{k+1}] + C(k + 1),   C = 0 at the block's end,
 //
-// walked from the first vertex already known (or the line's last segment, beyond which
-// C = 0) back to the one asked for: a vertex costs the samples of one cell edge instead of
+// walked from the first vertex already known (or the block's end, or the line's last
+// segment, beyond which C = 0) back to the one asked for; the blocks bound a walk (a line
+// towards a low sun crosses a layer over tens to hundreds of kilometres, of which a vertex
+// needs D): a vertex costs the samples of one cell edge instead of
 // a march of `steps` samples over max_distance_m (the "incremental" form of a shadow
 // volume along the light, as in the sun-aligned slices of Lokovic & Veach's deep shadow
-// maps). The optical depth over at most max_distance_m is then a difference on the same
-// line, tau(x_k) = C(k) - C(x_k + D w), C between vertices linear along the line
-// (D = max_distance_m; exact on a piecewise-constant line, and no interpolation across
-// lines, so the shadow is not blurred along the walk). The cell's integral: the midpoint
+// maps). The optical depth over at most D is then a difference on the same line,
+// tau(x_k) = C(k) - C(x_k + D w) when x_k + D w is in the same block, else
+// C(k) + C(first vertex of the next block) - C(x_k + D w), C between vertices linear along
+// the line (exact on a piecewise-constant line, and no interpolation across lines, so the
+// shadow is not blurred along the walk). The cell's integral: the midpoint
 // rule over each part of [x_k, x_{k+1}] inside the density's majorant segments (taken from
 // the first vertex of the vertex's tile along w), in steps no longer than
 // min(h, max_distance_m / steps): at the finest levels one density lookup per cell, far
 // finer along w than the `steps` samples a vertex's own march spreads over max_distance_m,
-// and never coarser than that march at the coarse levels. Each line value depends only on
-// the line and its own tile's base vertex, so the stored values are the same whichever
-// thread walks first (C is published with release stores: a value seen implies every value
-// beyond it on its line is visible, which is what lets an unset value beyond a known one
-// read as 0).
+// and never coarser than that march at the coarse levels. Each value depends only on the
+// line, its block and its own tile's base vertex, so the stored values are the same
+// whichever thread walks first (C is published with release stores: a value seen implies
+// every value after it in its block is visible, which is what lets an unset value after a
+// known one in the same block read as 0).
 //
 // Near field (aligned grids, set_near_field(levels, steps), off by default). A lookup on
 // level L reads the grid `levels` coarser, L' = L + levels, at the point one cell of L'
@@ -165,7 +170,7 @@ private:
     Tile* tile_at(int level, const std::int64_t t[3], std::uint64_t* keys, Tile** tiles, bool make) const;
     // The aligned grid: a vertex's optical depth over max_distance_m, and the cumulative C.
     double aligned_vertex(int level, const std::int64_t v[3], Cursor& cursor) const;
-    double cumulative(int level, const std::int64_t v[3], Cursor& cursor) const;
+    double cumulative(int level, const std::int64_t v[3], std::int64_t block, Cursor& cursor) const;
     float stored_cumulative(int level, const std::int64_t v[3], Cursor& cursor) const;
 
     const CloudDensity& density_;
