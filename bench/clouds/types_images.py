@@ -11,6 +11,8 @@ of the per-pixel relative difference of the luminance, the mean relative differe
 mean radiance over those pixels, the mean and 99th percentile of |delta T|.
 `--seed N` sets the march's jitter seed (`clouds.lighting.seed`): a second seed of the same
 build is the march's own noise, the floor any change is measured against.
+`--lighting JSON` merges more `clouds.lighting` settings, e.g. a shadow ray per sample of
+many steps, `{"shadow_grid": false, "light_steps": 64}`: a reference for the grids' error.
 
     PYTHONPATH=build /usr/bin/python3 bench/clouds/types_images.py --width 1024 --save /tmp/before
     PYTHONPATH=build /usr/bin/python3 bench/clouds/types_images.py --width 1024 --compare /tmp/before
@@ -28,17 +30,17 @@ import welkin
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
-def scene(cloud_type, seed):
+def scene(cloud_type, seed, lighting=None):
     return {
         "version": 1,
         "atmosphere": "bruneton2017",
         "sun": {"direction": [0.6, 0.2, 0.5]},
-        "clouds": {"layers": [{"cloud_type": cloud_type}], "lighting": {"seed": seed}},
+        "clouds": {"layers": [{"cloud_type": cloud_type}], "lighting": {"seed": seed, **(lighting or {})}},
     }
 
 
-def render(cloud_type, width, seed):
-    text = json.dumps(scene(cloud_type, seed))
+def render(cloud_type, width, seed, lighting=None):
+    text = json.dumps(scene(cloud_type, seed, lighting))
     c0 = time.process_time()
     image, t = welkin.scene_sky_image(text, width, sun_disc=False, return_transmittance=True)
     return np.asarray(image, np.float64), np.asarray(t, np.float64), time.process_time() - c0
@@ -67,6 +69,7 @@ def main():
     ap.add_argument("--width", type=int, default=1024)
     ap.add_argument("--types", nargs="*", default=list(welkin.CLOUD_TYPES))
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--lighting", type=json.loads, default={}, help="more clouds.lighting settings (JSON)")
     g = ap.add_mutually_exclusive_group(required=True)
     g.add_argument("--save")
     g.add_argument("--compare")
@@ -79,7 +82,7 @@ def main():
             "| mean radiance | mean dT | p99 dT | same bits |\n|---|---|---|---|---|---|---|---|---|---|"
         )
     for t in args.types:
-        img, tr, cpu = render(t, args.width, args.seed)
+        img, tr, cpu = render(t, args.width, args.seed, args.lighting)
         if args.save:
             np.savez_compressed(os.path.join(args.save, f"{t}.npz"), image=img, t=tr, cpu=cpu)
             print(f"{t}: {cpu:.2f} s CPU", flush=True)

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/geometric.hpp>
 #include <tbb/concurrent_unordered_map.h>
 
 #include "welkin/base/error.hpp"
@@ -34,6 +35,9 @@ namespace {
 constexpr int kV = OpticalDepthGrid::kTile + 1;  // vertices per tile edge
 constexpr int kCoordBits = 20;                   // signed tile coordinates per axis
 constexpr std::int64_t kCoordHalf = std::int64_t(1) << (kCoordBits - 1);
+// How far along its line an aligned grid's cumulative depth looks: past any layer's or
+// volume's far side (a shell 20 km up spans under 1100 km of a 6360 km planet).
+constexpr double kFarM = 1e7;
 
 }  // namespace
 
@@ -41,8 +45,17 @@ struct OpticalDepthGrid::Tile {
     int level;
     std::int64_t origin[3];  // vertex index of the tile's first corner on its level
     std::atomic<float> v[kV * kV * kV];
-    Tile(int l, const std::int64_t o[3]) : level(l), origin{o[0], o[1], o[2]} {
-        for (auto& x : v) x.store(std::numeric_limits<float>::quiet_NaN(), std::memory_order_relaxed);
+    // The aligned grid's cumulative depth C of the tile's own vertices (kTile per edge,
+    // the shared faces held by the tile above them), allocated for an aligned grid only.
+    std::unique_ptr<std::atomic<float>[]> c;
+    Tile(int l, const std::int64_t o[3], bool aligned) : level(l), origin{o[0], o[1], o[2]} {
+        constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+        for (auto& x : v) x.store(nan, std::memory_order_relaxed);
+        if (aligned) {
+            constexpr int n = kTile * kTile * kTile;
+            c = std::make_unique<std::atomic<float>[]>(n);
+            for (int i = 0; i < n; ++i) c[i].store(nan, std::memory_order_relaxed);
+        }
     }
 };
 
@@ -65,6 +78,7 @@ OpticalDepthGrid::OpticalDepthGrid(const CloudDensity& density, Direction direct
       h0_(base_spacing_m),
       max_distance_m_(max_distance_m),
       steps_(steps),
+      axis_{{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}},
       map_(std::make_unique<Map>()) {
     if (!(h0_ > 0.0 && std::isfinite(h0_)))
         throw InvalidArgument("base_spacing_m", "must be a finite positive length");
@@ -72,7 +86,40 @@ OpticalDepthGrid::OpticalDepthGrid(const CloudDensity& density, Direction direct
     require_in_range("steps", steps_, 1, 1 << 16);
 }
 
+OpticalDepthGrid::OpticalDepthGrid(const CloudDensity& density, const glm::dvec3& direction,
+                                   double base_spacing_m, double max_distance_m, int steps)
+    : OpticalDepthGrid(density, Direction{}, base_spacing_m, max_distance_m, steps) {
+    const double length = glm::length(direction);
+    if (!(length > 0.0 && std::isfinite(length)))
+        throw InvalidArgument("direction", "must be a finite, non-zero vector");
+    const glm::dvec3 w = direction / length;
+    direction_ = [w](const glm::dvec3&) { return w; };
+    // Across w: the horizontal normal to it (x when w is vertical), then w x that.
+    const glm::dvec3 c = glm::cross(w, glm::dvec3(0.0, 0.0, 1.0));
+    axis_[0] = glm::length(c) > 1e-6 ? glm::normalize(c) : glm::dvec3(1.0, 0.0, 0.0);
+    axis_[1] = glm::normalize(glm::cross(w, axis_[0]));
+    axis_[2] = w;
+    aligned_ = true;
+}
+
 OpticalDepthGrid::~OpticalDepthGrid() = default;
+
+void OpticalDepthGrid::set_near_field(int levels, int steps) {
+    require_in_range("levels", levels, 0, kMaxLevels - 1);
+    require_in_range("steps", steps, 1, 64);
+    if (!aligned_ && levels > 0)
+        throw InvalidArgument("levels", "a near field needs a grid aligned with a constant direction");
+    if (!map_->tiles.empty()) throw InvalidArgument("levels", "must be set before the first lookup");
+    near_levels_ = levels;
+    near_steps_ = steps;
+}
+
+glm::dvec3 OpticalDepthGrid::vertex_position(int level, std::int64_t i, std::int64_t j,
+                                             std::int64_t k) const {
+    const double h = spacing_m(level);
+    if (!aligned_) return {double(i) * h, double(j) * h, double(k) * h};
+    return h * (double(i) * axis_[0] + double(j) * axis_[1] + double(k) * axis_[2]);
+}
 
 int OpticalDepthGrid::level_for(double footprint_m) const {
     if (!(footprint_m > h0_)) return 0;
@@ -88,37 +135,189 @@ OpticalDepthGrid::Tile* OpticalDepthGrid::find(std::uint64_t key) const {
     return it == map_->tiles.end() ? nullptr : it->second.get();
 }
 
+namespace {
+
+std::uint64_t tile_key(int level, const std::int64_t t[3]) {
+    return (std::uint64_t(level) << (3 * kCoordBits)) |
+           (std::uint64_t(t[0] + kCoordHalf) << (2 * kCoordBits)) |
+           (std::uint64_t(t[1] + kCoordHalf) << kCoordBits) | std::uint64_t(t[2] + kCoordHalf);
+}
+
+// Floor division by kTile.
+std::int64_t tile_of(std::int64_t v) {
+    constexpr std::int64_t n = OpticalDepthGrid::kTile;
+    return v >= 0 ? v / n : -((-v + n - 1) / n);
+}
+
+// Floor division by a positive n.
+std::int64_t floor_div(std::int64_t v, std::int64_t n) { return v >= 0 ? v / n : -((-v + n - 1) / n); }
+
+bool key_in_range(std::int64_t t) { return t > -kCoordHalf && t < kCoordHalf - 1; }
+
+}  // namespace
+
+OpticalDepthGrid::Tile* OpticalDepthGrid::tile_at(int level, const std::int64_t t[3], std::uint64_t* keys,
+                                                  Tile** tiles, bool make) const {
+    const std::uint64_t key = tile_key(level, t);
+    const int slot = int((key ^ (key >> 20) ^ (key >> 40)) & (Cursor::kSlots - 1));
+    if (key == keys[slot]) return tiles[slot];
+    Tile* tile = find(key);
+    if (!tile) {
+        if (!make) return nullptr;
+        const std::int64_t origin[3] = {t[0] * kTile, t[1] * kTile, t[2] * kTile};
+        auto fresh = std::make_unique<Tile>(level, origin, aligned_);
+        // Whoever inserts first wins; the loser's empty tile is dropped.
+        tile = map_->tiles.emplace(key, std::move(fresh)).first->second.get();
+    }
+    keys[slot] = key;
+    tiles[slot] = tile;
+    return tile;
+}
+
+// C at vertex v if stored (NaN if not, or if its tile is absent), through the walk cache.
+float OpticalDepthGrid::stored_cumulative(int level, const std::int64_t v[3], Cursor& cursor) const {
+    const std::int64_t t[3] = {tile_of(v[0]), tile_of(v[1]), tile_of(v[2])};
+    for (int a = 0; a < 3; ++a)
+        if (!key_in_range(t[a])) return std::numeric_limits<float>::quiet_NaN();
+    const Tile* tile = tile_at(level, t, cursor.walk_key, cursor.walk_tile, false);
+    if (!tile) return std::numeric_limits<float>::quiet_NaN();
+    const int idx =
+        int(((v[2] - t[2] * kTile) * kTile + (v[1] - t[1] * kTile)) * kTile + (v[0] - t[0] * kTile));
+    return tile->c[idx].load(std::memory_order_acquire);
+}
+
+// The cumulative depth C at vertex v (the header's recurrence): from its tile if stored,
+// else walked along the line from v to the first stored vertex or the line's end, the new
+// values stored from the far end back (release stores: each one published after every
+// value beyond it).
+double OpticalDepthGrid::cumulative(int level, const std::int64_t v[3], std::int64_t block,
+                                    Cursor& cursor) const {
+    const double h = spacing_m(level);
+    const double delta = std::min(h, max_distance_m_ / steps_);  // the longest quadrature step
+    const std::int64_t ti = tile_of(v[0]), tj = tile_of(v[1]);
+    const int li = int(v[0] - ti * kTile), lj = int(v[1] - tj * kTile);
+    auto& run = cursor.run;
+    run.clear();
+    double beyond = 0.0;  // C after the run's last vertex
+    std::int64_t k = v[2];
+    const std::int64_t block_end = (floor_div(k, block) + 1) * block;  // C = 0 there (its block's)
+    Tile* tile = nullptr;
+    std::int64_t kb = 0;  // the base vertex (along the line) of `tile`
+    auto& segs = cursor.segs;
+    glm::dvec3 base_x(0.0);
+    while (k < block_end) {
+        const std::int64_t tk = tile_of(k);
+        if (!tile || tk * kTile != kb) {
+            const std::int64_t t[3] = {ti, tj, tk};
+            if (!key_in_range(tk)) break;  // past the key's range: nothing beyond counts
+            tile = tile_at(level, t, cursor.walk_key, cursor.walk_tile, true);
+            kb = tk * kTile;
+            base_x = vertex_position(level, v[0], v[1], kb);
+            segs.clear();
+            density_.segments({base_x, axis_[2]}, kFarM, segs);
+        }
+        const int idx = int(((k - kb) * kTile + lj) * kTile + li);
+        const float known = tile->c[idx].load(std::memory_order_acquire);
+        if (!std::isnan(known)) {
+            beyond = known;
+            break;
+        }
+        // The cell [k, k + 1] along the line, from the tile's base vertex.
+        const double ta = double(k - kb) * h, tb = ta + h;
+        if (segs.empty() || ta >= segs.back().t1) {
+            tile->c[idx].store(0.0f, std::memory_order_release);  // the line's end
+            break;
+        }
+        double local = 0.0;
+        for (const auto& g : segs) {
+            const double o0 = std::max(g.t0, ta), o1 = std::min(g.t1, tb);
+            if (!(o1 > o0)) continue;
+            const int n = std::max(1, int(std::ceil((o1 - o0) / delta - 1e-9)));
+            const double dt = (o1 - o0) / n;
+            for (int q = 0; q < n; ++q)
+                local += density_.sigma_t(base_x + (o0 + (q + 0.5) * dt) * axis_[2]) * dt;
+        }
+        run.push_back({tile, idx, local});
+        ++k;
+    }
+    // Back from the far end: C(k) = the cell's integral + C(k + 1), rounded to the stored float.
+    for (auto it = run.rbegin(); it != run.rend(); ++it) {
+        const float c = float(it->local + beyond);
+        it->tile->c[it->index].store(c, std::memory_order_release);
+        beyond = c;
+    }
+    return beyond;
+}
+
+// tau over max_distance_m at an aligned vertex (the header's blocks): C(v) less C at q
+// cells further along its line, linear between the two vertices around that point, read in
+// v's block or, past its end, as the next block's C at its first vertex less C there. An
+// unset value after a known one in the same block is past the line's end: 0.
+double OpticalDepthGrid::aligned_vertex(int level, const std::int64_t v[3], Cursor& cursor) const {
+    const double h = spacing_m(level);
+    // With the near field, the far part's vertices reach max_distance_m less one cell.
+    const double q = (max_distance_m_ - (near_levels_ > 0 ? h : 0.0)) / h;
+    if (!(q > 0.0)) return 0.0;
+    if (!(q < 1e15)) return march(vertex_position(level, v[0], v[1], v[2]), cursor.segs);
+    const std::int64_t block = std::int64_t(std::ceil(q)) + 1;
+    const double c0 = cumulative(level, v, block, cursor);
+    const std::int64_t kk = v[2] + std::int64_t(std::floor(q));
+    const double f = q - std::floor(q);
+    // C at vertex j of the line in the block ending at `end` (0 from there on).
+    const auto at = [&](std::int64_t j, std::int64_t end) {
+        if (j >= end) return 0.0;
+        const std::int64_t w[3] = {v[0], v[1], j};
+        const float c = stored_cumulative(level, w, cursor);
+        return std::isnan(c) ? 0.0 : double(c);
+    };
+    const std::int64_t end = (floor_div(v[2], block) + 1) * block;
+    if (kk < end) return std::max(0.0, c0 - (at(kk, end) + f * (at(kk + 1, end) - at(kk, end))));
+    // The point lies in the next block (q < block: never beyond it). If v's line leaves the
+    // density's segments before that block, it holds nothing.
+    auto& segs = cursor.segs;
+    segs.clear();
+    density_.segments({vertex_position(level, v[0], v[1], v[2]), axis_[2]}, kFarM, segs);
+    if (segs.empty() || segs.back().t1 <= double(end - v[2]) * h) return std::max(0.0, c0);
+    const std::int64_t e[3] = {v[0], v[1], end};
+    const double c_end = cumulative(level, e, block, cursor);
+    const double far = at(kk, end + block) + f * (at(kk + 1, end + block) - at(kk, end + block));
+    return std::max(0.0, c0 + c_end - far);
+}
+
 double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) const {
+    if (!aligned_ || near_levels_ <= 0) return grid_tau(p, level, cursor);
+    const int far = std::min(level + near_levels_, kMaxLevels - 1);
+    const double d = std::min(spacing_m(far), max_distance_m_);
+    // The midpoint rule over the parts of [0, d] inside the majorant segments, steps no
+    // longer than d / near_steps_ (exact on a constant density, as a vertex's cells).
+    auto& segs = cursor.segs;
+    segs.clear();
+    density_.segments({p, axis_[2]}, d, segs);
+    double near = 0.0;
+    for (const auto& g : segs) {
+        const int n = std::max(1, int(std::ceil((g.t1 - g.t0) * near_steps_ / d - 1e-9)));
+        const double dt = (g.t1 - g.t0) / n;
+        for (int q = 0; q < n; ++q) near += density_.sigma_t(p + (g.t0 + (q + 0.5) * dt) * axis_[2]) * dt;
+    }
+    if (!(d < max_distance_m_)) return near;
+    return near + grid_tau(p + d * axis_[2], far, cursor);
+}
+
+double OpticalDepthGrid::grid_tau(const glm::dvec3& p, int level, Cursor& cursor) const {
     const double h = spacing_m(level);
     double w[3];
     std::int64_t base[3], tcoord[3];
     for (int a = 0; a < 3; ++a) {
-        const double u = p[a] / h;
+        const double u = (aligned_ ? glm::dot(axis_[a], p) : p[a]) / h;
         const double b = std::floor(u);
         w[a] = u - b;
         base[a] = std::int64_t(b);
         // Tile of the cell (floor division), within the key's range; else march directly.
-        tcoord[a] = base[a] >= 0 ? base[a] / kTile : -((-base[a] + kTile - 1) / kTile);
+        tcoord[a] = tile_of(base[a]);
         if (!(std::abs(b) < 1e15) || tcoord[a] <= -kCoordHalf || tcoord[a] >= kCoordHalf - 1)
             return march(p, cursor.segs);
     }
-    const std::uint64_t key = (std::uint64_t(level) << (3 * kCoordBits)) |
-                              (std::uint64_t(tcoord[0] + kCoordHalf) << (2 * kCoordBits)) |
-                              (std::uint64_t(tcoord[1] + kCoordHalf) << kCoordBits) |
-                              std::uint64_t(tcoord[2] + kCoordHalf);
-    const int slot = int((key ^ (key >> 20) ^ (key >> 40)) & (Cursor::kSlots - 1));
-    if (key != cursor.key[slot]) {
-        Tile* t = find(key);
-        if (!t) {
-            const std::int64_t origin[3] = {tcoord[0] * kTile, tcoord[1] * kTile, tcoord[2] * kTile};
-            auto fresh = std::make_unique<Tile>(level, origin);
-            // Whoever inserts first wins; the loser's empty tile is dropped.
-            t = map_->tiles.emplace(key, std::move(fresh)).first->second.get();
-        }
-        cursor.key[slot] = key;
-        cursor.tile[slot] = t;
-    }
-    Tile& t = *cursor.tile[slot];
+    Tile& t = *tile_at(level, tcoord, cursor.key, cursor.tile, true);
     const int li = int(base[0] - t.origin[0]), lj = int(base[1] - t.origin[1]),
               lk = int(base[2] - t.origin[2]);
     double corner[8];
@@ -127,9 +326,9 @@ double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) con
         std::atomic<float>& vertex = t.v[(k * kV + j) * kV + i];
         float v = vertex.load(std::memory_order_relaxed);
         if (std::isnan(v)) {
-            const glm::dvec3 x(double(t.origin[0] + i) * h, double(t.origin[1] + j) * h,
-                               double(t.origin[2] + k) * h);
-            v = float(march(x, cursor.segs));
+            const std::int64_t vi[3] = {t.origin[0] + i, t.origin[1] + j, t.origin[2] + k};
+            v = aligned_ ? float(aligned_vertex(level, vi, cursor))
+                         : float(march(vertex_position(level, vi[0], vi[1], vi[2]), cursor.segs));
             vertex.store(v, std::memory_order_relaxed);
         }
         corner[c] = v;

@@ -211,10 +211,13 @@ private:
         const double h0 = options_.shadow_grid_spacing_m > 0.0 ? options_.shadow_grid_spacing_m
                                                                : 2.0 * density_.feature_size_m();
         const auto along = [&](const glm::dvec3& dir, int steps) {
-            return std::make_unique<OpticalDepthGrid>(
-                density_, [dir](const glm::dvec3&) { return dir; }, h0, options_.light_distance_m, steps);
+            return std::make_unique<OpticalDepthGrid>(density_, dir, h0, options_.light_distance_m, steps);
         };
         grids_.sun = along(s_, options_.light_steps);
+        // Where the rays' footprint is known (an image's neighbouring rays): the first two of
+        // the sun grid's cells marched per sample, the rest read one level coarser, on
+        // vertices the neighbouring rays share (depth_grid.hpp, "Near field").
+        if (options_.ray_spread_rad > 0.0 || options_.ray_width_m > 0.0) grids_.sun->set_near_field(1, 2);
         if (sized_) grids_.anti = along(-s_, options_.light_steps);
         if (diffusion_ && options_.sides) {
             grids_.side = along(across_, options_.light_steps);

@@ -30,6 +30,12 @@ double box_depth(const glm::dvec3& p, const glm::dvec3& s, const glm::dvec3& lo,
     return sigma * t;
 }
 
+// The shadow rays per sample the grids are measured against: fine enough that their own
+// quadrature is not the difference (the grids aligned with the sun integrate each cell,
+// a lookup per cell at the finest levels, where a march of the default 8 steps is off by
+// tens of per cent per ray on a cumulus: AlignedVerticesMatchAFineMarch).
+constexpr int kFineLightSteps = 128;
+
 }  // namespace
 
 // In a homogeneous box tau(p) = sigma * (distance to the exit along s): piecewise linear,
@@ -101,6 +107,7 @@ TEST(CloudDepthGrid, MarchIsThreadIndependentAndMatchesPerSampleShadows) {
     EXPECT_EQ(one.transmittance, many.transmittance);
     CloudLightingOptions per_sample = o;
     per_sample.shadow_grid = false;
+    per_sample.light_steps = kFineLightSteps;
     const CloudResult ref = render_clouds(layer, light, {0, 0, 0}, dirs, per_sample);
     double sg = 0, sr = 0, sa = 0;
     for (std::size_t r = 0; r < dirs.size(); ++r) {
@@ -148,6 +155,7 @@ TEST(CloudDepthGrid, FootprintLevelsMatchPerSampleShadows) {
         EXPECT_EQ(one.transmittance, many.transmittance);
         CloudLightingOptions per_sample = o;
         per_sample.shadow_grid = false;
+        per_sample.light_steps = kFineLightSteps;
         const CloudResult ref = render_clouds(layer, light, {0, 0, 0}, dirs, per_sample);
         double sg = 0, sr = 0, sa = 0, cloudy = 0;
         for (std::size_t r = 0; r < dirs.size(); ++r) {
@@ -173,4 +181,112 @@ TEST(CloudDepthGrid, FootprintLevelsMatchPerSampleShadows) {
     bad.ray_spread_rad = 0.0;
     bad.ray_width_m = std::nan("");
     EXPECT_THROW(bad.validate(), InvalidArgument);
+}
+
+// The grid aligned with a constant direction (depth_grid.hpp, "Aligned"): its vertices on
+// one line share a walk. In a homogeneous box tau is exact at every vertex (the cell
+// integrals are clipped to the box, and the difference C(k) - C(x_k + D w) is exact on a
+// constant density) and within a cell diagonal's change everywhere, as for the march per
+// vertex; the cut at max_distance_m holds (exactly where the box's far side is not within
+// a cell of the cut point).
+TEST(CloudDepthGrid, AlignedGridExactInAHomogeneousBox) {
+    const glm::dvec3 lo(-300.0, -200.0, 1000.0), hi(500.0, 400.0, 1600.0);
+    const double sigma = 0.01;
+    const test::HomogeneousBox box(lo, hi, sigma);
+    const glm::dvec3 s = glm::normalize(glm::dvec3(0.6, 0.2, 0.5));
+    for (const double reach : {1e5, 250.0}) {
+        const OpticalDepthGrid grid(box, s, 10.0, reach, 4);
+        ASSERT_TRUE(grid.aligned());
+        OpticalDepthGrid::Cursor cursor;
+        PathRng rng(7, 0, 0);
+        const auto exact = [&](const glm::dvec3& p) {
+            return std::min(box_depth(p, s, lo, hi, sigma), sigma * reach);
+        };
+        for (int level : {0, 2}) {
+            const double h = grid.spacing_m(level);
+            double worst = 0.0, worst_vertex = 0.0;
+            for (int i = 0; i < 2000; ++i) {
+                const glm::dvec3 p = lo + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * (hi - lo);
+                worst = std::max(worst, std::abs(grid.tau(p, level, cursor) - exact(p)));
+                // The vertex below p on each axis of the aligned frame.
+                const glm::dvec3 u(glm::dot(p, grid.vertex_position(level, 1, 0, 0)) / (h * h),
+                                   glm::dot(p, grid.vertex_position(level, 0, 1, 0)) / (h * h),
+                                   glm::dot(p, grid.vertex_position(level, 0, 0, 1)) / (h * h));
+                const glm::dvec3 v =
+                    grid.vertex_position(level, std::int64_t(std::floor(u.x)), std::int64_t(std::floor(u.y)),
+                                         std::int64_t(std::floor(u.z)));
+                // C is linear along the line between the two vertices around x + D w
+                // unless the box's far side lies between them (then within a cell's change).
+                const double exit = box_depth(v, s, lo, hi, sigma) / sigma;
+                if (box.sigma_t(v) > 0.0 && std::abs(exit - reach) > h)
+                    worst_vertex = std::max(worst_vertex, std::abs(grid.tau(v, level, cursor) - exact(v)));
+            }
+            std::printf(
+                "aligned, reach %g m, level %d: max |tau error| %.5f (bound %.4f), at vertices %.2e\n", reach,
+                level, worst, sigma * h * std::sqrt(3.0), worst_vertex);
+            EXPECT_LE(worst, sigma * h * std::sqrt(3.0));
+            EXPECT_LE(worst_vertex, 1e-4);
+        }
+    }
+    // The near field: the first cell of the level above marched per lookup, the rest read
+    // there; within that level's cell diagonal plus the near march's own error (a face
+    // crossed between its two midpoints: half a near step of depth).
+    OpticalDepthGrid near(box, s, 10.0, 1e5, 4);
+    near.set_near_field(1, 2);
+    OpticalDepthGrid::Cursor cursor;
+    PathRng rng(9, 0, 0);
+    double worst = 0.0;
+    for (int i = 0; i < 2000; ++i) {
+        const glm::dvec3 p = lo + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * (hi - lo);
+        worst = std::max(worst, std::abs(near.tau(p, 0, cursor) - box_depth(p, s, lo, hi, sigma)));
+    }
+    std::printf("aligned with the near field, level 0: max |tau error| %.5f\n", worst);
+    EXPECT_LE(worst, sigma * 20.0 * std::sqrt(3.0) + sigma * 10.0);
+    EXPECT_THROW(near.set_near_field(2, 2), InvalidArgument);  // after the first lookup
+    EXPECT_THROW(OpticalDepthGrid(box, glm::dvec3(0.0), 10.0, 1e5, 4), InvalidArgument);
+}
+
+// On a procedural layer the aligned grid's vertices hold the optical depth of a fine march
+// (4096 steps over max_distance_m) to within the quadrature of one lookup per cell: per
+// type, 400 vertices in the layer, the mean error (bias) within 1 % of the mean depth and
+// the mean |error| within 5 % and below that of a march of light_steps = 8 steps per vertex
+// (what a vertex held before the walk; measured: 0.9, 3.4, 1.4 % against 31, 4.3, 26 % for
+// cumulus, stratus, cirrus).
+TEST(CloudDepthGrid, AlignedVerticesMatchAFineMarch) {
+    const glm::dvec3 s = glm::normalize(glm::dvec3(0.6, 0.2, 0.5));
+    for (const CloudType type : {CloudType::cumulus, CloudType::stratus, CloudType::cirrus}) {
+        const CloudLayerParams lp = CloudLayerParams::preset(type);
+        const ProceduralClouds layer(lp);
+        const double h0 = 2.0 * layer.feature_size_m(), reach = 4000.0;
+        const OpticalDepthGrid grid(layer, s, h0, reach, 8);
+        OpticalDepthGrid::Cursor cursor;
+        std::vector<MajorantSegment> segs;
+        PathRng rng(11, 0, 0);
+        double sum = 0.0, bias = 0.0, abs_err = 0.0, abs_err8 = 0.0;
+        int n = 0;
+        while (n < 400) {
+            const glm::dvec3 p(
+                20000.0 * (rng.uniform() - 0.5), 20000.0 * (rng.uniform() - 0.5),
+                lp.bottom_altitude_m + rng.uniform() * (lp.top_altitude_m - lp.bottom_altitude_m));
+            // The grid's vertex nearest p (level 0).
+            const glm::dvec3 u(glm::dot(p, grid.vertex_position(0, 1, 0, 0)) / (h0 * h0),
+                               glm::dot(p, grid.vertex_position(0, 0, 1, 0)) / (h0 * h0),
+                               glm::dot(p, grid.vertex_position(0, 0, 0, 1)) / (h0 * h0));
+            const glm::dvec3 v =
+                grid.vertex_position(0, std::llround(u.x), std::llround(u.y), std::llround(u.z));
+            const double fine = march_optical_depth(layer, {v, s}, reach, 4096, segs);
+            if (!(fine > 0.05)) continue;
+            const double g = grid.tau(v, 0, cursor),
+                         coarse = march_optical_depth(layer, {v, s}, reach, 8, segs);
+            sum += fine, bias += g - fine, abs_err += std::abs(g - fine), abs_err8 += std::abs(coarse - fine);
+            ++n;
+        }
+        std::printf(
+            "%s: mean depth %.3f, aligned grid bias %+.2f %%, mean |error| %.2f %% (8-step march %.2f %%)\n",
+            std::string(cloud_type_name(type)).c_str(), sum / n, 100 * bias / sum, 100 * abs_err / sum,
+            100 * abs_err8 / sum);
+        EXPECT_LT(std::abs(bias) / sum, 0.01);
+        EXPECT_LT(abs_err / sum, 0.05);
+        EXPECT_LT(abs_err, abs_err8);
+    }
 }

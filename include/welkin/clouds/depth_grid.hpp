@@ -39,6 +39,48 @@
 // Accuracy: trilinear interpolation of tau; the error is second order in h (tau's
 // curvature across a cell). The cost: one vertex march per vertex touched, shared by every
 // sample in the eight cells around it.
+//
+// Aligned to a constant direction (the sun, and the other straight lines of the fast
+// march). When the direction w is the same everywhere, the grid's axes are turned so that
+// its third axis is w (the first two any orthonormal pair across it): the vertices
+// (i, j, k), (i, j, k + 1), ... then lie on one line along w, a cell edge h apart, and
+// share their march. A line is cut into blocks of B = ceil(q) + 1 cells (q = D / h, D =
+// max_distance_m), and each vertex stores the optical depth from it to the end of its
+// block, C(k) = integral of sigma_t(x_k + l w) dl up to the block's last vertex, by the
+// recurrence
+//
+//     C(k) = integral over the cell [x_k, x_{k+1}] + C(k + 1),   C = 0 at the block's end,
+//
+// walked from the first vertex already known (or the block's end, or the line's last
+// segment, beyond which C = 0) back to the one asked for; the blocks bound a walk (a line
+// towards a low sun crosses a layer over tens to hundreds of kilometres, of which a vertex
+// needs D): a vertex costs the samples of one cell edge instead of
+// a march of `steps` samples over max_distance_m (the "incremental" form of a shadow
+// volume along the light, as in the sun-aligned slices of Lokovic & Veach's deep shadow
+// maps). The optical depth over at most D is then a difference on the same line,
+// tau(x_k) = C(k) - C(x_k + D w) when x_k + D w is in the same block, else
+// C(k) + C(first vertex of the next block) - C(x_k + D w), C between vertices linear along
+// the line (exact on a piecewise-constant line, and no interpolation across lines, so the
+// shadow is not blurred along the walk). The cell's integral: the midpoint
+// rule over each part of [x_k, x_{k+1}] inside the density's majorant segments (taken from
+// the first vertex of the vertex's tile along w), in steps no longer than
+// min(h, max_distance_m / steps): at the finest levels one density lookup per cell, far
+// finer along w than the `steps` samples a vertex's own march spreads over max_distance_m,
+// and never coarser than that march at the coarse levels. Each value depends only on the
+// line, its block and its own tile's base vertex, so the stored values are the same
+// whichever thread walks first (C is published with release stores: a value seen implies
+// every value after it in its block is visible, which is what lets an unset value after a
+// known one in the same block read as 0).
+//
+// Near field (aligned grids, set_near_field(levels, steps), off by default). A lookup on
+// level L reads the grid `levels` coarser, L' = L + levels, at the point one cell of L'
+// further along w, and adds the first cell's depth marched at the lookup's own point (the
+// midpoint rule over the density's majorant segments, steps no longer than d / `steps`): tau(x) =
+// integral_0^d sigma_t(x + l w) dl + tau'(x + d w), d = h_{L'}, the vertices of L' holding their depth over
+// max_distance_m - h_{L'}. The shadow's detail next to x (a lit face, the edge of a wisp) is marched exactly,
+// the depth from farther away is read on cells 2^levels times as wide, whose vertices the neighbouring rays
+// share (a ray's samples each touch new vertices when the rays are a cell apart, as an image's pixels are at
+// the footprint's level).
 #pragma once
 
 #include <algorithm>
@@ -67,8 +109,12 @@ public:
     using Direction = std::function<glm::dvec3(const glm::dvec3&)>;
 
     // The density must outlive the grid. base_spacing_m > 0 (h_0), max_distance_m > 0,
-    // steps >= 1.
+    // steps >= 1. A direction that depends on the point: a march per vertex.
     OpticalDepthGrid(const CloudDensity& density, Direction direction, double base_spacing_m,
+                     double max_distance_m, int steps);
+    // A constant direction (normalised here; zero or non-finite is InvalidArgument
+    // "direction"): the grid aligned with it, its lines of vertices sharing one walk (above).
+    OpticalDepthGrid(const CloudDensity& density, const glm::dvec3& direction, double base_spacing_m,
                      double max_distance_m, int steps);
     ~OpticalDepthGrid();
     OpticalDepthGrid(const OpticalDepthGrid&) = delete;
@@ -82,7 +128,20 @@ public:
         std::uint64_t key[kSlots];
         Tile* tile[kSlots] = {};
         std::vector<MajorantSegment> segs;
-        Cursor() { std::fill(key, key + kSlots, ~std::uint64_t(0)); }
+        // The aligned grid's walks: their own cache (a line crosses other tiles than the
+        // lookups around it) and the vertices of the walk under way.
+        std::uint64_t walk_key[kSlots];
+        Tile* walk_tile[kSlots] = {};
+        struct Step {
+            Tile* tile;
+            int index;
+            double local;
+        };
+        std::vector<Step> run;
+        Cursor() {
+            std::fill(key, key + kSlots, ~std::uint64_t(0));
+            std::fill(walk_key, walk_key + kSlots, ~std::uint64_t(0));
+        }
     };
 
     // The level whose cell is the largest power-of-two multiple of h_0 not above footprint.
@@ -92,16 +151,36 @@ public:
     // Interpolated optical depth at world point p on `level`.
     double tau(const glm::dvec3& p, int level, Cursor& cursor) const;
 
-    // The optical depth straight from a march (what a vertex stores, at any point).
+    // The optical depth straight from a march of `steps` samples over max_distance_m (what
+    // a vertex of a point-dependent grid stores, at any point).
     double march(const glm::dvec3& p, std::vector<MajorantSegment>& segs) const;
+
+    // The near field (above): levels in [0, kMaxLevels) (0: off), steps in [1, 64]; for an
+    // aligned grid only, set before the first lookup (InvalidArgument otherwise).
+    void set_near_field(int levels, int steps);
+    // Whether the grid is aligned with a constant direction (the second constructor).
+    bool aligned() const { return aligned_; }
+    // The world position of vertex (i, j, k) of `level` (the aligned frame's axes or x, y, z).
+    glm::dvec3 vertex_position(int level, std::int64_t i, std::int64_t j, std::int64_t k) const;
 
 private:
     Tile* find(std::uint64_t key) const;
+    // The tile of tile coordinates t on `level` through the cache (key, tile), made if absent
+    // when `make`, else null if absent.
+    Tile* tile_at(int level, const std::int64_t t[3], std::uint64_t* keys, Tile** tiles, bool make) const;
+    // The aligned grid: a vertex's optical depth over max_distance_m, and the cumulative C.
+    double aligned_vertex(int level, const std::int64_t v[3], Cursor& cursor) const;
+    double cumulative(int level, const std::int64_t v[3], std::int64_t block, Cursor& cursor) const;
+    float stored_cumulative(int level, const std::int64_t v[3], Cursor& cursor) const;
 
     const CloudDensity& density_;
     Direction direction_;
     double h0_, max_distance_m_;
     int steps_;
+    bool aligned_ = false;
+    int near_levels_ = 0, near_steps_ = 2;
+    double grid_tau(const glm::dvec3& p, int level, Cursor& cursor) const;
+    glm::dvec3 axis_[3];  // the aligned frame: axis_[2] the direction
     struct Map;
     std::unique_ptr<Map> map_;
 };

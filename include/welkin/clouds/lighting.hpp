@@ -29,16 +29,19 @@
 //    dimmed below that fraction; T is left as it is, not rounded to 0).
 //  * Sun light. At each sample x a shadow ray towards the sun is marched through the
 //    density's segments (light_steps midpoint steps, at most light_distance_m) for the
-//    cloud's optical depth tau_sun. With shadow_grid (the default) that march is made at
-//    the vertices of a lazily filled world-space grid instead (clouds/depth_grid.hpp) and
-//    tau_sun is interpolated trilinearly from it: the finest cell is h_0 =
+//    cloud's optical depth tau_sun. With shadow_grid (the default) tau_sun is interpolated
+//    trilinearly from a lazily filled grid instead (clouds/depth_grid.hpp), aligned with
+//    the sun: the vertices on one sun line share one walk, a lookup per cell (light_steps
+//    only bounds its step, at most light_distance_m / light_steps, on the coarse levels),
+//    and where the rays have a footprint a sample marches the first two cells itself and
+//    reads the rest one level coarser ("Near field" there): the finest cell is h_0 =
 //    shadow_grid_spacing_m (by default twice the density's feature size), and a sample
 //    whose view step is dt reads the level of cell h_0 2^L <= max(dt, h_0), so far
 //    samples of a sky, a kilometre apart, share coarse cells. Each vertex march is shared
 //    by every sample around it. The level is also no finer than the ray's footprint w(t)
 //    (ray_spread_rad, ray_width_m: the distance to the neighbouring rays at the sample):
-//    a cell narrower than that is read by one ray only, and its vertices, each a march of
-//    light_steps lookups, cost more than the rays' own samples (a layer kilometres away,
+//    a cell narrower than that is read by one ray only, and its vertices cost more than
+//    the rays' own samples (a layer kilometres away,
 //    a cirrus or altocumulus deck seen from the ground, is where that happens); a pixel
 //    cannot show the shadow's detail below its own width (the cone tracing of a pixel's
 //    footprint, Amanatides 1984, "Ray tracing with cones", SIGGRAPH). The sun's irradiance
