@@ -284,8 +284,8 @@ double OpticalDepthGrid::aligned_vertex(int level, const std::int64_t v[3], Curs
     return std::max(0.0, c0 + c_end - far);
 }
 
-double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor) const {
-    if (!aligned_ || near_levels_ <= 0) return grid_tau(p, level, cursor);
+double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor, bool near_field) const {
+    if (!aligned_ || near_levels_ <= 0 || !near_field) return grid_tau(p, level, cursor);
     const int far = std::min(level + near_levels_, kMaxLevels - 1);
     const double d = std::min(spacing_m(far), max_distance_m_);
     // The midpoint rule over the parts of [0, d] inside the majorant segments, steps no

@@ -107,6 +107,7 @@ public:
     // The grid levels a sample reads (the sun's, its other half's, the sides').
     struct Levels {
         int sun = 0, anti = 0, side = 0;
+        bool near = false;  // the sun grid's near field: the rays about a cell apart or more
     };
     // The phase values of one ray's direction: nu = d . s is the same at every sample.
     struct RayPhase {
@@ -176,7 +177,8 @@ public:
     std::pair<double, double> weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph,
                                       Cursors& cur) const {
         const int steps = options_.light_steps;
-        const double tau_sun = depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur);
+        const double tau_sun = grids_.sun ? grids_.sun->tau(x, lv.sun, cur.sun, lv.near)
+                                          : depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur);
         // The cloud's depth away from the sun along the sun line through x: the slab's
         // thickness (diffusion), or the octaves' optical size f = 1 - exp(-tau_line),
         // octave i weighted by f^i (see the header).
@@ -342,6 +344,10 @@ private:
                 const double sigma_t = density_.sigma_t(x);
                 if (!(sigma_t > 0.0)) continue;
                 if (footprint && t >= next_level_t) set_levels(t);
+                // The sun grid's near field where the rays are about a cell apart or more;
+                // denser rays share the vertices of their own level already.
+                levels.near = footprint && options_.ray_width_m + options_.ray_spread_rad * t >=
+                                               0.5 * sun_grid->spacing_m(levels.sun);
                 const auto [sun_w, sky_w] = sample_light_.weights(x, levels, phase, cursors);
                 light_.sun_irradiance(x, sun.data());
                 light_.ambient_radiance(x, sky.data());

@@ -80,7 +80,9 @@
 // max_distance_m - h_{L'}. The shadow's detail next to x (a lit face, the edge of a wisp) is marched exactly,
 // the depth from farther away is read on cells 2^levels times as wide, whose vertices the neighbouring rays
 // share (a ray's samples each touch new vertices when the rays are a cell apart, as an image's pixels are at
-// the footprint's level).
+// the footprint's level). A lookup may decline it (denser rays share the vertices of their
+// own level): it then reads its own level, whose vertices, set for the near field, reach
+// max_distance_m less one cell of that level.
 #pragma once
 
 #include <algorithm>
@@ -148,8 +150,9 @@ public:
     int level_for(double footprint_m) const;
     double spacing_m(int level) const { return h0_ * double(std::uint64_t(1) << level); }
 
-    // Interpolated optical depth at world point p on `level`.
-    double tau(const glm::dvec3& p, int level, Cursor& cursor) const;
+    // Interpolated optical depth at world point p on `level`; with the near field set,
+    // near_field false reads `level` itself (its vertices reaching max_distance_m less a cell).
+    double tau(const glm::dvec3& p, int level, Cursor& cursor, bool near_field = true) const;
 
     // The optical depth straight from a march of `steps` samples over max_distance_m (what
     // a vertex of a point-dependent grid stores, at any point).
