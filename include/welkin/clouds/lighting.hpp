@@ -33,8 +33,9 @@
 //    trilinearly from a lazily filled grid instead (clouds/depth_grid.hpp), aligned with
 //    the sun: the vertices on one sun line share one walk, a lookup per cell (light_steps
 //    only bounds its step, at most light_distance_m / light_steps, on the coarse levels),
-//    and where the rays have a footprint a sample marches the first two cells itself and
-//    reads the rest one level coarser ("Near field" there): the finest cell is h_0 =
+//    and where the rays' footprint is at least half a cell a sample marches the first two
+//    cells itself and reads the rest one level coarser ("Near field" there): the finest
+//    cell is h_0 =
 //    shadow_grid_spacing_m (by default twice the density's feature size), and a sample
 //    whose view step is dt reads the level of cell h_0 2^L <= max(dt, h_0), so far
 //    samples of a sky, a kilometre apart, share coarse cells. Each vertex march is shared
