@@ -603,8 +603,11 @@ void ProceduralClouds::shell(const CloudRay& ray, double t_max, std::vector<Majo
 }
 
 double ProceduralClouds::feature_size_m() const {
-    // One texel of the detail texture (32 per tile), the finest structure the layer has.
-    return p_.detail_scale_m / 32.0;
+    // One texel of the detail texture (32 per tile), the finest structure the layer has;
+    // cirrus reads it kFibreStretch-fold stretched, its fibres sqrt(kFibreStretch) times
+    // narrower across than a texel (cirrus_density).
+    const double texel = p_.detail_scale_m / 32.0;
+    return shape_of(p_.cloud_type).fall > 0.0 ? texel / std::sqrt(kFibreStretch) : texel;
 }
 
 }  // namespace welkin

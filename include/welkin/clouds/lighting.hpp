@@ -61,7 +61,7 @@
 //    diffuse light falls off linearly with depth, as diffusion theory has it, where the
 //    octaves below vanish. With `sides` (the default) the slab is finite across the sun
 //    line: the cloud's chord tau_side along the horizontal normal to the sun (both ways,
-//    a third and fourth grid, three levels coarser) makes the diffuse light leak through
+//    a third and fourth grid, one level coarser) makes the diffuse light leak through
 //    its sides (clouds/diffusion.hpp, "The sides"). No fitted parameter. Its error against
 //    the reference (bench/clouds, bench/clouds/lighting_vs_reference.py) and against Cycles
 //    (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"). octaves = 1 is single
