@@ -220,7 +220,16 @@ private:
         // the sun grid's cells marched per sample, the rest read one level coarser, on
         // vertices the neighbouring rays share (depth_grid.hpp, "Near field").
         if (options_.ray_spread_rad > 0.0 || options_.ray_width_m > 0.0) grids_.sun->set_near_field(1, 2);
-        if (sized_) grids_.anti = along(-s_, options_.light_steps);
+        // The depth away from the sun on a grid of world axes, not one aligned with -s: it
+        // is read where the view samples lie, inside a layer whose flat base and top kink
+        // it; a grid turned to the sun cuts those planes at a slant, and the interpolation's
+        // error across the kink, which depends on where a line of vertices meets the plane,
+        // beats into streaks along the sun's azimuth on an even deck (an overcast stratus
+        // from below; docs/validation.md, "Every type's sky and plate").
+        if (sized_)
+            grids_.anti = std::make_unique<OpticalDepthGrid>(
+                density_, [d = -s_](const glm::dvec3&) { return d; }, h0, options_.light_distance_m,
+                options_.light_steps);
         if (diffusion_ && options_.sides) {
             grids_.side = along(across_, options_.light_steps);
             grids_.back = along(-across_, options_.light_steps);
