@@ -63,7 +63,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 namespace {
 
 constexpr int kSideLevels = 1;  // the side grids' levels above the sun grid's
-constexpr int kAntiLevels = 1;  // the anti-sun grid's levels above the sun grid's
+constexpr int kAntiLevels = 0;  // the anti-sun grid's levels above the sun grid's
 
 // The input checks of a march: one origin or one per direction, finite; max_distances
 // empty or one non-negative length per direction.
