@@ -17,6 +17,7 @@ bulging tops, and cirrus as filaments: two properties of the shape that a number
   pixel in every direction.)
 """
 
+import json
 import math
 
 import numpy as np
@@ -108,3 +109,55 @@ def test_cirrus_is_fibrous_and_cumulus_round(cloud_type, lo, hi):
         f"{cloud_type}: quarter-correlation lag {along:.0f} m along the streaks, {across:.0f} m across: {ratio:.2f}"
     )
     assert lo <= ratio <= hi
+
+
+def box_blur(image, k):
+    """The k x k box mean (k odd) of a 2-D array, edges clamped."""
+    r = k // 2
+    padded = np.pad(image, r, mode="edge")
+    c = np.cumsum(np.cumsum(np.pad(padded, ((1, 0), (1, 0))), 0), 1)
+    h, w = image.shape
+    return (c[k : k + h, k : k + w] - c[:h, k : k + w] - c[k : k + h, :w] + c[:h, :w]) / (k * k)
+
+
+def test_an_overcast_deck_from_below_has_no_streaks():
+    """An overcast stratus seen from the ground (the contact sheet's noon view: sun 60 degrees
+    up, 60 degrees right of the view, camera 15 degrees up) is an even grey: the fine
+    structure of its luminance, the standard deviation of the image less its 9-pixel box mean
+    over the sky's part, relative to the mean, stays under 0.004. Shadow grids turned to the
+    sun whose lines cut the deck's flat base at a slant drew streaks along the sun's azimuth
+    there (0.0070); the grids of world axes read 0.0025."""
+    elevation, azimuth = math.radians(60.0), math.radians(60.0)
+    turn = math.radians(90.0 + 15.0)
+    scene = {
+        "version": 1,
+        "atmosphere": "bruneton2017",
+        "sun": {
+            "direction": [
+                math.cos(elevation) * math.sin(azimuth),
+                math.cos(elevation) * math.cos(azimuth),
+                math.sin(elevation),
+            ]
+        },
+        "camera": {  # Blender's camera (-Z forward, +Y up) turned to look 15 degrees up towards +Y
+            "matrix_world": [
+                [1, 0, 0, 0],
+                [0, math.cos(turn), -math.sin(turn), 0],
+                [0, math.sin(turn), math.cos(turn), 20.0],
+                [0, 0, 0, 1],
+            ],
+            "type": "PERSP",
+            "fov_deg": 70.0,
+            "sensor_width_mm": 36,
+            "sensor_height_mm": 24,
+        },
+        "resolution": {"x": 480, "y": 270, "percentage": 100},
+        "clouds": {"layers": [{"cloud_type": "stratus", "coverage": 1.0}], "lighting": {"max_steps": 96}},
+    }
+    rgb = np.asarray(welkin.camera_plate(json.dumps(scene))["combined"], np.float64)[..., :3]
+    y = rgb @ np.array([0.2126, 0.7152, 0.0722])
+    sky = y[:200]
+    fine = float(np.std(sky - box_blur(sky, 9)) / sky.mean())
+    print(f"overcast stratus from below: fine structure {fine:.4f} of the mean")
+    assert np.isfinite(sky).all() and sky.min() > 0.0
+    assert fine < 0.004
