@@ -92,30 +92,20 @@ for v in "${versions[@]}"; do
     echo "--- $t (Blender $v)"
     if [[ $v == 3.4 ]]; then
       [[ -n ${WELKIN_ADDON_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
-      reason=${known["$(basename "$t" .py)@$v"]:-}
-      if PYTHONPATH="$(pwd)/build${PYTHONPATH:+:$PYTHONPATH}" \
-        timeout -k 10 "${WELKIN_TEST_TIMEOUT:-900}" blender -b --factory-startup --python-use-system-env --python-exit-code 1 \
-        --python "$t"; then
-        [[ -z $reason ]] || { echo "test_blender: $t now passes on $v: take it off the known list"; failed+=("$t@$v(known)"); }
-      elif [[ -n $reason ]]; then
-        echo "test_blender: KNOWN FAILURE on Blender $v: $t: $reason"
-      else
-        failed+=("$t@$v")
-      fi
+      run=(env PYTHONPATH="$(pwd)/build${PYTHONPATH:+:$PYTHONPATH}" blender)
     else
       [[ -n ${WELKIN_EXTENSION_ZIP:-} ]] || { failed+=("$t@$v"); continue; }
-      reason=${known["$(basename "$t" .py)@$v"]:-}
       # No PYTHONPATH: the compiled core comes from the Extension's wheel alone.
-      if env -u PYTHONPATH timeout -k 10 "${WELKIN_TEST_TIMEOUT:-900}" \
-        "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py \
-        -b --factory-startup --python-use-system-env --python-exit-code 1 \
-        --python "$t"; then
-        [[ -z $reason ]] || { echo "test_blender: $t now passes on $v: take it off the known list"; failed+=("$t@$v(known)"); }
-      elif [[ -n $reason ]]; then
-        echo "test_blender: KNOWN FAILURE on Blender $v: $t: $reason"
-      else
-        failed+=("$t@$v")
-      fi
+      run=(env -u PYTHONPATH "build/venv-bpy-$v/bin/python" tests/blender/bpy_blender.py)
+    fi
+    reason=${known["$(basename "$t" .py)@$v"]:-}
+    if timeout -k 10 "${WELKIN_TEST_TIMEOUT:-900}" "${run[@]}" \
+      -b --factory-startup --python-use-system-env --python-exit-code 1 --python "$t"; then
+      [[ -z $reason ]] || { echo "test_blender: $t now passes on $v: take it off the known list"; failed+=("$t@$v(known)"); }
+    elif [[ -n $reason ]]; then
+      echo "test_blender: KNOWN FAILURE on Blender $v: $t: $reason"
+    else
+      failed+=("$t@$v")
     fi
   done
   seconds[$v]=$((SECONDS - start))
