@@ -14,20 +14,33 @@
 
 namespace welkin {
 
+namespace {
+
+// The midpoint rule for the optical depth along `ray` over the parts of [a, b] inside the
+// majorant segments, each part in equal steps no longer than max_step (exact on a constant
+// density).
+double midpoint_depth(const CloudDensity& density, const CloudRay& ray,
+                      const std::vector<MajorantSegment>& segs, double a, double b, double max_step) {
+    double tau = 0.0;
+    for (const auto& s : segs) {
+        const double t0 = std::max(s.t0, a), t1 = std::min(s.t1, b);
+        if (!(t1 > t0)) continue;
+        const int n = std::max(1, int(std::ceil((t1 - t0) / max_step - 1e-9)));
+        const double h = (t1 - t0) / n;
+        for (int k = 0; k < n; ++k) tau += density.sigma_t(ray.at(t0 + (k + 0.5) * h)) * h;
+    }
+    return tau;
+}
+
+}  // namespace
+
 double march_optical_depth(const CloudDensity& density, const CloudRay& ray, double max_distance, int steps,
                            std::vector<MajorantSegment>& segs) {
     density.segments(ray, max_distance, segs);
     double total = 0.0;
     for (const auto& s : segs) total += s.t1 - s.t0;
     if (!(total > 0.0)) return 0.0;
-    const double dt = total / steps;
-    double tau = 0.0;
-    for (const auto& s : segs) {
-        const int n = std::max(1, int(std::ceil((s.t1 - s.t0) / dt - 1e-9)));
-        const double h = (s.t1 - s.t0) / n;
-        for (int k = 0; k < n; ++k) tau += density.sigma_t(ray.at(s.t0 + (k + 0.5) * h)) * h;
-    }
-    return tau;
+    return midpoint_depth(density, ray, segs, 0.0, max_distance, total / steps);
 }
 
 namespace {
@@ -228,16 +241,7 @@ double OpticalDepthGrid::cumulative(int level, const std::int64_t v[3], std::int
             tile->c[idx].store(0.0f, std::memory_order_release);  // the line's end
             break;
         }
-        double local = 0.0;
-        for (const auto& g : segs) {
-            const double o0 = std::max(g.t0, ta), o1 = std::min(g.t1, tb);
-            if (!(o1 > o0)) continue;
-            const int n = std::max(1, int(std::ceil((o1 - o0) / delta - 1e-9)));
-            const double dt = (o1 - o0) / n;
-            for (int q = 0; q < n; ++q)
-                local += density_.sigma_t(base_x + (o0 + (q + 0.5) * dt) * axis_[2]) * dt;
-        }
-        run.push_back({tile, idx, local});
+        run.push_back({tile, idx, midpoint_depth(density_, {base_x, axis_[2]}, segs, ta, tb, delta)});
         ++k;
     }
     // Back from the far end: C(k) = the cell's integral + C(k + 1), rounded to the stored float.
@@ -293,12 +297,7 @@ double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor, boo
     auto& segs = cursor.segs;
     segs.clear();
     density_.segments({p, axis_[2]}, d, segs);
-    double near = 0.0;
-    for (const auto& g : segs) {
-        const int n = std::max(1, int(std::ceil((g.t1 - g.t0) * near_steps_ / d - 1e-9)));
-        const double dt = (g.t1 - g.t0) / n;
-        for (int q = 0; q < n; ++q) near += density_.sigma_t(p + (g.t0 + (q + 0.5) * dt) * axis_[2]) * dt;
-    }
+    const double near = midpoint_depth(density_, {p, axis_[2]}, segs, 0.0, d, d / near_steps_);
     if (!(d < max_distance_m_)) return near;
     return near + grid_tau(p + d * axis_[2], far, cursor);
 }

@@ -63,7 +63,6 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 namespace {
 
 constexpr int kSideLevels = 1;  // the side grids' levels above the sun grid's
-constexpr int kAntiLevels = 0;  // the anti-sun grid's levels above the sun grid's
 
 // The input checks of a march: one origin or one per direction, finite; max_distances
 // empty or one non-negative length per direction.
@@ -106,8 +105,8 @@ public:
     };
     // The grid levels a sample reads (the sun's, its other half's, the sides').
     struct Levels {
-        int sun = 0, anti = 0, side = 0;
-        bool near = false;  // the sun grid's near field: the rays about a cell apart or more
+        int sun = 0, side = 0;  // the anti-sun grid reads the sun's level
+        bool near = false;      // the sun grid's near field: the rays about a cell apart or more
     };
     // The phase values of one ray's direction: nu = d . s is the same at every sample.
     struct RayPhase {
@@ -150,16 +149,15 @@ public:
 
     const OpticalDepthGrid* sun_grid() const { return grids_.sun.get(); }
 
-    // The levels for a footprint of `width` metres: no finer than it; the anti-sun grid
-    // kAntiLevels coarser and the sides' grid kSideLevels coarser: the depth away from the
-    // sun sets the slab's thickness (diffusion) or the octaves' optical size, and the chord
-    // across the sun line the leak, large-scale quantities of the diffuse light, which
-    // diffusion smooths over a transport mean free path; the depth towards the sun, the
-    // single scattering's shadow, is the shading's detail.
+    // The levels for a footprint of `width` metres: no finer than it; the sides' grid
+    // kSideLevels coarser: the chord across the sun line sets the leak, a large-scale
+    // quantity of the diffuse light, which diffusion smooths over a transport mean free
+    // path; the depths towards and away from the sun (the single scattering's shadow, the
+    // slab's thickness) are read at the sun's level (one level coarser, the depth away from
+    // the sun lost 2 % on altocumulus cells; docs/validation.md).
     Levels levels_for(double width) const {
         Levels lv;
         lv.sun = grids_.sun ? grids_.sun->level_for(width) : 0;
-        lv.anti = std::min(lv.sun + kAntiLevels, OpticalDepthGrid::kMaxLevels - 1);
         lv.side = std::min(lv.sun + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
         return lv;
     }
@@ -177,13 +175,11 @@ public:
     std::pair<double, double> weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph,
                                       Cursors& cur) const {
         const int steps = options_.light_steps;
-        const double tau_sun = grids_.sun ? grids_.sun->tau(x, lv.sun, cur.sun, lv.near)
-                                          : depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur);
+        const double tau_sun = depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur, lv.near);
         // The cloud's depth away from the sun along the sun line through x: the slab's
         // thickness (diffusion), or the octaves' optical size f = 1 - exp(-tau_line),
         // octave i weighted by f^i (see the header).
-        const double tau_anti =
-            sized_ ? depth_along(grids_.anti, cur.anti, lv.anti, x, -s_, steps, cur) : 0.0;
+        const double tau_anti = sized_ ? depth_along(grids_.anti, cur.anti, lv.sun, x, -s_, steps, cur) : 0.0;
         double sun_w = 0.0;
         if (diffusion_) {
             // Single scattering plus the forward-scattered and diffuse parts.
@@ -240,11 +236,12 @@ private:
                 options_.light_distance_m, options_.ambient_steps);
     }
 
-    // The cloud's optical depth from x along dir: from the grid when there is one, else by
-    // its own march of `steps` steps.
+    // The cloud's optical depth from x along dir: from the grid when there is one (its near
+    // field, if set, unless near_field is false), else by its own march of `steps` steps.
     double depth_along(const std::unique_ptr<OpticalDepthGrid>& grid, OpticalDepthGrid::Cursor& cursor,
-                       int level, const glm::dvec3& x, const glm::dvec3& dir, int steps, Cursors& cur) const {
-        return grid ? grid->tau(x, level, cursor)
+                       int level, const glm::dvec3& x, const glm::dvec3& dir, int steps, Cursors& cur,
+                       bool near_field = true) const {
+        return grid ? grid->tau(x, level, cursor, near_field)
                     : march_optical_depth(density_, {x, dir}, options_.light_distance_m, steps,
                                           cur.light_segs);
     }
