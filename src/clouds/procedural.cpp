@@ -451,6 +451,16 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     return clamp01d(remap(covered, e, 1.0, 0.0, 1.0));
 }
 
+// The footprint m of a cell or a streak at the (rotated, stretched) plane point (u, v) in
+// base tiles: the base shape read at one height (every cell keeps its outline up the
+// layer), remapped by the local coverage c (Schneider's remap).
+double ProceduralClouds::footprint(double u, double v, double c) const {
+    float b[2];
+    base_at(u, v, p_.evolution_m * inv_base_, b);
+    const double base = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
+    return clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
+}
+
 // Cells (header): the footprint m from the base shape read at one height (every cell keeps
 // its outline up the layer), its top f_top m^dome, its base the layer's bottom; the top
 // surface lowered by billows (inverted Worley: deep between the detail noise's balls),
@@ -465,10 +475,7 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
     const double sq = std::sqrt(shape.stretch);
     const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
-    float b[2];
-    base_at(along * inv_base_ / sq, across * inv_base_ * sq, p_.evolution_m * inv_base_, b);
-    const double base = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
-    const double m = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
+    const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c);
     if (m <= 0.0) return 0.0;
     // How far in from the footprint's edge the point is, in metres (m rises over about a
     // eighth of a base tile), and the dome over it: half an ellipse, `dome` times as wide
@@ -523,10 +530,7 @@ double ProceduralClouds::cirrus_density(double x, double y, double f, double c, 
     const double sq = std::sqrt(shape.stretch);
     const double along = kStreakCos * xw + kStreakSin * yw - drift,
                  across = -kStreakSin * xw + kStreakCos * yw;
-    float b[2];
-    base_at(along * inv_base_ / sq, across * inv_base_ * sq, p_.evolution_m * inv_base_, b);
-    const double base = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
-    const double m = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
+    const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c);
     if (m <= 0.0) return 0.0;
     // The head's trapezoid, and the fallstreak down to 1 - a0 - fall m, thinning downwards.
     const double head = shape.gradient(f);

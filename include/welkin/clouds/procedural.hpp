@@ -179,6 +179,7 @@ public:
 
 private:
     double density(const glm::dvec3& p, double h, double k) const;
+    double footprint(double u, double v, double c) const;
     double cell_density(double x, double y, double f, double c, const float* w) const;
     double cirrus_density(double x, double y, double f, double c, const float* w) const;
     double column_depth(double x, double y, double k) const;
