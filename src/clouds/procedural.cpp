@@ -107,6 +107,9 @@ const TypeShape& shape_of(CloudType t) {
 // The streaks' direction: 30 degrees off the x axis (cos, sin), so that no structure runs
 // along the world's axes.
 constexpr double kStreakCos = 0.8660254037844386, kStreakSin = 0.5;
+// How far (a height fraction) the clear-air tests stay from the shape's bounds: far above
+// the formulas' rounding (1e-16), far below any structure (1e-9 of a layer is a micrometre).
+constexpr double kBandMargin = 1e-9;
 // Internal coverage at which a layer is overcast (clamp(k (1 - weather_variation)) = 1
 // for weather_variation <= 0.75).
 constexpr double kMaxInternalCoverage = 4.0;
@@ -252,6 +255,23 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     inv_weather_ = 1.0 / p_.weather_scale_m;
     inv_base_ = 1.0 / p_.base_scale_m;
     inv_detail_ = 1.0 / p_.detail_scale_m;
+
+    // The band of heights the type's shape can fill (the header): a cell's ceiling at the
+    // highest local top (cell_ceiling rises with f_max, which is 1 where the towers are
+    // full); the longest fallstreak's foot (m <= 1); the layer model's trapezoid under the
+    // lowest and highest local tops. Widened by kBandMargin, far above the rounding of
+    // the formulas, so that a skipped point is clear air.
+    const TypeShape& shape = shape_of(p_.cloud_type);
+    if (shape.fall > 0.0) {
+        band_lo_ = shape.gradient.a0 - shape.fall;
+    } else if (shape.cells > 0.0) {
+        band_hi_ = cell_ceiling(1.0);
+    } else {
+        band_lo_ = shape.gradient.a0 * (1.0 - shape.towers);
+        band_hi_ = shape.gradient.a3;
+    }
+    band_lo_ = std::max(0.0, band_lo_ - kBandMargin);
+    band_hi_ = std::min(1.0, band_hi_ + kBandMargin);
 
     // The internal coverage k whose share of cloudy columns is `coverage` (header).
     if (p_.coverage <= 0.0 || p_.density_per_m <= 0.0) {
@@ -402,10 +422,11 @@ double ProceduralClouds::sigma_t(const glm::dvec3& p) const {
 }
 
 // The normalised density (header) at p, altitude h, internal coverage k.
-double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const {
+double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool skip) const {
     const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
     const double f = (h - p_.bottom_altitude_m) / thickness;
     if (!(f > 0.0 && f < 1.0)) return 0.0;
+    if (skip && !(f > band_lo_ && f < band_hi_)) return 0.0;  // clear air by construction
     const TypeShape& shape = shape_of(p_.cloud_type);
     const double x = p.x - p_.wind_offset_m.x, y = p.y - p_.wind_offset_m.y;
 
@@ -415,7 +436,7 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k) const 
     if (shape.fall > 0.0) return cirrus_density(x, y, f, c_raw, w);
     const double c = clamp01d(c_raw);
     if (c <= 0.0) return 0.0;
-    if (shape.cells > 0.0) return cell_density(x, y, f, c, w);
+    if (shape.cells > 0.0) return cell_density(x, y, f, c, w, skip);
     // Towers: the local top, lower where the weather map's g is low.
     const double tower = clamp01d((w[1] - 0.3) / 0.4);
     const double f_top = 1.0 - shape.towers * (1.0 - tower);
@@ -465,11 +486,14 @@ double ProceduralClouds::footprint(double u, double v, double c) const {
 // its outline up the layer), its top f_top m^dome, its base the layer's bottom; the top
 // surface lowered by billows (inverted Worley: deep between the detail noise's balls),
 // nothing at the base and most at the top; the density rises over kEdgeM inside the surface.
-double ProceduralClouds::cell_density(double x, double y, double f, double c, const float* w) const {
+double ProceduralClouds::cell_density(double x, double y, double f, double c, const float* w,
+                                      bool skip) const {
     const TypeShape& shape = shape_of(p_.cloud_type);
     const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
     const double tower = clamp01d((w[1] - 0.3) / 0.4);
     const double f_max = 1.0 - shape.towers * (1.0 - tower);
+    // Above the highest dome this local top allows: clear air, before the footprint's read.
+    if (skip && f >= cell_ceiling(f_max) + kBandMargin) return 0.0;
     // A gentle domain warp (its slope below one: a stronger one shreds the cells into swirls).
     const double warp = 0.3 * p_.base_scale_m;
     const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
@@ -505,6 +529,16 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double weight = clamp01d(f / shape.base_erosion) * (0.3 + 0.7 * f / f_top);
     const double depth = inside - 2.0 * p_.detail_strength * shape.billow * thickness * billow * weight;
     return rise * clamp01d(depth / kEdgeM);
+}
+
+// The dome's top at m = 1 (cell_density's u with in_m at its largest, the same operations):
+// u (2 - u) rises with u up to u = 1, so no footprint reaches above it.
+double ProceduralClouds::cell_ceiling(double f_max) const {
+    const TypeShape& shape = shape_of(p_.cloud_type);
+    const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
+    const double in_m = 1.0 * 0.12 * p_.base_scale_m;
+    const double u = std::min(1.0, in_m / (shape.dome * f_max * thickness));
+    return f_max * std::sqrt(u * (2.0 - u));
 }
 
 // Cirrus (header): heads near the layer's top where the footprint m is high, fallstreaks

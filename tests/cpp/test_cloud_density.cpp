@@ -7,6 +7,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cloud_test_util.hpp"
@@ -331,6 +332,54 @@ TEST(ProceduralClouds, SegmentsCoverTheDensityAndBoundIt) {
     for (const glm::dvec3 d :
          {glm::dvec3(1, 0, 0.05), glm::dvec3(0.3, 1, 0.2), glm::dvec3(0, 0, 1), glm::dvec3(1, 1, 0.6)})
         expect_segments_bound(layer, {{0, 0, 0}, glm::normalize(d)}, 40000.0, 4000, gen);
+}
+
+namespace welkin {
+// The whole shape, without the clear-air tests (procedural.hpp's `skip`).
+struct ProceduralCloudsTestAccess {
+    static double full_sigma_t(const ProceduralClouds& layer, const glm::dvec3& p) {
+        const double h = glm::length(p - layer.centre_) - layer.p_.planet_radius_m;
+        return layer.p_.density_per_m * layer.density(p, h, layer.k_, false);
+    }
+    static std::pair<double, double> band(const ProceduralClouds& layer) {
+        return {layer.band_lo_, layer.band_hi_};
+    }
+};
+}  // namespace welkin
+
+// The clear-air tests skip lookups only: at every point sigma_t is the whole shape's value,
+// for every type, its own layer and a thicker, a thinner and a coarser one; and they skip
+// something (the cells' domes and the cirrus's foot leave part of the layer empty).
+TEST(ProceduralClouds, ClearAirSkipsKeepEveryValue) {
+    std::mt19937_64 gen(29);
+    for (const auto name : kCloudTypeNames) {
+        const CloudLayerParams preset = CloudLayerParams::preset(cloud_type_from_name(name));
+        for (int variant = 0; variant < 4; ++variant) {
+            CloudLayerParams p = preset;
+            p.coverage_measure = CloudCoverageMeasure::area;  // a quick calibration
+            const double thick = p.top_altitude_m - p.bottom_altitude_m;
+            if (variant == 1) p.top_altitude_m = p.bottom_altitude_m + 3.0 * thick;
+            if (variant == 2) p.top_altitude_m = p.bottom_altitude_m + 0.3 * thick;
+            if (variant == 3) p.base_scale_m *= 4.0, p.coverage = 0.9;
+            const ProceduralClouds layer(p);
+            std::uniform_real_distribution<double> X(-3.0 * p.weather_scale_m, 3.0 * p.weather_scale_m);
+            std::uniform_real_distribution<double> F(-0.01, 1.01);
+            // Half the points near the band's ends, where a wrong bound would cut cloud.
+            const double lo = ProceduralCloudsTestAccess::band(layer).first,
+                         hi = ProceduralCloudsTestAccess::band(layer).second;
+            std::uniform_real_distribution<double> E(-0.03, 0.03);
+            int cloudy = 0;
+            for (int i = 0; i < 20000; ++i) {
+                const double f = i % 2 ? F(gen) : (i % 4 ? lo : hi) + E(gen);
+                const glm::dvec3 x{X(gen), X(gen),
+                                   p.bottom_altitude_m + f * (p.top_altitude_m - p.bottom_altitude_m)};
+                const double full = ProceduralCloudsTestAccess::full_sigma_t(layer, x);
+                ASSERT_EQ(layer.sigma_t(x), full) << name << " variant " << variant << " at f = " << f;
+                cloudy += full > 0.0;
+            }
+            EXPECT_GT(cloudy, 100) << name << " variant " << variant;  // the test saw cloud
+        }
+    }
 }
 
 TEST(ProceduralClouds, RejectsBadParameters) {

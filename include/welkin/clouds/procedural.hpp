@@ -61,6 +61,11 @@
 //       bent streaks;
 //   sigma_t = density_per_m * density.
 // Every factor is in [0, 1], so density <= 1: the majorant is density_per_m on the shell.
+// Clear air by construction is skipped before any texture read (sigma_t returns the same
+// value, sooner): a cell's top is below f_max sqrt(u (2 - u)) at m = 1, so above that
+// ceiling (at f_max = 1 for the layer, at the point's own f_max once the weather map is read)
+// the density is 0; cirrus has none below a0 - fall (the longest fallstreak's foot); the
+// layer model none outside [a0 (1 - towers), a3].
 //
 // Coverage means coverage, in one of two measures (coverage_measure):
 //  * dome (the default): the share of the sky dome a ground observer sees covered, the WMO's
@@ -149,6 +154,8 @@ struct CloudLayerParams {
 };
 
 class ProceduralClouds final : public CloudDensity {
+    friend struct ProceduralCloudsTestAccess;  // tests/cpp/test_cloud_density.cpp
+
 public:
     // A column is cloudy when its vertical optical depth reaches this (opacity 26 %).
     static constexpr double kCoverageOpticalDepth = 0.3;
@@ -178,9 +185,14 @@ public:
     static double height_gradient(CloudType type, double f);
 
 private:
-    double density(const glm::dvec3& p, double h, double k) const;
+    // `skip`: return early where the shape is clear air by construction (the header's last
+    // paragraph on the formulas); false evaluates the whole shape (the same value, which
+    // tests/cpp/test_cloud_density.cpp checks).
+    double density(const glm::dvec3& p, double h, double k, bool skip = true) const;
     double footprint(double u, double v, double c) const;
-    double cell_density(double x, double y, double f, double c, const float* w) const;
+    double cell_density(double x, double y, double f, double c, const float* w, bool skip) const;
+    // The highest height fraction a cell can reach under local top f_max (its dome at m = 1).
+    double cell_ceiling(double f_max) const;
     double cirrus_density(double x, double y, double f, double c, const float* w) const;
     double column_depth(double x, double y, double k) const;
     double fraction(double k, int columns) const;
@@ -190,6 +202,8 @@ private:
 
     CloudLayerParams p_;
     double k_ = 0.0;
+    // The height fractions outside which the type's shape is clear air (open interval).
+    double band_lo_ = 0.0, band_hi_ = 1.0;
     glm::dvec3 centre_;
     std::shared_ptr<const CloudNoiseTextures> noise_;
     // The channels sigma_t reads, combined once: base (pw, fbm_w), detail fbm_d, weather
