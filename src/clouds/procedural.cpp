@@ -512,6 +512,11 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double rise = clamp01d(f / shape.gradient.a1);  // the flat base
     const double inside = std::min((f_top - f) * thickness, in_m);
     if (p_.detail_strength <= 0.0) return rise * clamp01d(inside / kEdgeM);
+    // Deep inside, where no billow reaches within kEdgeM of the point (billow and weight
+    // below are at most 1, so the billows' depth is at most `deepest`, the same operations):
+    // the depth clamps to 1 whatever the detail noise reads, and the reads are skipped.
+    const double deepest = 2.0 * p_.detail_strength * shape.billow * thickness;
+    if (skip && inside - deepest >= kEdgeM + kBandMargin) return rise;
     // The billows: two octaves of the detail noise (its tile and twice it), their lookup
     // bent by the curl noise; inverted, so that the cloud keeps the balls; the surface
     // pushed in by them, in every direction, little at the base and most at the top.

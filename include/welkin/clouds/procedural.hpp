@@ -65,7 +65,9 @@
 // value, sooner): a cell's top is below f_max sqrt(u (2 - u)) at m = 1, so above that
 // ceiling (at f_max = 1 for the layer, at the point's own f_max once the weather map is read)
 // the density is 0; cirrus has none below a0 - fall (the longest fallstreak's foot); the
-// layer model none outside [a0 (1 - towers), a3].
+// layer model none outside [a0 (1 - towers), a3]. Deep inside a cell, more than the deepest
+// billow (2 detail_strength billow thickness) plus kEdgeM in, the density is clamp(f / a1)
+// whatever the detail noise reads, and it is not read.
 //
 // Coverage means coverage, in one of two measures (coverage_measure):
 //  * dome (the default): the share of the sky dome a ground observer sees covered, the WMO's
