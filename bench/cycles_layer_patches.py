@@ -33,6 +33,7 @@ detail), nor the layer's extent beyond the patch (the neighbouring clouds' shado
 light).
 """
 
+import importlib.util
 import math
 import os
 import sys
@@ -43,12 +44,10 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from vdb_dense import write_density  # noqa: E402
 
 # The patch (write_patch) is written without Blender; the comparison needs it.
-try:
+if importlib.util.find_spec("bpy") is not None:
     import bpy
     import cycles_addon_clouds as ac
     import cycles_volume as cv
-except ImportError:
-    bpy = ac = cv = None
 
 PATCH_M = 3000.0
 PATCH_TAPER = 0.3
@@ -118,7 +117,9 @@ def write_patch(native, cloud_type, path, voxel_m, planet_radius_m=6360e3):
     if not scale > 0.0:
         raise RuntimeError(f"{cloud_type}: the patch around ({cx:.0f}, {cy:.0f}) m is empty")
     kc = (k0 + k1) // 2
-    write_density(path, (sig / scale).astype(np.float32), (-n, -n, k0 - kc), voxel_m, tolerance=0.0, prune=True)
+    write_density(
+        path, (sig / scale).astype(np.float32), (-n, -n, k0 - kc), voxel_m, tolerance=0.0, prune=True
+    )
     distance = CAMERA_DISTANCE * PATCH_M
     return Patch(
         path=str(path),
@@ -214,10 +215,15 @@ def compare(T, native, patch, built, view, *, paths, samples=None, seeds=(1, 2),
     fast = ac.engine_pass(scene, native, ac.WELKIN_LOBES, air=False)
     refs = []
     for seed in seeds if paths else ():
-        rgb, t = ac.reference(scene, native, patch.path, patch.density_scale, ac.WELKIN_LOBES, paths, seed, patch.at)
+        rgb, t = ac.reference(
+            scene, native, patch.path, patch.density_scale, ac.WELKIN_LOBES, paths, seed, patch.at
+        )
         refs.append(np.concatenate([rgb, (1.0 - t)[..., None]], axis=-1))
     regs = ac.regions(scene, c[..., 3], ac.sun_direction(el, az))
-    out = {"pixels": int(regs["all"].sum()), "alpha": float(c[..., 3][regs["all"]].mean()) if regs["all"].any() else 0.0}
+    out = {
+        "pixels": int(regs["all"].sum()),
+        "alpha": float(c[..., 3][regs["all"]].mean()) if regs["all"].any() else 0.0,
+    }
     if not regs["all"].any():
         return out
 
@@ -239,13 +245,16 @@ def compare(T, native, patch, built, view, *, paths, samples=None, seeds=(1, 2),
         "cycles": edge_over_core(c, lregs, c[..., 3]),
         "cycles_noise": abs(ln[0] - ln[-1]) / 2 if None not in ln else None,
         "fast": edge_over_core(fast, lregs, fast[..., 3]),
-        "reference": edge_over_core(sum(refs) / len(refs), lregs, (sum(refs) / len(refs))[..., 3]) if refs else None,
+        "reference": edge_over_core(sum(refs) / len(refs), lregs, (sum(refs) / len(refs))[..., 3])
+        if refs
+        else None,
     }
     log(
         f"{patch.cloud_type} {view}: sun {el:.1f} / {az:.1f} deg, {out['pixels']} cloud pixels, "
         f"Cycles' mean alpha {out['alpha']:.3f}; "
         + "; ".join(
-            f"{k} / Cycles " + ", ".join(f"{r} {out[k][r]:.3f} (+-{out[k + '_noise'][r]:.3f})" for r in REGIONS if r in out[k])
+            f"{k} / Cycles "
+            + ", ".join(f"{r} {out[k][r]:.3f} (+-{out[k + '_noise'][r]:.3f})" for r in REGIONS if r in out[k])
             for k in ("fast", "reference")
             if k in out
         )
