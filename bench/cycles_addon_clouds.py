@@ -59,8 +59,11 @@ def build(
     samples,
     bounces,
     seed=1,
+    at=CLOUD_AT,
 ):
-    """The scene (T: tests/blender/addon_testing.py, the caller's import). Returns (scene, sun lamp, volume object)."""
+    """The scene (T: tests/blender/addon_testing.py, the caller's import), the volume object
+    at `at` (its grid's own origin there), the camera aimed at it. Returns (scene, sun lamp,
+    volume object)."""
     scene, sun = T.new_scene(
         sun_elevation_deg=sun_elevation_deg,
         sun_azimuth_deg=sun_azimuth_deg,
@@ -75,7 +78,7 @@ def build(
     vol.render.space = "OBJECT"
     vol.render.step_size = 0.0
     ob = bpy.data.objects.new("Cloud", vol)
-    ob.location = CLOUD_AT
+    ob.location = at
     scene.collection.objects.link(ob)
     vol.materials.append(cv._cloud_material(sigma, lobes))
     ob.welkin_cloud.enabled = True
@@ -84,7 +87,7 @@ def build(
     cam.location = camera
     cam.data.lens = lens_mm
     cam.data.clip_start, cam.data.clip_end = 0.1, 1e6
-    cv.look_at(cam, CLOUD_AT)
+    cv.look_at(cam, at)
     bpy.context.view_layer.update()
     r = scene.render
     r.engine = "CYCLES"
@@ -111,9 +114,9 @@ def build(
     return scene, sun, ob
 
 
-def update_sky(scene, sun, native, lamp="ground"):
-    """Update Sky; lamp="cloud": the lamp set to the sun at the cloud's altitude (above).
-    Returns the lamp's RGB irradiance at the ground and at the cloud."""
+def update_sky(scene, sun, native, lamp="ground", at=CLOUD_AT):
+    """Update Sky; lamp="cloud": the lamp set to the sun at the cloud's altitude (above;
+    the altitude of `at`). Returns the lamp's RGB irradiance at the ground and at the cloud."""
     import welkin
     from welkin import sky_request
     from welkin.blender.sky import scene_sun
@@ -123,7 +126,7 @@ def update_sky(scene, sun, native, lamp="ground"):
     atm = sky_request.build_atmosphere(request, native)
     s = tuple(request.sun_direction)
     e_ground = np.array(welkin.sun(atm, request.altitude_m, s).direct_irradiance_rgb)
-    e_cloud = np.array(welkin.sun(atm, CLOUD_AT[2], s).direct_irradiance_rgb)
+    e_cloud = np.array(welkin.sun(atm, at[2], s).direct_irradiance_rgb)
     if lamp == "cloud":
         scene.world.welkin.sync_lamp = False
         sun.data.energy = float(e_cloud.max())
@@ -145,9 +148,10 @@ def engine_pass(scene, native, lobes, air=True):
     return native.cloud_passes(native.SceneDescription.from_json_string(json.dumps(desc)))["Welkin.Clouds"]
 
 
-def reference(scene, native, vdb, sigma, lobes, paths, seed=1):
-    """Welkin's path tracer for the scene camera's pixel rays under the atmosphere's light:
-    (H, W, 3) RGB (the engine's conversion) and (H, W) transmittance."""
+def reference(scene, native, vdb, sigma, lobes, paths, seed=1, at=CLOUD_AT):
+    """Welkin's path tracer for the scene camera's pixel rays under the atmosphere's light,
+    the VDB placed at `at` as build() places it: (H, W, 3) RGB (the engine's conversion)
+    and (H, W) transmittance."""
     import welkin
     from welkin import sky_request
     from welkin.blender import compat
@@ -157,7 +161,7 @@ def reference(scene, native, vdb, sigma, lobes, paths, seed=1):
     atm = sky_request.build_atmosphere(request, native)
     origin, dirs = cv.camera_rays(scene)
     mw = np.eye(4)
-    mw[:3, 3] = np.array(CLOUD_AT) - np.array(origin)  # cloud_radiance's observer is at its origin
+    mw[:3, 3] = np.array(at) - np.array(origin)  # cloud_radiance's observer is at its origin
     clouds = welkin.VdbClouds(
         str(vdb), density_scale=sigma, matrix_world=mw, placement=compat.cycles_vdb_placement()
     )
