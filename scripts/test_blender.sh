@@ -36,7 +36,9 @@ tests=("$@")
 # KNOWN FAILURE with the reason; it does not fail the run, and its passing does (so that
 # the entry goes). Every entry is open work, named in the closing note of the change that
 # added it.
-declare -A known=()
+declare -A known=(
+  ["test_cycles_clouds_lighting@5.0"]="the fast march is 12 % dark against Cycles in all and 19 % on the sunlit half (tolerances 10 % and 15 %), its silver lining 16 % too strong against its core (docs/validation.md, Against Cycles under the add-on's own sky)"
+)
 
 # Every temporary file of the run (the tests', bpy_blender.py's user folders, Blender's
 # session folders) goes into one folder, removed when the run ends however it ends: a test

@@ -74,8 +74,8 @@ SimilarityScaling::SimilarityScaling(double a, double g) {
     albedo = depth_scale > 0.0 ? (1.0 - forward) * a / depth_scale : 1.0;
 }
 
-SunSource sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side,
-                     double nu, double g, double p, double p2) {
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side, double nu,
+                  double g, double p, double p2) {
     const double single = std::exp(-tau_sun);
     const double ts = sim.depth_scale * tau_sun, T = sim.depth_scale * (tau_sun + tau_anti);
     // The sides (header): the fundamental transverse mode's buckling across the chord's
@@ -89,33 +89,24 @@ SunSource sun_source(const SimilarityScaling& sim, double tau_sun, double tau_an
     // mu = sqrt(v):
     static constexpr std::array<double, 3> mu = {0.3357106870197288, 0.7071067811865476, 0.9419651451198934};
     const double beam_t = std::exp(-ts), beam_T = std::exp(-T);  // the scaled beam
-    // The slab's diffuse field at inclination i, with the leak k2_extra: its fluence and its
-    // source towards the viewer, the flux term included.
-    struct Part {
-        double fluence, slab;
-    };
-    const auto slab = [&](int i, double k2_extra) -> Part {
+    // The slab's diffuse source towards the viewer at inclination i, with the leak k2_extra.
+    const auto slab = [&](int i, double k2_extra) {
         const DiffuseField d = 3.0 * (1.0 - sim.albedo) + k2_extra < kConservative
                                    ? conservative_slab(mu[i] * T, mu[i] * ts, mu[i], beam_t, beam_T)
                                    : eddington_slab(mu[i] * T, mu[i] * ts, sim.albedo, mu[i], k2_extra);
-        return {std::max(0.0, d.fluence), std::max(0.0, d.fluence + 3.0 * g * d.flux * mu[i] * nu)};
+        return std::max(0.0, d.fluence + 3.0 * g * d.flux * mu[i] * nu);
     };
     // The higher modes' share at depth t' (the header's blend); below 1e-4 of the difference
     // it is left out.
     const double near = std::exp(-3.0 * Bw * ts);
-    double fluence = 0.0, with_flux = 0.0;
+    double diffuse = 0.0;
     for (int i = 0; i < 3; ++i) {
-        Part v = slab(i, leak);
-        if (leak > 0.0 && near > 1e-4) {
-            const Part v0 = slab(i, 0.0);
-            v.fluence += (v0.fluence - v.fluence) * near;
-            v.slab += (v0.slab - v.slab) * near;
-        }
-        fluence += w[i] * v.fluence;
-        with_flux += w[i] * v.slab;
+        double v = slab(i, leak);
+        if (leak > 0.0 && near > 1e-4) v += (slab(i, 0.0) - v) * near;
+        diffuse += w[i] * v;
     }
     const double forward = (beam_t - single) * p2;
-    return {single * p + forward, fluence / (4.0 * kPi), with_flux / (4.0 * kPi)};
+    return single * p + forward + diffuse / (4.0 * kPi);
 }
 
 }  // namespace welkin

@@ -62,7 +62,7 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 
 namespace {
 
-constexpr int kSideLevels = 0;  // the side grids' levels above the sun grid's
+constexpr int kSideLevels = 1;  // the side grids' levels above the sun grid's
 
 // The input checks of a march: one origin or one per direction, finite; max_distances
 // empty or one non-negative length per direction.
@@ -149,13 +149,12 @@ public:
 
     const OpticalDepthGrid* sun_grid() const { return grids_.sun.get(); }
 
-    // The levels for a footprint of `width` metres: no finer than it; every grid at the
-    // sun's level. The depths towards and away from the sun (the single scattering's
-    // shadow, the slab's thickness) lost 2 % on altocumulus cells one level coarser; the
-    // sides' chord sets the leak, whose change along the view ray is part of the diffuse
-    // flux the march in-scatters (the header's "The diffuse flux towards the viewer"): one
-    // level coarser, altocumulus at the footprint's levels came out 2.2 % below a shadow
-    // ray per sample, at the sun's level 1.5 % (docs/validation.md).
+    // The levels for a footprint of `width` metres: no finer than it; the sides' grid
+    // kSideLevels coarser: the chord across the sun line sets the leak, a large-scale
+    // quantity of the diffuse light, which diffusion smooths over a transport mean free
+    // path; the depths towards and away from the sun (the single scattering's shadow, the
+    // slab's thickness) are read at the sun's level (one level coarser, the depth away from
+    // the sun lost 2 % on altocumulus cells; docs/validation.md).
     Levels levels_for(double width) const {
         Levels lv;
         lv.sun = grids_.sun ? grids_.sun->level_for(width) : 0;
@@ -171,51 +170,38 @@ public:
         ph.twice = diffusion_ ? sc.phase.twice(ph.nu) : 0.0;
     }
 
-    // The sun's and the sky's weights at a sample (the factors of sigma_s E and sigma_s
-    // L_sky in the source). With the diffusion, also the sun's weight without the slab's
-    // flux term and the diffuse fluence's share, for the flux along the view ray (the
-    // header's "The diffuse flux towards the viewer").
-    struct Weights {
-        double sun = 0.0;       // the slab's flux term in it
-        double sun_iso = 0.0;   // without it: beam + fluence
-        double fluence = -1.0;  // phi / (4 pi E); < 0: no diffusion (the octaves)
-        double sky = 1.0;
-    };
-
-    double mean_cosine() const { return mean_g_; }
-    double depth_scale() const { return similarity_.depth_scale; }
-
-    Weights weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph, Cursors& cur) const {
+    // The sun's and the sky's weights at sample x (the factors of sigma_s E and sigma_s
+    // L_sky in the source).
+    std::pair<double, double> weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph,
+                                      Cursors& cur) const {
         const int steps = options_.light_steps;
         const double tau_sun = depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur, lv.near);
         // The cloud's depth away from the sun along the sun line through x: the slab's
         // thickness (diffusion), or the octaves' optical size f = 1 - exp(-tau_line),
         // octave i weighted by f^i (see the header).
         const double tau_anti = sized_ ? depth_along(grids_.anti, cur.anti, lv.sun, x, -s_, steps, cur) : 0.0;
-        Weights out;
+        double sun_w = 0.0;
         if (diffusion_) {
             // Single scattering plus the forward-scattered and diffuse parts.
             double tau_side = std::numeric_limits<double>::infinity();
             if (options_.sides)
                 tau_side = depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) +
                            depth_along(grids_.back, cur.back, lv.side, x, -across_, steps, cur);
-            const SunSource src =
+            sun_w =
                 sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0], ph.twice);
-            out.sun = src.total();
-            out.sun_iso = src.beam + src.fluence;
-            out.fluence = src.fluence;
         } else {
             const double f = sized_ ? 1.0 - std::exp(-(tau_sun + tau_anti)) : 1.0;
             double fi = 1.0;
             for (int i = 0; i < options_.octaves; ++i, fi *= f)
-                out.sun += ob_[i] * fi * std::exp(-oa_[i] * tau_sun) * ph.octave[i];
+                sun_w += ob_[i] * fi * std::exp(-oa_[i] * tau_sun) * ph.octave[i];
         }
+        double sky_w = 1.0;
         if (ambient_decay_) {
             const double tau_up =
                 depth_along(grids_.sky, cur.sky, lv.sun, x, light_.zenith(x), options_.ambient_steps, cur);
-            out.sky = std::exp(-kappa_ * tau_up);
+            sky_w = std::exp(-kappa_ * tau_up);
         }
-        return out;
+        return {sun_w, sky_w};
     }
 
 private:
@@ -347,13 +333,8 @@ private:
         double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
         const double albedo = options_.scattering.albedo;
         bool done = false;
-        // The diffuse flux towards the viewer (the header): the fluence's share and t at the
-        // previous sample with cloud of this segment (fluence < 0: none yet).
-        double prev_fluence = -1.0, prev_t = 0.0;
-        const double g_mean = sample_light_.mean_cosine(), scale = sample_light_.depth_scale();
         for (const auto& g : segs) {
             if (done) break;
-            prev_fluence = -1.0;
             const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
             const double dt = (g.t1 - g.t0) / steps;
             for (int k = 0, span = 1; k < steps; k += span) {
@@ -367,30 +348,13 @@ private:
                 const double t = g.t0 + k * dt + u * h;
                 const glm::dvec3 x = ray.at(t);
                 const double sigma_t = density_.sigma_t(x);
-                if (!(sigma_t > 0.0)) {
-                    prev_fluence = -1.0;
-                    continue;
-                }
+                if (!(sigma_t > 0.0)) continue;
                 if (footprint && t >= next_level_t) set_levels(t);
                 // The sun grid's near field where the rays are about a cell apart or more;
                 // denser rays share the vertices of their own level already.
                 levels.near = footprint && options_.ray_width_m + options_.ray_spread_rad * t >=
                                                0.5 * sun_grid->spacing_m(levels.sun);
-                const SampleLight::Weights lw = sample_light_.weights(x, levels, phase, cursors);
-                double sun_w = lw.sun;
-                if (lw.fluence >= 0.0) {
-                    if (prev_fluence >= 0.0 && t > prev_t) {
-                        // Fick's law along the ray: 3 g F . (-d) = (g / sigma') d phi / dt,
-                        // sigma' = (1 - albedo f) sigma_t; |3 F . w| <= phi keeps Eddington's
-                        // radiance non-negative.
-                        const double flux =
-                            g_mean / (scale * sigma_t) * (lw.fluence - prev_fluence) / (t - prev_t);
-                        const double bound = std::abs(g_mean) * lw.fluence;
-                        sun_w = lw.sun_iso + std::clamp(flux, -bound, bound);
-                    }
-                    prev_fluence = lw.fluence, prev_t = t;
-                }
-                const double sky_w = lw.sky;
+                const auto [sun_w, sky_w] = sample_light_.weights(x, levels, phase, cursors);
                 light_.sun_irradiance(x, sun.data());
                 light_.ambient_radiance(x, sky.data());
                 // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).

@@ -109,20 +109,11 @@ struct SimilarityScaling {
     SimilarityScaling(double albedo, double mean_cosine);
 };
 
-// The source of sun light above per unit sigma_s E, in parts: `beam` (parts 1 and 2),
-// `fluence` (part 3's isotropic share, phi / (4 pi E), averaged over the inclinations) and
-// `slab` (part 3 whole, (phi + 3 g F mu0 nu) / (4 pi E) clamped at 0 per inclination). The
-// source is beam + slab; clouds/lighting.hpp replaces the slab's flux term by the diffuse
-// flux along the view ray where the march has it ("The diffuse flux towards the viewer").
-struct SunSource {
-    double beam = 0.0, fluence = 0.0, slab = 0.0;
-    double total() const { return beam + slab; }
-};
-
-// The parts above for the sun-line depths tau_sun, tau_anti (unscaled), the chord tau_side
-// across the sun line (unscaled; infinity: no sides), nu = d . s, g the phase's mean cosine,
-// p the phase and p2 the twice-scattered phase at nu.
-SunSource sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side,
-                     double nu, double g, double p, double p2);
+// The source of sun light above per unit sigma_s E (parts 1, 2 and 3), for the sun-line
+// depths tau_sun, tau_anti (unscaled), the chord tau_side across the sun line (unscaled;
+// infinity: no sides), nu = d . s, g the phase's mean cosine, p the phase and p2 the
+// twice-scattered phase at nu.
+double sun_source(const SimilarityScaling& sim, double tau_sun, double tau_anti, double tau_side, double nu,
+                  double g, double p, double p2);
 
 }  // namespace welkin

@@ -55,28 +55,15 @@
 //    slant and streaks an even deck, docs/validation.md), and
 //    with nu = d . s,
 //        S_sun = sigma_s E(x) [exp(-tau_sun) p(nu) + (exp(-tau'_sun) - exp(-tau_sun)) p2(nu)
-//                              + (<phi> + (g / sigma') d<phi>/dt) / (4 pi E)],
+//                              + <phi + 3 g F mu0 nu> / (4 pi E)],
 //    single scattering (exact), the light scattered into the forward peak (similarity
 //    scaling tau' = (1 - albedo g) tau, the twice-scattered phase p2), and Eddington's
 //    diffuse field of the scaled slab, averaged over the slab's unknown inclination: the
 //    diffuse light falls off linearly with depth, as diffusion theory has it, where the
 //    octaves below vanish. With `sides` (the default) the slab is finite across the sun
 //    line: the cloud's chord tau_side along the horizontal normal to the sun (both ways,
-//    a third and fourth grid, at the sun's level) makes the diffuse light leak through
-//    its sides (clouds/diffusion.hpp, "The sides").
-//    The diffuse flux towards the viewer. The slab's flux runs along its normal, which the
-//    orientation average replaces by its mean, mu0 s: where the viewer sees the sunlit face
-//    the outward flux, which leaves through the face the viewer looks at, then counts as
-//    running away from the viewer. In-scattering needs only the flux's component along the
-//    outgoing direction w = -d, and by Fick's law (diffusion theory, F = -grad phi /
-//    (3 sigma'), sigma' = (1 - albedo f) sigma_t the scaled extinction of the isotropic
-//    scaled medium) that component is the fluence's derivative along the view ray itself:
-//        3 g F . w = (g / sigma') d phi / dt,
-//    which the march has from the fluence at consecutive samples of a segment (the
-//    backward difference; the slab's own term at a segment's first sample and after an
-//    empty sample), bounded by |3 F . w| <= phi (Eddington's radiance (phi + 3 F . w) /
-//    (4 pi) non-negative). So the 3D shape of the modelled fluence, not only the sun line,
-//    sets the flux the viewer sees. No fitted parameter. Its error against
+//    a third and fourth grid, one level coarser) makes the diffuse light leak through
+//    its sides (clouds/diffusion.hpp, "The sides"). No fitted parameter. Its error against
 //    the reference (bench/clouds, bench/clouds/lighting_vs_reference.py) and against Cycles
 //    (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"). octaves = 1 is single
 //    scattering in either mode.
