@@ -154,7 +154,7 @@ public:
     static constexpr double kCoverageOpticalDepth = 0.3;
     static constexpr int kCoverageColumns = 2048;
     static constexpr double kMaxErosion = 0.6;
-    static constexpr double kEdgeM = 80.0;         // cells: the density's rise inside the surface
+    static constexpr double kEdgeM = 60.0;         // cells: the density's rise inside the surface
     static constexpr double kFibreStretch = 25.0;  // cirrus: the fibres' length over their width
     static constexpr double kDomeMinElevationDeg = 5.0;
     static constexpr int kDomeObservers = 32;
@@ -192,11 +192,12 @@ private:
     double k_ = 0.0;
     glm::dvec3 centre_;
     std::shared_ptr<const CloudNoiseTextures> noise_;
-    // The channels sigma_t reads, combined once: base (pw, fbm_w), detail fbm_d, weather
+    // The channels sigma_t reads, combined once: base (pw, fbm_w), detail (fbm_d and its
+    // three Worley octaves), weather
     // (r, g, b, a), curl (x, y).
     PeriodicTexture<2> base_, curl_;
     PeriodicTexture<4> weather_;
-    PeriodicTexture<1> detail_;
+    PeriodicTexture<4> detail_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
     // The weather map and the base shape read aperiodically (noise.hpp, hex_taps), about the
     // channels' means over their textures.
