@@ -100,9 +100,9 @@ const TypeShape& shape_of(CloudType t) {
     static const TypeShape shapes[] = {
         {{0.0, 0.04, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.8, 1.2, 0.0, 0.0, 0.0},  // cumulus
         {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.4, 0.8, 0.0, 0.0, 0.0},  // stratocumulus
-        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.4, 1.0, 0.0, 0.0, 0.0},  // altocumulus
+        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.4, 2.0, 0.0, 0.0, 0.0},  // altocumulus
         {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},     // stratus
-        {{0.78, 0.85, 0.94, 1.0}, 0.3, 0.0, 3.0, 0.8, 2.0, 0.0, 0.0, 0.0, 1.0, 1.5, 2.5},  // cirrus
+        {{0.78, 0.85, 0.94, 1.0}, 0.3, 0.0, 2.5, 0.8, 2.0, 0.0, 0.0, 0.0, 1.0, 3.0, 5.0},  // cirrus
     };
     return shapes[static_cast<int>(t)];
 }
@@ -174,7 +174,7 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
         case CloudType::cirrus:
             p.bottom_altitude_m = 8000.0, p.top_altitude_m = 9500.0, p.coverage = 0.3,
             p.density_per_m = 0.008;
-            p.base_scale_m = 5000.0, p.detail_scale_m = 800.0, p.weather_scale_m = 60000.0;
+            p.base_scale_m = 3000.0, p.detail_scale_m = 800.0, p.weather_scale_m = 60000.0;
             p.detail_strength = 0.6, p.weather_variation = 0.6;
             break;
     }
@@ -570,9 +570,10 @@ double ProceduralClouds::cirrus_density(double x, double y, double f, double c, 
     const double env = std::max(head, tail) * clamp01d(m / 0.2);
     if (env <= 0.0) return 0.0;
     if (p_.detail_strength <= 0.0) return env;
-    // Fibres: the grain of the head (the detail fbm at one height) carried down its fall curve.
+    // Fibres: the grain of the head (the detail fbm at one height, four times as long along
+    // the streaks as across them) carried down its fall curve.
     float d[4];
-    detail_.sample(0.5 * along * inv_detail_, 0.5 * across * inv_detail_, 0.5 * p_.evolution_m * inv_detail_, d);
+    detail_.sample(0.25 * along * inv_detail_, across * inv_detail_, 0.5 * p_.evolution_m * inv_detail_, d);
     const double strands = clamp01d(remap(d[0], 0.5, 0.68, 0.0, 1.0));
     return env * (1.0 - std::min(1.0, shape.fibres * p_.detail_strength) * (1.0 - strands));
 }
