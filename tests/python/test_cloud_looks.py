@@ -28,7 +28,6 @@ import welkin
 from test_cloud_tiling import autocorrelation
 
 R_PLANET = 6360e3
-STREAK = math.radians(30.0)
 
 
 def density_columns(layer, span_m, n, steps):
@@ -240,7 +239,9 @@ def test_cirrus_fallstreaks_hook_and_strands_show_from_above():
     assert 100.0 < reach[0] < reach[1] < reach[2], reach
     upper, lower = drift[0], drift[2] - drift[1]
     turn = math.degrees(math.acos(np.dot(upper, lower) / (np.linalg.norm(upper) * np.linalg.norm(lower))))
-    print(f"cirrus: drift {[f'({d[0]:.0f}, {d[1]:.0f})' for d in drift]} m; the trail turns {turn:.0f} degrees")
+    print(
+        f"cirrus: drift {[f'({d[0]:.0f}, {d[1]:.0f})' for d in drift]} m; the trail turns {turn:.0f} degrees"
+    )
     assert turn > 15.0
 
     sigma, _, dh = density_columns(layer, 20000.0, 200, 30)
