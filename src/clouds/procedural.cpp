@@ -102,7 +102,7 @@ const TypeShape& shape_of(CloudType t) {
         {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.4, 0.8, 0.0, 0.0, 0.0},  // stratocumulus
         {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.4, 2.0, 0.0, 0.0, 0.0},  // altocumulus
         {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},     // stratus
-        {{0.78, 0.85, 0.94, 1.0}, 0.3, 0.0, 2.5, 0.8, 2.0, 0.0, 0.0, 0.0, 1.0, 3.0, 5.0},   // cirrus
+        {{0.78, 0.85, 0.94, 1.0}, 0.3, 0.0, 4.0, 0.8, 2.0, 0.0, 0.0, 0.0, 1.0, 1.5, 2.4},   // cirrus
     };
     return shapes[static_cast<int>(t)];
 }
@@ -570,11 +570,12 @@ double ProceduralClouds::cirrus_density(double x, double y, double f, double c, 
     const double env = std::max(head, tail) * clamp01d(m / 0.2);
     if (env <= 0.0) return 0.0;
     if (p_.detail_strength <= 0.0) return env;
-    // Fibres: the grain of the head (the detail fbm at one height, four times as long along
+    // Fibres: the grain of the head (the detail fbm at one height, about two and a half times as long along
     // the streaks as across them) carried down its fall curve.
     float d[4];
-    detail_.sample(0.25 * along * inv_detail_, across * inv_detail_, 0.5 * p_.evolution_m * inv_detail_, d);
-    const double strands = clamp01d(remap(d[0], 0.5, 0.68, 0.0, 1.0));
+    detail_.sample(0.25 * along * inv_detail_, 0.6 * across * inv_detail_, 0.5 * p_.evolution_m * inv_detail_,
+                   d);
+    const double strands = clamp01d(remap(d[0], 0.45, 0.75, 0.0, 1.0));
     return env * (1.0 - std::min(1.0, shape.fibres * p_.detail_strength) * (1.0 - strands));
 }
 
@@ -637,9 +638,11 @@ void ProceduralClouds::shell(const CloudRay& ray, double t_max, std::vector<Majo
 }
 
 double ProceduralClouds::feature_size_m() const {
-    // One texel of the detail texture (32 per tile), the finest structure the layer has
-    // (cirrus's fibres are its grains drawn out along their fall curves: a texel across).
-    return p_.detail_scale_m / 32.0;
+    // One texel of the detail texture (32 per tile), the finest structure the layer has;
+    // cirrus's strands, its grains drawn out down their tilted fall curves, are thinner
+    // in the vertical than across: three quarters of a texel.
+    const double texel = p_.detail_scale_m / 32.0;
+    return shape_of(p_.cloud_type).fall > 0.0 ? 0.75 * texel : texel;
 }
 
 }  // namespace welkin

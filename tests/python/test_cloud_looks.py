@@ -214,10 +214,10 @@ def test_cirrus_fallstreaks_hook_and_strands_show_from_above():
     fallstreaks of ice drifting in a wind whose shear turns with height. Two properties of
     the density:
     * the trails drift and curve: the plane shift that best matches the heads' level (the
-      density map at 0.88 of the layer) to the levels 0.1, 0.2 and 0.35 of the way down is
+      density map at 0.88 of the layer) to the levels 0.15, 0.3 and 0.5 of the way down is
       the trails' drift at that depth; it grows with the depth (from at least 100 m), and its
-      direction turns by more than 15 degrees between the trail's start (the head to 0.1)
-      and its lower part (0.2 to 0.35): a hook (a drift in line with the streaks, or none,
+      direction turns by more than 15 degrees between the trail's start (the head to 0.15)
+      and its lower part (0.3 to 0.5): a hook (a drift in line with the streaks, or none,
       fails);
     * the strands are optically thick enough to be seen against the ground from above: the
       densest tenth of the cirrus columns (vertical optical depth above 0.01) reaches 1.3
@@ -234,7 +234,7 @@ def test_cirrus_fallstreaks_hook_and_strands_show_from_above():
         return np.asarray(layer.sigma_t(p)).reshape(x.shape)
 
     head = level(0.88)
-    drift = [shift_of_best_match(head, level(0.85 * (1.0 - s)), span / n) for s in (0.1, 0.2, 0.35)]
+    drift = [shift_of_best_match(head, level(0.85 * (1.0 - s)), span / n) for s in (0.15, 0.3, 0.5)]
     reach = [float(np.linalg.norm(d)) for d in drift]
     assert 100.0 < reach[0] < reach[1] < reach[2], reach
     upper, lower = drift[0], drift[2] - drift[1]
