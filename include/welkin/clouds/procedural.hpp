@@ -63,9 +63,9 @@
 //       for cells; the head the type's trapezoid G(f) near the top, the fallstreak below it
 //       down to s = fall m, thinning downwards; density = max(head, tail) clamp(m / 0.2)
 //       (1 - min(1, fibres detail_strength) (1 - strands)), strands = clamp(remap(fbm_d,
-//       0.5, 0.68, 0, 1)) of the detail texture read at xb (a grain of the head four times
-//       as long along the streaks as across, carried down its fall curve: each grain draws
-//       a thin strand, many to a trail);
+//       0.45, 0.75, 0, 1)) of the detail texture read at xb (a grain of the head, 0.25 and
+//       0.6 times the detail frequency along and across the streaks, carried down its fall
+//       curve: each grain draws a strand, many to a trail);
 //   sigma_t = density_per_m * density.
 // Every factor is in [0, 1], so density <= 1: the majorant is density_per_m on the shell.
 //
