@@ -135,7 +135,7 @@ struct CloudLayerParams {
     double coverage = 0.4;              // [0, 1]: share of the area or the dome under cloud (header)
     CloudCoverageMeasure coverage_measure = CloudCoverageMeasure::dome;  // what coverage measures
     double density_per_m = 0.04;         // sigma_t of the densest cloud, m^-1, [0, 10]
-    double base_scale_m = 5000.0;        // tile of the base shape, [10, 1e6] m
+    double base_scale_m = 5000.0;        // tile of the base shape, [10, 1e6] m (cumulus: 8000)
     double detail_scale_m = 700.0;       // tile of the erosion noise, [1, 1e6] m
     double weather_scale_m = 30000.0;    // tile of the weather map, [10, 1e7] m
     double detail_strength = 0.5;        // [0, 1]
@@ -150,7 +150,7 @@ struct CloudLayerParams {
     double planet_radius_m = 6360e3;  // [1e3, 1e8]
     double origin_altitude_m = 0.0;   // of the world origin above the ground, [0, 1e6]
 
-    // The preset of a cloud type (the defaults above are cumulus's).
+    // The preset of a cloud type (the defaults above are cumulus's, but for its 8 km base tile).
     static CloudLayerParams preset(CloudType type);
     void validate() const;  // InvalidArgument naming the field and its range
 };
