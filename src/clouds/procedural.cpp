@@ -80,26 +80,29 @@ struct TypeShape {
     double towers, base_erosion, stretch, curl;
     double fibres;  // how much the detail noise shapes the whole cloud, not only its edges
     // cells (cumulus, stratocumulus, altocumulus): 1 builds the cloud from its footprint
-    // (flat base, domed top, billows); 0 the layer model (stratus). billow: the billows'
-    // depth, a fraction of the layer; dome: the dome's half-width over its height.
+    // (flat base, a heap narrowing upwards, lobes); 0 the layer model (stratus). billow: the
+    // lobes' depth over their cells' size (1: balls of half a cell's radius); dome: the
+    // footprint's strength m at which the heap reaches its local top (a larger one, a
+    // broader, lower heap).
     double cells, billow, dome;
     // cirrus: the fallstreaks' length below the heads (a fraction of the layer, times the
-    // footprint's strength) and their shear (down-wind drift at the bottom, in base tiles).
-    double fall, shear;
+    // footprint's strength), their drift along the streaks at the bottom (shear) and across
+    // them (hook, growing as the square of the depth: the hook), in base tiles.
+    double fall, shear, hook;
 };
 const TypeShape& shape_of(CloudType t) {
-    // cumulus: a flat base (steep rise, no billows at the bottom), towers where the weather
-    //   map says so, domed cauliflower tops of billows;
-    // stratocumulus: a lumpy layer of low domed rolls, somewhat stretched;
+    // cumulus: a flat base (steep rise, no lobes at the bottom), towers where the weather
+    //   map says so, heaps narrowing upwards with cauliflower tops of lobes on lobes;
+    // stratocumulus: a lumpy layer of low, broad heaps, somewhat stretched;
     // altocumulus: a thin mid-level sheet of small rounded cells;
     // stratus: a low, uniform grey sheet with faint, stretched undulations;
-    // cirrus: thin high heads of stretched, curl-bent fibres with sheared fallstreaks below.
+    // cirrus: thin high heads of tufts with sheared, hooked fallstreaks of fibres below.
     static const TypeShape shapes[] = {
-        {{0.0, 0.04, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.12, 1.5, 0.0, 0.0},  // cumulus
-        {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.2, 3.0, 0.0, 0.0},   // stratocumulus
-        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.25, 1.0, 0.0, 0.0},  // altocumulus
-        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},      // stratus
-        {{0.7, 0.8, 0.92, 1.0}, 0.3, 0.0, 25.0, 0.8, 1.0, 0.0, 0.0, 0.0, 0.3, 0.15},    // cirrus
+        {{0.0, 0.04, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.8, 1.2, 0.0, 0.0, 0.0},  // cumulus
+        {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.4, 0.8, 0.0, 0.0, 0.0},  // stratocumulus
+        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.4, 2.0, 0.0, 0.0, 0.0},  // altocumulus
+        {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},     // stratus
+        {{0.78, 0.85, 0.94, 1.0}, 0.3, 0.0, 4.0, 0.8, 2.0, 0.0, 0.0, 0.0, 1.0, 1.5, 2.4},   // cirrus
     };
     return shapes[static_cast<int>(t)];
 }
@@ -154,7 +157,8 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
     p.cloud_type = type;
     switch (type) {
         case CloudType::cumulus:
-            break;  // the struct's defaults
+            p.base_scale_m = 8000.0;  // cells 1-2 km across
+            break;
         case CloudType::stratocumulus:
             p.bottom_altitude_m = 1000.0, p.top_altitude_m = 1800.0, p.coverage = 0.7, p.density_per_m = 0.03;
             p.base_scale_m = 2500.0, p.detail_scale_m = 500.0, p.weather_scale_m = 25000.0;
@@ -172,8 +176,8 @@ CloudLayerParams CloudLayerParams::preset(CloudType type) {
             break;
         case CloudType::cirrus:
             p.bottom_altitude_m = 8000.0, p.top_altitude_m = 9500.0, p.coverage = 0.3,
-            p.density_per_m = 0.0025;
-            p.base_scale_m = 8000.0, p.detail_scale_m = 3000.0, p.weather_scale_m = 60000.0;
+            p.density_per_m = 0.008;
+            p.base_scale_m = 3000.0, p.detail_scale_m = 800.0, p.weather_scale_m = 60000.0;
             p.detail_strength = 0.6, p.weather_variation = 0.6;
             break;
     }
@@ -226,12 +230,14 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
             }
     const auto& nd = noise_->detail;
     const int m = nd.size();
-    detail_ = PeriodicTexture<1>(m, m, m);
+    detail_ = PeriodicTexture<4>(m, m, m);
     for (int k = 0; k < m; ++k)
         for (int j = 0; j < m; ++j)
             for (int i = 0; i < m; ++i) {
                 const glm::vec4 v = nd.at(i, j, k);
-                detail_.at(i, j, k)[0] = 0.625f * v.r + 0.25f * v.g + 0.125f * v.b;
+                float* t = detail_.at(i, j, k);
+                t[0] = 0.625f * v.r + 0.25f * v.g + 0.125f * v.b;
+                t[1] = v.r, t[2] = v.g, t[3] = v.b;
             }
     const auto& nw = noise_->weather;
     const int q = nw.size();
@@ -263,7 +269,7 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     // the formulas, so that a skipped point is clear air.
     const TypeShape& shape = shape_of(p_.cloud_type);
     if (shape.fall > 0.0) {
-        band_lo_ = shape.gradient.a0 - shape.fall;
+        band_lo_ = std::min(shape.gradient.a0, shape.gradient.a1 * (1.0 - shape.fall));
     } else if (shape.cells > 0.0) {
         band_hi_ = cell_ceiling(1.0);
     } else {
@@ -463,9 +469,9 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool s
     const double amp = shape.curl * (1.0 - f);
     const double ax = kStreakCos * x + kStreakSin * y, ay = -kStreakSin * x + kStreakCos * y;
     const double zd = (h - p_.bottom_altitude_m + p_.evolution_m) * inv_detail_;
-    float fbm_d_f;  // 0.625 r + 0.25 g + 0.125 b of the detail texture
-    detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1], zd, &fbm_d_f);
-    const double fbm_d = fbm_d_f;
+    float dt[4];  // [0]: 0.625 r + 0.25 g + 0.125 b of the detail texture
+    detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1], zd, dt);
+    const double fbm_d = dt[0];
     const double modifier = fbm_d + (1.0 - 2.0 * fbm_d) * clamp01d(10.0 * f);  // mix(fbm, 1 - fbm, .)
     const double fade = shape.base_erosion > 0.0 ? clamp01d(f / shape.base_erosion) : 1.0;
     const double e = kMaxErosion * p_.detail_strength * (1.0 - covered) * modifier * fade;
@@ -483,9 +489,11 @@ double ProceduralClouds::footprint(double u, double v, double c) const {
 }
 
 // Cells (header): the footprint m from the base shape read at one height (every cell keeps
-// its outline up the layer), its top f_top m^dome, its base the layer's bottom; the top
-// surface lowered by billows (inverted Worley: deep between the detail noise's balls),
-// nothing at the base and most at the top; the density rises over kEdgeM inside the surface.
+// its outline up the layer), a paraboloid heap over it narrowing upwards, its base the
+// layer's bottom; the heap's surface pushed in by rounded lobes at three scales (the
+// detail texture's Worley octaves, each biting as deep as its cells are wide between its
+// balls: cauliflower), nothing at the base and most at the top; the density rises over
+// kEdgeM inside the surface.
 double ProceduralClouds::cell_density(double x, double y, double f, double c, const float* w,
                                       bool skip) const {
     const TypeShape& shape = shape_of(p_.cloud_type);
@@ -501,89 +509,111 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
     const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c);
     if (m <= 0.0) return 0.0;
-    // How far in from the footprint's edge the point is, in metres (m rises over about a
-    // eighth of a base tile), and the dome over it: half an ellipse, `dome` times as wide
-    // as the local top f_max is high, its top rising as sqrt(u (2 - u)), u the distance in
-    // over the half-width: steep sides at the base, a rounded top.
-    const double in_m = m * 0.12 * p_.base_scale_m;
-    const double u = std::min(1.0, in_m / (shape.dome * f_max * thickness));
-    const double f_top = f_max * std::sqrt(u * (2.0 - u));
-    if (f >= f_top) return 0.0;                           // the billows only remove
+    // The heap: m rises from 0 at the footprint's edge over about an eighth of a base tile
+    // (reach, metres: about a Worley cell's radius), so d_in = m reach is the distance in
+    // from the edge; over it a paraboloid f_top = f_max v (2 - v), v = min(1, d_in dome /
+    // (f_max thickness)): `dome` is its height over its half-width, its sides rise at twice
+    // that at the base, its width at height f shrinks as 1 - sqrt(1 - f / f_max) (a heap
+    // narrower upwards, the atlas's mounds and domes; a wider cell grows taller, up to the
+    // local top f_max, where it flattens: humilis), its top rounded.
+    const double reach = 0.12 * p_.base_scale_m;
+    const double d_in = m * reach;
+    const double v = std::min(1.0, d_in * shape.dome / (f_max * thickness));
+    const double f_top = f_max * v * (2.0 - v);
+    if (f >= f_top) return 0.0;                           // the lobes only remove
     const double rise = clamp01d(f / shape.gradient.a1);  // the flat base
-    const double inside = std::min((f_top - f) * thickness, in_m);
+    // The distance in from the heap's surface, along its normal: the vertical one times the
+    // cosine of the surface's slope (d(f_top thickness) / d(m reach)), at most the distance
+    // in from the footprint's edge; so that the lobes bite the steep sides as deep as the top.
+    const double slope = 2.0 * shape.dome * (1.0 - v);
+    const double inside = std::min((f_top - f) * thickness / std::sqrt(1.0 + slope * slope), d_in);
     if (p_.detail_strength <= 0.0) return rise * clamp01d(inside / kEdgeM);
-    // Deep inside, where no billow reaches within kEdgeM of the point (billow and weight
-    // below are at most 1, so the billows' depth is at most `deepest`, the same operations):
-    // the depth clamps to 1 whatever the detail noise reads, and the reads are skipped.
-    const double deepest = 2.0 * p_.detail_strength * shape.billow * thickness;
-    if (skip && inside - deepest >= kEdgeM + kBandMargin) return rise;
-    // The billows: two octaves of the detail noise (its tile and twice it), their lookup
-    // bent by the curl noise; inverted, so that the cloud keeps the balls; the surface
-    // pushed in by them, in every direction, little at the base and most at the top.
-    const double h_m = f * thickness + p_.evolution_m;
+    // The lobes (cauliflower): the three Worley octaves of the detail texture read at half
+    // its frequency (cells of detail_scale_m / 2, / 4, / 8), each 1 - W = d^2 (d the distance
+    // to the octave's nearest feature point in its cells) scaled by its cell size, so that
+    // the surface around each feature point is a paraboloid of radius of curvature
+    // cell / (2 lobe): rounded bulges on bulges, creased between them (the atlas's
+    // cauliflower, sprouting from the heap: Schneider's billows, GPU Pro 7 ch. 4, as a
+    // displacement of the surface rather than a threshold of the density). Their weight
+    // grows with the height in the heap (none at the flat base, most at the top).
+    const double lobe = 2.0 * p_.detail_strength * shape.billow;
+    const double cell0 = 0.5 * p_.detail_scale_m;
+    const double weight = clamp01d(f / shape.base_erosion) * (0.3 + 0.7 * clamp01d(f / f_max));
+    const double scale = lobe * cell0 * weight;
+    // Deep inside, where no lobe reaches within kEdgeM of the point (each 1 - W is at most 1,
+    // so the bite below is at most 1.39 scale): the depth clamps to 1 whatever the detail
+    // noise reads, and the reads are skipped.
+    if (skip && inside - 1.39 * scale >= kEdgeM + kBandMargin) return rise;
+    // The lookup bent by the curl noise and shifted by the weather map's warp channels by up
+    // to 1.5 periods (slowly, over the weather's scale), so that the periodic texture does
+    // not repeat over a wide view.
     float cu[2];
     curl_.sample(x * inv_detail_ * 0.25, y * inv_detail_ * 0.25, 0.0, cu);
     const double amp = shape.curl;
     const double ax = kStreakCos * x + kStreakSin * y, ay = -kStreakSin * x + kStreakCos * y;
-    float d1, d2;
-    detail_.sample(ax * inv_detail_ / sq + amp * cu[0], ay * inv_detail_ * sq + amp * cu[1],
-                   h_m * inv_detail_, &d1);
-    detail_.sample(0.5 * (ax * inv_detail_ / sq) + 0.37 + amp * cu[1],
-                   0.5 * (ay * inv_detail_ * sq) + 0.61 - amp * cu[0], 0.5 * h_m * inv_detail_ + 0.29, &d2);
-    const double billow = clamp01d((0.8 - (0.6 * d2 + 0.4 * d1)) / 0.5);
-    const double weight = clamp01d(f / shape.base_erosion) * (0.3 + 0.7 * f / f_top);
-    const double depth = inside - 2.0 * p_.detail_strength * shape.billow * thickness * billow * weight;
-    return rise * clamp01d(depth / kEdgeM);
+    const double h_m = f * thickness + p_.evolution_m;
+    float d[4];  // fbm, then the Worley octaves at 4, 8, 16 cells per period
+    detail_.sample(0.5 * ax * inv_detail_ / sq + amp * cu[0] + 1.5 * w[2],
+                   0.5 * ay * inv_detail_ * sq + amp * cu[1] + 1.5 * w[3], 0.5 * h_m * inv_detail_, d);
+    const double bite = scale * ((1.0 - d[1]) + 0.3 * (1.0 - d[2]) + 0.09 * (1.0 - d[3]));
+    return rise * clamp01d((inside - bite) / kEdgeM);
 }
 
-// The dome's top at m = 1 (cell_density's u with in_m at its largest, the same operations):
-// u (2 - u) rises with u up to u = 1, so no footprint reaches above it.
+// The heap's top at m = 1 (cell_density's v with d_in at its largest, the same operations):
+// v (2 - v) rises with v up to v = 1, so no footprint reaches above it.
 double ProceduralClouds::cell_ceiling(double f_max) const {
     const TypeShape& shape = shape_of(p_.cloud_type);
     const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
-    const double in_m = 1.0 * 0.12 * p_.base_scale_m;
-    const double u = std::min(1.0, in_m / (shape.dome * f_max * thickness));
-    return f_max * std::sqrt(u * (2.0 - u));
+    const double reach = 0.12 * p_.base_scale_m;
+    const double d_in = 1.0 * reach;
+    const double v = std::min(1.0, d_in * shape.dome / (f_max * thickness));
+    return f_max * v * (2.0 - v);
 }
 
-// Cirrus (header): heads near the layer's top where the footprint m is high, fallstreaks
-// hanging below them, longer under the stronger heads, drifting down-wind with depth (the
-// wind shear that bends them into hooks), the whole bent by the curl noise and thinned
-// into fibres by the streak-stretched detail noise.
+// Cirrus (header): heads of stretched tufts near the layer's top where the footprint m is
+// high, fallstreaks hanging below them, longer under the stronger heads. The ice that falls
+// from a head drifts with the wind's shear, whose direction turns with height: a point s
+// of the way down from the heads lies under the head point xb = x - D(s), D(s) = base_scale
+// (shear s e_along + hook s^2 e_across), a parabola in plan: the trail leaves the head along
+// the streaks and bends across them (the atlas's uncinus: commas, hooks). The fibres are the
+// trails of the head's grains: the detail noise (a fine 2D grain) read at xb, so that each
+// grain of the head is drawn out along its own fall curve into a thin strand, many to a
+// streak.
 double ProceduralClouds::cirrus_density(double x, double y, double f, double c, const float* w) const {
     const TypeShape& shape = shape_of(p_.cloud_type);
-    const double drop = 1.0 - f;
     // Patches several kilometres across (the weather map read at 4 times its frequency,
     // elsewhere in its lattice): the strands come in tufts and bands, not over the whole sky.
     float wp[4];
     weather_at(4.0 * x * inv_weather_ + 0.31, 4.0 * y * inv_weather_ + 0.53, wp);
-    c = clamp01d(c * (0.2 + 1.6 * wp[0]));
+    c = clamp01d(c * clamp01d(2.5 * wp[0] - 0.75));
     if (c <= 0.0) return 0.0;
-    // Curl bends (a quarter of a base tile at most) and the shear's drift along the streaks.
+    // Curl bends (a tenth of a base tile at most), and the fall curve back to the head.
     float cu[2];
     curl_.sample(x * inv_base_ * 0.25, y * inv_base_ * 0.25, 0.0, cu);
     const double bend = 0.1 * p_.base_scale_m;
     const double warp = 0.3 * p_.base_scale_m;
     const double xw = x + warp * (w[2] - 0.5) + bend * cu[0], yw = y + warp * (w[3] - 0.5) + bend * cu[1];
-    const double drift = shape.shear * p_.base_scale_m * drop * drop;
+    const double s = clamp01d((shape.gradient.a1 - f) / shape.gradient.a1);  // 0 at the heads
+    // The hook's strength varies over the weather's scale (half to one and a half times).
+    const double hook = shape.hook * (0.5 + wp[1]);
+    const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
+    const double along = kStreakCos * xw + kStreakSin * yw - thickness * shape.shear * s,
+                 across = -kStreakSin * xw + kStreakCos * yw - thickness * hook * s * s;
     const double sq = std::sqrt(shape.stretch);
-    const double along = kStreakCos * xw + kStreakSin * yw - drift,
-                 across = -kStreakSin * xw + kStreakCos * yw;
     const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c);
     if (m <= 0.0) return 0.0;
-    // The head's trapezoid, and the fallstreak down to 1 - a0 - fall m, thinning downwards.
+    // The head's trapezoid, and the fallstreak down to s = fall m, thinning downwards.
     const double head = shape.gradient(f);
-    const double bottom = shape.gradient.a0 - shape.fall * m;
-    const double tail = f < shape.gradient.a1 ? clamp01d((f - bottom) / 0.1) * (0.1 + 0.4 * f) : 0.0;
-    const double env = std::max(head, tail) * clamp01d(m / 0.25);
+    const double tail = s > 0.0 ? clamp01d((shape.fall * m - s) / 0.15) * (0.4 + 0.4 * (1.0 - s)) : 0.0;
+    const double env = std::max(head, tail) * clamp01d(m / 0.2);
     if (env <= 0.0) return 0.0;
     if (p_.detail_strength <= 0.0) return env;
-    // Fibres: the detail noise stretched kFibreStretch-fold along the (bent) streaks.
-    const double fs = std::sqrt(kFibreStretch);
-    const double zd = (f * (p_.top_altitude_m - p_.bottom_altitude_m) + p_.evolution_m) * inv_detail_;
-    float d;
-    detail_.sample(along * inv_detail_ / fs, across * inv_detail_ * fs, 0.5 * zd, &d);
-    const double strands = clamp01d(remap(d, 0.42, 0.62, 0.0, 1.0));
+    // Fibres: the grain of the head (the detail fbm at one height, about two and a half times as long along
+    // the streaks as across them) carried down its fall curve.
+    float d[4];
+    detail_.sample(0.25 * along * inv_detail_, 0.6 * across * inv_detail_, 0.5 * p_.evolution_m * inv_detail_,
+                   d);
+    const double strands = clamp01d(remap(d[0], 0.45, 0.75, 0.0, 1.0));
     return env * (1.0 - std::min(1.0, shape.fibres * p_.detail_strength) * (1.0 - strands));
 }
 
@@ -647,10 +677,10 @@ void ProceduralClouds::shell(const CloudRay& ray, double t_max, std::vector<Majo
 
 double ProceduralClouds::feature_size_m() const {
     // One texel of the detail texture (32 per tile), the finest structure the layer has;
-    // cirrus reads it kFibreStretch-fold stretched, its fibres sqrt(kFibreStretch) times
-    // narrower across than a texel (cirrus_density).
+    // cirrus's strands, its grains drawn out down their tilted fall curves, are thinner
+    // in the vertical than across: three quarters of a texel.
     const double texel = p_.detail_scale_m / 32.0;
-    return shape_of(p_.cloud_type).fall > 0.0 ? texel / std::sqrt(kFibreStretch) : texel;
+    return shape_of(p_.cloud_type).fall > 0.0 ? 0.75 * texel : texel;
 }
 
 }  // namespace welkin

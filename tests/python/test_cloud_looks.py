@@ -11,8 +11,9 @@ bulging tops, and cirrus as filaments: two properties of the shape that a number
   layer's thickness, the spread of the tops over 10 %: a flat underside and heaps of
   different heights over it, where a slab or a 3D noise blob fails one or the other.
 * Fibres (cirrus): the autocorrelation of the map of the vertical optical depth seen from
-  above falls to a quarter at a lag along the streaks (30 degrees off x) at least three
-  times the lag across them; the cells of cumulus are round (the same ratio under 1.6).
+  above falls to a quarter at a lag along its longest direction (the fibres', which curve
+  with the hooks: searched every 10 degrees) at least three times the lag across it; the
+  cells of cumulus are round (the same ratio under 1.6).
   (A quarter, not a half: the fibres, finer than the map's pixels, decorrelate the first
   pixel in every direction.)
 """
@@ -27,7 +28,6 @@ import welkin
 from test_cloud_tiling import autocorrelation
 
 R_PLANET = 6360e3
-STREAK = math.radians(30.0)
 
 
 def density_columns(layer, span_m, n, steps):
@@ -102,11 +102,14 @@ def test_cirrus_is_fibrous_and_cumulus_round(cloud_type, lo, hi):
     n = 256
     sigma, _, dh = density_columns(layer, span, n, 12)
     c = autocorrelation(sigma.sum(axis=-1) * dh)
-    along = quarter_lag(c, span / n, STREAK)
-    across = quarter_lag(c, span / n, STREAK + math.pi / 2)
+    lags = {a: quarter_lag(c, span / n, math.radians(a)) for a in range(0, 180, 10)}
+    longest = max(lags, key=lags.get)
+    along = lags[longest]
+    across = quarter_lag(c, span / n, math.radians(longest + 90))
     ratio = along / across
     print(
-        f"{cloud_type}: quarter-correlation lag {along:.0f} m along the streaks, {across:.0f} m across: {ratio:.2f}"
+        f"{cloud_type}: quarter-correlation lag {along:.0f} m along its longest direction ({longest} degrees),"
+        f" {across:.0f} m across: {ratio:.2f}"
     )
     assert lo <= ratio <= hi
 
@@ -161,3 +164,88 @@ def test_an_overcast_deck_from_below_has_no_streaks():
     print(f"overcast stratus from below: fine structure {fine:.4f} of the mean")
     assert np.isfinite(sky).all() and sky.min() > 0.0
     assert fine < 0.004
+
+
+def test_cumulus_heaps_narrow_upwards():
+    """The atlas's cumulus are heaps: mounds and domes over a flat base, narrower at the top
+    than at the base (a paraboloid heap's width at height z shrinks as 1 - sqrt(1 - z / H)).
+    The area of the horizontal cross-section of the dense cloud (sigma_t at least half the
+    densest) over a square of columns, at a quarter and at half of H (the 90th percentile of
+    the columns' tops) over its area at a tenth of H, stays under 0.87 and 0.6. Heaps with
+    near-vertical sides under flattened or overhanging tops (boxes and mushrooms) keep most
+    of their base's area up to half their height (0.93 and 0.70)."""
+    preset = welkin.cloud_type_preset("cumulus")
+    layer = welkin.CloudLayer(cloud_type="cumulus")
+    sigma, heights, _ = density_columns(layer, 3.0 * preset["base_scale_m"], 200, 100)
+    dense = sigma >= 0.5 * preset["density_per_m"]
+    body = dense.any(axis=-1)
+    last = dense.shape[-1] - 1 - np.argmax(dense[..., ::-1], axis=-1)
+    top = np.percentile(heights[last[body]], 90)
+    area = dense.mean(axis=(0, 1))
+
+    def at(z):
+        return float(np.interp(z, heights, area))
+
+    quarter, half = at(0.25 * top) / at(0.1 * top), at(0.5 * top) / at(0.1 * top)
+    print(f"cumulus: tops to {top:.0f} m; area at 1/4 and 1/2 of it over at 1/10: {quarter:.2f}, {half:.2f}")
+    assert quarter < 0.87
+    assert half < 0.6
+
+
+def shift_of_best_match(a, b, pixel_m):
+    """The plane shift (m, x and y) that moves map a onto map b best: the peak of their
+    circular cross-correlation (FFT), refined by a parabola through the peak's neighbours."""
+    fa, fb = np.fft.fft2(a - a.mean()), np.fft.fft2(b - b.mean())
+    c = np.real(np.fft.ifft2(np.conj(fa) * fb))
+    n = c.shape[0]
+    i, j = np.unravel_index(np.argmax(c), c.shape)
+
+    def refine(m, z, p):
+        return (m - p) / (2.0 * (m - 2.0 * z + p)) if (m - 2.0 * z + p) < 0 else 0.0
+
+    di = refine(c[(i - 1) % n, j], c[i, j], c[(i + 1) % n, j])
+    dj = refine(c[i, (j - 1) % n], c[i, j], c[i, (j + 1) % n])
+    sy, sx = (i + di + n / 2) % n - n / 2, (j + dj + n / 2) % n - n / 2
+    return np.array([sx, sy]) * pixel_m
+
+
+def test_cirrus_fallstreaks_hook_and_strands_show_from_above():
+    """Cirrus uncinus (the atlas): fibres ending in a hook or tuft at the top, their trails
+    fallstreaks of ice drifting in a wind whose shear turns with height. Two properties of
+    the density:
+    * the trails drift and curve: the plane shift that best matches the heads' level (the
+      density map at 0.88 of the layer) to the levels 0.15, 0.3 and 0.5 of the way down is
+      the trails' drift at that depth; it grows with the depth (from at least 100 m), and its
+      direction turns by more than 15 degrees between the trail's start (the head to 0.15)
+      and its lower part (0.3 to 0.5): a hook (a drift in line with the streaks, or none,
+      fails);
+    * the strands are optically thick enough to be seen against the ground from above: the
+      densest tenth of the cirrus columns (vertical optical depth above 0.01) reaches 1.3
+      (73 % of the light stopped), where uniformly thin streaks stay under 1 (0.94)."""
+    preset = welkin.cloud_type_preset("cirrus")
+    layer = welkin.CloudLayer(cloud_type="cirrus")
+    bottom, top = preset["bottom_altitude_m"], preset["top_altitude_m"]
+    span, n = 16000.0, 256
+    xs = (np.arange(n) + 0.5 - n / 2) * span / n
+    x, y = np.meshgrid(xs, xs, indexing="xy")
+
+    def level(f):
+        p = np.stack([x, y, np.full_like(x, bottom + f * (top - bottom))], -1).reshape(-1, 3)
+        return np.asarray(layer.sigma_t(p)).reshape(x.shape)
+
+    head = level(0.88)
+    drift = [shift_of_best_match(head, level(0.85 * (1.0 - s)), span / n) for s in (0.15, 0.3, 0.5)]
+    reach = [float(np.linalg.norm(d)) for d in drift]
+    assert 100.0 < reach[0] < reach[1] < reach[2], reach
+    upper, lower = drift[0], drift[2] - drift[1]
+    turn = math.degrees(math.acos(np.dot(upper, lower) / (np.linalg.norm(upper) * np.linalg.norm(lower))))
+    print(
+        f"cirrus: drift {[f'({d[0]:.0f}, {d[1]:.0f})' for d in drift]} m; the trail turns {turn:.0f} degrees"
+    )
+    assert turn > 15.0
+
+    sigma, _, dh = density_columns(layer, 20000.0, 200, 30)
+    tau = sigma.sum(axis=-1) * dh
+    p90 = float(np.percentile(tau[tau > 0.01], 90))
+    print(f"cirrus: 90th percentile of the columns' optical depth {p90:.2f}")
+    assert p90 > 1.3

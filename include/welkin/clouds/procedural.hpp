@@ -26,19 +26,22 @@
 //       30 degrees off the x axis, read at a point displaced by a domain warp from the weather
 //       map's b, a channels); every type then builds its clouds its own way (the WMO
 //       International Cloud Atlas's descriptions, docs/artists.md#cloud-types):
-//  * cells (cumulus, stratocumulus, altocumulus: a flat base, a domed top, billows):
+//  * cells (cumulus, stratocumulus, altocumulus: a flat base, a heap, lobes):
 //       the footprint m = clamp(remap(base, 1 - c, 1, 0, 1)) from the base texture read at
 //       one height (h = evolution_m: every cell keeps its outline up the layer), d_in =
-//       m base_scale_m / 8 metres in from its edge (about a Worley cell's radius at m = 1);
-//       over it half an ellipse `dome` times as wide as f_max is high: the local top
-//       f_top = f_max sqrt(u (2 - u)), u = min(1, d_in / (dome f_max thickness)) (steep sides
-//       at the base, a rounded top); the point is inside = min((f_top - f) thickness, d_in)
-//       metres in, less the billows' depth 2 detail_strength billow thickness B W, B the
-//       inverted Worley fBm of the detail texture at its tile and at twice it (deep between
-//       its balls: cauliflower), its lookup bent by the curl noise, W = clamp(f / base_erosion)
-//       (0.3 + 0.7 f / f_top) (none at the base, most at the top); density =
-//       clamp(f / a1) clamp(inside / kEdgeM), a1 the type's gradient's first corner (the base's
-//       rise over a few tens of metres);
+//       m 0.12 base_scale_m metres in from its edge (about a Worley cell's radius at m = 1);
+//       over it a paraboloid heap f_top = f_max v (2 - v), v = min(1, d_in dome / (f_max
+//       thickness)), `dome` its height over its half-width: narrower upwards (the atlas's
+//       mounds and domes), a wider cell taller, flattening at the local top f_max (humilis);
+//       the point is inside = min((f_top - f) thickness cos(slope), d_in) metres in (along
+//       the surface's normal), less the lobes' bite: the detail texture's three Worley
+//       octaves W_o read at half its frequency (cells detail_scale_m / 2, / 4, / 8), bite =
+//       2 detail_strength billow (detail_scale_m / 2) L sum_o a_o (1 - W_o), a = (1, 0.3,
+//       0.09), each a paraboloid around its feature points (rounded bulges on bulges,
+//       creased between them: cauliflower), the lookup bent by the curl noise and shifted by
+//       the weather map's warp, L = clamp(f / base_erosion) (0.3 + 0.7 f / f_max) (none at
+//       the base, most at the top); density = clamp(f / a1) clamp((inside - bite) / kEdgeM),
+//       a1 the type's gradient's first corner (the base's rise over a few tens of metres);
 //  * the layer (stratus): height gradient G(f / f_max), the type's trapezoid (0 below a0,
 //       up to 1 at a1, 1 to a2, down to 0 at a3), the base texture read at the height
 //       h - bottom + evolution_m; covered = clamp(remap(base G, 1 - c, 1, 0, 1))
@@ -49,25 +52,29 @@
 //       the cloud is thin, so that raising the detail shapes edges and leaves no isolated
 //       specks: density = clamp(remap(covered, e, 1, 0, 1)), e = kMaxErosion detail_strength
 //       (1 - covered) modifier;
-//  * cirrus (heads of fibres with fallstreaks): c further thinned into patches a few
-//       kilometres wide (the weather map read at 4 times its frequency, its r channel wp:
-//       c = clamp(c_raw (0.2 + 1.6 wp))); the base texture's lookup bent by the curl noise
-//       (a tenth of a base tile) and drifted down-wind by shear base_scale_m (1 - f)^2 (the
-//       wind's shear: the fallstreaks trail behind their heads, as hooks); the footprint m as
+//  * cirrus (heads with hooked fallstreaks of fibres, the atlas's uncinus): c further thinned
+//       into patches a few kilometres wide with clear sky between (the weather map read at 4
+//       times its frequency, its r channel wp: c = clamp(c_raw clamp(2.5 wp - 0.75))); a
+//       point s = clamp((a1 - f) / a1) of the way down from the heads lies under the head
+//       point xb = x - D(s), D = thickness (shear s e_along + hook s^2 e_across) (the ice
+//       falling from a head drifts in a wind whose shear turns with height: the trail leaves
+//       the head along the streaks and bends across them, a hook; hook varies over the
+//       weather's scale), the lookup also bent by the curl noise; the footprint m at xb as
 //       for cells; the head the type's trapezoid G(f) near the top, the fallstreak below it
-//       down to a0 - fall m, thinning downwards; density = max(head, tail) clamp(m / 0.25)
+//       down to s = fall m, thinning downwards; density = max(head, tail) clamp(m / 0.2)
 //       (1 - min(1, fibres detail_strength) (1 - strands)), strands = clamp(remap(fbm_d,
-//       0.42, 0.62, 0, 1)) of the detail texture stretched kFibreStretch-fold along the
-//       bent streaks;
+//       0.45, 0.75, 0, 1)) of the detail texture read at xb (a grain of the head, 0.25 and
+//       0.6 times the detail frequency along and across the streaks, carried down its fall
+//       curve: each grain draws a strand, many to a trail);
 //   sigma_t = density_per_m * density.
 // Every factor is in [0, 1], so density <= 1: the majorant is density_per_m on the shell.
 // Clear air by construction is skipped before any texture read (sigma_t returns the same
-// value, sooner): a cell's top is below f_max sqrt(u (2 - u)) at m = 1, so above that
-// ceiling (at f_max = 1 for the layer, at the point's own f_max once the weather map is read)
-// the density is 0; cirrus has none below a0 - fall (the longest fallstreak's foot); the
-// layer model none outside [a0 (1 - towers), a3]. Deep inside a cell, more than the deepest
-// billow (2 detail_strength billow thickness) plus kEdgeM in, the density is clamp(f / a1)
-// whatever the detail noise reads, and it is not read.
+// value, sooner): a cell's top is below f_max v (2 - v) at m = 1, so above that ceiling (at
+// f_max = 1 for the layer, at the point's own f_max once the weather map is read) the
+// density is 0; cirrus has none below min(a0, a1 (1 - fall)) (the head's foot, the longest
+// fallstreak's); the layer model none outside [a0 (1 - towers), a3]. Deep inside a cell,
+// more than the deepest lobe (1.39 times the lobes' scale) plus kEdgeM in, the density is
+// clamp(f / a1) whatever the detail noise reads, and it is not read.
 //
 // Coverage means coverage, in one of two measures (coverage_measure):
 //  * dome (the default): the share of the sky dome a ground observer sees covered, the WMO's
@@ -135,7 +142,7 @@ struct CloudLayerParams {
     double coverage = 0.4;              // [0, 1]: share of the area or the dome under cloud (header)
     CloudCoverageMeasure coverage_measure = CloudCoverageMeasure::dome;  // what coverage measures
     double density_per_m = 0.04;         // sigma_t of the densest cloud, m^-1, [0, 10]
-    double base_scale_m = 5000.0;        // tile of the base shape, [10, 1e6] m
+    double base_scale_m = 5000.0;        // tile of the base shape, [10, 1e6] m (cumulus: 8000)
     double detail_scale_m = 700.0;       // tile of the erosion noise, [1, 1e6] m
     double weather_scale_m = 30000.0;    // tile of the weather map, [10, 1e7] m
     double detail_strength = 0.5;        // [0, 1]
@@ -150,7 +157,7 @@ struct CloudLayerParams {
     double planet_radius_m = 6360e3;  // [1e3, 1e8]
     double origin_altitude_m = 0.0;   // of the world origin above the ground, [0, 1e6]
 
-    // The preset of a cloud type (the defaults above are cumulus's).
+    // The preset of a cloud type (the defaults above are cumulus's, but for its 8 km base tile).
     static CloudLayerParams preset(CloudType type);
     void validate() const;  // InvalidArgument naming the field and its range
 };
@@ -163,8 +170,7 @@ public:
     static constexpr double kCoverageOpticalDepth = 0.3;
     static constexpr int kCoverageColumns = 2048;
     static constexpr double kMaxErosion = 0.6;
-    static constexpr double kEdgeM = 80.0;         // cells: the density's rise inside the surface
-    static constexpr double kFibreStretch = 25.0;  // cirrus: the fibres' length over their width
+    static constexpr double kEdgeM = 60.0;  // cells: the density's rise inside the surface
     static constexpr double kDomeMinElevationDeg = 5.0;
     static constexpr int kDomeObservers = 32;
     static constexpr int kDomeDirections = 64;
@@ -208,11 +214,12 @@ private:
     double band_lo_ = 0.0, band_hi_ = 1.0;
     glm::dvec3 centre_;
     std::shared_ptr<const CloudNoiseTextures> noise_;
-    // The channels sigma_t reads, combined once: base (pw, fbm_w), detail fbm_d, weather
+    // The channels sigma_t reads, combined once: base (pw, fbm_w), detail (fbm_d and its
+    // three Worley octaves), weather
     // (r, g, b, a), curl (x, y).
     PeriodicTexture<2> base_, curl_;
     PeriodicTexture<4> weather_;
-    PeriodicTexture<1> detail_;
+    PeriodicTexture<4> detail_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
     // The weather map and the base shape read aperiodically (noise.hpp, hex_taps), about the
     // channels' means over their textures.

@@ -109,7 +109,7 @@ class WelkinCloudLayer(bpy.types.PropertyGroup):
     )
     base_scale_m: bpy.props.FloatProperty(
         name="Base Scale (m)",
-        default=5000.0,
+        default=8000.0,  # the cumulus preset (clouds/procedural.cpp)
         min=10.0,
         max=1e6,
         soft_max=50000.0,
