@@ -114,6 +114,31 @@ def build(
     return scene, sun, ob
 
 
+# The lighting test's scene (tests/blender/test_cycles_clouds_lighting.py; replayed outside
+# Blender by bench/clouds/cycles_addon_saved.py): the cumulus written at 2.7 times, seen from
+# the ground through a 150 mm lens, in two views (the sun's elevation, azimuth in degrees).
+TEST_SIGMA = 0.04 / 2.7
+TEST_SIZE, TEST_SAMPLES, TEST_BOUNCES, TEST_PATHS = (96, 64), 128, 256, 256
+TEST_VIEWS = {"side": (30.0, 60.0), "backlit": (43.0, 3.0)}
+
+
+def build_test_view(T, vdb, elevation_deg, azimuth_deg):
+    """The lighting test's scene for one view, with Welkin's phase."""
+    return build(
+        T,
+        vdb,
+        sigma=TEST_SIGMA,
+        lobes=WELKIN_LOBES,
+        sun_elevation_deg=elevation_deg,
+        sun_azimuth_deg=azimuth_deg,
+        camera=(0.0, 0.0, 1.5),
+        lens_mm=150.0,
+        size=TEST_SIZE,
+        samples=TEST_SAMPLES,
+        bounces=TEST_BOUNCES,
+    )
+
+
 def update_sky(scene, sun, native, lamp="ground", at=CLOUD_AT):
     """Update Sky; lamp="cloud": the lamp set to the sun at the cloud's altitude (above;
     the altitude of `at`). Returns the lamp's RGB irradiance at the ground and at the cloud."""

@@ -27,9 +27,6 @@ import sys
 
 import numpy as np
 
-VIEWS = {"side": (30.0, 60.0), "backlit": (43.0, 3.0)}  # the sun's elevation, azimuth (degrees)
-SIGMA = 0.04 / 2.7
-SIZE, SAMPLES, BOUNCES, PATHS = (96, 64), 128, 256, 256
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec.709, as bench/cycles_addon_clouds.py
 
 
@@ -51,20 +48,8 @@ def save(directory):
     os.makedirs(directory, exist_ok=True)
     vdb = os.path.abspath(os.path.join(directory, "cumulus.vdb"))
     ac.write_cloud(vdb)
-    for view, (el, az) in VIEWS.items():
-        scene, sun, _ob = ac.build(
-            T,
-            vdb,
-            sigma=SIGMA,
-            lobes=ac.WELKIN_LOBES,
-            sun_elevation_deg=el,
-            sun_azimuth_deg=az,
-            camera=(0.0, 0.0, 1.5),
-            lens_mm=150.0,
-            size=SIZE,
-            samples=SAMPLES,
-            bounces=BOUNCES,
-        )
+    for view, (el, az) in ac.TEST_VIEWS.items():
+        scene, sun, _ob = ac.build_test_view(T, vdb, el, az)
         ac.update_sky(scene, sun, native, lamp="cloud")
         cyc = cv.render(scene, os.path.join(directory, f"cycles_{view}.exr"))
         desc = json.loads(
@@ -74,7 +59,11 @@ def save(directory):
         with open(os.path.join(directory, f"scene_{view}.json"), "w") as f:
             json.dump(desc, f)
         regs = ac.regions(scene, cyc[..., 3], ac.sun_direction(el, az))
-        ref = ac.reference(scene, native, vdb, SIGMA, ac.WELKIN_LOBES, PATHS)[0] if view == "side" else None
+        ref = (
+            ac.reference(scene, native, vdb, ac.TEST_SIGMA, ac.WELKIN_LOBES, ac.TEST_PATHS)[0]
+            if view == "side"
+            else None
+        )
         arrays = {"cycles": cyc, **{f"region_{k}": v for k, v in regs.items()}}
         if ref is not None:
             arrays["reference"] = ref

@@ -52,9 +52,7 @@ addon, native = T.install_addon()
 import cycles_addon_clouds as ac  # noqa: E402
 import cycles_volume as cv  # noqa: E402
 
-SIGMA = 0.04 / 2.7
-SIZE, SAMPLES, BOUNCES, PATHS = (96, 64), 128, 256, 256
-VIEWS = {"side": (30.0, 60.0), "backlit": (43.0, 3.0)}
+SIGMA, PATHS, VIEWS = ac.TEST_SIGMA, ac.TEST_PATHS, ac.TEST_VIEWS
 
 
 def main():
@@ -64,19 +62,7 @@ def main():
     ac.write_cloud(vdb)
     failures = []
     for view, (el, az) in VIEWS.items():
-        scene, sun, _ob = ac.build(
-            T,
-            vdb,
-            sigma=SIGMA,
-            lobes=ac.WELKIN_LOBES,
-            sun_elevation_deg=el,
-            sun_azimuth_deg=az,
-            camera=(0.0, 0.0, 1.5),
-            lens_mm=150.0,
-            size=SIZE,
-            samples=SAMPLES,
-            bounces=BOUNCES,
-        )
+        scene, sun, _ob = ac.build_test_view(T, vdb, el, az)
         e_ground, e_cloud = ac.update_sky(scene, sun, native, lamp="cloud")
         cyc = cv.render(scene, os.path.join(tmp, f"cycles_{view}.exr"))
         fast = ac.engine_pass(scene, native, ac.WELKIN_LOBES, air=False)
