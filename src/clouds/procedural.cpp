@@ -113,6 +113,9 @@ constexpr double kStreakCos = 0.8660254037844386, kStreakSin = 0.5;
 // How far (a height fraction) the clear-air tests stay from the shape's bounds: far above
 // the formulas' rounding (1e-16), far below any structure (1e-9 of a layer is a micrometre).
 constexpr double kBandMargin = 1e-9;
+// How far in from a cell's footprint edge m reaches 1, in base tiles (about a Worley cell's
+// radius: cell_density).
+constexpr double kFootprintReach = 0.12;
 // Internal coverage at which a layer is overcast (clamp(k (1 - weather_variation)) = 1
 // for weather_variation <= 0.75).
 constexpr double kMaxInternalCoverage = 4.0;
@@ -516,9 +519,8 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     // that at the base, its width at height f shrinks as 1 - sqrt(1 - f / f_max) (a heap
     // narrower upwards, the atlas's mounds and domes; a wider cell grows taller, up to the
     // local top f_max, where it flattens: humilis), its top rounded.
-    const double reach = 0.12 * p_.base_scale_m;
-    const double d_in = m * reach;
-    const double v = std::min(1.0, d_in * shape.dome / (f_max * thickness));
+    const double d_in = m * (kFootprintReach * p_.base_scale_m);
+    const double v = heap_v(d_in, f_max);
     const double f_top = f_max * v * (2.0 - v);
     if (f >= f_top) return 0.0;                           // the lobes only remove
     const double rise = clamp01d(f / shape.gradient.a1);  // the flat base
@@ -559,14 +561,15 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     return rise * clamp01d((inside - bite) / kEdgeM);
 }
 
-// The heap's top at m = 1 (cell_density's v with d_in at its largest, the same operations):
-// v (2 - v) rises with v up to v = 1, so no footprint reaches above it.
-double ProceduralClouds::cell_ceiling(double f_max) const {
-    const TypeShape& shape = shape_of(p_.cloud_type);
+// The heap's v (cell_density) at d_in metres in from the footprint's edge, under local top f_max.
+double ProceduralClouds::heap_v(double d_in, double f_max) const {
     const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
-    const double reach = 0.12 * p_.base_scale_m;
-    const double d_in = 1.0 * reach;
-    const double v = std::min(1.0, d_in * shape.dome / (f_max * thickness));
+    return std::min(1.0, d_in * shape_of(p_.cloud_type).dome / (f_max * thickness));
+}
+
+// The heap's top at m = 1: v (2 - v) rises with v up to v = 1, so no footprint reaches above it.
+double ProceduralClouds::cell_ceiling(double f_max) const {
+    const double v = heap_v(kFootprintReach * p_.base_scale_m, f_max);
     return f_max * v * (2.0 - v);
 }
 

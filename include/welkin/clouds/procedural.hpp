@@ -201,6 +201,7 @@ private:
     double cell_density(double x, double y, double f, double c, const float* w, bool skip) const;
     // The highest height fraction a cell can reach under local top f_max (its dome at m = 1).
     double cell_ceiling(double f_max) const;
+    double heap_v(double d_in, double f_max) const;
     double cirrus_density(double x, double y, double f, double c, const float* w) const;
     double column_depth(double x, double y, double k) const;
     double fraction(double k, int columns) const;
