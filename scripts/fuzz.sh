@@ -56,6 +56,10 @@ libs+=(-lopenvdb -lboost_iostreams -lfmt -ltbb -lOpenEXR-3_1 -lImath-3_1 -lIlmTh
 sanitizers() { echo fuzzer,address; }
 
 failed=()
+# One line per failed target: what ended it and where its input went (scripts/test.sh prints
+# this file last, so that the reason is in the tail of a long CI log).
+findings=$out/findings.txt
+: >"$findings"
 for t in "${targets[@]}"; do
   san=$(sanitizers "$t")
   obj=$out/obj_${san//,/_}
@@ -83,6 +87,9 @@ for t in "${targets[@]}"; do
       >"$out/$t.log" 2>&1; then
     tail -n 40 "$out/$t.log" >&2
     failed+=("$t")
+    reason=$(grep -E "ERROR: |ALARM: |out-of-memory|SUMMARY: |terminate called|Test unit written" \
+               "$out/$t.log" | tail -n 3 | tr '\n' ' ' | cut -c1-600)
+    echo "$t: ${reason:-no report in $out/$t.log (killed by timeout?)}" >>"$findings"
   else
     grep -E "^(stat::number_of_executed_units|Done)" "$out/$t.log" || tail -n 2 "$out/$t.log"
   fi

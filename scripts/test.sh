@@ -53,6 +53,7 @@ for t in tests/farm/test_*.sh; do
 done
 
 if ((${#failed[@]})); then
+  [[ " ${failed[*]} " == *" fuzz "* && -s build/fuzz/findings.txt ]] && sed 's/^/fuzz: /' build/fuzz/findings.txt >&2
   echo "test: FAILED: ${failed[*]}" >&2
   exit 1
 fi
