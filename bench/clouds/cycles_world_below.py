@@ -16,8 +16,8 @@ same reference and fast march:
   mean at the cloud).
 
 The world's mean is measured by Cycles itself: an equirectangular camera at the scene
-camera's place renders the world alone (the cloud hidden, the sun disc's camera-ray term
-off), and its pixels are averaged with their solid angles.
+camera's place renders the world alone (the cloud hidden), and its pixels are averaged with
+their solid angles, those the sun's disc lights left out.
 
     WELKIN_EXTENSION_ZIP=build/blender_dist/welkin-0.1.0-linux_x64.zip \
     build/venv-bpy-5.0/bin/python tests/blender/bpy_blender.py -b --factory-startup \
@@ -55,6 +55,7 @@ addon, native = T.install_addon()
 import cycles_addon_clouds as ac  # noqa: E402
 import cycles_layer_patches as lp  # noqa: E402
 import cycles_volume as cv  # noqa: E402
+from welkin.blender import compat  # noqa: E402  (the installed add-on's)
 
 tmp = tempfile.mkdtemp(prefix="welkin_cycles_world_below_")
 atexit.register(shutil.rmtree, tmp, ignore_errors=True)
@@ -68,22 +69,10 @@ def world_output(world):
 
 def world_mean(scene):
     """The world's radiance averaged over the sphere (RGB), as Cycles renders it for camera
-    rays, the sun disc's camera-ray term off; and the means over the upper and lower halves."""
-    nodes, links = scene.world.node_tree.nodes, scene.world.node_tree.links
-    disc = []
-    for n in nodes:
-        if n.bl_idname == "ShaderNodeBackground" and n.inputs["Strength"].is_linked:
-            link = n.inputs["Strength"].links[0]
-            if link.from_node.bl_idname == "ShaderNodeLightPath":
-                disc.append((n, link.from_node, link.from_socket.name))
-                links.remove(link)
-                n.inputs["Strength"].default_value = 0.0
+    rays, the sun's disc left out; and the means over the upper and lower halves."""
     cam_data = bpy.data.cameras.new("Pano")
     cam_data.type = "PANO"
-    if hasattr(cam_data, "panorama_type"):
-        cam_data.panorama_type = "EQUIRECTANGULAR"
-    else:
-        cam_data.cycles.panorama_type = "EQUIRECTANGULAR"
+    compat.camera_panorama(cam_data).panorama_type = "EQUIRECTANGULAR"
     pano = bpy.data.objects.new("Pano", cam_data)
     scene.collection.objects.link(pano)
     pano.location = scene.camera.location
@@ -105,24 +94,24 @@ def world_mean(scene):
     for o in hidden:
         o.hide_render = False
     bpy.data.objects.remove(pano)
-    for n, src, sock in disc:
-        links.new(src.outputs[sock], n.inputs["Strength"])
+    bpy.data.cameras.remove(cam_data)
     h = img.shape[0]
     # cv.render's rows: the first is the top of the frame (elevation +90 deg).
     el = (0.5 - (np.arange(h) + 0.5) / h) * np.pi
     w = np.cos(el)[:, None, None] * np.ones_like(img[..., :1])
-    # The sun's disc, should the add-on's render handler have put its camera-ray term back:
-    # pixels a thousand times the sky's median luminance (the disc is about a million times
-    # the sky; the brightest aureole pixel of a 128 x 64 panorama a few tens) weigh nothing.
+    # The sun's disc (the add-on's camera-ray term): a pixel whose centre falls in it (the
+    # scene's 0.01 px filter samples the centres) is a thousand times the sky's median
+    # luminance and more (the disc is about a million times the sky; the brightest aureole
+    # pixel of a 128 x 64 panorama a few tens); such pixels weigh nothing.
     lum = img @ ac.LUMINANCE
     disc_px = lum > 1000.0 * np.median(lum)
     w[disc_px] = 0.0
     state["disc_pixels"] = state.get("disc_pixels", []) + [int(disc_px.sum())]
-    up, down = el > 0, el < 0
-    mean = (img * w).sum(axis=(0, 1)) / w.sum(axis=(0, 1))
-    mean_up = (img[up] * w[up]).sum(axis=(0, 1)) / w[up].sum(axis=(0, 1))
-    mean_down = (img[down] * w[down]).sum(axis=(0, 1)) / w[down].sum(axis=(0, 1))
-    return mean, mean_up, mean_down
+
+    def mean(rows):
+        return (img[rows] * w[rows]).sum(axis=(0, 1)) / w[rows].sum(axis=(0, 1))
+
+    return mean(slice(None)), mean(el > 0), mean(el < 0)
 
 
 def set_world(scene, variant, mean):
