@@ -87,9 +87,26 @@ for t in "${targets[@]}"; do
       >"$out/$t.log" 2>&1; then
     tail -n 40 "$out/$t.log" >&2
     failed+=("$t")
-    reason=$(grep -E "ERROR: |ALARM: |out-of-memory|SUMMARY: |terminate called|Test unit written" \
-               "$out/$t.log" | tail -n 3 | tr '\n' ' ' | cut -c1-600)
-    echo "$t: ${reason:-no report in $out/$t.log (killed by timeout?)}" >>"$findings"
+    # The first report of the fuzzer's own process (a sanitizer's or an uncaught exception,
+    # before libFuzzer's "deadly signal" that follows it; fuzz_vdb's reader children report
+    # the corrupt trees they die of, by design, so a target that forks names its process),
+    # the first frames of its stack, and the last lines (which input, where it went).
+    host=$(sed -n 's/^.*: host process \([0-9]*\)$/\1/p' "$out/$t.log" | head -n 1)
+    reason=$(awk -v host="${host:+==$host==}" '
+                  !first && (/terminate called/ || (/ERROR: |ALARM: |out-of-memory/ && index($0, host))) {
+                      first = 1; print; next }
+                  first == 1 && /what\(\):/ { print }
+                  first && /^ *#[0-9]+ / && !/fuzzer::|__sanitizer|libc\.so|libstdc|raise|abort|pthread_kill/ &&
+                  frames++ < 6 { sub(/^ */, ""); sub(/0x[0-9a-f]+ in /, ""); sub(/ \(BuildId: [0-9a-f]+\)/, ""); print }' "$out/$t.log"
+             grep -E "SUMMARY: |Test unit written" "$out/$t.log" | tail -n 2)
+    echo "$t: ${reason:-no report in $out/$t.log (killed by timeout?)}" | cut -c1-300 >>"$findings"
+    # A small input goes into the findings whole (gzip, base64), so that a failure on a
+    # machine whose files are gone can be reproduced from its log.
+    unit=$(grep -oE "Test unit written to [^ ]+" "$out/$t.log" | tail -n 1 | cut -d' ' -f5)
+    if [[ -n $unit && -f $unit ]]; then
+      packed=$(gzip -9c "$unit" | base64 -w0)
+      ((${#packed} <= 6000)) && echo "$t: input (gzip | base64): $packed" >>"$findings"
+    fi
   else
     grep -E "^(stat::number_of_executed_units|Done)" "$out/$t.log" || tail -n 2 "$out/$t.log"
   fi

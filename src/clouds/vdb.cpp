@@ -10,7 +10,6 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
-#include <sstream>
 #include <vector>
 
 #include <fcntl.h>
@@ -18,9 +17,11 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
+#include <openvdb/Exceptions.h>
+#include <openvdb/io/DelayedLoadMetadata.h>
 #include <openvdb/io/File.h>
-#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Count.h>
 #include <openvdb/tools/Interpolation.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -56,9 +57,20 @@ struct VdbClouds::Impl {
 
 namespace {
 
+// OpenVDB with one metadata type taken out. io::DelayedLoadMetadata (type "__delayedload",
+// what every OpenVDB since 6 writes with each grid for delayed loading, which Welkin never
+// uses) blosc-decompresses tables from the file as soon as a grid's metadata is read, and
+// libblosc reads out of bounds on a corrupt chunk (a SEGV in the fuzzer's own process:
+// tests/fuzz/corpus/vdb/delayed_load_blosc_segv.vdb). Unregistered, OpenVDB reads the
+// entry as UnknownMetadata, its declared bytes as they are, and drops it (MetaMap::readMeta
+// keeps no unknown type whose name starts with "__"). Process-wide: the wheel carries its
+// own OpenVDB, and nothing else in Welkin reads delayed-load tables.
 void initialize_openvdb() {
     static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
+    std::call_once(once, [] {
+        openvdb::initialize();
+        openvdb::Metadata::unregisterType(openvdb::io::DelayedLoadMetadata::staticTypeName());
+    });
 }
 
 std::uint64_t metadata_u64(const openvdb::GridBase& meta, const char* name) {
@@ -203,46 +215,6 @@ private:
         }
         return bytes(n);
     }
-    // io::DelayedLoadMetadata::readValue (OpenVDB 10) reads its own layout, not the byte
-    // count n: a leaf count, then the leaves' masks (1 byte each) and their compressed sizes
-    // (8 bytes each), each as a byte count and that many blosc-compressed bytes, or 0 and
-    // the raw values (the sizes' count 0xffffffff: none), then skips what n has left. It
-    // sizes its buffers from the leaf count and the blosc header's uncompressed size before
-    // reading: both are held to what the file can hold.
-    void delayed_load(std::uint32_t n) {
-        const std::uint64_t count = u32();
-        if (count > size_)
-            fail(fmt::format(
-                "a delayed-load table at byte {} declares {} leaves, more than the file's {} bytes", pos_ - 4,
-                count, size_));
-        std::uint64_t total = 12 + packed_or_raw(u32(), count, 1, "the delayed-load masks");
-        const std::uint32_t sizes = u32();
-        if (sizes != 0xffffffffu) total += packed_or_raw(sizes, count, 8, "the delayed-load sizes");
-        if (total < n) {
-            need(n - total, "a delayed-load table's tail");
-            skip(n - total);
-        }
-    }
-    // `bytes` of blosc data, or with bytes 0 the count x item raw bytes; skips them and
-    // returns how many they were. The blosc header's uncompressed size (what OpenVDB
-    // reserves) is held to 8 bytes per byte of the file, as the leaf count is to one.
-    std::uint64_t packed_or_raw(std::uint32_t bytes, std::uint64_t count, std::uint64_t item,
-                                const char* what) {
-        const std::uint64_t raw = bytes > 0 ? bytes : count * item;
-        need(raw, what);
-        if (bytes >= 16) {
-            const std::string header = this->bytes(8);
-            std::uint32_t uncompressed;
-            std::memcpy(&uncompressed, header.data() + 4, 4);
-            if (uncompressed > 8 * size_ + 4096)
-                fail(fmt::format("{} at byte {} unpack to {} bytes, more than 8 per byte of the file", what,
-                                 pos_ - 8, uncompressed));
-            skip(raw - 8);
-        } else {
-            skip(raw);
-        }
-        return raw;
-    }
     // MetaMap::readMeta: a count, then (name, type name, byte count + value) per entry.
     void meta_map() {
         const std::uint32_t count = u32();
@@ -257,10 +229,8 @@ private:
             string();
             const std::string type = string();
             const std::uint32_t n = u32();
-            if (type == "__delayedload") {
-                if (n != 0) delayed_load(n);
-                continue;
-            }
+            // An unregistered type (the delayed-load table among them: initialize_openvdb)
+            // is read as its n bytes.
             std::uint64_t size = n;
             for (const auto& [name, bytes] : kFixed)
                 if (type == name) size = std::uint64_t(bytes);
@@ -282,11 +252,17 @@ private:
 // OpenVDB throws (tests/fuzz/corpus/vdb/blosc_heap_buffer_overflow.vdb,
 // tests/fuzz/corpus/vdb/crash_ball_*.vdb). Everything up to the tree is bounded by VdbStructureCheck;
 // the tree itself cannot be checked without parsing it. So the child parses the file's tree
-// and writes the grid back through a pipe with OpenVDB's own writer (uncompressed: every
-// chunk exactly as long as its buffer), and the host reads that stream, never the file's
-// tree. A child that throws (the exception may follow an overwrite of its heap), dies or
-// outlives kChildSeconds only refuses the file; the host's heap is never touched by it. The
-// price: the grid is serialised once more, and the host holds that copy while it reads it.
+// and writes the grid back through a pipe (GridPipe below), and the host builds the grid
+// from that, never reading the file's tree. A child that throws (the exception may follow
+// an overwrite of its heap), dies or outlives kChildSeconds only refuses the file; the
+// host's heap is never touched by it. The price: the grid is copied once more, and the
+// host holds that copy while it builds the grid.
+//
+// No TBB in the child: fork copies the calling thread alone, and TBB's scheduler, whose
+// worker threads stay behind in the host, may hold its locks at that moment; OpenVDB's
+// writer (LeafManager in Archive::writeGrid) and its tree counts (memUsage) run parallel
+// loops, and under the fuzzer a child hung for good on a futex in libtbb there. The
+// child's work is serial: OpenVDB's reader, a serial memory count, and GridPipe's writer.
 constexpr unsigned kChildSeconds = 600;
 
 void write_all_fd(int fd, const char* data, std::size_t size) {
@@ -299,12 +275,160 @@ void write_all_fd(int fd, const char* data, std::size_t size) {
     }
 }
 
-// The child: one tag byte, then the grid as an OpenVDB stream ('G'), an exception's message
+// The grid through the pipe, written by the child with serial loops over the tree and read
+// by the host, which checks every count against what arrived (the child's heap may have
+// been overwritten before it wrote). Native byte order (the same binary at both ends):
+//   u8 map: 0 affine, 1 not affine (a frustum), 2 singular; then, if affine, 16 f64, the
+//     index-to-world matrix as OpenVDB's Mat4d (row vectors);
+//   f32 background;
+//   u64 tile count, then per tile: u8 level (1-3), u8 active, 3 i32 origin, f32 value
+//     (the tiles that differ from an inactive background);
+//   u64 leaf count, then per leaf: 3 i32 origin, 8 u64 of the value mask, 512 f32 values.
+class GridPipe {
+public:
+    using Leaf = openvdb::FloatTree::LeafNodeType;
+
+    static std::string write(const openvdb::FloatGrid& g) {
+        std::string out;
+        std::uint8_t map = 0;
+        openvdb::Mat4d m;
+        if (!g.transform().isLinear()) {
+            map = 1;
+        } else {
+            try {
+                m = g.transform().baseMap()->getAffineMap()->getMat4();
+            } catch (const openvdb::ArithmeticError&) {
+                map = 2;
+            }
+        }
+        put(out, map);
+        if (map == 0)
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) put(out, double(m(r, c)));
+        const float background = g.background();
+        put(out, background);
+        const std::size_t tiles_at = out.size();
+        std::uint64_t tiles = 0, leaves = 0;
+        put(out, tiles);
+        for (auto it = g.tree().cbeginValueAll(); it; ++it) {
+            if (it.isVoxelValue() || (!it.isValueOn() && *it == background)) continue;
+            put(out, std::uint8_t(it.getLevel()));
+            put(out, std::uint8_t(it.isValueOn()));
+            put_coord(out, it.getCoord());
+            put(out, float(*it));
+            ++tiles;
+        }
+        std::memcpy(out.data() + tiles_at, &tiles, sizeof tiles);
+        const std::size_t leaves_at = out.size();
+        put(out, leaves);
+        for (auto it = g.tree().cbeginLeaf(); it; ++it) {
+            put_coord(out, it->origin());
+            for (openvdb::Index w = 0; w < Leaf::NodeMaskType::WORD_COUNT; ++w)
+                put(out, it->getValueMask().template getWord<std::uint64_t>(w));
+            out.append(reinterpret_cast<const char*>(it->buffer().data()), Leaf::SIZE * sizeof(float));
+            ++leaves;
+        }
+        std::memcpy(out.data() + leaves_at, &leaves, sizeof leaves);
+        return out;
+    }
+
+    // The grid, or an exception naming `where`.
+    static openvdb::FloatGrid::Ptr read(const std::string& data, const std::string& where) {
+        GridPipe in(data, where);
+        const auto map = in.get<std::uint8_t>();
+        if (map == 1)
+            throw InvalidArgument(
+                "grid",
+                fmt::format("{} has a non-affine (frustum) transform, which Welkin does not read", where));
+        if (map == 2)
+            throw InvalidArgument("grid",
+                                  fmt::format("{} has a degenerate transform (its voxels have no volume); "
+                                              "refused",
+                                              where));
+        if (map != 0) in.fail("an unknown transform");
+        openvdb::Mat4d m;
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) m(r, c) = in.get<double>();
+        const openvdb::FloatGrid::Ptr g = openvdb::FloatGrid::create(in.get<float>());
+        try {
+            g->setTransform(openvdb::math::Transform::createLinearTransform(m));
+        } catch (const openvdb::Exception& e) {
+            throw InvalidArgument("grid",
+                                  fmt::format("{} has a degenerate transform (its voxels have no volume: "
+                                              "{}); refused",
+                                              where, e.what()));
+        }
+        const std::uint64_t tiles = in.count(1 + 1 + 12 + 4);
+        for (std::uint64_t i = 0; i < tiles; ++i) {
+            const auto level = in.get<std::uint8_t>();
+            const bool active = in.get<std::uint8_t>() != 0;
+            const openvdb::Coord origin = in.coord();
+            const float value = in.get<float>();
+            if (level < 1 || level > 3) in.fail("a tile's level");
+            g->tree().addTile(level, origin, value, active);
+        }
+        const std::uint64_t leaves =
+            in.count(12 + 8 * Leaf::NodeMaskType::WORD_COUNT + Leaf::SIZE * sizeof(float));
+        for (std::uint64_t i = 0; i < leaves; ++i) {
+            auto leaf = std::make_unique<Leaf>(in.coord(), g->background());
+            for (openvdb::Index w = 0; w < Leaf::NodeMaskType::WORD_COUNT; ++w)
+                leaf->getValueMask().template getWord<std::uint64_t>(w) = in.get<std::uint64_t>();
+            in.bytes(reinterpret_cast<char*>(leaf->buffer().data()), Leaf::SIZE * sizeof(float));
+            g->tree().addLeaf(leaf.release());
+        }
+        if (in.pos_ != data.size()) in.fail("bytes after the grid");
+        return g;
+    }
+
+private:
+    GridPipe(const std::string& data, const std::string& where) : data_(data), where_(where) {}
+
+    template <typename T>
+    static void put(std::string& out, T v) {
+        out.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+    static void put_coord(std::string& out, const openvdb::Coord& c) {
+        for (int a = 0; a < 3; ++a) put(out, std::int32_t(c[a]));
+    }
+    [[noreturn]] void fail(const char* what) const {
+        throw IoError(fmt::format("{}: the reader process returned a malformed grid ({} at byte {}); refused",
+                                  where_, what, pos_));
+    }
+    void bytes(char* to, std::size_t n) {
+        if (n > data_.size() - pos_) fail("a short record");
+        std::memcpy(to, data_.data() + pos_, n);
+        pos_ += n;
+    }
+    template <typename T>
+    T get() {
+        T v;
+        bytes(reinterpret_cast<char*>(&v), sizeof v);
+        return v;
+    }
+    openvdb::Coord coord() {
+        openvdb::Coord c;
+        for (int a = 0; a < 3; ++a) c[a] = get<std::int32_t>();
+        return c;
+    }
+    // A count of records of `size` bytes that the rest of the data can hold.
+    std::uint64_t count(std::uint64_t size) {
+        const auto n = get<std::uint64_t>();
+        if (n > (data_.size() - pos_) / size) fail("a count beyond the data");
+        return n;
+    }
+
+    const std::string& data_;
+    const std::string& where_;
+    std::size_t pos_ = 0;
+};
+
+// The child: one tag byte, then the grid through GridPipe ('G'), an exception's message
 // ('E'), nothing (out of memory, 'M') or the grid's memory use in bytes (over the limit, 'L').
 [[noreturn]] void tree_reader_child(int fd, const std::string& path, const std::string& grid,
                                     std::uint64_t max_bytes) {
     // Only async-signal-safe calls are certain after fork in a threaded host; OpenVDB's
-    // reader and writer are serial and the allocator is fork-aware, which is what this relies on.
+    // reader and GridPipe's writer are serial and the allocator is fork-aware, which is what
+    // this relies on (no TBB: see above).
     for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGILL, SIGFPE, SIGALRM, SIGPIPE}) ::signal(sig, SIG_DFL);
     ::alarm(kChildSeconds);
     char tag = 'G';
@@ -314,15 +438,14 @@ void write_all_fd(int fd, const char* data, std::size_t size) {
         file.open(/*delayLoad=*/false);
         const openvdb::GridBase::Ptr g = file.readGrid(grid);
         file.close();
-        if (g->memUsage() > max_bytes) {
+        const openvdb::FloatGrid::Ptr fg = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
+        if (!fg) throw openvdb::TypeError("the grid is not a FloatGrid");
+        const openvdb::Index64 memory = openvdb::tools::memUsage(fg->tree(), /*threaded=*/false);
+        if (memory > max_bytes) {
             tag = 'L';
-            message = std::to_string(g->memUsage());
+            message = std::to_string(memory);
         } else {
-            std::ostringstream out(std::ios::binary);
-            openvdb::io::Stream stream(out);
-            stream.setCompression(openvdb::io::COMPRESS_NONE);
-            stream.write(openvdb::GridCPtrVec{g});
-            message = std::move(out).str();
+            message = GridPipe::write(*fg);
         }
     } catch (const std::bad_alloc&) {
         tag = 'M';
@@ -405,22 +528,10 @@ std::string run_tree_reader(const std::string& path, const std::string& grid, co
     return data;
 }
 
-// The grid, parsed in a child (run_tree_reader) and read here from OpenVDB's own stream of it.
+// The grid, parsed in a child (run_tree_reader) and built here from what it wrote.
 openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::string& grid,
                                            const std::string& where, std::uint64_t max_bytes) {
-    std::istringstream in(run_tree_reader(path, grid, where, max_bytes), std::ios::binary);
-    openvdb::GridPtrVecPtr grids;
-    try {
-        openvdb::io::Stream stream(in, /*delayLoad=*/false);
-        grids = stream.getGrids();
-    } catch (const std::bad_alloc&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw IoError(fmt::format("{}: cannot be read back from the reader process: {}", where, e.what()));
-    }
-    if (!grids || grids->size() != 1)
-        throw IoError(fmt::format("{}: the reader process returned no grid", where));
-    return openvdb::gridPtrCast<openvdb::FloatGrid>(grids->front());
+    return GridPipe::read(run_tree_reader(path, grid, where, max_bytes), where);
 }
 
 // The active bounding box within the documented limits (docs/limits.md), or an
@@ -464,7 +575,16 @@ void VdbClouds::Impl::check_values(VdbCloudOptions::Negative negative) {
 void VdbClouds::Impl::set_transforms(const VdbCloudOptions& options) {
     // Transforms: index -> object from the file (OpenVDB's Mat4d acts on row vectors,
     // p' = p M, so its transpose is glm's column-vector matrix), then object -> world.
-    const openvdb::Mat4d vm = grid->transform().baseMap()->getAffineMap()->getMat4();
+    // A map whose matrix is (nearly) singular, e.g. a zero voxel size, makes OpenVDB's
+    // AffineMap throw ArithmeticError while it inverts it.
+    openvdb::Mat4d vm;
+    try {
+        vm = grid->transform().baseMap()->getAffineMap()->getMat4();
+    } catch (const openvdb::Exception& e) {
+        throw InvalidArgument(
+            "grid", fmt::format("{} has a degenerate transform (its voxels have no volume: {}); refused",
+                                where(), e.what()));
+    }
     glm::dmat4 index_to_object;
     for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) index_to_object[c][r] = vm(c, r);
@@ -531,6 +651,10 @@ VdbClouds::VdbClouds(const std::string& path, const VdbCloudOptions& options)
             fmt::format("VDB file '{}' (grid '{}'): out of memory while reading it (a corrupt or "
                         "very large grid?); the limit is max_memory_bytes",
                         path, options.grid));
+    } catch (const openvdb::Exception& e) {
+        // Whatever OpenVDB refuses in a grid that the checks above let through.
+        throw IoError(
+            fmt::format("VDB file '{}' (grid '{}'): refused by OpenVDB: {}", path, options.grid, e.what()));
     }
 }
 

@@ -15,6 +15,7 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <openvdb/tools/Interpolation.h>
 
 #include "welkin/base/error.hpp"
 #include "welkin/clouds/illumination.hpp"
@@ -474,6 +475,52 @@ TEST(VdbClouds, SamplesThroughBothTransforms) {
 // p + A (1/2, 1/2, 1/2) in Blender's; the majorant segments of a ray moved by that offset
 // are the same (same t, same majorants), and so are the world bounds, moved. The matrix
 // rotates and scales non-uniformly so that the offset is not along a world axis.
+// The grid comes back from the reader process (clouds/vdb.cpp, GridPipe) as the file holds
+// it: active tiles at each internal level (8^3 and 128^3 voxels), an inactive tile and
+// inactive voxels with values that are not the background (samplers read them too), leaf
+// voxels, and an affine transform that is not a plain scale. Every sample, through
+// trilinear interpolation, equals OpenVDB's own sampler on the grid as written.
+TEST(VdbClouds, TheReaderProcessReturnsTheGridAsTheFileHoldsIt) {
+    TempDir dir;
+    const std::string path = dir.file("tiles.vdb");
+    const openvdb::FloatGrid::Ptr g = openvdb::FloatGrid::create(0.0f);
+    g->setName("density");
+    openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
+    m.preScale(openvdb::Vec3d(10.0, 12.0, 8.0));
+    m.postRotate(openvdb::math::Z_AXIS, 0.3);
+    m.postTranslate(openvdb::Vec3d(5.0, -20.0, 40.0));
+    g->setTransform(openvdb::math::Transform::createLinearTransform(m));
+    g->tree().addTile(2, openvdb::Coord(128, 0, 0), 0.25f, true);  // 128^3 voxels
+    g->tree().addTile(1, openvdb::Coord(0, 0, 16), 0.5f, true);    // 8^3
+    g->tree().addTile(1, openvdb::Coord(0, 0, 24), 0.75f, false);  // inactive, not background
+    auto acc = g->getAccessor();
+    for (int i = -6; i < 10; ++i)
+        for (int j = -3; j < 7; ++j)
+            for (int k = 0; k < 12; ++k) {
+                const float v = 0.1f + 0.01f * float(i + 2 * j + 3 * k);
+                if ((i + j + k) % 5 == 0)
+                    acc.setValueOff(openvdb::Coord(i, j, k), v);
+                else
+                    acc.setValueOn(openvdb::Coord(i, j, k), v);
+            }
+    test::write_vdb(path, {g});
+    VdbCloudOptions o;
+    o.placement = VdbCloudOptions::VoxelPlacement::OpenVdb;
+    const VdbClouds v(path, o);
+    std::mt19937_64 gen(11);
+    std::uniform_real_distribution<double> u(-10.0, 270.0), w(-8.0, 40.0);
+    const auto cacc = g->getConstAccessor();
+    int checked = 0;
+    for (int n = 0; n < 4000; ++n) {
+        const openvdb::Vec3d index(u(gen), w(gen), w(gen));
+        const openvdb::Vec3d world = g->transform().indexToWorld(index);
+        const double expected = std::max(0.0, double(openvdb::tools::BoxSampler::sample(cacc, index)));
+        ASSERT_NEAR(v.sigma_t({world.x(), world.y(), world.z()}), expected, 1e-6) << index;
+        checked += expected > 0.0;
+    }
+    EXPECT_GT(checked, 1000);
+}
+
 TEST(VdbClouds, BlenderPlacementIsOpenVdbMovedHalfAVoxel) {
     TempDir dir;
     const std::string path = dir.file("ball.vdb");

@@ -54,6 +54,8 @@ void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); 
 // child libFuzzer's death callback (which would save the input as a finding and print the
 // fuzzer's statistics from a dying process) is removed; a crash of the host is still one.
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
+    // Which process a report in the log comes from (scripts/fuzz.sh puts this in its findings).
+    std::fprintf(stderr, "fuzz_vdb: host process %d\n", int(::getpid()));
     ::pthread_atfork(nullptr, nullptr, [] { __sanitizer_set_death_callback(nullptr); });
     return 0;
 }
