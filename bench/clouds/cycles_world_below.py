@@ -1,19 +1,19 @@
 # SPDX-License-Identifier: Apache-2.0
 """Where Welkin's reference and Cycles part at a cloud's base: the light from below.
 
-Welkin lights a cloud with the sun and an isotropic sky, the mean over the sphere of the
-sky's radiance at the cloud (include/welkin/clouds/illumination.hpp); Cycles lights it with
-the add-on's world, whose lower hemisphere is the dim ground. This renders one type's patch
-(bench/cycles_layer_patches.py, the "side" view) by Cycles under three worlds, against the
-same reference and fast march:
+Welkin lights a cloud with the sun and the sky's mean radiance over the hemisphere above the
+cloud's horizon and over the one below (include/welkin/clouds/illumination.hpp); Cycles
+lights it with the add-on's world, whose lower hemisphere is the dim ground. This renders
+one type's patch (bench/cycles_layer_patches.py, the "side" view) by Cycles under three
+worlds, against the same reference and fast march:
 
 * addon: the add-on's world as Update Sky makes it (bench/clouds/cycles_types_lighting.py's);
 * below: the same, but every direction below the horizon gets the world's mean over the
-  sphere (the sun disc left out), so that the base sees from below what Welkin's sky light
-  gives it;
-* uniform: the world's mean over the sphere in every direction, Welkin's model of the sky
-  light (up to the difference between the world's mean at the ground and the atmosphere's
-  mean at the cloud).
+  sphere (the sun disc left out): the light from below of an isotropic sky of the sphere's
+  mean, what Welkin lit clouds with before the two hemispheres;
+* uniform: the world's mean over the sphere in every direction, that isotropic sky light
+  (up to the difference between the world's mean at the ground and the atmosphere's mean
+  at the cloud).
 
 The world's mean is measured by Cycles itself: an equirectangular camera at the scene
 camera's place renders the world alone (the cloud hidden), and its pixels are averaged with

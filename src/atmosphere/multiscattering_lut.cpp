@@ -65,21 +65,25 @@ struct SunPairs {
 // are a geometric series in <f'> for the mean, Psi_ms f'(w) for its shape.
 void MultiScatteringLut::store_row(int j, int n_phi, const std::vector<Spectrum4>& m0,
                                    const std::vector<Spectrum4>& m1, const std::vector<Spectrum4>& m2,
-                                   const Spectrum4& f0, const Spectrum4& f1, const Spectrum4& f2) {
+                                   const std::vector<Spectrum4>& m_up, const Spectrum4& f0,
+                                   const Spectrum4& f1, const Spectrum4& f2, const Spectrum4& f_up) {
     const int size = texture_.width();
     const Spectrum4 series = 1.0f / glm::max(Spectrum4(1.0f) - f0, Spectrum4(1e-3f));
     for (int i = 0; i < size; ++i) {
-        Spectrum4 s0(0.0f), s1(0.0f), s2(0.0f);
+        Spectrum4 s0(0.0f), s1(0.0f), s2(0.0f), s_up(0.0f);
         for (int b = 0; b < n_phi; ++b) {
             const std::size_t l = std::size_t(b) * size + i;
             s0 += m0[l];
             s1 += m1[l];
             s2 += m2[l];
+            s_up += m_up[l];
         }
         const Spectrum4 psi = s0 * series;
         texture_.at(i, j) = psi;
         dipole_.at(i, j) = 3.0f * (s1 + psi * f1);
         quadrupole_.at(i, j) = 5.0f * (s2 + psi * f2);
+        // The upper hemisphere's mean; never above twice the sphere's (rounding).
+        upper_.at(i, j) = glm::min(2.0f * (s_up + psi * f_up), 2.0f * psi);
     }
 }
 
@@ -106,7 +110,8 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
       mie_chi2_(mie_phase_moment(batch.mie_phase_model(), 2, batch.mie_g())),
       texture_(size, size),
       dipole_(size, size),
-      quadrupole_(size, size) {
+      quadrupole_(size, size),
+      upper_(size, size) {
     if (directions_sqrt < 2 || directions_sqrt % 2 != 0)
         throw InvalidArgument("directions_sqrt", "must be an even number >= 2");
     const double R = bottom_, top = top_;
@@ -130,8 +135,8 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
         // Per pair, this ray's sums of w sigma_R T_sun and w sigma_M T_sun, then the light
         // L' it brings (phases applied, ground added).
         std::vector<Float4> sum_r_buf(n_pairs), sum_m_buf(n_pairs), ground_buf(n_pairs);
-        // Per pair, <L'>, <L' P_1>, <L' P_2> summed over the directions.
-        std::vector<Spectrum4> m0_buf(n_pairs), m1_buf(n_pairs), m2_buf(n_pairs);
+        // Per pair, <L'>, <L' P_1>, <L' P_2> and <L' 1_up> summed over the directions.
+        std::vector<Spectrum4> m0_buf(n_pairs), m1_buf(n_pairs), m2_buf(n_pairs), up_buf(n_pairs);
         int* const texel = texel_buf.data();
         float* const fx = fx_buf.data();
         float* const fraction = fraction_buf.data();
@@ -142,8 +147,9 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
         for (int j = rows.begin(); j != rows.end(); ++j) {
             const double r =
                 R + (top - R) * clamp01(double(unit_from_texcoord((float(j) + 0.5f) / float(size), size)));
-            for (auto* m : {&m0_buf, &m1_buf, &m2_buf}) std::fill(m->begin(), m->end(), Spectrum4(0.0f));
-            Spectrum4 f0(0.0f), f1(0.0f), f2(0.0f);  // <f'>, <f' P_1>, <f' P_2>
+            for (auto* m : {&m0_buf, &m1_buf, &m2_buf, &up_buf})
+                std::fill(m->begin(), m->end(), Spectrum4(0.0f));
+            Spectrum4 f0(0.0f), f1(0.0f), f2(0.0f), f_up(0.0f);  // <f'>, <f' P_1>, <f' P_2>, <f' 1_up>
             for (int a = 0; a < 2 * n_half; ++a) {
                 const double mu = a < n_half ? gl_x[std::size_t(a)] : -gl_x[std::size_t(a - n_half)];
                 // This cosine's weight in the mean over the sphere (each hemisphere's sum to 1),
@@ -180,6 +186,8 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                 f0 += f * w_mu;
                 f1 += f * (w_mu * p1);
                 f2 += f * (w_mu * p2);
+                const float in_up = a < n_half ? 1.0f : 0.0f;  // the indicator 1_up
+                f_up += f * (w_mu * in_up);
                 if (hits_ground) {
                     // Sun light reflected by the Lambertian ground at the ray's end, where
                     // mu_s = (r mu_s + d nu) / R.
@@ -201,9 +209,10 @@ MultiScatteringLut::MultiScatteringLut(const AtmosphereBatch& batch, const Trans
                     m0_buf[l] += L;
                     m1_buf[l] += L * p1;
                     m2_buf[l] += L * p2;
+                    up_buf[l] += L * in_up;
                 }
             }
-            store_row(j, n_phi, m0_buf, m1_buf, m2_buf, f0, f1, f2);
+            store_row(j, n_phi, m0_buf, m1_buf, m2_buf, up_buf, f0, f1, f2, f_up);
         }
     });
 }

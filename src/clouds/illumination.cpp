@@ -22,23 +22,35 @@ glm::dvec3 unit_sun(const glm::dvec3& s) {
 }  // namespace
 
 ConstantIllumination::ConstantIllumination(const glm::dvec3& sun_direction, std::vector<float> sun_irradiance,
-                                           std::vector<float> ambient_radiance)
-    : s_(unit_sun(sun_direction)), sun_(std::move(sun_irradiance)), ambient_(std::move(ambient_radiance)) {
-    if (sun_.empty() || sun_.size() != ambient_.size())
-        throw InvalidArgument("ambient_radiance",
-                              fmt::format("must have as many channels as sun_irradiance ({}), got {}",
-                                          sun_.size(), ambient_.size()));
+                                           std::vector<float> sky_radiance)
+    : ConstantIllumination(sun_direction, std::move(sun_irradiance), sky_radiance, sky_radiance) {}
+
+ConstantIllumination::ConstantIllumination(const glm::dvec3& sun_direction, std::vector<float> sun_irradiance,
+                                           std::vector<float> sky_radiance,
+                                           std::vector<float> ground_radiance)
+    : s_(unit_sun(sun_direction)),
+      sun_(std::move(sun_irradiance)),
+      above_(std::move(sky_radiance)),
+      below_(std::move(ground_radiance)) {
+    for (const auto& [name, v] : {std::pair<const char*, const std::vector<float>*>{"sky_radiance", &above_},
+                                  {"ground_radiance", &below_}})
+        if (sun_.empty() || sun_.size() != v->size())
+            throw InvalidArgument(
+                name, fmt::format("must have as many channels as sun_irradiance ({}), got {}", sun_.size(),
+                                  v->size()));
     for (std::size_t c = 0; c < sun_.size(); ++c) {
         require_in_range(fmt::format("sun_irradiance[{}]", c), sun_[c], 0.0, 1e9);
-        require_in_range(fmt::format("ambient_radiance[{}]", c), ambient_[c], 0.0, 1e9);
+        require_in_range(fmt::format("sky_radiance[{}]", c), above_[c], 0.0, 1e9);
+        require_in_range(fmt::format("ground_radiance[{}]", c), below_[c], 0.0, 1e9);
     }
 }
 
 void ConstantIllumination::sun_irradiance(const glm::dvec3&, float* out) const {
     std::copy(sun_.begin(), sun_.end(), out);
 }
-void ConstantIllumination::ambient_radiance(const glm::dvec3&, float* out) const {
-    std::copy(ambient_.begin(), ambient_.end(), out);
+void ConstantIllumination::sky_radiance(const glm::dvec3&, float* above, float* below) const {
+    std::copy(above_.begin(), above_.end(), above);
+    std::copy(below_.begin(), below_.end(), below);
 }
 
 AtmosphereIllumination::AtmosphereIllumination(const Atmosphere& atmosphere, const Observer& observer,
@@ -63,14 +75,17 @@ void AtmosphereIllumination::sun_irradiance(const glm::dvec3& p, float* out) con
     }
 }
 
-void AtmosphereIllumination::ambient_radiance(const glm::dvec3& p, float* out) const {
+void AtmosphereIllumination::sky_radiance(const glm::dvec3& p, float* above, float* below) const {
     const glm::dvec3 q = p - centre_;
     const double r = glm::length(q);
     const double mu_s = clamp_cosine(glm::dot(q, s_) / r);
     for (const auto& b : luts_->batches()) {
-        const Spectrum4 l = b->medium.solar_irradiance() * b->multiscattering.psi(r, mu_s);
-        store_channels(glm::max(l, Spectrum4(0.0f)), b->medium.channel_count(),
-                       out + b->medium.first_channel());
+        Spectrum4 up, down;
+        b->multiscattering.hemispheres(r, mu_s, up, down);
+        const Spectrum4 e = b->medium.solar_irradiance();
+        const int n = b->medium.channel_count(), first = b->medium.first_channel();
+        store_channels(glm::max(e * up, Spectrum4(0.0f)), n, above + first);
+        store_channels(glm::max(e * down, Spectrum4(0.0f)), n, below + first);
     }
 }
 

@@ -92,7 +92,7 @@ void check_rays(std::span<const glm::dvec3> origins, std::span<const glm::dvec3>
 // decays (albedo < 1), towards the local zenith. Each is null where the march does not
 // need it or marches a ray per sample instead (shadow_grid off). Filled lazily by the rays.
 struct ShadowGrids {
-    std::unique_ptr<OpticalDepthGrid> sun, anti, side, back, sky;
+    std::unique_ptr<OpticalDepthGrid> sun, anti, side, back, sky, ground;
 };
 
 // The per-sample light of the header: the sun's weight (single and multiple scattering)
@@ -101,7 +101,7 @@ class SampleLight {
 public:
     struct Cursors {
         std::vector<MajorantSegment> light_segs;  // a shadow march's segments (no grid)
-        OpticalDepthGrid::Cursor sun, sky, anti, side, back;
+        OpticalDepthGrid::Cursor sun, sky, ground, anti, side, back;
     };
     // The grid levels a sample reads (the sun's, its other half's, the sides').
     struct Levels {
@@ -110,6 +110,7 @@ public:
     };
     // The phase values of one ray's direction: nu = d . s is the same at every sample.
     struct RayPhase {
+        glm::dvec3 d{0.0};  // the view ray's direction
         double nu = 0.0, twice = 0.0;
         std::vector<double> octave;
     };
@@ -135,6 +136,9 @@ public:
         // depth (see the header): 0 for albedo 1.
         kappa_ = std::sqrt(std::max(0.0, 3.0 * (1.0 - sc.albedo) * (1.0 - sc.albedo * mean_g_)));
         ambient_decay_ = options.ambient_steps > 0 && kappa_ > 0.0;
+        // A sky brighter above the horizon than below: the depths up and down set the mix.
+        two_skies_ = !light.uniform_sky();
+        transport_ = 1.0 - sc.albedo * mean_g_;
         // The cloud's chord across the sun line, for the diffusion's sides (diffusion.hpp):
         // along the horizontal direction normal to the sun (x where the sun is at the
         // zenith), both ways.
@@ -164,16 +168,19 @@ public:
 
     void ray_phase(const glm::dvec3& d, RayPhase& ph) const {
         const CloudScattering& sc = options_.scattering;
+        ph.d = d;
         ph.nu = glm::dot(d, s_);
         ph.octave.resize(options_.octaves);
         for (int i = 0; i < options_.octaves; ++i) ph.octave[i] = sc.phase(ph.nu, oc_[i]);
         ph.twice = diffusion_ ? sc.phase.twice(ph.nu) : 0.0;
     }
 
-    // The sun's and the sky's weights at sample x (the factors of sigma_s E and sigma_s
-    // L_sky in the source).
-    std::pair<double, double> weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph,
-                                      Cursors& cur) const {
+    // The weights at sample x: the factors of sigma_s E, sigma_s L_above and sigma_s
+    // L_below in the source.
+    struct Weights {
+        double sun = 0.0, above = 1.0, below = 0.0;
+    };
+    Weights weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph, Cursors& cur) const {
         const int steps = options_.light_steps;
         const double tau_sun = depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur, lv.near);
         // The cloud's depth away from the sun along the sun line through x: the slab's
@@ -195,13 +202,32 @@ public:
             for (int i = 0; i < options_.octaves; ++i, fi *= f)
                 sun_w += ob_[i] * fi * std::exp(-oa_[i] * tau_sun) * ph.octave[i];
         }
-        double sky_w = 1.0;
-        if (ambient_decay_) {
+        Weights w;
+        w.sun = sun_w;
+        if (two_skies_ && options_.ambient_steps == 0) {
+            w.above = w.below = 0.5;  // no depths: the two skies' mean, as in a thin cloud
+        } else if (two_skies_) {
+            const glm::dvec3 z = light_.zenith(x);
+            const double tau_up = depth_along(grids_.sky, cur.sky, lv.sun, x, z, options_.ambient_steps, cur);
+            const double tau_down =
+                depth_along(grids_.ground, cur.ground, lv.sun, x, -z, options_.ambient_steps, cur);
+            // Eddington's conservative slab between the two skies (see the header): the
+            // diffuse field is linear in the scaled depth, Marshak's conditions at the faces;
+            // its net flux, scattered with the phase's mean cosine towards the viewer.
+            const double D = transport_ * (tau_up + tau_down) + 4.0 / 3.0;
+            const double flux = mean_g_ * glm::dot(ph.d, z) / D;
+            w.below = std::max(0.0, (transport_ * tau_up + 2.0 / 3.0) / D - flux);
+            w.above = std::max(0.0, (transport_ * tau_down + 2.0 / 3.0) / D + flux);
+            if (ambient_decay_) {
+                w.above *= std::exp(-kappa_ * tau_up);
+                w.below *= std::exp(-kappa_ * tau_down);
+            }
+        } else if (ambient_decay_) {
             const double tau_up =
                 depth_along(grids_.sky, cur.sky, lv.sun, x, light_.zenith(x), options_.ambient_steps, cur);
-            sky_w = std::exp(-kappa_ * tau_up);
+            w.above = std::exp(-kappa_ * tau_up);
         }
-        return {sun_w, sky_w};
+        return w;
     }
 
 private:
@@ -230,9 +256,13 @@ private:
             grids_.side = along(across_, options_.light_steps);
             grids_.back = along(-across_, options_.light_steps);
         }
-        if (ambient_decay_)
+        if (ambient_decay_ || (two_skies_ && options_.ambient_steps > 0))
             grids_.sky = std::make_unique<OpticalDepthGrid>(
                 density_, [&light = light_](const glm::dvec3& p) { return light.zenith(p); }, h0,
+                options_.light_distance_m, options_.ambient_steps);
+        if (two_skies_ && options_.ambient_steps > 0)
+            grids_.ground = std::make_unique<OpticalDepthGrid>(
+                density_, [&light = light_](const glm::dvec3& p) { return -light.zenith(p); }, h0,
                 options_.light_distance_m, options_.ambient_steps);
     }
 
@@ -253,8 +283,8 @@ private:
     double mean_g_;  // the phase's mean cosine g
     SimilarityScaling similarity_;
     std::vector<double> ob_, oa_, oc_;
-    double kappa_ = 0.0;
-    bool ambient_decay_ = false, diffusion_ = false, sized_ = false;
+    double kappa_ = 0.0, transport_ = 1.0;  // transport_: 1 - albedo g, the diffusion's scaling
+    bool ambient_decay_ = false, two_skies_ = false, diffusion_ = false, sized_ = false;
     ShadowGrids grids_;
 };
 
@@ -290,7 +320,7 @@ public:
 private:
     struct Scratch {
         std::vector<MajorantSegment> segs;
-        std::vector<float> sun, sky;
+        std::vector<float> sun, above, below;
         std::vector<double> acc;
         SampleLight::Cursors cursors;
         SampleLight::RayPhase phase;
@@ -299,8 +329,8 @@ private:
     // Marches ray r into the result.
     void march_ray(std::size_t r, Scratch& scratch) const {
         const std::size_t nc = light_.channels();
-        auto& [segs, sun, sky, acc, cursors, phase] = scratch;
-        sun.resize(nc), sky.resize(nc), acc.resize(nc);
+        auto& [segs, sun, above, below, acc, cursors, phase] = scratch;
+        sun.resize(nc), above.resize(nc), below.resize(nc), acc.resize(nc);
         const glm::dvec3 d = glm::normalize(directions_[r]);
         const CloudRay ray{origins_[origins_.size() == 1 ? 0 : r], d};
         const double t_end = max_distances_.empty() ? options_.max_distance_m
@@ -354,13 +384,14 @@ private:
                 // denser rays share the vertices of their own level already.
                 levels.near = footprint && options_.ray_width_m + options_.ray_spread_rad * t >=
                                                0.5 * sun_grid->spacing_m(levels.sun);
-                const auto [sun_w, sky_w] = sample_light_.weights(x, levels, phase, cursors);
+                const SampleLight::Weights lw = sample_light_.weights(x, levels, phase, cursors);
                 light_.sun_irradiance(x, sun.data());
-                light_.ambient_radiance(x, sky.data());
+                light_.sky_radiance(x, above.data(), below.data());
                 // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
                 const double step_opacity = 1.0 - std::exp(-sigma_t * h);
                 const double w = T * step_opacity * albedo;
-                for (std::size_t c = 0; c < nc; ++c) acc[c] += w * (sun[c] * sun_w + sky[c] * sky_w);
+                for (std::size_t c = 0; c < nc; ++c)
+                    acc[c] += w * (sun[c] * lw.sun + above[c] * lw.above + below[c] * lw.below);
                 depth_sum += t * T * step_opacity;
                 opacity_sum += T * step_opacity;
                 T *= 1.0 - step_opacity;

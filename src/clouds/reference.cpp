@@ -84,7 +84,7 @@ CloudReferenceResult render_clouds_reference(const CloudDensity& density, const 
     ProgressTracker tracker(progress, n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1), [&](const auto& range) {
         std::vector<MajorantSegment> segs, view_segs;
-        std::vector<float> e(nc), sky(nc);
+        std::vector<float> e(nc), above(nc), below(nc);
         std::vector<double> path_l(nc), sum(nc), sum2(nc);
         for (std::size_t r = range.begin(); r != range.end(); ++r) {
             const glm::dvec3 d0 = glm::normalize(directions[r]);
@@ -135,9 +135,12 @@ CloudReferenceResult render_clouds_reference(const CloudDensity& density, const 
                     density.segments(ray, kFarAway, segs);
                     t = segs.empty() ? -1.0 : delta_tracking(density, ray, segs, rng);
                 }
-                if (bounce > 0 && t < 0.0) {  // left the cloud: the sky at the last vertex
-                    light.ambient_radiance(last, sky.data());
-                    for (std::size_t c = 0; c < nc; ++c) path_l[c] += beta * sky[c];
+                if (bounce > 0 && t < 0.0) {
+                    // Left the cloud: the sky at the last vertex, from the hemisphere the
+                    // path leaves into.
+                    light.sky_radiance(last, above.data(), below.data());
+                    const bool up = glm::dot(ray.direction, light.zenith(last)) > 0.0;
+                    for (std::size_t c = 0; c < nc; ++c) path_l[c] += beta * (up ? above[c] : below[c]);
                 }
                 for (std::size_t c = 0; c < nc; ++c) {
                     sum[c] += path_l[c];

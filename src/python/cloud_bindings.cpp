@@ -74,6 +74,8 @@ or neither; 1-D, one value per channel, as many channels as you like, W m^-2 and
 W m^-2 sr^-1): the sun's irradiance at normal incidence everywhere and a uniform sky of
 that radiance from every direction, below included (a Cycles sun lamp of that strength
 and a world of that colour); atm and altitude_m then do not light the cloud.
+ground_radiance: with them, the radiance from below the horizon instead (a world of one
+colour above the horizon and another below); None: ambient_radiance all round.
 g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
 (include/welkin/clouds/phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
 )doc";
@@ -83,8 +85,8 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
                          const py::object& origin, const std::string& method, int max_steps, int light_steps,
                          int octaves, double albedo, int paths, std::uint64_t seed,
                          const py::object& progress, const py::object& sun_irradiance,
-                         const py::object& ambient_radiance, double g_forward, double g_back,
-                         double w_forward) {
+                         const py::object& ambient_radiance, const py::object& ground_radiance,
+                         double g_forward, double g_back, double w_forward) {
     CloudScattering scattering;
     scattering.albedo = albedo;
     scattering.phase = CloudPhase{g_forward, g_back, w_forward};
@@ -98,11 +100,28 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
     if (sun_irradiance.is_none() != ambient_radiance.is_none())
         throw InvalidArgument(sun_irradiance.is_none() ? "sun_irradiance" : "ambient_radiance",
                               "must be given together with the other (a constant light), or both left None");
+    if (!ground_radiance.is_none() && sun_irradiance.is_none())
+        throw InvalidArgument("ground_radiance",
+                              "needs sun_irradiance and ambient_radiance (a constant light)");
     std::unique_ptr<const CloudIllumination> constant;
-    if (!sun_irradiance.is_none())
-        constant = std::make_unique<ConstantIllumination>(observer.sun_direction,
-                                                          to_spectrum(sun_irradiance, "sun_irradiance"),
-                                                          to_spectrum(ambient_radiance, "ambient_radiance"));
+    if (!sun_irradiance.is_none()) {
+        const std::vector<float> sun = to_spectrum(sun_irradiance, "sun_irradiance"),
+                                 sky = to_spectrum(ambient_radiance, "ambient_radiance"),
+                                 ground = ground_radiance.is_none()
+                                              ? sky
+                                              : to_spectrum(ground_radiance, "ground_radiance");
+        for (const auto& [name, v] :
+             {std::pair<const char*, const std::vector<float>*>{"ambient_radiance", &sky},
+              {"ground_radiance", &ground}}) {
+            if (v->size() != sun.size())
+                throw InvalidArgument(
+                    name, fmt::format("must have as many channels as sun_irradiance ({}), got {}", sun.size(),
+                                      v->size()));
+            for (std::size_t c = 0; c < v->size(); ++c)
+                require_in_range(fmt::format("{}[{}]", name, c), (*v)[c], 0.0, 1e9);
+        }
+        constant = std::make_unique<ConstantIllumination>(observer.sun_direction, sun, sky, ground);
+    }
     CloudResult result;
     run_cancellable(
         [&](Progress* p) {
@@ -312,8 +331,9 @@ A cloud density source (base class of CloudLayer and VdbClouds).
           py::arg("octaves") = lo.octaves, py::arg("albedo") = lo.scattering.albedo,
           py::arg("paths") = CloudReferenceOptions{}.paths, py::arg("seed") = lo.seed,
           py::arg("progress") = py::none(), py::arg("sun_irradiance") = py::none(),
-          py::arg("ambient_radiance") = py::none(), py::arg("g_forward") = CloudPhase{}.g_forward,
-          py::arg("g_back") = CloudPhase{}.g_back, py::arg("w_forward") = CloudPhase{}.w_forward);
+          py::arg("ambient_radiance") = py::none(), py::arg("ground_radiance") = py::none(),
+          py::arg("g_forward") = CloudPhase{}.g_forward, py::arg("g_back") = CloudPhase{}.g_back,
+          py::arg("w_forward") = CloudPhase{}.w_forward);
 }
 
 }  // namespace welkin::python

@@ -724,7 +724,7 @@ def cloud_passes(scene: typing.Any, depth: typing.Any = None, *, progress: typin
     volume ("clouds.volumes[i].file", with the file's path and the reason), a depth of the
     wrong shape or with NaN / negative values ("depth"), a bad row range ("rows").
     """
-def cloud_radiance(clouds: CloudDensity, atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, *, origin: typing.Any = (0.0, 0.0, 0.0), method: str = 'fast', max_steps: int = 96, light_steps: int = 8, octaves: int = 4, albedo: float = 1.0, paths: int = 256, seed: int = 1, progress: typing.Any = None, sun_irradiance: typing.Any = None, ambient_radiance: typing.Any = None, g_forward: float = 0.8, g_back: float = -0.3, w_forward: float = 0.8) -> tuple:
+def cloud_radiance(clouds: CloudDensity, atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, *, origin: typing.Any = (0.0, 0.0, 0.0), method: str = 'fast', max_steps: int = 96, light_steps: int = 8, octaves: int = 4, albedo: float = 1.0, paths: int = 256, seed: int = 1, progress: typing.Any = None, sun_irradiance: typing.Any = None, ambient_radiance: typing.Any = None, ground_radiance: typing.Any = None, g_forward: float = 0.8, g_back: float = -0.3, w_forward: float = 0.8) -> tuple:
     """
     Cloud lighting for many view rays, lit by the atmosphere.
     
@@ -744,6 +744,8 @@ def cloud_radiance(clouds: CloudDensity, atmosphere: Atmosphere, altitude_m: flo
     W m^-2 sr^-1): the sun's irradiance at normal incidence everywhere and a uniform sky of
     that radiance from every direction, below included (a Cycles sun lamp of that strength
     and a world of that colour); atm and altitude_m then do not light the cloud.
+    ground_radiance: with them, the radiance from below the horizon instead (a world of one
+    colour above the horizon and another below); None: ambient_radiance all round.
     g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
     (include/welkin/clouds/phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
     """

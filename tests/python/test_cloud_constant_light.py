@@ -139,3 +139,45 @@ def test_phase_parameters(ball):
     for name, value in (("g_forward", 1.0), ("g_back", -1.5), ("w_forward", 1.2)):
         with pytest.raises(ValueError, match=name):
             welkin.cloud_radiance(ball, atm, 0.0, sun, d, **{name: value})
+    with pytest.raises(ValueError, match="ground_radiance"):
+        welkin.cloud_radiance(ball, atm, 0.0, (0, 0, 1), d, ground_radiance=[1.0])
+    with pytest.raises(ValueError, match="ground_radiance"):
+        welkin.cloud_radiance(
+            ball,
+            atm,
+            0.0,
+            (0, 0, 1),
+            d,
+            sun_irradiance=[1.0],
+            ambient_radiance=[1.0],
+            ground_radiance=[1.0, 2.0],
+        )
+    with pytest.raises(ValueError, match=r"ground_radiance\[0\]"):
+        welkin.cloud_radiance(
+            ball, atm, 0.0, (0, 0, 1), d, sun_irradiance=[1.0], ambient_radiance=[1.0], ground_radiance=[-1.0]
+        )
+
+
+@pytest.mark.parametrize("method", ["fast", "reference"])
+def test_sky_and_ground_add_up(ball, method):
+    # The light is linear in the sky: a sky above the horizon only plus the ground below
+    # only is the uniform sky, for both integrators (the reference's paths are the same
+    # for the same seed; the march's mix of the two skies has weights that sum to 1), seen
+    # from below the ball and from above it.
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    kw = dict(method=method, paths=64, sun_irradiance=[0.0])
+    for origin in ((0.0, 0.0, -300.0), (0.0, 0.0, 300.0)):
+        aim = np.array([0.0, 1000.0, 0.0]) - np.array(origin)
+        d = aim / np.linalg.norm(aim) + np.array([[0.0, 0.0, z] for z in (-0.02, 0.0, 0.02)])
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        sky, _, _ = welkin.cloud_radiance(
+            ball, atm, 0.0, (0, 0, 1), d, origin=origin, ambient_radiance=[1.0], ground_radiance=[0.0], **kw
+        )
+        ground, _, _ = welkin.cloud_radiance(
+            ball, atm, 0.0, (0, 0, 1), d, origin=origin, ambient_radiance=[0.0], ground_radiance=[1.0], **kw
+        )
+        both, _, _ = welkin.cloud_radiance(
+            ball, atm, 0.0, (0, 0, 1), d, origin=origin, ambient_radiance=[1.0], **kw
+        )
+        np.testing.assert_allclose(sky + ground, both, rtol=1e-5, atol=1e-7)
+        assert np.all(sky > 0.01) and np.all(ground > 0.01) and np.all(both > 0.05)

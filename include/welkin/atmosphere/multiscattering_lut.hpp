@@ -72,9 +72,17 @@
 // moments so that the truncated field itself stays >= 0 would also do, but it flattens
 // the horizon peak near the ground and costs accuracy (docs/validation.md).
 //
-// Cost: three 32 x 32 textures instead of one, filled by the same loop (one more sum per
-// step and pair, and the phases once per ray and pair). At lookup (*) takes three texels at
-// one coordinate, and the weights sigma_k chi_kl P_l(mu_v) depend on the step alone, so a
+// The sky's two hemispheres. A cloud lit by this field (clouds/illumination.hpp) is lit
+// from above by the sky and from below by the ground and the air over it, which a cloud's
+// base sees far dimmer than its top sees the sky. The same sums split by the sign of mu_w
+// give the field's mean over each hemisphere: with 1_up the indicator of mu_w > 0,
+//   L_above = 2 (<L' 1_up> + Psi_ms <f' 1_up>),   L_below = 2 Psi_ms - L_above,
+// a fourth texture (L_above; L_below follows, so the two always average to Psi_ms). The
+// truncated series would give a_0 +- a_1 / 2 instead, which drops every odd moment above 1.
+//
+// Cost: four 32 x 32 textures instead of one (the fourth, L_above, for clouds), filled by
+// the same loop (one more sum per step and pair, and the phases once per ray and pair). At lookup (*) takes
+// three texels at one coordinate, and the weights sigma_k chi_kl P_l(mu_v) depend on the step alone, so a
 // sky-view row combines the three texel rows once per step and each view does one lookup.
 #pragma once
 
@@ -98,6 +106,15 @@ public:
         const float v =
             texcoord_from_unit(float(clamp01((r - bottom_) / (top_ - bottom_))), texture_.height());
         return texture_.sample(u, v);
+    }
+
+    // The field's mean over the upper and the lower hemisphere about the local zenith
+    // (sr^-1 per unit sun illuminance; see "The sky's two hemispheres"); their mean is psi.
+    void hemispheres(double r, double mu_s, Spectrum4& above, Spectrum4& below) const {
+        const float u = texcoord_from_unit(float(0.5 * (mu_s + 1.0)), texture_.width());
+        const float v = v_at_radius(r);
+        above = upper_.sample(u, v);
+        below = glm::max(2.0f * texture_.sample(u, v) - above, Spectrum4(0.0f));
     }
 
     // psi with the radius-only part (the v coordinate) computed once.
@@ -170,15 +187,16 @@ public:
     const Texture2D& texture() const { return texture_; }        // a_0 = Psi_ms
     const Texture2D& dipole() const { return dipole_; }          // a_1
     const Texture2D& quadrupole() const { return quadrupole_; }  // a_2
+    const Texture2D& upper() const { return upper_; }            // L_above
 
 private:
     void store_row(int j, int n_phi, const std::vector<Spectrum4>& m0, const std::vector<Spectrum4>& m1,
-                   const std::vector<Spectrum4>& m2, const Spectrum4& f0, const Spectrum4& f1,
-                   const Spectrum4& f2);
+                   const std::vector<Spectrum4>& m2, const std::vector<Spectrum4>& m_up, const Spectrum4& f0,
+                   const Spectrum4& f1, const Spectrum4& f2, const Spectrum4& f_up);
 
     double bottom_, top_;
     double mie_chi1_, mie_chi2_;
-    Texture2D texture_, dipole_, quadrupole_;
+    Texture2D texture_, dipole_, quadrupole_, upper_;
 };
 
 }  // namespace welkin

@@ -83,20 +83,41 @@
 //    scattering do in an optically thin medium (order n+1 / order n ~ tau, e.g. Hansen &
 //    Travis 1974, "Light scattering in planetary atmospheres", sec. 3) and tends to
 //    Wrenninge's b^i in a thick one (docs/validation.md, "Clouds").
-//  * Sky light. The sky is an isotropic radiance L_sky(x) around the cloud
-//    (clouds/illumination.hpp). In a uniform isotropic field a conservative medium
-//    (albedo 1) changes nothing: the radiance is L_sky everywhere inside, at all orders
-//    of scattering (in-scattering sigma_s L equals extinction sigma_t L), so the source
-//    is exactly S_sky = sigma_s L_sky, however deep the point. With absorption the field
-//    decays into the cloud; diffusion theory gives the asymptotic decay exp(-kappa tau)
-//    with kappa = sqrt(3 (1 - albedo) (1 - albedo g)) per unit optical depth (the inverse
-//    diffusion length, sigma_a and the transport coefficient sigma_t (1 - albedo g); e.g.
-//    Bohren & Clothiaux 2006, "Fundamentals of Atmospheric Radiation", ch. 6), g the
-//    phase's mean cosine. The march takes tau from one ray towards the local zenith
-//    (ambient_steps steps; skipped for albedo 1; on a second grid with shadow_grid):
-//        S_sky = sigma_s L_sky(x) exp(-kappa tau_up).
-//    Exact for albedo 1 (tests/cpp/test_cloud_lighting.cpp, UniformSky...), an estimate
-//    otherwise (the true depth is over all directions, not the zenith alone).
+//  * Sky light. The sky is a radiance L_a(x) from above the local horizon and L_b(x) from
+//    below it (clouds/illumination.hpp). In a uniform isotropic field (L_a = L_b = L) a
+//    conservative medium (albedo 1) changes nothing: the radiance is L everywhere inside,
+//    at all orders of scattering (in-scattering sigma_s L equals extinction sigma_t L), so
+//    the source is exactly S_sky = sigma_s L, however deep the point. With two skies the
+//    field inside is a mix that depends on the depths to the cloud's top and base. Take
+//    the cloud at x as a plane-parallel conservative slab, its scaled optical depths
+//    tau'_up and tau'_down (tau' = (1 - albedo g) tau, the transport depth) towards the
+//    zenith and the nadir, D = tau'_up + tau'_down + 4/3. In Eddington's approximation the
+//    radiance is I0 + I1 mu (mu the cosine of the light's direction with the nadir); I0 = J
+//    is linear in depth, I1 = -dJ/dtau' is constant, and Marshak's conditions, J -+ (2/3)
+//    I1 = L_a at the top and L_b at the base (isotropic radiance falling on each face),
+//    give
+//        J = L_a (tau'_down + 2/3) / D + L_b (tau'_up + 2/3) / D,   I1 = (L_a - L_b) / D
+//    (e.g. Thomas & Stamnes 1999, "Radiative Transfer in the Atmosphere and Ocean", ch. 7;
+//    Bohren & Clothiaux 2006, "Fundamentals of Atmospheric Radiation", ch. 5-6). The
+//    phase turns the dipole I1 mu into g I1 mu' (Funk-Hecke, chi_1 = g), mu' = d . z for a
+//    view ray d: light sent down to a viewer below carries the net downward flux. So
+//        w_a = (tau'_down + 2/3) / D + g (d . z) / D,  w_b = (tau'_up + 2/3) / D - g (d . z) / D,
+//    each clamped at 0 (Eddington's radiance goes negative for g > 2/3 at a face's
+//    grazing views; never below 0 here). The mix is exact for L_a = L_b, gives the mean
+//    (w = 1/2) in a thin cloud seen edge-on, and at the base of a thick slab the light let
+//    through plus L_b (tests/cpp/test_cloud_lighting.cpp, TwoSkies..., against the
+//    reference); ambient_steps = 0 takes the mean throughout.
+//    With absorption the field decays into the cloud; diffusion theory gives the asymptotic
+//    decay exp(-kappa tau) with kappa = sqrt(3 (1 - albedo) (1 - albedo g)) per unit
+//    optical depth (the inverse diffusion length, sigma_a and the transport coefficient
+//    sigma_t (1 - albedo g); Bohren & Clothiaux, ch. 6), g the phase's mean cosine, each
+//    sky's light decaying from its own face. The march takes tau_up and tau_down from one
+//    ray each towards the local zenith and nadir (ambient_steps steps; on their own grids
+//    with shadow_grid; neither for a uniform sky of albedo 1):
+//        S_sky = sigma_s (w_a L_a exp(-kappa tau_up) + w_b L_b exp(-kappa tau_down)).
+//    Exact for a uniform sky and albedo 1 (tests/cpp/test_cloud_lighting.cpp,
+//    UniformSky...), an estimate otherwise (the true depths are over all directions, not
+//    the vertical alone; the cloud is not a slab).
 //
 // Outputs per ray (premultiplied, "over" the background): the in-scattered radiance per
 // channel (W m^-2 sr^-1 nm^-1, the illumination's channels), the transmittance T (grey:
@@ -139,7 +160,7 @@ struct CloudLightingOptions {
     CloudScattering scattering;
     int max_steps = 96;                // along each view ray, [1, 4096]
     int light_steps = 8;               // along each shadow ray, [1, 256]
-    int ambient_steps = 4;             // along the ray towards the zenith, [0, 256] (0: no decay)
+    int ambient_steps = 4;             // along the rays to the zenith and nadir, [0, 256] (0: see above)
     double light_distance_m = 4000.0;  // how far the shadow and sky rays look, (0, 1e6]
     CloudMultipleScattering multiple_scattering =
         CloudMultipleScattering::diffusion;  // orders >= 2 (see above)

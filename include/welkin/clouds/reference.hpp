@@ -14,10 +14,11 @@
 //    tracking (Cramer 1978; Novak et al. 2014, "Residual ratio tracking"), the product of
 //    (1 - sigma_t / majorant) over the tentative collisions; then a new direction is
 //    sampled from the phase function (exactly, so the weight is unchanged).
-//  * A path leaving the cloud after at least one scattering picks up the sky radiance
-//    L_sky at its last vertex: the same isotropic sky as the fast march's, so both solve
-//    the same problem. (The view ray leaving without scattering is the transmittance T,
-//    estimated separately by ratio tracking of the view ray: the background is not ours.)
+//  * A path leaving the cloud after at least one scattering picks up the sky radiance at
+//    its last vertex from the hemisphere it leaves into (above or below that point's
+//    horizon): the same sky as the fast march's, so both solve the same problem. (The view ray leaving
+//    without scattering is the transmittance T, estimated separately by ratio tracking of the view ray: the
+//    background is not ours.)
 //  * No Russian roulette (albedo ~1 would not end paths); a path is cut after max_bounces
 //    scatterings, and the fraction of paths cut is reported (truncated_fraction), which
 //    bounds the energy lost.
