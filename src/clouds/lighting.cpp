@@ -208,9 +208,12 @@ public:
             w.above = w.below = 0.5;  // no depths: the two skies' mean, as in a thin cloud
         } else if (two_skies_) {
             const glm::dvec3 z = light_.zenith(x);
-            const double tau_up = depth_along(grids_.sky, cur.sky, lv.sun, x, z, options_.ambient_steps, cur);
+            // Read at the sides' level: the mix, like the sides' leak, is set by the depths to
+            // the cloud's faces, a large-scale quantity the diffuse light smooths.
+            const double tau_up =
+                depth_along(grids_.sky, cur.sky, lv.side, x, z, options_.ambient_steps, cur);
             const double tau_down =
-                depth_along(grids_.ground, cur.ground, lv.sun, x, -z, options_.ambient_steps, cur);
+                depth_along(grids_.ground, cur.ground, lv.side, x, -z, options_.ambient_steps, cur);
             // Eddington's conservative slab between the two skies (see the header): the
             // diffuse field is linear in the scaled depth, Marshak's conditions at the faces;
             // its net flux, scattered with the phase's mean cosine towards the viewer.

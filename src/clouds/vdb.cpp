@@ -17,6 +17,7 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
+#include <oneapi/tbb/global_control.h>
 #include <openvdb/Exceptions.h>
 #include <openvdb/io/DelayedLoadMetadata.h>
 #include <openvdb/io/File.h>
@@ -258,11 +259,12 @@ private:
 // host's heap is never touched by it. The price: the grid is copied once more, and the
 // host holds that copy while it builds the grid.
 //
-// No TBB in the child: fork copies the calling thread alone, and TBB's scheduler, whose
-// worker threads stay behind in the host, may hold its locks at that moment; OpenVDB's
-// writer (LeafManager in Archive::writeGrid) and its tree counts (memUsage) run parallel
-// loops, and under the fuzzer a child hung for good on a futex in libtbb there. The
-// child's work is serial: OpenVDB's reader, a serial memory count, and GridPipe's writer.
+// TBB and fork: fork copies the calling thread alone, and TBB's scheduler, whose worker
+// threads stay behind in the host, may hold its locks at that moment; under the fuzzer
+// children hung for good on a futex in libtbb, in OpenVDB's writer (LeafManager in
+// Archive::writeGrid) and in a tree's destructor (Tree::clear). So the host ends TBB's
+// workers before it forks (run_tree_reader), and the child's own work is serial where it
+// can be: OpenVDB's reader, a serial memory count, and GridPipe's writer.
 constexpr unsigned kChildSeconds = 600;
 
 void write_all_fd(int fd, const char* data, std::size_t size) {
@@ -428,7 +430,7 @@ private:
                                     std::uint64_t max_bytes) {
     // Only async-signal-safe calls are certain after fork in a threaded host; OpenVDB's
     // reader and GridPipe's writer are serial and the allocator is fork-aware, which is what
-    // this relies on (no TBB: see above).
+    // this relies on (TBB: see above).
     for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGILL, SIGFPE, SIGALRM, SIGPIPE}) ::signal(sig, SIG_DFL);
     ::alarm(kChildSeconds);
     char tag = 'G';
@@ -480,6 +482,16 @@ std::string run_tree_reader(const std::string& path, const std::string& grid, co
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0)
         throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
+    // TBB's worker threads end here (the next parallel loop starts them again), so that no
+    // worker holds one of TBB's locks in the copy the child gets; the child's own parallel
+    // loops (OpenVDB destroys a tree with one) then start a scheduler of their own. When
+    // another thread is running TBB work at this moment, finalize declines and the fork
+    // goes ahead with the workers running: a child hung on their locks is then stopped by
+    // kChildSeconds.
+    {
+        oneapi::tbb::task_scheduler_handle handle{oneapi::tbb::attach{}};
+        (void)oneapi::tbb::finalize(handle, std::nothrow);
+    }
     const pid_t pid = ::fork();
     if (pid == 0) {
         ::close(fds[0]);
