@@ -476,7 +476,7 @@ bool read_pipe(int fd, std::string& data, std::uint64_t cap) {
     }
 }
 
-// The child's result: the grid's stream (tag stripped) or an exception naming the file.
+// The child's result: the grid's GridPipe records (tag stripped) or an exception naming the file.
 std::string run_tree_reader(const std::string& path, const std::string& grid, const std::string& where,
                             std::uint64_t max_bytes) {
     int fds[2];
@@ -503,7 +503,7 @@ std::string run_tree_reader(const std::string& path, const std::string& grid, co
         throw IoError(fmt::format("{}: cannot start the reader process: {}", where, std::strerror(errno)));
     }
     std::string data;
-    // The stream of a grid within the limit: its voxels, its topology and some metadata.
+    // A grid within the limit: its leaves' values and masks, its tiles (GridPipe).
     const bool complete = read_pipe(fds[0], data, 2 * max_bytes + (std::uint64_t(1) << 24));
     if (!complete) ::kill(pid, SIGKILL);
     ::close(fds[0]);
