@@ -440,6 +440,9 @@ private:
         file.open(/*delayLoad=*/false);
         const openvdb::GridBase::Ptr g = file.readGrid(grid);
         file.close();
+        // Never destroyed: the child ends with _exit, and a tree's destructor runs a
+        // parallel loop (Tree::clear), which needs TBB (see above).
+        new openvdb::GridBase::Ptr(g);
         const openvdb::FloatGrid::Ptr fg = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
         if (!fg) throw openvdb::TypeError("the grid is not a FloatGrid");
         const openvdb::Index64 memory = openvdb::tools::memUsage(fg->tree(), /*threaded=*/false);
