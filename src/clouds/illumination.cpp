@@ -22,25 +22,26 @@ glm::dvec3 unit_sun(const glm::dvec3& s) {
 }  // namespace
 
 ConstantIllumination::ConstantIllumination(const glm::dvec3& sun_direction, std::vector<float> sun_irradiance,
-                                           std::vector<float> sky_radiance)
-    : ConstantIllumination(sun_direction, std::move(sun_irradiance), sky_radiance, sky_radiance) {}
+                                           std::vector<float> ambient_radiance)
+    : ConstantIllumination(sun_direction, std::move(sun_irradiance), ambient_radiance, ambient_radiance) {}
 
 ConstantIllumination::ConstantIllumination(const glm::dvec3& sun_direction, std::vector<float> sun_irradiance,
-                                           std::vector<float> sky_radiance,
+                                           std::vector<float> ambient_radiance,
                                            std::vector<float> ground_radiance)
     : s_(unit_sun(sun_direction)),
       sun_(std::move(sun_irradiance)),
-      above_(std::move(sky_radiance)),
+      above_(std::move(ambient_radiance)),
       below_(std::move(ground_radiance)) {
-    for (const auto& [name, v] : {std::pair<const char*, const std::vector<float>*>{"sky_radiance", &above_},
-                                  {"ground_radiance", &below_}})
+    for (const auto& [name, v] :
+         {std::pair<const char*, const std::vector<float>*>{"ambient_radiance", &above_},
+          {"ground_radiance", &below_}})
         if (sun_.empty() || sun_.size() != v->size())
             throw InvalidArgument(
                 name, fmt::format("must have as many channels as sun_irradiance ({}), got {}", sun_.size(),
                                   v->size()));
     for (std::size_t c = 0; c < sun_.size(); ++c) {
         require_in_range(fmt::format("sun_irradiance[{}]", c), sun_[c], 0.0, 1e9);
-        require_in_range(fmt::format("sky_radiance[{}]", c), above_[c], 0.0, 1e9);
+        require_in_range(fmt::format("ambient_radiance[{}]", c), above_[c], 0.0, 1e9);
         require_in_range(fmt::format("ground_radiance[{}]", c), below_[c], 0.0, 1e9);
     }
 }

@@ -337,16 +337,17 @@ public:
     // The grid, or an exception naming `where`.
     static openvdb::FloatGrid::Ptr read(const std::string& data, const std::string& where) {
         GridPipe in(data, where);
+        const auto degenerate = [&](const std::string& why) {
+            return InvalidArgument(
+                "grid", fmt::format("{} has a degenerate transform (its voxels have no volume{}); refused",
+                                    where, why));
+        };
         const auto map = in.get<std::uint8_t>();
         if (map == 1)
             throw InvalidArgument(
                 "grid",
                 fmt::format("{} has a non-affine (frustum) transform, which Welkin does not read", where));
-        if (map == 2)
-            throw InvalidArgument("grid",
-                                  fmt::format("{} has a degenerate transform (its voxels have no volume); "
-                                              "refused",
-                                              where));
+        if (map == 2) throw degenerate("");
         if (map != 0) in.fail("an unknown transform");
         openvdb::Mat4d m;
         for (int r = 0; r < 4; ++r)
@@ -355,10 +356,7 @@ public:
         try {
             g->setTransform(openvdb::math::Transform::createLinearTransform(m));
         } catch (const openvdb::Exception& e) {
-            throw InvalidArgument("grid",
-                                  fmt::format("{} has a degenerate transform (its voxels have no volume: "
-                                              "{}); refused",
-                                              where, e.what()));
+            throw degenerate(std::string(": ") + e.what());
         }
         const std::uint64_t tiles = in.count(1 + 1 + 12 + 4);
         for (std::uint64_t i = 0; i < tiles; ++i) {
@@ -590,16 +588,9 @@ void VdbClouds::Impl::check_values(VdbCloudOptions::Negative negative) {
 void VdbClouds::Impl::set_transforms(const VdbCloudOptions& options) {
     // Transforms: index -> object from the file (OpenVDB's Mat4d acts on row vectors,
     // p' = p M, so its transpose is glm's column-vector matrix), then object -> world.
-    // A map whose matrix is (nearly) singular, e.g. a zero voxel size, makes OpenVDB's
-    // AffineMap throw ArithmeticError while it inverts it.
-    openvdb::Mat4d vm;
-    try {
-        vm = grid->transform().baseMap()->getAffineMap()->getMat4();
-    } catch (const openvdb::Exception& e) {
-        throw InvalidArgument(
-            "grid", fmt::format("{} has a degenerate transform (its voxels have no volume: {}); refused",
-                                where(), e.what()));
-    }
+    // GridPipe::read built the map from an invertible matrix (a frustum or a singular map
+    // refused there), so OpenVDB's inversion here cannot throw.
+    const openvdb::Mat4d vm = grid->transform().baseMap()->getAffineMap()->getMat4();
     glm::dmat4 index_to_object;
     for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) index_to_object[c][r] = vm(c, r);
@@ -755,10 +746,6 @@ void VdbClouds::load(const std::string& path, const VdbCloudOptions& options) {
                               fmt::format("{} has background value {}; a density grid must have background 0 "
                                           "(a fog volume), or it would fill all of space",
                                           m.where(), background));
-    if (!m.grid->transform().isLinear())
-        throw InvalidArgument(
-            "grid",
-            fmt::format("{} has a non-affine (frustum) transform, which Welkin does not read", m.where()));
 
     m.check_values(options.negative);
     m.set_transforms(options);

@@ -105,22 +105,11 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
                               "needs sun_irradiance and ambient_radiance (a constant light)");
     std::unique_ptr<const CloudIllumination> constant;
     if (!sun_irradiance.is_none()) {
-        const std::vector<float> sun = to_spectrum(sun_irradiance, "sun_irradiance"),
-                                 sky = to_spectrum(ambient_radiance, "ambient_radiance"),
-                                 ground = ground_radiance.is_none()
-                                              ? sky
-                                              : to_spectrum(ground_radiance, "ground_radiance");
-        for (const auto& [name, v] :
-             {std::pair<const char*, const std::vector<float>*>{"ambient_radiance", &sky},
-              {"ground_radiance", &ground}}) {
-            if (v->size() != sun.size())
-                throw InvalidArgument(
-                    name, fmt::format("must have as many channels as sun_irradiance ({}), got {}", sun.size(),
-                                      v->size()));
-            for (std::size_t c = 0; c < v->size(); ++c)
-                require_in_range(fmt::format("{}[{}]", name, c), (*v)[c], 0.0, 1e9);
-        }
-        constant = std::make_unique<ConstantIllumination>(observer.sun_direction, sun, sky, ground);
+        const std::vector<float> sky = to_spectrum(ambient_radiance, "ambient_radiance");
+        const std::vector<float> ground =
+            ground_radiance.is_none() ? sky : to_spectrum(ground_radiance, "ground_radiance");
+        constant = std::make_unique<ConstantIllumination>(
+            observer.sun_direction, to_spectrum(sun_irradiance, "sun_irradiance"), sky, ground);
     }
     CloudResult result;
     run_cancellable(

@@ -632,6 +632,21 @@ TEST(VdbClouds, WrongGridType) {
     EXPECT_NE(m.find("'density'"), std::string::npos) << m;
 }
 
+// A frustum (non-affine) transform is refused by name, after the reader process.
+TEST(VdbClouds, FrustumTransformRefused) {
+    TempDir dir;
+    const std::string path = dir.file("frustum.vdb");
+    const openvdb::FloatGrid::Ptr g = openvdb::FloatGrid::create(0.0f);
+    g->setName("density");
+    g->setTransform(openvdb::math::Transform::createFrustumTransform(
+        openvdb::BBoxd(openvdb::Vec3d(0, 0, 0), openvdb::Vec3d(10, 10, 10)), 0.5, 100.0, 1.0));
+    g->getAccessor().setValue(openvdb::Coord(1, 2, 3), 0.5f);
+    test::write_vdb(path, {g});
+    const std::string m = expect_throw_message<InvalidArgument>([&] { VdbClouds v(path); });
+    EXPECT_NE(m.find("frustum"), std::string::npos) << m;
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+}
+
 TEST(VdbClouds, EmptyGrid) {
     TempDir dir;
     const std::string path = dir.file("empty.vdb");

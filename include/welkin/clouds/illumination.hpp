@@ -49,12 +49,13 @@ public:
 class ConstantIllumination final : public CloudIllumination {
 public:
     // sun_direction normalised here; InvalidArgument if it is not a finite non-zero vector
-    // or the spectra differ in length / hold negative or non-finite values. The sky is
-    // sky_radiance all round, or sky_radiance above the horizon and ground_radiance below.
+    // or the spectra differ in length / hold negative or non-finite values (the error names
+    // the parameter). The sky is ambient_radiance all round, or ambient_radiance above the
+    // horizon and ground_radiance below.
     ConstantIllumination(const glm::dvec3& sun_direction, std::vector<float> sun_irradiance,
-                         std::vector<float> sky_radiance);
+                         std::vector<float> ambient_radiance);
     ConstantIllumination(const glm::dvec3& sun_direction, std::vector<float> sun_irradiance,
-                         std::vector<float> sky_radiance, std::vector<float> ground_radiance);
+                         std::vector<float> ambient_radiance, std::vector<float> ground_radiance);
     std::size_t channels() const override { return sun_.size(); }
     glm::dvec3 sun_direction() const override { return s_; }
     glm::dvec3 zenith(const glm::dvec3&) const override { return {0.0, 0.0, 1.0}; }
