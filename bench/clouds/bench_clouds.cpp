@@ -108,7 +108,7 @@ struct Args {
     std::string csv;
     bool sky_only = false, cases_only = false, types_only = false;
     double spread = 0.0;
-    std::string only_type;
+    std::string only_type, upsampling_type;
 };
 
 void add_options(CLI::App& app, Args& a) {
@@ -124,6 +124,9 @@ void add_options(CLI::App& app, Args& a) {
                    "the types' skies: CloudLightingOptions::ray_spread_rad (0: from the grid; 1e-9: "
                    "the grids' levels by the view step alone)");
     app.add_option("--type", a.only_type, "the types' skies: this type only");
+    app.add_option("--upsampling-type", a.upsampling_type,
+                   "the upsampling's table for this type's preset instead of the default layer")
+        ->check(CLI::IsMember(std::vector<std::string>(kCloudTypeNames.begin(), kCloudTypeNames.end())));
     app.add_flag("--cases-only", a.cases_only, "only fast vs reference on the three clouds, at the defaults");
 }
 
@@ -266,9 +269,10 @@ void bench_upsampling(const Args& a, const SkyMethod& lut, const Atmosphere& atm
         if (st.up.stride == 1) t_exact = t;
         const auto [mean_err, p99] = sky_error(img, reference);
         fmt::print(
-            "| lut sky {}x{}, one default cumulus layer, {} | {:.3f} s | {:.2f}x | {:.2f} % | {:.2f} % "
+            "| lut sky {}x{}, one {} layer, {} | {:.3f} s | {:.2f}x | {:.2f} % | {:.2f} % "
             "|\n",
-            a.width, a.width / 2, st.name, t, t_exact / t, 100.0 * mean_err, 100.0 * p99);
+            a.width, a.width / 2, a.upsampling_type.empty() ? "default cumulus" : a.upsampling_type, st.name,
+            t, t_exact / t, 100.0 * mean_err, 100.0 * p99);
         rows.push_back(
             fmt::format("sky,{},cumulus_stride{}_finest{}_dT{}_dL{}_block{},{:.4f},,,,,,{:.5f},{:.5f}",
                         a.width, st.up.stride, st.up.finest, st.up.transmittance_tolerance,
@@ -282,9 +286,12 @@ void bench_upsampling(const Args& a, const SkyMethod& lut, const Atmosphere& atm
 std::shared_ptr<const ProceduralClouds> bench_cloudy_sky(const Args& a, const Atmosphere& atm,
                                                          const Observer& obs,
                                                          std::vector<std::string>& rows) {
-    const CloudLayerParams cumulus;
+    CloudLayerParams params;  // the default layer, or --upsampling-type's preset
+    for (std::size_t t = 0; t < kCloudTypeNames.size(); ++t)
+        if (a.upsampling_type == kCloudTypeNames[t])
+            params = CloudLayerParams::preset(static_cast<CloudType>(t));
     const auto t_bake0 = Clock::now();
-    auto layer = std::make_shared<const ProceduralClouds>(cumulus);
+    auto layer = std::make_shared<const ProceduralClouds>(params);
     const double bake = std::chrono::duration<double>(Clock::now() - t_bake0).count();
     const auto lut = make_sky_method("lut");
     SkyImageOptions clear;

@@ -127,6 +127,19 @@ void OpticalDepthGrid::set_near_field(int levels, int steps) {
     near_steps_ = steps;
 }
 
+void OpticalDepthGrid::set_chord_scaled(bool on) {
+    if (!map_->tiles.empty()) throw InvalidArgument("chord", "must be set before the first lookup");
+    chord_ = on;
+}
+
+double OpticalDepthGrid::chord(const glm::dvec3& p, double reach, std::vector<MajorantSegment>& segs) const {
+    segs.clear();
+    density_.segments({p, aligned_ ? axis_[2] : direction_(p)}, reach, segs);
+    double length = 0.0;
+    for (const auto& s : segs) length += std::max(0.0, std::min(s.t1, reach) - std::max(s.t0, 0.0));
+    return length;
+}
+
 glm::dvec3 OpticalDepthGrid::vertex_position(int level, std::int64_t i, std::int64_t j,
                                              std::int64_t k) const {
     const double h = spacing_m(level);
@@ -316,6 +329,11 @@ double OpticalDepthGrid::grid_tau(const glm::dvec3& p, int level, Cursor& cursor
         if (!(std::abs(b) < 1e15) || tcoord[a] <= -kCoordHalf || tcoord[a] >= kCoordHalf - 1)
             return march(p, cursor.segs);
     }
+    // The vertices' reach: max_distance_m, less one cell where the near field's first cell
+    // is marched by the lookup (aligned_vertex).
+    const double reach = max_distance_m_ - (aligned_ && near_levels_ > 0 ? h : 0.0);
+    const double length = chord_ ? chord(p, reach, cursor.segs) : 0.0;
+    if (chord_ && !(length > 0.0)) return 0.0;
     Tile& t = *tile_at(level, tcoord, cursor.key, cursor.tile, true);
     const int li = int(base[0] - t.origin[0]), lj = int(base[1] - t.origin[1]),
               lk = int(base[2] - t.origin[2]);
@@ -326,11 +344,31 @@ double OpticalDepthGrid::grid_tau(const glm::dvec3& p, int level, Cursor& cursor
         float v = vertex.load(std::memory_order_relaxed);
         if (std::isnan(v)) {
             const std::int64_t vi[3] = {t.origin[0] + i, t.origin[1] + j, t.origin[2] + k};
-            v = aligned_ ? float(aligned_vertex(level, vi, cursor))
-                         : float(march(vertex_position(level, vi[0], vi[1], vi[2]), cursor.segs));
+            const glm::dvec3 x = vertex_position(level, vi[0], vi[1], vi[2]);
+            const double tau = aligned_ ? aligned_vertex(level, vi, cursor) : march(x, cursor.segs);
+            if (chord_) {
+                const double l = chord(x, reach, cursor.segs);
+                v = l > 0.0 ? float(tau / l) : -1.0f;  // -1: no segment on the vertex's line
+            } else {
+                v = float(tau);
+            }
             vertex.store(v, std::memory_order_relaxed);
         }
         corner[c] = v;
+    }
+    if (chord_) {
+        double sum = 0.0, weight = 0.0;
+        for (int c = 0; c < 8; ++c) {
+            if (corner[c] < 0.0) continue;
+            const double wc =
+                (c & 1 ? w[0] : 1.0 - w[0]) * (c & 2 ? w[1] : 1.0 - w[1]) * (c & 4 ? w[2] : 1.0 - w[2]);
+            sum += wc * corner[c];
+            weight += wc;
+        }
+        if (!(weight > 0.0))
+            return march_optical_depth(density_, {p, aligned_ ? axis_[2] : direction_(p)}, reach, steps_,
+                                       cursor.segs);
+        return length * sum / weight;
     }
     const auto lerp = [](double a, double b, double s) { return a + s * (b - a); };
     const double x00 = lerp(corner[0], corner[1], w[0]), x10 = lerp(corner[2], corner[3], w[0]);

@@ -184,7 +184,7 @@ void parse_cloud_lighting(const json& li, CloudLightingOptions& o) {
         li, "clouds.lighting",
         {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "multiple_scattering", "octaves",
          "octave_extinction", "octave_contribution", "octave_eccentricity", "min_transmittance", "seed",
-         "jitter", "max_distance_m", "shadow_grid_spacing_m", "sides"});
+         "jitter", "max_distance_m", "shadow_grid", "shadow_grid_spacing_m", "sides"});
     const auto geti = [&](const char* key, int& v) {
         if (li.contains(key)) v = integer(li[key], p + key);
     };
@@ -213,6 +213,7 @@ void parse_cloud_lighting(const json& li, CloudLightingOptions& o) {
     if (li.contains("seed")) o.seed = unsigned_integer(li["seed"], p + "seed");
     if (li.contains("jitter")) o.jitter = boolean(li["jitter"], p + "jitter");
     if (li.contains("sides")) o.sides = boolean(li["sides"], p + "sides");
+    if (li.contains("shadow_grid")) o.shadow_grid = boolean(li["shadow_grid"], p + "shadow_grid");
     getd("max_distance_m", o.max_distance_m);
     getd("shadow_grid_spacing_m", o.shadow_grid_spacing_m);
 }
@@ -308,6 +309,7 @@ ordered_json clouds_json(const SceneClouds& c) {
                      {"seed", o.seed},
                      {"jitter", o.jitter},
                      {"max_distance_m", o.max_distance_m},
+                     {"shadow_grid", o.shadow_grid},
                      {"shadow_grid_spacing_m", o.shadow_grid_spacing_m},
                      {"sides", o.sides}};
     j["upsampling"] = {{"stride", c.upsampling.stride},

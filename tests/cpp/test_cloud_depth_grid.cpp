@@ -36,6 +36,8 @@ double box_depth(const glm::dvec3& p, const glm::dvec3& s, const glm::dvec3& lo,
 // tens of per cent per ray on a cumulus: AlignedVerticesMatchAFineMarch).
 constexpr int kFineLightSteps = 128;
 
+double grid_h(const OpticalDepthGrid& grid, int level) { return grid.spacing_m(level); }
+
 }  // namespace
 
 // In a homogeneous box tau(p) = sigma * (distance to the exit along s): piecewise linear,
@@ -244,6 +246,49 @@ TEST(CloudDepthGrid, AlignedGridExactInAHomogeneousBox) {
     EXPECT_LE(worst, sigma * 20.0 * std::sqrt(3.0) + sigma * 10.0);
     EXPECT_THROW(near.set_near_field(2, 2), InvalidArgument);  // after the first lookup
     EXPECT_THROW(OpticalDepthGrid(box, glm::dvec3(0.0), 10.0, 1e5, 4), InvalidArgument);
+}
+
+// The chord (depth_grid.hpp, "Chord"): a vertex holds the mean extinction along its line,
+// and a lookup multiplies the interpolated mean by its own chord through the majorant
+// segments. In a homogeneous box the mean is sigma on every line that meets the box, so
+// the lookup is exact at every point, including the cells a face cuts, where the depth's
+// kink puts the plain interpolation off by up to sigma h sqrt(3) (the test above): on a
+// grid of world axes marching each vertex, on one turned to s, and with the near field.
+TEST(CloudDepthGrid, ChordScaledGridExactInAHomogeneousBox) {
+    const glm::dvec3 lo(-300.0, -200.0, 1000.0), hi(500.0, 400.0, 1600.0);
+    const double sigma = 0.01;
+    const test::HomogeneousBox box(lo, hi, sigma);
+    const glm::dvec3 s = glm::normalize(glm::dvec3(0.6, 0.2, 0.5));
+    OpticalDepthGrid world(
+        box, [s](const glm::dvec3&) { return s; }, 10.0, 1e5, 4);
+    OpticalDepthGrid aligned(box, s, 10.0, 1e5, 4), near(box, s, 10.0, 1e5, 4), plain(box, s, 10.0, 1e5, 4);
+    near.set_near_field(1, 2);
+    for (OpticalDepthGrid* g : {&world, &aligned, &near}) g->set_chord_scaled(true);
+    const char* names[] = {"world axes", "aligned", "aligned, near field"};
+    OpticalDepthGrid::Cursor cursors[4];  // one per grid: a cursor caches its grid's tiles
+    std::vector<MajorantSegment> segs;
+    for (int level : {0, 2}) {
+        PathRng rng(11, std::uint64_t(level), 0);
+        double worst[3] = {}, worst_plain = 0.0;
+        for (int i = 0; i < 4000; ++i) {
+            // Half the points within a cell of a face, where the depth's kink is.
+            glm::dvec3 p = lo + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * (hi - lo);
+            if (i % 2) p.z = (rng.uniform() < 0.5 ? lo.z : hi.z) + (rng.uniform() - 0.5) * 2.0 * 40.0;
+            // The march is exact on a constant density (its steps clipped to the box).
+            const double exact = march_optical_depth(box, {p, s}, 1e5, 4, segs);
+            const OpticalDepthGrid* grids[] = {&world, &aligned, &near};
+            for (int g = 0; g < 3; ++g)
+                worst[g] = std::max(worst[g], std::abs(grids[g]->tau(p, level, cursors[g]) - exact));
+            worst_plain = std::max(worst_plain, std::abs(plain.tau(p, level, cursors[3]) - exact));
+        }
+        for (int g = 0; g < 3; ++g) {
+            std::printf("chord-scaled, %s, level %d: max |tau error| %.2e (plain interpolation %.4f)\n",
+                        names[g], level, worst[g], worst_plain);
+            EXPECT_LE(worst[g], 1e-5 * sigma * 2000.0);  // the float vertex and rounding: 1e-5 of the deepest
+        }
+        EXPECT_GT(worst_plain, 0.1 * sigma * grid_h(aligned, level));  // what the chord removes
+    }
+    EXPECT_THROW(world.set_chord_scaled(false), InvalidArgument);  // after the first lookup
 }
 
 // On a procedural layer the aligned grid's vertices hold the optical depth of a fine march

@@ -149,8 +149,8 @@ TEST(CloudFastVsReference, DenseCumulus) {
 // ground, docs/validation.md "The light from below"), sun off so that the sky light alone
 // is compared, views from below at the bases. The reference takes the hemisphere each path
 // leaves into; the march, Eddington's slab between the two skies (lighting.hpp, "Sky
-// light"). Measured: bias +0.8 %, mean |error| 7.6 % (256 paths, se 1.6 %); the sphere's
-// mean (what lit clouds before) would light the bases with 2.5 times the light from below.
+// light"). Measured: docs/validation.md, "The light from below"; the sphere's mean (what
+// lit clouds before) would light the bases with 2.5 times the light from below.
 // Tolerance: bias within +-10 %, mean |error| < 15 %; transmittance within 0.01 + 4 se.
 TEST(CloudFastVsReference, DenseCumulusUnderTwoSkies) {
     const ProceduralClouds layer(dense_cumulus());

@@ -79,7 +79,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
       "lighting": {"max_steps": 64, "light_steps": 6, "ambient_steps": 2, "light_distance_m": 3000,
                    "multiple_scattering": "octaves", "octaves": 3, "octave_extinction": 0.4, "octave_contribution": 0.6,
                    "octave_eccentricity": 0.7, "min_transmittance": 0.01, "seed": 3,
-                   "jitter": false, "max_distance_m": 5e5, "sides": false},
+                   "jitter": false, "max_distance_m": 5e5, "sides": false, "shadow_grid": false},
       "upsampling": {"stride": 4, "finest": 1, "transmittance_tolerance": 0.05, "radiance_tolerance": 0.2,
                      "max_block_size_m": 800}})");
     const SceneDescription s = SceneDescription::from_json_string(text);
@@ -133,6 +133,7 @@ TEST(SceneClouds, JsonReadsEveryKeyAndRoundTrips) {
     EXPECT_FALSE(o.jitter);
     EXPECT_EQ(o.max_distance_m, 5e5);
     EXPECT_FALSE(o.sides);
+    EXPECT_FALSE(o.shadow_grid);
     const CloudUpsampling& u = c.upsampling;
     EXPECT_EQ(u.stride, 4);
     EXPECT_EQ(u.finest, 1);
@@ -214,6 +215,7 @@ TEST(SceneClouds, ErrorsNameTheKey) {
     EXPECT_EQ(bad(R"({"lighting": {"max_steps": 0}})"), "clouds.lighting.max_steps");
     EXPECT_EQ(bad(R"({"lighting": {"jitter": 1}})"), "clouds.lighting.jitter");
     EXPECT_EQ(bad(R"({"lighting": {"sides": "yes"}})"), "clouds.lighting.sides");
+    EXPECT_EQ(bad(R"({"lighting": {"shadow_grid": 1}})"), "clouds.lighting.shadow_grid");
     EXPECT_EQ(bad(R"({"lighting": {"multiple_scattering": "wrenninge"}})"),
               "clouds.lighting.multiple_scattering");
     EXPECT_EQ(bad(R"({"lighting": {"steps": 1}})"), "clouds.lighting.steps");

@@ -83,6 +83,19 @@
 // the footprint's level). A lookup may decline it (denser rays share the vertices of their
 // own level): it then reads its own level, whose vertices, set for the near field, reach
 // max_distance_m less one cell of that level.
+//
+// Chord (set_chord_scaled, off by default). tau has a kink wherever its line leaves the
+// cloud through a face of the density's majorant segments (a layer's flat base seen along
+// the direction away from the sun): trilinear interpolation across that kink errs by up to
+// a quarter of a cell's depth, and on a grid turned to the direction, whose cells the face
+// cuts at a slant, the error depends on where each line of vertices meets the face and
+// beats into streaks along it (an even deck from below). With the chord, a vertex stores
+// tau over the length l of the segments on its line within its reach, the mean extinction
+// tau / l, and a lookup returns l(p), exact from the segments, times the trilinear
+// interpolation of that mean over the corners whose l is positive (weights renormalised;
+// a point whose corners all lie outside marches its own line). On an even deck the mean
+// is the deck's extinction on every line, and the face's kink is in l alone: the lookup
+// is exact across it.
 #pragma once
 
 #include <algorithm>
@@ -161,6 +174,9 @@ public:
     // The near field (above): levels in [0, kMaxLevels) (0: off), steps in [1, 64]; for an
     // aligned grid only, set before the first lookup (InvalidArgument otherwise).
     void set_near_field(int levels, int steps);
+    // Interpolate the mean extinction along the line, not the depth (above, "Chord"); set
+    // before the first lookup (InvalidArgument "chord" otherwise).
+    void set_chord_scaled(bool on);
     // Whether the grid is aligned with a constant direction (the second constructor).
     bool aligned() const { return aligned_; }
     // The world position of vertex (i, j, k) of `level` (the aligned frame's axes or x, y, z).
@@ -182,6 +198,9 @@ private:
     int steps_;
     bool aligned_ = false;
     int near_levels_ = 0, near_steps_ = 2;
+    bool chord_ = false;
+    // The length of the density's majorant segments along direction(p) over [0, reach].
+    double chord(const glm::dvec3& p, double reach, std::vector<MajorantSegment>& segs) const;
     double grid_tau(const glm::dvec3& p, int level, Cursor& cursor) const;
     glm::dvec3 axis_[3];  // the aligned frame: axis_[2] the direction
     struct Map;

@@ -50,9 +50,10 @@
 //  * Multiple scattering of sun light, by default (multiple_scattering = diffusion) from
 //    the delta-Eddington slab along the sun line (clouds/diffusion.hpp, with its
 //    derivation): tau_line = tau_sun + tau_antisun, the cloud's optical depth along the
-//    sun's line through x (both ways, each at most light_distance_m; a second grid, on the
-//    world's axes at the sun's level: a grid turned to the sun cuts a deck's flat base at a
-//    slant and streaks an even deck, docs/validation.md), and
+//    sun's line through x (both ways, each at most light_distance_m; a second grid, turned
+//    to -s, read at the sun's level, its first cell marched per sample; every grid
+//    interpolates the mean extinction along its lines, the depth's kink at a layer's faces
+//    exact, depth_grid.hpp "Chord"), and
 //    with nu = d . s,
 //        S_sun = sigma_s E(x) [exp(-tau_sun) p(nu) + (exp(-tau'_sun) - exp(-tau_sun)) p2(nu)
 //                              + <phi + 3 g F mu0 nu> / (4 pi E)],
