@@ -123,6 +123,7 @@ void OpticalDepthGrid::set_near_field(int levels, int steps) {
     if (!aligned_ && levels > 0)
         throw InvalidArgument("levels", "a near field needs a grid aligned with a constant direction");
     if (!map_->tiles.empty()) throw InvalidArgument("levels", "must be set before the first lookup");
+    if (both_ways_ && levels > 0) throw InvalidArgument("levels", "a grid read both ways has no near field");
     near_levels_ = levels;
     near_steps_ = steps;
 }
@@ -132,11 +133,22 @@ void OpticalDepthGrid::set_chord_scaled(bool on) {
     chord_ = on;
 }
 
+void OpticalDepthGrid::set_both_ways(bool on) {
+    if (!map_->tiles.empty()) throw InvalidArgument("both_ways", "must be set before the first lookup");
+    if (on && (!aligned_ || near_levels_ > 0))
+        throw InvalidArgument("both_ways",
+                              "needs a grid aligned with a constant direction, without a near field");
+    both_ways_ = on;
+}
+
 double OpticalDepthGrid::chord(const glm::dvec3& p, double reach, std::vector<MajorantSegment>& segs) const {
     segs.clear();
-    density_.segments({p, aligned_ ? axis_[2] : direction_(p)}, reach, segs);
+    const glm::dvec3 w = aligned_ ? axis_[2] : direction_(p);
+    // Both ways: the line from p - reach w over twice the reach.
+    const double span = both_ways_ ? 2.0 * reach : reach;
+    density_.segments({both_ways_ ? p - reach * w : p, w}, span, segs);
     double length = 0.0;
-    for (const auto& s : segs) length += std::max(0.0, std::min(s.t1, reach) - std::max(s.t0, 0.0));
+    for (const auto& s : segs) length += std::max(0.0, std::min(s.t1, span) - std::max(s.t0, 0.0));
     return length;
 }
 
@@ -153,7 +165,15 @@ int OpticalDepthGrid::level_for(double footprint_m) const {
 }
 
 double OpticalDepthGrid::march(const glm::dvec3& p, std::vector<MajorantSegment>& segs) const {
-    return march_optical_depth(density_, {p, direction_(p)}, max_distance_m_, steps_, segs);
+    return march_at(p, max_distance_m_, segs);
+}
+
+double OpticalDepthGrid::march_at(const glm::dvec3& p, double reach,
+                                  std::vector<MajorantSegment>& segs) const {
+    const glm::dvec3 w = direction_(p);
+    double tau = march_optical_depth(density_, {p, w}, reach, steps_, segs);
+    if (both_ways_) tau += march_optical_depth(density_, {p, -w}, reach, steps_, segs);
+    return tau;
 }
 
 OpticalDepthGrid::Tile* OpticalDepthGrid::find(std::uint64_t key) const {
@@ -301,6 +321,37 @@ double OpticalDepthGrid::aligned_vertex(int level, const std::int64_t v[3], Curs
     return std::max(0.0, c0 + c_end - far);
 }
 
+// The depth over positions [v - back, v + ahead] (cells) of vertex v's line: per block the
+// span crosses, C at the span's start in it less C at its end (C linear between vertices, 0
+// at the block's end, an unset value after a walked one past the line's end: 0).
+double OpticalDepthGrid::aligned_span(int level, const std::int64_t v[3], double back, double ahead,
+                                      Cursor& cursor) const {
+    const double q = max_distance_m_ / spacing_m(level);
+    const std::int64_t block = std::int64_t(std::ceil(q)) + 1;
+    // C at position x of the line, in the block that ends at vertex `end`.
+    const auto c_at = [&](double x, std::int64_t end) {
+        const std::int64_t k = std::int64_t(std::floor(x));
+        if (k >= end) return 0.0;
+        const std::int64_t w[3] = {v[0], v[1], k}, w1[3] = {v[0], v[1], k + 1};
+        const double c0 = cumulative(level, w, block, cursor);
+        double c1 = 0.0;
+        if (k + 1 < end) {
+            const float c = stored_cumulative(level, w1, cursor);
+            c1 = std::isnan(c) ? 0.0 : double(c);
+        }
+        return c0 + (x - double(k)) * (c1 - c0);
+    };
+    const double b = double(v[2]) + ahead;
+    double x = double(v[2]) - back, total = 0.0;
+    while (x < b) {
+        const std::int64_t end = (floor_div(std::int64_t(std::floor(x)), block) + 1) * block;
+        const double y = std::min(b, double(end));
+        total += c_at(x, end) - c_at(y, end);
+        x = y;
+    }
+    return std::max(0.0, total);
+}
+
 double OpticalDepthGrid::tau(const glm::dvec3& p, int level, Cursor& cursor, bool near_field) const {
     if (!aligned_ || near_levels_ <= 0 || !near_field) return grid_tau(p, level, cursor);
     const int far = std::min(level + near_levels_, kMaxLevels - 1);
@@ -345,7 +396,10 @@ double OpticalDepthGrid::grid_tau(const glm::dvec3& p, int level, Cursor& cursor
         if (std::isnan(v)) {
             const std::int64_t vi[3] = {t.origin[0] + i, t.origin[1] + j, t.origin[2] + k};
             const glm::dvec3 x = vertex_position(level, vi[0], vi[1], vi[2]);
-            const double tau = aligned_ ? aligned_vertex(level, vi, cursor) : march(x, cursor.segs);
+            const double q = max_distance_m_ / h;
+            const double tau = both_ways_ ? aligned_span(level, vi, q, q, cursor)
+                               : aligned_ ? aligned_vertex(level, vi, cursor)
+                                          : march(x, cursor.segs);
             if (chord_) {
                 const double l = chord(x, reach, cursor.segs);
                 v = l > 0.0 ? float(tau / l) : -1.0f;  // -1: no segment on the vertex's line
@@ -365,9 +419,7 @@ double OpticalDepthGrid::grid_tau(const glm::dvec3& p, int level, Cursor& cursor
             sum += wc * corner[c];
             weight += wc;
         }
-        if (!(weight > 0.0))
-            return march_optical_depth(density_, {p, aligned_ ? axis_[2] : direction_(p)}, reach, steps_,
-                                       cursor.segs);
+        if (!(weight > 0.0)) return march_at(p, reach, cursor.segs);
         return length * sum / weight;
     }
     const auto lerp = [](double a, double b, double s) { return a + s * (b - a); };

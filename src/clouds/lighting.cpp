@@ -89,10 +89,10 @@ void check_rays(std::span<const glm::dvec3> origins, std::span<const glm::dvec3>
 // The optical-depth grids (clouds/depth_grid.hpp) a march reads: towards the sun, away
 // from it (the sun line's other half, for the diffusion's slab or the octaves' optical
 // size), both ways across the sun line (the diffusion's sides) and, when the sky light
-// decays (albedo < 1), towards the local zenith. Each is null where the march does not
-// need it or marches a ray per sample instead (shadow_grid off). Filled lazily by the rays.
+// decays (albedo < 1) or two skies light it, towards the local zenith and nadir. Each is null where the march
+// does not need it or marches a ray per sample instead (shadow_grid off). Filled lazily by the rays.
 struct ShadowGrids {
-    std::unique_ptr<OpticalDepthGrid> sun, anti, side, back, sky, ground;
+    std::unique_ptr<OpticalDepthGrid> sun, anti, side, sky, ground;
 };
 
 // The per-sample light of the header: the sun's weight (single and multiple scattering)
@@ -101,7 +101,7 @@ class SampleLight {
 public:
     struct Cursors {
         std::vector<MajorantSegment> light_segs;  // a shadow march's segments (no grid)
-        OpticalDepthGrid::Cursor sun, sky, ground, anti, side, back;
+        OpticalDepthGrid::Cursor sun, sky, ground, anti, side;
     };
     // The grid levels a sample reads (the sun's, its other half's, the sides').
     struct Levels {
@@ -192,8 +192,10 @@ public:
             // Single scattering plus the forward-scattered and diffuse parts.
             double tau_side = std::numeric_limits<double>::infinity();
             if (options_.sides)
-                tau_side = depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) +
-                           depth_along(grids_.back, cur.back, lv.side, x, -across_, steps, cur);
+                tau_side = grids_.side
+                               ? grids_.side->tau(x, lv.side, cur.side)
+                               : depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) +
+                                     depth_along(grids_.side, cur.side, lv.side, x, -across_, steps, cur);
             sun_w =
                 sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0], ph.twice);
         } else {
@@ -258,7 +260,7 @@ private:
         }
         if (diffusion_ && options_.sides) {
             grids_.side = along(across_, options_.light_steps);
-            grids_.back = along(-across_, options_.light_steps);
+            grids_.side->set_both_ways(true);  // the chord both ways, one walk per line
         }
         if (ambient_decay_ || (two_skies_ && options_.ambient_steps > 0))
             grids_.sky = std::make_unique<OpticalDepthGrid>(
@@ -272,8 +274,7 @@ private:
         // the density's faces (a layer's flat base and top) taken exactly from the majorant
         // segments (depth_grid.hpp, "Chord"): interpolated across, that kink brightened an
         // overcast deck by several per cent (docs/validation.md, "Chord-scaled depth grids").
-        for (auto* grid :
-             {&grids_.sun, &grids_.anti, &grids_.side, &grids_.back, &grids_.sky, &grids_.ground})
+        for (auto* grid : {&grids_.sun, &grids_.anti, &grids_.side, &grids_.sky, &grids_.ground})
             if (*grid) (*grid)->set_chord_scaled(true);
     }
 

@@ -96,6 +96,11 @@
 // a point whose corners all lie outside marches its own line). On an even deck the mean
 // is the deck's extinction on every line, and the face's kink is in l alone: the lookup
 // is exact across it.
+//
+// Both ways (aligned grids, set_both_ways, off by default). The depth over the whole chord
+// through x along the line, from x - D w to x + D w: the same walks read over the span
+// [k - q, k + q] of a vertex's line (C at both ends, linear between vertices, summed over
+// the blocks the span crosses), where two grids along w and -w would each walk the line.
 #pragma once
 
 #include <algorithm>
@@ -168,7 +173,7 @@ public:
     double tau(const glm::dvec3& p, int level, Cursor& cursor, bool near_field = true) const;
 
     // The optical depth straight from a march of `steps` samples over max_distance_m (what
-    // a vertex of a point-dependent grid stores, at any point).
+    // a vertex of a point-dependent grid stores, at any point; both ways, one march each way).
     double march(const glm::dvec3& p, std::vector<MajorantSegment>& segs) const;
 
     // The near field (above): levels in [0, kMaxLevels) (0: off), steps in [1, 64]; for an
@@ -177,6 +182,9 @@ public:
     // Interpolate the mean extinction along the line, not the depth (above, "Chord"); set
     // before the first lookup (InvalidArgument "chord" otherwise).
     void set_chord_scaled(bool on);
+    // The depth both ways along the line (above, "Both ways"): an aligned grid without a
+    // near field only, set before the first lookup (InvalidArgument "both_ways" otherwise).
+    void set_both_ways(bool on);
     // Whether the grid is aligned with a constant direction (the second constructor).
     bool aligned() const { return aligned_; }
     // The world position of vertex (i, j, k) of `level` (the aligned frame's axes or x, y, z).
@@ -198,7 +206,10 @@ private:
     int steps_;
     bool aligned_ = false;
     int near_levels_ = 0, near_steps_ = 2;
-    bool chord_ = false;
+    bool chord_ = false, both_ways_ = false;
+    double march_at(const glm::dvec3& p, double reach, std::vector<MajorantSegment>& segs) const;
+    // The aligned grid: the depth over [v - back, v + ahead] cells along vertex v's line.
+    double aligned_span(int level, const std::int64_t v[3], double back, double ahead, Cursor& cursor) const;
     // The length of the density's majorant segments along direction(p) over [0, reach].
     double chord(const glm::dvec3& p, double reach, std::vector<MajorantSegment>& segs) const;
     double grid_tau(const glm::dvec3& p, int level, Cursor& cursor) const;

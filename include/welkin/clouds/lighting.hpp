@@ -62,9 +62,9 @@
 //    diffuse field of the scaled slab, averaged over the slab's unknown inclination: the
 //    diffuse light falls off linearly with depth, as diffusion theory has it, where the
 //    octaves below vanish. With `sides` (the default) the slab is finite across the sun
-//    line: the cloud's chord tau_side along the horizontal normal to the sun (both ways,
-//    a third and fourth grid, one level coarser) makes the diffuse light leak through
-//    its sides (clouds/diffusion.hpp, "The sides"). No fitted parameter. Its error against
+//    line: the cloud's chord tau_side along the horizontal normal to the sun (a third
+//    grid, read both ways along its lines, one level coarser) makes the diffuse light
+//    leak through its sides (clouds/diffusion.hpp, "The sides"). No fitted parameter. Its error against
 //    the reference (bench/clouds, bench/clouds/lighting_vs_reference.py) and against Cycles
 //    (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"). octaves = 1 is single
 //    scattering in either mode.
