@@ -63,6 +63,8 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 namespace {
 
 constexpr int kSideLevels = 1;  // the side grids' levels above the sun grid's
+// sin 15 deg: the lowest sun whose anti-sun depth is on a grid turned to it (SampleLight).
+constexpr double kTurnedAntiSunMinSin = 0.2588;
 
 // The input checks of a march: one origin or one per direction, finite; max_distances
 // empty or one non-negative length per direction.
@@ -252,11 +254,17 @@ private:
         // flat base kinks it (chord, below) and whose density ramps up over its lower part:
         // without the near field, the interpolation's error there, which depends on where
         // a slanted line of vertices meets the base, beat into streaks along the sun's
-        // azimuth on an even deck seen from below (docs/validation.md, "Chord-scaled depth
-        // grids").
-        if (sized_) {
+        // azimuth on an even deck seen from below. Under a low sun the lines run nearly
+        // along the base, the near field's cell rises too little to reach it, and the
+        // streaks come back as wedges: there a grid of world axes, a march per vertex
+        // (docs/validation.md, "Chord-scaled depth grids").
+        if (sized_ && glm::dot(s_, light_.zenith(glm::dvec3(0.0))) >= kTurnedAntiSunMinSin) {
             grids_.anti = along(-s_, options_.light_steps);
             grids_.anti->set_near_field(1, 2);
+        } else if (sized_) {
+            grids_.anti = std::make_unique<OpticalDepthGrid>(
+                density_, [d = -s_](const glm::dvec3&) { return d; }, h0, options_.light_distance_m,
+                options_.light_steps);
         }
         if (diffusion_ && options_.sides) {
             grids_.side = along(across_, options_.light_steps);

@@ -51,10 +51,10 @@
 //    the delta-Eddington slab along the sun line (clouds/diffusion.hpp, with its
 //    derivation): tau_line = tau_sun + tau_antisun, the cloud's optical depth along the
 //    sun's line through x (both ways, each at most light_distance_m; a second grid, turned
-//    to -s, read at the sun's level, its first cell marched per sample; every grid
-//    interpolates the mean extinction along its lines, the depth's kink at a layer's faces
-//    exact, depth_grid.hpp "Chord"), and
-//    with nu = d . s,
+//    to -s with its first cell marched per sample, on the world's axes under a sun below
+//    15 degrees, whose turned lines run nearly along a deck's base and streak it; read at
+//    the sun's level; every grid interpolates the mean extinction along its lines, the
+//    depth's kink at a layer's faces exact, depth_grid.hpp "Chord"), and with nu = d . s,
 //        S_sun = sigma_s E(x) [exp(-tau_sun) p(nu) + (exp(-tau'_sun) - exp(-tau_sun)) p2(nu)
 //                              + <phi + 3 g F mu0 nu> / (4 pi E)],
 //    single scattering (exact), the light scattered into the forward peak (similarity
