@@ -125,7 +125,8 @@ void add_options(CLI::App& app, Args& a) {
                    "the grids' levels by the view step alone)");
     app.add_option("--type", a.only_type, "the types' skies: this type only");
     app.add_option("--upsampling-type", a.upsampling_type,
-                   "the upsampling's table for this type's preset instead of the default layer")
+                   "the upsampling's table for this type's preset instead of the default layer (the "
+                   "types' skies then skipped)")
         ->check(CLI::IsMember(std::vector<std::string>(kCloudTypeNames.begin(), kCloudTypeNames.end())));
     app.add_flag("--cases-only", a.cases_only, "only fast vs reference on the three clouds, at the defaults");
 }
@@ -524,7 +525,7 @@ int main(int argc, char** argv) {
     const Observer obs{0.0, glm::normalize(glm::dvec3(0.6, 0.2, 0.5))};
     fmt::print("Welkin cloud benchmark: {} threads, {}x{} sky\n", tbb::info::default_concurrency(),
                args.width, args.width / 2);
-    bench_types(args, atm, obs, rows);
+    if (args.upsampling_type.empty() || args.types_only) bench_types(args, atm, obs, rows);
     if (args.types_only) return write_csv(args.csv, rows);
     const std::shared_ptr<const ProceduralClouds> layer = bench_cloudy_sky(args, atm, obs, rows);
     if (args.sky_only) return write_csv(args.csv, rows);
