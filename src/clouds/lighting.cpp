@@ -91,8 +91,9 @@ void check_rays(std::span<const glm::dvec3> origins, std::span<const glm::dvec3>
 // The optical-depth grids (clouds/depth_grid.hpp) a march reads: towards the sun, away
 // from it (the sun line's other half, for the diffusion's slab or the octaves' optical
 // size), both ways across the sun line (the diffusion's sides) and, when the sky light
-// decays (albedo < 1) or two skies light it, towards the local zenith and nadir. Each is null where the march
-// does not need it or marches a ray per sample instead (shadow_grid off). Filled lazily by the rays.
+// decays (albedo < 1) or two skies light it, towards the local zenith and nadir. Each is
+// null where the march does not need it or marches a ray per sample instead (shadow_grid
+// off). Filled lazily by the rays.
 struct ShadowGrids {
     std::unique_ptr<OpticalDepthGrid> sun, anti, side, sky, ground;
 };
@@ -194,10 +195,13 @@ public:
             // Single scattering plus the forward-scattered and diffuse parts.
             double tau_side = std::numeric_limits<double>::infinity();
             if (options_.sides)
+                // The grid reads both ways along its lines; without it, a march each way.
                 tau_side = grids_.side
                                ? grids_.side->tau(x, lv.side, cur.side)
-                               : depth_along(grids_.side, cur.side, lv.side, x, across_, steps, cur) +
-                                     depth_along(grids_.side, cur.side, lv.side, x, -across_, steps, cur);
+                               : march_optical_depth(density_, {x, across_}, options_.light_distance_m, steps,
+                                                     cur.light_segs) +
+                                     march_optical_depth(density_, {x, -across_}, options_.light_distance_m,
+                                                         steps, cur.light_segs);
             sun_w =
                 sun_source(similarity_, tau_sun, tau_anti, tau_side, ph.nu, mean_g_, ph.octave[0], ph.twice);
         } else {

@@ -38,6 +38,14 @@ constexpr int kFineLightSteps = 128;
 
 double grid_h(const OpticalDepthGrid& grid, int level) { return grid.spacing_m(level); }
 
+// A point of the box [lo, hi], every odd i's within 40 m of its bottom or top face (where
+// the depth's kink is; outside the box half the time).
+glm::dvec3 point_near_faces(PathRng& rng, const glm::dvec3& lo, const glm::dvec3& hi, int i) {
+    glm::dvec3 p = lo + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * (hi - lo);
+    if (i % 2) p.z = (rng.uniform() < 0.5 ? lo.z : hi.z) + (rng.uniform() - 0.5) * 2.0 * 40.0;
+    return p;
+}
+
 }  // namespace
 
 // In a homogeneous box tau(p) = sigma * (distance to the exit along s): piecewise linear,
@@ -271,9 +279,7 @@ TEST(CloudDepthGrid, ChordScaledGridExactInAHomogeneousBox) {
         PathRng rng(11, std::uint64_t(level), 0);
         double worst[3] = {}, worst_plain = 0.0;
         for (int i = 0; i < 4000; ++i) {
-            // Half the points within a cell of a face, where the depth's kink is.
-            glm::dvec3 p = lo + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * (hi - lo);
-            if (i % 2) p.z = (rng.uniform() < 0.5 ? lo.z : hi.z) + (rng.uniform() - 0.5) * 2.0 * 40.0;
+            const glm::dvec3 p = point_near_faces(rng, lo, hi, i);
             // The march is exact on a constant density (its steps clipped to the box).
             const double exact = march_optical_depth(box, {p, s}, 1e5, 4, segs);
             const OpticalDepthGrid* grids[] = {&world, &aligned, &near};
@@ -311,8 +317,7 @@ TEST(CloudDepthGrid, BothWaysIsTheChordThroughThePoint) {
         PathRng rng(13, 0, 0);
         double worst_chord = 0.0, worst_plain = 0.0;
         for (int i = 0; i < 4000; ++i) {
-            glm::dvec3 p = lo + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * (hi - lo);
-            if (i % 2) p.z = (rng.uniform() < 0.5 ? lo.z : hi.z) + (rng.uniform() - 0.5) * 2.0 * 40.0;
+            const glm::dvec3 p = point_near_faces(rng, lo, hi, i);
             const double exact = march_optical_depth(box, {p, s}, reach, 4, segs) +
                                  march_optical_depth(box, {p, -s}, reach, 4, segs);
             // Where a face lies within a cell of a span's end, the linear C there is not exact.
