@@ -315,7 +315,7 @@ private:
 // The march of view rays (the header's steps) into a CloudResult.
 class RayMarcher {
 public:
-    RayMarcher(const CloudDensity& density, const CloudIllumination& light,
+    RayMarcher(const CloudDensity& density, const CloudIllumination& light, const SampleLight& sample_light,
                std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
                std::span<const double> max_distances, const CloudLightingOptions& options,
                std::uint64_t first_ray_index, CloudResult& result)
@@ -327,7 +327,7 @@ public:
           options_(options),
           first_ray_index_(first_ray_index),
           result_(result),
-          sample_light_(density, light, options) {}
+          sample_light_(sample_light) {}
 
     // Marches the rays `which` (all when null), in parallel.
     void march_rays(const std::vector<std::size_t>* which, ProgressTracker& tracker) {
@@ -437,7 +437,7 @@ private:
     const CloudLightingOptions& options_;
     std::uint64_t first_ray_index_;
     CloudResult& result_;
-    SampleLight sample_light_;
+    const SampleLight& sample_light_;
     tbb::enumerable_thread_specific<Scratch> scratches_;
 };
 
@@ -467,17 +467,34 @@ bool corners_agree(const CloudResult& result, const Block& b, int width, const C
 }
 
 // Whether the block spans more than up.max_block_size_m at its farthest cloud: the angle
-// between its diagonal's corner rays times that depth.
-bool too_wide(const CloudResult& result, std::span<const glm::dvec3> directions, const Block& b, int width,
-              const CloudUpsampling& up) {
+// between its diagonal's corner rays times that depth, plus their origins' distance (the
+// parallel rays of an orthographic camera).
+bool too_wide(const CloudResult& result, std::span<const glm::dvec3> origins,
+              std::span<const glm::dvec3> directions, const Block& b, int width, const CloudUpsampling& up) {
     const std::array<std::size_t, 4> q = b.corners(width);
     float depth = 0.0f;
     for (std::size_t a : q) depth = std::max(depth, result.depth_m[a]);
     if (!(depth > 0.0f)) return false;
-    const double chord =
-        std::max(glm::length(glm::normalize(directions[q[0]]) - glm::normalize(directions[q[3]])),
-                 glm::length(glm::normalize(directions[q[1]]) - glm::normalize(directions[q[2]])));
-    return chord * depth > up.max_block_size_m;
+    const auto spread = [&](std::size_t i, std::size_t j) {
+        const double apart = origins.size() == 1 ? 0.0 : glm::length(origins[i] - origins[j]);
+        return glm::length(glm::normalize(directions[i]) - glm::normalize(directions[j])) * depth + apart;
+    };
+    return std::max(spread(q[0], q[3]), spread(q[1], q[2])) > up.max_block_size_m;
+}
+
+// Whether every ray of the block (its closed rectangle) is of one kind: unbounded, or
+// ending within CloudUpsampling::kLengthTolerance of the others (header). Always true
+// without lengths.
+bool lengths_agree(std::span<const double> max_distances, const Block& b, int width) {
+    if (max_distances.empty()) return true;
+    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+    for (int y = b.y0; y <= b.y1; ++y)
+        for (int x = b.x0; x <= b.x1; ++x) {
+            const double d = max_distances[std::size_t(y) * std::size_t(width) + std::size_t(x)];
+            lo = std::min(lo, d), hi = std::max(hi, d);
+        }
+    if (std::isinf(lo)) return true;  // every ray unbounded
+    return !std::isinf(hi) && hi - lo <= CloudUpsampling::kLengthTolerance * lo;
 }
 
 // Splits b at its midpoints along each axis at least two pixels long into `split`,
@@ -521,8 +538,9 @@ void interpolate_unmarched(CloudResult& result) {
 // belongs to the block whose half-open rectangle [x0, x1) x [y0, y1) holds it (the last
 // column and row closed), so it is interpolated once, from the corners of the smallest
 // block around it.
-void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm::dvec3> directions,
-                   int width, const CloudUpsampling& up, Progress* progress) {
+void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm::dvec3> origins,
+                   std::span<const glm::dvec3> directions, std::span<const double> max_distances, int width,
+                   const CloudUpsampling& up, Progress* progress) {
     const std::size_t n = directions.size();
     const int W = width, H = int(n / std::size_t(width));
     CloudGridInterpolation& grid = result.interpolation;
@@ -554,8 +572,19 @@ void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm
         std::vector<Block> split;
         for (const Block& b : blocks) {
             if (b.x1 - b.x0 <= 1 && b.y1 - b.y0 <= 1) continue;  // every pixel it owns is a corner
-            if ((b.x1 - b.x0 <= up.finest && b.y1 - b.y0 <= up.finest) ||
-                (corners_agree(result, b, W, up) && !too_wide(result, directions, b, W, up))) {
+            const bool finest = b.x1 - b.x0 <= up.finest && b.y1 - b.y0 <= up.finest;
+            if (!lengths_agree(max_distances, b, W)) {
+                // A silhouette: split, and at the finest size march every ray it owns.
+                if (!finest) {
+                    split_block(b, split, mark);
+                } else {
+                    for (int y = b.y0; y <= b.y1; ++y)
+                        for (int x = b.x0; x <= b.x1; ++x) mark(x, y);
+                }
+                continue;
+            }
+            if (finest ||
+                (corners_agree(result, b, W, up) && !too_wide(result, origins, directions, b, W, up))) {
                 grid.blocks.push_back(b);
                 continue;
             }
@@ -568,28 +597,52 @@ void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm
     tracker.finish();
 }
 
+}  // namespace
+
+// The shared state of CloudLighting (header): its options, and the per-sample light with
+// its grids.
+struct CloudLighting::Impl {
+    Impl(const CloudDensity& d, const CloudIllumination& l, const CloudLightingOptions& o)
+        : density(d), light(l), options((o.validate(), o)), sample_light(d, l, options) {}
+    const CloudDensity& density;
+    const CloudIllumination& light;
+    const CloudLightingOptions options;
+    const SampleLight sample_light;
+};
+
+CloudLighting::CloudLighting(const CloudDensity& density, const CloudIllumination& light,
+                             const CloudLightingOptions& options)
+    : impl_(std::make_unique<Impl>(density, light, options)) {}
+CloudLighting::~CloudLighting() = default;
+const CloudLightingOptions& CloudLighting::options() const { return impl_->options; }
+
+struct CloudLightingAccess {
+    static const CloudLighting::Impl& of(const CloudLighting& lighting) { return *lighting.impl_; }
+};
+
+namespace {
+
 // The march of every ray (grid_width == 0), or of a grid of rays (rows of grid_width) with
 // upsampling (the header's render_clouds_grid).
-CloudResult march(const CloudDensity& density, const CloudIllumination& light,
-                  std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
-                  std::span<const double> max_distances, const CloudLightingOptions& options,
+CloudResult march(const CloudLighting::Impl& lighting, std::span<const glm::dvec3> origins,
+                  std::span<const glm::dvec3> directions, std::span<const double> max_distances,
                   Progress* progress, std::uint64_t first_ray_index, int grid_width,
                   const CloudUpsampling& up) {
-    options.validate();
     check_rays(origins, directions, max_distances);
-    const std::size_t n = directions.size(), nc = light.channels();
+    const std::size_t n = directions.size(), nc = lighting.light.channels();
     CloudResult result;
     result.channels = nc;
     result.radiance.assign(n * nc, 0.0f);
     result.transmittance.assign(n, 1.0f);
     result.depth_m.assign(n, 0.0f);
-    RayMarcher marcher(density, light, origins, directions, max_distances, options, first_ray_index, result);
+    RayMarcher marcher(lighting.density, lighting.light, lighting.sample_light, origins, directions,
+                       max_distances, lighting.options, first_ray_index, result);
     if (grid_width <= 0 || up.stride <= 1) {
         ProgressTracker tracker(progress, n);
         marcher.march_rays(nullptr, tracker);
         tracker.finish();
     } else {
-        march_refined(marcher, result, directions, grid_width, up, progress);
+        march_refined(marcher, result, origins, directions, max_distances, grid_width, up, progress);
     }
     return result;
 }
@@ -600,8 +653,9 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                           std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
                           std::span<const double> max_distances, const CloudLightingOptions& options,
                           Progress* progress, std::uint64_t first_ray_index) {
-    return march(density, light, origins, directions, max_distances, options, progress, first_ray_index, 0,
-                 {});
+    const CloudLighting lighting(density, light, options);
+    return march(CloudLightingAccess::of(lighting), origins, directions, max_distances, progress,
+                 first_ray_index, 0, {});
 }
 
 CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light,
@@ -609,16 +663,31 @@ CloudResult render_clouds_grid(const CloudDensity& density, const CloudIlluminat
                                const CloudLightingOptions& options, const CloudUpsampling& upsampling,
                                Progress* progress, std::uint64_t first_ray_index) {
     for (int a = 0; a < 3; ++a) require_finite(fmt::format("origin[{}]", a), origin[a]);
+    return render_clouds_grid(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, width,
+                              options, upsampling, progress, first_ray_index);
+}
+
+CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light,
+                               std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                               std::span<const double> max_distances, int width,
+                               const CloudLightingOptions& options, const CloudUpsampling& upsampling,
+                               Progress* progress, std::uint64_t first_ray_index) {
+    const CloudLighting lighting(density, light, options);
+    return render_clouds_grid(lighting, origins, directions, max_distances, width, upsampling, progress,
+                              first_ray_index);
+}
+
+CloudResult render_clouds_grid(const CloudLighting& lighting, std::span<const glm::dvec3> origins,
+                               std::span<const glm::dvec3> directions, std::span<const double> max_distances,
+                               int width, const CloudUpsampling& upsampling, Progress* progress,
+                               std::uint64_t first_ray_index) {
     upsampling.validate();
     if (width < 1 || directions.size() % std::size_t(width) != 0)
         throw InvalidArgument("width", fmt::format("must divide the number of directions ({}), got {}",
                                                    directions.size(), width));
-    const int stride = directions.size() / std::size_t(width) < 2 || width < 2 ? 1
-                       : upsampling.stride == 0 ? std::clamp(width / CloudUpsampling::kAutoColumns, 1, 16)
-                                                : upsampling.stride;
     CloudUpsampling up = upsampling;
-    up.stride = stride;
-    return march(density, light, std::span<const glm::dvec3>(&origin, 1), directions, {}, options, progress,
+    up.stride = upsampling.resolved_stride(width, int(directions.size() / std::size_t(width)));
+    return march(CloudLightingAccess::of(lighting), origins, directions, max_distances, progress,
                  first_ray_index, width, up);
 }
 
@@ -640,6 +709,11 @@ double angle_between_rays(const glm::dvec3& a, const glm::dvec3& b) {
     // 2 asin(|u - v| / 2): accurate for the small angles between neighbouring pixels.
     const double chord = glm::length(glm::normalize(a) - glm::normalize(b));
     return 2.0 * std::asin(std::min(1.0, 0.5 * chord));
+}
+
+int CloudUpsampling::resolved_stride(int width, int height) const {
+    if (width < 2 || height < 2) return 1;
+    return stride == 0 ? std::clamp(width / kAutoColumns, 1, 16) : stride;
 }
 
 void CloudUpsampling::validate() const {

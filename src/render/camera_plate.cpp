@@ -104,6 +104,9 @@ struct CameraPlateRenderer::Impl {
 
         // The aerial perspective, fitted to the whole frame's depth.
         aerial = std::make_unique<AerialFrame>(scene.aerial_view(), depth, w, h);
+
+        // The clouds' light and shadow grids, shared by the bands.
+        if (clouds) cloud_passes = std::make_unique<CloudPassRenderer>(scene, *clouds);
     }
 
     // The scene validated, with a camera, and a resolution that fits in memory.
@@ -137,6 +140,7 @@ struct CameraPlateRenderer::Impl {
     std::shared_ptr<const GroundIllumination> ground;  // null: no ground in view, or switched off
     std::vector<double> ground_albedo_over_pi;
     std::unique_ptr<AerialFrame> aerial;
+    std::unique_ptr<CloudPassRenderer> cloud_passes;  // null without clouds
 };
 
 CameraPlateRenderer::CameraPlateRenderer(const SceneDescription& scene)
@@ -248,8 +252,7 @@ void CameraPlateRenderer::Impl::add_clouds(CameraPlate& plate, RowRange band, Pr
     const std::size_t nb = std::size_t(band.size()) * std::size_t(w);
     if (clouds) {
         ProgressStage cloud_stage(host_progress, 0.3, 1.0);
-        CloudPasses passes =
-            render_cloud_passes(scene, *clouds, depth, host_progress ? &cloud_stage : nullptr, band);
+        CloudPasses passes = cloud_passes->render(depth, host_progress ? &cloud_stage : nullptr, band);
         for (std::size_t q = 0; q < nb; ++q) {
             const float* c = &passes.clouds[q * 4];
             for (int k = 0; k < 3; ++k)

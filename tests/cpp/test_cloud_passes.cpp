@@ -229,6 +229,38 @@ TEST(CloudPasses, BandsHaveTheWholeFramesValues) {
     EXPECT_THROW(render_cloud_passes(s, box, depth, nullptr, RowRange{5, 13}), InvalidArgument);
 }
 
+// The same with the upsampling (stride 4): a band is marched on the frame's lattice, widened
+// to every block whose edge it touches, so it has the frame's values bit for bit, whether
+// it starts on a lattice row or not, and wherever it ends (the frame's last block is 3
+// rows). The cloud's edges and the geometry's speckles make blocks split.
+TEST(CloudPasses, UpsampledBandsHaveTheWholeFramesValues) {
+    const int W = 40, H = 31;
+    SceneDescription s = scene_up(CameraType::Perspective, W, H, Atmosphere::preset("clear"));
+    s.clouds->lighting = CloudLightingOptions{};
+    s.clouds->upsampling.stride = 4;
+    const HomogeneousBox box({-300.0, -300.0, 1000.0}, {200.0, 250.0, 1300.0}, 0.01);
+    std::vector<float> depth(std::size_t(W) * H, 1e10f);
+    for (int q = 0; q < W * H; q += 37) depth[q] = 1100.0f;
+    const CloudPasses whole = render_cloud_passes(s, box, depth);
+    s.clouds->upsampling.stride = 1;
+    const CloudPasses every = render_cloud_passes(s, box, depth);
+    s.clouds->upsampling.stride = 4;
+    std::size_t differ = 0;
+    for (std::size_t k = 0; k < whole.clouds.size(); ++k) differ += whole.clouds[k] != every.clouds[k];
+    EXPECT_GT(differ, std::size_t(0));  // some pixels interpolated
+    for (const RowRange rows : {RowRange{0, 5}, RowRange{4, 8}, RowRange{5, 12}, RowRange{3, 4},
+                                RowRange{8, 9}, RowRange{27, 31}, RowRange{13, 29}}) {
+        const CloudPasses band = render_cloud_passes(s, box, depth, nullptr, rows);
+        ASSERT_EQ(band.height, rows.size());
+        const std::size_t q0 = std::size_t(rows.begin) * W;
+        for (std::size_t q = 0; q < band.depth.size(); ++q) {
+            ASSERT_EQ(band.depth[q], whole.depth[q0 + q]) << rows.begin << " " << q;
+            for (int k = 0; k < 4; ++k)
+                ASSERT_EQ(band.clouds[q * 4 + k], whole.clouds[(q0 + q) * 4 + k]) << rows.begin << " " << q;
+        }
+    }
+}
+
 // The composite of the pass over a hazed render: an opaque cloud hides the render
 // whatever it is; no cloud leaves the hazed render as it is; and the composite is linear
 // in the render with slope (1 - alpha) x transmittance.

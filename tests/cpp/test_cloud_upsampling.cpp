@@ -4,10 +4,13 @@
 // combination of the four marched corners of the one block that owns it; zero tolerances
 // with a finest block of one pixel march every ray that differs (the plain march); the
 // result does not depend on the thread count; the block-size limit splits blocks that
-// span more than it at their cloud's distance, however well their corners agree.
+// span more than it at their cloud's distance, however well their corners agree; rays
+// ending at geometry are not interpolated across its silhouette.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include "cloud_test_util.hpp"
@@ -44,6 +47,8 @@ const ConstantIllumination& light() {
                                         {0.1f, 0.15f, 0.25f});
     return l;
 }
+
+const glm::dvec3 kEye(0.0);
 
 CloudLightingOptions quick() {
     CloudLightingOptions o;
@@ -177,6 +182,60 @@ TEST(CloudUpsampling, BlockSizeLimitSplitsBlocksWiderThanItAtTheirCloud) {
     EXPECT_EQ(n_all, 17 * 33);  // every even row, and in it every even column and the last
     EXPECT_EQ(some[4], 0);      // the top block's middle row: not split
     EXPECT_EQ(some[28], 33);    // the bottom block's: split to the finest
+}
+
+// Rays with lengths (a camera's rays ending at its geometry): a deck over the whole view,
+// and in front of it a disc of geometry 500 m away (a silhouette) and a tilted surface
+// beyond the deck's reach (lengths varying smoothly, 200 to 240 m). Interpolation never
+// crosses the silhouette: every ray inside the disc is clear (T = 1, no light), as the
+// plain march gives, and every block interpolated holds rays of one kind (all unbounded,
+// or all ending within the length tolerance); the sky's blocks and the smooth surface's
+// are still interpolated.
+TEST(CloudUpsampling, InterpolationDoesNotCrossTheGeometrysSilhouette) {
+    const int W = 96, H = 64;
+    const HomogeneousBox deck({-1e6, -1e6, 1000.0}, {1e6, 1e6, 1400.0}, 0.01);
+    const auto dirs = sky_grid(W, H);
+    std::vector<double> lengths(dirs.size(), std::numeric_limits<double>::infinity());
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const std::size_t p = std::size_t(j) * W + std::size_t(i);
+            if (std::hypot(i - 30.0, j - 20.0) < 12.0) lengths[p] = 500.0;
+            if (i >= 60) lengths[p] = 200.0 + 40.0 * (i - 60) / (W - 61);
+        }
+    const std::span<const glm::dvec3> origin(&kEye, 1);
+    const CloudResult plain = render_clouds(deck, light(), origin, dirs, lengths, quick());
+    const CloudResult grid =
+        render_clouds_grid(deck, light(), origin, dirs, lengths, W, quick(), settings(8, 2, 0.1, 0.3, 1e7));
+    const CloudGridInterpolation& g = grid.interpolation;
+    ASSERT_EQ(g.marched.size(), dirs.size());
+    std::size_t marched = 0, interpolated_bounded = 0;
+    for (std::size_t p = 0; p < dirs.size(); ++p) {
+        marched += g.marched[p];
+        interpolated_bounded += !g.marched[p] && std::isfinite(lengths[p]);
+        if (std::isfinite(lengths[p])) {
+            EXPECT_EQ(plain.transmittance[p], 1.0f) << p;
+            EXPECT_EQ(grid.transmittance[p], 1.0f) << p;
+            EXPECT_EQ(grid.radiance[p * 3], 0.0f) << p;
+        } else {
+            EXPECT_LT(grid.transmittance[p], 0.1f) << p;  // the deck, > 400 m of sigma_t 0.01
+        }
+    }
+    EXPECT_LT(marched, dirs.size() / 2);
+    EXPECT_GT(interpolated_bounded, std::size_t(0));
+    for (const auto& b : g.blocks) {
+        double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+        for (int y = b.y0; y <= b.y1; ++y)
+            for (int x = b.x0; x <= b.x1; ++x) {
+                lo = std::min(lo, lengths[std::size_t(y) * W + std::size_t(x)]);
+                hi = std::max(hi, lengths[std::size_t(y) * W + std::size_t(x)]);
+            }
+        EXPECT_TRUE(std::isinf(lo) || hi - lo <= CloudUpsampling::kLengthTolerance * lo)
+            << b.x0 << "," << b.y0 << " " << lo << " " << hi;
+    }
+    // Without the lengths the same blocks would interpolate the deck over the disc.
+    const CloudResult blind =
+        render_clouds_grid(deck, light(), origin, dirs, {}, W, quick(), settings(8, 2, 0.1, 0.3, 1e7));
+    EXPECT_LT(blind.transmittance[std::size_t(20) * W + 30], 1.0f);
 }
 
 TEST(CloudUpsampling, BadSettingsNameTheParameter) {

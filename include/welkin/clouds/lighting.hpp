@@ -133,6 +133,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -240,6 +241,30 @@ struct CloudResult {
     CloudGridInterpolation interpolation;    // render_clouds_grid: which rays were marched
 };
 
+// The lighting of one density under one light with one set of options, shared by the
+// marches of one frame's parts (the render engine's bands of rows): the per-sample light
+// and its shadow grids, filled lazily by every march that uses it, so that the vertices
+// the bands share are walked once. A vertex's depth does not depend on which march filled
+// it, so the results are those of one march over the whole frame. Keeps references to the
+// density and the light (they must outlive it) and a copy of the options (validated:
+// InvalidArgument). Safe for several marches at once. Its memory is the grids' tiles, as
+// one march over the frame would fill them.
+class CloudLighting {
+public:
+    CloudLighting(const CloudDensity& density, const CloudIllumination& light,
+                  const CloudLightingOptions& options);
+    ~CloudLighting();
+    CloudLighting(const CloudLighting&) = delete;
+    CloudLighting& operator=(const CloudLighting&) = delete;
+    const CloudLightingOptions& options() const;
+
+    struct Impl;
+
+private:
+    friend struct CloudLightingAccess;  // lighting.cpp's march
+    std::unique_ptr<Impl> impl_;
+};
+
 // Throws InvalidArgument for bad options, a non-finite origin or a bad direction (naming
 // view_directions[i]); Cancelled when `progress` cancels.
 CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& light,
@@ -273,11 +298,19 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 // kilometres away and their shapes smaller than a block, whose corners can agree by
 // chance. Deterministic: a ray's value is its own march or a fixed combination of marched
 // rays, whatever the thread count.
+// Rays that end at the scene's geometry (a camera's rays with lengths) are interpolated
+// only between rays of the same kind: a block is interpolated when every ray in it is
+// unbounded (the sky), or every one ends within kLengthTolerance of the others (one smooth
+// surface). A block with a silhouette in it is split, and at the finest size its rays are
+// all marched, so a cloud never bleeds over the geometry in front of it. Rays that end at
+// nearby geometry cost little: the march stops at their end.
 // What is lost: a cloud smaller than a block between four corner rays that agree (four
 // clear rays around a small wisp) is interpolated away. docs/validation.md ("Speed of a
-// cloudy sky") charts time against error for these settings, against marching every ray.
+// cloudy sky", "Every type's sky and plate") charts time against error for these
+// settings, against marching every ray.
 struct CloudUpsampling {
-    static constexpr int kAutoColumns = 256;  // stride 0: the grid's width / this
+    static constexpr int kAutoColumns = 256;          // stride 0: the grid's width / this
+    static constexpr double kLengthTolerance = 0.01;  // relative, between bounded rays
     // Coarse lattice, [0, 16]: 0 (the default) one marched column per 1/256 of the width
     // (every 1.4 degrees of an equirect sky: stride 8 at 2048 wide), 1 every ray marched.
     int stride = 0;
@@ -286,6 +319,9 @@ struct CloudUpsampling {
     double radiance_tolerance = 0.3;       // [0, 1], relative
     double max_block_size_m = 500.0;       // [0, 1e7] m
     void validate() const;
+    // The lattice's stride for a grid width x height: `stride`, or with 0 the width /
+    // kAutoColumns in [1, 16]; 1 for a single row or column.
+    int resolved_stride(int width, int height) const;
 };
 
 // render_clouds for the rays of an image (rows of `width` rays, row-major, from `origin`),
@@ -295,6 +331,23 @@ CloudResult render_clouds_grid(const CloudDensity& density, const CloudIlluminat
                                const CloudLightingOptions& options = {},
                                const CloudUpsampling& upsampling = {}, Progress* progress = nullptr,
                                std::uint64_t first_ray_index = 0);
+
+// The same for rays with their own origins and lengths (render_clouds' second form): a
+// camera's frame, or a band of its rows. The lattice's rows are the grid's rows 0, stride,
+// 2 stride, ... and its last: a band cut at lattice rows, marched with the frame's
+// resolved stride, has exactly the frame's values (render_cloud_passes does so).
+CloudResult render_clouds_grid(const CloudDensity& density, const CloudIllumination& light,
+                               std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
+                               std::span<const double> max_distances, int width,
+                               const CloudLightingOptions& options = {},
+                               const CloudUpsampling& upsampling = {}, Progress* progress = nullptr,
+                               std::uint64_t first_ray_index = 0);
+
+// The same with a frame's shared lighting (CloudLighting): what the bands of one frame use.
+CloudResult render_clouds_grid(const CloudLighting& lighting, std::span<const glm::dvec3> origins,
+                               std::span<const glm::dvec3> directions, std::span<const double> max_distances,
+                               int width, const CloudUpsampling& upsampling = {},
+                               Progress* progress = nullptr, std::uint64_t first_ray_index = 0);
 
 template <class F>
 void CloudGridInterpolation::for_each_interpolated(F&& f) const {

@@ -4,14 +4,17 @@
 // docs/pipelines.md "Clouds in a scene" gives the same definition).
 //
 // For every pixel of the scene's render (scene.resolution, camera.hpp's rays: perspective,
-// orthographic and equirectangular panoramas) the pixel's centre ray is marched through
-// the clouds' density (clouds/lighting.hpp, the scene's clouds.lighting options, lit by the
+// orthographic and equirectangular panoramas) the pixel's centre ray goes through the
+// clouds' density (clouds/lighting.hpp, the scene's clouds.lighting options, lit by the
 // atmosphere: AtmosphereIllumination with the observer at the scene origin, as the sky
 // image's clouds are). The ray ends at the scene's geometry: the Z pass `depth` (Blender's
 // convention, camera.hpp), converted to a distance along the ray by the ray's
 // distance_per_depth; sky pixels (depth +inf or >= aerial.sky_depth_m) and a render
 // without a depth image run to clouds.lighting.max_distance_m. Geometry in front of a cloud
-// therefore hides it.
+// therefore hides it. The rays are upsampled as the equirect sky's are (the scene's
+// clouds.upsampling; render_clouds_grid with the rays' lengths): a lattice of marched
+// rays refined where the clouds have edges, the rest interpolated, never across the
+// geometry's silhouettes; stride 1 marches every pixel.
 //
 // The march gives, per pixel, the cloud's in-scattered radiance L_c (premultiplied), its
 // transmittance T_c, and the transmittance-weighted depth d_c of its scattering. The air in
@@ -29,20 +32,22 @@
 // whole path radiance) the same formula is exact as well: the sky is S(0, d_c) +
 // T(0, d_c) S(d_c, inf).
 //
-// The air terms T(0, d_c) and S(0, d_c) are marched per pixel, from the camera to the
-// pixel's cloud depth (aerial_along_rays, aerial_perspective.hpp: the per-pixel march of
-// the aerial passes' reference method, aerial.raymarch_steps steps; the equirect sky's
-// clouds get their air from the same function, sky_image.hpp), not read from a
-// froxel volume. Why: (1) clouds lie kilometres to hundreds of kilometres away, where the
-// froxel volume's quadratic slices are coarsest, and its depth range would have to be
-// fitted to the cloud depths, which are known only after the cloud march; (2) a pixel's
-// value then depends on that pixel alone, so a band of rows (the render engine's tiles,
-// `rows`) has exactly the whole frame's values; (3) it is cheap next to the cloud march
-// (64 steps of LUT lookups against ~100 steps each with ~12 density samples), and only
-// pixels with cloud are marched. tests/cpp/test_cloud_passes.cpp checks it against the
-// froxel volume sampled at the same cloud depths (AirInFront...). The cloud's depth extent
-// is collapsed to d_c: the air between parts of one cloud is left out (a few hundred
-// metres of air inside a cloud several km away).
+// The air terms T(0, d_c) and S(0, d_c) are marched per marched ray, from the camera to
+// its cloud depth (aerial_along_rays, aerial_perspective.hpp: the per-pixel march of the
+// aerial passes' reference method, aerial.raymarch_steps steps; the equirect sky's clouds
+// get their air from the same function, sky_image.hpp), not read from a froxel volume.
+// Why: (1) clouds lie kilometres to hundreds of kilometres away, where the froxel volume's
+// quadratic slices are coarsest, and its depth range would have to be fitted to the cloud
+// depths, which are known only after the cloud march; (2) a ray's air then depends on its
+// own cloud depth alone, so a band of rows (the render engine's tiles, `rows`; its clouds
+// marched on the frame's lattice, widened to the lattice's blocks around it) has exactly
+// the whole frame's values; (3) it is cheap next to the cloud march (64 steps of LUT
+// lookups against ~100 steps each with ~12 density samples), and only rays with cloud are
+// marched. An interpolated ray gets the whole pass (Welkin.Clouds) interpolated from its
+// block's corners, as the equirect sky's do. tests/cpp/test_cloud_passes.cpp checks the
+// march against the froxel volume sampled at the same cloud depths (AirInFront...). The
+// cloud's depth extent is collapsed to d_c: the air between parts of one cloud is left out
+// (a few hundred metres of air inside a cloud several km away).
 //
 // Colour and units: the cloud radiance is converted to linear Rec.709 as the sky is
 // (color.hpp, lambda power -3; the same conversion the equirect sky applies to its clouds),
@@ -59,6 +64,7 @@
 // its index). Cancellable through Progress (Cancelled).
 #pragma once
 
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -87,6 +93,27 @@ struct CloudPasses {
 CloudPasses render_cloud_passes(const SceneDescription& scene, const CloudDensity& density,
                                 std::span<const float> depth = {}, Progress* progress = nullptr,
                                 RowRange rows = {});
+
+// The frame-wide part of the passes, once for a frame whose bands are rendered one by one
+// (the render engine's tiles, camera_plate.hpp's CameraPlateRenderer): the checks, the
+// atmosphere's light and the clouds' shared lighting (lighting.hpp, CloudLighting), whose
+// shadow grids the bands fill and share. render() gives render_cloud_passes's passes for
+// `rows`, with the whole frame's values. Keeps references to the scene and the density:
+// they must outlive it. render() may run from several threads at once. Throws as
+// render_cloud_passes does (the constructor: "camera", "resolution" and the options).
+class CloudPassRenderer {
+public:
+    CloudPassRenderer(const SceneDescription& scene, const CloudDensity& density);
+    ~CloudPassRenderer();
+    CloudPassRenderer(const CloudPassRenderer&) = delete;
+    CloudPassRenderer& operator=(const CloudPassRenderer&) = delete;
+    CloudPasses render(std::span<const float> depth = {}, Progress* progress = nullptr,
+                       RowRange rows = {}) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 // The scene's own clouds (scene.cloud_density(): opens the VDBs). InvalidArgument naming
 // "clouds" when the scene has none, "clouds.volumes[i].file" for a bad volume.
