@@ -110,13 +110,24 @@ def scene_description_json(scene, depsgraph, native):
 
 
 def _set_rect(render_pass, rect):
-    """Fills a render pass from an (n, channels) float32 array: foreach_set on the pass's
-    (n, channels) array where Blender has it (a copy of the buffer, ~70 times faster at
-    1920 x 1080 than assignment, which converts every value), else assignment."""
-    try:
-        render_pass.rect.foreach_set(rect)
-    except (AttributeError, TypeError):
-        render_pass.rect = rect
+    """Fills a render pass from an (n, channels) float32 array by foreach_set, a copy of the
+    buffer (assignment converts every value: 0.26 s a band of 1920 x 64 in Blender 5.3,
+    against 1 ms). Blender 4.2 and later take the values flat (n x channels of them), 3.4
+    the (n, channels) array; each refuses the other's shape by its size before any copy.
+    Assignment only where neither is taken. Returns the way it wrote ("flat", "rows" or
+    "assigned"), which the tests check."""
+    import numpy as np
+
+    rect = np.ascontiguousarray(rect, dtype=np.float32)  # foreach_set takes float32 only
+    rows = render_pass.rect
+    for name, values in (("flat", rect.reshape(-1)), ("rows", rect)):
+        try:
+            rows.foreach_set(values)
+            return name
+        except (AttributeError, TypeError):
+            continue
+    render_pass.rect = rect
+    return "assigned"
 
 
 class WelkinRenderEngine(bpy.types.RenderEngine):
