@@ -614,7 +614,6 @@ CloudLighting::CloudLighting(const CloudDensity& density, const CloudIlluminatio
                              const CloudLightingOptions& options)
     : impl_(std::make_unique<Impl>(density, light, options)) {}
 CloudLighting::~CloudLighting() = default;
-const CloudLightingOptions& CloudLighting::options() const { return impl_->options; }
 
 struct CloudLightingAccess {
     static const CloudLighting::Impl& of(const CloudLighting& lighting) { return *lighting.impl_; }

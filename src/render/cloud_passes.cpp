@@ -21,19 +21,17 @@
 
 namespace welkin {
 
-// The frame-wide part (header): the checks, the lighting options with the rays' footprint,
-// the resolved upsampling, the atmosphere's light and the shared CloudLighting.
+// The frame-wide part (header): the checks, the resolved upsampling, the atmosphere's light
+// and the shared CloudLighting (its options with the rays' footprint).
 struct CloudPassRenderer::Impl {
     Impl(const SceneDescription& s, const CloudDensity& d)
         : scene(s),
-          density(d),
           w(scene.resolution.width()),
           h(scene.resolution.height()),
           rays(scene.require_camera(), w, h),
-          options(footprint_options(scene, rays)),
           upsampling(resolved_upsampling(scene)),
           light(scene.atmosphere, scene.origin_observer(), scene.sky_options.luts()),
-          lighting(density, light, options) {}
+          lighting(d, light, footprint_options(scene, rays)) {}
 
     // Besides the aerial passes' own buffers: rays (origin, direction, length: 56 bytes),
     // the march's radiance, transmittance and depth, the RGB and the passes (40 bytes).
@@ -69,10 +67,8 @@ struct CloudPassRenderer::Impl {
     }
 
     const SceneDescription& scene;
-    const CloudDensity& density;
     int w, h;
     CameraRays rays;
-    CloudLightingOptions options;
     CloudUpsampling upsampling;
     AtmosphereIllumination light;
     CloudLighting lighting;
@@ -129,7 +125,6 @@ CloudPasses CloudPassRenderer::render(std::span<const float> depth, Progress* pr
         render_clouds_grid(f.lighting, origins, dirs, lengths, w, f.upsampling, &march_stage, m0);
     lengths = {};
     const CloudGridInterpolation& grid = march.interpolation;
-    const auto was_marched = [&](std::size_t q) { return grid.all_marched() || grid.marched[q] != 0; };
 
     // Cloud radiance to the scene's RGB (the sky's conversion).
     std::vector<float> rgb(m * 3);
@@ -146,7 +141,7 @@ CloudPasses CloudPassRenderer::render(std::span<const float> depth, Progress* pr
     // treat it (T = 1, S = 0), or an interpolated ray: not marched.
     std::vector<double> cloud_d(m, 0.0);
     for (std::size_t q = 0; q < m; ++q)
-        if (was_marched(q) && march.transmittance[q] < 1.0f &&
+        if (grid.was_marched(q) && march.transmittance[q] < 1.0f &&
             !is_sky_depth(float(double(march.depth_m[q]) / per_depth[q]), scene.aerial.sky_depth_m))
             cloud_d[q] = double(march.depth_m[q]);
     const AirAlongRays air = aerial_along_rays(
@@ -158,7 +153,7 @@ CloudPasses CloudPassRenderer::render(std::span<const float> depth, Progress* pr
     const float exposure = float(scene.exposure);
     std::vector<float> clouds(m * 4, 0.0f);
     for (std::size_t q = 0; q < m; ++q) {
-        if (!was_marched(q) || !(march.transmittance[q] < 1.0f)) continue;
+        if (!grid.was_marched(q) || !(march.transmittance[q] < 1.0f)) continue;
         const float alpha = 1.0f - march.transmittance[q];
         for (int c = 0; c < 3; ++c)
             clouds[q * 4 + c] =

@@ -356,8 +356,7 @@ BandClouds march_band_clouds(const SkyImageOptions& options, const AtmosphereIll
     const CloudGridInterpolation& grid = b.march.interpolation;
     std::vector<double> cloud_d(n, 0.0);  // 0: no cloud, or not marched
     for (std::size_t q = 0; q < n; ++q)
-        if (b.march.transmittance[q] < 1.0f && (grid.all_marched() || grid.marched[q]))
-            cloud_d[q] = double(b.march.depth_m[q]);
+        if (b.march.transmittance[q] < 1.0f && grid.was_marched(q)) cloud_d[q] = double(b.march.depth_m[q]);
     const glm::dvec3 origin(0.0);
     const AirAlongRays air =
         aerial_along_rays(atm, light.luts(), {0.0, 0.0, -(atm.bottom_radius_m + obs.altitude_m)},

@@ -220,6 +220,8 @@ struct CloudGridInterpolation {
     std::vector<unsigned char> marched;  // per ray (row-major); empty: every ray was marched
 
     bool all_marched() const { return marched.empty(); }
+    // Whether ray p was marched (not interpolated).
+    bool was_marched(std::size_t p) const { return marched.empty() || marched[p] != 0; }
     // f(p, q, w) for every unmarched pixel p, q its block's corner pixels (top-left,
     // top-right, bottom-left, bottom-right) and w their bilinear weights; in parallel,
     // each pixel once.
@@ -256,7 +258,6 @@ public:
     ~CloudLighting();
     CloudLighting(const CloudLighting&) = delete;
     CloudLighting& operator=(const CloudLighting&) = delete;
-    const CloudLightingOptions& options() const;
 
     struct Impl;
 
