@@ -78,6 +78,10 @@ ground_radiance: with them, the radiance from below the horizon instead (a world
 colour above the horizon and another below); None: ambient_radiance all round.
 g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
 (include/welkin/clouds/phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
+lighting: method "fast" only: a dict of the scene file's clouds.lighting options
+(docs/pipelines.md, e.g. {"sides": False, "shadow_grid": False}), applied over
+max_steps, light_steps and octaves; ValueError names a bad key as the scene file's
+("clouds.lighting.sides").
 )doc";
 
 py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere atmosphere, double altitude_m,
@@ -86,7 +90,7 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
                          int octaves, double albedo, int paths, std::uint64_t seed,
                          const py::object& progress, const py::object& sun_irradiance,
                          const py::object& ambient_radiance, const py::object& ground_radiance,
-                         double g_forward, double g_back, double w_forward) {
+                         double g_forward, double g_back, double w_forward, const py::object& lighting) {
     CloudScattering scattering;
     scattering.albedo = albedo;
     scattering.phase = CloudPhase{g_forward, g_back, w_forward};
@@ -94,6 +98,18 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
     if (!clouds) throw InvalidArgument("clouds", "must be a welkin.CloudLayer or welkin.VdbClouds");
     if (method != "fast" && method != "reference")
         throw InvalidArgument("method", fmt::format("must be \"fast\" or \"reference\", got \"{}\"", method));
+    CloudLightingOptions fast;
+    fast.max_steps = max_steps;
+    fast.light_steps = light_steps;
+    fast.octaves = octaves;
+    fast.scattering = scattering;
+    fast.seed = seed;
+    if (!lighting.is_none()) {
+        if (method != "fast") throw InvalidArgument("lighting", "applies to method \"fast\" only");
+        if (!py::isinstance<py::dict>(lighting)) throw InvalidArgument("lighting", "must be a dict");
+        apply_cloud_lighting_json(py::module_::import("json").attr("dumps")(lighting).cast<std::string>(),
+                                  fast);
+    }
     const Observer observer{altitude_m, to_dvec3(sun_direction, "sun_direction")};
     const glm::dvec3 o = to_dvec3(origin, "origin");
     const std::vector<glm::dvec3> dirs = to_points(view_directions, "view_directions");
@@ -118,13 +134,7 @@ py::tuple cloud_radiance(std::shared_ptr<const CloudDensity> clouds, Atmosphere 
             if (!constant) from_atmosphere = std::make_unique<AtmosphereIllumination>(atmosphere, observer);
             const CloudIllumination& light = constant ? *constant : *from_atmosphere;
             if (method == "fast") {
-                CloudLightingOptions opt;
-                opt.max_steps = max_steps;
-                opt.light_steps = light_steps;
-                opt.octaves = octaves;
-                opt.scattering = scattering;
-                opt.seed = seed;
-                result = render_clouds(*clouds, light, o, dirs, opt, p);
+                result = render_clouds(*clouds, light, o, dirs, fast, p);
             } else {
                 CloudReferenceOptions opt;
                 opt.paths = paths;
@@ -322,7 +332,7 @@ A cloud density source (base class of CloudLayer and VdbClouds).
           py::arg("progress") = py::none(), py::arg("sun_irradiance") = py::none(),
           py::arg("ambient_radiance") = py::none(), py::arg("ground_radiance") = py::none(),
           py::arg("g_forward") = CloudPhase{}.g_forward, py::arg("g_back") = CloudPhase{}.g_back,
-          py::arg("w_forward") = CloudPhase{}.w_forward);
+          py::arg("w_forward") = CloudPhase{}.w_forward, py::arg("lighting") = py::none());
 }
 
 }  // namespace welkin::python

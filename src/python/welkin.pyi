@@ -724,7 +724,7 @@ def cloud_passes(scene: typing.Any, depth: typing.Any = None, *, progress: typin
     volume ("clouds.volumes[i].file", with the file's path and the reason), a depth of the
     wrong shape or with NaN / negative values ("depth"), a bad row range ("rows").
     """
-def cloud_radiance(clouds: CloudDensity, atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, *, origin: typing.Any = (0.0, 0.0, 0.0), method: str = 'fast', max_steps: int = 96, light_steps: int = 8, octaves: int = 4, albedo: float = 1.0, paths: int = 256, seed: int = 1, progress: typing.Any = None, sun_irradiance: typing.Any = None, ambient_radiance: typing.Any = None, ground_radiance: typing.Any = None, g_forward: float = 0.8, g_back: float = -0.3, w_forward: float = 0.8) -> tuple:
+def cloud_radiance(clouds: CloudDensity, atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, view_directions: typing.Any, *, origin: typing.Any = (0.0, 0.0, 0.0), method: str = 'fast', max_steps: int = 96, light_steps: int = 8, octaves: int = 4, albedo: float = 1.0, paths: int = 256, seed: int = 1, progress: typing.Any = None, sun_irradiance: typing.Any = None, ambient_radiance: typing.Any = None, ground_radiance: typing.Any = None, g_forward: float = 0.8, g_back: float = -0.3, w_forward: float = 0.8, lighting: typing.Any = None) -> tuple:
     """
     Cloud lighting for many view rays, lit by the atmosphere.
     
@@ -748,6 +748,10 @@ def cloud_radiance(clouds: CloudDensity, atmosphere: Atmosphere, altitude_m: flo
     colour above the horizon and another below); None: ambient_radiance all round.
     g_forward, g_back, w_forward: the phase function, w HG(g_forward) + (1 - w) HG(g_back)
     (include/welkin/clouds/phase.hpp; w_forward=1 is one Henyey-Greenstein lobe).
+    lighting: method "fast" only: a dict of the scene file's clouds.lighting options
+    (docs/pipelines.md, e.g. {"sides": False, "shadow_grid": False}), applied over
+    max_steps, light_steps and octaves; ValueError names a bad key as the scene file's
+    ("clouds.lighting.sides").
     """
 def cloud_transmittance(scene: typing.Any, points: typing.Any, direction: typing.Any = None, *, steps: int = 64, max_distance_m: float = 1000000.0, progress: typing.Any = None) -> numpy.ndarray[numpy.float32]:
     """

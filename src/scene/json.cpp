@@ -506,6 +506,13 @@ SceneDescription parse(const json& j, const std::filesystem::path& base) {
 
 }  // namespace
 
+void apply_cloud_lighting_json(const std::string& text, CloudLightingOptions& options) {
+    const json j = parse_json(text, "clouds.lighting");
+    if (!j.is_object()) throw InvalidArgument("clouds.lighting", "must be a JSON object");
+    parse_cloud_lighting(j, options);
+    prefixed("clouds.lighting.", [&] { options.validate(); });
+}
+
 SceneDescription SceneDescription::from_json_string(const std::string& text,
                                                     const std::string& base_directory) {
     const json j = parse_json(text, "scene JSON");

@@ -52,6 +52,43 @@ def test_vdb_clouds_with_blender_matrix(tmp_path):
     assert abs(depth[0] - math.hypot(1000.0, 500.0)) < 80.0
 
 
+def test_cloud_radiance_takes_the_scene_files_lighting_options(tmp_path):
+    """`lighting` is the scene file's clouds.lighting: keys that are also keywords give the
+    same march as the keywords; {"sides": False} takes away the diffuse light's leak
+    through the cloud's sides, which only removes light (it adds the leak to the slab's
+    absorption), so a dense ball is brighter without it; bad keys and values are named as
+    in a scene file."""
+    path = tmp_path / "ball.vdb"
+    write_ball(path, radius=12, voxel=25.0)
+    m = np.eye(4)
+    m[:3, 3] = (0.0, 2000.0, 400.0)
+    v = welkin.VdbClouds(str(path), matrix_world=m, density_scale=0.05)
+    atm = welkin.Atmosphere.preset("bruneton2017")
+    a = np.radians(np.linspace(-4.0, 4.0, 9))
+    e = math.atan2(400.0, 2000.0) + np.radians(np.linspace(-4.0, 4.0, 9))
+    az, el = np.meshgrid(a, e)
+    d = np.stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)], -1).reshape(-1, 3)
+    sun = (0.8, 0.0, 0.6)  # from the side: a sunlit and a shadow half
+    keywords = welkin.cloud_radiance(v, atm, 0.0, sun, d, max_steps=48, light_steps=6)
+    options = welkin.cloud_radiance(v, atm, 0.0, sun, d, lighting={"max_steps": 48, "light_steps": 6})
+    for x, y in zip(keywords, options):
+        assert np.array_equal(x, y)
+    with_sides = welkin.cloud_radiance(v, atm, 0.0, sun, d)[0].sum()
+    without = welkin.cloud_radiance(v, atm, 0.0, sun, d, lighting={"sides": False})[0].sum()
+    print(f"without the sides over with them: {without / with_sides:.3f}")
+    assert with_sides > 0.0 and without > 1.05 * with_sides
+    for bad, name in (
+        ({"side": False}, "clouds.lighting.side"),
+        ({"sides": 3}, "clouds.lighting.sides"),
+        ({"max_steps": 0}, "clouds.lighting.max_steps"),
+        ([1], "lighting"),
+    ):
+        with pytest.raises(ValueError, match=name):
+            welkin.cloud_radiance(v, atm, 0.0, sun, d, lighting=bad)
+    with pytest.raises(ValueError, match="lighting"):
+        welkin.cloud_radiance(v, atm, 0.0, sun, d, method="reference", paths=4, lighting={})
+
+
 def test_vdb_errors_name_file_and_grid(tmp_path):
     with pytest.raises(OSError, match="missing.vdb"):
         welkin.VdbClouds(str(tmp_path / "missing.vdb"))

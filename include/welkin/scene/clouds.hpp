@@ -65,6 +65,13 @@ std::shared_ptr<const CloudDensity> make_scene_cloud_density(const SceneClouds& 
                                                              double planet_radius_m,
                                                              double origin_altitude_m);
 
+// The scene JSON's "clouds.lighting" object, as text, onto `options`: the keys it has set
+// their fields, the others are kept (the scattering is not among them). For hosts that march
+// without a scene (welkin.cloud_radiance's `lighting`). Not a JSON object, an unknown key
+// or a bad value: InvalidArgument naming it as a scene file would ("clouds.lighting.sides").
+// The result is validated (CloudLightingOptions::validate, its parameter prefixed so).
+void apply_cloud_lighting_json(const std::string& text, CloudLightingOptions& options);
+
 // "clamp" | "reject" (the JSON's "negative").
 const char* vdb_negative_name(VdbCloudOptions::Negative negative);
 VdbCloudOptions::Negative vdb_negative_from_name(const std::string& name, const std::string& parameter);
