@@ -25,8 +25,16 @@ of the pixels' position along the sun's direction on the image) and the base (th
 fifth of the cloud's rows), as bench/cycles_addon_clouds.py's regions; and the median of the
 per-pixel ratio's distance from 1.
 
+--boxes does the same for uniform boxes instead of the patches, where the geometry is
+known: BOX_HEIGHT_M thick, 2 and 20 times as wide across the sun's azimuth, 4 km long along
+it, their base 3 km up, vertical optical depths 1, 3, 10 and 30, the sun 30 degrees up along
+the long axis. "below": a fan of rays 20 degrees about the zenith from the ground under the
+box's middle (its base; the wide box is a plane-parallel slab there); "side": rays from 3 km
+off the long side at the box's mid-height (the side face, parallel to the sun, which only
+the light leaking sideways lights). Sums over the rays with reference transmittance < 0.95.
+
 --doc replaces the table between "<!-- sun_light_per_type: begin -->" and
-"<!-- sun_light_per_type: end -->" in that file.
+"<!-- sun_light_per_type: end -->" in that file ("sun_light_boxes" with --boxes).
 """
 
 import argparse
@@ -55,6 +63,10 @@ DEFAULT_VARIANTS = {
     "depths marched, no sides": {"shadow_grid": False, "light_steps": 64, "sides": False},
 }
 SUN_ONLY = {"sun_irradiance": [1.0], "ambient_radiance": [0.0]}
+BOX_HEIGHT_M = 200.0
+BOX_VOXEL_M = 20.0
+BOX_TAUS = (1.0, 3.0, 10.0, 30.0)
+BOX_WIDTHS = (2.0, 20.0)  # over the height
 
 
 def sun_vector(elevation_deg, azimuth_deg):
@@ -140,6 +152,84 @@ def run(types, variants, paths, voxel, tmp, log=print):
     return out
 
 
+def box_rays(view, width_m):
+    """(origin, (N, 3) directions) of a box view (the header)."""
+    if view == "below":
+        origin = np.zeros(3)
+        a = np.radians(np.linspace(-20.0, 20.0, 9))
+        ax, ay = np.meshgrid(a, a)
+        d = np.stack([np.sin(ax), np.sin(ay), np.ones_like(ax)], -1)
+    else:
+        origin = np.array([0.0, -width_m / 2.0 - 3000.0, 3000.0 + BOX_HEIGHT_M / 2.0])
+        a, b = np.meshgrid(np.radians(np.linspace(-3.0, 3.0, 9)), np.radians(np.linspace(-1.5, 1.5, 7)))
+        d = np.stack([np.sin(a), np.ones_like(a), np.sin(b)], -1)
+    d = d.reshape(-1, 3)
+    return origin, d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def run_boxes(variants, paths, tmp, log=print):
+    """{(box, view): {variant: {"all": ratio, "all_noise": ...}}} for the uniform boxes."""
+    from vdb_dense import write_density
+
+    out = {}
+    atm = welkin.Atmosphere.preset("clear_day")
+    sun = sun_vector(30.0, 0.0)
+    for tau in BOX_TAUS:
+        for over in BOX_WIDTHS:
+            width = over * BOX_HEIGHT_M
+            n = [int(4000.0 / BOX_VOXEL_M), int(width / BOX_VOXEL_M), int(BOX_HEIGHT_M / BOX_VOXEL_M)]
+            path = pathlib.Path(tmp) / f"box_{tau:g}_{over:g}.vdb"
+            write_density(path, np.ones(n, np.float32), (-n[0] // 2, -n[1] // 2, 0), BOX_VOXEL_M)
+            mw = np.eye(4)
+            mw[:3, 3] = (0.0, 0.0, 3000.0)
+            clouds = welkin.VdbClouds(
+                str(path), density_scale=tau / BOX_HEIGHT_M, matrix_world=mw, placement="openvdb"
+            )
+            name = f"optical depth {tau:g}, {over:g} x as wide"
+            for view in ("below", "side"):
+                origin, d = box_rays(view, width)
+                kw = dict(SUN_ONLY, origin=origin)
+                refs, mask = [], None
+                for seed in (1, 2):
+                    L, T, _ = welkin.cloud_radiance(
+                        clouds, atm, 0.0, sun, d, method="reference", paths=paths // 2, seed=seed, **kw
+                    )
+                    refs.append(np.asarray(L)[:, 0])
+                    mask = np.asarray(T) < 0.95 if mask is None else mask & (np.asarray(T) < 0.95)
+                ref = (refs[0] + refs[1]) / 2.0
+                row = {}
+                for vname, lighting in variants.items():
+                    fast = np.asarray(
+                        welkin.cloud_radiance(clouds, atm, 0.0, sun, d, lighting=lighting, **kw)[0]
+                    )
+                    f = fast[:, 0][mask].sum()
+                    per_seed = [f / x[mask].sum() for x in refs]
+                    row[vname] = {
+                        "all": float(f / ref[mask].sum()),
+                        "all_noise": abs(per_seed[0] - per_seed[1]) / 2,
+                    }
+                out[(name, view)] = row
+                log(f"{name}, {view}: " + "; ".join(f"{k} {c['all']:.3f}" for k, c in row.items()))
+    return out
+
+
+def box_table(results, variants, paths):
+    lines = [
+        f"Uniform boxes, sun light alone, fast / reference (2 x {paths // 2} paths) over the rays "
+        "that meet the box:",
+        "",
+        "| box | view | " + " | ".join(variants) + " |",
+        "|---|---|" + "---|" * len(variants),
+    ]
+    for (name, view), row in results.items():
+        lines.append(
+            f"| {name} | {view} | "
+            + " | ".join(f"{row[v]['all']:.2f} (±{row[v]['all_noise']:.2f})" for v in variants)
+            + " |"
+        )
+    return "\n".join(lines)
+
+
 def table(results, variants, paths, voxel):
     lines = [
         f"Sun light alone, fast / reference (2 x {paths // 2} paths), {SIZE[0]} x {SIZE[1]}, "
@@ -176,6 +266,7 @@ def main():
         metavar='NAME={"key": value}',
         help="a clouds.lighting variant (repeatable; default: the four above)",
     )
+    p.add_argument("--boxes", action="store_true", help="uniform boxes instead of the patches")
     p.add_argument("--doc", default="")
     a = p.parse_args()
     variants = dict(DEFAULT_VARIANTS)
@@ -185,12 +276,15 @@ def main():
             name, _, text = v.partition("=")
             variants[name] = json.loads(text)
     with tempfile.TemporaryDirectory() as tmp:
-        results = run(a.types.split(","), variants, a.paths, a.voxel, tmp)
-    text = table(results, variants, a.paths, a.voxel)
+        if a.boxes:
+            text = box_table(run_boxes(variants, a.paths, tmp), variants, a.paths)
+        else:
+            text = table(run(a.types.split(","), variants, a.paths, a.voxel, tmp), variants, a.paths, a.voxel)
     print(text)
     if a.doc:
         doc = pathlib.Path(a.doc)
-        begin, end = "<!-- sun_light_per_type: begin -->", "<!-- sun_light_per_type: end -->"
+        marker = "sun_light_boxes" if a.boxes else "sun_light_per_type"
+        begin, end = f"<!-- {marker}: begin -->", f"<!-- {marker}: end -->"
         s = doc.read_text()
         i, j = s.index(begin) + len(begin), s.index(end)
         doc.write_text(s[:i] + "\n" + text + "\n" + s[j:])
