@@ -47,12 +47,7 @@ import addon_testing as T  # noqa: E402
 
 import bpy  # noqa: E402
 
-# After `--` on Blender's command line; tests/blender/bpy_blender.py passes them as the
-# script's own arguments.
-if "--" in sys.argv:
-    argv = sys.argv[sys.argv.index("--") + 1 :]
-else:
-    argv = sys.argv[1:] if T.is_module_bpy() else []
+argv = T.script_argv()
 parser = argparse.ArgumentParser()
 parser.add_argument("--repeats", type=int, default=7)
 parser.add_argument("--width", type=int, default=2048)

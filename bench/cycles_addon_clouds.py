@@ -34,6 +34,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cycles_volume as cv  # noqa: E402
+from cloud_regions import image_regions  # noqa: E402
 
 WELKIN_LOBES = ((0.8, 0.8), (-0.3, 0.2))  # Welkin's default CloudPhase: w HG(g), (g, w)
 ONE_LOBE = ((cv.G, 1.0),)
@@ -214,26 +215,11 @@ def luminance(x):
 
 
 def regions(scene, alpha, sun_direction):
-    """Masks over the cloud's pixels (alpha > 0.05): "all"; "sunlit", the half of them
-    towards the sun's direction on the image; "shadow", the other half; "base", the
-    bottom fifth of the cloud's rows; "edge" (0.05 < alpha < 0.6) and "core" (alpha > 0.95)."""
-    h, w = alpha.shape
-    mask = alpha > 0.05
+    """cloud_regions.image_regions of the scene camera's image: the sun's direction
+    projected on the camera's right and up axes."""
     m = np.array(scene.camera.matrix_world.to_3x3())
     s = np.asarray(sun_direction, dtype=float)
-    sx, sy = float(s @ m[:, 0]), float(s @ m[:, 1])
-    yy, xx = np.mgrid[0:h, 0:w].astype(float)
-    toward = (xx - xx[mask].mean()) * sx - (yy - yy[mask].mean()) * sy  # rows grow downwards
-    sunlit = mask & (toward > np.median(toward[mask]))
-    rows = np.nonzero(mask.any(axis=1))[0]
-    return {
-        "all": mask,
-        "sunlit": sunlit,
-        "shadow": mask & ~sunlit,
-        "base": mask & (yy >= rows.min() + 0.8 * (rows.max() - rows.min() + 1)),
-        "edge": mask & (alpha < 0.6),
-        "core": alpha > 0.95,
-    }
+    return image_regions(alpha, float(s @ m[:, 0]), float(s @ m[:, 1]))
 
 
 def ratios(x, ref, regs):

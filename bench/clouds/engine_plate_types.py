@@ -34,10 +34,7 @@ import cloud_testing as ct  # noqa: E402
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-if "--" in sys.argv:
-    argv = sys.argv[sys.argv.index("--") + 1 :]
-else:
-    argv = sys.argv[1:] if t.is_module_bpy() else []
+argv = t.script_argv()
 ap = argparse.ArgumentParser()
 ap.add_argument("--width", type=int, default=1920)
 ap.add_argument("--types", nargs="*", default=None)

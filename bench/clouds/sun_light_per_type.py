@@ -22,7 +22,7 @@ sides' leak (clouds/diffusion.hpp, "The sides"); and both.
 Per type, view and variant: the fast march's light over the reference's, summed over the
 cloud's pixels (reference alpha > 0.05), the sunlit and shadow halves (split at the median
 of the pixels' position along the sun's direction on the image) and the base (the bottom
-fifth of the cloud's rows), as bench/cycles_addon_clouds.py's regions; and the median of the
+fifth of the cloud's rows), bench/cloud_regions.py; and the median of the
 per-pixel ratio's distance from 1.
 
 --boxes does the same for uniform boxes instead of the patches, where the geometry is
@@ -52,6 +52,7 @@ import welkin
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "bench"))
 import cycles_layer_patches as lp  # noqa: E402
+from cloud_regions import image_regions  # noqa: E402
 
 SIZE = (72, 48)
 VIEWS = ("side", "backlit")
@@ -92,21 +93,6 @@ def camera(patch):
     return origin, (d / np.linalg.norm(d, axis=-1, keepdims=True)).reshape(-1, 3), right, up
 
 
-def regions(alpha, sun, right, up):
-    h, w = alpha.shape
-    mask = alpha > 0.05
-    yy, xx = np.mgrid[0:h, 0:w].astype(float)
-    toward = (xx - xx[mask].mean()) * float(sun @ right) - (yy - yy[mask].mean()) * float(sun @ up)
-    sunlit = mask & (toward > np.median(toward[mask]))
-    rows = np.nonzero(mask.any(axis=1))[0]
-    return {
-        "all": mask,
-        "sunlit": sunlit,
-        "shadow": mask & ~sunlit,
-        "base": mask & (yy >= rows.min() + 0.8 * (rows.max() - rows.min() + 1)),
-    }
-
-
 def run(types, variants, paths, voxel, tmp, log=print):
     """{(type, view): {variant: {region: ratio, region + "_noise": ..., "median_error": ...}}}"""
     out = {}
@@ -128,7 +114,7 @@ def run(types, variants, paths, voxel, tmp, log=print):
                 refs.append(np.asarray(L)[:, 0].reshape(SIZE[::-1]))
                 alpha = alpha + (1.0 - np.asarray(T).reshape(SIZE[::-1])) / 2.0
             ref = (refs[0] + refs[1]) / 2.0
-            regs = regions(alpha, sun, right, up)
+            regs = image_regions(alpha, float(sun @ right), float(sun @ up))
             row = {}
             for name, lighting in variants.items():
                 fast = welkin.cloud_radiance(clouds, atm, 0.0, sun, d, lighting=lighting, **SUN_ONLY)[0]

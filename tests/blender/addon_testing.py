@@ -63,6 +63,14 @@ def is_module_bpy():
     return not bpy.app.binary_path
 
 
+def script_argv():
+    """A script's own arguments: those after `--` on Blender's command line, or for the bpy
+    module (tests/blender/bpy_blender.py passes them as the script's own) all of them."""
+    if "--" in sys.argv:
+        return sys.argv[sys.argv.index("--") + 1 :]
+    return sys.argv[1:] if is_module_bpy() else []
+
+
 def blender_command():
     """The command that runs this Blender from the command line: its binary, or for the
     bpy module, tests/blender/bpy_blender.py in the same Python."""
