@@ -82,8 +82,7 @@ struct TypeShape {
     // cells (cumulus, stratocumulus, altocumulus): 1 builds the cloud from its footprint
     // (flat base, a heap narrowing upwards, lobes); 0 the layer model (stratus). billow: the
     // lobes' depth over their cells' size (1: balls of half a cell's radius); dome: the
-    // footprint's strength m at which the heap reaches its local top (a larger one, a
-    // broader, lower heap).
+    // small cells' height over their width (a larger one, taller heaps).
     double cells, billow, dome;
     // cirrus: the fallstreaks' length below the heads (a fraction of the layer, times the
     // footprint's strength), their drift along the streaks at the bottom (shear) and across
@@ -100,7 +99,7 @@ const TypeShape& shape_of(CloudType t) {
     static const TypeShape shapes[] = {
         {{0.0, 0.04, 0.45, 1.0}, 0.65, 0.06, 1.0, 0.3, 0.0, 1.0, 0.8, 1.2, 0.0, 0.0, 0.0},  // cumulus
         {{0.0, 0.06, 0.5, 0.95}, 0.35, 0.08, 1.6, 0.3, 0.0, 1.0, 0.4, 0.8, 0.0, 0.0, 0.0},  // stratocumulus
-        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.4, 2.0, 0.0, 0.0, 0.0},  // altocumulus
+        {{0.0, 0.08, 0.55, 0.95}, 0.3, 0.08, 1.0, 0.4, 0.0, 1.0, 0.4, 1.0, 0.0, 0.0, 0.0},  // altocumulus
         {{0.0, 0.1, 0.75, 1.0}, 0.0, 0.0, 1.5, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},     // stratus
         {{0.78, 0.85, 0.94, 1.0}, 0.3, 0.0, 4.0, 0.8, 2.0, 0.0, 0.0, 0.0, 1.0, 1.5, 2.4},   // cirrus
     };
@@ -116,6 +115,11 @@ constexpr double kBandMargin = 1e-9;
 // How far in from a cell's footprint edge m reaches 1, in base tiles (about a Worley cell's
 // radius: cell_density).
 constexpr double kFootprintReach = 0.12;
+// The heap's profile over its footprint, f_top = H u^kDomeExponent with u = 1 - r^2 / rho^2
+// (cell_density): 1 is a paraboloid of revolution, 1/2 the cap of an ellipsoid (vertical
+// at the foot, the flattest top). 0.6 rounds the tops and still narrows upwards as
+// tests/python/test_cloud_looks.py asks (the area above a quarter and half of the height).
+constexpr double kDomeExponent = 0.6;
 // Internal coverage at which a layer is overcast (clamp(k (1 - weather_variation)) = 1
 // for weather_variation <= 0.75).
 constexpr double kMaxInternalCoverage = 4.0;
@@ -128,6 +132,69 @@ std::map<std::tuple<int, double, double, double, double, double, double, double,
                     std::uint64_t, double, double, double>,
          double>
     calibration_cache;
+
+// The peak map of the cells' footprints (header; footprint()): the footprint's base
+// slice S (the base texture's n x n texels at the height z, remapped as footprint() does)
+// split into basins, each texel's basin found by steepest ascent over its 8 neighbours on S
+// smoothed by a Gaussian of two texels (so that the fine Worley octaves' bumps, which are the
+// lobes' scale, do not each make a cell of their own), and each texel holding its basin's
+// highest S. So peak >= S at every texel; across a basin's boundary the map steps, and the
+// bilinear lookup ramps it over a texel.
+PeriodicTexture<1> bake_peaks(const PeriodicTexture<2>& base, int n, double z, double& mean) {
+    std::vector<double> S(std::size_t(n) * n), G(std::size_t(n) * n);
+    const auto at = [n](int i, int j) { return std::size_t((j + n) % n) * n + std::size_t((i + n) % n); };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            float b[2];
+            base.sample((i + 0.5) / n, (j + 0.5) / n, z, b);
+            S[at(i, j)] = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
+        }
+    // Separable Gaussian, sigma 2 texels, periodic.
+    constexpr int kR = 6;
+    double w[2 * kR + 1], wsum = 0.0;
+    for (int k = -kR; k <= kR; ++k) wsum += w[k + kR] = std::exp(-0.5 * (k * k) / 4.0);
+    std::vector<double> tmp(S.size());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            double a = 0.0;
+            for (int k = -kR; k <= kR; ++k) a += w[k + kR] * S[at(i + k, j)];
+            tmp[at(i, j)] = a / wsum;
+        }
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            double a = 0.0;
+            for (int k = -kR; k <= kR; ++k) a += w[k + kR] * tmp[at(i, j + k)];
+            G[at(i, j)] = a / wsum;
+        }
+    // Steepest ascent on G: each texel's uphill neighbour (itself at a maximum), followed to
+    // its root; the highest S of each root's basin.
+    std::vector<std::size_t> up(S.size());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            std::size_t best = at(i, j);
+            for (int dj = -1; dj <= 1; ++dj)
+                for (int di = -1; di <= 1; ++di)
+                    if (G[at(i + di, j + dj)] > G[best]) best = at(i + di, j + dj);
+            up[at(i, j)] = best;
+        }
+    std::vector<std::size_t> root(S.size());
+    std::vector<double> top(S.size(), 0.0);
+    for (std::size_t p = 0; p < S.size(); ++p) {
+        std::size_t q = p;
+        while (up[q] != q) q = up[q];  // G strictly rises along the path: it ends
+        root[p] = q;
+        top[q] = std::max(top[q], S[p]);
+    }
+    PeriodicTexture<1> peaks(n, n, 1);
+    mean = 0.0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double v = top[root[at(i, j)]];
+            peaks.at(i, j, 0)[0] = float(v);
+            mean += v / (double(n) * n);
+        }
+    return peaks;
+}
 
 }  // namespace
 
@@ -264,6 +331,8 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     inv_weather_ = 1.0 / p_.weather_scale_m;
     inv_base_ = 1.0 / p_.base_scale_m;
     inv_detail_ = 1.0 / p_.detail_scale_m;
+    if (shape_of(p_.cloud_type).cells > 0.0)
+        peak_ = bake_peaks(base_, n, p_.evolution_m * inv_base_, peak_mean_);
 
     // The band of heights the type's shape can fill (the header): a cell's ceiling at the
     // highest local top (cell_ceiling rises with f_max, which is 1 where the towers are
@@ -483,12 +552,33 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool s
 
 // The footprint m of a cell or a streak at the (rotated, stretched) plane point (u, v) in
 // base tiles: the base shape read at one height (every cell keeps its outline up the
-// layer), remapped by the local coverage c (Schneider's remap).
-double ProceduralClouds::footprint(double u, double v, double c) const {
-    float b[2];
-    base_at(u, v, p_.evolution_m * inv_base_, b);
-    const double base = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
-    return clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
+// layer), remapped by the local coverage c (Schneider's remap). With m_peak (cells): also
+// the footprint at the top of the cell the point lies in, m_peak >= m, from the peak map
+// read with the same hex taps and remapped by the same c.
+double ProceduralClouds::footprint(double u, double v, double c, double* m_peak) const {
+    HexTaps taps;
+    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + 0xba5e, taps);
+    const double z = p_.evolution_m * inv_base_;
+    double acc[3] = {};
+    for (int t = 0; t < taps.count; ++t) {
+        float r[2];
+        base_.sample(u + taps.du[t], v + taps.dv[t], z, r);
+        for (int ch = 0; ch < 2; ++ch) acc[ch] += taps.weight[t] * (r[ch] - base_mean_[ch]);
+        if (m_peak) {
+            float q;
+            peak_.sample(u + taps.du[t], v + taps.dv[t], 0.0, &q);
+            acc[2] += taps.weight[t] * (q - peak_mean_);
+        }
+    }
+    const float b0 = float(clamp01d(base_mean_[0] + taps.contrast * acc[0]));
+    const float b1 = float(clamp01d(base_mean_[1] + taps.contrast * acc[1]));
+    const double base = clamp01d(remap(b0, -(1.0 - b1), 1.0, 0.0, 1.0));
+    const double m = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
+    if (m_peak) {
+        const double peak = clamp01d(peak_mean_ + taps.contrast * acc[2]);
+        *m_peak = std::max(m, clamp01d(remap(peak, 1.0 - c, 1.0, 0.0, 1.0)));
+    }
+    return m;
 }
 
 // Cells (header): the footprint m from the base shape read at one height (every cell keeps
@@ -510,25 +600,36 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
     const double sq = std::sqrt(shape.stretch);
     const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
-    const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c);
+    double m_peak = 0.0;
+    const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c, &m_peak);
     if (m <= 0.0) return 0.0;
-    // The heap: m rises from 0 at the footprint's edge over about an eighth of a base tile
-    // (reach, metres: about a Worley cell's radius), so d_in = m reach is the distance in
-    // from the edge; over it a paraboloid f_top = f_max v (2 - v), v = min(1, d_in dome /
-    // (f_max thickness)): `dome` is its height over its half-width, its sides rise at twice
-    // that at the base, its width at height f shrinks as 1 - sqrt(1 - f / f_max) (a heap
-    // narrower upwards, the atlas's mounds and domes; a wider cell grows taller, up to the
-    // local top f_max, where it flattens: humilis), its top rounded.
-    const double d_in = m * (kFootprintReach * p_.base_scale_m);
-    const double v = heap_v(d_in, f_max);
-    const double f_top = f_max * v * (2.0 - v);
+    // The heap: a dome over the cell's own footprint, f_top = H u^p, u = m / m_peak, p =
+    // kDomeExponent. Near its top a cell's footprint is a quadratic bump (the Worley octaves
+    // are 1 - d^2 about their feature points), m = m_peak (1 - r^2 / rho^2) with r the
+    // distance from the top and rho the footprint's radius, so u = 1 - r^2 / rho^2 and every
+    // cell is a rounded dome, level at its top whatever its size (with p < 1 steeper at the
+    // foot than a paraboloid: the atlas's domes). A heap read from m alone, f_top = g(m),
+    // keeps m's straight flanks under a peak that does not reach g's plateau: a tent. Its
+    // radius rho = m_peak reach (reach about a Worley cell's radius at m = 1), its height
+    // H = f_max v (2 - v), v = min(1, rho dome / (f_max thickness)): for the small cells
+    // `dome` times their width (2 rho), a wider cell taller, up to the local top f_max (humilis:
+    // broad and flattened).
+    const double rho = m_peak * (kFootprintReach * p_.base_scale_m);
+    const double v = heap_v(rho, f_max);
+    const double height = f_max * v * (2.0 - v);
+    const double u = std::min(1.0, m / m_peak);
+    const double f_top = height * std::pow(u, kDomeExponent);
     if (f >= f_top) return 0.0;                           // the lobes only remove
     const double rise = clamp01d(f / shape.gradient.a1);  // the flat base
     // The distance in from the heap's surface, along its normal: the vertical one times the
-    // cosine of the surface's slope (d(f_top thickness) / d(m reach)), at most the distance
-    // in from the footprint's edge; so that the lobes bite the steep sides as deep as the top.
-    const double slope = 2.0 * shape.dome * (1.0 - v);
-    const double inside = std::min((f_top - f) * thickness / std::sqrt(1.0 + slope * slope), d_in);
+    // cosine of the surface's slope (d(f_top thickness) / dr = 2 p H thickness u^(p - 1) r /
+    // rho^2), at most the distance in from the footprint's edge, rho - r; so that the lobes
+    // bite the steep sides as deep as the top.
+    const double r_rel = std::sqrt(1.0 - u);  // r / rho
+    const double slope = 2.0 * kDomeExponent * height * thickness * r_rel *
+                         std::pow(std::max(u, 1e-9), kDomeExponent - 1.0) / rho;
+    const double inside =
+        std::min((f_top - f) * thickness / std::sqrt(1.0 + slope * slope), rho * (1.0 - r_rel));
     if (p_.detail_strength <= 0.0) return rise * clamp01d(inside / kEdgeM);
     // The lobes (cauliflower): the three Worley octaves of the detail texture read at half
     // its frequency (cells of detail_scale_m / 2, / 4, / 8), each 1 - W = d^2 (d the distance
@@ -561,13 +662,14 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     return rise * clamp01d((inside - bite) / kEdgeM);
 }
 
-// The heap's v (cell_density) at d_in metres in from the footprint's edge, under local top f_max.
-double ProceduralClouds::heap_v(double d_in, double f_max) const {
+// The heap's v (cell_density) for a cell of radius rho metres, under local top f_max.
+double ProceduralClouds::heap_v(double rho, double f_max) const {
     const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
-    return std::min(1.0, d_in * shape_of(p_.cloud_type).dome / (f_max * thickness));
+    return std::min(1.0, rho * shape_of(p_.cloud_type).dome / (f_max * thickness));
 }
 
-// The heap's top at m = 1: v (2 - v) rises with v up to v = 1, so no footprint reaches above it.
+// The heap's top for m_peak = 1: its height f_max v (2 - v) rises with v, v with rho, up to
+// v = 1, and a cell's top is at most its height (u <= 1), so no cell reaches above it.
 double ProceduralClouds::cell_ceiling(double f_max) const {
     const double v = heap_v(kFootprintReach * p_.base_scale_m, f_max);
     return f_max * v * (2.0 - v);

@@ -204,6 +204,59 @@ def test_cumulus_heaps_narrow_upwards():
     assert half < 0.6
 
 
+def connected_cells(mask):
+    """Labels of the 4-connected regions of a 2D boolean map (0 outside), and their count."""
+    labels = np.zeros(mask.shape, dtype=int)
+    count = 0
+    for start in zip(*np.nonzero(mask)):
+        if labels[start]:
+            continue
+        count += 1
+        labels[start] = count
+        stack = [start]
+        while stack:
+            i, j = stack.pop()
+            for a, b in ((i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)):
+                if 0 <= a < mask.shape[0] and 0 <= b < mask.shape[1] and mask[a, b] and not labels[a, b]:
+                    labels[a, b] = count
+                    stack.append((a, b))
+    return labels, count
+
+
+@pytest.mark.parametrize("cloud_type", ["cumulus", "stratocumulus", "altocumulus"])
+def test_cells_are_domes_not_tents(cloud_type):
+    """The atlas's heaps are mounds and domes. A heap whose top is read from its footprint's
+    strength alone is a paraboloid under each cell's peak, tall for the small cells, and
+    reads as a tent; a dome is fuller. Over a square of columns of the heaps without their
+    lobes (detail_strength 0), each cell (a 4-connected region of columns with dense cloud,
+    sigma_t at least half the densest) of height H (its highest column's top) keeps a share
+    of its footprint above H / 2: 0.25 for a cone, 0.5 for a paraboloid of revolution, 0.685
+    for the heap's profile u^0.6 and 0.75 for the cap of an ellipsoid, 1 for a box. Cells
+    that touch count as one, under the higher one's H, and the widest cells flatten at the
+    local top, so a sky's shares read between the closed forms: the paraboloid heaps read
+    0.52-0.57 (cumulus, stratocumulus, altocumulus), the domes 0.60-0.69. The median cell's
+    share stays above 0.58, and under 0.9: narrower upwards than a box."""
+    preset = welkin.cloud_type_preset(cloud_type)
+    layer = welkin.CloudLayer(cloud_type=cloud_type, detail_strength=0.0)
+    sigma, heights, dh = density_columns(layer, 3.0 * preset["base_scale_m"], 240, 100)
+    dense = sigma >= 0.5 * preset["density_per_m"]
+    body = dense.any(axis=-1)
+    last = dense.shape[-1] - 1 - np.argmax(dense[..., ::-1], axis=-1)
+    top = np.where(body, heights[last] + 0.5 * dh, 0.0)
+    labels, count = connected_cells(body)
+    shares = []
+    for c in range(1, count + 1):
+        tops = top[labels == c]
+        if tops.size >= 30:  # a cell over a few columns has no profile to speak of
+            shares.append(np.mean(tops >= 0.5 * tops.max()))
+    share = float(np.median(shares))
+    print(
+        f"{cloud_type}: {len(shares)} cells; median share of the footprint above half the height {share:.3f}"
+    )
+    assert len(shares) >= 20
+    assert 0.58 < share < 0.9
+
+
 def shift_of_best_match(a, b, pixel_m):
     """The plane shift (m, x and y) that moves map a onto map b best: the peak of their
     circular cross-correlation (FFT), refined by a parabola through the peak's neighbours."""

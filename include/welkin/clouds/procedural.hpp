@@ -28,12 +28,17 @@
 //       International Cloud Atlas's descriptions, docs/artists.md#cloud-types):
 //  * cells (cumulus, stratocumulus, altocumulus: a flat base, a heap, lobes):
 //       the footprint m = clamp(remap(base, 1 - c, 1, 0, 1)) from the base texture read at
-//       one height (h = evolution_m: every cell keeps its outline up the layer), d_in =
-//       m 0.12 base_scale_m metres in from its edge (about a Worley cell's radius at m = 1);
-//       over it a paraboloid heap f_top = f_max v (2 - v), v = min(1, d_in dome / (f_max
-//       thickness)), `dome` its height over its half-width: narrower upwards (the atlas's
-//       mounds and domes), a wider cell taller, flattening at the local top f_max (humilis);
-//       the point is inside = min((f_top - f) thickness cos(slope), d_in) metres in (along
+//       one height (h = evolution_m: every cell keeps its outline up the layer), and m_peak,
+//       the footprint at the top of the cell the point lies in, from the peak map (the base
+//       slice split into the basins of its maxima by steepest ascent, each texel holding its
+//       basin's highest value; procedural.cpp, bake_peaks), read with the same taps; over
+//       the footprint a dome f_top = H u^0.6, u = m / m_peak (1 - r^2 / rho^2 about a cell's
+//       top, r the distance from it: level at every cell's top, steeper at the foot than a
+//       paraboloid, narrower upwards: the atlas's mounds and domes), rho = m_peak 0.12
+//       base_scale_m its radius (about a Worley cell's radius at m = 1), its height H = f_max
+//       v (2 - v), v = min(1, rho dome / (f_max thickness)), `dome` the small cells' height
+//       over their width, a wider cell taller, flattening at the local top f_max (humilis);
+//       the point is inside = min((f_top - f) thickness cos(slope), rho - r) metres in (along
 //       the surface's normal), less the lobes' bite: the detail texture's three Worley
 //       octaves W_o read at half its frequency (cells detail_scale_m / 2, / 4, / 8), bite =
 //       2 detail_strength billow (detail_scale_m / 2) L sum_o a_o (1 - W_o), a = (1, 0.3,
@@ -197,11 +202,11 @@ private:
     // paragraph on the formulas); false evaluates the whole shape (the same value, which
     // tests/cpp/test_cloud_density.cpp checks).
     double density(const glm::dvec3& p, double h, double k, bool skip = true) const;
-    double footprint(double u, double v, double c) const;
+    double footprint(double u, double v, double c, double* m_peak = nullptr) const;
     double cell_density(double x, double y, double f, double c, const float* w, bool skip) const;
     // The highest height fraction a cell can reach under local top f_max (its dome at m = 1).
     double cell_ceiling(double f_max) const;
-    double heap_v(double d_in, double f_max) const;
+    double heap_v(double rho, double f_max) const;
     double cirrus_density(double x, double y, double f, double c, const float* w) const;
     double column_depth(double x, double y, double k) const;
     double fraction(double k, int columns) const;
@@ -221,12 +226,15 @@ private:
     PeriodicTexture<2> base_, curl_;
     PeriodicTexture<4> weather_;
     PeriodicTexture<4> detail_;
+    // The footprints' base slice (the base read at h = evolution_m) at its cells' tops: per
+    // texel, the highest base value of its basin (header); 2D, cell types only.
+    PeriodicTexture<1> peak_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
     // The weather map and the base shape read aperiodically (noise.hpp, hex_taps), about the
     // channels' means over their textures.
     void weather_at(double u, double v, float* w) const;
     void base_at(double u, double v, double z, float* b) const;
-    double weather_mean_[4] = {}, base_mean_[2] = {};
+    double weather_mean_[4] = {}, base_mean_[2] = {}, slice_mean_ = 0.0, peak_mean_ = 0.0;
 };
 
 }  // namespace welkin
