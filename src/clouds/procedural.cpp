@@ -133,6 +133,10 @@ std::map<std::tuple<int, double, double, double, double, double, double, double,
          double>
     calibration_cache;
 
+// The base shape of the header, base = remap(pw, -(1 - fbm_w), 1, 0, 1), from a blended
+// read b = (pw, fbm_w) of the base texture.
+double base_shape(const float* b) { return clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0)); }
+
 // The peak map of the cells' footprints (header; footprint()): the footprint's base
 // slice S (the base texture's n x n texels at the height z, remapped as footprint() does)
 // split into basins, each texel's basin found by steepest ascent over its 8 neighbours on S
@@ -147,25 +151,23 @@ PeriodicTexture<1> bake_peaks(const PeriodicTexture<2>& base, int n, double z, d
         for (int i = 0; i < n; ++i) {
             float b[2];
             base.sample((i + 0.5) / n, (j + 0.5) / n, z, b);
-            S[at(i, j)] = clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0));
+            S[at(i, j)] = base_shape(b);
         }
     // Separable Gaussian, sigma 2 texels, periodic.
     constexpr int kR = 6;
     double w[2 * kR + 1], wsum = 0.0;
     for (int k = -kR; k <= kR; ++k) wsum += w[k + kR] = std::exp(-0.5 * (k * k) / 4.0);
+    const auto blur = [&](const std::vector<double>& src, std::vector<double>& dst, int di, int dj) {
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                double a = 0.0;
+                for (int k = -kR; k <= kR; ++k) a += w[k + kR] * src[at(i + k * di, j + k * dj)];
+                dst[at(i, j)] = a / wsum;
+            }
+    };
     std::vector<double> tmp(S.size());
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            double a = 0.0;
-            for (int k = -kR; k <= kR; ++k) a += w[k + kR] * S[at(i + k, j)];
-            tmp[at(i, j)] = a / wsum;
-        }
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            double a = 0.0;
-            for (int k = -kR; k <= kR; ++k) a += w[k + kR] * tmp[at(i, j + k)];
-            G[at(i, j)] = a / wsum;
-        }
+    blur(S, tmp, 1, 0);
+    blur(tmp, G, 0, 1);
     // Steepest ascent on G: each texel's uphill neighbour (itself at a maximum), followed to
     // its root; the highest S of each root's basin.
     std::vector<std::size_t> up(S.size());
@@ -529,8 +531,7 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool s
     const double zb = (h - p_.bottom_altitude_m + p_.evolution_m) * inv_base_;
     float b[2];  // the Perlin-Worley channel and fbm_w = 0.625 g + 0.25 b + 0.125 a
     base_at(along * inv_base_ / sq, across * inv_base_ * sq, zb, b);
-    const double fbm_w = b[1];
-    const double base = clamp01d(remap(b[0], -(1.0 - fbm_w), 1.0, 0.0, 1.0)) * g;
+    const double base = base_shape(b) * g;
     const double covered = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
     if (covered <= 0.0) return 0.0;  // erosion only removes: skip the detail lookup
     if (p_.detail_strength <= 0.0) return covered;
@@ -556,28 +557,12 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool s
 // the footprint at the top of the cell the point lies in, m_peak >= m, from the peak map
 // read with the same hex taps and remapped by the same c.
 double ProceduralClouds::footprint(double u, double v, double c, double* m_peak) const {
-    HexTaps taps;
-    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + 0xba5e, taps);
-    const double z = p_.evolution_m * inv_base_;
-    double acc[3] = {};
-    for (int t = 0; t < taps.count; ++t) {
-        float r[2];
-        base_.sample(u + taps.du[t], v + taps.dv[t], z, r);
-        for (int ch = 0; ch < 2; ++ch) acc[ch] += taps.weight[t] * (r[ch] - base_mean_[ch]);
-        if (m_peak) {
-            float q;
-            peak_.sample(u + taps.du[t], v + taps.dv[t], 0.0, &q);
-            acc[2] += taps.weight[t] * (q - peak_mean_);
-        }
-    }
-    const float b0 = float(clamp01d(base_mean_[0] + taps.contrast * acc[0]));
-    const float b1 = float(clamp01d(base_mean_[1] + taps.contrast * acc[1]));
-    const double base = clamp01d(remap(b0, -(1.0 - b1), 1.0, 0.0, 1.0));
+    float b[2];
+    double peak = 0.0;
+    base_at(u, v, p_.evolution_m * inv_base_, b, m_peak ? &peak : nullptr);
+    const double base = base_shape(b);
     const double m = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
-    if (m_peak) {
-        const double peak = clamp01d(peak_mean_ + taps.contrast * acc[2]);
-        *m_peak = std::max(m, clamp01d(remap(peak, 1.0 - c, 1.0, 0.0, 1.0)));
-    }
+    if (m_peak) *m_peak = std::max(m, clamp01d(remap(peak, 1.0 - c, 1.0, 0.0, 1.0)));
     return m;
 }
 
@@ -618,7 +603,8 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     const double v = heap_v(rho, f_max);
     const double height = f_max * v * (2.0 - v);
     const double u = std::min(1.0, m / m_peak);
-    const double f_top = height * std::pow(u, kDomeExponent);
+    const double u_p = std::pow(u, kDomeExponent);  // u > 0: m > 0 and m_peak >= m
+    const double f_top = height * u_p;
     if (f >= f_top) return 0.0;                           // the lobes only remove
     const double rise = clamp01d(f / shape.gradient.a1);  // the flat base
     // The distance in from the heap's surface, along its normal: the vertical one times the
@@ -626,8 +612,7 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     // rho^2), at most the distance in from the footprint's edge, rho - r; so that the lobes
     // bite the steep sides as deep as the top.
     const double r_rel = std::sqrt(1.0 - u);  // r / rho
-    const double slope = 2.0 * kDomeExponent * height * thickness * r_rel *
-                         std::pow(std::max(u, 1e-9), kDomeExponent - 1.0) / rho;
+    const double slope = 2.0 * kDomeExponent * height * thickness * r_rel * (u_p / u) / rho;
     const double inside =
         std::min((f_top - f) * thickness / std::sqrt(1.0 + slope * slope), rho * (1.0 - r_rel));
     if (p_.detail_strength <= 0.0) return rise * clamp01d(inside / kEdgeM);
@@ -738,16 +723,22 @@ void ProceduralClouds::weather_at(double u, double v, float* w) const {
     for (int c = 0; c < 4; ++c) w[c] = float(clamp01d(weather_mean_[c] + taps.contrast * acc[c]));
 }
 
-void ProceduralClouds::base_at(double u, double v, double z, float* b) const {
+void ProceduralClouds::base_at(double u, double v, double z, float* b, double* peak) const {
     HexTaps taps;
     hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + 0xba5e, taps);
-    double acc[2] = {};
+    double acc[2] = {}, acc_peak = 0.0;
     for (int t = 0; t < taps.count; ++t) {
         float r[2];
         base_.sample(u + taps.du[t], v + taps.dv[t], z, r);
         for (int c = 0; c < 2; ++c) acc[c] += taps.weight[t] * (r[c] - base_mean_[c]);
+        if (peak) {
+            float q;
+            peak_.sample(u + taps.du[t], v + taps.dv[t], 0.0, &q);
+            acc_peak += taps.weight[t] * (q - peak_mean_);
+        }
     }
     for (int c = 0; c < 2; ++c) b[c] = float(clamp01d(base_mean_[c] + taps.contrast * acc[c]));
+    if (peak) *peak = clamp01d(peak_mean_ + taps.contrast * acc_peak);
 }
 
 // The shell between the bottom and top spheres, the ray stopped by the ground: the part of

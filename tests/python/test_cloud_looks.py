@@ -49,6 +49,16 @@ def density_columns(layer, span_m, n, steps):
     return sigma, heights, dh
 
 
+def dense_extent(sigma, density_per_m):
+    """Where the density reaches half the layer's largest (sigma_t >= density_per_m / 2): the
+    dense map, and per column the indices of its first and last dense height (0 and the last
+    height where a column has none)."""
+    dense = sigma >= 0.5 * density_per_m
+    first = np.argmax(dense, axis=-1)
+    last = dense.shape[-1] - 1 - np.argmax(dense[..., ::-1], axis=-1)
+    return dense, first, last
+
+
 @pytest.mark.parametrize("cloud_type", ["cumulus", "stratocumulus", "altocumulus"])
 def test_cells_have_flat_bases_under_tops_of_many_heights(cloud_type):
     preset = welkin.cloud_type_preset(cloud_type)
@@ -58,9 +68,7 @@ def test_cells_have_flat_bases_under_tops_of_many_heights(cloud_type):
     tau = sigma.sum(axis=-1) * dh
     body = tau >= 2.0
     assert body.sum() >= 100, f"only {body.sum()} cloud columns"
-    dense = sigma >= 0.5 * preset["density_per_m"]
-    first = np.argmax(dense, axis=-1)
-    last = dense.shape[-1] - 1 - np.argmax(dense[..., ::-1], axis=-1)
+    _, first, last = dense_extent(sigma, preset["density_per_m"])
     bases, tops = heights[first[body]], heights[last[body]]
     base_spread = np.percentile(bases, 90) - np.percentile(bases, 10)
     top_spread = np.percentile(tops, 90) - np.percentile(tops, 10)
@@ -189,9 +197,8 @@ def test_cumulus_heaps_narrow_upwards():
     preset = welkin.cloud_type_preset("cumulus")
     layer = welkin.CloudLayer(cloud_type="cumulus")
     sigma, heights, _ = density_columns(layer, 3.0 * preset["base_scale_m"], 200, 100)
-    dense = sigma >= 0.5 * preset["density_per_m"]
+    dense, _, last = dense_extent(sigma, preset["density_per_m"])
     body = dense.any(axis=-1)
-    last = dense.shape[-1] - 1 - np.argmax(dense[..., ::-1], axis=-1)
     top = np.percentile(heights[last[body]], 90)
     area = dense.mean(axis=(0, 1))
 
@@ -239,9 +246,8 @@ def test_cells_are_domes_not_tents(cloud_type):
     preset = welkin.cloud_type_preset(cloud_type)
     layer = welkin.CloudLayer(cloud_type=cloud_type, detail_strength=0.0)
     sigma, heights, dh = density_columns(layer, 3.0 * preset["base_scale_m"], 240, 100)
-    dense = sigma >= 0.5 * preset["density_per_m"]
+    dense, _, last = dense_extent(sigma, preset["density_per_m"])
     body = dense.any(axis=-1)
-    last = dense.shape[-1] - 1 - np.argmax(dense[..., ::-1], axis=-1)
     top = np.where(body, heights[last] + 0.5 * dh, 0.0)
     labels, count = connected_cells(body)
     shares = []

@@ -231,10 +231,10 @@ private:
     PeriodicTexture<1> peak_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
     // The weather map and the base shape read aperiodically (noise.hpp, hex_taps), about the
-    // channels' means over their textures.
+    // channels' means over their textures; with `peak`, the peak map too, with the same taps.
     void weather_at(double u, double v, float* w) const;
-    void base_at(double u, double v, double z, float* b) const;
-    double weather_mean_[4] = {}, base_mean_[2] = {}, slice_mean_ = 0.0, peak_mean_ = 0.0;
+    void base_at(double u, double v, double z, float* b, double* peak = nullptr) const;
+    double weather_mean_[4] = {}, base_mean_[2] = {}, peak_mean_ = 0.0;
 };
 
 }  // namespace welkin
