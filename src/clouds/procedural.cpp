@@ -135,24 +135,34 @@ std::map<std::tuple<int, double, double, double, double, double, double, double,
 
 // The base shape of the header, base = remap(pw, -(1 - fbm_w), 1, 0, 1), from a blended
 // read b = (pw, fbm_w) of the base texture.
+// The salt of the base texture's hex taps (base_at, slice_at: the same taps).
+constexpr std::uint64_t kBaseTaps = 0xba5e;
+
 double base_shape(const float* b) { return clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0)); }
 
-// The peak map of the cells' footprints (header; footprint()): the footprint's base
-// slice S (the base texture's n x n texels at the height z, remapped as footprint() does)
-// split into basins, each texel's basin found by steepest ascent over its 8 neighbours on S
-// smoothed by a Gaussian of two texels (so that the fine Worley octaves' bumps, which are the
-// lobes' scale, do not each make a cell of their own), and each texel holding its basin's
-// highest S. So peak >= S at every texel; across a basin's boundary the map steps, and the
-// bilinear lookup ramps it over a texel.
-PeriodicTexture<1> bake_peaks(const PeriodicTexture<2>& base, int n, double z, double& mean) {
+// The footprints' slice (header; footprint()): the base texture's n x n texels at the
+// height z, its two channels as they are (a bilinear read of it is the base texture's
+// trilinear read at z), and for cells a third channel, the peak map. The peak map: the
+// footprint's base slice S (remapped as footprint() does) split into basins, each texel's
+// basin found by steepest ascent over its 8 neighbours on S smoothed by a Gaussian of two
+// texels (so that the fine Worley octaves' bumps, which are the lobes' scale, do not each
+// make a cell of their own), and each texel holding its basin's highest S. So peak >= S at
+// every texel; across a basin's boundary the map steps, and the bilinear lookup ramps it
+// over a texel. peak_mean: the peak map's mean (0 without it).
+PeriodicTexture<3> bake_slice(const PeriodicTexture<2>& base, int n, double z, bool peaks,
+                              double& peak_mean) {
+    PeriodicTexture<3> slice(n, n, 1);
     std::vector<double> S(std::size_t(n) * n), G(std::size_t(n) * n);
     const auto at = [n](int i, int j) { return std::size_t((j + n) % n) * n + std::size_t((i + n) % n); };
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
-            float b[2];
+            float* b = slice.at(i, j, 0);
             base.sample((i + 0.5) / n, (j + 0.5) / n, z, b);
+            b[2] = 0.0f;
             S[at(i, j)] = base_shape(b);
         }
+    peak_mean = 0.0;
+    if (!peaks) return slice;
     // Separable Gaussian, sigma 2 texels, periodic.
     constexpr int kR = 6;
     double w[2 * kR + 1], wsum = 0.0;
@@ -187,15 +197,13 @@ PeriodicTexture<1> bake_peaks(const PeriodicTexture<2>& base, int n, double z, d
         root[p] = q;
         top[q] = std::max(top[q], S[p]);
     }
-    PeriodicTexture<1> peaks(n, n, 1);
-    mean = 0.0;
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             const double v = top[root[at(i, j)]];
-            peaks.at(i, j, 0)[0] = float(v);
-            mean += v / (double(n) * n);
+            slice.at(i, j, 0)[2] = float(v);
+            peak_mean += v / (double(n) * n);
         }
-    return peaks;
+    return slice;
 }
 
 }  // namespace
@@ -333,8 +341,8 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     inv_weather_ = 1.0 / p_.weather_scale_m;
     inv_base_ = 1.0 / p_.base_scale_m;
     inv_detail_ = 1.0 / p_.detail_scale_m;
-    if (shape_of(p_.cloud_type).cells > 0.0)
-        peak_ = bake_peaks(base_, n, p_.evolution_m * inv_base_, peak_mean_);
+    slice_ =
+        bake_slice(base_, n, p_.evolution_m * inv_base_, shape_of(p_.cloud_type).cells > 0.0, peak_mean_);
 
     // The band of heights the type's shape can fill (the header): a cell's ceiling at the
     // highest local top (cell_ceiling rises with f_max, which is 1 where the towers are
@@ -557,12 +565,11 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool s
 // the footprint at the top of the cell the point lies in, m_peak >= m, from the peak map
 // read with the same hex taps and remapped by the same c.
 double ProceduralClouds::footprint(double u, double v, double c, double* m_peak) const {
-    float b[2];
-    double peak = 0.0;
-    base_at(u, v, p_.evolution_m * inv_base_, b, m_peak ? &peak : nullptr);
+    float b[3];
+    slice_at(u, v, b);
     const double base = base_shape(b);
     const double m = clamp01d(remap(base, 1.0 - c, 1.0, 0.0, 1.0));
-    if (m_peak) *m_peak = std::max(m, clamp01d(remap(peak, 1.0 - c, 1.0, 0.0, 1.0)));
+    if (m_peak) *m_peak = std::max(m, clamp01d(remap(b[2], 1.0 - c, 1.0, 0.0, 1.0)));
     return m;
 }
 
@@ -723,22 +730,31 @@ void ProceduralClouds::weather_at(double u, double v, float* w) const {
     for (int c = 0; c < 4; ++c) w[c] = float(clamp01d(weather_mean_[c] + taps.contrast * acc[c]));
 }
 
-void ProceduralClouds::base_at(double u, double v, double z, float* b, double* peak) const {
+void ProceduralClouds::base_at(double u, double v, double z, float* b) const {
     HexTaps taps;
-    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + 0xba5e, taps);
-    double acc[2] = {}, acc_peak = 0.0;
+    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + kBaseTaps, taps);
+    double acc[2] = {};
     for (int t = 0; t < taps.count; ++t) {
         float r[2];
         base_.sample(u + taps.du[t], v + taps.dv[t], z, r);
         for (int c = 0; c < 2; ++c) acc[c] += taps.weight[t] * (r[c] - base_mean_[c]);
-        if (peak) {
-            float q;
-            peak_.sample(u + taps.du[t], v + taps.dv[t], 0.0, &q);
-            acc_peak += taps.weight[t] * (q - peak_mean_);
-        }
     }
     for (int c = 0; c < 2; ++c) b[c] = float(clamp01d(base_mean_[c] + taps.contrast * acc[c]));
-    if (peak) *peak = clamp01d(peak_mean_ + taps.contrast * acc_peak);
+}
+
+// The base texture's read at the footprints' height (base_at at z = evolution_m / base
+// scale, the same taps) and the peak map, from the slice.
+void ProceduralClouds::slice_at(double u, double v, float* b) const {
+    HexTaps taps;
+    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + kBaseTaps, taps);
+    const double mean[3] = {base_mean_[0], base_mean_[1], peak_mean_};
+    double acc[3] = {};
+    for (int t = 0; t < taps.count; ++t) {
+        float r[3];
+        slice_.sample(u + taps.du[t], v + taps.dv[t], 0.0, r);
+        for (int c = 0; c < 3; ++c) acc[c] += taps.weight[t] * (r[c] - mean[c]);
+    }
+    for (int c = 0; c < 3; ++c) b[c] = float(clamp01d(mean[c] + taps.contrast * acc[c]));
 }
 
 // The shell between the bottom and top spheres, the ray stopped by the ground: the part of

@@ -28,10 +28,11 @@
 //       International Cloud Atlas's descriptions, docs/artists.md#cloud-types):
 //  * cells (cumulus, stratocumulus, altocumulus: a flat base, a heap, lobes):
 //       the footprint m = clamp(remap(base, 1 - c, 1, 0, 1)) from the base texture read at
-//       one height (h = evolution_m: every cell keeps its outline up the layer), and m_peak,
-//       the footprint at the top of the cell the point lies in, from the peak map (the base
-//       slice split into the basins of its maxima by steepest ascent, each texel holding its
-//       basin's highest value; procedural.cpp, bake_peaks), read with the same taps; over
+//       one height (h = evolution_m: every cell keeps its outline up the layer; baked once
+//       into a 2D slice), and m_peak, the footprint at the top of the cell the point lies
+//       in, from the peak map (the base slice split into the basins of its maxima by
+//       steepest ascent, each texel holding its basin's highest value; procedural.cpp,
+//       bake_slice), the slice's third channel, read with the same taps; over
 //       the footprint a dome f_top = H u^0.6, u = m / m_peak (1 - r^2 / rho^2 about a cell's
 //       top, r the distance from it: level at every cell's top, steeper at the foot than a
 //       paraboloid, narrower upwards: the atlas's mounds and domes), rho = m_peak 0.12
@@ -226,14 +227,16 @@ private:
     PeriodicTexture<2> base_, curl_;
     PeriodicTexture<4> weather_;
     PeriodicTexture<4> detail_;
-    // The footprints' base slice (the base read at h = evolution_m) at its cells' tops: per
-    // texel, the highest base value of its basin (header); 2D, cell types only.
-    PeriodicTexture<1> peak_;
+    // The footprints' slice: the base texture at h = evolution_m (its two channels) and, for
+    // the cell types, the peak map (per texel, the highest base value of its basin; header).
+    PeriodicTexture<3> slice_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
     // The weather map and the base shape read aperiodically (noise.hpp, hex_taps), about the
-    // channels' means over their textures; with `peak`, the peak map too, with the same taps.
+    // channels' means over their textures; slice_at: the footprints' slice, b = (pw, fbm_w,
+    // peak), with base_at's taps.
     void weather_at(double u, double v, float* w) const;
-    void base_at(double u, double v, double z, float* b, double* peak = nullptr) const;
+    void base_at(double u, double v, double z, float* b) const;
+    void slice_at(double u, double v, float* b) const;
     double weather_mean_[4] = {}, base_mean_[2] = {}, peak_mean_ = 0.0;
 };
 
