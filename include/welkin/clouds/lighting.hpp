@@ -113,9 +113,9 @@
 //    optical depth (the inverse diffusion length, sigma_a and the transport coefficient
 //    sigma_t (1 - albedo g); Bohren & Clothiaux, ch. 6), g the phase's mean cosine, each
 //    sky's light decaying from its own face. The march takes tau_up and tau_down from one
-//    ray each towards the local zenith and nadir (ambient_steps steps; on their own grids
-//    with shadow_grid, read one level coarser than the sun's, as the sides' are; neither
-//    for a uniform sky of albedo 1):
+//    ray each towards the local zenith and nadir (ambient_steps steps; with shadow_grid, on
+//    grids aligned with the zenith at the world's origin, read one level coarser than the
+//    sun's, as the sides' are; neither for a uniform sky of albedo 1):
 //        S_sky = sigma_s (w_a L_a exp(-kappa tau_up) + w_b L_b exp(-kappa tau_down)).
 //    Exact for a uniform sky and albedo 1 (tests/cpp/test_cloud_lighting.cpp,
 //    UniformSky...), an estimate otherwise (the true depths are over all directions, not
