@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <tbb/concurrent_unordered_map.h>
 
@@ -128,6 +129,16 @@ void OpticalDepthGrid::set_near_field(int levels, int steps) {
     near_steps_ = steps;
 }
 
+void OpticalDepthGrid::set_cross_spacing(double first, double second) {
+    if (!aligned_) throw InvalidArgument("cross_spacing", "needs a grid aligned with a constant direction");
+    if (!map_->tiles.empty()) throw InvalidArgument("cross_spacing", "must be set before the first lookup");
+    for (const double f : {first, second})
+        if (!(f >= 1.0 / 64.0 && f <= 64.0))
+            throw InvalidArgument("cross_spacing", fmt::format("must be in [1/64, 64] cells, got {}", f));
+    cross_[0] = first;
+    cross_[1] = second;
+}
+
 void OpticalDepthGrid::set_chord_scaled(bool on) {
     if (!map_->tiles.empty()) throw InvalidArgument("chord", "must be set before the first lookup");
     chord_ = on;
@@ -156,7 +167,7 @@ glm::dvec3 OpticalDepthGrid::vertex_position(int level, std::int64_t i, std::int
                                              std::int64_t k) const {
     const double h = spacing_m(level);
     if (!aligned_) return {double(i) * h, double(j) * h, double(k) * h};
-    return h * (double(i) * axis_[0] + double(j) * axis_[1] + double(k) * axis_[2]);
+    return h * (double(i) * cross_[0] * axis_[0] + double(j) * cross_[1] * axis_[1] + double(k) * axis_[2]);
 }
 
 int OpticalDepthGrid::level_for(double footprint_m) const {
@@ -371,7 +382,7 @@ double OpticalDepthGrid::grid_tau(const glm::dvec3& p, int level, Cursor& cursor
     double w[3];
     std::int64_t base[3], tcoord[3];
     for (int a = 0; a < 3; ++a) {
-        const double u = (aligned_ ? glm::dot(axis_[a], p) : p[a]) / h;
+        const double u = aligned_ ? glm::dot(axis_[a], p) / (h * cross_[a]) : p[a] / h;
         const double b = std::floor(u);
         w[a] = u - b;
         base[a] = std::int64_t(b);

@@ -62,7 +62,11 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 
 namespace {
 
-constexpr int kSideLevels = 1;  // the side grids' levels above the sun grid's
+// The sides' grid (levels_for): its level above the sun grid's, and its lines' spacing in
+// the vertical, in its own cells (a quarter of the sun grid's cell).
+constexpr int kSideLevels = 2;
+constexpr double kSideVertical = 1.0 / 16.0;
+constexpr int kSkyLevels = 1;  // the zenith and nadir grids' level above the sun grid's
 // sin 15 deg: the lowest sun whose anti-sun depth is on a grid turned to it (SampleLight).
 constexpr double kTurnedAntiSunMinSin = 0.2588;
 
@@ -108,8 +112,8 @@ public:
     };
     // The grid levels a sample reads (the sun's, its other half's, the sides').
     struct Levels {
-        int sun = 0, side = 0;  // the anti-sun grid reads the sun's level
-        bool near = false;      // the sun grid's near field: the rays about a cell apart or more
+        int sun = 0, side = 0, sky = 0;  // the anti-sun grid reads the sun's level
+        bool near = false;               // the sun grid's near field: the rays about a cell apart or more
     };
     // The phase values of one ray's direction: nu = d . s is the same at every sample.
     struct RayPhase {
@@ -156,16 +160,22 @@ public:
 
     const OpticalDepthGrid* sun_grid() const { return grids_.sun.get(); }
 
-    // The levels for a footprint of `width` metres: no finer than it; the sides' grid
-    // kSideLevels coarser: the chord across the sun line sets the leak, a large-scale
-    // quantity of the diffuse light, which diffusion smooths over a transport mean free
-    // path; the depths towards and away from the sun (the single scattering's shadow, the
-    // slab's thickness) are read at the sun's level (one level coarser, the depth away from
-    // the sun lost 2 % on altocumulus cells; docs/validation.md).
+    // The levels for a footprint of `width` metres: no finer than it. The depths towards
+    // and away from the sun (the single scattering's shadow, the slab's thickness) are read
+    // at the sun's level (one level coarser, the depth away from the sun lost 2 % on
+    // altocumulus cells; docs/validation.md). The depths up and down set the two skies' mix,
+    // a large-scale quantity of the diffuse light: one level coarser. The sides' chord, a
+    // horizontal line's depth over kilometres both ways, changes slowly across the ground
+    // and fast up the cloud (a deck's base, a thin layer's cells): its lines kSideLevels
+    // coarser across the ground and along the line, and kSideVertical of that apart in the
+    // vertical (build_grids). Read on cubic cells one level coarser than the sun's, it came
+    // out too long at a deck's base and too short across thin cells (docs/validation.md,
+    // "The sides' chord").
     Levels levels_for(double width) const {
         Levels lv;
         lv.sun = grids_.sun ? grids_.sun->level_for(width) : 0;
         lv.side = std::min(lv.sun + kSideLevels, OpticalDepthGrid::kMaxLevels - 1);
+        lv.sky = std::min(lv.sun + kSkyLevels, OpticalDepthGrid::kMaxLevels - 1);
         return lv;
     }
 
@@ -216,12 +226,11 @@ public:
             w.above = w.below = 0.5;  // no depths: the two skies' mean, as in a thin cloud
         } else if (two_skies_) {
             const glm::dvec3 z = light_.zenith(x);
-            // Read at the sides' level: the mix, like the sides' leak, is set by the depths to
-            // the cloud's faces, a large-scale quantity the diffuse light smooths.
-            const double tau_up =
-                depth_along(grids_.sky, cur.sky, lv.side, x, z, options_.ambient_steps, cur);
+            // Read one level coarser (levels_for): the mix is set by the depths to the cloud's
+            // faces, a large-scale quantity the diffuse light smooths.
+            const double tau_up = depth_along(grids_.sky, cur.sky, lv.sky, x, z, options_.ambient_steps, cur);
             const double tau_down =
-                depth_along(grids_.ground, cur.ground, lv.side, x, -z, options_.ambient_steps, cur);
+                depth_along(grids_.ground, cur.ground, lv.sky, x, -z, options_.ambient_steps, cur);
             // Eddington's conservative slab between the two skies (see the header): the
             // diffuse field is linear in the scaled depth, Marshak's conditions at the faces;
             // its net flux, scattered with the phase's mean cosine towards the viewer.
@@ -273,6 +282,9 @@ private:
         if (diffusion_ && options_.sides) {
             grids_.side = along(across_, options_.light_steps);
             grids_.side->set_both_ways(true);  // the chord both ways, one walk per line
+            // Lines a cell apart along the ground, kSideVertical of one in the vertical: the
+            // grid's first axis is horizontal, its second vertical (the line is horizontal).
+            grids_.side->set_cross_spacing(1.0, kSideVertical);
         }
         // The depths up and down: grids aligned with the zenith at the world's origin, whose
         // vertices on one vertical share a walk (a march of ambient_steps per vertex along

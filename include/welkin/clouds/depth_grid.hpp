@@ -97,6 +97,14 @@
 // is the deck's extinction on every line, and the face's kink is in l alone: the lookup
 // is exact across it.
 //
+// Cross spacing (aligned grids, set_cross_spacing; 1 and 1 by default). The lines of
+// vertices may lie closer or farther apart across the direction than a cell along it: the
+// vertex (i, j, k) at h (i c_1 e_1 + j c_2 e_2 + k w), e_1 the horizontal normal to w (x
+// when w is vertical) and e_2 = w x e_1. A quantity that varies slowly along one axis
+// across the lines and fast along the other is read on lines spaced for each (the sides'
+// chord across the sun line, clouds/lighting.cpp: a horizontal line's depth changes over
+// a few metres up a deck's base, over kilometres along the ground).
+//
 // Both ways (aligned grids, set_both_ways, off by default). The depth over the whole chord
 // through x along the line, from x - D w to x + D w: the same walks read over the span
 // [k - q, k + q] of a vertex's line (C at both ends, linear between vertices, summed over
@@ -182,6 +190,10 @@ public:
     // Interpolate the mean extinction along the line, not the depth (above, "Chord"); set
     // before the first lookup (InvalidArgument "chord" otherwise).
     void set_chord_scaled(bool on);
+    // The lines' spacing across the direction (above, "Cross spacing"): `first` and `second`
+    // cells of the level along the frame's first and second axes, each in [1/64, 64]; an
+    // aligned grid only, set before the first lookup (InvalidArgument "cross_spacing").
+    void set_cross_spacing(double first, double second);
     // The depth both ways along the line (above, "Both ways"): an aligned grid without a
     // near field only, set before the first lookup (InvalidArgument "both_ways" otherwise).
     void set_both_ways(bool on);
@@ -213,7 +225,8 @@ private:
     // The length of the density's majorant segments along direction(p) over [0, reach].
     double chord(const glm::dvec3& p, double reach, std::vector<MajorantSegment>& segs) const;
     double grid_tau(const glm::dvec3& p, int level, Cursor& cursor) const;
-    glm::dvec3 axis_[3];  // the aligned frame: axis_[2] the direction
+    glm::dvec3 axis_[3];                 // the aligned frame: axis_[2] the direction
+    double cross_[3] = {1.0, 1.0, 1.0};  // the vertex spacing along each axis, in cells
     struct Map;
     std::unique_ptr<Map> map_;
 };

@@ -63,7 +63,8 @@
 //    diffuse light falls off linearly with depth, as diffusion theory has it, where the
 //    octaves below vanish. With `sides` (the default) the slab is finite across the sun
 //    line: the cloud's chord tau_side along the horizontal normal to the sun (a third
-//    grid, read both ways along its lines, one level coarser) makes the diffuse light
+//    grid, read both ways along its lines, two levels coarser across the ground and a
+//    quarter of the sun's cell in the vertical) makes the diffuse light
 //    leak through its sides (clouds/diffusion.hpp, "The sides"). No fitted parameter. Its error against
 //    the reference (bench/clouds, bench/clouds/lighting_vs_reference.py) and against Cycles
 //    (bench/cycles_clouds.py) is in docs/validation.md ("Clouds"). octaves = 1 is single
@@ -115,7 +116,7 @@
 //    sky's light decaying from its own face. The march takes tau_up and tau_down from one
 //    ray each towards the local zenith and nadir (ambient_steps steps; with shadow_grid, on
 //    grids aligned with the zenith at the world's origin, read one level coarser than the
-//    sun's, as the sides' are; neither for a uniform sky of albedo 1):
+//    sun's; neither for a uniform sky of albedo 1):
 //        S_sky = sigma_s (w_a L_a exp(-kappa tau_up) + w_b L_b exp(-kappa tau_down)).
 //    Exact for a uniform sky and albedo 1 (tests/cpp/test_cloud_lighting.cpp,
 //    UniformSky...), an estimate otherwise (the true depths are over all directions, not
