@@ -33,8 +33,13 @@ box's middle (its base; the wide box is a plane-parallel slab there); "side": ra
 off the long side at the box's mid-height (the side face, parallel to the sun, which only
 the light leaking sideways lights). Sums over the rays with reference transmittance < 0.95.
 
+--sky does the same for the two skies' light alone (SKY_ONLY: 1 above the horizon, 0.15
+below, no sun), in the side view, the march as it is and with its depths marched per
+sample (the zenith's and the nadir's too): what the zenith and nadir grids cost the mix.
+
 --doc replaces the table between "<!-- sun_light_per_type: begin -->" and
-"<!-- sun_light_per_type: end -->" in that file ("sun_light_boxes" with --boxes).
+"<!-- sun_light_per_type: end -->" in that file ("sun_light_boxes" with --boxes,
+"sky_light_per_type" with --sky).
 """
 
 import argparse
@@ -64,6 +69,13 @@ DEFAULT_VARIANTS = {
     "depths marched, no sides": {"shadow_grid": False, "light_steps": 64, "sides": False},
 }
 SUN_ONLY = {"sun_irradiance": [1.0], "ambient_radiance": [0.0]}
+# --sky: the two skies alone, 1 above the horizon and 0.15 below (a sunlit ground's share);
+# the march's own depths marched per sample, the zenith's and nadir's too.
+SKY_ONLY = {"sun_irradiance": [0.0], "ambient_radiance": [1.0], "ground_radiance": [0.15]}
+SKY_VARIANTS = {
+    "as it is": {},
+    "depths marched": {"shadow_grid": False, "light_steps": 64, "ambient_steps": 64},
+}
 BOX_HEIGHT_M = 200.0
 BOX_VOXEL_M = 20.0
 BOX_TAUS = (1.0, 3.0, 10.0, 30.0)
@@ -93,7 +105,7 @@ def camera(patch):
     return origin, (d / np.linalg.norm(d, axis=-1, keepdims=True)).reshape(-1, 3), right, up
 
 
-def run(types, variants, paths, voxel, tmp, log=print):
+def run(types, variants, paths, voxel, tmp, light=SUN_ONLY, views=VIEWS, log=print):
     """{(type, view): {variant: {region: ratio, region + "_noise": ..., "median_error": ...}}}"""
     out = {}
     atm = welkin.Atmosphere.preset("clear_day")  # not lighting anything: the light is constant
@@ -103,13 +115,13 @@ def run(types, variants, paths, voxel, tmp, log=print):
         mw = np.eye(4)
         mw[:3, 3] = np.asarray(patch.at) - origin  # cloud_radiance's observer is at its origin
         clouds = welkin.VdbClouds(patch.path, density_scale=patch.density_scale, matrix_world=mw)
-        for view in VIEWS:
+        for view in views:
             sun = sun_vector(*lp.sun_for(patch, view))
             t0 = time.time()
             refs, alpha = [], 0.0
             for seed in (1, 2):
                 L, T, _ = welkin.cloud_radiance(
-                    clouds, atm, 0.0, sun, d, method="reference", paths=paths // 2, seed=seed, **SUN_ONLY
+                    clouds, atm, 0.0, sun, d, method="reference", paths=paths // 2, seed=seed, **light
                 )
                 refs.append(np.asarray(L)[:, 0].reshape(SIZE[::-1]))
                 alpha = alpha + (1.0 - np.asarray(T).reshape(SIZE[::-1])) / 2.0
@@ -117,7 +129,7 @@ def run(types, variants, paths, voxel, tmp, log=print):
             regs = image_regions(alpha, float(sun @ right), float(sun @ up))
             row = {}
             for name, lighting in variants.items():
-                fast = welkin.cloud_radiance(clouds, atm, 0.0, sun, d, lighting=lighting, **SUN_ONLY)[0]
+                fast = welkin.cloud_radiance(clouds, atm, 0.0, sun, d, lighting=lighting, **light)[0]
                 fast = np.asarray(fast)[:, 0].reshape(SIZE[::-1])
                 cell = {}
                 for r in REGIONS:
@@ -216,9 +228,9 @@ def box_table(results, variants, paths):
     return "\n".join(lines)
 
 
-def table(results, variants, paths, voxel):
+def table(results, variants, paths, voxel, what="Sun light alone"):
     lines = [
-        f"Sun light alone, fast / reference (2 x {paths // 2} paths), {SIZE[0]} x {SIZE[1]}, "
+        f"{what}, fast / reference (2 x {paths // 2} paths), {SIZE[0]} x {SIZE[1]}, "
         f"{voxel:g} m voxels; all / sunlit / shadow / base, median per-pixel |ratio - 1|:",
         "",
         "| type | view | " + " | ".join(variants) + " |",
@@ -253,9 +265,10 @@ def main():
         help="a clouds.lighting variant (repeatable; default: the four above)",
     )
     p.add_argument("--boxes", action="store_true", help="uniform boxes instead of the patches")
+    p.add_argument("--sky", action="store_true", help="the two skies' light alone, side view (SKY_ONLY)")
     p.add_argument("--doc", default="")
     a = p.parse_args()
-    variants = dict(DEFAULT_VARIANTS)
+    variants = dict(SKY_VARIANTS if a.sky else DEFAULT_VARIANTS)
     if a.variant:
         variants = {"as it is": {}}
         for v in a.variant:
@@ -264,12 +277,16 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         if a.boxes:
             text = box_table(run_boxes(variants, a.paths, tmp), variants, a.paths)
+        elif a.sky:
+            results = run(a.types.split(","), variants, a.paths, a.voxel, tmp, SKY_ONLY, ("side",))
+            what = "Sky light alone (1 above the horizon, 0.15 below)"
+            text = table(results, variants, a.paths, a.voxel, what)
         else:
             text = table(run(a.types.split(","), variants, a.paths, a.voxel, tmp), variants, a.paths, a.voxel)
     print(text)
     if a.doc:
         doc = pathlib.Path(a.doc)
-        marker = "sun_light_boxes" if a.boxes else "sun_light_per_type"
+        marker = "sun_light_boxes" if a.boxes else "sky_light_per_type" if a.sky else "sun_light_per_type"
         begin, end = f"<!-- {marker}: begin -->", f"<!-- {marker}: end -->"
         s = doc.read_text()
         i, j = s.index(begin) + len(begin), s.index(end)
