@@ -287,11 +287,11 @@ private:
             grids_.side->set_cross_spacing(1.0, kSideVertical);
         }
         // The depths up and down: grids aligned with the zenith at the world's origin, whose
-        // vertices on one vertical share a walk (a march of ambient_steps per vertex along
-        // each point's own zenith cost a ninth of a stratocumulus sky). Over a curved planet
-        // the line at a point d from the origin leans d / R from its local vertical, and its
-        // depth through a flat layer is 1 / cos(d / R) times the vertical one: 0.1 % at 300
-        // km, the farthest a layer seen from the ground reaches.
+        // vertices on one vertical share a walk, as the sun's do (docs/validation.md, "The
+        // light from below"). Over a curved planet the line at a point d from the origin
+        // leans d / R from its local vertical, and its depth through a flat layer is
+        // 1 / cos(d / R) times the vertical one: 0.1 % at 300 km, the farthest a layer seen
+        // from the ground reaches.
         const glm::dvec3 up = light_.zenith(glm::dvec3(0.0));
         if (ambient_decay_ || (two_skies_ && options_.ambient_steps > 0))
             grids_.sky = along(up, options_.ambient_steps);

@@ -135,10 +135,30 @@ std::map<std::tuple<int, double, double, double, double, double, double, double,
 
 // The base shape of the header, base = remap(pw, -(1 - fbm_w), 1, 0, 1), from a blended
 // read b = (pw, fbm_w) of the base texture.
-// The salt of the base texture's hex taps (base_at, slice_at: the same taps).
-constexpr std::uint64_t kBaseTaps = 0xba5e;
-
 double base_shape(const float* b) { return clamp01d(remap(b[0], -(1.0 - b[1]), 1.0, 0.0, 1.0)); }
+
+// The salts of the hex taps (hex_read) of the weather map and of the base texture (base_at
+// and slice_at read the same taps).
+constexpr std::uint64_t kWeatherTaps = 0x57ea7e5, kBaseTaps = 0xba5e;
+
+// A hex-tiled read (noise.hpp, hex_taps), the lattice half a texture period apart: every
+// channel is its mean over the texture plus the weighted deviations of the taps, each tap
+// the texture read at height z, times the taps' contrast factor, clamped to the channel's
+// range [0, 1]. The offsets move in the plane only: the base shape still repeats through
+// the height (evolution_m cycles).
+template <int N>
+void hex_read(const PeriodicTexture<N>& texture, const double* mean, double u, double v, double z,
+              std::uint64_t seed, float* out) {
+    HexTaps taps;
+    hex_taps(u, v, 0.5, seed, taps);
+    double acc[N] = {};
+    for (int t = 0; t < taps.count; ++t) {
+        float r[N];
+        texture.sample(u + taps.du[t], v + taps.dv[t], z, r);
+        for (int c = 0; c < N; ++c) acc[c] += taps.weight[t] * (r[c] - mean[c]);
+    }
+    for (int c = 0; c < N; ++c) out[c] = float(clamp01d(mean[c] + taps.contrast * acc[c]));
+}
 
 // The footprints' slice (header; footprint()): the base texture's n x n texels at the
 // height z, its two channels as they are (a bilinear read of it is the base texture's
@@ -714,47 +734,19 @@ double ProceduralClouds::cirrus_density(double x, double y, double f, double c, 
     return env * (1.0 - std::min(1.0, shape.fibres * p_.detail_strength) * (1.0 - strands));
 }
 
-// Hex-tiled reads (noise.hpp, hex_taps), the lattice half a texture period apart: every
-// channel is the texture's mean plus the weighted deviations of the taps, times the taps'
-// contrast factor, clamped to the channel's range [0, 1]. The offsets move in the plane
-// only: the base shape still repeats through the height (evolution_m cycles).
+// The hex-tiled reads (hex_read) of the weather map, the base texture and the footprints'
+// slice (the base texture at z = evolution_m / base scale, with the peak map).
 void ProceduralClouds::weather_at(double u, double v, float* w) const {
-    HexTaps taps;
-    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + 0x57ea7e5, taps);
-    double acc[4] = {};
-    for (int t = 0; t < taps.count; ++t) {
-        float r[4];
-        weather_.sample(u + taps.du[t], v + taps.dv[t], 0.0, r);
-        for (int c = 0; c < 4; ++c) acc[c] += taps.weight[t] * (r[c] - weather_mean_[c]);
-    }
-    for (int c = 0; c < 4; ++c) w[c] = float(clamp01d(weather_mean_[c] + taps.contrast * acc[c]));
+    hex_read(weather_, weather_mean_, u, v, 0.0, p_.seed * 0x100000001b3ULL + kWeatherTaps, w);
 }
 
 void ProceduralClouds::base_at(double u, double v, double z, float* b) const {
-    HexTaps taps;
-    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + kBaseTaps, taps);
-    double acc[2] = {};
-    for (int t = 0; t < taps.count; ++t) {
-        float r[2];
-        base_.sample(u + taps.du[t], v + taps.dv[t], z, r);
-        for (int c = 0; c < 2; ++c) acc[c] += taps.weight[t] * (r[c] - base_mean_[c]);
-    }
-    for (int c = 0; c < 2; ++c) b[c] = float(clamp01d(base_mean_[c] + taps.contrast * acc[c]));
+    hex_read(base_, base_mean_, u, v, z, p_.seed * 0x100000001b3ULL + kBaseTaps, b);
 }
 
-// The base texture's read at the footprints' height (base_at at z = evolution_m / base
-// scale, the same taps) and the peak map, from the slice.
 void ProceduralClouds::slice_at(double u, double v, float* b) const {
-    HexTaps taps;
-    hex_taps(u, v, 0.5, p_.seed * 0x100000001b3ULL + kBaseTaps, taps);
     const double mean[3] = {base_mean_[0], base_mean_[1], peak_mean_};
-    double acc[3] = {};
-    for (int t = 0; t < taps.count; ++t) {
-        float r[3];
-        slice_.sample(u + taps.du[t], v + taps.dv[t], 0.0, r);
-        for (int c = 0; c < 3; ++c) acc[c] += taps.weight[t] * (r[c] - mean[c]);
-    }
-    for (int c = 0; c < 3; ++c) b[c] = float(clamp01d(mean[c] + taps.contrast * acc[c]));
+    hex_read(slice_, mean, u, v, 0.0, p_.seed * 0x100000001b3ULL + kBaseTaps, b);
 }
 
 // The shell between the bottom and top spheres, the ray stopped by the ground: the part of
