@@ -7,6 +7,7 @@ the work), and both as ratios to the target (10 s for a 1920 x 1080 plate).
 
     PYTHONPATH=build /usr/bin/python3 bench/clouds/plate_types.py --width 1920
     ... --width 480 --types cumulus cirrus
+    ... --lighting '{"surface_cut": 1}'      # clouds.lighting settings over the defaults
 """
 
 import argparse
@@ -22,7 +23,7 @@ import welkin
 TARGET_S = 10.0
 
 
-def scene(cloud_type, width, upsampling=None, seed=None):
+def scene(cloud_type, width, upsampling=None, seed=None, lighting=None):
     a = math.radians(90.0 + 15.0)
     c, s = math.cos(a), math.sin(a)
     cam = {
@@ -41,7 +42,7 @@ def scene(cloud_type, width, upsampling=None, seed=None):
         "clouds": {
             "layers": [{"cloud_type": cloud_type}],
             **({"upsampling": upsampling} if upsampling else {}),
-            **({"lighting": {"seed": seed}} if seed else {}),
+            "lighting": {**({"seed": seed} if seed else {}), **(lighting or {})},
         },
     }
 
@@ -90,6 +91,7 @@ def main():
     ap.add_argument("--every-ray", action="store_true", help="also every ray marched: times and error")
     ap.add_argument("--reference-seeds", type=int, choices=(1, 2), default=1)
     ap.add_argument("--bands", type=int, default=0, help="render in bands of this many rows, as the engine")
+    ap.add_argument("--lighting", type=json.loads, default={}, help="more clouds.lighting settings (JSON)")
     args = ap.parse_args()
     threads = len(os.sched_getaffinity(0))
     head = (
@@ -106,14 +108,18 @@ def main():
     print(head)
     print("|" + "---|" * (head.count("|") - 1))
     for t in args.types:
-        plate, wall, cpu = timed(json.dumps(scene(t, args.width)), args.bands)
+        plate, wall, cpu = timed(json.dumps(scene(t, args.width, lighting=args.lighting)), args.bands)
         row = (
             f"| {t} | {wall:.2f} s | {cpu:.2f} s | {wall / TARGET_S:.2f}x | {cpu / threads / TARGET_S:.2f}x |"
         )
         if args.every_ray:
-            exact, wall1, cpu1 = timed(json.dumps(scene(t, args.width, {"stride": 1})))
+            exact, wall1, cpu1 = timed(
+                json.dumps(scene(t, args.width, {"stride": 1}, lighting=args.lighting))
+            )
             if args.reference_seeds == 2:
-                second = welkin.camera_plate(json.dumps(scene(t, args.width, {"stride": 1}, seed=2)))
+                second = welkin.camera_plate(
+                    json.dumps(scene(t, args.width, {"stride": 1}, seed=2, lighting=args.lighting))
+                )
                 noise = errors(second, exact)
                 exact = {k: 0.5 * (exact[k] + second[k]) for k in ("combined", "clouds")}
             m, p99, am, ap99, share = errors(plate, exact)

@@ -10,6 +10,7 @@ x / (1 + x) and sRGB's curve), so a grey type reads grey beside a white one.
 
     PYTHONPATH=build /usr/bin/python3 bench/clouds/types_sheet.py            # docs/clouds_types.png
     ... /tmp/cu.png --types cumulus --width 480                             # one type, to look at it
+    ... /tmp/cu1.png --types cumulus --lighting '{"surface_cut": 1}'        # a march setting changed
 (needs numpy, Pillow and matplotlib's DejaVu font: scripts/install_deps.sh installs Debian's
 python3-numpy and python3-matplotlib, which brings python3-pil and fonts-dejavu-core.)
 """
@@ -78,7 +79,7 @@ def sun(elevation_deg, azimuth_deg):
     return [math.cos(e) * math.sin(a), math.cos(e) * math.cos(a), math.sin(e)]
 
 
-def render(cloud_type, view, width, steps):
+def render(cloud_type, view, width, steps, lighting=None):
     height_m, pitch, elevation, azimuth = VIEWS[view]
     scene = {
         "version": 1,
@@ -88,7 +89,10 @@ def render(cloud_type, view, width, steps):
         "resolution": {"x": width, "y": width * 9 // 16, "percentage": 100},
     }
     if cloud_type:
-        scene["clouds"] = {"layers": [{"cloud_type": cloud_type}], "lighting": {"max_steps": steps}}
+        scene["clouds"] = {
+            "layers": [{"cloud_type": cloud_type}],
+            "lighting": {"max_steps": steps, **(lighting or {})},
+        }
     return np.asarray(welkin.camera_plate(json.dumps(scene))["combined"], np.float64)[..., :3]
 
 
@@ -109,6 +113,7 @@ def main():
     ap.add_argument("--steps", type=int, default=96, help="the march's view steps")
     ap.add_argument("--types", nargs="*", default=list(welkin.CLOUD_TYPES))
     ap.add_argument("--views", nargs="*", default=list(VIEWS))
+    ap.add_argument("--lighting", type=json.loads, default={}, help="more clouds.lighting settings (JSON)")
     args = ap.parse_args()
     w, h = args.width, args.width * 9 // 16
     text_w, head_h = 330, 22
@@ -129,7 +134,7 @@ def main():
             d.text((8, y0 + 32 + 15 * k), line, fill=(200, 200, 200), font=body)
         for i, v in enumerate(args.views):
             t0 = time.perf_counter()
-            rgb = render(t, v, w, args.steps)
+            rgb = render(t, v, w, args.steps, args.lighting)
             print(f"{t:13s} {v:15s} {time.perf_counter() - t0:6.1f} s", file=sys.stderr)
             tile = Image.fromarray((tone(rgb, scales[v]) * 255 + 0.5).astype(np.uint8))
             sheet.paste(tile, (text_w + i * w, y0))

@@ -47,6 +47,7 @@ void CloudLightingOptions::validate() const {
     if (!(max_distance_m > 0.0 && max_distance_m <= 1e8))
         throw InvalidArgument("max_distance_m", fmt::format("must be in (0, 1e8] m, got {}", max_distance_m));
     require_in_range("tail_transmittance", tail_transmittance, 0.0, 1.0);
+    require_in_range("surface_cut", surface_cut, 1, 64);
     require_in_range("shadow_grid_spacing_m", shadow_grid_spacing_m, 0.0, 1e5, "m");
     require_in_range("ray_spread_rad", ray_spread_rad, 0.0, 1.0, "rad");
     require_in_range("ray_width_m", ray_width_m, 0.0, 1e6, "m");
@@ -400,12 +401,55 @@ private:
         std::fill(acc.begin(), acc.end(), 0.0);
         double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
         const double albedo = options_.scattering.albedo;
-        bool done = false;
+        bool alive = true;  // false once T < min_transmittance: the ray stops
+        // The sample at t (density sigma_t at x) of a step h long.
+        const auto integrate = [&](double t, double h, double sigma_t, const glm::dvec3& x) {
+            if (footprint && t >= next_level_t) set_levels(t);
+            // The sun grid's near field where the rays are about a cell apart or more;
+            // denser rays share the vertices of their own level already.
+            levels.near = footprint && options_.ray_width_m + options_.ray_spread_rad * t >=
+                                           0.5 * sun_grid->spacing_m(levels.sun);
+            const SampleLight::Weights lw = sample_light_.weights(x, levels, phase, cursors);
+            light_.sun_irradiance(x, sun.data());
+            light_.sky_radiance(x, above.data(), below.data());
+            // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
+            const double step_opacity = 1.0 - std::exp(-sigma_t * h);
+            const double w = T * step_opacity * albedo;
+            for (std::size_t c = 0; c < nc; ++c)
+                acc[c] += w * (sun[c] * lw.sun + above[c] * lw.above + below[c] * lw.below);
+            depth_sum += t * T * step_opacity;
+            opacity_sum += T * step_opacity;
+            T *= 1.0 - step_opacity;
+            alive = T >= options_.min_transmittance;
+        };
+        // The step [a, a + dt) cut into n, each sample at the same fraction u of its own
+        // step; whether any sample was in a cloud.
+        const auto cut = [&](double a, double dt, int n) {
+            const double h = dt / n;
+            bool cloud = false;
+            for (int j = 0; j < n && alive; ++j) {
+                const double t = a + (j + u) * h;
+                const glm::dvec3 x = ray.at(t);
+                const double sigma_t = density_.sigma_t(x);
+                if (!(sigma_t > 0.0)) continue;
+                cloud = true;
+                integrate(t, h, sigma_t, x);
+            }
+            return cloud;
+        };
         for (const auto& g : segs) {
-            if (done) break;
+            if (!alive) break;
             const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
             const double dt = (g.t1 - g.t0) / steps;
-            for (int k = 0, span = 1; k < steps; k += span) {
+            // How many fine steps the base step at t is cut into at a surface (the header's
+            // "Steps"): none shorter than half the feature size nor the footprint.
+            const auto pieces = [&](double t) {
+                const double fine = std::max(0.5 * density_.feature_size_m(),
+                                             options_.ray_width_m + options_.ray_spread_rad * t);
+                return std::clamp(int(std::min(dt / fine, 64.0)), 1, options_.surface_cut);
+            };
+            bool was_cut = false, in_cloud = false;  // the last step: cut; cut and cloudy
+            for (int k = 0, span = 1; k < steps && alive; k += span) {
                 // The dim tail: below tail_transmittance a step spans up to 8 base steps,
                 // about tail_transmittance / T of them (whole steps, the same jitter u).
                 // Empty space keeps the base step: a longer step there can pass over a thin
@@ -413,30 +457,29 @@ private:
                 const bool dim = T < options_.tail_transmittance;
                 span = dim ? std::min({steps - k, 8, std::max(1, int(options_.tail_transmittance / T))}) : 1;
                 const double h = span * dt;
-                const double t = g.t0 + k * dt + u * h;
+                const double a = g.t0 + k * dt;
+                const double t = a + u * h;
+                const int n = dim ? 1 : pieces(t);
+                const bool cut_before = was_cut;
+                was_cut = n > 1 && in_cloud;
+                if (was_cut) {  // still in the cloud, or one step out of it
+                    in_cloud = cut(a, dt, n);
+                    continue;
+                }
+                in_cloud = false;
                 const glm::dvec3 x = ray.at(t);
                 const double sigma_t = density_.sigma_t(x);
                 if (!(sigma_t > 0.0)) continue;
-                if (footprint && t >= next_level_t) set_levels(t);
-                // The sun grid's near field where the rays are about a cell apart or more;
-                // denser rays share the vertices of their own level already.
-                levels.near = footprint && options_.ray_width_m + options_.ray_spread_rad * t >=
-                                               0.5 * sun_grid->spacing_m(levels.sun);
-                const SampleLight::Weights lw = sample_light_.weights(x, levels, phase, cursors);
-                light_.sun_irradiance(x, sun.data());
-                light_.sky_radiance(x, above.data(), below.data());
-                // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
-                const double step_opacity = 1.0 - std::exp(-sigma_t * h);
-                const double w = T * step_opacity * albedo;
-                for (std::size_t c = 0; c < nc; ++c)
-                    acc[c] += w * (sun[c] * lw.sun + above[c] * lw.above + below[c] * lw.below);
-                depth_sum += t * T * step_opacity;
-                opacity_sum += T * step_opacity;
-                T *= 1.0 - step_opacity;
-                if (T < options_.min_transmittance) {
-                    done = true;
-                    break;
+                if (n == 1) {
+                    integrate(t, h, sigma_t, x);
+                    continue;
                 }
+                // A cloud's near surface: the step before (empty at its sample, so it added
+                // nothing) and this one, cut. This sample is not used: a cut's samples sit
+                // at u of their own steps.
+                if (k > 0 && !cut_before) cut(a - dt, dt, pieces(t - dt));
+                if (alive) in_cloud = cut(a, dt, n);
+                was_cut = true;
             }
         }
         for (std::size_t c = 0; c < nc; ++c) result_.radiance[r * nc + c] = float(acc[c]);

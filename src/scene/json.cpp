@@ -184,7 +184,7 @@ void parse_cloud_lighting(const json& li, CloudLightingOptions& o) {
         li, "clouds.lighting",
         {"max_steps", "light_steps", "ambient_steps", "light_distance_m", "multiple_scattering", "octaves",
          "octave_extinction", "octave_contribution", "octave_eccentricity", "min_transmittance", "seed",
-         "jitter", "max_distance_m", "shadow_grid", "shadow_grid_spacing_m", "sides"});
+         "jitter", "max_distance_m", "shadow_grid", "shadow_grid_spacing_m", "sides", "surface_cut"});
     const auto geti = [&](const char* key, int& v) {
         if (li.contains(key)) v = integer(li[key], p + key);
     };
@@ -192,6 +192,7 @@ void parse_cloud_lighting(const json& li, CloudLightingOptions& o) {
         if (li.contains(key)) v = json_number(li[key], p + key);
     };
     geti("max_steps", o.max_steps);
+    geti("surface_cut", o.surface_cut);
     geti("light_steps", o.light_steps);
     geti("ambient_steps", o.ambient_steps);
     getd("light_distance_m", o.light_distance_m);
@@ -311,7 +312,8 @@ ordered_json clouds_json(const SceneClouds& c) {
                      {"max_distance_m", o.max_distance_m},
                      {"shadow_grid", o.shadow_grid},
                      {"shadow_grid_spacing_m", o.shadow_grid_spacing_m},
-                     {"sides", o.sides}};
+                     {"sides", o.sides},
+                     {"surface_cut", o.surface_cut}};
     j["upsampling"] = {{"stride", c.upsampling.stride},
                        {"finest", c.upsampling.finest},
                        {"transmittance_tolerance", c.upsampling.transmittance_tolerance},

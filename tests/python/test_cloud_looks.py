@@ -177,13 +177,16 @@ def test_an_overcast_deck_from_below_has_no_streaks():
 @pytest.mark.parametrize("elevation_deg", [3.0, 8.0])
 def test_an_overcast_deck_under_a_low_sun_has_no_wedges(elevation_deg):
     """The same deck at sunset (the contact sheet's view: sun 3 degrees up, 45 degrees right of
-    the view; and 8 degrees up), 400 x 225: the fine structure stays under 0.006. An anti-sun
+    the view; and 8 degrees up), 400 x 225: the fine structure stays under 0.0065. An anti-sun
     grid turned to a low sun runs nearly along the deck's base, and its lines drew dark
     wedges fanning from the sun's azimuth (0.0155 at 3 degrees, 0.0082 at 8); the grid of
-    world axes it falls back to there reads 0.0050 and 0.0043."""
+    world axes it falls back to there reads 0.0061 and 0.0057. Of that, the deck's own
+    texture near the horizon, where the view steps through it are longest: lit at the
+    surface cut's pieces (lighting.hpp, "The surface"), not one long step inside, it reads
+    0.0061 where the base step alone read 0.0060 (seeds 1-4 within 0.00004)."""
     fine = overcast_fine_structure(elevation_deg, 45.0, 400, 225, 170)
     print(f"overcast stratus, sun {elevation_deg:g} deg up: fine structure {fine:.4f} of the mean")
-    assert fine < 0.006
+    assert fine < 0.0065
 
 
 def test_cumulus_heaps_narrow_upwards():

@@ -81,6 +81,8 @@ def test_cloud_radiance_takes_the_scene_files_lighting_options(tmp_path):
         ({"side": False}, "clouds.lighting.side"),
         ({"sides": 3}, "clouds.lighting.sides"),
         ({"max_steps": 0}, "clouds.lighting.max_steps"),
+        ({"surface_cut": 0}, "clouds.lighting.surface_cut"),
+        ({"surface_cut": 65}, "clouds.lighting.surface_cut"),
         ([1], "lighting"),
     ):
         with pytest.raises(ValueError, match=name):

@@ -9,6 +9,16 @@
 //    a whole number of equal steps. The sample of each step sits at the same fraction u of
 //    it, u drawn once per ray from a seeded stream (PathRng(seed, ray)): the jittered start
 //    that turns banding into noise, the same on every machine.
+//  * The surface. A long path (a layer seen low over the horizon, a heap kilometres away)
+//    has steps much longer than the cloud's edge is sharp, and where a cloud's near face
+//    falls between two samples is then left to the jitter: its outline and its lobes read
+//    as speckled fuzz. So when a base step's sample finds cloud, that step and the one
+//    before it (empty at its sample) are cut into n equal pieces, and so is every
+//    following step while the cut ones find cloud, and one more past it: n = dt / fine
+//    (rounded down, at most surface_cut, 8 by default), fine the longer of half the feature size
+//    and the ray's footprint w(t) (below), the finest that a pixel can show. Each piece's
+//    sample sits at u of it. The dim tail (next) is not cut. A short path, whose base step
+//    is already that fine, is marched as before.
 //  * Energy-conserving integration (Hillaire 2015, "Physically based and unified
 //    volumetric rendering in Frostbite", SIGGRAPH course, sec. 5.6.3): over a step of
 //    length dt with extinction sigma_t and scattering sigma_s = albedo sigma_t, the source
@@ -163,6 +173,7 @@ enum class CloudMultipleScattering {
 struct CloudLightingOptions {
     CloudScattering scattering;
     int max_steps = 96;                // along each view ray, [1, 4096]
+    int surface_cut = 8;               // the most pieces a step is cut into at a surface, [1, 64]; 1: off
     int light_steps = 8;               // along each shadow ray, [1, 256]
     int ambient_steps = 4;             // along the rays to the zenith and nadir, [0, 256] (0: see above)
     double light_distance_m = 4000.0;  // how far the shadow and sky rays look, (0, 1e6]
