@@ -81,7 +81,9 @@ void check_rays(std::span<const glm::dvec3> origins, std::span<const glm::dvec3>
         throw InvalidArgument("origins", fmt::format("must hold 1 or {} points (one per direction), got {}",
                                                      n, origins.size()));
     for (std::size_t i = 0; i < origins.size(); ++i)
-        for (int a = 0; a < 3; ++a) require_finite(fmt::format("origins[{}][{}]", i, a), origins[i][a]);
+        for (int a = 0; a < 3; ++a)  // the name formatted only for the error: a frame has millions
+            if (!std::isfinite(origins[i][a]))
+                require_finite(fmt::format("origins[{}][{}]", i, a), origins[i][a]);
     if (!max_distances.empty() && max_distances.size() != n)
         throw InvalidArgument("max_distances",
                               fmt::format("must be empty or hold {} values (one per direction), "

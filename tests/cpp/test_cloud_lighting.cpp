@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <string>
 
 #include "cloud_test_util.hpp"
 #include <glm/geometric.hpp>
@@ -123,6 +125,27 @@ TEST(CloudSteps, SurfaceCutKeepsAFarCloudsDepth) {
     EXPECT_LE(worst_cut, 2.0 * sigma * (20000.0 / 96.0 / 8.0) + 1e-9);
     EXPECT_NEAR(mean_cut, sigma * depth, 0.02);
     EXPECT_GT(worst_base, 0.9);  // what the cut mends: one sample of the box missed
+}
+
+// A bad ray is refused naming it, whichever ray of the frame it is.
+TEST(CloudSteps, BadRaysAreRefusedByName) {
+    const HomogeneousBox box({0, -50, -50}, {100, 50, 50}, 0.015);
+    const auto light = sun_only({0, 0, 1}, 1.0f);
+    const std::vector<glm::dvec3> dirs(3, glm::dvec3(1, 0, 0));
+    const auto refused = [&](std::vector<glm::dvec3> origins, std::vector<double> lengths) {
+        try {
+            render_clouds(box, light, origins, dirs, lengths);
+        } catch (const InvalidArgument& e) {
+            return e.parameter();
+        }
+        return std::string("accepted");
+    };
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(refused({{-10, 0, 0}, {-10, 0, 0}, {-10, 0, nan}}, {}), "origins[2][2]");
+    EXPECT_EQ(refused({{-10, 0, 0}, {-10, std::numeric_limits<double>::infinity(), 0}, {-10, 0, 0}}, {}),
+              "origins[1][1]");
+    EXPECT_EQ(refused({{-10, 0, 0}}, {50.0, -1.0, 50.0}), "max_distances[1]");
+    EXPECT_EQ(refused({{-10, 0, 0}}, {50.0, 50.0, 50.0}), "accepted");
 }
 
 // Single scattering of a homogeneous slab, sun overhead, view horizontal through it: every
