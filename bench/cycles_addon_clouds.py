@@ -24,6 +24,7 @@ texture and the synced lamp). What each renderer gets:
   the atmosphere's light, converted to RGB as the engine converts the march.
 """
 
+import contextlib
 import json
 import math
 import os
@@ -158,6 +159,28 @@ def update_sky(scene, sun, native, lamp="ground", at=CLOUD_AT):
         sun.data.energy = float(e_cloud.max())
         sun.data.color = tuple(float(v) for v in e_cloud / e_cloud.max())
     return e_ground, e_cloud
+
+
+@contextlib.contextmanager
+def world_seen_from(scene, altitude_m):
+    """While the block runs, Cycles' world is the add-on's sky seen from altitude_m above the
+    camera's (the world's Origin Altitude raised, Update Sky run), as the sky around a cloud
+    at that height is; then the camera's own again. A world texture is at infinity: every
+    point of a volume sees the same sky, the one from the observer's altitude. For a cloud
+    kilometres up that is the sky from the ground, brighter above and darker below than the
+    sky the cloud itself sees (docs/validation.md, "Each cloud type against Cycles"). The
+    engine's pass and the reference take the observer from the world's altitude: leave the
+    block before them. A lamp set for the cloud (update_sky, lamp="cloud") is kept; a synced
+    one follows the sun at the raised altitude."""
+    world = scene.world.welkin
+    ground = world.altitude_m
+    world.altitude_m = ground + altitude_m
+    bpy.ops.welkin.update_sky()
+    try:
+        yield
+    finally:
+        world.altitude_m = ground
+        bpy.ops.welkin.update_sky()
 
 
 def engine_pass(scene, native, lobes, air=True):

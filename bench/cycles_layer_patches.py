@@ -33,6 +33,7 @@ detail), nor the layer's extent beyond the patch (the neighbouring clouds' shado
 light).
 """
 
+import contextlib
 import importlib.util
 import math
 import os
@@ -190,7 +191,9 @@ def build(T, native, patch, *, size, samples, bounces):
     return scene, sun
 
 
-def compare(T, native, patch, built, view, *, paths, samples=None, seeds=(1, 2), tmp, log=print):
+def compare(
+    T, native, patch, built, view, *, paths, samples=None, seeds=(1, 2), tmp, log=print, world_at_cloud=False
+):
     """One view of a patch in the scene build() made: the sun aimed and Update Sky run (the
     lamp at the cloud's altitude), Cycles once per seed (`samples` each, else build()'s),
     the engine's pass (the fast march,
@@ -199,7 +202,10 @@ def compare(T, native, patch, built, view, *, paths, samples=None, seeds=(1, 2),
     difference between the seeds' ratios: "fast_noise", "reference_noise"), the
     edge-over-core of each renderer ("lining": {"cycles", "cycles_noise", "fast",
     "reference"}), the cloud's pixel count ("pixels") and Cycles' and the fast march's
-    mean alpha over them ("alpha", "fast_alpha")."""
+    mean alpha over them ("alpha", "fast_alpha"). world_at_cloud: Cycles' world is the sky
+    seen from the patch's altitude (the world's Origin Altitude), not from the ground; the
+    fast march and the reference, which light the cloud with the sky at its own altitude
+    whatever the world shows, are unchanged."""
     scene, sun = built
     if samples:
         scene.cycles.samples = samples
@@ -208,9 +214,10 @@ def compare(T, native, patch, built, view, *, paths, samples=None, seeds=(1, 2),
     bpy.context.view_layer.update()
     ac.update_sky(scene, sun, native, lamp="cloud", at=patch.at)
     cyc = []
-    for seed in seeds:
-        scene.cycles.seed = seed
-        cyc.append(cv.render(scene, os.path.join(tmp, f"cycles_{patch.cloud_type}_{view}_{seed}.exr")))
+    with ac.world_seen_from(scene, patch.at[2]) if world_at_cloud else contextlib.nullcontext():
+        for seed in seeds:
+            scene.cycles.seed = seed
+            cyc.append(cv.render(scene, os.path.join(tmp, f"cycles_{patch.cloud_type}_{view}_{seed}.exr")))
     c = sum(cyc) / len(cyc)
     fast = ac.engine_pass(scene, native, ac.WELKIN_LOBES, air=False)
     refs = []

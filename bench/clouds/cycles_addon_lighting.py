@@ -6,9 +6,10 @@ Welkin's reference path tracer, and the pieces between them, in one Blender proc
         --python-use-system-env --python bench/clouds/cycles_addon_lighting.py -- \
         [--size 96 64] [--samples 128] [--bounces 256] [--paths 256] [--lobes welkin|one] \
         [--lamp ground|cloud|both] [--csv bench/results/cycles_addon_clouds.csv] \
-        [--doc docs/validation.md]
+        [--doc docs/validation.md] [--world-at-cloud]
 
-(Blender 3.4: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
+--world-at-cloud: Cycles' world is the sky seen from the cloud's altitude, not from the
+ground (bench/cycles_addon_clouds.py, world_seen_from). (Blender 3.4: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
 --python bench/clouds/cycles_addon_lighting.py -- --lobes one: its Cycles lights two Volume
 Scatter closures as the sum of their lobes.) The scene and what each renderer gets:
 bench/cycles_addon_clouds.py; the "side" view of tests/blender/test_cycles_clouds_lighting.py
@@ -27,6 +28,7 @@ towards / away from the sun on the image; base: the bottom fifth of the cloud's 
 
 import argparse
 import atexit
+import contextlib
 import os
 import pathlib
 import shutil
@@ -53,6 +55,7 @@ p.add_argument("--lobes", default="welkin", choices=("welkin", "one"))
 p.add_argument("--lamp", default="both", choices=("ground", "cloud", "both"))
 p.add_argument("--csv", default="")
 p.add_argument("--doc", default="")
+p.add_argument("--world-at-cloud", action="store_true", help="Cycles' world seen from the cloud's altitude")
 args = p.parse_args(argv)
 
 addon, native = T.install_addon()
@@ -85,7 +88,8 @@ for lamp in lamps:
             bounces=args.bounces,
         )
         e_ground, e_cloud = ac.update_sky(scene, sun, native, lamp=lamp)
-        cyc = cv.render(scene, os.path.join(tmp, f"cycles_{lamp}_{view}.exr"))
+        with ac.world_seen_from(scene, ac.CLOUD_AT[2]) if args.world_at_cloud else contextlib.nullcontext():
+            cyc = cv.render(scene, os.path.join(tmp, f"cycles_{lamp}_{view}.exr"))
         eng = ac.engine_pass(scene, native, LOBES, air=True)
         noair = ac.engine_pass(scene, native, LOBES, air=False)
         regs = ac.regions(scene, cyc[..., 3], ac.sun_direction(el, az))
@@ -126,7 +130,9 @@ if args.csv:
 if args.doc:
     lines = [
         f"Blender {bpy.app.version_string}, {args.size[0]} x {args.size[1]}, Cycles {args.samples} spp "
-        f"({args.bounces} bounces), reference {args.paths} paths, phase "
+        f"({args.bounces} bounces), reference {args.paths} paths, "
+        + ("Cycles' world seen from the cloud's altitude, " if args.world_at_cloud else "")
+        + "phase "
         + ("Welkin's two lobes" if args.lobes == "welkin" else f"one HG lobe g = {cv.G}")
         + "; luminance ratios:",
         "",

@@ -8,7 +8,7 @@ two-lobe phase wrongly, bench/cycles_volume.py).
         --python-use-system-env --python bench/clouds/cycles_types_lighting.py -- \
         [--types cumulus,stratus] [--size 96 64] [--samples 64] [--bounces 256] \
         [--paths 128] [--voxel 25] [--csv bench/results/cycles_cloud_types.csv] \
-        [--doc docs/validation.md]
+        [--doc docs/validation.md] [--world-at-cloud]
 
 The patch, the views and what each renderer gets: bench/cycles_layer_patches.py (over
 bench/cycles_addon_clouds.py's scene). Cycles and the reference each run twice (seeds 1
@@ -47,6 +47,12 @@ p.add_argument("--paths", type=int, default=128, help="reference paths per seed 
 p.add_argument("--voxel", type=float, default=25.0, help="the patch's voxel, m")
 p.add_argument("--csv", default="")
 p.add_argument("--doc", default="")
+p.add_argument(
+    "--world-at-cloud",
+    action="store_true",
+    help="Cycles' world seen from each patch's altitude, not from the ground (the fast march and the "
+    "reference light the cloud with the sky at its altitude either way)",
+)
 args = p.parse_args(argv)
 
 addon, native = T.install_addon()
@@ -66,8 +72,12 @@ for t in types:
         flush=True,
     )
     built = lp.build(T, native, patch, size=tuple(args.size), samples=args.samples, bounces=args.bounces)
-    side = lp.compare(T, native, patch, built, "side", paths=args.paths, tmp=tmp)
-    backlit = lp.compare(T, native, patch, built, "backlit", paths=0, tmp=tmp)
+    side = lp.compare(
+        T, native, patch, built, "side", paths=args.paths, tmp=tmp, world_at_cloud=args.world_at_cloud
+    )
+    backlit = lp.compare(
+        T, native, patch, built, "backlit", paths=0, tmp=tmp, world_at_cloud=args.world_at_cloud
+    )
     results.append((patch, side, backlit, time.time() - start))
 
 
@@ -121,7 +131,9 @@ def lining(d, k):
 lines = [
     f"Blender {bpy.app.version_string}, {args.size[0]} x {args.size[1]}, Cycles 2 x {args.samples} spp "
     f"({args.bounces} bounces), reference 2 x {args.paths} paths, {args.voxel:g} m voxels over "
-    f"{lp.PATCH_M / 1000:g} km; luminance ratios to Cycles (± half the seeds' difference); "
+    f"{lp.PATCH_M / 1000:g} km; "
+    + ("Cycles' world seen from the patch's altitude; " if args.world_at_cloud else "")
+    + "luminance ratios to Cycles (± half the seeds' difference); "
     "silver lining: edge over core in the backlit view:",
     "",
     "| type | patch: optical depth, sigma_t max | fast: all | sunlit | shadow | base "

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Headless Blender 5.0 + Cycles: each procedural cloud type (welkin.CLOUD_TYPES) as a VDB
-patch of its layer under the add-on's own sky (world texture and the sun lamp at the
-cloud's altitude), Cycles against the engine's cloud pass (the fast march, the air left
+patch of its layer under the add-on's own sky seen from the cloud's altitude (the world
+texture and the sun lamp: the light the cloud gets; bench/cycles_addon_clouds.py,
+world_seen_from), Cycles against the engine's cloud pass (the fast march, the air left
 out) for the same pixels.
 
 The patch and the views: bench/cycles_layer_patches.py (a 3 km square of the type's preset
@@ -81,7 +82,18 @@ def main():
         patch = lp.write_patch(native, t, os.path.join(tmp, f"{t}.vdb"), VOXEL_M)
         built = lp.build(T, native, patch, size=SIZE, samples=SAMPLES["side"], bounces=BOUNCES)
         for view in ("side", "backlit"):
-            r = lp.compare(T, native, patch, built, view, paths=0, samples=SAMPLES[view], tmp=tmp, log=log)
+            r = lp.compare(
+                T,
+                native,
+                patch,
+                built,
+                view,
+                paths=0,
+                samples=SAMPLES[view],
+                tmp=tmp,
+                log=log,
+                world_at_cloud=True,
+            )
             T.check(r["pixels"] >= 150, f"{t} {view}: the cloud covers too few pixels ({r['pixels']})")
             da = r["fast_alpha"] - r["alpha"]
             T.check(

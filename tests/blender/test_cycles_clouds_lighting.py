@@ -6,8 +6,13 @@ sun lamp), Cycles against Welkin's reference path tracer and against the engine'
 The scene and what each renderer gets: bench/cycles_addon_clouds.py (the cumulus about
 1.2 x 0.9 km, 5 km up and 6 km away, sigma_t up to 0.0148 /m, Welkin's phase 0.8 HG(0.8) +
 0.2 HG(-0.3), albedo 1; Cycles 96 x 64, 128 samples, 256 volume bounces; the reference 256
-paths). The lamp is the sun at the cloud's altitude (the light Welkin gives the cloud; the
-add-on syncs the lamp to the sun at the camera, 0.73 of it in luminance here), and the
+paths). Cycles gets the light the cloud gets: the lamp is the sun at the cloud's altitude
+(the add-on syncs the lamp to the sun at the camera, 0.73 of it in luminance here), and the
+world is the add-on's sky seen from the cloud's altitude (bench/cycles_addon_clouds.py,
+world_seen_from). A world texture is at infinity: with the camera's sky every point of the
+cloud would see the sky from the ground, brighter above and darker below than the sky 5 km
+up, and the reference read 0.96 of Cycles in all and 0.93 on the sunlit half, the fast
+march 0.87 and 0.80 (docs/validation.md, "Against Cycles under the add-on's own sky"). The
 engine's pass leaves out the air in front of the cloud, which Cycles does not have.
 
 Two views. "side": the sun 30 degrees up, 60 degrees left of the view; luminance ratios
@@ -17,8 +22,8 @@ the edge pixels' own brightness (L / alpha, 0.05 < alpha < 0.6) over the core's 
 0.95). Tolerances (the issue's; noise is about 1 % per region at these counts):
 
 * the reference against Cycles: mean within 10 %, sunlit and shadow halves within 15 %
-  (the two renderers under one light; what is left is the world, the sky seen from the
-  ground in Cycles, the sky's mean at the cloud in Welkin);
+  (the two renderers under one light; what is left is the sky's angular detail, which
+  Welkin's two hemispheres at the cloud average);
 * the fast march against Cycles: the same;
 * Cycles shows a silver lining (edge over core > 1), and the fast march's edge over core
   is > 1 and within 15 % of Cycles'.
@@ -64,7 +69,8 @@ def main():
     for view, (el, az) in VIEWS.items():
         scene, sun, _ob = ac.build_test_view(T, vdb, el, az)
         e_ground, e_cloud = ac.update_sky(scene, sun, native, lamp="cloud")
-        cyc = cv.render(scene, os.path.join(tmp, f"cycles_{view}.exr"))
+        with ac.world_seen_from(scene, ac.CLOUD_AT[2]):
+            cyc = cv.render(scene, os.path.join(tmp, f"cycles_{view}.exr"))
         fast = ac.engine_pass(scene, native, ac.WELKIN_LOBES, air=False)
         regs = ac.regions(scene, cyc[..., 3], ac.sun_direction(el, az))
         T.check(regs["all"].sum() > 400, f"{view}: the cloud covers too few pixels ({regs['all'].sum()})")
