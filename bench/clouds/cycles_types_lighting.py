@@ -76,7 +76,7 @@ for t in types:
         T, native, patch, built, "side", paths=args.paths, tmp=tmp, world_at_cloud=args.world_at_cloud
     )
     backlit = lp.compare(
-        T, native, patch, built, "backlit", paths=0, tmp=tmp, world_at_cloud=args.world_at_cloud
+        T, native, patch, built, "backlit", paths=args.paths, tmp=tmp, world_at_cloud=args.world_at_cloud
     )
     results.append((patch, side, backlit, time.time() - start))
 
@@ -88,7 +88,7 @@ def f3(x):
 COLS = [f"{w}_{r}" for w in ("fast", "reference") for r in lp.REGIONS] + [
     f"{w}_{r}_noise" for w in ("fast", "reference") for r in lp.REGIONS
 ]
-LINING = ("cycles", "cycles_noise", "fast")
+LINING = ("cycles", "cycles_noise", "fast", "reference")
 if args.csv:
     os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)
     with open(args.csv, "w") as f:
@@ -137,17 +137,21 @@ lines = [
     "silver lining: edge over core in the backlit view:",
     "",
     "| type | patch: optical depth, sigma_t max | fast: all | sunlit | shadow | base "
-    "| reference: all | sunlit | shadow | base | edge / core: Cycles | fast | fast / Cycles |",
-    "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    "| reference: all | sunlit | shadow | base | edge / core: Cycles | fast | fast / Cycles "
+    "| reference / Cycles |",
+    "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
 ]
 for patch, side, backlit, _s in results:
     lc, lf = backlit.get("lining", {}).get("cycles"), backlit.get("lining", {}).get("fast")
+    lr = backlit.get("lining", {}).get("reference")
     lines.append(
         f"| {patch.cloud_type} | {patch.column_tau:.1f}, {patch.density_scale:.4f} /m | "
         + " | ".join(cell(side, w, r) for w in ("fast", "reference") for r in lp.REGIONS)
         + f" | {lining(backlit, 'cycles')} ± {f3(backlit.get('lining', {}).get('cycles_noise')) or '-'}"
         + f" | {lining(backlit, 'fast')} | "
         + (f"{lf / lc:.2f}" if lc and lf else "-")
+        + " | "
+        + (f"{lr / lc:.2f}" if lc and lr else "-")
         + " |"
     )
 print("\n".join(lines))
