@@ -443,8 +443,8 @@ private:
             if (!alive) break;
             const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
             const double dt = (g.t1 - g.t0) / steps;
-            // How many fine steps the base step at t is cut into at a surface (the header's
-            // "Steps"): none shorter than half the feature size nor the footprint.
+            // How many pieces the base step at t is cut into at a surface (the header's "The
+            // surface"): none shorter than half the feature size nor the footprint.
             const auto pieces = [&](double t) {
                 const double fine = std::max(0.5 * density_.feature_size_m(),
                                              options_.ray_width_m + options_.ray_spread_rad * t);
