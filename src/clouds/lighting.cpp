@@ -380,7 +380,10 @@ private:
         double total = 0.0;
         for (const auto& g : segs) total += g.t1 - g.t0;
         if (!(total > 0.0)) return;
-        const double dt_target = std::max(total / options_.max_steps, 0.5 * density_.feature_size_m());
+        const double half_feature = 0.5 * density_.feature_size_m();
+        const double dt_target = std::max(total / options_.max_steps, half_feature);
+        // The ray's footprint at distance t: the distance to the neighbouring rays (the header).
+        const auto width_at = [&](double t) { return options_.ray_width_m + options_.ray_spread_rad * t; };
         // The grids' levels at distance t: no finer than the view step nor the ray's
         // footprint (the header); re-read when the footprint has doubled.
         const OpticalDepthGrid* sun_grid = sample_light_.sun_grid();
@@ -388,8 +391,7 @@ private:
         SampleLight::Levels levels;
         double next_level_t = -1.0;  // the footprint's level holds below this t
         const auto set_levels = [&](double t) {
-            const double w = options_.ray_width_m + options_.ray_spread_rad * t;
-            levels = sample_light_.levels_for(std::max(dt_target, w));
+            levels = sample_light_.levels_for(std::max(dt_target, width_at(t)));
             next_level_t =
                 footprint && options_.ray_spread_rad > 0.0
                     ? (sun_grid->spacing_m(levels.sun + 1) - options_.ray_width_m) / options_.ray_spread_rad
@@ -409,8 +411,7 @@ private:
             if (footprint && t >= next_level_t) set_levels(t);
             // The sun grid's near field where the rays are about a cell apart or more;
             // denser rays share the vertices of their own level already.
-            levels.near = footprint && options_.ray_width_m + options_.ray_spread_rad * t >=
-                                           0.5 * sun_grid->spacing_m(levels.sun);
+            levels.near = footprint && width_at(t) >= 0.5 * sun_grid->spacing_m(levels.sun);
             const SampleLight::Weights lw = sample_light_.weights(x, levels, phase, cursors);
             light_.sun_irradiance(x, sun.data());
             light_.sky_radiance(x, above.data(), below.data());
@@ -446,8 +447,7 @@ private:
             // How many pieces the base step at t is cut into at a surface (the header's "The
             // surface"): none shorter than half the feature size nor the footprint.
             const auto pieces = [&](double t) {
-                const double fine = std::max(0.5 * density_.feature_size_m(),
-                                             options_.ray_width_m + options_.ray_spread_rad * t);
+                const double fine = std::max(half_feature, width_at(t));
                 return std::clamp(int(std::min(dt / fine, 64.0)), 1, options_.surface_cut);
             };
             bool was_cut = false, in_cloud = false;  // the last step: cut; cut and cloudy
