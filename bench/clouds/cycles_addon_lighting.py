@@ -8,8 +8,8 @@ Welkin's reference path tracer, and the pieces between them, in one Blender proc
         [--lamp ground|cloud|both] [--csv bench/results/cycles_addon_clouds.csv] \
         [--doc docs/validation.md] [--world-at-cloud]
 
---world-at-cloud: Cycles' world is the sky seen from the cloud's altitude, not from the
-ground (bench/cycles_addon_clouds.py, world_seen_from). (Blender 3.4: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
+--world-at-cloud (with --lamp cloud): Cycles' world is the sky seen from the cloud's
+altitude, not from the ground (bench/cycles_addon_clouds.py, world_seen_from). (Blender 3.4: PYTHONPATH=build blender -b --factory-startup --python-use-system-env
 --python bench/clouds/cycles_addon_lighting.py -- --lobes one: its Cycles lights two Volume
 Scatter closures as the sum of their lobes.) The scene and what each renderer gets:
 bench/cycles_addon_clouds.py; the "side" view of tests/blender/test_cycles_clouds_lighting.py
@@ -57,6 +57,10 @@ p.add_argument("--csv", default="")
 p.add_argument("--doc", default="")
 p.add_argument("--world-at-cloud", action="store_true", help="Cycles' world seen from the cloud's altitude")
 args = p.parse_args(argv)
+if args.world_at_cloud and args.lamp != "cloud":
+    # Raising the world's altitude re-syncs a synced lamp there too: a "ground" row would not
+    # be the lamp at the ground (bench/cycles_addon_clouds.py, world_seen_from).
+    p.error("--world-at-cloud needs --lamp cloud")
 
 addon, native = T.install_addon()
 import cycles_addon_clouds as ac  # noqa: E402
