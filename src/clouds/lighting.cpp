@@ -335,7 +335,7 @@ public:
     RayMarcher(const CloudDensity& density, const CloudIllumination& light, const SampleLight& sample_light,
                std::span<const glm::dvec3> origins, std::span<const glm::dvec3> directions,
                std::span<const double> max_distances, const CloudLightingOptions& options,
-               std::uint64_t first_ray_index, CloudResult& result)
+               std::uint64_t first_ray_index, CloudResult& result, double ray_spacing = 1.0)
         : density_(density),
           light_(light),
           origins_(origins),
@@ -343,6 +343,7 @@ public:
           max_distances_(max_distances),
           options_(options),
           first_ray_index_(first_ray_index),
+          ray_spacing_(ray_spacing),
           result_(result),
           sample_light_(sample_light) {}
 
@@ -367,6 +368,43 @@ private:
         SampleLight::RayPhase phase;
     };
 
+    // The footprint along one ray at distance t: the distance to the neighbouring pixels'
+    // rays (the header), and to the neighbouring marched rays, `spacing` pixels apart. The
+    // grids' levels: no finer than the view step nor the marched rays' footprint (the
+    // grids' cells, which those rays share), re-read when the footprint has doubled.
+    class RayLevels {
+    public:
+        RayLevels(const SampleLight& light, const CloudLightingOptions& o, double spacing, double dt)
+            : light_(light), o_(o), spacing_(spacing), dt_(dt), sun_grid_(light.sun_grid()) {
+            footprint_ = sun_grid_ && (o.ray_spread_rad > 0.0 || o.ray_width_m > 0.0);
+            set(0.0);
+        }
+        double pixel_at(double t) const { return o_.ray_width_m + o_.ray_spread_rad * t; }
+        const SampleLight::Levels& at(double t) {
+            if (footprint_ && t >= next_t_) set(t);
+            // The sun grid's near field where the rays are about a cell apart or more;
+            // denser rays share the vertices of their own level already.
+            levels_.near = footprint_ && spacing_ * pixel_at(t) >= 0.5 * sun_grid_->spacing_m(levels_.sun);
+            return levels_;
+        }
+
+    private:
+        void set(double t) {
+            levels_ = light_.levels_for(std::max(dt_, spacing_ * pixel_at(t)));
+            next_t_ =
+                footprint_ && o_.ray_spread_rad > 0.0
+                    ? (sun_grid_->spacing_m(levels_.sun + 1) / spacing_ - o_.ray_width_m) / o_.ray_spread_rad
+                    : std::numeric_limits<double>::infinity();
+        }
+        const SampleLight& light_;
+        const CloudLightingOptions& o_;
+        double spacing_, dt_;
+        const OpticalDepthGrid* sun_grid_;
+        bool footprint_ = false;
+        SampleLight::Levels levels_;
+        double next_t_ = -1.0;  // the footprint's level holds below this t
+    };
+
     // Marches ray r into the result.
     void march_ray(std::size_t r, Scratch& scratch) const {
         const std::size_t nc = light_.channels();
@@ -382,22 +420,7 @@ private:
         if (!(total > 0.0)) return;
         const double half_feature = 0.5 * density_.feature_size_m();
         const double dt_target = std::max(total / options_.max_steps, half_feature);
-        // The ray's footprint at distance t: the distance to the neighbouring rays (the header).
-        const auto width_at = [&](double t) { return options_.ray_width_m + options_.ray_spread_rad * t; };
-        // The grids' levels at distance t: no finer than the view step nor the ray's
-        // footprint (the header); re-read when the footprint has doubled.
-        const OpticalDepthGrid* sun_grid = sample_light_.sun_grid();
-        const bool footprint = sun_grid && (options_.ray_spread_rad > 0.0 || options_.ray_width_m > 0.0);
-        SampleLight::Levels levels;
-        double next_level_t = -1.0;  // the footprint's level holds below this t
-        const auto set_levels = [&](double t) {
-            levels = sample_light_.levels_for(std::max(dt_target, width_at(t)));
-            next_level_t =
-                footprint && options_.ray_spread_rad > 0.0
-                    ? (sun_grid->spacing_m(levels.sun + 1) - options_.ray_width_m) / options_.ray_spread_rad
-                    : std::numeric_limits<double>::infinity();
-        };
-        set_levels(0.0);
+        RayLevels levels(sample_light_, options_, ray_spacing_, dt_target);
         PathRng rng(options_.seed, first_ray_index_ + r, 0, 0x636c6f7564ULL);
         const double u = options_.jitter ? rng.uniform() : 0.5;
         sample_light_.ray_phase(d, phase);
@@ -408,11 +431,7 @@ private:
         bool alive = true;  // false once T < min_transmittance: the ray stops
         // The sample at t (density sigma_t at x) of a step h long.
         const auto integrate = [&](double t, double h, double sigma_t, const glm::dvec3& x) {
-            if (footprint && t >= next_level_t) set_levels(t);
-            // The sun grid's near field where the rays are about a cell apart or more;
-            // denser rays share the vertices of their own level already.
-            levels.near = footprint && width_at(t) >= 0.5 * sun_grid->spacing_m(levels.sun);
-            const SampleLight::Weights lw = sample_light_.weights(x, levels, phase, cursors);
+            const SampleLight::Weights lw = sample_light_.weights(x, levels.at(t), phase, cursors);
             light_.sun_irradiance(x, sun.data());
             light_.sky_radiance(x, above.data(), below.data());
             // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
@@ -445,9 +464,9 @@ private:
             const int steps = std::max(1, int(std::ceil((g.t1 - g.t0) / dt_target - 1e-9)));
             const double dt = (g.t1 - g.t0) / steps;
             // How many pieces the base step at t is cut into at a surface (the header's "The
-            // surface"): none shorter than half the feature size nor the footprint.
+            // surface"): none shorter than half the feature size nor the pixel's footprint.
             const auto pieces = [&](double t) {
-                const double fine = std::max(half_feature, width_at(t));
+                const double fine = std::max(half_feature, levels.pixel_at(t));
                 return std::clamp(int(std::min(dt / fine, 64.0)), 1, options_.surface_cut);
             };
             bool was_cut = false, in_cloud = false;  // the last step: cut; cut and cloudy
@@ -495,6 +514,7 @@ private:
     std::span<const double> max_distances_;
     const CloudLightingOptions& options_;
     std::uint64_t first_ray_index_;
+    double ray_spacing_;  // pixels between neighbouring marched rays: the footprint's factor
     CloudResult& result_;
     const SampleLight& sample_light_;
     tbb::enumerable_thread_specific<Scratch> scratches_;
@@ -693,9 +713,13 @@ CloudResult march(const CloudLighting::Impl& lighting, std::span<const glm::dvec
     result.radiance.assign(n * nc, 0.0f);
     result.transmittance.assign(n, 1.0f);
     result.depth_m.assign(n, 0.0f);
+    // Refined, the marched rays are at least `finest` pixels apart (the header's
+    // CloudUpsampling): the footprint a marched ray stands for.
+    const bool refined = grid_width > 0 && up.stride > 1;
     RayMarcher marcher(lighting.density, lighting.light, lighting.sample_light, origins, directions,
-                       max_distances, lighting.options, first_ray_index, result);
-    if (grid_width <= 0 || up.stride <= 1) {
+                       max_distances, lighting.options, first_ray_index, result,
+                       refined ? double(up.finest) : 1.0);
+    if (!refined) {
         ProgressTracker tracker(progress, n);
         marcher.march_rays(nullptr, tracker);
         tracker.finish();

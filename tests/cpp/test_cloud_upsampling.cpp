@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The upsampled cloud pass (render_clouds_grid, CloudUpsampling in lighting.hpp): the rays
-// it marches are the plain march's rays bit for bit; every other ray is the bilinear
+// it marches are the plain march's rays bit for bit (with the footprint `finest` pixels
+// wide where one is set); every other ray is the bilinear
 // combination of the four marched corners of the one block that owns it; zero tolerances
 // with a finest block of one pixel march every ray that differs (the plain march); the
 // result does not depend on the thread count; the block-size limit splits blocks that
@@ -131,6 +132,38 @@ TEST(CloudUpsampling, MarchedRaysAreThePlainMarchAndTheRestTheirBlocksCorners) {
     for (std::size_t p = 0; p < dirs.size(); ++p) EXPECT_EQ(visits[p], g.marched[p] ? 0 : 1) << p;
     // A block is left unsplit only at the finest size or where its corners agree.
     for (const auto& b : g.blocks) EXPECT_TRUE(b.x1 > b.x0 || b.y1 > b.y0);
+}
+
+// With the rays' footprint set (an image's pixel angle), a refined grid marches each ray as
+// the plain march does with a footprint `finest` pixels wide: its marched rays are at least
+// that far apart, so the optical-depth grids are read at their spacing, not a pixel's
+// (lighting.hpp, CloudUpsampling). Bit for bit with the plain march at finest x the angle;
+// at one pixel's angle some of them differ (the grids' levels move).
+TEST(CloudUpsampling, MarchedRaysStandForTheirSpacing) {
+    const int W = 160, H = 64;
+    CloudLayerParams p = CloudLayerParams::preset(CloudType::altocumulus);
+    const ProceduralClouds layer(p);
+    const auto dirs = sky_grid(W, H);
+    CloudLightingOptions pixel = quick();
+    pixel.ray_spread_rad = 2.0 * std::numbers::pi / W;
+    for (const int finest : {2, 4}) {
+        const CloudResult grid =
+            render_clouds_grid(layer, light(), kEye, dirs, W, pixel, settings(8, finest, 0.1, 0.3, 500.0));
+        CloudLightingOptions spaced = pixel;
+        spaced.ray_spread_rad = finest * pixel.ray_spread_rad;
+        const CloudResult plain = render_clouds(layer, light(), kEye, dirs, spaced);
+        const CloudResult one_pixel = render_clouds(layer, light(), kEye, dirs, pixel);
+        std::size_t cloudy = 0, moved = 0;
+        for (std::size_t q = 0; q < dirs.size(); ++q) {
+            if (!grid.interpolation.marched[q]) continue;
+            ASSERT_EQ(grid.transmittance[q], plain.transmittance[q]) << q;
+            for (int c = 0; c < 3; ++c) ASSERT_EQ(grid.radiance[q * 3 + c], plain.radiance[q * 3 + c]) << q;
+            cloudy += plain.transmittance[q] < 0.99f;
+            moved += grid.radiance[q * 3 + 1] != one_pixel.radiance[q * 3 + 1];
+        }
+        EXPECT_GT(cloudy, std::size_t(100)) << finest;
+        EXPECT_GT(moved, cloudy / 2) << finest;
+    }
 }
 
 // Tolerances 0 and a finest block of one pixel split every block whose corners differ in

@@ -16,7 +16,8 @@
 //    before it (empty at its sample) are cut into n equal pieces, and so is every
 //    following step while the cut ones find cloud, and one more past it: n = dt / fine
 //    (rounded down, at most surface_cut, 8 by default), fine the longer of half the feature size
-//    and the ray's footprint w(t) (below), the finest that a pixel can show. Each piece's
+//    and the pixel's footprint w(t) (below; a pixel's even where the marched rays stand for
+//    more, CloudUpsampling), the finest that a pixel can show. Each piece's
 //    sample sits at u of it. The dim tail (next) is not cut. A short path, whose base step
 //    is already that fine, is marched as before.
 //  * Energy-conserving integration (Hillaire 2015, "Physically based and unified
@@ -50,7 +51,8 @@
 //    whose view step is dt reads the level of cell h_0 2^L <= max(dt, h_0), so far
 //    samples of a sky, a kilometre apart, share coarse cells. Each vertex march is shared
 //    by every sample around it. The level is also no finer than the ray's footprint w(t)
-//    (ray_spread_rad, ray_width_m: the distance to the neighbouring rays at the sample):
+//    (ray_spread_rad, ray_width_m: the distance to the neighbouring rays at the sample;
+//    an upsampled grid's marched rays stand for `finest` pixels, CloudUpsampling):
 //    a cell narrower than that is read by one ray only, and its vertices cost more than
 //    the rays' own samples (a layer kilometres away,
 //    a cirrus or altocumulus deck seen from the ground, is where that happens); a pixel
@@ -201,6 +203,8 @@ struct CloudLightingOptions {
     // the header, "Sun light"). Both 0: unknown (the levels by the view step alone). The
     // hosts set it: the sky image (sky_image.hpp) and the camera passes (cloud_passes.hpp)
     // from the angle (angle_between_rays) and distance between two neighbouring pixels' rays.
+    // An upsampled grid (render_clouds_grid, stride > 1) marches its rays with it `finest`
+    // times as wide (CloudUpsampling).
     double ray_spread_rad = 0.0;  // [0, 1]
     double ray_width_m = 0.0;     // [0, 1e6] m
 
@@ -305,9 +309,15 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 // (CloudGridInterpolation). Refining only the blocks that straddle an edge marches about
 // the edge's length in pixels per level, instead of every pixel of every block it
 // touches; finest 2 leaves the last level (half the rays an edge costs) interpolated, an
-// edge softened over two pixels. A block is also split, however well its corners agree,
-// while it spans more than max_block_size_m at the farthest cloud its corners see (the
-// angle between its corner rays times that depth): near a horizon the clouds are tens of
+// edge softened over two pixels. The marched rays are then at least `finest` pixels apart,
+// and each is marched with a footprint that wide (ray_spread_rad and ray_width_m times
+// finest): its optical-depth grids are read at the marched rays' spacing, whose vertices
+// the neighbouring marched rays share, and not a pixel's, which no other marched ray would
+// read (docs/validation.md, "The marched rays' footprint"). A silhouette's rays, all
+// marched at the finest size (below), are marched so too. A block is also split, however
+// well its corners agree, while it spans more than max_block_size_m at the farthest cloud
+// its corners see (the angle between its corner rays times that depth): near a horizon
+// the clouds are tens of
 // kilometres away and their shapes smaller than a block, whose corners can agree by
 // chance. Deterministic: a ray's value is its own march or a fixed combination of marched
 // rays, whatever the thread count.
