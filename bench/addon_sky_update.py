@@ -3,7 +3,7 @@
 beside the time the same Blender spends preparing its own sky for a render, in one run.
 
     blender -b --factory-startup --python-use-system-env --python bench/addon_sky_update.py \
-        [-- --repeats 7 --width 2048 [--clouds] [--sky auto] [--docs]]
+        [-- --repeats 7 --width 2048 [--clouds [--cloud-type altocumulus]] [--sky auto] [--docs]]
 
 or, for PyPI's bpy of another Blender (the add-on installed from its Extension; scripts/
 test_blender.sh builds it, WELKIN_EXTENSION_ZIP names it):
@@ -53,6 +53,10 @@ parser.add_argument("--repeats", type=int, default=7)
 parser.add_argument("--width", type=int, default=2048)
 parser.add_argument("--clouds", action="store_true", help="one cloud layer at the panel's defaults")
 parser.add_argument(
+    "--cloud-type",
+    help="with --clouds: the layer's type (its preset, as the panel's Type sets it); default cumulus",
+)
+parser.add_argument(
     "--sky",
     default="auto",
     help="Blender's sky model (ShaderNodeTexSky.sky_type)"
@@ -82,6 +86,8 @@ T.panoramic_camera(scene, 8, 4, samples=1)
 if args.clouds:
     layer = scene.world.welkin_clouds.layers.add()
     layer.name = "Bench Layer"
+    if args.cloud_type:
+        layer.cloud_type = args.cloud_type
 bpy.ops.welkin.update_sky()  # the first update creates images and nodes
 elevations = [10.0 + 40.0 * k / max(1, args.repeats - 1) for k in range(args.repeats)]
 
@@ -132,7 +138,7 @@ c = med(constant)
 rows = [
     (
         f"welkin: lamp rotation -> new world image {args.width}x{args.width // 2} ({method}"
-        f"{', one cloud layer' if args.clouds else ''})",
+        f"{(', one ' + (args.cloud_type or 'cumulus') + ' layer') if args.clouds else ''})",
         med(total),
     ),
     ("  of which the module (sky + sun and disc model)", med(module_share)),
