@@ -46,19 +46,26 @@ std::shared_ptr<const CloudNoiseTextures> shared_noise(std::uint64_t seed) {
     return p;
 }
 
-// The segment [t0, t1] of the ray inside the sphere of radius r about c: roots of
-// t^2 + 2 b t + q = 0, b = d . (o - c), q = |o - c|^2 - r^2 = (|o - c| - r)(|o - c| + r)
-// (factored so that a point near the sphere keeps its digits). False if it misses.
-bool sphere_interval(const CloudRay& ray, const glm::dvec3& c, double r, double& t0, double& t1) {
-    const glm::dvec3 oc = ray.origin - c;
-    const double l = glm::length(oc);
-    const double b = glm::dot(ray.direction, oc);
-    const double q = (l - r) * (l + r);
-    const double disc = b * b - q;
+// The ray's distance l from the centre and b = d . (o - c), shared by concentric spheres.
+struct CentreOffset {
+    double l, b;
+    CentreOffset(const CloudRay& ray, const glm::dvec3& c) {
+        const glm::dvec3 oc = ray.origin - c;
+        l = glm::length(oc);
+        b = glm::dot(ray.direction, oc);
+    }
+};
+
+// The segment [t0, t1] of the ray (o: its offset from the centre c) inside the sphere of radius r about c:
+// roots of t^2 + 2 b t + q = 0, b = d . (o - c), q = |o - c|^2 - r^2 = (|o - c| - r)(|o - c| + r) (factored
+// so that a point near the sphere keeps its digits). False if it misses.
+bool sphere_interval(const CentreOffset& o, double r, double& t0, double& t1) {
+    const double q = (o.l - r) * (o.l + r);
+    const double disc = o.b * o.b - q;
     if (disc < 0.0) return false;
     const double s = std::sqrt(disc);
     // Numerically stable pair: the root of larger magnitude first, the other from q.
-    const double big = b > 0.0 ? -b - s : -b + s;
+    const double big = o.b > 0.0 ? -o.b - s : -o.b + s;
     const double other = big != 0.0 ? q / big : 0.0;
     t0 = std::min(big, other);
     t1 = std::max(big, other);
@@ -361,6 +368,8 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     inv_weather_ = 1.0 / p_.weather_scale_m;
     inv_base_ = 1.0 / p_.base_scale_m;
     inv_detail_ = 1.0 / p_.detail_scale_m;
+    inv_thickness_ = 1.0 / (p_.top_altitude_m - p_.bottom_altitude_m);
+    sqrt_stretch_ = std::sqrt(shape_of(p_.cloud_type).stretch);
     slice_ =
         bake_slice(base_, n, p_.evolution_m * inv_base_, shape_of(p_.cloud_type).cells > 0.0, peak_mean_);
 
@@ -531,8 +540,7 @@ double ProceduralClouds::sigma_t(const glm::dvec3& p) const {
 
 // The normalised density (header) at p, altitude h, internal coverage k.
 double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool skip) const {
-    const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
-    const double f = (h - p_.bottom_altitude_m) / thickness;
+    const double f = (h - p_.bottom_altitude_m) * inv_thickness_;
     if (!(f > 0.0 && f < 1.0)) return 0.0;
     if (skip && !(f > band_lo_ && f < band_hi_)) return 0.0;  // clear air by construction
     const TypeShape& shape = shape_of(p_.cloud_type);
@@ -554,7 +562,7 @@ double ProceduralClouds::density(const glm::dvec3& p, double h, double k, bool s
     // The base shape: domain-warped (half a tile at most), rotated and stretched.
     const double warp = 1.2 * p_.base_scale_m;
     const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
-    const double sq = std::sqrt(shape.stretch);
+    const double sq = sqrt_stretch_;
     const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
     const double zb = (h - p_.bottom_altitude_m + p_.evolution_m) * inv_base_;
     float b[2];  // the Perlin-Worley channel and fbm_w = 0.625 g + 0.25 b + 0.125 a
@@ -610,7 +618,7 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     // A gentle domain warp (its slope below one: a stronger one shreds the cells into swirls).
     const double warp = 0.3 * p_.base_scale_m;
     const double xw = x + warp * (w[2] - 0.5), yw = y + warp * (w[3] - 0.5);
-    const double sq = std::sqrt(shape.stretch);
+    const double sq = sqrt_stretch_;
     const double along = kStreakCos * xw + kStreakSin * yw, across = -kStreakSin * xw + kStreakCos * yw;
     double m_peak = 0.0;
     const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c, &m_peak);
@@ -716,7 +724,7 @@ double ProceduralClouds::cirrus_density(double x, double y, double f, double c, 
     const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
     const double along = kStreakCos * xw + kStreakSin * yw - thickness * shape.shear * s,
                  across = -kStreakSin * xw + kStreakCos * yw - thickness * hook * s * s;
-    const double sq = std::sqrt(shape.stretch);
+    const double sq = sqrt_stretch_;
     const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c);
     if (m <= 0.0) return 0.0;
     // The head's trapezoid, and the fallstreak down to s = fall m, thinning downwards.
@@ -761,17 +769,17 @@ void ProceduralClouds::segments(const CloudRay& ray, double t_max, std::vector<M
 void ProceduralClouds::shell(const CloudRay& ray, double t_max, std::vector<MajorantSegment>& out) const {
     out.clear();
     const double majorant = p_.density_per_m;
+    const CentreOffset o(ray, centre_);
     double g0, g1;
-    if (sphere_interval(ray, centre_, p_.planet_radius_m, g0, g1) && g1 > 0.0)
+    if (sphere_interval(o, p_.planet_radius_m, g0, g1) && g1 > 0.0)
         t_max = std::min(t_max, std::max(g0, 0.0));
     double a0, a1;
-    if (!sphere_interval(ray, centre_, p_.planet_radius_m + p_.top_altitude_m, a0, a1)) return;
+    if (!sphere_interval(o, p_.planet_radius_m + p_.top_altitude_m, a0, a1)) return;
     a0 = std::max(a0, 0.0);
     a1 = std::min(a1, t_max);
     if (!(a1 > a0)) return;
     double b0, b1;
-    if (!sphere_interval(ray, centre_, p_.planet_radius_m + p_.bottom_altitude_m, b0, b1) || b1 <= a0 ||
-        b0 >= a1) {
+    if (!sphere_interval(o, p_.planet_radius_m + p_.bottom_altitude_m, b0, b1) || b1 <= a0 || b0 >= a1) {
         out.push_back({a0, a1, majorant});
         return;
     }

@@ -159,11 +159,14 @@ inline void hex_taps(double u, double v, double cell, std::uint64_t seed, HexTap
         w[k] = w[k] * w[k] * w[k];  // kHexSharpness
         sum += w[k];
     }
+    // One division per normalisation: the weights over their sum, less the cut-off, over
+    // what is kept (k); the contrast 1 / sqrt(sum (w_k / k)^2) = k / sqrt(sum w_k^2).
+    const double inv_sum = 1.0 / sum;
     taps.count = 0;
-    double kept = 0.0;
+    double kept = 0.0, sq = 0.0;
     for (int k = 0; k < 3; ++k) {
-        w[k] = w[k] / sum - HexTaps::kHexCutoff;  // the largest is at least 1/3: one is kept
-        if (w[k] <= 0.0) continue;
+        const double wk = w[k] * inv_sum - HexTaps::kHexCutoff;  // the largest is at least 1/3: one is kept
+        if (wk <= 0.0) continue;
         // splitmix64's finaliser (base/rng.hpp's splitmix64_mix) of the vertex and the seed.
         std::uint64_t h = seed + 0x9e3779b97f4a7c15ULL * std::uint64_t(vi[k]) +
                           0xc2b2ae3d27d4eb4fULL * std::uint64_t(vj[k]);
@@ -172,16 +175,14 @@ inline void hex_taps(double u, double v, double cell, std::uint64_t seed, HexTap
         h ^= h >> 31;
         taps.du[taps.count] = double(h >> 40) / double(1 << 24);
         taps.dv[taps.count] = double((h >> 16) & 0xffffff) / double(1 << 24);
-        taps.weight[taps.count] = w[k];
-        kept += w[k];
+        taps.weight[taps.count] = wk;
+        kept += wk;
+        sq += wk * wk;
         ++taps.count;
     }
-    double sq = 0.0;
-    for (int k = 0; k < taps.count; ++k) {
-        taps.weight[k] /= kept;
-        sq += taps.weight[k] * taps.weight[k];
-    }
-    taps.contrast = 1.0 / std::sqrt(sq);
+    const double inv_kept = 1.0 / kept;
+    for (int k = 0; k < taps.count; ++k) taps.weight[k] *= inv_kept;
+    taps.contrast = kept / std::sqrt(sq);
 }
 
 // Schneider's two textures and a weather texture, baked for one seed.
