@@ -75,6 +75,12 @@ sky_type = (
 )
 if sky_type not in sky_types:
     raise SystemExit(f"addon_sky_update: --sky {sky_type!r} is not one of this Blender's {sky_types}")
+if args.cloud_type and not args.clouds:
+    raise SystemExit("addon_sky_update: --cloud-type needs --clouds")
+if args.cloud_type and args.cloud_type not in welkin.CLOUD_TYPES:
+    raise SystemExit(
+        f"addon_sky_update: --cloud-type {args.cloud_type!r} is not one of {', '.join(welkin.CLOUD_TYPES)}"
+    )
 sky_name = {
     "MULTIPLE_SCATTERING": "Multiple Scattering",
     "NISHITA": "Nishita",
