@@ -11,7 +11,7 @@ texture and the synced lamp). What each renderer gets:
 
 * Cycles: the volume with Welkin's phase (`lobes`, albedo 1, sigma_t = density_scale x the
   grid's value per metre), film_transparent (RGB = the cloud's premultiplied radiance, no
-  world behind), a 0.01 px box filter, `bounces` volume bounces, no clamping or denoising;
+  world behind), a 0.01 px Gaussian pixel filter, `bounces` volume bounces, no clamping or denoising;
   the world texture lights it, and the lamp. The add-on syncs the lamp to the sun at the
   camera's height; lamp="cloud" sets it to the sun's irradiance at the cloud's altitude
   (welkin.sun, the atmosphere's transmittance from there), the light Welkin gives the
@@ -111,7 +111,9 @@ def build(
     c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
     c.light_sampling_threshold = 0.0
     c.volume_max_steps = 4096
-    c.pixel_filter_type = "BOX"
+    # The pixel centre's ray: a Gaussian 0.01 px wide (Cycles' box filter is one pixel wide
+    # whatever filter_width says: docs/validation.md, "Cycles' pixel filter").
+    c.pixel_filter_type = "GAUSSIAN"
     c.filter_width = 0.01
     return scene, sun, ob
 

@@ -48,7 +48,7 @@ def build_scene():
     scene.cycles.device = "CPU"
     scene.cycles.samples = 4
     scene.cycles.use_denoising = False
-    scene.cycles.pixel_filter_type = "BOX"
+    scene.cycles.pixel_filter_type = "GAUSSIAN"  # a box is one pixel wide whatever its width
     scene.cycles.filter_width = 0.01  # point samples at the pixel centres
     scene.render.film_transparent = False
     scene.view_layers[0].use_pass_z = True
