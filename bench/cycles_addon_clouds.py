@@ -91,30 +91,9 @@ def build(
     cam.data.clip_start, cam.data.clip_end = 0.1, 1e6
     cv.look_at(cam, at)
     bpy.context.view_layer.update()
-    r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x, r.resolution_y, r.resolution_percentage = size[0], size[1], 100
-    r.film_transparent = True
-    r.filter_size = 0.01
-    r.image_settings.file_format = "OPEN_EXR"
-    r.image_settings.color_mode = "RGBA"
-    r.image_settings.color_depth = "32"
-    scene.view_settings.view_transform = "Standard"
-    c = scene.cycles
-    c.device = "CPU"
-    c.samples = samples
-    c.seed = seed
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.max_bounces = c.volume_bounces = c.transparent_max_bounces = bounces
-    c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = 0
-    c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
-    c.light_sampling_threshold = 0.0
-    c.volume_max_steps = 4096
-    # The pixel centre's ray: a Gaussian 0.01 px wide (Cycles' box filter is one pixel wide
-    # whatever filter_width says: docs/validation.md, "Cycles' pixel filter").
-    c.pixel_filter_type = "GAUSSIAN"
-    c.filter_width = 0.01
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    cv.exact_cycles(scene, samples=samples, seed=seed, bounces=bounces)
     return scene, sun, ob
 
 

@@ -161,19 +161,32 @@ def build_scene(
     scene.world = world
 
     r = scene.render
-    r.engine = "CYCLES"
     r.resolution_x, r.resolution_y, r.resolution_percentage = width, height, 100
-    r.film_transparent = True
-    r.filter_size = 0.01
     r.threads_mode = "FIXED"
     r.threads = os.cpu_count() or 2
     r.use_persistent_data = False
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    exact_cycles(scene, samples=samples, seed=seed, bounces=bounces)
+    c = scene.cycles
+    c.volume_step_rate = float(step_rate)
+    c.use_auto_tile = False
+    return scene
+
+
+def exact_cycles(scene, *, samples, seed, bounces):
+    """The Cycles settings of the cloud comparisons: the CPU, `samples` per pixel at `seed`
+    (no adaptive sampling, denoising or clamping), `bounces` volume bounces and no others,
+    film_transparent (RGB the cloud's premultiplied radiance, A = 1 - T), each pixel its
+    centre's ray, a linear 32-bit RGBA EXR."""
+    r = scene.render
+    r.engine = "CYCLES"
+    r.film_transparent = True
+    r.filter_size = 0.01
     r.image_settings.file_format = "OPEN_EXR"
     r.image_settings.color_mode = "RGBA"
     r.image_settings.color_depth = "32"
     scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
     c = scene.cycles
     c.device = "CPU"
     c.samples = int(samples)
@@ -184,14 +197,11 @@ def build_scene(
     c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = 0
     c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
     c.light_sampling_threshold = 0.0
-    c.volume_step_rate = float(step_rate)
     c.volume_max_steps = 4096
     # The pixel centre's ray: a Gaussian 0.01 px wide (Cycles' box filter is one pixel wide
     # whatever filter_width says: docs/validation.md, "Cycles' pixel filter").
     c.pixel_filter_type = "GAUSSIAN"
     c.filter_width = 0.01
-    c.use_auto_tile = False
-    return scene
 
 
 def _cloud_material(density_scale, lobes):

@@ -160,7 +160,7 @@ inline void hex_taps(double u, double v, double cell, std::uint64_t seed, HexTap
         sum += w[k];
     }
     // One division per normalisation: the weights over their sum, less the cut-off, over
-    // what is kept (k); the contrast 1 / sqrt(sum (w_k / k)^2) = k / sqrt(sum w_k^2).
+    // their sum K once cut; the contrast 1 / sqrt(sum (w_i / K)^2) = K / sqrt(sum w_i^2).
     const double inv_sum = 1.0 / sum;
     taps.count = 0;
     double kept = 0.0, sq = 0.0;
