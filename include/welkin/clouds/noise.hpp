@@ -28,6 +28,8 @@
 
 #include <glm/vec4.hpp>
 
+#include "welkin/base/math.hpp"
+
 namespace welkin {
 
 // Periodic noise on the unit cube at integer `frequency` (cells per unit), in [0, 1].
@@ -77,9 +79,8 @@ public:
         // a modulo otherwise.
         const auto axis = [](double u, int n, int& i0, int& i1, float& w) {
             const double f = u * double(n) - 0.5;
-            const double b = std::floor(f);
-            w = float(f - b);
-            const std::int64_t i = std::int64_t(b);
+            const std::int64_t i = floor_to_int64(f);
+            w = float(f - double(i));
             if ((n & (n - 1)) == 0) {
                 i0 = int(i & (n - 1));
                 i1 = int((i + 1) & (n - 1));
@@ -140,9 +141,8 @@ inline void hex_taps(double u, double v, double cell, std::uint64_t seed, HexTap
     // Skewed coordinates (a, b) of the point on the lattice basis (cell, 0), (cell/2, cell sqrt(3)/2).
     constexpr double kInvSin60 = 1.1547005383792515;  // 2 / sqrt(3)
     const double b = v / cell * kInvSin60, a = u / cell - 0.5 * b;
-    const double fa = std::floor(a), fb = std::floor(b);
-    const double ta = a - fa, tb = b - fb;
-    const std::int64_t i = std::int64_t(fa), j = std::int64_t(fb);
+    const std::int64_t i = floor_to_int64(a), j = floor_to_int64(b);
+    const double ta = a - double(i), tb = b - double(j);
     std::int64_t vi[3], vj[3];
     double w[3];
     if (ta + tb < 1.0) {  // the lower triangle (i, j), (i + 1, j), (i, j + 1)
