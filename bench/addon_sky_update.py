@@ -3,7 +3,8 @@
 beside the time the same Blender spends preparing its own sky for a render, in one run.
 
     blender -b --factory-startup --python-use-system-env --python bench/addon_sky_update.py \
-        [-- --repeats 7 --width 2048 [--clouds [--cloud-type altocumulus]] [--sky auto] [--docs]]
+        [-- --repeats 7 --width 2048 [--clouds [--cloud-type altocumulus] [--march-afresh]]
+            [--sky auto] [--docs]]
 
 or, for PyPI's bpy of another Blender (the add-on installed from its Extension; scripts/
 test_blender.sh builds it, WELKIN_EXTENSION_ZIP names it):
@@ -19,7 +20,9 @@ per Blender version, replaced when that version runs again).
 
 --clouds adds one cloud layer at the panel's defaults to the world first: the update is then
 the cloudy sky (the core's upsampled cloud pass, docs/validation.md "Speed of a cloudy sky")
-and the lamp's cloud shadow.
+and the lamp's cloud shadow. Each update after the first lights the clouds' view samples
+the last one kept (welkin.scene_sky_image, keep_cloud_samples): --march-afresh times it
+without them, every update marching the clouds again.
 
 The add-on is installed from its package as in the tests (tests/blender/addon_testing.py; a
 temporary scripts directory, the machine's Blender configuration untouched). Measured,
@@ -35,6 +38,7 @@ medians of --repeats, each with a new sun elevation:
 """
 
 import argparse
+import functools
 import math
 import os
 import statistics
@@ -62,10 +66,18 @@ parser.add_argument(
     help="Blender's sky model (ShaderNodeTexSky.sky_type)"
     "; auto: MULTIPLE_SCATTERING where it exists (5.0+), else NISHITA",
 )
+parser.add_argument(
+    "--march-afresh",
+    action="store_true",
+    help="each update marches the clouds again (welkin.scene_sky_image's keep_cloud_samples=False):"
+    " the update without the samples kept from the last one",
+)
 parser.add_argument("--docs", action="store_true", help="put the row into docs/validation.md")
 args = parser.parse_args(argv)
 
 addon, welkin = T.install_addon()
+if args.march_afresh:
+    welkin.scene_sky_image = functools.partial(welkin.scene_sky_image, keep_cloud_samples=False)
 from welkin.blender import compat  # noqa: E402
 from welkin.blender.sky import update  # noqa: E402
 
@@ -75,8 +87,9 @@ sky_type = (
 )
 if sky_type not in sky_types:
     raise SystemExit(f"addon_sky_update: --sky {sky_type!r} is not one of this Blender's {sky_types}")
-if args.cloud_type and not args.clouds:
-    raise SystemExit("addon_sky_update: --cloud-type needs --clouds")
+for flag, given in (("--cloud-type", args.cloud_type), ("--march-afresh", args.march_afresh)):
+    if given and not args.clouds:
+        raise SystemExit(f"addon_sky_update: {flag} needs --clouds")
 if args.cloud_type and args.cloud_type not in welkin.CLOUD_TYPES:
     raise SystemExit(
         f"addon_sky_update: --cloud-type {args.cloud_type!r} is not one of {', '.join(welkin.CLOUD_TYPES)}"
@@ -144,7 +157,8 @@ c = med(constant)
 rows = [
     (
         f"welkin: lamp rotation -> new world image {args.width}x{args.width // 2} ({method}"
-        f"{(', one ' + (args.cloud_type or 'cumulus') + ' layer') if args.clouds else ''})",
+        f"{(', one ' + (args.cloud_type or 'cumulus') + ' layer') if args.clouds else ''}"
+        f"{', marched afresh' if args.march_afresh else ''})",
         med(total),
     ),
     ("  of which the module (sky + sun and disc model)", med(module_share)),

@@ -135,6 +135,28 @@ void add_options(CLI::App& app, Args& a) {
 // Each type at its preset, as `welkin sky --scene` renders it: the layer's build (the
 // coverage calibration; the noise bake, shared by every type of a seed, is timed once
 // before) and the 2048 x 1024 sky with the default upsampling.
+// The sky of `o` rendered once with the sun of obs, then again (median of repeats) with the
+// sun turned 10 degrees in azimuth more each time, the clouds' view samples kept
+// (CloudViewCache): the seconds of one again, and the cache's bytes.
+std::array<double, 2> relight_s(const Args& a, const Atmosphere& atm, const Observer& obs,
+                                SkyImageOptions o) {
+    const auto lut = make_sky_method("lut");
+    auto cache = std::make_shared<CloudViewCache>();
+    cache->keep("bench");
+    o.cloud_lighting.view_cache = cache;
+    render_equirect_sky(*lut, atm, obs, a.width, o);
+    Observer turned = obs;
+    const glm::dvec3 s = obs.sun_direction;
+    double azimuth = std::atan2(s.y, s.x);
+    const double t = median_s(a.repeats, [&] {
+        azimuth += 10.0 * kDegree;
+        const double h = std::hypot(s.x, s.y);
+        turned.sun_direction = {h * std::cos(azimuth), h * std::sin(azimuth), s.z};
+        render_equirect_sky(*lut, atm, turned, a.width, o);
+    });
+    return {t, double(cache->bytes())};
+}
+
 void bench_types(const Args& a, const Atmosphere& atm, const Observer& obs, std::vector<std::string>& rows) {
     CloudLayerParams clear_layer;  // coverage 0: the noise bake without a calibration
     clear_layer.coverage = 0.0;
@@ -146,6 +168,7 @@ void bench_types(const Args& a, const Atmosphere& atm, const Observer& obs, std:
     fmt::print("| (noise bake, once per seed) | {:.2f} s | | |\n", t_noise);
     const auto type_lut = make_sky_method("lut");
     std::vector<std::array<double, 3>> totals;  // per type: wall, CPU / 2 (two idle cores), type index
+    std::vector<std::array<double, 2>> relit;   // per type: the sky lit again, the cache's bytes
     for (std::size_t t = 0; t < kCloudTypeNames.size(); ++t) {
         if (!a.only_type.empty() && a.only_type != kCloudTypeNames[t]) continue;
         CloudLayerParams p = CloudLayerParams::preset(static_cast<CloudType>(t));
@@ -168,8 +191,15 @@ void bench_types(const Args& a, const Atmosphere& atm, const Observer& obs, std:
                    t_build + t_sky, cpu);
         rows.push_back(fmt::format("type_sky,{},{}x{},{:.4f},,,,,,,", kCloudTypeNames[t], a.width,
                                    a.width / 2, t_build + t_sky));
+        relit.push_back(relight_s(a, atm, obs, o));
         std::fflush(stdout);
     }
+    // The same skies lit again (CloudViewCache): the sun turned, the clouds' view samples
+    // kept from the render before (the add-on's live update after a lamp rotation).
+    fmt::print("\n| type | sky again, the sun turned (samples kept) | kept samples |\n|---|---|---|\n");
+    for (std::size_t k = 0; k < totals.size(); ++k)
+        fmt::print("| {} | {:.2f} s | {:.0f} MB |\n", kCloudTypeNames[std::size_t(totals[k][2])], relit[k][0],
+                   relit[k][1] / (1 << 20));
     // The types side by side against the target: a cloudy world in kTypeTargetS, the
     // layer's build included. The wall time on a shared machine is inflated by the other
     // load; the sky's CPU time over the threads (a perfect parallel efficiency) is what

@@ -3,15 +3,19 @@
 #include "welkin/clouds/lighting.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/concurrent_unordered_map.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -366,6 +370,7 @@ private:
         std::vector<double> acc;
         SampleLight::Cursors cursors;
         SampleLight::RayPhase phase;
+        std::vector<CloudViewCache::Sample> stored;  // the ray's samples, for the view cache
     };
 
     // The footprint along one ray at distance t: the distance to the neighbouring pixels'
@@ -408,22 +413,31 @@ private:
     // Marches ray r into the result.
     void march_ray(std::size_t r, Scratch& scratch) const {
         const std::size_t nc = light_.channels();
-        auto& [segs, sun, above, below, acc, cursors, phase] = scratch;
+        auto& [segs, sun, above, below, acc, cursors, phase, stored] = scratch;
         sun.resize(nc), above.resize(nc), below.resize(nc), acc.resize(nc);
         const glm::dvec3 d = glm::normalize(directions_[r]);
         const CloudRay ray{origins_[origins_.size() == 1 ? 0 : r], d};
-        const double t_end = max_distances_.empty() ? options_.max_distance_m
-                                                    : std::min(max_distances_[r], options_.max_distance_m);
-        density_.segments(ray, t_end, segs);
+        // The ray's samples from the view cache, or the segments its march steps through.
+        CloudViewCache* const cache = options_.view_cache.get();
+        const std::uint64_t key = first_ray_index_ + r;
+        const CloudViewCache::Ray* const kept = cache ? cache->find(key) : nullptr;
         double total = 0.0;
-        for (const auto& g : segs) total += g.t1 - g.t0;
-        if (!(total > 0.0)) return;
+        if (!kept) {
+            const double t_end = max_distances_.empty()
+                                     ? options_.max_distance_m
+                                     : std::min(max_distances_[r], options_.max_distance_m);
+            density_.segments(ray, t_end, segs);
+            for (const auto& g : segs) total += g.t1 - g.t0;
+        }
+        if (kept ? kept->samples.empty() : !(total > 0.0)) {
+            if (cache && !kept) cache->store(key, {});
+            return;
+        }
         const double half_feature = 0.5 * density_.feature_size_m();
-        const double dt_target = std::max(total / options_.max_steps, half_feature);
+        const double dt_target = kept ? kept->dt_target : std::max(total / options_.max_steps, half_feature);
         RayLevels levels(sample_light_, options_, ray_spacing_, dt_target);
-        PathRng rng(options_.seed, first_ray_index_ + r, 0, 0x636c6f7564ULL);
-        const double u = options_.jitter ? rng.uniform() : 0.5;
         sample_light_.ray_phase(d, phase);
+        stored.clear();
 
         std::fill(acc.begin(), acc.end(), 0.0);
         double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
@@ -431,6 +445,7 @@ private:
         bool alive = true;  // false once T < min_transmittance: the ray stops
         // The sample at t (density sigma_t at x) of a step h long.
         const auto integrate = [&](double t, double h, double sigma_t, const glm::dvec3& x) {
+            if (cache && !kept) stored.push_back({t, h, sigma_t});
             const SampleLight::Weights lw = sample_light_.weights(x, levels.at(t), phase, cursors);
             light_.sun_irradiance(x, sun.data());
             light_.sky_radiance(x, above.data(), below.data());
@@ -444,6 +459,27 @@ private:
             T *= 1.0 - step_opacity;
             alive = T >= options_.min_transmittance;
         };
+        if (kept) {
+            for (const auto& k : kept->samples) integrate(k.t, k.h, k.sigma_t, ray.at(k.t));
+        } else {
+            march_samples(ray, r, segs, dt_target, levels, T, alive, integrate);
+            if (cache) cache->store(key, {dt_target, stored});
+        }
+        for (std::size_t c = 0; c < nc; ++c) result_.radiance[r * nc + c] = float(acc[c]);
+        result_.transmittance[r] = float(T);
+        result_.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
+    }
+
+    // The march's steps along ray r through its segments (the header's "Steps", "The
+    // surface", "The dim tail"): integrate(t, h, sigma_t, x) at each sample that finds
+    // cloud, while `alive` (integrate updates T and alive).
+    template <class Integrate>
+    void march_samples(const CloudRay& ray, std::size_t r, const std::vector<MajorantSegment>& segs,
+                       double dt_target, const RayLevels& levels, const double& T, const bool& alive,
+                       Integrate& integrate) const {
+        PathRng rng(options_.seed, first_ray_index_ + r, 0, 0x636c6f7564ULL);
+        const double u = options_.jitter ? rng.uniform() : 0.5;
+        const double half_feature = 0.5 * density_.feature_size_m();
         // The step [a, a + dt) cut into n, each sample at the same fraction u of its own
         // step; whether any sample was in a cloud.
         const auto cut = [&](double a, double dt, int n) {
@@ -503,9 +539,6 @@ private:
                 was_cut = true;
             }
         }
-        for (std::size_t c = 0; c < nc; ++c) result_.radiance[r * nc + c] = float(acc[c]);
-        result_.transmittance[r] = float(T);
-        result_.depth_m[r] = opacity_sum > 0.0 ? float(depth_sum / opacity_sum) : 0.0f;
     }
 
     const CloudDensity& density_;
@@ -786,6 +819,53 @@ void CloudGridInterpolation::interpolate(std::span<float> values, std::size_t ch
         }
     });
 }
+
+struct CloudViewCache::Impl {
+    std::size_t max_bytes;
+    std::mutex key_mutex;  // keep(): not during a march (the map's clear is not concurrent)
+    std::string key;
+    tbb::concurrent_unordered_map<std::uint64_t, Ray> rays;
+    std::atomic<std::size_t> bytes{0}, reused{0};
+};
+
+CloudViewCache::CloudViewCache(std::size_t max_bytes) : impl_(std::make_unique<Impl>()) {
+    impl_->max_bytes = max_bytes;
+}
+
+CloudViewCache::~CloudViewCache() = default;
+
+bool CloudViewCache::keep(const std::string& key) {
+    std::lock_guard<std::mutex> lock(impl_->key_mutex);
+    impl_->reused = 0;
+    if (key == impl_->key) return true;
+    impl_->rays.clear();
+    impl_->bytes = 0;
+    impl_->key = key;
+    return false;
+}
+
+const CloudViewCache::Ray* CloudViewCache::find(std::uint64_t ray) const {
+    const auto it = impl_->rays.find(ray);
+    if (it == impl_->rays.end()) return nullptr;
+    impl_->reused.fetch_add(1, std::memory_order_relaxed);
+    return &it->second;
+}
+
+void CloudViewCache::store(std::uint64_t ray, Ray&& samples) {
+    // A ray's entry: its samples and about the map's node (key, vector, links).
+    const std::size_t size = samples.samples.size() * sizeof(Sample) + sizeof(Ray) + 64;
+    if (impl_->bytes.fetch_add(size, std::memory_order_relaxed) + size > impl_->max_bytes) {
+        impl_->bytes.fetch_sub(size, std::memory_order_relaxed);
+        return;
+    }
+    samples.samples.shrink_to_fit();
+    if (!impl_->rays.emplace(ray, std::move(samples)).second)
+        impl_->bytes.fetch_sub(size, std::memory_order_relaxed);  // marched twice at once: one kept
+}
+
+std::size_t CloudViewCache::rays() const { return impl_->rays.size(); }
+std::size_t CloudViewCache::bytes() const { return impl_->bytes.load(); }
+std::size_t CloudViewCache::reused() const { return impl_->reused.load(); }
 
 double angle_between_rays(const glm::dvec3& a, const glm::dvec3& b) {
     // 2 asin(|u - v| / 2): accurate for the small angles between neighbouring pixels.

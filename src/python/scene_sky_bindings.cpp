@@ -3,8 +3,13 @@
 // included, as `welkin sky --scene` renders it (sky_image.hpp): the scene's atmosphere, sun,
 // observer at the scene origin, sky method and options, exposure, and its clouds (layers and
 // VDB volumes, lit with clouds.lighting). Thin: converts, releases the GIL, calls the core.
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <memory>
+#include <mutex>
 #include <optional>
+#include <string>
 #include <utility>
 
 #include "bindings.hpp"
@@ -12,6 +17,7 @@
 #include <pybind11/stl.h>
 
 #include "welkin/base/error.hpp"
+#include "welkin/clouds/lighting.hpp"
 #include "welkin/night/moonlit_sky.hpp"
 #include "welkin/night/night_glow.hpp"
 #include "welkin/night/stars.hpp"
@@ -51,7 +57,12 @@ dimmed by the air and by the clouds' transmittance; night_glow=True adds the nig
 sky's own glow (welkin.night_glow_image), dimmed the same way. time, latitude_deg,
 longitude_deg, height_m, north_deg: the moment and place that put the ecliptic (and
 so the zodiacal light) in the scene's frame, as night_glow_image's; time=None: the
-zodiacal light at its darkest everywhere.
+zodiacal light at its darkest everywhere. keep_cloud_samples: the clouds' view samples
+(where each marched ray meets cloud) are kept for the next call, and a call whose scene
+differs only in its sun (and the light: its time, moon, stars) lights them again instead
+of marching the clouds: the same image, bit for bit, in a fraction of the time (a lamp
+rotation, an animated sun). The last two cloudy skies' are kept (each at most 128 MB: a
+preview and its full sky); False: none read or kept.
 )doc";
 
 // The moon of the keyword arguments, or none (no moon_direction).
@@ -74,13 +85,89 @@ std::optional<Moon> moon_from(const py::object& direction, const py::object& sun
     return moon;
 }
 
+// The clouds' view samples of the last cloudy skies (clouds/lighting.hpp, CloudViewCache),
+// one per scene key: the add-on's live update renders a preview and then the full sky after
+// each lamp rotation, and a render of an animated sun the next frame's; each lights its own
+// kept samples instead of marching the clouds again. Two slots (the preview and the sky),
+// each at most kSlotBytes; a call takes its key's slot, else the one used least recently
+// (emptied for it), else (both in use by other calls) runs without one.
+class ViewCacheSlots {
+public:
+    static constexpr std::size_t kSlotBytes = std::size_t(128) << 20;
+
+    // The slot's cache while the guard lives; null: none free.
+    class Taken {
+    public:
+        Taken() = default;
+        Taken(ViewCacheSlots* owner, std::size_t slot) : owner_(owner), slot_(slot) {}
+        Taken(Taken&& o) noexcept : owner_(std::exchange(o.owner_, nullptr)), slot_(o.slot_) {}
+        Taken& operator=(Taken&& o) noexcept {
+            if (this != &o) {
+                release();
+                owner_ = std::exchange(o.owner_, nullptr);
+                slot_ = o.slot_;
+            }
+            return *this;
+        }
+        ~Taken() { release(); }
+        std::shared_ptr<CloudViewCache> cache() const {
+            return owner_ ? owner_->slots_[slot_].cache : nullptr;
+        }
+
+    private:
+        void release() {
+            if (!owner_) return;
+            std::lock_guard<std::mutex> lock(owner_->mutex_);
+            owner_->slots_[slot_].busy = false;
+            owner_ = nullptr;
+        }
+        ViewCacheSlots* owner_ = nullptr;
+        std::size_t slot_ = 0;
+    };
+
+    Taken take(const std::string& key) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        std::size_t pick = slots_.size();
+        for (std::size_t k = 0; k < slots_.size(); ++k)
+            if (!slots_[k].busy && slots_[k].key == key) pick = k;
+        if (pick == slots_.size())
+            for (std::size_t k = 0; k < slots_.size(); ++k)
+                if (!slots_[k].busy && (pick == slots_.size() || slots_[k].used < slots_[pick].used))
+                    pick = k;
+        if (pick == slots_.size()) return {};
+        Slot& s = slots_[pick];
+        if (!s.cache) s.cache = std::make_shared<CloudViewCache>(kSlotBytes);
+        s.cache->keep(key);
+        s.key = key;
+        s.busy = true;
+        s.used = ++clock_;
+        return {this, pick};
+    }
+
+    static ViewCacheSlots& instance() {
+        static auto* slots = new ViewCacheSlots;  // never destroyed: a call may outlive the statics
+        return *slots;
+    }
+
+private:
+    struct Slot {
+        std::string key;
+        std::shared_ptr<CloudViewCache> cache;
+        std::uint64_t used = 0;
+        bool busy = false;
+    };
+    std::mutex mutex_;
+    std::array<Slot, 2> slots_;
+    std::uint64_t clock_ = 0;
+};
+
 py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc, const std::string& output,
                            bool return_transmittance, const py::object& progress, bool ground,
                            const py::object& moon_direction, const py::object& sun_from_moon,
                            double moon_angular_radius_rad, double moon_irradiance_ratio,
                            const std::optional<py::array_t<double>>& stars, bool night_glow,
                            const py::object& time, double latitude_deg, double longitude_deg, double height_m,
-                           double north_deg) {
+                           double north_deg, bool keep_cloud_samples) {
     SceneDescription scene = to_scene(scene_in);
     require_progress_callback(progress);
     const std::optional<Moon> moon =
@@ -97,9 +184,15 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
     SkyImage image;
     run_cancellable(
         [&](Progress* p) {
+            ViewCacheSlots::Taken kept;
             if (scene.has_clouds()) {
                 options.clouds = scene.cloud_density();  // opens the VDB files
                 options.cloud_lighting = scene.clouds->lighting;
+                if (keep_cloud_samples) {
+                    kept =
+                        ViewCacheSlots::instance().take(fmt::format("{}|{}", width, scene.cloud_view_key()));
+                    options.cloud_lighting.view_cache = kept.cache();
+                }
                 options.cloud_upsampling = scene.clouds->upsampling;
                 options.air_steps = scene.aerial.raymarch_steps;
             }
@@ -126,14 +219,14 @@ py::object scene_sky_image(const py::handle& scene_in, int width, bool sun_disc,
 }  // namespace
 
 void register_scene_sky(py::module_& m) {
-    m.def("scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"),
-          py::kw_only(), py::arg("sun_disc") = true, py::arg("output") = "rgb",
-          py::arg("return_transmittance") = false, py::arg("progress") = py::none(), py::arg("ground") = true,
-          py::arg("moon_direction") = py::none(), py::arg("sun_from_moon") = py::none(),
-          py::arg("moon_angular_radius_rad") = Moon{}.angular_radius_rad,
-          py::arg("moon_irradiance_ratio") = 0.0, py::arg("stars") = py::none(),
-          py::arg("night_glow") = false, py::arg("time") = py::none(), py::arg("latitude_deg") = 0.0,
-          py::arg("longitude_deg") = 0.0, py::arg("height_m") = 0.0, py::arg("north_deg") = 0.0);
+    m.def(
+        "scene_sky_image", &scene_sky_image, kSceneSkyDoc, py::arg("scene"), py::arg("width"), py::kw_only(),
+        py::arg("sun_disc") = true, py::arg("output") = "rgb", py::arg("return_transmittance") = false,
+        py::arg("progress") = py::none(), py::arg("ground") = true, py::arg("moon_direction") = py::none(),
+        py::arg("sun_from_moon") = py::none(), py::arg("moon_angular_radius_rad") = Moon{}.angular_radius_rad,
+        py::arg("moon_irradiance_ratio") = 0.0, py::arg("stars") = py::none(), py::arg("night_glow") = false,
+        py::arg("time") = py::none(), py::arg("latitude_deg") = 0.0, py::arg("longitude_deg") = 0.0,
+        py::arg("height_m") = 0.0, py::arg("north_deg") = 0.0, py::arg("keep_cloud_samples") = true);
 }
 
 }  // namespace welkin::python

@@ -888,7 +888,7 @@ def rgb_to_reflectance(rgb: typing.Any, wavelengths_nm: typing.Any, *, color_spa
     for a ground of a chosen colour. Raises ValueError naming ground_color for a
     channel outside [0, 1].
     """
-def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, output: str = 'rgb', return_transmittance: bool = False, progress: typing.Any = None, ground: bool = True, moon_direction: typing.Any = None, sun_from_moon: typing.Any = None, moon_angular_radius_rad: float = 0.0045, moon_irradiance_ratio: float = 0.0, stars: numpy.ndarray[numpy.float64] | None = None, night_glow: bool = False, time: typing.Any = None, latitude_deg: float = 0.0, longitude_deg: float = 0.0, height_m: float = 0.0, north_deg: float = 0.0) -> typing.Any:
+def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, output: str = 'rgb', return_transmittance: bool = False, progress: typing.Any = None, ground: bool = True, moon_direction: typing.Any = None, sun_from_moon: typing.Any = None, moon_angular_radius_rad: float = 0.0045, moon_irradiance_ratio: float = 0.0, stars: numpy.ndarray[numpy.float64] | None = None, night_glow: bool = False, time: typing.Any = None, latitude_deg: float = 0.0, longitude_deg: float = 0.0, height_m: float = 0.0, north_deg: float = 0.0, keep_cloud_samples: bool = True) -> typing.Any:
     """
     The equirectangular sky of a scene, with its clouds (the world texture of a cloudy sky).
     
@@ -918,7 +918,12 @@ def scene_sky_image(scene: typing.Any, width: int, *, sun_disc: bool = True, out
     sky's own glow (welkin.night_glow_image), dimmed the same way. time, latitude_deg,
     longitude_deg, height_m, north_deg: the moment and place that put the ecliptic (and
     so the zodiacal light) in the scene's frame, as night_glow_image's; time=None: the
-    zodiacal light at its darkest everywhere.
+    zodiacal light at its darkest everywhere. keep_cloud_samples: the clouds' view samples
+    (where each marched ray meets cloud) are kept for the next call, and a call whose scene
+    differs only in its sun (and the light: its time, moon, stars) lights them again instead
+    of marching the clouds: the same image, bit for bit, in a fraction of the time (a lamp
+    rotation, an animated sun). The last two cloudy skies' are kept (each at most 128 MB: a
+    preview and its full sky); False: none read or kept.
     """
 def sky_image(atmosphere: Atmosphere, altitude_m: float, sun_direction: typing.Any, width: int, method: str = 'lut', output: str = 'rgb', *, sun_disc: bool = True, exposure: float = 1.0, steps: int = 64, sun_steps: int = 32, paths: int = 4096, seed: int = 1, clouds: CloudDensity = None, progress: typing.Any = None, ground: bool = True, ground_albedo: float | None = None, color_space: str = 'rec709') -> numpy.ndarray[numpy.float32]:
     """

@@ -4,6 +4,8 @@
 #include "welkin/scene/scene.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <string>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -44,6 +46,20 @@ void SceneDescription::validate() const {
 std::shared_ptr<const CloudDensity> SceneDescription::cloud_density() const {
     if (!has_clouds()) return nullptr;
     return make_scene_cloud_density(*clouds, atmosphere.bottom_radius_m, origin_altitude_m);
+}
+
+std::string SceneDescription::cloud_view_key() const {
+    SceneDescription unlit = *this;
+    unlit.sun_direction = SceneDescription{}.sun_direction;
+    std::string key = unlit.to_json_string();
+    if (clouds)
+        for (const auto& v : clouds->volumes) {
+            std::error_code ec;  // a missing file: no stamp (cloud_density() refuses it)
+            const auto size = std::filesystem::file_size(v.file, ec);
+            const auto time = std::filesystem::last_write_time(v.file, ec);
+            key += fmt::format("|{}:{}:{}", v.file, ec ? 0 : size, ec ? 0 : time.time_since_epoch().count());
+        }
+    return key;
 }
 
 const Camera& SceneDescription::require_camera() const {

@@ -148,6 +148,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -164,6 +165,49 @@ struct CloudScattering {
     double albedo = 1.0;  // single-scattering albedo of cloud droplets, [0, 1]
     CloudPhase phase;
     void validate() const;
+};
+
+// The view samples of marched rays, kept so that the same rays through the same clouds can
+// be lit again without marching them. Where a ray's samples fall, and each one's step and
+// extinction, depend on the density, the ray and the march's options alone; the light
+// enters only each sample's source. So a march that finds its ray here (keyed by the ray's
+// index, first_ray_index + r of render_clouds / render_clouds_grid) lights the stored
+// samples, and one that does not marches the ray and stores them. The radiance, the
+// transmittance and the depth are the march's, bit for bit: the same samples in the same
+// order, lit by the same light and depth grids. What it saves is the march through the
+// clouds' empty parts, most of a thin layer's time; the light's depths along the sun are
+// walked as before (docs/validation.md, "Lighting the same rays again").
+// The caller vouches that nothing but the light changed (the sun, the sky, the atmosphere
+// that makes them): keep(key) empties the cache unless the key, the caller's fingerprint of
+// the clouds, the rays and the options, is the one it holds. Marches may find and store at
+// once; keep() runs between marches. Rays past max_bytes are not stored (they are marched
+// every time).
+class CloudViewCache {
+public:
+    struct Sample {
+        double t, h, sigma_t;  // the sample's distance along the ray, its step, its extinction
+    };
+    struct Ray {
+        double dt_target = 0.0;  // the ray's base step (RayLevels' view step)
+        std::vector<Sample> samples;
+    };
+    explicit CloudViewCache(std::size_t max_bytes = std::size_t(256) << 20);
+    ~CloudViewCache();
+    CloudViewCache(const CloudViewCache&) = delete;
+    CloudViewCache& operator=(const CloudViewCache&) = delete;
+
+    // Keeps the stored rays if `key` is the one they were stored under; else empties the
+    // cache for it. Returns whether they were kept.
+    bool keep(const std::string& key);
+    const Ray* find(std::uint64_t ray) const;  // nullptr: not stored
+    void store(std::uint64_t ray, Ray&& samples);
+    std::size_t rays() const;    // stored
+    std::size_t bytes() const;   // their samples' memory
+    std::size_t reused() const;  // rays found since the last keep()
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
 };
 
 // How the march approximates the orders of sun light beyond the first (see above).
@@ -207,6 +251,8 @@ struct CloudLightingOptions {
     // times as wide (CloudUpsampling).
     double ray_spread_rad = 0.0;  // [0, 1]
     double ray_width_m = 0.0;     // [0, 1e6] m
+    // The marched rays' samples, read and stored by the march (above); null: none kept.
+    std::shared_ptr<CloudViewCache> view_cache;
 
     void validate() const;
 };

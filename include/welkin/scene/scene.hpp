@@ -68,6 +68,11 @@ struct SceneDescription {
     bool has_clouds() const { return clouds && !clouds->empty(); }
     // The union of the scene's layers and volumes (opens the VDB files); nullptr without clouds.
     std::shared_ptr<const CloudDensity> cloud_density() const;
+    // A fingerprint of what the clouds' view samples (clouds/lighting.hpp, CloudViewCache)
+    // depend on: the scene but its sun (its JSON with the sun left out), and each VDB file's
+    // size and modification time (a file written again under the same name is another
+    // cloud). Two scenes with the same key march the same samples along the same rays.
+    std::string cloud_view_key() const;
 
     // Relative paths in the JSON (clouds.volumes[i].file) are resolved against
     // `base_directory` (from_json_file: the file's folder; empty: the working directory).
