@@ -368,7 +368,8 @@ ProceduralClouds::ProceduralClouds(const CloudLayerParams& params) : p_(params) 
     inv_weather_ = 1.0 / p_.weather_scale_m;
     inv_base_ = 1.0 / p_.base_scale_m;
     inv_detail_ = 1.0 / p_.detail_scale_m;
-    inv_thickness_ = 1.0 / (p_.top_altitude_m - p_.bottom_altitude_m);
+    thickness_ = p_.top_altitude_m - p_.bottom_altitude_m;
+    inv_thickness_ = 1.0 / thickness_;
     sqrt_stretch_ = std::sqrt(shape_of(p_.cloud_type).stretch);
     slice_ =
         bake_slice(base_, n, p_.evolution_m * inv_base_, shape_of(p_.cloud_type).cells > 0.0, peak_mean_);
@@ -610,7 +611,6 @@ double ProceduralClouds::footprint(double u, double v, double c, double* m_peak)
 double ProceduralClouds::cell_density(double x, double y, double f, double c, const float* w,
                                       bool skip) const {
     const TypeShape& shape = shape_of(p_.cloud_type);
-    const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
     const double tower = clamp01d((w[1] - 0.3) / 0.4);
     const double f_max = 1.0 - shape.towers * (1.0 - tower);
     // Above the highest dome this local top allows: clear air, before the footprint's read.
@@ -647,9 +647,9 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     // rho^2), at most the distance in from the footprint's edge, rho - r; so that the lobes
     // bite the steep sides as deep as the top.
     const double r_rel = std::sqrt(1.0 - u);  // r / rho
-    const double slope = 2.0 * kDomeExponent * height * thickness * r_rel * (u_p / u) / rho;
+    const double slope = 2.0 * kDomeExponent * height * thickness_ * r_rel * (u_p / u) / rho;
     const double inside =
-        std::min((f_top - f) * thickness / std::sqrt(1.0 + slope * slope), rho * (1.0 - r_rel));
+        std::min((f_top - f) * thickness_ / std::sqrt(1.0 + slope * slope), rho * (1.0 - r_rel));
     if (p_.detail_strength <= 0.0) return rise * clamp01d(inside / kEdgeM);
     // The lobes (cauliflower): the three Worley octaves of the detail texture read at half
     // its frequency (cells of detail_scale_m / 2, / 4, / 8), each 1 - W = d^2 (d the distance
@@ -674,7 +674,7 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
     curl_.sample(x * inv_detail_ * 0.25, y * inv_detail_ * 0.25, 0.0, cu);
     const double amp = shape.curl;
     const double ax = kStreakCos * x + kStreakSin * y, ay = -kStreakSin * x + kStreakCos * y;
-    const double h_m = f * thickness + p_.evolution_m;
+    const double h_m = f * thickness_ + p_.evolution_m;
     float d[4];  // fbm, then the Worley octaves at 4, 8, 16 cells per period
     detail_.sample(0.5 * ax * inv_detail_ / sq + amp * cu[0] + 1.5 * w[2],
                    0.5 * ay * inv_detail_ * sq + amp * cu[1] + 1.5 * w[3], 0.5 * h_m * inv_detail_, d);
@@ -684,8 +684,7 @@ double ProceduralClouds::cell_density(double x, double y, double f, double c, co
 
 // The heap's v (cell_density) for a cell of radius rho metres, under local top f_max.
 double ProceduralClouds::heap_v(double rho, double f_max) const {
-    const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
-    return std::min(1.0, rho * shape_of(p_.cloud_type).dome / (f_max * thickness));
+    return std::min(1.0, rho * shape_of(p_.cloud_type).dome / (f_max * thickness_));
 }
 
 // The heap's top for m_peak = 1: its height f_max v (2 - v) rises with v, v with rho, up to
@@ -721,9 +720,8 @@ double ProceduralClouds::cirrus_density(double x, double y, double f, double c, 
     const double s = clamp01d((shape.gradient.a1 - f) / shape.gradient.a1);  // 0 at the heads
     // The hook's strength varies over the weather's scale (half to one and a half times).
     const double hook = shape.hook * (0.5 + wp[1]);
-    const double thickness = p_.top_altitude_m - p_.bottom_altitude_m;
-    const double along = kStreakCos * xw + kStreakSin * yw - thickness * shape.shear * s,
-                 across = -kStreakSin * xw + kStreakCos * yw - thickness * hook * s * s;
+    const double along = kStreakCos * xw + kStreakSin * yw - thickness_ * shape.shear * s,
+                 across = -kStreakSin * xw + kStreakCos * yw - thickness_ * hook * s * s;
     const double sq = sqrt_stretch_;
     const double m = footprint(along * inv_base_ / sq, across * inv_base_ * sq, c);
     if (m <= 0.0) return 0.0;

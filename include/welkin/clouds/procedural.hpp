@@ -231,7 +231,8 @@ private:
     // the cell types, the peak map (per texel, the highest base value of its basin; header).
     PeriodicTexture<3> slice_;
     double inv_weather_ = 0.0, inv_base_ = 0.0, inv_detail_ = 0.0;  // 1 / the tile scales
-    double inv_thickness_ = 0.0;                                    // 1 / the layer's thickness
+    double thickness_ = 0.0;                                        // top - bottom altitude, m
+    double inv_thickness_ = 0.0;                                    // 1 / thickness_
     double sqrt_stretch_ = 1.0;                                     // the square root of the type's stretch
     // The weather map and the base shape read aperiodically (noise.hpp, hex_taps), about the
     // channels' means over their textures; slice_at: the footprints' slice, b = (pw, fbm_w,
