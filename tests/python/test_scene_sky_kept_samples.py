@@ -91,3 +91,22 @@ def test_a_preview_and_its_sky_each_keep_their_own():
         preview = welkin.scene_sky_image(text, WIDTH // 2)
         assert np.array_equal(preview, welkin.scene_sky_image(text, WIDTH // 2, keep_cloud_samples=False))
         assert np.array_equal(sky(text), fresh(text))
+
+
+def test_a_cancelled_sky_leaves_samples_that_still_hold():
+    # A sky cancelled part-way keeps whole rays only (a ray's samples are stored when its
+    # march ends); the next one (the sun turned) lights those it finds and marches the rest:
+    # still the fresh march.
+    layers = {"layers": [{"cloud_type": "cirrus", "coverage": 0.5}]}
+    fractions = []
+
+    def stop_halfway(f):
+        fractions.append(f)
+        return f < 0.5
+
+    with pytest.raises(KeyboardInterrupt):
+        welkin.scene_sky_image(scene(30.0, **layers), WIDTH * 2, progress=stop_halfway)
+    assert 0.5 <= max(fractions) < 1.0
+    turned = scene(18.0, 200.0, **layers)
+    kept = welkin.scene_sky_image(turned, WIDTH * 2)
+    assert np.array_equal(kept, welkin.scene_sky_image(turned, WIDTH * 2, keep_cloud_samples=False))
