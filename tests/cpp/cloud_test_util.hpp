@@ -3,10 +3,14 @@
 // atmosphere, and small VDB files written with OpenVDB into a temporary folder.
 #pragma once
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
+#include <numbers>
 #include <string>
+#include <vector>
 
+#include <glm/vec3.hpp>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 #include <unistd.h>
@@ -27,6 +31,20 @@ inline Atmosphere airless() {
     a.absorption_extinction.assign(n, 0.0);
     a.ground_albedo.assign(n, 0.0);
     return a;
+}
+
+// A W x H grid of directions over the upper sky, elevations 3 to 87 degrees, row 0 at the
+// top: an equirect sky's upper half (the upsampled grids' tests).
+inline std::vector<glm::dvec3> sky_grid(int W, int H) {
+    std::vector<glm::dvec3> d;
+    for (int j = 0; j < H; ++j) {
+        const double el = (87.0 - 84.0 * j / (H - 1)) * std::numbers::pi / 180.0;
+        for (int i = 0; i < W; ++i) {
+            const double az = 2.0 * std::numbers::pi * (i + 0.5) / W;
+            d.push_back({std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)});
+        }
+    }
+    return d;
 }
 
 // sigma_t constant inside [lo, hi], zero outside.

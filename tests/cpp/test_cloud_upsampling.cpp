@@ -26,22 +26,9 @@
 
 using namespace welkin;
 using welkin::test::HomogeneousBox;
+using welkin::test::sky_grid;
 
 namespace {
-
-// A W x H grid of directions over the upper sky, elevations 3 to 87 degrees, row 0 at
-// the top: an equirect sky's upper half.
-std::vector<glm::dvec3> sky_grid(int W, int H) {
-    std::vector<glm::dvec3> d;
-    for (int j = 0; j < H; ++j) {
-        const double el = (87.0 - 84.0 * j / (H - 1)) * std::numbers::pi / 180.0;
-        for (int i = 0; i < W; ++i) {
-            const double az = 2.0 * std::numbers::pi * (i + 0.5) / W;
-            d.push_back({std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)});
-        }
-    }
-    return d;
-}
 
 const ConstantIllumination& light() {
     static const ConstantIllumination l(glm::normalize(glm::dvec3(0.6, 0.2, 0.5)), {1.0f, 0.9f, 0.8f},

@@ -2,11 +2,11 @@
 // The march's view cache (clouds/lighting.hpp, CloudViewCache): rays lit again from their
 // kept samples give what a march gives, bit for bit, under another sun; a cache kept under
 // another key is emptied; one too small keeps what fits and marches the rest.
-#include <cmath>
 #include <memory>
 #include <numbers>
 #include <vector>
 
+#include "cloud_test_util.hpp"
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
@@ -15,21 +15,9 @@
 #include "welkin/clouds/procedural.hpp"
 
 using namespace welkin;
+using welkin::test::sky_grid;
 
 namespace {
-
-// A W x H grid of directions over the upper sky, elevations 3 to 87 degrees.
-std::vector<glm::dvec3> sky_grid(int W, int H) {
-    std::vector<glm::dvec3> d;
-    for (int j = 0; j < H; ++j) {
-        const double el = (87.0 - 84.0 * j / (H - 1)) * std::numbers::pi / 180.0;
-        for (int i = 0; i < W; ++i) {
-            const double az = 2.0 * std::numbers::pi * (i + 0.5) / W;
-            d.push_back({std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)});
-        }
-    }
-    return d;
-}
 
 ConstantIllumination sun_at(const glm::dvec3& s) {
     return ConstantIllumination(glm::normalize(s), {1.0f, 0.9f, 0.8f}, {0.1f, 0.15f, 0.25f},
