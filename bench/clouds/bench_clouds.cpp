@@ -132,19 +132,15 @@ void add_options(CLI::App& app, Args& a) {
 }
 
 // --- every type side by side ---------------------------------------------------------
-// Each type at its preset, as `welkin sky --scene` renders it: the layer's build (the
-// coverage calibration; the noise bake, shared by every type of a seed, is timed once
-// before) and the 2048 x 1024 sky with the default upsampling.
 // The sky of `o` rendered once with the sun of obs, then again (median of repeats) with the
 // sun turned 10 degrees in azimuth more each time, the clouds' view samples kept
 // (CloudViewCache): the seconds of one again, and the cache's bytes.
-std::array<double, 2> relight_s(const Args& a, const Atmosphere& atm, const Observer& obs,
-                                SkyImageOptions o) {
-    const auto lut = make_sky_method("lut");
+std::array<double, 2> relight_s(const Args& a, const SkyMethod& lut, const Atmosphere& atm,
+                                const Observer& obs, SkyImageOptions o) {
     auto cache = std::make_shared<CloudViewCache>();
     cache->keep("bench");
     o.cloud_lighting.view_cache = cache;
-    render_equirect_sky(*lut, atm, obs, a.width, o);
+    render_equirect_sky(lut, atm, obs, a.width, o);
     Observer turned = obs;
     const glm::dvec3 s = obs.sun_direction;
     double azimuth = std::atan2(s.y, s.x);
@@ -152,11 +148,14 @@ std::array<double, 2> relight_s(const Args& a, const Atmosphere& atm, const Obse
         azimuth += 10.0 * kDegree;
         const double h = std::hypot(s.x, s.y);
         turned.sun_direction = {h * std::cos(azimuth), h * std::sin(azimuth), s.z};
-        render_equirect_sky(*lut, atm, turned, a.width, o);
+        render_equirect_sky(lut, atm, turned, a.width, o);
     });
     return {t, double(cache->bytes())};
 }
 
+// Each type at its preset, as `welkin sky --scene` renders it: the layer's build (the
+// coverage calibration; the noise bake, shared by every type of a seed, is timed once
+// before) and the 2048 x 1024 sky with the default upsampling.
 void bench_types(const Args& a, const Atmosphere& atm, const Observer& obs, std::vector<std::string>& rows) {
     CloudLayerParams clear_layer;  // coverage 0: the noise bake without a calibration
     clear_layer.coverage = 0.0;
@@ -191,7 +190,7 @@ void bench_types(const Args& a, const Atmosphere& atm, const Observer& obs, std:
                    t_build + t_sky, cpu);
         rows.push_back(fmt::format("type_sky,{},{}x{},{:.4f},,,,,,,", kCloudTypeNames[t], a.width,
                                    a.width / 2, t_build + t_sky));
-        relit.push_back(relight_s(a, atm, obs, o));
+        relit.push_back(relight_s(a, *type_lut, atm, obs, o));
         std::fflush(stdout);
     }
     // The same skies lit again (CloudViewCache): the sun turned, the clouds' view samples

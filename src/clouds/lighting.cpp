@@ -462,7 +462,7 @@ private:
         if (kept) {
             for (const auto& k : kept->samples) integrate(k.t, k.h, k.sigma_t, ray.at(k.t));
         } else {
-            march_samples(ray, r, segs, dt_target, levels, T, alive, integrate);
+            march_samples(ray, r, segs, dt_target, half_feature, levels, T, alive, integrate);
             if (cache) cache->store(key, {dt_target, stored});
         }
         for (std::size_t c = 0; c < nc; ++c) result_.radiance[r * nc + c] = float(acc[c]);
@@ -475,11 +475,10 @@ private:
     // cloud, while `alive` (integrate updates T and alive).
     template <class Integrate>
     void march_samples(const CloudRay& ray, std::size_t r, const std::vector<MajorantSegment>& segs,
-                       double dt_target, const RayLevels& levels, const double& T, const bool& alive,
-                       Integrate& integrate) const {
+                       double dt_target, double half_feature, const RayLevels& levels, const double& T,
+                       const bool& alive, Integrate& integrate) const {
         PathRng rng(options_.seed, first_ray_index_ + r, 0, 0x636c6f7564ULL);
         const double u = options_.jitter ? rng.uniform() : 0.5;
-        const double half_feature = 0.5 * density_.feature_size_m();
         // The step [a, a + dt) cut into n, each sample at the same fraction u of its own
         // step; whether any sample was in a cloud.
         const auto cut = [&](double a, double dt, int n) {

@@ -54,10 +54,12 @@ std::string SceneDescription::cloud_view_key() const {
     std::string key = unlit.to_json_string();
     if (clouds)
         for (const auto& v : clouds->volumes) {
-            std::error_code ec;  // a missing file: no stamp (cloud_density() refuses it)
-            const auto size = std::filesystem::file_size(v.file, ec);
-            const auto time = std::filesystem::last_write_time(v.file, ec);
-            key += fmt::format("|{}:{}:{}", v.file, ec ? 0 : size, ec ? 0 : time.time_since_epoch().count());
+            // A file that cannot be read: no stamp (cloud_density() refuses it).
+            std::error_code size_error, time_error;
+            const auto size = std::filesystem::file_size(v.file, size_error);
+            const auto time = std::filesystem::last_write_time(v.file, time_error);
+            key += fmt::format("|{}:{}:{}", v.file, size_error ? 0 : size,
+                               time_error ? 0 : time.time_since_epoch().count());
         }
     return key;
 }
