@@ -151,13 +151,19 @@ constexpr std::uint64_t kWeatherTaps = 0x57ea7e5, kBaseTaps = 0xba5e;
 // A hex-tiled read (noise.hpp, hex_taps), the lattice half a texture period apart: every
 // channel is its mean over the texture plus the weighted deviations of the taps, each tap
 // the texture read at height z, times the taps' contrast factor, clamped to the channel's
-// range [0, 1]. The offsets move in the plane only: the base shape still repeats through
-// the height (evolution_m cycles).
+// range [0, 1]. With one tap (weight 1, contrast 1) that is the tap's read itself, to the
+// double rounding that the conversion to float drops. The offsets move in the plane only:
+// the base shape still repeats through the height (evolution_m cycles).
 template <int N>
 void hex_read(const PeriodicTexture<N>& texture, const double* mean, double u, double v, double z,
               std::uint64_t seed, float* out) {
     HexTaps taps;
     hex_taps(u, v, 0.5, seed, taps);
+    if (taps.count == 1) {  // half the plane
+        texture.sample(u + taps.du[0], v + taps.dv[0], z, out);
+        for (int c = 0; c < N; ++c) out[c] = std::clamp(out[c], 0.0f, 1.0f);
+        return;
+    }
     double acc[N] = {};
     for (int t = 0; t < taps.count; ++t) {
         float r[N];

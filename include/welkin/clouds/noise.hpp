@@ -24,11 +24,13 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <glm/vec4.hpp>
 
 #include "welkin/base/math.hpp"
+#include "welkin/base/simd.hpp"
 
 namespace welkin {
 
@@ -64,8 +66,16 @@ template <int N>
 class PeriodicTexture {
 public:
     PeriodicTexture() = default;
+    // A texture of three channels keeps one float after its last texel, so that its texels
+    // are read four floats at a time (sample) inside the buffer.
     PeriodicTexture(int nx, int ny, int nz)
-        : nx_(nx), ny_(ny), nz_(nz), texels_(std::size_t(nx) * ny * nz * N) {}
+        : nx_(nx),
+          ny_(ny),
+          nz_(nz),
+          mask_x_(wrap_mask(nx)),
+          mask_y_(wrap_mask(ny)),
+          mask_z_(wrap_mask(nz)),
+          texels_(std::size_t(nx) * ny * nz * N + (N == 3 ? 1 : 0)) {}
     float* at(int i, int j, int k) { return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N]; }
     const float* at(int i, int j, int k) const {
         return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N];
@@ -74,42 +84,69 @@ public:
     // (x, y, z) in texture units (one period = 1); out receives N values. Inlined: it is
     // most of a cloud density lookup.
     [[gnu::always_inline]] inline void sample(double x, double y, double z, float* out) const {
-        // Per axis: texel centres at (i + 0.5) / n, so the lower texel is floor(u n - 0.5)
-        // wrapped into [0, n): a mask for the power-of-two sizes the noise is baked at,
-        // a modulo otherwise.
-        const auto axis = [](double u, int n, int& i0, int& i1, float& w) {
-            const double f = u * double(n) - 0.5;
-            const std::int64_t i = floor_to_int64(f);
-            w = float(f - double(i));
-            if ((n & (n - 1)) == 0) {
-                i0 = int(i & (n - 1));
-                i1 = int((i + 1) & (n - 1));
-            } else {
-                i0 = int(((i % n) + n) % n);
-                i1 = i0 + 1 == n ? 0 : i0 + 1;
-            }
-        };
         int i0, i1, j0, j1, k0 = 0, k1 = 0;
         float wx, wy, wz = 0.0f;
-        axis(x, nx_, i0, i1, wx);
-        axis(y, ny_, j0, j1, wy);
-        if (nz_ > 1) axis(z, nz_, k0, k1, wz);
-        const auto layer = [&](int k, float* v) {
-            const float *a = at(i0, j0, k), *b = at(i1, j0, k), *c = at(i0, j1, k), *d = at(i1, j1, k);
-            for (int q = 0; q < N; ++q) {
-                const float lo = a[q] + wx * (b[q] - a[q]), hi = c[q] + wx * (d[q] - c[q]);
-                v[q] = lo + wy * (hi - lo);
+        axis(x, nx_, mask_x_, i0, i1, wx);
+        axis(y, ny_, mask_y_, j0, j1, wy);
+        if (nz_ > 1) axis(z, nz_, mask_z_, k0, k1, wz);
+        if constexpr (N >= 3) {
+            // Three or four channels as one Float4 (a fourth lane of a three-channel texel is
+            // the next texel's first channel, or the padding: read, never stored): the same
+            // float operations lane by lane as the scalar loop below, so the same bits.
+            const auto layer = [&](int k) {
+                const Float4 a = load4(at(i0, j0, k)), b = load4(at(i1, j0, k));
+                const Float4 c = load4(at(i0, j1, k)), d = load4(at(i1, j1, k));
+                const Float4 lo = a + wx * (b - a), hi = c + wx * (d - c);
+                return lo + wy * (hi - lo);
+            };
+            Float4 v = layer(k0);
+            if (nz_ > 1) {
+                const Float4 up = layer(k1);
+                v = v + wz * (up - v);
             }
-        };
-        layer(k0, out);
-        if (nz_ == 1) return;
-        float up[N];
-        layer(k1, up);
-        for (int q = 0; q < N; ++q) out[q] += wz * (up[q] - out[q]);
+            for (int q = 0; q < N; ++q) out[q] = v[q];
+        } else {
+            const auto layer = [&](int k, float* v) {
+                const float *a = at(i0, j0, k), *b = at(i1, j0, k), *c = at(i0, j1, k), *d = at(i1, j1, k);
+                for (int q = 0; q < N; ++q) {
+                    const float lo = a[q] + wx * (b[q] - a[q]), hi = c[q] + wx * (d[q] - c[q]);
+                    v[q] = lo + wy * (hi - lo);
+                }
+            };
+            layer(k0, out);
+            if (nz_ == 1) return;
+            float up[N];
+            layer(k1, up);
+            for (int q = 0; q < N; ++q) out[q] += wz * (up[q] - out[q]);
+        }
     }
 
 private:
+    // n - 1 for a power-of-two size (the sizes the noise is baked at: the wrap is a mask),
+    // -1 otherwise (a modulo).
+    static int wrap_mask(int n) { return n > 0 && (n & (n - 1)) == 0 ? n - 1 : -1; }
+    // One axis: texel centres at (i + 0.5) / n, so the lower texel is floor(u n - 0.5)
+    // wrapped into [0, n).
+    [[gnu::always_inline]] static void axis(double u, int n, int mask, int& i0, int& i1, float& w) {
+        const double f = u * double(n) - 0.5;
+        const std::int64_t i = floor_to_int64(f);
+        w = float(f - double(i));
+        if (mask >= 0) {
+            i0 = int(i & mask);
+            i1 = int((i + 1) & mask);
+        } else {
+            i0 = int(((i % n) + n) % n);
+            i1 = i0 + 1 == n ? 0 : i0 + 1;
+        }
+    }
+    static Float4 load4(const float* p) {
+        Float4 v;
+        std::memcpy(&v, p, sizeof v);
+        return v;
+    }
+
     int nx_ = 0, ny_ = 0, nz_ = 0;
+    int mask_x_ = -1, mask_y_ = -1, mask_z_ = -1;
     std::vector<float> texels_;
 };
 
@@ -130,10 +167,12 @@ private:
 // variance-preserving blend): mean + sum_i w_i (read_i - mean) / sqrt(sum_i w_i^2).
 struct HexTaps {
     static constexpr double kHexSharpness = 3.0, kHexCutoff = 0.1;
-    int count = 0;
-    double du[3] = {}, dv[3] = {};  // the reads' offsets, texture units
-    double weight[3] = {};          // sharpened, cut off, summing to 1
-    double contrast = 1.0;          // 1 / sqrt(sum weight^2): the variance-preserving factor
+    // Left uninitialised (hex_taps sets count, contrast and the first count entries): the
+    // taps are made once per read of a density lookup.
+    int count;
+    double du[3], dv[3];  // the reads' offsets, texture units
+    double weight[3];     // sharpened, cut off, summing to 1
+    double contrast;      // 1 / sqrt(sum weight^2): the variance-preserving factor
 };
 // The taps at texture coordinates (u, v): lattice spacing `cell` (texture units), offsets from
 // `seed`.
