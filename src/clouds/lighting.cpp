@@ -200,7 +200,12 @@ public:
     struct Weights {
         double sun = 0.0, above = 1.0, below = 0.0;
     };
-    Weights weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph, Cursors& cur) const {
+    // Whether the sky's weights are the two skies' (sky_weights): what else they depend on
+    // (the density, the sample, the view ray, the options) a kept ray keeps.
+    bool two_skies() const { return two_skies_; }
+
+    // The sun's weight at sample x.
+    double sun_weight(const glm::dvec3& x, const Levels& lv, const RayPhase& ph, Cursors& cur) const {
         const int steps = options_.light_steps;
         const double tau_sun = depth_along(grids_.sun, cur.sun, lv.sun, x, s_, steps, cur, lv.near);
         // The cloud's depth away from the sun along the sun line through x: the slab's
@@ -227,8 +232,12 @@ public:
             for (int i = 0; i < options_.octaves; ++i, fi *= f)
                 sun_w += ob_[i] * fi * std::exp(-oa_[i] * tau_sun) * ph.octave[i];
         }
-        Weights w;
-        w.sun = sun_w;
+        return sun_w;
+    }
+
+    // The sky's weights at sample x (w.above and w.below): they do not depend on the sun.
+    void sky_weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph, Cursors& cur,
+                     Weights& w) const {
         if (two_skies_ && options_.ambient_steps == 0) {
             w.above = w.below = 0.5;  // no depths: the two skies' mean, as in a thin cloud
         } else if (two_skies_) {
@@ -254,7 +263,6 @@ public:
                 depth_along(grids_.sky, cur.sky, lv.sun, x, light_.zenith(x), options_.ambient_steps, cur);
             w.above = std::exp(-kappa_ * tau_up);
         }
-        return w;
     }
 
 private:
@@ -443,10 +451,19 @@ private:
         double T = 1.0, depth_sum = 0.0, opacity_sum = 0.0;
         const double albedo = options_.scattering.albedo;
         bool alive = true;  // false once T < min_transmittance: the ray stops
-        // The sample at t (density sigma_t at x) of a step h long.
-        const auto integrate = [&](double t, double h, double sigma_t, const glm::dvec3& x) {
-            if (cache && !kept) stored.push_back({t, h, sigma_t});
-            const SampleLight::Weights lw = sample_light_.weights(x, levels.at(t), phase, cursors);
+        // A kept ray's sky weights hold under a sky of the same kind (two skies or one).
+        const bool kept_sky = kept && kept->two_skies == sample_light_.two_skies();
+        // The sample at t (density sigma_t at x) of a step h long; k: its kept sample.
+        const auto light_sample = [&](double t, double h, double sigma_t, const glm::dvec3& x,
+                                      const CloudViewCache::Sample* k) {
+            const SampleLight::Levels& lv = levels.at(t);
+            SampleLight::Weights lw;
+            lw.sun = sample_light_.sun_weight(x, lv, phase, cursors);
+            if (k && kept_sky)
+                lw.above = k->above, lw.below = k->below;
+            else
+                sample_light_.sky_weights(x, lv, phase, cursors, lw);
+            if (cache && !kept) stored.push_back({t, h, sigma_t, lw.above, lw.below});
             light_.sun_irradiance(x, sun.data());
             light_.sky_radiance(x, above.data(), below.data());
             // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
@@ -460,10 +477,13 @@ private:
             alive = T >= options_.min_transmittance;
         };
         if (kept) {
-            for (const auto& k : kept->samples) integrate(k.t, k.h, k.sigma_t, ray.at(k.t));
+            for (const auto& k : kept->samples) light_sample(k.t, k.h, k.sigma_t, ray.at(k.t), &k);
         } else {
+            const auto integrate = [&](double t, double h, double sigma_t, const glm::dvec3& x) {
+                light_sample(t, h, sigma_t, x, nullptr);
+            };
             march_samples(ray, r, segs, dt_target, half_feature, levels, T, alive, integrate);
-            if (cache) cache->store(key, {dt_target, stored});
+            if (cache) cache->store(key, {dt_target, sample_light_.two_skies(), stored});
         }
         for (std::size_t c = 0; c < nc; ++c) result_.radiance[r * nc + c] = float(acc[c]);
         result_.transmittance[r] = float(T);

@@ -116,3 +116,29 @@ TEST(CloudViewCache, ABoundedCacheKeepsWhatFits) {
     const CloudResult again = render_clouds(layer, second, glm::dvec3(0.0), dirs, o);
     expect_same(again, render_clouds(layer, second, glm::dvec3(0.0), dirs, pixel_options(W)));
 }
+
+// The sky's weights a sample keeps are those of its kind of sky: kept under a sky of one
+// radiance all round and lit again under two skies (and the other way round), a ray's
+// samples are lit with the new kind's weights, as a march under it alone.
+TEST(CloudViewCache, AnotherKindOfSkyIsLitAfresh) {
+    const int W = 48, H = 16;
+    const ProceduralClouds layer(CloudLayerParams::preset(CloudType::stratocumulus));
+    const auto dirs = sky_grid(W, H);
+    const glm::dvec3 s = glm::normalize(glm::dvec3(0.6, 0.2, 0.5));
+    const ConstantIllumination one(s, {1.0f, 0.9f, 0.8f}, {0.1f, 0.15f, 0.25f});
+    const ConstantIllumination two = sun_at({0.6, 0.2, 0.5});
+    ASSERT_TRUE(one.uniform_sky());
+    ASSERT_FALSE(two.uniform_sky());
+    for (const bool one_first : {true, false}) {
+        const ConstantIllumination& a = one_first ? one : two;
+        const ConstantIllumination& b = one_first ? two : one;
+        CloudLightingOptions o = pixel_options(W);
+        o.view_cache = std::make_shared<CloudViewCache>();
+        o.view_cache->keep("sky");
+        render_clouds(layer, a, glm::dvec3(0.0), dirs, o);
+        o.view_cache->keep("sky");
+        const CloudResult again = render_clouds(layer, b, glm::dvec3(0.0), dirs, o);
+        EXPECT_EQ(o.view_cache->reused(), dirs.size()) << one_first;
+        expect_same(again, render_clouds(layer, b, glm::dvec3(0.0), dirs, pixel_options(W)));
+    }
+}

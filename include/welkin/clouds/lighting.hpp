@@ -175,7 +175,10 @@ struct CloudScattering {
 // samples, and one that does not marches the ray and stores them. The radiance, the
 // transmittance and the depth are the march's, bit for bit: the same samples in the same
 // order, lit by the same light and depth grids. What it saves is the march through the
-// clouds' empty parts, most of a thin layer's time; the light's depths along the sun are
+// clouds' empty parts, most of a thin layer's time, and each sample's depths towards the
+// zenith and the nadir: the sky's weights in its source depend on them, on the view ray and
+// on whether the sky is two skies or one, not on the sun, so a sample keeps them (with the
+// ray's kind of sky: another kind lights it afresh). The light's depths along the sun are
 // walked as before (docs/validation.md, "Lighting the same rays again").
 // The caller vouches that nothing but the light changed (the sun, the sky, the atmosphere
 // that makes them): keep(key) empties the cache unless the key, the caller's fingerprint of
@@ -186,9 +189,11 @@ class CloudViewCache {
 public:
     struct Sample {
         double t, h, sigma_t;  // the sample's distance along the ray, its step, its extinction
+        double above, below;   // the sky's weights in its source (they do not depend on the sun)
     };
     struct Ray {
         double dt_target = 0.0;  // the ray's base step (RayLevels' view step)
+        bool two_skies = true;   // whether above and below are the two skies' (a sky of one: not)
         std::vector<Sample> samples;
     };
     explicit CloudViewCache(std::size_t max_bytes = std::size_t(256) << 20);
