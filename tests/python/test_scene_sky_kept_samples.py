@@ -100,13 +100,16 @@ def test_a_cancelled_sky_leaves_samples_that_still_hold():
     layers = {"layers": [{"cloud_type": "cirrus", "coverage": 0.5}]}
     fractions = []
 
-    def stop_halfway(f):
+    # Stopped at the first report past a quarter: the reports come a few per cent apart, but
+    # on a loaded machine one can come a quarter later than the one before (measured with
+    # the other core busy), and a stop asked for at 0.5 could come after the whole sky.
+    def stop_at_a_quarter(f):
         fractions.append(f)
-        return f < 0.5
+        return f < 0.25
 
     with pytest.raises(KeyboardInterrupt):
-        welkin.scene_sky_image(scene(30.0, **layers), WIDTH * 2, progress=stop_halfway)
-    assert 0.5 <= max(fractions) < 1.0
+        welkin.scene_sky_image(scene(30.0, **layers), WIDTH * 2, progress=stop_at_a_quarter)
+    assert 0.25 <= max(fractions) < 1.0
     turned = scene(18.0, 200.0, **layers)
     kept = welkin.scene_sky_image(turned, WIDTH * 2)
     assert np.array_equal(kept, welkin.scene_sky_image(turned, WIDTH * 2, keep_cloud_samples=False))
