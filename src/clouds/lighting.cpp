@@ -195,10 +195,10 @@ public:
         ph.twice = diffusion_ ? sc.phase.twice(ph.nu) : 0.0;
     }
 
-    // The weights at sample x: the factors of sigma_s E, sigma_s L_above and sigma_s
-    // L_below in the source.
-    struct Weights {
-        double sun = 0.0, above = 1.0, below = 0.0;
+    // The sky's weights at a sample: the factors of sigma_s L_above and sigma_s L_below in
+    // the source (the sun's, of sigma_s E: sun_weight).
+    struct SkyWeights {
+        double above = 1.0, below = 0.0;
     };
     // Whether the sky's weights are the two skies' (sky_weights): what else they depend on
     // (the density, the sample, the view ray, the options) a kept ray keeps.
@@ -235,9 +235,9 @@ public:
         return sun_w;
     }
 
-    // The sky's weights at sample x (w.above and w.below): they do not depend on the sun.
-    void sky_weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph, Cursors& cur,
-                     Weights& w) const {
+    // The sky's weights at sample x: they do not depend on the sun.
+    SkyWeights sky_weights(const glm::dvec3& x, const Levels& lv, const RayPhase& ph, Cursors& cur) const {
+        SkyWeights w;
         if (two_skies_ && options_.ambient_steps == 0) {
             w.above = w.below = 0.5;  // no depths: the two skies' mean, as in a thin cloud
         } else if (two_skies_) {
@@ -263,6 +263,7 @@ public:
                 depth_along(grids_.sky, cur.sky, lv.sun, x, light_.zenith(x), options_.ambient_steps, cur);
             w.above = std::exp(-kappa_ * tau_up);
         }
+        return w;
     }
 
 private:
@@ -457,20 +458,18 @@ private:
         const auto light_sample = [&](double t, double h, double sigma_t, const glm::dvec3& x,
                                       const CloudViewCache::Sample* k) {
             const SampleLight::Levels& lv = levels.at(t);
-            SampleLight::Weights lw;
-            lw.sun = sample_light_.sun_weight(x, lv, phase, cursors);
-            if (k && kept_sky)
-                lw.above = k->above, lw.below = k->below;
-            else
-                sample_light_.sky_weights(x, lv, phase, cursors, lw);
-            if (cache && !kept) stored.push_back({t, h, sigma_t, lw.above, lw.below});
+            const double sun_w = sample_light_.sun_weight(x, lv, phase, cursors);
+            const SampleLight::SkyWeights sky = k && kept_sky
+                                                    ? SampleLight::SkyWeights{k->above, k->below}
+                                                    : sample_light_.sky_weights(x, lv, phase, cursors);
+            if (cache && !kept) stored.push_back({t, h, sigma_t, sky.above, sky.below});
             light_.sun_irradiance(x, sun.data());
             light_.sky_radiance(x, above.data(), below.data());
             // Energy-conserving step: S / sigma_t = albedo (sun + sky terms).
             const double step_opacity = 1.0 - std::exp(-sigma_t * h);
             const double w = T * step_opacity * albedo;
             for (std::size_t c = 0; c < nc; ++c)
-                acc[c] += w * (sun[c] * lw.sun + above[c] * lw.above + below[c] * lw.below);
+                acc[c] += w * (sun[c] * sun_w + above[c] * sky.above + below[c] * sky.below);
             depth_sum += t * T * step_opacity;
             opacity_sum += T * step_opacity;
             T *= 1.0 - step_opacity;

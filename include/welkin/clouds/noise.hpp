@@ -64,10 +64,12 @@ private:
 // interpolations). Smaller texels stay in the caches: the lookups are the march's cost.
 template <int N>
 class PeriodicTexture {
+    static_assert(N >= 1 && N <= 4, "a texel is read as one Float4");
+
 public:
     PeriodicTexture() = default;
-    // A texture of three channels keeps one float after its last texel, so that its texels
-    // are read four floats at a time (sample) inside the buffer.
+    // 4 - N floats after the last texel, so that every texel is read four floats at a time
+    // (sample) inside the buffer.
     PeriodicTexture(int nx, int ny, int nz)
         : nx_(nx),
           ny_(ny),
@@ -75,7 +77,7 @@ public:
           mask_x_(wrap_mask(nx)),
           mask_y_(wrap_mask(ny)),
           mask_z_(wrap_mask(nz)),
-          texels_(std::size_t(nx) * ny * nz * N + (N == 3 ? 1 : 0)) {}
+          texels_(std::size_t(nx) * ny * nz * N + (4 - N)) {}
     float* at(int i, int j, int k) { return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N]; }
     const float* at(int i, int j, int k) const {
         return &texels_[((std::size_t(k) * ny_ + j) * nx_ + i) * N];
@@ -89,36 +91,21 @@ public:
         axis(x, nx_, mask_x_, i0, i1, wx);
         axis(y, ny_, mask_y_, j0, j1, wy);
         if (nz_ > 1) axis(z, nz_, mask_z_, k0, k1, wz);
-        if constexpr (N >= 3) {
-            // Three or four channels as one Float4 (a fourth lane of a three-channel texel is
-            // the next texel's first channel, or the padding: read, never stored): the same
-            // float operations lane by lane as the scalar loop below, so the same bits.
-            const auto layer = [&](int k) {
-                const Float4 a = load4(at(i0, j0, k)), b = load4(at(i1, j0, k));
-                const Float4 c = load4(at(i0, j1, k)), d = load4(at(i1, j1, k));
-                const Float4 lo = a + wx * (b - a), hi = c + wx * (d - c);
-                return lo + wy * (hi - lo);
-            };
-            Float4 v = layer(k0);
-            if (nz_ > 1) {
-                const Float4 up = layer(k1);
-                v = v + wz * (up - v);
-            }
-            for (int q = 0; q < N; ++q) out[q] = v[q];
-        } else {
-            const auto layer = [&](int k, float* v) {
-                const float *a = at(i0, j0, k), *b = at(i1, j0, k), *c = at(i0, j1, k), *d = at(i1, j1, k);
-                for (int q = 0; q < N; ++q) {
-                    const float lo = a[q] + wx * (b[q] - a[q]), hi = c[q] + wx * (d[q] - c[q]);
-                    v[q] = lo + wy * (hi - lo);
-                }
-            };
-            layer(k0, out);
-            if (nz_ == 1) return;
-            float up[N];
-            layer(k1, up);
-            for (int q = 0; q < N; ++q) out[q] += wz * (up[q] - out[q]);
+        // The N channels as one Float4 (the lanes past N are the next texel's channels, or the
+        // padding: read, never stored): per lane the float operations of a scalar trilinear
+        // lookup, so its bits.
+        const auto layer = [&](int k) {
+            const Float4 a = load4(at(i0, j0, k)), b = load4(at(i1, j0, k));
+            const Float4 c = load4(at(i0, j1, k)), d = load4(at(i1, j1, k));
+            const Float4 lo = a + wx * (b - a), hi = c + wx * (d - c);
+            return lo + wy * (hi - lo);
+        };
+        Float4 v = layer(k0);
+        if (nz_ > 1) {
+            const Float4 up = layer(k1);
+            v = v + wz * (up - v);
         }
+        for (int q = 0; q < N; ++q) out[q] = v[q];
     }
 
 private:
