@@ -280,7 +280,7 @@ void bench_upsampling(const Args& a, const SkyMethod& lut, const Atmosphere& atm
     };
     const std::vector<Setting> settings{
         {"exact (every ray marched)", setting(1, 1, 0.0, 0.0, 0.0)},
-        {"upsampled, the default (stride 0: width / 256)", CloudUpsampling{}},
+        {"upsampled, the default (stride 0: a power of two near width / 256)", CloudUpsampling{}},
         {"upsampled, stride 4", setting(4, 2, 0.1, 0.3, 500.0)},
         {"upsampled, stride 16", setting(16, 2, 0.1, 0.3, 500.0)},
         {"upsampled, finest 1 (edges marched to the pixel)", setting(0, 1, 0.1, 0.3, 500.0)},

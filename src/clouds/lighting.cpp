@@ -662,8 +662,37 @@ void interpolate_unmarched(CloudResult& result) {
     });
 }
 
+// How many times wider than tall, in pixels, a block between rows y0 and y1 is made so that
+// it is about square in angle (the header's CloudUpsampling): the angle between
+// neighbouring rows over that between neighbouring columns, at the middle column of both
+// rows, the smaller of the two, rounded down to a power of two, at most kMaxAspect. An
+// equirect's rows near a pole are circles of 2 pi cos(elevation): there its columns are
+// 1 / cos(elevation) times closer than its rows. A pinhole camera's are about as close
+// (1); parallel rays (an orthographic camera) have no angle between them (1).
+int block_aspect(std::span<const glm::dvec3> directions, int width, int height, int y0, int y1) {
+    constexpr int kMaxAspect = 32;
+    if (width < 2 || height < 2) return 1;
+    const int xc = (width - 1) / 2;
+    const auto chord = [&](int xa, int ya, int xb, int yb) {
+        return glm::length(
+            glm::normalize(directions[std::size_t(ya) * std::size_t(width) + std::size_t(xa)]) -
+            glm::normalize(directions[std::size_t(yb) * std::size_t(width) + std::size_t(xb)]));
+    };
+    double ratio = std::numeric_limits<double>::infinity();
+    for (const int y : {y0, y1}) {
+        const double across = chord(xc, y, xc + 1, y);
+        const double down = y + 1 < height ? chord(xc, y, xc, y + 1) : chord(xc, y - 1, xc, y);
+        if (!(down > 0.0)) return 1;
+        if (across > 0.0) ratio = std::min(ratio, down / across);  // else a row at the pole
+    }
+    int aspect = 1;
+    while (aspect < kMaxAspect && 2.0 * aspect <= ratio) aspect *= 2;
+    return aspect;
+}
+
 // The grid, refined as a quadtree (the header's CloudUpsampling): march the rays at every
-// stride-th column and row (and the last ones), then, level by level, split each block
+// stride-th row and every (stride x the block row's aspect)-th column (and the last ones),
+// then, level by level, split each block
 // whose four corner rays disagree at its midpoints, marching the new corners. Each pixel
 // belongs to the block whose half-open rectangle [x0, x1) x [y0, y1) holds it (the last
 // column and row closed), so it is interpolated once, from the corners of the smallest
@@ -681,17 +710,25 @@ void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm
         const std::size_t p = std::size_t(y) * std::size_t(W) + std::size_t(x);
         if (!grid.marched[p]) grid.marched[p] = 1, todo.push_back(p);
     };
-    std::vector<int> xs, ys;  // the coarse lattice
-    for (int i = 0; i < W; i += up.stride) xs.push_back(i);
-    if (xs.back() != W - 1) xs.push_back(W - 1);
+    std::vector<int> ys;  // the coarse lattice's rows
     for (int j = 0; j < H; j += up.stride) ys.push_back(j);
     if (ys.back() != H - 1) ys.push_back(H - 1);
+    // Per row, the aspect of the blocks of its lattice row: the finest block there is
+    // `finest` rows tall and finest x aspect columns wide.
+    std::vector<int> aspect(std::size_t(H), 1);
     std::vector<Block> blocks;
-    for (std::size_t b = 0; b + 1 < ys.size(); ++b)
-        for (std::size_t a = 0; a + 1 < xs.size(); ++a)
+    for (std::size_t b = 0; b + 1 < ys.size(); ++b) {
+        const int m = block_aspect(directions, W, H, ys[b], ys[b + 1]);
+        std::fill(aspect.begin() + ys[b], aspect.begin() + ys[b + 1] + 1, m);
+        std::vector<int> xs;
+        for (int i = 0; i < W; i += up.stride * m) xs.push_back(i);
+        if (xs.back() != W - 1) xs.push_back(W - 1);
+        for (std::size_t a = 0; a + 1 < xs.size(); ++a) {
             blocks.push_back({xs[a], ys[b], xs[a + 1], ys[b + 1]});
-    for (int y : ys)
-        for (int x : xs) mark(x, y);
+            mark(xs[a], ys[b]), mark(xs[a], ys[b + 1]);
+        }
+        mark(W - 1, ys[b]), mark(W - 1, ys[b + 1]);
+    }
     ProgressTracker tracker(progress, n);
     std::size_t marched = 0;
     while (!todo.empty()) {
@@ -702,7 +739,8 @@ void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm
         std::vector<Block> split;
         for (const Block& b : blocks) {
             if (b.x1 - b.x0 <= 1 && b.y1 - b.y0 <= 1) continue;  // every pixel it owns is a corner
-            const bool finest = b.x1 - b.x0 <= up.finest && b.y1 - b.y0 <= up.finest;
+            const bool finest =
+                b.x1 - b.x0 <= up.finest * aspect[std::size_t(b.y0)] && b.y1 - b.y0 <= up.finest;
             if (!lengths_agree(max_distances, b, W)) {
                 // A silhouette: split, and at the finest size march every ray it owns.
                 if (!finest) {
@@ -893,7 +931,13 @@ double angle_between_rays(const glm::dvec3& a, const glm::dvec3& b) {
 
 int CloudUpsampling::resolved_stride(int width, int height) const {
     if (width < 2 || height < 2) return 1;
-    return stride == 0 ? std::clamp(width / kAutoColumns, 1, 16) : stride;
+    if (stride != 0) return stride;
+    // A power of two, so that the quadtree halves every block evenly down to `finest`: an
+    // odd stride (7) leaves blocks of 3 and 4 pixels whose halves are 1 and 2 wide, and an
+    // edge then marches 4 of every 7 columns and rows instead of 1 in 2.
+    const double columns = double(width) / kAutoColumns;
+    if (columns < 2.0) return 1;
+    return std::min(1 << int(std::lround(std::log2(columns))), 16);
 }
 
 void CloudUpsampling::validate() const {

@@ -5,13 +5,16 @@
 // combination of the four marched corners of the one block that owns it; zero tolerances
 // with a finest block of one pixel march every ray that differs (the plain march); the
 // result does not depend on the thread count; the block-size limit splits blocks that
-// span more than it at their cloud's distance, however well their corners agree; rays
-// ending at geometry are not interpolated across its silhouette.
+// span more than it at their cloud's distance, however well their corners agree; the
+// automatic stride halves every block evenly; blocks are about square in angle (an
+// equirect's near a pole wider in pixels); rays ending at geometry are not interpolated
+// across its silhouette.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "cloud_test_util.hpp"
@@ -202,6 +205,102 @@ TEST(CloudUpsampling, BlockSizeLimitSplitsBlocksWiderThanItAtTheirCloud) {
     EXPECT_EQ(n_all, 17 * 33);  // every even row, and in it every even column and the last
     EXPECT_EQ(some[4], 0);      // the top block's middle row: not split
     EXPECT_EQ(some[28], 33);    // the bottom block's: split to the finest
+}
+
+namespace {
+
+// W columns around the sky and H rows from `bottom_deg` up, rows as far apart as the
+// columns (360 / W degrees), at the pixels' centres.
+std::vector<glm::dvec3> band_grid(int W, int H, double bottom_deg) {
+    std::vector<glm::dvec3> d;
+    const double step = 2.0 * std::numbers::pi / W;
+    for (int j = 0; j < H; ++j) {
+        const double el = bottom_deg * std::numbers::pi / 180.0 + (H - 0.5 - j) * step;
+        for (int i = 0; i < W; ++i) {
+            const double az = step * (i + 0.5);
+            d.push_back({std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)});
+        }
+    }
+    return d;
+}
+
+}  // namespace
+
+// The automatic stride (0) is the power of two nearest width / 256, so that the quadtree
+// halves every block evenly down to the finest size. A deck whose blocks are all split
+// to the finest (block limit 0), 1921 rays wide (7.5 x 256): stride 8 marches every
+// second column and row and no more; the stride 7 that width / 256 rounded down to
+// leaves blocks of 3 and 4 pixels, halved into blocks 1 and 2 wide, and marches a third
+// more rays for the same finest size.
+TEST(CloudUpsampling, TheAutomaticStrideHalvesEveryBlockEvenly) {
+    const CloudUpsampling automatic;
+    for (const auto& [width, stride] : {std::pair{256, 1},
+                                        {511, 1},
+                                        {512, 2},
+                                        {724, 2},
+                                        {725, 4},
+                                        {1024, 4},
+                                        {1280, 4},
+                                        {1448, 4},
+                                        {1449, 8},
+                                        {1920, 8},
+                                        {2048, 8},
+                                        {3840, 16},
+                                        {16384, 16}})
+        EXPECT_EQ(automatic.resolved_stride(width, width / 2), stride) << width;
+    EXPECT_EQ(automatic.resolved_stride(1920, 1), 1);
+    EXPECT_EQ(settings(7, 2, 0.1, 0.3, 500.0).resolved_stride(1920, 1080), 7);
+
+    // Rows as far apart as columns (blocks square in angle: aspect 1), 10 to 13 degrees up.
+    const int W = 1921, H = 17;
+    const HomogeneousBox deck({-1e6, -1e6, 1000.0}, {1e6, 1e6, 1400.0}, 0.01);
+    const auto dirs = band_grid(W, H, 10.0);
+    const auto marched = [&](int stride) {
+        const CloudResult r =
+            render_clouds_grid(deck, light(), kEye, dirs, W, quick(), settings(stride, 2, 1.0, 1.0, 0.0));
+        return std::count(r.interpolation.marched.begin(), r.interpolation.marched.end(), 1);
+    };
+    const auto even = marched(0);
+    EXPECT_EQ(even, 961 * 9);  // columns 0, 2, .., 1920; rows 0, 2, .., 16
+    EXPECT_GT(marched(7), even * 5 / 4);
+}
+
+// Blocks about square in angle: the upper half of an equirect sky 257 wide (rows 1.4
+// degrees apart, as its columns are at the horizon; 65 rows, from 1.4 degrees up), every
+// block split to the finest (2
+// pixels: block limit 0). Near the horizon every second column of every second row is
+// marched; above 70 degrees up (the lattice rows of 8 pixels whose lower row is above 60
+// degrees, where the columns are less than half as far apart as the rows) at most every
+// fourth column; in all, fewer than on a lattice of square pixels, down to about the
+// share of the sky's solid angle (2 / pi of it) where the lattice's rows are closer. Each
+// interpolated pixel's corners are marched.
+TEST(CloudUpsampling, BlocksAreAboutSquareInAngle) {
+    const int W = 257, H = 65;  // the last column and row on every lattice
+    const HomogeneousBox deck({-1e6, -1e6, 1000.0}, {1e6, 1e6, 1400.0}, 0.01);
+    const auto dirs = band_grid(W, H, 0.7);
+    const CloudResult r =
+        render_clouds_grid(deck, light(), kEye, dirs, W, quick(), settings(8, 2, 1.0, 1.0, 0.0));
+    const CloudGridInterpolation& g = r.interpolation;
+    std::size_t total = 0;
+    for (int j = 0; j < H; ++j) {
+        const double el = std::asin(dirs[std::size_t(j) * W].z) * 180.0 / std::numbers::pi;
+        int in_row = 0;
+        for (int i = 0; i < W; ++i) in_row += g.marched[std::size_t(j) * W + i];
+        total += std::size_t(in_row);
+        if (j % 2 == 1 && j != H - 1) {
+            EXPECT_EQ(in_row, 0) << j;
+        } else if (el < 30.0) {
+            EXPECT_EQ(in_row, W / 2 + 1) << j;  // columns 0, 2, .., 256
+        } else if (el > 70.0) {
+            EXPECT_LE(in_row, W / 4 + 1) << j;
+        }
+    }
+    const std::size_t square = std::size_t(W / 2 + 1) * std::size_t(H / 2 + 1);
+    EXPECT_LT(double(total), 0.9 * double(square));
+    EXPECT_GT(double(total), 2.0 / std::numbers::pi * double(square));
+    g.for_each_interpolated([&](std::size_t p, const std::size_t q[4], const double[4]) {
+        for (int a = 0; a < 4; ++a) EXPECT_TRUE(g.marched[q[a]]) << p;
+    });
 }
 
 // Rays with lengths (a camera's rays ending at its geometry): a deck over the whole view,

@@ -351,11 +351,16 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
                           Progress* progress = nullptr, std::uint64_t first_ray_index = 0);
 
 // Upsampling of a grid of rays (render_clouds_grid): a cloud sky is mostly smooth (clear
-// sky, cloud interiors) with sharp edges between. The rays at every stride-th column and
-// row (and the last ones) are marched first. Then, as a quadtree, each block whose four
+// sky, cloud interiors) with sharp edges between. The rays at every stride-th row and
+// every (stride x aspect)-th column (and the last ones) are marched first. The aspect, per
+// lattice row, makes the blocks about square in angle: the angle between neighbouring
+// rows over that between neighbouring columns, rounded down to a power of two (at most
+// 32); 1 for a pinhole camera, 1 / cos(elevation) for an equirect's rows, whose columns
+// crowd towards the poles. Then, as a quadtree, each block whose four
 // marched corner rays disagree (transmittances more than transmittance_tolerance apart,
 // or a channel's radiances more than radiance_tolerance of the largest) is split in four
-// at its midpoints, whose rays are marched, down to blocks `finest` pixels wide; the rays
+// at its midpoints, whose rays are marched, down to blocks `finest` pixels tall (finest x
+// aspect wide); the rays
 // inside the blocks left are interpolated bilinearly from their corners
 // (CloudGridInterpolation). Refining only the blocks that straddle an edge marches about
 // the edge's length in pixels per level, instead of every pixel of every block it
@@ -383,18 +388,20 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 // cloudy sky", "Every type's sky and plate") charts time against error for these
 // settings, against marching every ray.
 struct CloudUpsampling {
-    static constexpr int kAutoColumns = 256;          // stride 0: the grid's width / this
+    static constexpr int kAutoColumns = 256;          // stride 0: about the grid's width / this
     static constexpr double kLengthTolerance = 0.01;  // relative, between bounded rays
-    // Coarse lattice, [0, 16]: 0 (the default) one marched column per 1/256 of the width
-    // (every 1.4 degrees of an equirect sky: stride 8 at 2048 wide), 1 every ray marched.
+    // Coarse lattice, [0, 16]: 0 (the default) about one marched column per 1/256 of the
+    // width, the power of two nearest (every 1.4 degrees of an equirect sky: stride 8 at
+    // 2048 wide, and at 1920), 1 every ray marched.
     int stride = 0;
     int finest = 2;                        // [1, 16]: blocks this wide are not split
     double transmittance_tolerance = 0.1;  // [0, 1]
     double radiance_tolerance = 0.3;       // [0, 1], relative
     double max_block_size_m = 500.0;       // [0, 1e7] m
     void validate() const;
-    // The lattice's stride for a grid width x height: `stride`, or with 0 the width /
-    // kAutoColumns in [1, 16]; 1 for a single row or column.
+    // The lattice's stride for a grid width x height: `stride`, or with 0 the power of two
+    // nearest width / kAutoColumns (in ratio: 7.5 -> 8, 5 -> 4), 1 where that is below 2, at
+    // most 16; 1 for a single row or column.
     int resolved_stride(int width, int height) const;
 };
 
