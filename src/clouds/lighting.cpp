@@ -664,27 +664,26 @@ void interpolate_unmarched(CloudResult& result) {
 
 // How many times wider than tall, in pixels, a block between rows y0 and y1 is made so that
 // it is about square in angle (the header's CloudUpsampling): the angle between
-// neighbouring rows over that between neighbouring columns, at the middle column of both
-// rows, the smaller of the two, rounded down to a power of two, at most kMaxAspect. An
-// equirect's rows near a pole are circles of 2 pi cos(elevation): there its columns are
-// 1 / cos(elevation) times closer than its rows. A pinhole camera's are about as close
-// (1); parallel rays (an orthographic camera) have no angle between them (1).
-int block_aspect(std::span<const glm::dvec3> directions, int width, int height, int y0, int y1) {
+// neighbouring rows (rows y0 and y1's over y1 - y0) over that between neighbouring columns
+// (at the middle column, of row y0 or y1, whichever is the larger), rounded down to a power
+// of two, at most kMaxAspect. From those two rows alone, so that a band of a frame cut at
+// its lattice rows has the frame's blocks. An equirect's rows near a pole are circles of
+// 2 pi cos(elevation): there its columns are 1 / cos(elevation) times closer than its rows.
+// A pinhole camera's are about as close (1); parallel rays (an orthographic camera) have
+// no angle between them (1).
+int block_aspect(std::span<const glm::dvec3> directions, int width, int y0, int y1) {
     constexpr int kMaxAspect = 32;
-    if (width < 2 || height < 2) return 1;
+    if (width < 2) return 1;
     const int xc = (width - 1) / 2;
     const auto chord = [&](int xa, int ya, int xb, int yb) {
         return glm::length(
             glm::normalize(directions[std::size_t(ya) * std::size_t(width) + std::size_t(xa)]) -
             glm::normalize(directions[std::size_t(yb) * std::size_t(width) + std::size_t(xb)]));
     };
-    double ratio = std::numeric_limits<double>::infinity();
-    for (const int y : {y0, y1}) {
-        const double across = chord(xc, y, xc + 1, y);
-        const double down = y + 1 < height ? chord(xc, y, xc, y + 1) : chord(xc, y - 1, xc, y);
-        if (!(down > 0.0)) return 1;
-        if (across > 0.0) ratio = std::min(ratio, down / across);  // else a row at the pole
-    }
+    const double down = chord(xc, y0, xc, y1) / double(y1 - y0);
+    if (!(down > 0.0)) return 1;
+    const double across = std::max(chord(xc, y0, xc + 1, y0), chord(xc, y1, xc + 1, y1));
+    const double ratio = across > 0.0 ? down / across : std::numeric_limits<double>::infinity();  // a pole
     int aspect = 1;
     while (aspect < kMaxAspect && 2.0 * aspect <= ratio) aspect *= 2;
     return aspect;
@@ -718,7 +717,7 @@ void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm
     std::vector<int> aspect(std::size_t(H), 1);
     std::vector<Block> blocks;
     for (std::size_t b = 0; b + 1 < ys.size(); ++b) {
-        const int m = block_aspect(directions, W, H, ys[b], ys[b + 1]);
+        const int m = block_aspect(directions, W, ys[b], ys[b + 1]);
         std::fill(aspect.begin() + ys[b], aspect.begin() + ys[b + 1] + 1, m);
         std::vector<int> xs;
         for (int i = 0; i < W; i += up.stride * m) xs.push_back(i);
