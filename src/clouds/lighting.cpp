@@ -675,14 +675,13 @@ int block_aspect(std::span<const glm::dvec3> directions, int width, int y0, int 
     constexpr int kMaxAspect = 32;
     if (width < 2) return 1;
     const int xc = (width - 1) / 2;
-    const auto chord = [&](int xa, int ya, int xb, int yb) {
-        return glm::length(
-            glm::normalize(directions[std::size_t(ya) * std::size_t(width) + std::size_t(xa)]) -
-            glm::normalize(directions[std::size_t(yb) * std::size_t(width) + std::size_t(xb)]));
+    const auto angle = [&](int xa, int ya, int xb, int yb) {
+        return angle_between_rays(directions[std::size_t(ya) * std::size_t(width) + std::size_t(xa)],
+                                  directions[std::size_t(yb) * std::size_t(width) + std::size_t(xb)]);
     };
-    const double down = chord(xc, y0, xc, y1) / double(y1 - y0);
+    const double down = angle(xc, y0, xc, y1) / double(y1 - y0);
     if (!(down > 0.0)) return 1;
-    const double across = std::max(chord(xc, y0, xc + 1, y0), chord(xc, y1, xc + 1, y1));
+    const double across = std::max(angle(xc, y0, xc + 1, y0), angle(xc, y1, xc + 1, y1));
     const double ratio = across > 0.0 ? down / across : std::numeric_limits<double>::infinity();  // a pole
     int aspect = 1;
     while (aspect < kMaxAspect && 2.0 * aspect <= ratio) aspect *= 2;
@@ -691,8 +690,8 @@ int block_aspect(std::span<const glm::dvec3> directions, int width, int y0, int 
 
 // The grid, refined as a quadtree (the header's CloudUpsampling): march the rays at every
 // stride-th row and every (stride x the block row's aspect)-th column (and the last ones),
-// then, level by level, split each block
-// whose four corner rays disagree at its midpoints, marching the new corners. Each pixel
+// then, level by level, split each block whose four corner rays disagree at its midpoints,
+// marching the new corners. Each pixel
 // belongs to the block whose half-open rectangle [x0, x1) x [y0, y1) holds it (the last
 // column and row closed), so it is interpolated once, from the corners of the smallest
 // block around it.

@@ -356,12 +356,11 @@ CloudResult render_clouds(const CloudDensity& density, const CloudIllumination& 
 // lattice row, makes the blocks about square in angle: the angle between neighbouring
 // rows over that between neighbouring columns, rounded down to a power of two (at most
 // 32); 1 for a pinhole camera, 1 / cos(elevation) for an equirect's rows, whose columns
-// crowd towards the poles. Then, as a quadtree, each block whose four
-// marched corner rays disagree (transmittances more than transmittance_tolerance apart,
-// or a channel's radiances more than radiance_tolerance of the largest) is split in four
-// at its midpoints, whose rays are marched, down to blocks `finest` pixels tall (finest x
-// aspect wide); the rays
-// inside the blocks left are interpolated bilinearly from their corners
+// crowd towards the poles. Then, as a quadtree, each block whose four marched corner rays
+// disagree (transmittances more than transmittance_tolerance apart, or a channel's
+// radiances more than radiance_tolerance of the largest) is split in four at its
+// midpoints, whose rays are marched, down to blocks `finest` pixels tall (finest x aspect
+// wide); the rays inside the blocks left are interpolated bilinearly from their corners
 // (CloudGridInterpolation). Refining only the blocks that straddle an edge marches about
 // the edge's length in pixels per level, instead of every pixel of every block it
 // touches; finest 2 leaves the last level (half the rays an edge costs) interpolated, an
