@@ -74,6 +74,25 @@ constexpr double kSideVertical = 1.0 / 16.0;
 constexpr int kSkyLevels = 1;  // the zenith and nadir grids' level above the sun grid's
 // sin 15 deg: the lowest sun whose anti-sun depth is on a grid turned to it (SampleLight).
 constexpr double kTurnedAntiSunMinSin = 0.2588;
+// The closest the sun grid's lines come across the vertical (sun_cross_spacing), in cells.
+constexpr double kMinSunCross = 1.0 / 8.0;
+
+// The spacing, in cells, of the sun grid's lines along its climbing cross axis e_2 (the
+// axis that is vertical when the sun is on the horizon; depth_grid.hpp, "Cross
+// spacing"), for the sun at elevation el. Below a flat face of the cloud (a deck's top
+// seen against a low sun, a cell's crown), the next line, c h away along e_2, starts c h
+// cos(el) higher, and its path to the face is c h cos(el) / sin(el) shorter: the depth
+// steps by sigma_t c h cot(el) from line to line, where a 45-degree sun's steps by
+// sigma_t h. Interpolated across its kink at the face, such a profile reads deep: with the
+// lines a cell apart the lit rim of a deck's top against a 16-degree sun came out at half
+// the radiance of Cycles and of the path tracer (docs/validation.md, "Each cloud type
+// against Cycles"; tests/cpp/test_cloud_depth_grid.cpp). c = tan(el) keeps the 45-degree
+// step, at most one cell (a higher sun's lines run up the cloud, its faces along them) and
+// at least kMinSunCross (the lines, and the vertices marched, grow as 1 / c).
+double sun_cross_spacing(double sin_el) {
+    const double s = std::clamp(sin_el, 0.0, 1.0);
+    return std::clamp(s / std::sqrt(std::max(1e-12, 1.0 - s * s)), kMinSunCross, 1.0);
+}
 
 // The input checks of a march: one origin or one per direction, finite; max_distances
 // empty or one non-negative length per direction.
@@ -278,6 +297,8 @@ private:
         // the sun grid's cells marched per sample, the rest read one level coarser, on
         // vertices the neighbouring rays share (depth_grid.hpp, "Near field").
         if (options_.ray_spread_rad > 0.0 || options_.ray_width_m > 0.0) grids_.sun->set_near_field(1, 2);
+        const double sin_el = glm::dot(s_, light_.zenith(glm::dvec3(0.0)));
+        grids_.sun->set_cross_spacing(1.0, sun_cross_spacing(sin_el));
         // The depth away from the sun: a grid turned to -s, whose first cell a sample
         // marches itself as on the sun grid. Read at the view samples, inside a layer whose
         // flat base kinks it (chord, below) and whose density ramps up over its lower part:
@@ -287,7 +308,7 @@ private:
         // along the base, the near field's cell rises too little to reach it, and the
         // streaks come back as wedges: there a grid of world axes, a march per vertex
         // (docs/validation.md, "Chord-scaled depth grids").
-        if (sized_ && glm::dot(s_, light_.zenith(glm::dvec3(0.0))) >= kTurnedAntiSunMinSin) {
+        if (sized_ && sin_el >= kTurnedAntiSunMinSin) {
             grids_.anti = along(-s_, options_.light_steps);
             grids_.anti->set_near_field(1, 2);
         } else if (sized_) {

@@ -103,7 +103,8 @@
 // when w is vertical) and e_2 = w x e_1. A quantity that varies slowly along one axis
 // across the lines and fast along the other is read on lines spaced for each (the sides'
 // chord across the sun line, clouds/lighting.cpp: a horizontal line's depth changes over
-// a few metres up a deck's base, over kilometres along the ground).
+// a few metres up a deck's base, over kilometres along the ground; the depth towards a low
+// sun, which changes faster up the cloud than across the ground).
 //
 // Both ways (aligned grids, set_both_ways, off by default). The depth over the whole chord
 // through x along the line, from x - D w to x + D w: the same walks read over the span
