@@ -21,9 +21,10 @@ is half the difference between the ratios to each seed. Per type:
   within 15 % (the issue's tolerances);
 * "backlit" (the sun 3 degrees above the patch's near top edge): Cycles shows a silver
   lining (edge over core above 1: the edge pixels' own brightness, L / alpha, over the
-  core's; edge and core relative to the cloud's own opacity for a thin cirrus,
-  bench/cycles_layer_patches.py lining_regions), and the fast march's edge over core is
-  above 1 and within 15 % of Cycles'; its noise under a third of that.
+  core's, alpha the fast march's opacity for both renderers, as Cycles' film alpha is no
+  transmittance at a cloud's thin edge; edge and core relative to the cloud's own opacity
+  for a thin cirrus, bench/cycles_layer_patches.py lining_regions), and the fast march's
+  edge over core is above 1 and within 15 % of Cycles'; its noise under a third of that.
 
 The fast march's misses are collected and fail the test together (scripts/test_blender.sh
 lists this test as a known failure with the measured reason while they stand); the other
