@@ -200,15 +200,15 @@ def compare(
 ):
     """One view of a patch in the scene build() made: the sun aimed and Update Sky run (the
     lamp at the cloud's altitude), Cycles once per seed (`samples` each, else build()'s),
-    the engine's pass (the fast march,
-    the air left out) and, with paths, the reference once per seed. Returns a dict: the
-    ratios to Cycles' seed mean per region ("fast", "reference"), their noise (half the
-    difference between the seeds' ratios: "fast_noise", "reference_noise"), the
-    edge-over-core of each renderer, its luminance over the fast march's opacity ("lining":
-    {"cycles", "cycles_noise", "fast", "reference"}), the cloud's pixel count ("pixels") and Cycles' and the fast march's
-    mean alpha over them ("alpha", "fast_alpha"). world_at_cloud: Cycles' world is the sky
-    seen from the patch's altitude (the world's Origin Altitude), not from the ground; the
-    fast march and the reference, which light the cloud with the sky at its own altitude
+    the engine's pass (the fast march, the air left out) and, with paths, the reference
+    once per seed. Returns a dict: the ratios to Cycles' seed mean per region ("fast",
+    "reference"), their noise (half the difference between the seeds' ratios:
+    "fast_noise", "reference_noise"), the edge-over-core of each renderer, its luminance
+    over the fast march's opacity ("lining": {"cycles", "cycles_noise", "fast",
+    "reference"}), the cloud's pixel count ("pixels") and Cycles' and the fast march's mean
+    alpha over them ("alpha", "fast_alpha"). world_at_cloud: Cycles' world is the sky seen
+    from the patch's altitude (the world's Origin Altitude), not from the ground; the fast
+    march and the reference, which light the cloud with the sky at its own altitude
     whatever the world shows, are unchanged."""
     scene, sun = built
     if samples:
@@ -251,9 +251,9 @@ def compare(
     # The lining: every renderer's luminance over one opacity, the fast march's 1 - T (the
     # path tracer's ratio tracking agrees within 4 % at the thinnest pixels, and no seed's
     # noise picks the pixels). Cycles' film alpha is no transmittance there: at the pixels
-    # thinner than 0.03 it reads 1.5 to 4 times the opacity both of Welkin's estimators
-    # agree on while its luminance agrees, and divided by it Cycles' own edge came out dim
-    # (docs/validation.md, "Cycles' alpha at a cloud's thin edge").
+    # thinner than 0.03 it reads up to 3.5 times the opacity both of Welkin's estimators
+    # agree on while its luminance there agrees with theirs, and divided by it Cycles' own
+    # edge came out dim (docs/validation.md, "Cycles' alpha at a cloud's thin edge").
     opacity = fast[..., 3]
     lregs = lining_regions(opacity)
     ln = [edge_over_core(y, lregs, opacity) for y in cyc]

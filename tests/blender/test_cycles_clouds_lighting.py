@@ -19,7 +19,8 @@ Two views. "side": the sun 30 degrees up, 60 degrees left of the view; luminance
 over the cloud's pixels (Cycles' alpha > 0.05), its sunlit half (towards the sun on the
 image) and its shadow half. "backlit": the sun just above the cloud; the silver lining is
 the edge pixels' own brightness (L / alpha, 0.05 < alpha < 0.6) over the core's (alpha >
-0.95), alpha the fast march's opacity for both renderers. Tolerances (the issue's; noise is about 1 % per region at these counts):
+0.95), alpha the fast march's opacity for both renderers. Tolerances (the issue's; noise
+is about 1 % per region at these counts):
 
 * the reference against Cycles: mean within 10 %, sunlit and shadow halves within 15 %
   (the two renderers under one light; what is left is the sky's angular detail, which
