@@ -83,12 +83,11 @@ constexpr double kMinSunCross = 1.0 / 8.0;
 // seen against a low sun, a cell's crown), the next line, c h away along e_2, starts c h
 // cos(el) higher, and its path to the face is c h cos(el) / sin(el) shorter: the depth
 // steps by sigma_t c h cot(el) from line to line, where a 45-degree sun's steps by
-// sigma_t h. Interpolated across its kink at the face, such a profile reads deep: with the
-// lines a cell apart the lit rim of a deck's top against a 16-degree sun came out at half
-// the radiance of Cycles and of the path tracer (docs/validation.md, "Each cloud type
-// against Cycles"; tests/cpp/test_cloud_depth_grid.cpp). c = tan(el) keeps the 45-degree
-// step, at most one cell (a higher sun's lines run up the cloud, its faces along them) and
-// at least kMinSunCross (the lines, and the vertices marched, grow as 1 / c).
+// sigma_t h. Interpolated across its kink at the face, such a profile reads deep, and the
+// lit rim of a deck's top seen against a low sun comes out dark (docs/validation.md, "The
+// sun grid's lines under a low sun"). c = tan(el) keeps the 45-degree step, at most one
+// cell (a higher sun's lines run up the cloud, its faces along them) and at least
+// kMinSunCross (the lines, and the vertices marched, grow as 1 / c).
 double sun_cross_spacing(double sin_el) {
     const double s = std::clamp(sin_el, 0.0, 1.0);
     return std::clamp(s / std::sqrt(std::max(1e-12, 1.0 - s * s)), kMinSunCross, 1.0);
@@ -712,10 +711,9 @@ int block_aspect(std::span<const glm::dvec3> directions, int width, int y0, int 
 // The grid, refined as a quadtree (the header's CloudUpsampling): march the rays at every
 // stride-th row and every (stride x the block row's aspect)-th column (and the last ones),
 // then, level by level, split each block whose four corner rays disagree at its midpoints,
-// marching the new corners. Each pixel
-// belongs to the block whose half-open rectangle [x0, x1) x [y0, y1) holds it (the last
-// column and row closed), so it is interpolated once, from the corners of the smallest
-// block around it.
+// marching the new corners. Each pixel belongs to the block whose half-open rectangle
+// [x0, x1) x [y0, y1) holds it (the last column and row closed), so it is interpolated
+// once, from the corners of the smallest block around it.
 void march_refined(RayMarcher& marcher, CloudResult& result, std::span<const glm::dvec3> origins,
                    std::span<const glm::dvec3> directions, std::span<const double> max_distances, int width,
                    const CloudUpsampling& up, Progress* progress) {

@@ -480,8 +480,8 @@ TEST(CloudDepthGrid, AlignedVerticesMatchAFineMarch) {
 }
 
 // The lit top of a deck seen against a low sun (the Cycles chart's backlit view of the
-// stratus patch, docs/validation.md "Each cloud type against Cycles"): a VDB deck 400 m
-// thick of 40 m voxels, its density falling to 0 over its top 120 m, seen from the ground
+// stratus patch, docs/validation.md "The sun grid's lines under a low sun"): a VDB deck
+// of 40 m voxels, its density ramping down over its top three voxels, seen from the ground
 // 5 km from its near edge across that edge, the sun 16 degrees up behind it and 3 degrees
 // to the side; the rays a fan 0.004 rad apart, as an image's pixels are. Just below the
 // top a sample's sun line climbs out through the ramp, and its depth falls from the deck's
@@ -508,8 +508,8 @@ TEST(CloudDepthGrid, SunGridMatchesPerSampleAtABacklitDeckTop) {
     const double e = 16.0 * kDegree, az = 3.0 * kDegree;
     const ConstantIllumination light({std::cos(e) * std::cos(az), std::cos(e) * std::sin(az), std::sin(e)},
                                      {1.0f, 1.0f, 1.0f}, {0.05f, 0.05f, 0.05f}, {0.02f, 0.02f, 0.02f});
-    // The near top edge (x = -1500 m, z = 1200 m) is 13.1 degrees up from the camera.
-    const double edge = std::atan2(1200.0 - camera.z, camera.x * -1.0 - 1500.0);
+    // The near top edge (x = -1500 m, z = 1200 m) is 13.5 degrees up from the camera.
+    const double edge = std::atan2(1200.0 - camera.z, -camera.x - 1500.0);
     const double spread = 0.004;
     std::vector<glm::dvec3> dirs;
     for (int j = 0; j < 16; ++j)

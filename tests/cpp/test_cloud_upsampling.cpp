@@ -268,10 +268,11 @@ TEST(CloudUpsampling, TheAutomaticStrideHalvesEveryBlockEvenly) {
 // Blocks about square in angle: the upper half of an equirect sky 257 wide (rows 1.4
 // degrees apart, as its columns are at the horizon; 65 rows, from 1.4 degrees up), every
 // block split to the finest (2 pixels: block limit 0). Near the horizon every second
-// column of every second row is marched; above 70 degrees up (the lattice rows of 8 pixels whose lower row is
-// above 60 degrees, where the columns are less than half as far apart as the rows) at most every fourth
-// column; in all, fewer than on a lattice of square pixels, down to about the share of the sky's solid angle
-// (2 / pi of it) where the lattice's rows are closer. Each interpolated pixel's corners are marched.
+// column of every second row is marched; above 70 degrees up (the lattice rows of 8
+// pixels whose lower row is above 60 degrees, where the columns are less than half as far
+// apart as the rows) at most every fourth column; in all, fewer than on a lattice of
+// square pixels, down to about the share of the sky's solid angle (2 / pi of it) where the
+// lattice's rows are closer. Each interpolated pixel's corners are marched.
 TEST(CloudUpsampling, BlocksAreAboutSquareInAngle) {
     const int W = 257, H = 65;  // the last column and row on every lattice
     const HomogeneousBox deck({-1e6, -1e6, 1000.0}, {1e6, 1e6, 1400.0}, 0.01);
